@@ -1,0 +1,95 @@
+"""Argument checks shared by every building block: each error names the argument and the rule."""
+
+from __future__ import annotations
+
+import numbers
+
+import numpy as np
+
+__all__ = [
+    "check_finite",
+    "check_positive",
+    "check_nonnegative",
+    "check_int",
+    "check_in",
+    "check_matrix",
+]
+
+
+def _is_real_scalar(value) -> bool:
+    return isinstance(value, numbers.Real) and not isinstance(value, bool) or (
+        isinstance(value, np.generic) and np.isrealobj(value) and np.ndim(value) == 0
+    )
+
+
+def check_finite(name: str, value, *, shape=None) -> np.ndarray | float:
+    """Return ``value`` as float (scalar) or float array; raise if any entry is NaN/inf.
+
+    Raises
+    ------
+    TypeError
+        If ``value`` is not numeric.
+    ValueError
+        If ``value`` contains NaN or inf, or does not have ``shape``.
+    """
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise TypeError(f"{name} must be a real number or array, got {value!r}") from None
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name} must be finite (no NaN or inf), got {value!r}")
+    if shape is not None and arr.shape != tuple(shape):
+        raise ValueError(f"{name} must have shape {tuple(shape)}, got {arr.shape}")
+    return float(arr) if arr.ndim == 0 else arr
+
+
+def check_positive(name: str, value) -> np.ndarray | float:
+    """Finite and strictly positive (element-wise)."""
+    arr = check_finite(name, value)
+    if np.any(np.asarray(arr) <= 0):
+        raise ValueError(f"{name} must be > 0, got {value!r}")
+    return arr
+
+
+def check_nonnegative(name: str, value) -> np.ndarray | float:
+    """Finite and >= 0 (element-wise)."""
+    arr = check_finite(name, value)
+    if np.any(np.asarray(arr) < 0):
+        raise ValueError(f"{name} must be >= 0, got {value!r}")
+    return arr
+
+
+def check_int(name: str, value, *, minimum: int | None = None, maximum: int | None = None) -> int:
+    """An integer (not bool) within the given bounds."""
+    if isinstance(value, bool) or not isinstance(value, (numbers.Integral, np.integer)):
+        if isinstance(value, (float, np.floating)) and float(value).is_integer():
+            value = int(value)
+        else:
+            raise TypeError(f"{name} must be an integer, got {value!r}")
+    value = int(value)
+    if minimum is not None and value < minimum:
+        raise ValueError(f"{name} must be >= {minimum}, got {value}")
+    if maximum is not None and value > maximum:
+        raise ValueError(f"{name} must be <= {maximum}, got {value}")
+    return value
+
+
+def check_in(name: str, value, allowed) -> object:
+    """One of ``allowed``."""
+    if value not in allowed:
+        raise ValueError(f"{name} must be one of {sorted(allowed)!r}, got {value!r}")
+    return value
+
+
+def check_matrix(name: str, value, *, shape=None, square: bool = False, symmetric: bool = False) -> np.ndarray:
+    """A finite 2-D float array, optionally of a given shape, square or symmetric."""
+    arr = np.atleast_2d(check_finite(name, value))
+    if arr.ndim != 2:
+        raise ValueError(f"{name} must be a 2-D matrix, got ndim={arr.ndim}")
+    if shape is not None and arr.shape != tuple(shape):
+        raise ValueError(f"{name} must have shape {tuple(shape)}, got {arr.shape}")
+    if square and arr.shape[0] != arr.shape[1]:
+        raise ValueError(f"{name} must be square, got shape {arr.shape}")
+    if symmetric and not np.allclose(arr, arr.T, rtol=1e-10, atol=1e-12):
+        raise ValueError(f"{name} must be symmetric")
+    return arr

@@ -1,0 +1,116 @@
+"""The ``ctrl-analysis`` command: list studies, reproduce them into figures/ and results.json."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+from .report import StudyContext, summary_table, write_report_md, write_results_json
+
+__all__ = ["main"]
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse that reports a usage error as one line on stderr and exit status 2."""
+
+    def error(self, message):  # noqa: D102
+        sys.stderr.write(f"ctrl-analysis: error: {message}\n")
+        raise SystemExit(2)
+
+
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a positive integer, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be a positive integer, got {text!r}")
+    return value
+
+
+def _seed(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a non-negative integer, got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"must be a non-negative integer, got {text!r}")
+    return value
+
+
+def _build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog="ctrl-analysis", description=__doc__)
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    sub.add_parser("list", help="studies and what each reproduces")
+    rep = sub.add_parser("reproduce", help="figures + results.json (+ REPORT.md for all)")
+    rep.add_argument("studies", nargs="+", metavar="STUDY", help="study names, or 'all'")
+    rep.add_argument("--out", default="figures", help="output directory (default: figures)")
+    rep.add_argument("--runs", type=_positive_int, default=None, help="Monte Carlo runs where noise is random")
+    rep.add_argument("--seed", type=_seed, default=0, help="base seed (default: 0)")
+    rep.add_argument("--quick", action="store_true", help="fewer runs / shorter horizons, for smoke tests")
+    return parser
+
+
+def _progress(study: str):
+    def emit(msg: str) -> None:
+        sys.stderr.write(f"[{study}] {msg}\n")
+        sys.stderr.flush()
+
+    return emit
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of the console script; returns the exit status."""
+    from analysis import STUDIES, load_study
+
+    args = _build_parser().parse_args(argv)
+    if args.command == "list":
+        for name in STUDIES:
+            info = load_study(name).INFO
+            print(f"{name:24s} {info.reproduces}")
+        return 0
+
+    names = list(STUDIES) if "all" in args.studies else args.studies
+    unknown = [n for n in names if n not in STUDIES]
+    if unknown:
+        sys.stderr.write(
+            f"ctrl-analysis: error: unknown study {unknown[0]!r}; choose from {', '.join(STUDIES)} or all\n"
+        )
+        return 2
+
+    out = Path(args.out)
+    status = 0
+    for name in dict.fromkeys(names):
+        study_dir = out / name
+        ctx = StudyContext(out_dir=study_dir, runs=args.runs, seed=args.seed, quick=args.quick,
+                           progress=_progress(name))
+        t0 = time.perf_counter()
+        try:
+            result = load_study(name).run(ctx)
+        except (ValueError, TypeError, RuntimeError, ArithmeticError) as exc:
+            sys.stderr.write(f"ctrl-analysis: error: study {name!r} failed: {exc}\n")
+            status = 1
+            continue
+        result.runtime_s = time.perf_counter() - t0
+        path = write_results_json(result, study_dir)
+        data = result.to_dict()
+        print(f"\n== {name}: {path} ({len(result.figures)} figures, {result.runtime_s:.1f} s)")
+        if data["quantities"]:
+            print(summary_table(data))
+        if result.missing:
+            print("not built yet: " + "; ".join(result.missing))
+    if "all" in args.studies:
+        results = []
+        for name in STUDIES:
+            p = out / name / "results.json"
+            if p.exists():
+                results.append(json.loads(p.read_text(encoding="utf-8")))
+        print(f"\nreport: {write_report_md(results, out)}")
+    return status
+
+
+if __name__ == "__main__":  # pragma: no cover
+    raise SystemExit(main())
