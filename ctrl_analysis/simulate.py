@@ -1,0 +1,441 @@
+"""The simulation engine: discrete loops, sampled-data loops and smooth ODE loops, over a batch of runs.
+
+Conventions
+-----------
+* Every state array has shape ``(B, n)``: ``B`` independent runs (Monte Carlo seeds or points of a
+  parameter grid) advance together; time is the Python loop, the batch is vectorised.
+* A continuous right-hand side is ``rhs(t, x, u, params) -> dx/dt`` (python-control's order); it
+  must accept ``x`` of shape ``(B, n)`` and ``u`` of shape ``(B, m)`` (or ``None``).
+* Noise is drawn before the loop, one :class:`numpy.random.Generator` per run seeded with that
+  run's recorded seed, so a batch equals the stacked single runs and the same seed always gives the
+  same numbers. White noise in a sampled-data loop is drawn once per step and held over it.
+* A run whose state becomes non-finite or exceeds ``bound`` is flagged (run index and step), its
+  state set to NaN from then on, and it is excluded by :attr:`SimResult.ok`; it is never silently
+  averaged.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from ._validate import check_finite, check_in, check_int, check_positive
+
+__all__ = [
+    "SimResult",
+    "run_seeds",
+    "draw_noise",
+    "uniform_noise",
+    "gaussian_noise",
+    "euler_step",
+    "rk4_step",
+    "simulate_sampled",
+    "simulate_discrete",
+    "simulate_ivp",
+    "continuous_nlsys",
+]
+
+
+# ----------------------------------------------------------------------------------------------
+# Seeds and noise
+# ----------------------------------------------------------------------------------------------
+
+def run_seeds(base_seed: int, runs: int) -> list[int]:
+    """Per-run seeds ``base_seed, base_seed + 1, ...``; record them in results.
+
+    Each seed is expanded by :func:`numpy.random.default_rng` (SeedSequence hashing), so
+    consecutive integers give independent streams.
+    """
+    base_seed = check_int("base_seed", base_seed, minimum=0)
+    runs = check_int("runs", runs, minimum=1)
+    return [base_seed + i for i in range(runs)]
+
+
+def uniform_noise(low, high) -> Callable:
+    """Sampler of white noise uniform on ``[low, high]`` per channel (scalars or equal-length vectors)."""
+    low = np.atleast_1d(check_finite("low", low))
+    high = np.atleast_1d(check_finite("high", high))
+    if low.shape != high.shape or np.any(high < low):
+        raise ValueError(f"high must be >= low element-wise with the same length, got low={low}, high={high}")
+
+    def sample(rng: np.random.Generator, n_steps: int) -> np.ndarray:
+        return rng.uniform(low, high, size=(n_steps, low.size))
+
+    return sample
+
+
+def gaussian_noise(std, mean=0.0) -> Callable:
+    """Sampler of white Gaussian noise with standard deviation ``std`` per channel."""
+    std = np.atleast_1d(check_finite("std", std))
+    if np.any(std < 0):
+        raise ValueError(f"std must be >= 0, got {std}")
+    mean = np.broadcast_to(np.atleast_1d(check_finite("mean", mean)), std.shape)
+
+    def sample(rng: np.random.Generator, n_steps: int) -> np.ndarray:
+        return mean + std * rng.standard_normal((n_steps, std.size))
+
+    return sample
+
+
+def draw_noise(seeds, n_steps: int, *samplers: Callable) -> np.ndarray:
+    """Draw the noise of every run up front: an array of shape ``(n_steps, B, m)``.
+
+    Run ``b`` uses ``numpy.random.default_rng(seeds[b])``; the samplers are called in order on that
+    generator and their channels concatenated, so run ``b``'s noise does not depend on ``B``.
+    """
+    seeds = list(seeds)
+    if not seeds:
+        raise ValueError("seeds must contain at least one seed")
+    n_steps = check_int("n_steps", n_steps, minimum=1)
+    if not samplers:
+        raise ValueError("draw_noise needs at least one sampler")
+    per_run = []
+    for s in seeds:
+        rng = np.random.default_rng(s)
+        per_run.append(np.concatenate([np.asarray(f(rng, n_steps)).reshape(n_steps, -1) for f in samplers], axis=1))
+    return np.stack(per_run, axis=1)
+
+
+# ----------------------------------------------------------------------------------------------
+# Fixed-step integrators (one piece of code for every continuous block)
+# ----------------------------------------------------------------------------------------------
+
+def euler_step(rhs: Callable, t: float, x: np.ndarray, u, h: float, params=None) -> np.ndarray:
+    """One forward-Euler step of ``x' = rhs(t, x, u, params)`` with ``u`` held."""
+    return x + h * rhs(t, x, u, params)
+
+
+def rk4_step(rhs: Callable, t: float, x: np.ndarray, u, h: float, params=None) -> np.ndarray:
+    """One classical Runge-Kutta step of ``x' = rhs(t, x, u, params)`` with ``u`` held over the step."""
+    k1 = rhs(t, x, u, params)
+    k2 = rhs(t + 0.5 * h, x + 0.5 * h * k1, u, params)
+    k3 = rhs(t + 0.5 * h, x + 0.5 * h * k2, u, params)
+    k4 = rhs(t + h, x + h * k3, u, params)
+    return x + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+
+
+_STEPPERS = {"euler": euler_step, "rk4": rk4_step}
+
+
+# ----------------------------------------------------------------------------------------------
+# Results
+# ----------------------------------------------------------------------------------------------
+
+@dataclass
+class SimResult:
+    """Trajectories of a batch of runs.
+
+    Attributes
+    ----------
+    t : ndarray, shape (N+1,)
+        Sample instants.
+    x : ndarray, shape (N+1, B, n) or None
+        States at the sample instants (``None`` when not stored).
+    u : ndarray, shape (N, B, m) or None
+        Inputs held over each step (controller output, or the noise when there is no controller).
+    y : ndarray, shape (N+1, B, p) or None
+        What ``observe`` returned at each sample instant.
+    diverged : ndarray of bool, shape (B,)
+    diverged_step : ndarray of int, shape (B,)
+        First step index at which the run left the bound (``-1`` if never).
+    seeds : list or None
+        Per-run seeds, as recorded.
+    """
+
+    t: np.ndarray
+    x: np.ndarray | None
+    u: np.ndarray | None
+    y: np.ndarray | None
+    diverged: np.ndarray
+    diverged_step: np.ndarray
+    seeds: list | None = None
+    bound: float = np.inf
+    info: dict = field(default_factory=dict)
+
+    @property
+    def ok(self) -> np.ndarray:
+        """Mask of runs that stayed finite and bounded."""
+        return ~self.diverged
+
+    @property
+    def runs(self) -> int:
+        return int(self.diverged.size)
+
+    def divergences(self) -> list[dict]:
+        """One record per diverged run: index, step, time and seed."""
+        out = []
+        for b in np.flatnonzero(self.diverged):
+            k = int(self.diverged_step[b])
+            out.append({
+                "run": int(b),
+                "step": k,
+                "t": float(self.t[min(k, len(self.t) - 1)]),
+                "seed": None if self.seeds is None else self.seeds[b],
+            })
+        return out
+
+
+def _check_bad(x_new: np.ndarray, bound: float) -> np.ndarray:
+    with np.errstate(invalid="ignore"):
+        return ~np.all(np.isfinite(x_new), axis=1) | np.any(np.abs(x_new) > bound, axis=1)
+
+
+def _prepare(x0, noise, seeds):
+    x0 = np.asarray(x0, dtype=float)
+    if x0.ndim not in (1, 2):
+        raise ValueError(f"x0 must have shape (n,) or (B, n), got {x0.shape}")
+    if not np.all(np.isfinite(x0)):
+        raise ValueError("x0 must be finite (no NaN or inf)")
+    B = x0.shape[0] if x0.ndim == 2 else 1
+    if noise is not None:
+        noise = np.asarray(noise, dtype=float)
+        if noise.ndim != 3:
+            raise ValueError(f"noise must have shape (n_steps, B, m), got {noise.shape}")
+        if x0.ndim == 1:
+            B = noise.shape[1]
+        elif noise.shape[1] != B:
+            raise ValueError(f"noise has {noise.shape[1]} runs but x0 has {B}")
+    if seeds is not None and len(seeds) != B:
+        raise ValueError(f"seeds must have one entry per run ({B}), got {len(seeds)}")
+    x = np.array(np.broadcast_to(x0, (B, x0.shape[-1])), dtype=float)
+    return x, noise, B
+
+
+# ----------------------------------------------------------------------------------------------
+# Runners
+# ----------------------------------------------------------------------------------------------
+
+def simulate_sampled(
+    rhs: Callable,
+    x0,
+    h: float,
+    n_steps: int,
+    *,
+    controller: Callable | None = None,
+    noise=None,
+    method: str = "rk4",
+    substeps: int = 1,
+    t0: float = 0.0,
+    params=None,
+    observe: Callable | None = None,
+    store_states: bool = True,
+    bound: float = 1e8,
+    seeds=None,
+) -> SimResult:
+    """Sampled-data loop: a continuous part integrated with a fixed step, inputs held per sample.
+
+    At each sample ``k`` (time ``t_k = t0 + k h``) the discrete part runs once,
+    ``u_k = controller(k, t_k, x_k, w_k)`` (``u_k = w_k`` without a controller), and the continuous
+    part ``x' = rhs(t, x, u_k, params)`` is integrated over ``[t_k, t_k + h]`` with ``substeps``
+    fixed steps of ``method`` (``"rk4"`` or ``"euler"``), ``u_k`` and the noise ``w_k`` held.
+
+    Parameters
+    ----------
+    rhs : callable
+        ``rhs(t, x, u, params)`` with ``x`` of shape ``(B, n)``; returns the same shape.
+    x0 : array_like, shape (n,) or (B, n)
+        Initial state (broadcast over the runs of ``noise`` when 1-D).
+    h : float
+        Sampling period (> 0).
+    n_steps : int
+        Number of samples N; states are returned at N+1 instants.
+    controller : callable, optional
+        ``controller(k, t, x, w) -> u`` of shape ``(B, m)``; may keep its own state.
+    noise : ndarray, shape (n_steps, B, m), optional
+        Held noise, e.g. from :func:`draw_noise`.
+    observe : callable, optional
+        ``observe(k, t, x, u) -> (B, p)`` stored at every instant (``u`` is ``None`` at the last).
+    store_states : bool
+        Keep the whole state trajectory (``False`` saves memory in large batches).
+    bound : float
+        A run whose state leaves ``|x| <= bound`` or becomes non-finite is flagged as diverged.
+    seeds : list, optional
+        Per-run seeds, recorded in the result.
+
+    Returns
+    -------
+    SimResult
+    """
+    h = check_positive("h", h)
+    n_steps = check_int("n_steps", n_steps, minimum=1)
+    substeps = check_int("substeps", substeps, minimum=1)
+    check_in("method", method, _STEPPERS)
+    bound = check_positive("bound", bound) if np.isfinite(bound) else np.inf
+    step = _STEPPERS[method]
+    x, noise, B = _prepare(x0, noise, seeds)
+    if noise is not None and noise.shape[0] < n_steps:
+        raise ValueError(f"noise must have at least n_steps={n_steps} rows, got {noise.shape[0]}")
+
+    t = t0 + h * np.arange(n_steps + 1)
+    xs = np.empty((n_steps + 1, B, x.shape[1])) if store_states else None
+    us = None
+    ys = None
+    diverged = np.zeros(B, dtype=bool)
+    div_step = np.full(B, -1, dtype=int)
+    dt = h / substeps
+    with np.errstate(all="ignore"):
+        for k in range(n_steps):
+            if xs is not None:
+                xs[k] = x
+            w = None if noise is None else noise[k]
+            u = controller(k, t[k], x, w) if controller is not None else w
+            if observe is not None:
+                obs = np.asarray(observe(k, t[k], x, u), dtype=float).reshape(B, -1)
+                if ys is None:
+                    ys = np.empty((n_steps + 1, B, obs.shape[1]))
+                ys[k] = obs
+            if u is not None:
+                u_arr = np.asarray(u, dtype=float).reshape(B, -1)
+                if us is None:
+                    us = np.empty((n_steps, B, u_arr.shape[1]))
+                us[k] = u_arr
+            tk = t[k]
+            for _ in range(substeps):
+                x = step(rhs, tk, x, u, dt, params)
+                tk += dt
+            bad = _check_bad(x, bound) & ~diverged
+            if bad.any():
+                diverged |= bad
+                div_step[bad] = k + 1
+                x = x.copy()
+                x[diverged] = np.nan
+        if xs is not None:
+            xs[n_steps] = x
+        if observe is not None:
+            obs = np.asarray(observe(n_steps, t[n_steps], x, None), dtype=float).reshape(B, -1)
+            if ys is None:
+                ys = np.empty((n_steps + 1, B, obs.shape[1]))
+            ys[n_steps] = obs
+    return SimResult(t=t, x=xs, u=us, y=ys, diverged=diverged, diverged_step=div_step,
+                     seeds=None if seeds is None else list(seeds), bound=bound)
+
+
+def simulate_discrete(
+    step: Callable,
+    x0,
+    n_steps: int,
+    *,
+    noise=None,
+    params=None,
+    observe: Callable | None = None,
+    store_states: bool = True,
+    bound: float = 1e8,
+    seeds=None,
+) -> SimResult:
+    """Discrete loop ``x(k+1) = step(k, x(k), w(k), params)`` over a batch of runs.
+
+    ``step`` receives ``x`` of shape ``(B, n)`` and the noise row ``w(k)`` of shape ``(B, m)``
+    (``None`` without noise). Divergence is detected as in :func:`simulate_sampled`.
+    ``observe(k, x, w) -> (B, p)`` is stored for ``k = 0..N-1``.
+    """
+    n_steps = check_int("n_steps", n_steps, minimum=1)
+    bound = check_positive("bound", bound) if np.isfinite(bound) else np.inf
+    x, noise, B = _prepare(x0, noise, seeds)
+    if noise is not None and noise.shape[0] < n_steps:
+        raise ValueError(f"noise must have at least n_steps={n_steps} rows, got {noise.shape[0]}")
+    xs = np.empty((n_steps + 1, B, x.shape[1])) if store_states else None
+    ys = None
+    diverged = np.zeros(B, dtype=bool)
+    div_step = np.full(B, -1, dtype=int)
+    with np.errstate(all="ignore"):
+        for k in range(n_steps):
+            if xs is not None:
+                xs[k] = x
+            w = None if noise is None else noise[k]
+            if observe is not None:
+                obs = np.asarray(observe(k, x, w), dtype=float).reshape(B, -1)
+                if ys is None:
+                    ys = np.empty((n_steps, B, obs.shape[1]))
+                ys[k] = obs
+            x = np.asarray(step(k, x, w, params), dtype=float).reshape(B, -1)
+            bad = _check_bad(x, bound) & ~diverged
+            if bad.any():
+                diverged |= bad
+                div_step[bad] = k + 1
+                x = x.copy()
+                x[diverged] = np.nan
+        if xs is not None:
+            xs[n_steps] = x
+    return SimResult(t=np.arange(n_steps + 1, dtype=float), x=xs, u=None, y=ys, diverged=diverged,
+                     diverged_step=div_step, seeds=None if seeds is None else list(seeds), bound=bound)
+
+
+def simulate_ivp(
+    rhs: Callable,
+    x0,
+    t_eval,
+    *,
+    u: Callable | None = None,
+    params=None,
+    method: str = "RK45",
+    rtol: float = 1e-8,
+    atol: float = 1e-10,
+    bound: float = 1e8,
+) -> SimResult:
+    """Smooth, deterministic loop integrated adaptively by :func:`scipy.integrate.solve_ivp`.
+
+    The batch is flattened into one ODE of size ``B*n`` (``rhs`` is vectorised over runs), so one
+    adaptive solve serves the whole batch. ``u(t) -> (B, m)`` is an optional smooth input.
+    A failed solve or a state leaving ``bound`` marks the affected runs as diverged.
+    """
+    from scipy.integrate import solve_ivp
+
+    t_eval = check_finite("t_eval", t_eval)
+    t_eval = np.atleast_1d(t_eval)
+    if t_eval.size < 2 or np.any(np.diff(t_eval) <= 0):
+        raise ValueError("t_eval must be strictly increasing with at least two instants")
+    x, _, B = _prepare(x0, None, None)
+    n = x.shape[1]
+
+    def f(t, z):
+        xb = z.reshape(B, n)
+        return np.asarray(rhs(t, xb, None if u is None else u(t), params), dtype=float).reshape(-1)
+
+    sol = solve_ivp(f, (t_eval[0], t_eval[-1]), x.reshape(-1), t_eval=t_eval, method=method,
+                    rtol=rtol, atol=atol)
+    xs = np.full((t_eval.size, B, n), np.nan)
+    m = sol.y.shape[1]
+    xs[:m] = sol.y.T.reshape(m, B, n)
+    with np.errstate(invalid="ignore"):
+        bad_k = ~np.all(np.isfinite(xs), axis=2) | np.any(np.abs(xs) > bound, axis=2)
+    diverged = bad_k.any(axis=0)
+    div_step = np.where(diverged, bad_k.argmax(axis=0), -1)
+    return SimResult(t=t_eval, x=xs, u=None, y=None, diverged=diverged, diverged_step=div_step,
+                     bound=bound, info={"status": sol.status, "message": sol.message, "nfev": sol.nfev})
+
+
+# ----------------------------------------------------------------------------------------------
+# python-control interoperability
+# ----------------------------------------------------------------------------------------------
+
+def continuous_nlsys(rhs: Callable, *, states, inputs, outputs=None, output: Callable | None = None,
+                     params=None, name: str | None = None):
+    """Wrap a batched right-hand side as a :class:`control.NonlinearIOSystem` (``control.nlsys``).
+
+    python-control calls the update function with 1-D ``x`` and ``u``; they are lifted to a batch of
+    one, so the same ``rhs`` serves the engine and :func:`control.interconnect`.
+
+    Parameters
+    ----------
+    rhs : callable
+        ``rhs(t, x, u, params)`` accepting ``x`` of shape ``(1, n)`` and ``u`` of shape ``(1, m)``.
+    states, inputs, outputs : int or list of str
+        Signal counts or names, as for :func:`control.nlsys`.
+    output : callable, optional
+        ``output(t, x, u, params)`` (batched like ``rhs``); default: the full state.
+    """
+    import control as ct
+
+    def updfcn(t, x, u, p):
+        return np.asarray(rhs(t, np.atleast_2d(x), np.atleast_2d(u), p if p else params)).reshape(-1)
+
+    outfcn = None
+    if output is not None:
+        def outfcn(t, x, u, p):
+            return np.asarray(output(t, np.atleast_2d(x), np.atleast_2d(u), p if p else params)).reshape(-1)
+
+    if outputs is None:
+        outputs = states
+    return ct.nlsys(updfcn, outfcn, states=states, inputs=inputs, outputs=outputs, name=name)
