@@ -1,0 +1,42 @@
+"""CLI: exit codes, one-line errors, files written."""
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+from analysis import STUDIES
+from ctrl_analysis.cli import main
+
+
+def test_list_names_all_five_studies(capsys):
+    assert main(["list"]) == 0
+    out = capsys.readouterr().out
+    for name in ["ikf-mfac", "ckf", "differential-estimator", "meso", "pendulum"]:
+        assert name in out
+    assert len(STUDIES) == 5
+
+
+@pytest.mark.parametrize(
+    "argv,fragment",
+    [
+        (["reproduce", "nope"], "unknown study 'nope'"),
+        (["reproduce", "ckf", "--runs", "0"], "--runs: must be a positive integer"),
+        (["reproduce", "ckf", "--seed", "-3"], "--seed: must be a non-negative integer"),
+        (["reproduce", "ckf", "--runs", "many"], "--runs: must be a positive integer"),
+        (["frobnicate"], "invalid choice"),
+    ],
+)
+def test_bad_input_is_one_line_and_exit_2(argv, fragment):
+    proc = subprocess.run([sys.executable, "-m", "ctrl_analysis.cli", *argv], capture_output=True, text=True)
+    assert proc.returncode == 2
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and fragment in lines[0] and "Traceback" not in proc.stderr
+
+
+def test_unbuilt_study_reports_what_is_missing(tmp_path, capsys):
+    assert main(["reproduce", "ckf", "--out", str(tmp_path), "--quick"]) == 0
+    data = json.loads((tmp_path / "ckf" / "results.json").read_text())
+    assert data["study"] == "ckf" and data["missing"]
+    assert "not built yet" in capsys.readouterr().out

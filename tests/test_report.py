@@ -1,0 +1,80 @@
+"""Report layer: computed verdicts, results.json contract, REPORT.md."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from ctrl_analysis.report import (Quantity, StudyContext, StudyInfo, StudyResult, compute_verdict, relative_error,
+                                  write_report_md, write_results_json)
+
+INFO = StudyInfo(name="demo", seed_file="x.txt", paper="A paper", reproduces="things")
+
+
+@pytest.mark.parametrize(
+    "value,paper,tol,verdict",
+    [
+        (1.05, 1.0, 0.1, "agrees"),
+        (1.2, 1.0, 0.1, "differs"),
+        (3.0, None, None, "new"),
+        ([1.0, 2.1], [1.0, 2.0], 0.1, "agrees"),
+        ([1.0, 2.5], [1.0, 2.0], 0.1, "differs"),
+        ([1.0], [1.0, 2.0], 0.5, "differs"),  # shape mismatch never agrees
+        (float("nan"), 1.0, 10.0, "differs"),  # a diverged value never agrees
+        (None, 1.0, 0.1, "differs"),
+        (0.05, 0.0, 0.1, "agrees"),  # absolute error where the paper value is 0
+    ],
+)
+def test_verdict_is_computed(value, paper, tol, verdict):
+    assert compute_verdict(value, paper, tol) == verdict
+    assert Quantity("q", "q", value, paper, tolerance=tol).verdict == verdict
+
+
+def test_relative_error():
+    assert relative_error(-9.0, -10.0) == pytest.approx(0.1)
+    assert math.isinf(relative_error([1, 2], [1]))
+
+
+def test_results_json_contract(tmp_path):
+    r = StudyResult(INFO, settings={"h": np.float64(1e-3), "n": np.int64(5), "v": np.arange(3)})
+    r.quantity("a.b", "a quantity", np.float64(1.29e-4), paper=1.3179e-4, std=2e-6, runs=20, tolerance=0.25)
+    r.quantity("a.c", "a diverged one", float("nan"), paper=1.0)
+    r.quantity("a.d", "new", [1.0, 2.0])
+    r.reconstruction("h", 1e-3, "the paper does not print it")
+    r.finding("eq9-typo", "text", evidence={"x": 1})
+    with pytest.raises(ValueError, match="a.b"):
+        r.quantity("a.b", "dup", 1.0)
+    data = json.loads(write_results_json(r, tmp_path).read_text())
+    assert set(data) >= {"study", "seed_file", "settings", "reconstructions", "quantities", "findings", "figures",
+                         "runtime_s", "versions"}
+    q = {d["id"]: d for d in data["quantities"]}
+    assert q["a.b"]["verdict"] == "agrees" and q["a.b"]["runs"] == 20 and q["a.b"]["tolerance"] == 0.25
+    assert q["a.c"]["value"] is None and q["a.c"]["verdict"] == "differs" and "not finite" in q["a.c"]["note"]
+    assert q["a.d"]["verdict"] == "new" and q["a.d"]["tolerance"] is None
+    assert data["settings"] == {"h": 1e-3, "n": 5, "v": [0, 1, 2]}
+    assert data["versions"]["control"]
+
+
+def test_report_md_lists_tables_findings_figures(tmp_path):
+    r = StudyResult(INFO)
+    r.quantity("x", "x", 2.0, paper=1.0)
+    r.finding("f1", "a finding")
+    r.figures.append("fig1.png")
+    r.missing.append("part B")
+    text = write_report_md([r.to_dict()], tmp_path).read_text()
+    assert "| `x` | x | 1 | 2 |" in text and "differs" in text
+    assert "**f1**" in text and "![fig1.png](demo/fig1.png)" in text and "part B" in text
+
+
+def test_context_runs_and_save_figure(tmp_path):
+    from ctrl_analysis.report import new_figure
+
+    assert StudyContext(tmp_path).runs_or(100, 5) == 100
+    assert StudyContext(tmp_path, quick=True).runs_or(100, 5) == 5
+    assert StudyContext(tmp_path, runs=7, quick=True).runs_or(100, 5) == 7
+    r = StudyResult(INFO)
+    fig, ax = new_figure(title="t")
+    ax.plot([0, 1], [0, 1])
+    path = StudyContext(tmp_path).save_figure(r, fig, "f.png")
+    assert path.exists() and path.stat().st_size > 1000 and r.figures == ["f.png"]
