@@ -1,0 +1,289 @@
+"""The model-free differential state estimator Σ: parameters, linear models and right-hand side.
+
+Σ of order ``n0`` driven by the measured signal ``y`` (states ``z_1..z_n0``)::
+
+    z_i'  = z_(i+1) + a_i (y - z_1),   i = 1..n0-1
+    z_n0' = a_n0 (y - z_1)
+
+with ``a_i = K C(n0-1, i-1) a^(i-1)`` (all ``n0 - 1`` open-loop zeros at ``-a``) and, by default,
+``K`` the gain that puts a double closed-loop pole at the real-axis breakaway point ``-n0 a``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import control as ct
+import numpy as np
+
+from .._validate import check_in, check_int, check_positive
+from ..symbolic.differential import breakaway_gain, breakaway_point, differential_coefficients
+
+__all__ = ["DifferentialEstimator", "READINGS"]
+
+#: The two ways of reading estimates off Σ: ``"state"`` (x̂_i = z_i) and ``"corrected"``
+#: (x̂_i = z_i + a_(i-1) (y - z_1)).
+READINGS = ("state", "corrected")
+
+
+@dataclass(frozen=True)
+class DifferentialEstimator:
+    """Differential state estimator Σ of order ``n0`` (a chain of integrators with output injection).
+
+    Parameters
+    ----------
+    n0 : int
+        Order of Σ (number of states), ``>= 2``. To estimate ``x`` and its first ``n - 1``
+        derivatives, take ``n0 >= n + 1``.
+    a : float
+        The ``n0 - 1`` open-loop zeros sit at ``-a``; ``> 0`` and finite, in 1/s.
+    K : float, optional
+        Open-loop gain, ``> 0``. Default: the breakaway design gain ``n0^n0 a / (n0-1)^(n0-1)``,
+        which puts a double closed-loop pole at ``-n0 a``.
+
+    Attributes
+    ----------
+    a_coeffs : numpy.ndarray
+        ``[a_1, ..., a_n0]`` (read-only), ``a_i = K C(n0-1, i-1) a^(i-1)``.
+    tf : control.TransferFunction
+        Closed loop ``Φ(s)``, y -> z_1.
+    open_loop_tf : control.TransferFunction
+        Open loop ``G(s) = K (s + a)^(n0-1) / s^n0``.
+    ss : control.StateSpace
+        Input ``y``, states and outputs ``z[0]..z[n0-1]`` (``z[i-1]`` is the paper's ``z_i``).
+    poles : numpy.ndarray
+        Closed-loop poles, sorted by decreasing real part.
+
+    Raises
+    ------
+    TypeError
+        If ``n0`` is not an integer.
+    ValueError
+        If ``n0 < 2``, ``a`` is not finite and ``> 0``, or ``K`` is not finite and ``> 0``.
+
+    References
+    ----------
+    Qi Guoyuan, Chen Zengqiang, Xue Wei, Yuan Zhuzhi, "A new differential state estimator and
+    controller for nonlinear stochastic system", Acta Electronica Sinica 32(4), 2004:
+    eq. (2) the estimator, (3) Φ(s), (4) G(s), (5)-(6) the coefficients, (8)-(9) the gain,
+    (11) and remark (1) the two estimate readings. The coefficient signs and the gain are the
+    derived ones (the paper's printed eq. (5) last term and eq. (9) exponent differ).
+
+    Examples
+    --------
+    >>> import control as ct
+    >>> import numpy as np
+    >>> est = DifferentialEstimator(5, 2.0)
+    >>> est.K
+    24.4140625
+    >>> float(ct.dcgain(est.tf))
+    1.0
+    >>> np.round(est.poles[-2:].real, 6)
+    array([-10., -10.])
+    """
+
+    n0: int
+    a: float
+    K: float | None = None
+    a_coeffs: np.ndarray = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self):
+        n0 = check_int("n0", self.n0, minimum=2)
+        a = check_positive("a", self.a)
+        k = breakaway_gain(n0, a) if self.K is None else check_positive("K", self.K)
+        object.__setattr__(self, "n0", n0)
+        object.__setattr__(self, "a", float(a))
+        object.__setattr__(self, "K", float(k))
+        coeffs = differential_coefficients(n0, a, k)  # (5)+(6)
+        coeffs.setflags(write=False)
+        object.__setattr__(self, "a_coeffs", coeffs)
+
+    # ------------------------------------------------------------------ linear models
+    @property
+    def breakaway_point(self) -> float:
+        """Real-axis breakaway (break-in) point ``-n0 a`` of the root locus of ``G``, in 1/s."""
+        return breakaway_point(self.n0, self.a)
+
+    @property
+    def characteristic_polynomial(self) -> np.ndarray:
+        """``[1, a_1, ..., a_n0]``: coefficients of ``s^n0 + a_1 s^(n0-1) + ... + a_n0``."""
+        return np.concatenate(([1.0], self.a_coeffs))
+
+    @property
+    def tf(self) -> ct.TransferFunction:
+        """Closed loop y -> z_1, eq. (3)."""
+        # (3) Φ(s) = (a_1 s^(n0-1) + ... + a_n0) / (s^n0 + a_1 s^(n0-1) + ... + a_n0)
+        return ct.tf(self.a_coeffs, self.characteristic_polynomial, inputs="y", outputs="z[0]")
+
+    @property
+    def open_loop_tf(self) -> ct.TransferFunction:
+        """Open loop, eq. (4) with (6)."""
+        # (4) G(s) = K (s + a)^(n0-1) / s^n0 = (a_1 s^(n0-1) + ... + a_n0) / s^n0
+        den = np.zeros(self.n0 + 1)
+        den[0] = 1.0
+        return ct.tf(self.a_coeffs, den, inputs="e", outputs="z[0]")
+
+    @property
+    def A(self) -> np.ndarray:
+        """State matrix of eq. (2): ``-a`` in the first column, ones on the superdiagonal."""
+        A = np.diag(np.ones(self.n0 - 1), 1)
+        A[:, 0] = -self.a_coeffs
+        return A
+
+    @property
+    def B(self) -> np.ndarray:
+        """Input matrix of eq. (2): ``[a_1, ..., a_n0]^T``, shape ``(n0, 1)``."""
+        return self.a_coeffs.reshape(-1, 1).copy()
+
+    @property
+    def ss(self) -> ct.StateSpace:
+        """Eq. (2) as a state-space system: input ``y``, outputs ``z[0]..z[n0-1]``."""
+        names = self._state_names()
+        # (2) z' = A z + B y, outputs all states
+        return ct.ss(self.A, self.B, np.eye(self.n0), np.zeros((self.n0, 1)),
+                     inputs="y", states=names, outputs=names)
+
+    @property
+    def poles(self) -> np.ndarray:
+        """Closed-loop poles (roots of the denominator of Φ), by decreasing real part."""
+        p = np.roots(self.characteristic_polynomial)
+        return p[np.lexsort((p.imag, -p.real))]
+
+    # ------------------------------------------------------------------ estimates
+    def estimate_matrices(self, reading: str = "state") -> tuple[np.ndarray, np.ndarray]:
+        """``(C, D)`` with ``x̂ = C z + D y`` for the chosen estimate reading.
+
+        Parameters
+        ----------
+        reading : {"state", "corrected"}
+            ``"state"``: x̂_i = z_i (remark (1), with measurement noise). ``"corrected"``:
+            x̂_1 = z_1, x̂_i = z_i + a_(i-1) (y - z_1), i = 2..n0 (eq. 11), i.e. x̂_i = z_(i-1)'.
+
+        Returns
+        -------
+        C : numpy.ndarray, shape (n0, n0)
+        D : numpy.ndarray, shape (n0, 1)
+
+        Notes
+        -----
+        With the ``"corrected"`` reading, y -> x̂_i is ``s^(i-1) Φ(s)``: biproper for ``i = 2``
+        (high-frequency gain ``a_1``) and improper beyond, so measurement noise reaches the
+        estimates unfiltered; with ``"state"`` every channel y -> z_i is strictly proper.
+        """
+        check_in("reading", reading, READINGS)
+        C = np.eye(self.n0)
+        D = np.zeros((self.n0, 1))
+        if reading == "corrected":
+            # (11) x̂_i = z_i + a_(i-1) (y - z_1), i = 2..n0
+            C[1:, 0] -= self.a_coeffs[:-1]
+            D[1:, 0] = self.a_coeffs[:-1]
+        return C, D
+
+    def estimates(self, z, y, reading: str = "state") -> np.ndarray:
+        """State estimates ``x̂_1..x̂_n0`` from the states ``z`` and the measurement ``y``.
+
+        Parameters
+        ----------
+        z : array_like, shape (..., n0)
+            States of Σ on the last axis (e.g. ``(n0,)``, ``(B, n0)`` or ``(T, n0)``; a
+            python-control response has them on the first axis: pass ``resp.states.T``).
+        y : array_like
+            Measurement, broadcastable to ``z.shape[:-1]`` (a trailing axis of length 1 is allowed).
+        reading : {"state", "corrected"}
+            See :meth:`estimate_matrices`.
+
+        Returns
+        -------
+        numpy.ndarray, shape (..., n0)
+        """
+        z, y = self._check_zy(z, y)
+        C, D = self.estimate_matrices(reading)
+        return z @ C.T + y[..., None] * D[:, 0]
+
+    # ------------------------------------------------------------------ simulation
+    def rhs(self, t, z, y, params=None) -> np.ndarray:
+        """Right-hand side of eq. (2) in python-control's ``(t, x, u, params)`` order.
+
+        Parameters
+        ----------
+        t : float
+            Time (unused: Σ is time invariant).
+        z : array_like, shape (n0,) or (B, n0)
+            States on the last axis; leading axes are batch axes.
+        y : array_like
+            Measurement: scalar, shape ``(1,)`` (python-control's input vector), or
+            broadcastable to ``z.shape[:-1]`` (a trailing axis of length 1 is allowed).
+        params : dict, optional
+            Ignored (accepted for ``control.nlsys``).
+
+        Returns
+        -------
+        numpy.ndarray
+            ``dz/dt``, same shape as ``z`` broadcast with ``y``.
+        """
+        z, y = self._check_zy(z, y)
+        e = (y - z[..., 0])[..., None]  # output error y - z_1
+        dz = self.a_coeffs * e  # a_i (y - z_1)
+        # (2) z_i' = z_(i+1) + a_i (y - z_1), i = 1..n0-1;  z_n0' = a_n0 (y - z_1)
+        dz[..., :-1] += z[..., 1:]
+        return dz
+
+    def nlsys(self, name: str | None = None, reading: str = "state") -> ct.NonlinearIOSystem:
+        """Σ as a ``control.nlsys``: input ``y``, states ``z[0..n0-1]``, outputs ``xhat[0..n0-1]``.
+
+        Parameters
+        ----------
+        name : str, optional
+            System name (for ``control.interconnect``).
+        reading : {"state", "corrected"}
+            Which estimates the outputs are (see :meth:`estimate_matrices`); ``"corrected"``
+            has direct feedthrough from ``y``.
+
+        Returns
+        -------
+        control.NonlinearIOSystem
+
+        Examples
+        --------
+        >>> import control as ct
+        >>> import numpy as np
+        >>> est = DifferentialEstimator(3, 5.0)
+        >>> sys = est.nlsys(name="sigma")
+        >>> resp = ct.input_output_response(sys, np.linspace(0, 1, 101), 1.0)
+        >>> bool(abs(resp.outputs[0, -1] - 1) < 1e-2)
+        True
+        """
+        check_in("reading", reading, READINGS)
+        C, D = self.estimate_matrices(reading)
+        d = D[:, 0]
+
+        def outfcn(t, z, u, params=None):
+            return C @ z + d * u[0]
+
+        return ct.nlsys(
+            lambda t, z, u, params=None: self.rhs(t, z, u[0], params),
+            outfcn,
+            inputs="y",
+            states=self._state_names(),
+            outputs=[f"xhat[{k}]" for k in range(self.n0)],
+            name=name,
+        )
+
+    # ------------------------------------------------------------------ helpers
+    def _state_names(self) -> list[str]:
+        return [f"z[{k}]" for k in range(self.n0)]
+
+    def _check_zy(self, z, y) -> tuple[np.ndarray, np.ndarray]:
+        z = np.asarray(z, dtype=float)
+        if z.ndim < 1 or z.shape[-1] != self.n0:
+            raise ValueError(f"z must have the {self.n0} states of Σ on its last axis, got shape {z.shape}")
+        y = np.asarray(y, dtype=float)
+        if y.ndim >= 1 and y.shape[-1] == 1 and y.ndim >= z.ndim:
+            y = y[..., 0]  # python-control input vector (1,) or a column (B, 1)
+        try:
+            np.broadcast_shapes(y.shape, z.shape[:-1])
+        except ValueError:
+            raise ValueError(
+                f"y must be broadcastable to z.shape[:-1] = {z.shape[:-1]}, got shape {y.shape}"
+            ) from None
+        return z, y
