@@ -1,0 +1,350 @@
+"""Extended state observers: linear ESO, Han's nonlinear ESO (``fal``) and the modified ESO (MESO).
+
+Plant of order ``n`` in the canonical form
+
+    x_i' = x_{i+1}  (i < n),   x_n' = f(known) + L(t) + b0 u,   y = x_1,
+
+with the *extended state* ``x_{n+1} = L(t)`` (the total unknown part). The observer has ``n + 1``
+states ``x_hat_1 .. x_hat_{n+1}``; with ``e = y - x_hat_1``
+
+    x_hat_i'     = x_hat_{i+1} + L_i g_i(e)                            i = 1..n-1
+    x_hat_n'     = x_hat_{n+1} + f_known + b0 u + L_n g_n(e)
+    x_hat_{n+1}' = L_{n+1} g_{n+1}(e)
+
+``g_i(e) = e`` (linear ESO) or ``g_i(e) = fal(e, alpha_i, delta)`` (Han's nonlinear ESO). A callable
+``known`` supplying ``f_known`` makes it a *modified* ESO (MESO); without it the observer is the
+conventional ESO, which lumps the known part into the extended state.
+"""
+
+from __future__ import annotations
+
+from math import comb
+from typing import Callable
+
+import numpy as np
+
+from .._validate import check_finite, check_int, check_positive
+
+__all__ = ["fal", "ExtendedStateObserver"]
+
+
+def fal(e, alpha, delta):
+    """Han's nonlinear gain function ``fal(e, alpha, delta)``.
+
+    ``fal(e) = e / delta**(1 - alpha)`` for ``|e| <= delta`` and ``|e|**alpha * sign(e)`` otherwise:
+    linear near the origin (which avoids the infinite slope of ``|e|**alpha`` at 0), continuous at
+    ``|e| = delta`` and odd.
+
+    Parameters
+    ----------
+    e : array_like
+        Error(s).
+    alpha : float or array_like
+        Exponent(s), broadcast against ``e``.
+    delta : float
+        Width of the linear zone (> 0).
+
+    Returns
+    -------
+    ndarray or float
+        Same shape as ``broadcast(e, alpha)``.
+
+    Raises
+    ------
+    ValueError
+        If ``delta <= 0`` or any input is not finite.
+
+    References
+    ----------
+    Han J., "From PID to active disturbance rejection control", IEEE TIE 56(3), 2009.
+    Chen Z., Gao Q., "Modified extended state observer: analysis and implementation", Control
+    Theory & Applications 35(8), 2018, eq. (2)-(3) (nonlinear g_i).
+
+    Examples
+    --------
+    >>> float(fal(0.5, 0.5, 0.1))  # |e| > delta: sqrt(0.5)
+    0.7071067811865476
+    """
+    delta = check_positive("delta", delta)
+    e = np.asarray(e, dtype=float)
+    alpha = np.asarray(alpha, dtype=float)
+    if not np.all(np.isfinite(alpha)):
+        raise ValueError(f"alpha must be finite (no NaN or inf), got {alpha!r}")
+    abs_e = np.abs(e)
+    inner = e / np.power(delta, 1.0 - alpha)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        outer = np.power(abs_e, alpha) * np.sign(e)
+    out = np.where(abs_e <= delta, inner, outer)
+    return float(out) if out.ndim == 0 else out
+
+
+class ExtendedStateObserver:
+    """Continuous extended state observer of plant order ``n`` (linear, nonlinear or modified).
+
+    Parameters
+    ----------
+    gains : sequence of float, length n + 1 >= 2
+        Observer gains ``L_1 .. L_{n+1}`` (> 0).
+    b0 : float
+        Nominal input gain of the plant (``b0 u`` enters the n-th equation).
+    alpha : sequence of float, length n + 1, optional
+        Exponents of Han's ``fal``; ``None`` gives the linear ESO (``g_i(e) = e``).
+    delta : float, optional
+        Linear-zone width of ``fal`` (> 0); required when ``alpha`` is given.
+    known : callable, optional
+        ``known(t, x_hat, u, params) -> f_known`` of shape ``x_hat.shape[:-1]``; it receives the same
+        ``x_hat`` and observer input ``u = [y, u_control]`` as :meth:`rhs`. Present: modified ESO
+        (MESO, the known part of the plant is fed into the n-th equation). Absent: conventional ESO.
+
+    Attributes
+    ----------
+    n : int
+        Plant order.
+    nstates : int
+        Observer order ``n + 1``.
+    L : ndarray, shape (n + 1,)
+        Gains.
+    b0 : float
+    alpha, delta, known
+        As given.
+
+    Raises
+    ------
+    ValueError
+        Gains not finite or not > 0, fewer than two gains, ``alpha`` of the wrong length, or
+        ``delta`` missing / not > 0 when ``alpha`` is given.
+
+    Notes
+    -----
+    Error dynamics of the linear ESO (``e_i = x_i - x_hat_i``, known part cancelled exactly):
+    ``e' = (A - L C) e + E_{n+1} h`` with ``h = dx_{n+1}/dt``; characteristic polynomial
+    ``s^(n+1) + L_1 s^n + ... + L_{n+1}``. With ``L_i = beta_i / eps^i`` the steady error for a
+    constant ``h`` is ``e_i = L_{i-1} / L_{n+1} h ∝ eps^(n+2-i)`` (``L_0 = 1``).
+
+    References
+    ----------
+    Chen Z., Gao Q., "Modified extended state observer: analysis and implementation", Control
+    Theory & Applications 35(8), 2018: eq. (3) MESO, (6) ESO, (29) linear gains ``beta_i / eps^i``,
+    bound (4)/(7) for the error scaling.
+    Gao Z., "Scaling and bandwidth-parameterization based controller tuning", ACC 2003 (bandwidth
+    form ``(s + omega_o)^(n+1)``).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> obs = ExtendedStateObserver.from_bandwidth(2, 20.0, b0=3.95)
+    >>> np.allclose(obs.characteristic_polynomial(), [1, 60, 1200, 8000])
+    True
+    """
+
+    def __init__(self, gains, b0: float = 0.0, alpha=None, delta=None,
+                 known: Callable | None = None):
+        gains = np.atleast_1d(check_finite("gains", gains)).astype(float)
+        if gains.ndim != 1 or gains.size < 2:
+            raise ValueError(f"gains must be a 1-D sequence of n + 1 >= 2 entries, got shape {gains.shape}")
+        if np.any(gains <= 0):
+            raise ValueError(f"gains must all be > 0, got {gains.tolist()}")
+        self.L = gains
+        self.n = gains.size - 1
+        self.nstates = self.n + 1
+        self.b0 = float(check_finite("b0", b0))
+        if alpha is not None:
+            alpha = np.atleast_1d(check_finite("alpha", alpha)).astype(float)
+            if alpha.shape != (self.nstates,):
+                raise ValueError(f"alpha must have n + 1 = {self.nstates} entries, got {alpha.size}")
+            if delta is None:
+                raise ValueError("delta must be given (> 0) when alpha is given, got None")
+            delta = float(check_positive("delta", delta))
+        elif delta is not None:
+            delta = float(check_positive("delta", delta))
+        if known is not None and not callable(known):
+            raise TypeError(f"known must be callable known(t, x_hat, u, params), got {known!r}")
+        self.alpha = alpha
+        self.delta = delta
+        self.known = known
+
+    # ------------------------------------------------------------------------------------------
+    # Constructors
+    # ------------------------------------------------------------------------------------------
+
+    @classmethod
+    def from_epsilon(cls, n: int, epsilon: float, beta, **kw) -> "ExtendedStateObserver":
+        """High-gain form ``L_i = beta_i / epsilon**i`` (paper eq. (29) with ``g_i(e) = beta_i e``).
+
+        Parameters
+        ----------
+        n : int
+            Plant order (>= 1).
+        epsilon : float
+            High-gain parameter (> 0); the observer bandwidth scales as ``1 / epsilon``.
+        beta : sequence of float, length n + 1
+            Normalised gains (> 0).
+        **kw
+            Passed to the constructor (``b0``, ``alpha``, ``delta``, ``known``).
+        """
+        n = check_int("n", n, minimum=1)
+        epsilon = float(check_positive("epsilon", epsilon))
+        beta = np.atleast_1d(check_positive("beta", beta)).astype(float)
+        if beta.shape != (n + 1,):
+            raise ValueError(f"beta must have n + 1 = {n + 1} entries, got {beta.size}")
+        i = np.arange(1, n + 2)
+        return cls(beta / epsilon**i, **kw)
+
+    @classmethod
+    def from_bandwidth(cls, n: int, omega_o: float, **kw) -> "ExtendedStateObserver":
+        """Bandwidth form: all poles at ``-omega_o``, ``L_i = C(n+1, i) omega_o**i``.
+
+        Parameters
+        ----------
+        n : int
+            Plant order (>= 1).
+        omega_o : float
+            Observer bandwidth in rad/s (> 0).
+        **kw
+            Passed to the constructor.
+        """
+        n = check_int("n", n, minimum=1)
+        omega_o = float(check_positive("omega_o", omega_o))
+        # (s + omega_o)^(n+1) = sum_i C(n+1, i) omega_o^i s^(n+1-i)
+        return cls([comb(n + 1, i) * omega_o**i for i in range(1, n + 2)], **kw)
+
+    # ------------------------------------------------------------------------------------------
+    # Dynamics
+    # ------------------------------------------------------------------------------------------
+
+    @property
+    def is_linear(self) -> bool:
+        """True for ``g_i(e) = e`` (no ``alpha``)."""
+        return self.alpha is None
+
+    def correction(self, e) -> np.ndarray:
+        """The output-injection terms ``L_i g_i(e)``, shape ``e.shape + (n + 1,)``."""
+        e = np.asarray(e, dtype=float)[..., None]
+        if self.alpha is None:
+            return self.L * e
+        return self.L * fal(e, self.alpha, self.delta)
+
+    def rhs(self, t, x_hat, u, params=None) -> np.ndarray:
+        """Observer right-hand side in python-control's order ``(t, x, u, params)``.
+
+        Parameters
+        ----------
+        t : float
+        x_hat : ndarray, shape (n + 1,) or (B, n + 1)
+            Observer states on the last axis.
+        u : ndarray, shape (..., 2)
+            Observer inputs ``[y, u_control]``.
+        params : object, optional
+            Passed to ``known``.
+
+        Returns
+        -------
+        ndarray
+            ``d x_hat / dt``, shape ``broadcast(x_hat, u)[..., n + 1]``.
+        """
+        x_hat = np.asarray(x_hat, dtype=float)
+        u = np.asarray(u, dtype=float)
+        y = u[..., 0]
+        uc = u[..., 1]
+        e = y - x_hat[..., 0]
+        dx = self.correction(e)
+        dx = dx + np.zeros_like(x_hat)  # broadcast to the batch shape
+        n = self.n
+        # (3)/(6) chain of integrators: x_hat_i' = x_hat_{i+1} + L_i g_i(e)
+        dx[..., :n] += x_hat[..., 1:]
+        # (3) n-th equation: + f_known + b0 u  (MESO); (6) without f_known (ESO)
+        drive = self.b0 * uc
+        if self.known is not None:
+            drive = drive + np.asarray(self.known(t, x_hat, u, params), dtype=float)
+        dx[..., n - 1] += drive
+        return dx
+
+    def nlsys(self, name: str | None = None):
+        """The observer as a :class:`control.NonlinearIOSystem` (inputs ``y``, ``u``; outputs the states)."""
+        from ..simulate import continuous_nlsys
+
+        states = [f"xhat{i}" for i in range(1, self.nstates + 1)]
+        return continuous_nlsys(self.rhs, states=states, inputs=["y", "u"], outputs=states, name=name)
+
+    # ------------------------------------------------------------------------------------------
+    # Linear analysis
+    # ------------------------------------------------------------------------------------------
+
+    def _require_linear(self, what: str) -> None:
+        if self.alpha is not None:
+            raise ValueError(f"{what} is defined for the linear ESO only (alpha must be None)")
+
+    def _matrices(self):
+        m = self.nstates
+        A = np.diag(np.ones(m - 1), 1)
+        A[:, 0] -= self.L
+        B = np.zeros((m, 2))
+        B[:, 0] = self.L
+        B[self.n - 1, 1] = self.b0
+        return A, B
+
+    @property
+    def ss(self):
+        """Linear ESO as :class:`control.StateSpace`: inputs ``[y, u]``, outputs ``x_hat_1..x_hat_{n+1}``.
+
+        The ``known`` term (MESO) is not part of this linear part; it enters the n-th state equation
+        as an additional input with unit gain.
+        """
+        import control as ct
+
+        self._require_linear("ss")
+        A, B = self._matrices()
+        m = self.nstates
+        return ct.ss(A, B, np.eye(m), np.zeros((m, 2)),
+                     inputs=["y", "u"], outputs=[f"xhat{i}" for i in range(1, m + 1)],
+                     states=[f"xhat{i}" for i in range(1, m + 1)])
+
+    def characteristic_polynomial(self) -> np.ndarray:
+        """Coefficients ``[1, L_1, ..., L_{n+1}]`` of ``det(sI - (A - LC))`` (highest power first)."""
+        self._require_linear("characteristic_polynomial")
+        return np.concatenate([[1.0], self.L])
+
+    @property
+    def poles(self) -> np.ndarray:
+        """Observer poles (roots of the characteristic polynomial)."""
+        return np.roots(self.characteristic_polynomial())
+
+    def disturbance_error_tf(self, wrt: str = "derivative") -> list:
+        """Transfer functions from the total disturbance to each estimation error ``e_i = x_i - x_hat_i``.
+
+        Parameters
+        ----------
+        wrt : {"derivative", "state"}
+            ``"derivative"``: input ``h = dx_{n+1}/dt`` (the derivative of the extended state),
+            ``E_i(s)/H(s) = (s^(i-1) + L_1 s^(i-2) + ... + L_{i-1}) / p(s)``.
+            ``"state"``: input ``x_{n+1}`` itself (the former times ``s``).
+
+        Returns
+        -------
+        list of control.TransferFunction
+            ``n + 1`` SISO transfer functions, ``e_1 .. e_{n+1}``.
+
+        References
+        ----------
+        Chen & Gao 2018, error bound (4)/(7).
+        """
+        import control as ct
+
+        self._require_linear("disturbance_error_tf")
+        if wrt not in ("derivative", "state"):
+            raise ValueError(f"wrt must be 'derivative' or 'state', got {wrt!r}")
+        den = self.characteristic_polynomial()
+        coeff = np.concatenate([[1.0], self.L])
+        out = []
+        for i in range(1, self.nstates + 1):
+            num = coeff[:i].copy()  # s^(i-1) + L_1 s^(i-2) + ... + L_{i-1}
+            if wrt == "state":
+                num = np.concatenate([num, [0.0]])
+            out.append(ct.tf(num, den, inputs="h" if wrt == "derivative" else "x_ext",
+                             outputs=f"e{i}"))
+        return out
+
+    def __repr__(self) -> str:
+        kind = "MESO" if self.known is not None else "ESO"
+        kind = ("nonlinear " if self.alpha is not None else "linear ") + kind
+        return f"ExtendedStateObserver({kind}, n={self.n}, L={self.L.tolist()}, b0={self.b0})"

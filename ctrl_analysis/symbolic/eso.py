@@ -1,0 +1,206 @@
+"""Sympy derivations for the linear extended state observer with gains ``L_i = beta_i / eps^i``.
+
+For a plant of order ``n`` the linear ESO has the characteristic polynomial
+
+    p(s) = s^(n+1) + Σ_{i=1}^{n+1} (beta_i / eps^i) s^(n+1-i),
+
+its estimation errors ``e_i = x_i - x̂_i`` respond to the derivative ``h`` of the extended state by
+
+    E_i(s) / H(s) = (s^(i-1) + L_1 s^(i-2) + ... + L_{i-1}) / p(s),
+
+whose DC gains ``(beta_{i-1} / beta_{n+1}) eps^(n+2-i)`` (``beta_0 = 1``) are the ``eps^(n+2-i)``
+error-scaling law, and the design is a bandwidth form ``(s + ω_o)^(n+1)`` iff
+``beta_i = C(n+1, i) c^i`` for one constant ``c``, in which case ``ω_o = c / eps``.
+Each result is a sympy expression and, where useful, a plain numeric function.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+import sympy as sp
+
+from .._validate import check_int, check_positive
+
+__all__ = [
+    "S",
+    "EPS",
+    "beta_symbols",
+    "gain_symbols",
+    "characteristic_polynomial",
+    "characteristic_coefficients",
+    "observer_matrices",
+    "error_transfer_functions",
+    "error_dc_gains",
+    "error_scaling_exponents",
+    "BandwidthMatch",
+    "bandwidth_match",
+    "bandwidth_polynomial",
+]
+
+#: Laplace variable and high-gain parameter.
+S = sp.Symbol("s")
+EPS = sp.Symbol("epsilon", positive=True)
+
+
+def beta_symbols(n: int) -> tuple:
+    """``beta_1 .. beta_{n+1}`` (positive)."""
+    n = check_int("n", n, minimum=1)
+    return sp.symbols(f"beta1:{n + 2}", positive=True)
+
+
+def gain_symbols(n: int) -> tuple:
+    """``L_1 .. L_{n+1}`` (positive)."""
+    n = check_int("n", n, minimum=1)
+    return sp.symbols(f"L1:{n + 2}", positive=True)
+
+
+@lru_cache(maxsize=None)
+def characteristic_polynomial(n: int, high_gain: bool = True) -> sp.Expr:
+    """``det(sI - (A - L C))`` of the linear ESO of plant order ``n``.
+
+    With ``high_gain`` the gains are ``L_i = beta_i / eps^i`` (paper eq. (29)); otherwise the
+    symbols ``L_i``.
+
+    References
+    ----------
+    Chen Z., Gao Q., "Modified extended state observer: analysis and implementation", Control
+    Theory & Applications 35(8), 2018, eq. (3), (6), (29).
+    """
+    A, _, _ = observer_matrices(n, high_gain)
+    return sp.expand(sp.Matrix(A).charpoly(S).as_expr())
+
+
+def characteristic_coefficients(n: int):
+    """Numeric function ``(epsilon, beta) -> [1, beta_1/eps, ..., beta_{n+1}/eps^(n+1)]``."""
+    n = check_int("n", n, minimum=1)
+    betas = beta_symbols(n)
+    coeffs = sp.Poly(characteristic_polynomial(n), S).all_coeffs()
+    f = sp.lambdify((EPS, betas), coeffs, "numpy")
+
+    def numeric(epsilon, beta):
+        epsilon = check_positive("epsilon", epsilon)
+        beta = np.atleast_1d(check_positive("beta", beta))
+        if beta.shape != (n + 1,):
+            raise ValueError(f"beta must have n + 1 = {n + 1} entries, got {beta.size}")
+        return np.array(f(epsilon, tuple(beta)), dtype=float)
+
+    return numeric
+
+
+def observer_matrices(n: int, high_gain: bool = True):
+    """Symbolic error-dynamics matrices ``(A - L C, E, C)``: ``e' = (A - L C) e + E h``.
+
+    ``E`` is the unit vector on the extended state; ``C = [1, 0, ..., 0]``.
+    """
+    n = check_int("n", n, minimum=1)
+    m = n + 1
+    if high_gain:
+        L = [b / EPS**i for i, b in enumerate(beta_symbols(n), start=1)]
+    else:
+        L = list(gain_symbols(n))
+    A = sp.zeros(m, m)
+    for i in range(m - 1):
+        A[i, i + 1] = 1
+    for i in range(m):
+        A[i, 0] = -L[i]
+    E = sp.zeros(m, 1)
+    E[m - 1, 0] = 1
+    C = sp.zeros(1, m)
+    C[0, 0] = 1
+    return A, E, C
+
+
+@lru_cache(maxsize=None)
+def error_transfer_functions(n: int, high_gain: bool = False) -> tuple:
+    """``E_i(s) / H(s)`` for ``i = 1..n+1``, solved from ``(sI - (A - LC)) E = e_{n+1} H``.
+
+    Returns a tuple of simplified rational expressions in ``s`` (and ``L_i`` or ``beta_i, eps``).
+
+    References
+    ----------
+    Chen & Gao 2018, bound (4)/(7).
+    """
+    A, E, _ = observer_matrices(n, high_gain)
+    m = n + 1
+    sol = (S * sp.eye(m) - A).LUsolve(E)
+    return tuple(sp.factor(sp.cancel(sp.together(e))) for e in sol)
+
+
+@lru_cache(maxsize=None)
+def error_dc_gains(n: int) -> tuple:
+    """DC gains of ``E_i / H`` with ``L_i = beta_i / eps^i``: ``(beta_{i-1}/beta_{n+1}) eps^(n+2-i)``."""
+    return tuple(sp.simplify(sp.limit(g, S, 0)) for g in error_transfer_functions(n, high_gain=True))
+
+
+def error_scaling_exponents(n: int) -> tuple:
+    """Exponent ``k_i`` of ``eps`` in the steady error of ``x̂_i`` for a constant ``h``: ``n + 2 - i``.
+
+    Derived from :func:`error_dc_gains` (the degree of ``eps`` in each DC gain), not assumed.
+    """
+    out = []
+    for g in error_dc_gains(n):
+        num, den = sp.fraction(sp.together(g))
+        out.append(int(sp.degree(num, EPS) - sp.degree(den, EPS)))
+    return tuple(out)
+
+
+@dataclass(frozen=True)
+class BandwidthMatch:
+    """Result of :func:`bandwidth_match`.
+
+    Attributes
+    ----------
+    is_bandwidth : bool
+        ``beta_i = C(n+1, i) c^i`` for all ``i`` (exact, in rational arithmetic).
+    c : sympy.Expr or None
+        The constant ``c`` (then ``ω_o = c / eps``).
+    omega_o : sympy.Expr or None
+        ``c / eps`` (a number when ``epsilon`` is given).
+    """
+
+    is_bandwidth: bool
+    c: object
+    omega_o: object
+
+
+def bandwidth_polynomial(n: int, omega_o=None) -> sp.Expr:
+    """``(s + omega_o)^(n+1)`` expanded (``omega_o`` a symbol when not given)."""
+    n = check_int("n", n, minimum=1)
+    w = sp.Symbol("omega_o", positive=True) if omega_o is None else sp.nsimplify(omega_o)
+    return sp.expand((S + w) ** (n + 1))
+
+
+def bandwidth_match(beta, epsilon=None) -> BandwidthMatch:
+    """Is ``s^(n+1) + Σ beta_i/eps^i s^(n+1-i)`` exactly ``(s + ω_o)^(n+1)``? If so, which ``ω_o``?
+
+    Matching coefficients of ``(s + ω)^(n+1) = Σ C(n+1, i) ω^i s^(n+1-i)`` gives
+    ``beta_i / eps^i = C(n+1, i) ω^i``, i.e. ``beta_i = C(n+1, i) c^i`` with ``c = eps ω``.
+
+    Parameters
+    ----------
+    beta : sequence of numbers, length n + 1
+        Converted to exact rationals with :func:`sympy.nsimplify`.
+    epsilon : number, optional
+        When given, ``omega_o`` is returned as a number.
+
+    Examples
+    --------
+    >>> m = bandwidth_match((3, 3, 1), epsilon=0.05)
+    >>> m.is_bandwidth, m.c, m.omega_o
+    (True, 1, 20)
+    """
+    beta = [sp.nsimplify(b, rational=True) for b in beta]
+    if len(beta) < 2 or any(b <= 0 for b in beta):
+        raise ValueError(f"beta must have n + 1 >= 2 positive entries, got {beta}")
+    m = len(beta)
+    c = beta[0] / m  # from beta_1 = C(n+1, 1) c
+    ok = all(sp.simplify(beta[i - 1] - sp.binomial(m, i) * c**i) == 0 for i in range(1, m + 1))
+    if not ok:
+        return BandwidthMatch(False, None, None)
+    if epsilon is None:
+        return BandwidthMatch(True, c, c / EPS)
+    eps = sp.nsimplify(check_positive("epsilon", epsilon), rational=True)
+    return BandwidthMatch(True, c, sp.nsimplify(c / eps))
