@@ -7,6 +7,8 @@ from __future__ import annotations
 
 from ctrl_analysis.report import StudyContext, StudyInfo, StudyResult
 
+from ._unbuilt import run_unbuilt
+
 INFO = StudyInfo(
     name='ckf',
     seed_file='001_98762e3e5a8851d8.txt',
@@ -19,7 +21,4 @@ MISSING = ['characteristic-model RLS identification and CKF', 'golden-section + 
 
 def run(ctx: StudyContext) -> StudyResult:
     """Reproduce what exists of the study; list what is not built yet."""
-    result = StudyResult(INFO)
-    result.missing = list(MISSING)
-    ctx.progress("not built yet: " + "; ".join(MISSING))
-    return result
+    return run_unbuilt(ctx, INFO, MISSING)

@@ -7,6 +7,8 @@ from __future__ import annotations
 
 from ctrl_analysis.report import StudyContext, StudyInfo, StudyResult
 
+from ._unbuilt import run_unbuilt
+
 INFO = StudyInfo(
     name='ikf-mfac',
     seed_file='000_1281acf4834e65d1.txt',
@@ -19,7 +21,4 @@ MISSING = ['CFDL-MFAC, D-MFAC, TD-MFAC and IKF-MFAC controllers', 'Examples 1 an
 
 def run(ctx: StudyContext) -> StudyResult:
     """Reproduce what exists of the study; list what is not built yet."""
-    result = StudyResult(INFO)
-    result.missing = list(MISSING)
-    ctx.progress("not built yet: " + "; ".join(MISSING))
-    return result
+    return run_unbuilt(ctx, INFO, MISSING)

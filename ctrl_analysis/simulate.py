@@ -182,6 +182,26 @@ def _check_bad(x_new: np.ndarray, bound: float) -> np.ndarray:
         return ~np.all(np.isfinite(x_new), axis=1) | np.any(np.abs(x_new) > bound, axis=1)
 
 
+def _flag_divergence(x, bound, diverged, div_step, step_index):
+    """Mark runs that just left the bound (in place) and set every diverged run's state to NaN."""
+    bad = _check_bad(x, bound) & ~diverged
+    if bad.any():
+        diverged |= bad
+        div_step[bad] = step_index
+        x = x.copy()
+        x[diverged] = np.nan
+    return x
+
+
+def _store(buf, k, value, n_rows, B):
+    """Store ``value`` (reshaped to ``(B, -1)``) as row ``k`` of ``buf``, allocating it on first use."""
+    arr = np.asarray(value, dtype=float).reshape(B, -1)
+    if buf is None:
+        buf = np.empty((n_rows, B, arr.shape[1]))
+    buf[k] = arr
+    return buf
+
+
 def _prepare(x0, noise, seeds):
     x0 = np.asarray(x0, dtype=float)
     if x0.ndim not in (1, 2):
@@ -282,32 +302,18 @@ def simulate_sampled(
             w = None if noise is None else noise[k]
             u = controller(k, t[k], x, w) if controller is not None else w
             if observe is not None:
-                obs = np.asarray(observe(k, t[k], x, u), dtype=float).reshape(B, -1)
-                if ys is None:
-                    ys = np.empty((n_steps + 1, B, obs.shape[1]))
-                ys[k] = obs
+                ys = _store(ys, k, observe(k, t[k], x, u), n_steps + 1, B)
             if u is not None:
-                u_arr = np.asarray(u, dtype=float).reshape(B, -1)
-                if us is None:
-                    us = np.empty((n_steps, B, u_arr.shape[1]))
-                us[k] = u_arr
+                us = _store(us, k, u, n_steps, B)
             tk = t[k]
             for _ in range(substeps):
                 x = step(rhs, tk, x, u, dt, params)
                 tk += dt
-            bad = _check_bad(x, bound) & ~diverged
-            if bad.any():
-                diverged |= bad
-                div_step[bad] = k + 1
-                x = x.copy()
-                x[diverged] = np.nan
+            x = _flag_divergence(x, bound, diverged, div_step, k + 1)
         if xs is not None:
             xs[n_steps] = x
         if observe is not None:
-            obs = np.asarray(observe(n_steps, t[n_steps], x, None), dtype=float).reshape(B, -1)
-            if ys is None:
-                ys = np.empty((n_steps + 1, B, obs.shape[1]))
-            ys[n_steps] = obs
+            ys = _store(ys, n_steps, observe(n_steps, t[n_steps], x, None), n_steps + 1, B)
     return SimResult(t=t, x=xs, u=us, y=ys, diverged=diverged, diverged_step=div_step,
                      seeds=None if seeds is None else list(seeds), bound=bound)
 
@@ -345,17 +351,9 @@ def simulate_discrete(
                 xs[k] = x
             w = None if noise is None else noise[k]
             if observe is not None:
-                obs = np.asarray(observe(k, x, w), dtype=float).reshape(B, -1)
-                if ys is None:
-                    ys = np.empty((n_steps, B, obs.shape[1]))
-                ys[k] = obs
+                ys = _store(ys, k, observe(k, x, w), n_steps, B)
             x = np.asarray(step(k, x, w, params), dtype=float).reshape(B, -1)
-            bad = _check_bad(x, bound) & ~diverged
-            if bad.any():
-                diverged |= bad
-                div_step[bad] = k + 1
-                x = x.copy()
-                x[diverged] = np.nan
+            x = _flag_divergence(x, bound, diverged, div_step, k + 1)
         if xs is not None:
             xs[n_steps] = x
     return SimResult(t=np.arange(n_steps + 1, dtype=float), x=xs, u=None, y=ys, diverged=diverged,
