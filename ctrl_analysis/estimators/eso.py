@@ -66,16 +66,19 @@ def fal(e, alpha, delta):
     0.7071067811865476
     """
     delta = check_positive("delta", delta)
-    e = np.asarray(e, dtype=float)
     alpha = np.asarray(alpha, dtype=float)
     if not np.all(np.isfinite(alpha)):
         raise ValueError(f"alpha must be finite (no NaN or inf), got {alpha!r}")
+    out = _fal(np.asarray(e, dtype=float), alpha, delta, np.power(delta, 1.0 - alpha))
+    return float(out) if out.ndim == 0 else out
+
+
+def _fal(e: np.ndarray, alpha: np.ndarray, delta: float, delta_pow: np.ndarray) -> np.ndarray:
+    """fal without argument checks (the per-step path); ``delta_pow = delta**(1 - alpha)``."""
     abs_e = np.abs(e)
-    inner = e / np.power(delta, 1.0 - alpha)
     with np.errstate(divide="ignore", invalid="ignore"):
         outer = np.power(abs_e, alpha) * np.sign(e)
-    out = np.where(abs_e <= delta, inner, outer)
-    return float(out) if out.ndim == 0 else out
+    return np.where(abs_e <= delta, e / delta_pow, outer)
 
 
 class ExtendedStateObserver:
@@ -161,6 +164,7 @@ class ExtendedStateObserver:
             raise TypeError(f"known must be callable known(t, x_hat, u, params), got {known!r}")
         self.alpha = alpha
         self.delta = delta
+        self._delta_pow = None if alpha is None else np.power(delta, 1.0 - alpha)
         self.known = known
 
     # ------------------------------------------------------------------------------------------
@@ -222,7 +226,8 @@ class ExtendedStateObserver:
         e = np.asarray(e, dtype=float)[..., None]
         if self.alpha is None:
             return self.L * e
-        return self.L * fal(e, self.alpha, self.delta)
+        # arguments were checked once in __init__; the per-step path skips the checks
+        return self.L * _fal(e, self.alpha, self.delta, self._delta_pow)
 
     def rhs(self, t, x_hat, u, params=None) -> np.ndarray:
         """Observer right-hand side in python-control's order ``(t, x, u, params)``.
