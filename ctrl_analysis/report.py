@@ -259,13 +259,18 @@ def _fmt(value, std=None) -> str:
     return text
 
 
+def _cell(text) -> str:
+    """Text safe inside a Markdown table cell (pipes escaped, one line)."""
+    return str(text or "").replace("|", "\\|").replace("\n", " ")
+
+
 def summary_table(results: dict) -> str:
     """A Markdown table of the quantities of one results.json dict."""
     rows = ["| id | quantity | paper | reproduced | verdict | note |", "|---|---|---|---|---|---|"]
     for q in results["quantities"]:
-        note = (q.get("note") or "").replace("|", "\\|").replace("\n", " ")
+        note = _cell(q.get("note"))
         rows.append(
-            f"| `{q['id']}` | {q['label']} | {_fmt(q['paper'])} | {_fmt(q['value'], q.get('std'))}"
+            f"| `{q['id']}` | {_cell(q['label'])} | {_fmt(q['paper'])} | {_fmt(q['value'], q.get('std'))}"
             f"{' (' + str(q['runs']) + ' runs)' if q.get('runs') else ''} | {q['verdict']} | {note} |"
         )
     return "\n".join(rows)

@@ -64,7 +64,7 @@ def test_report_md_lists_tables_findings_figures(tmp_path):
     r.missing.append("part B")
     text = write_report_md([r.to_dict()], tmp_path).read_text()
     assert "| `x` | x | 1 | 2 |" in text and "differs" in text
-    assert "**f1**" in text and "![fig1.png](demo/fig1.png)" in text and "part B" in text
+    assert "**f1**" in text and text.count("\n| `x`") == 1 and "![fig1.png](demo/fig1.png)" in text and "part B" in text
 
 
 def test_context_runs_and_save_figure(tmp_path):
@@ -78,3 +78,11 @@ def test_context_runs_and_save_figure(tmp_path):
     ax.plot([0, 1], [0, 1])
     path = StudyContext(tmp_path).save_figure(r, fig, "f.png")
     assert path.exists() and path.stat().st_size > 1000 and r.figures == ["f.png"]
+
+
+def test_table_cells_escape_pipes(tmp_path):
+    r = StudyResult(INFO)
+    r.quantity("e", "mean |x - x_hat|", 1.0, note="a | b")
+    row = [line for line in write_report_md([r.to_dict()], tmp_path).read_text().splitlines()
+           if line.startswith("| `e`")][0]
+    assert row.count("|") - row.count("\\|") == 7  # six cells, seven unescaped separators
