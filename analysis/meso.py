@@ -372,9 +372,9 @@ def eps_scaling(paper: Paper = PAPER, eps_grid=EPS_GRID, T: float = 10.0, t_from
     x, u = res.x[:K], res.u[:, :, 0]
     d = paper.theta1 * x[:, :, 0] + paper.theta2 * x[:, :, 1] + (paper.b - b0) * u
     keep = res.t[:K] >= t_from
-    err = np.stack([np.mean(np.abs(x[keep, :, 0] - x[keep, :, 2]), axis=0),
-                    np.mean(np.abs(x[keep, :, 1] - x[keep, :, 3]), axis=0),
-                    np.mean(np.abs(d[keep] - x[keep, :, 4]), axis=0)], axis=1)
+    err = np.stack([mean_abs_error(x[keep, :, 0], x[keep, :, 2]),
+                    mean_abs_error(x[keep, :, 1], x[keep, :, 3]),
+                    mean_abs_error(d[keep], x[keep, :, 4])], axis=1)
     slope = np.array([np.polyfit(np.log(eps_grid), np.log(err[:, i]), 1)[0] for i in range(3)])
     return {"eps": np.asarray(eps_grid, dtype=float), "err": err, "slope": slope, "T": T, "t_from": t_from}
 

@@ -21,7 +21,7 @@ from ctrl_analysis.controllers.differential_feedback import HighOrderDifferentia
 from ctrl_analysis.estimators.differential import DifferentialEstimator
 from ctrl_analysis.estimators.eso import ExtendedStateObserver
 from ctrl_analysis.estimators.tracking import SetpointPrefilter, TrackingDifferentiator, softened_setpoint
-from ctrl_analysis.metrics import mean_std
+from ctrl_analysis.metrics import mean_abs_error, mean_std, rmse
 from ctrl_analysis.report import StudyContext, StudyResult, new_figure
 from ctrl_analysis.simulate import draw_noise, run_seeds, simulate_sampled, uniform_noise
 
@@ -249,10 +249,10 @@ def _ex1_errors(p: Example1, res, noise, reading: str = "state", with_eso: bool 
     n_steps = x.shape[0]
     y = x[:, :, 0] + noise[:n_steps, :, 1]
     z_hat = est.estimates(x[:, :, 2:2 + p.n0], y, reading=reading)
-    out = {"sigma": np.mean(np.abs(x[:, :, :2] - z_hat[:, :, :2]), axis=0)}  # (B, 2)
+    out = {"sigma": mean_abs_error(x[:, :, :2], z_hat[:, :, :2])}  # (B, 2)
     if with_eso:
         ie = slice(2 + p.n0, 2 + p.n0 + 2)
-        out["eso"] = np.mean(np.abs(x[:, :, :2] - x[:, :, ie]), axis=0)
+        out["eso"] = mean_abs_error(x[:, :, :2], x[:, :, ie])
     return out
 
 
@@ -397,10 +397,10 @@ def _run_example1(ctx: StudyContext, result: StudyResult) -> None:
     # errors at the 1 ms instants of the window only, so both steps average the same instants
     x = res_h.x[:-1:2]
     zs = est.estimates(x[:, :, 2:2 + p.n0], x[:, :, 0] + noise_h[::2, :, 1])
-    err_h = np.mean(np.abs(x[:, :, :2] - zs[:, :, :2]), axis=0)
+    err_h = mean_abs_error(x[:, :, :2], zs[:, :, :2])
     x_m = res.x[:n_win]
     zm = est.estimates(x_m[:, :, 2:2 + p.n0], x_m[:, :, 0] + noise[:n_win, :, 1])
-    err_m = np.mean(np.abs(x_m[:, :, :2] - zm[:, :, :2]), axis=0)
+    err_m = mean_abs_error(x_m[:, :, :2], zm[:, :, :2])
     held, fresh = slice(0, runs), slice(runs, 2 * runs)
     ratios = {}
     for tag, sl, what in (("same_noise", held, "paired: the RK4 runs' noise, held over two 0.5 ms sub-steps"),
@@ -855,7 +855,7 @@ def _run_example2(ctx: StudyContext, result: StudyResult) -> None:
     v = theta[:, 0]
     e = x1 - v[:, None]
     tail = slice(n_steps - n_steps // 4, n_steps)
-    err_all = np.mean(np.abs(e), axis=0)
+    err_all = mean_abs_error(x1, v[:, None])
     offset = np.mean(e[tail], axis=0)
     amp, freq = _oscillation(e[tail], p_lit.h)
     ok = res.ok
@@ -876,7 +876,7 @@ def _run_example2(ctx: StudyContext, result: StudyResult) -> None:
                      f"the last {p_lit.T / 4:g} s", amp[mc], ok[mc],
                      note="a sustained oscillation (limit cycle) shows here; noise alone gives ~1e-3")
         _quantity_ms(result, f"ex2.{name}.rms_control", f"Example 2, {label}, RMS of u",
-                     np.sqrt(np.mean(u[:, mc] ** 2, axis=0)), ok[mc])
+                     rmse(u[:, mc], 0.0), ok[mc])
         result.quantity(f"ex2.{name}.diverged_fraction", f"Example 2, {label}: fraction of runs flagged as diverged "
                         f"(|state| > {p_lit.bound:g})", float(np.mean(res.diverged[mc])), runs=runs)
         frac = float(np.mean(stable[grid]))
@@ -918,7 +918,7 @@ def _run_example2(ctx: StudyContext, result: StudyResult) -> None:
         f"into a limit cycle around v with half peak-to-peak amplitude {lit_amp:.3g} at {lit_freq:.2f} Hz "
         f"(the linearised unstable pair {pair.real:+.1f} ± {abs(pair.imag):.1f}j rad/s, i.e. "
         f"{abs(pair.imag) / (2 * np.pi):.2f} Hz), mean |v - x1| = {np.mean(err_all[mc_l][ok_l]):.3g} and RMS u = "
-        f"{np.mean(np.sqrt(np.mean(u[:, mc_l][:, ok_l] ** 2, axis=0))):.3g}. Over the grid the limit-cycle "
+        f"{np.mean(rmse(u[:, mc_l][:, ok_l], 0.0)):.3g}. Over the grid the limit-cycle "
         f"amplitude is set by the damping b3: "
         + ", ".join(f"{amp_lit[k].min():.3g}-{amp_lit[k].max():.3g} at b3 = {b3:g}" for k, b3 in enumerate(b3s))
         + ". At large b3 a plot of the printed loop can look like tracking; the eigenvalues say it is not stable.",

@@ -135,8 +135,8 @@ class ExtendedStateObserver:
     Examples
     --------
     >>> import numpy as np
-    >>> obs = ExtendedStateObserver.from_bandwidth(2, 20.0, b0=3.95)
-    >>> np.allclose(obs.characteristic_polynomial(), [1, 60, 1200, 8000])
+    >>> obs = ExtendedStateObserver.from_bandwidth(2, 10.0, b0=1.0)
+    >>> np.allclose(obs.characteristic_polynomial(), [1, 30, 300, 1000])
     True
     """
 

@@ -41,8 +41,8 @@ class LowPassFilter:
     Examples
     --------
     >>> import numpy as np
-    >>> W = LowPassFilter(1.8)
-    >>> np.allclose(W.tf.den[0][0], [1, 3.6, 3.24])
+    >>> W = LowPassFilter(2.0)
+    >>> np.allclose(W.tf.den[0][0], [1, 4.0, 4.0])
     True
     """
 
@@ -86,15 +86,11 @@ class LowPassFilter:
 
         Returns ``(Ad, Bd)`` with ``Bd`` of shape (m,).
         """
-        from scipy.linalg import expm
+        import control as ct
 
         h = float(check_positive("h", h))
-        m = self.order
-        M = np.zeros((m + 1, m + 1))
-        M[:m, :m] = self.A
-        M[:m, m] = self.B[:, 0]
-        E = expm(M * h)
-        return E[:m, :m], E[:m, m]
+        sysd = ct.c2d(ct.ss(self.A, self.B, np.eye(self.order), 0), h, method="zoh")
+        return np.asarray(sysd.A), np.asarray(sysd.B)[:, 0]
 
     def digital(self, h: float, shape=(), initial=None) -> "DiscreteLowPass":
         """A :class:`DiscreteLowPass` for sample period ``h`` over signals of ``shape``."""

@@ -188,9 +188,9 @@ def bandwidth_match(beta, epsilon=None) -> BandwidthMatch:
 
     Examples
     --------
-    >>> m = bandwidth_match((3, 3, 1), epsilon=0.05)
+    >>> m = bandwidth_match((3, 3, 1), epsilon=0.1)
     >>> m.is_bandwidth, m.c, m.omega_o
-    (True, 1, 20)
+    (True, 1, 10)
     """
     beta = [sp.nsimplify(b, rational=True) for b in beta]
     if len(beta) < 2 or any(b <= 0 for b in beta):
