@@ -1,0 +1,230 @@
+"""α-β gains, Kalata's tracking index and a constant-gain α-β filter."""
+
+from __future__ import annotations
+
+
+import numpy as np
+
+from ..._validate import check_finite, check_matrix, check_positive
+
+
+__all__ = ["alpha_beta_from_gain", "gain_from_alpha_beta", "tracking_index", "tracking_index_from_gains", "kalata_gains", "alpha_beta_stable", "AlphaBetaFilter"]
+
+
+# --------------------------------------------------------------------------------------------
+# α-β filters
+# --------------------------------------------------------------------------------------------
+
+
+def alpha_beta_from_gain(K, T):
+    """α-β gains of a 2-state (position, velocity) **filter-form** gain ``K = [k1, k2]``.
+
+    Convention (Kalata 1984; Bar-Shalom et al. 2001, §6.5): the update is
+    ``x̂ = x̂⁻ + α r``, ``v̂ = v̂⁻ + (β/T) r``, so ``α = k1`` and ``β = T·k2`` (both dimensionless).
+    Do not pass the predictor-form gain ``L = F K`` from :func:`control.dlqe`.
+
+    Parameters
+    ----------
+    K : array_like, shape (2,) or (2, 1)
+        Filter-form gain.
+    T : float, > 0
+        Sampling period (s).
+
+    Returns
+    -------
+    (alpha, beta) : tuple of float
+    """
+    K = np.ravel(check_finite("K", K))
+    if K.shape != (2,):
+        raise ValueError(f"K must have 2 entries (position, velocity), got shape {np.shape(K)}")
+    T = check_positive("T", T)
+    return float(K[0]), float(T * K[1])
+
+
+def gain_from_alpha_beta(alpha, beta, T) -> np.ndarray:
+    """Filter-form gain ``[α, β/T]`` (shape (2,)) of an α-β filter; inverse of :func:`alpha_beta_from_gain`."""
+    alpha = check_finite("alpha", alpha)
+    beta = check_finite("beta", beta)
+    T = check_positive("T", T)
+    return np.array([alpha, beta / T], dtype=float)
+
+
+def tracking_index(sigma_w, sigma_v, T):
+    """Kalata's tracking index ``Λ = σ_w T² / σ_v``.
+
+    ``σ_w`` is the standard deviation of the (piecewise-constant) acceleration noise of the
+    discrete white-noise-acceleration model ``x(k+1) = [[1, T], [0, 1]] x(k) + [T²/2, T]ᵀ w(k)``,
+    ``σ_v`` that of the position measurement noise.
+
+    References
+    ----------
+    P. R. Kalata, "The tracking index: a generalized parameter for α-β and α-β-γ target trackers",
+    IEEE Trans. AES 20(2), 1984, 174–182.
+    """
+    sigma_w = check_finite("sigma_w", sigma_w)
+    if np.any(np.asarray(sigma_w) < 0):
+        raise ValueError(f"sigma_w must be >= 0, got {sigma_w!r}")
+    sigma_v = check_positive("sigma_v", sigma_v)
+    T = check_positive("T", T)
+    return sigma_w * T**2 / sigma_v
+
+
+def tracking_index_from_gains(alpha, beta):
+    """Tracking index implied by steady-state α-β gains: ``Λ = β / √(1 − α)`` (Kalata 1984, ``Λ² = β²/(1−α)``).
+
+    Valid for ``0 < α < 1``. A pair that is not on the steady-state locus
+    ``β = 2(2 − α) − 4√(1 − α)`` still yields a number, but it is not the Λ of any Kalman filter.
+    """
+    alpha = check_finite("alpha", alpha)
+    beta = check_finite("beta", beta)
+    a = np.asarray(alpha)
+    if np.any((a <= 0) | (a >= 1)):
+        raise ValueError(f"alpha must be in (0, 1) for a steady-state α-β filter, got {alpha!r}")
+    return beta / np.sqrt(1.0 - alpha)
+
+
+def kalata_gains(Lambda):
+    """Steady-state α-β gains as functions of Kalata's tracking index Λ.
+
+    ``α = −(Λ² + 8Λ − (Λ + 4)√(Λ² + 8Λ)) / 8``, ``β = (Λ² + 4Λ − Λ√(Λ² + 8Λ)) / 4``.
+    They are the filter-form steady-state Kalman gains ``[α, β/T]`` of the discrete
+    white-noise-acceleration model (see :func:`tracking_index`) and satisfy
+    ``β²/(1 − α) = Λ²`` and ``(α + β/2)² = 2β``. Derived in
+    :func:`ctrl_analysis.symbolic.riccati.derive_kalata_gains` (numeric: :func:`ctrl_analysis.symbolic.riccati.kalata_gains_closed_form`).
+
+    Parameters
+    ----------
+    Lambda : float or array_like, >= 0
+
+    Returns
+    -------
+    (alpha, beta) : floats or arrays
+
+    References
+    ----------
+    Kalata (1984), eqs. for the α-β tracker; Y. Bar-Shalom, X. R. Li, T. Kirubarajan,
+    *Estimation with Applications to Tracking and Navigation*, Wiley 2001, §6.5.3.
+    """
+    L = check_finite("Lambda", Lambda)
+    if np.any(np.asarray(L) < 0):
+        raise ValueError(f"Lambda must be >= 0, got {Lambda!r}")
+    r = np.sqrt(L * L + 8.0 * L)
+    alpha = -(L * L + 8.0 * L - (L + 4.0) * r) / 8.0
+    beta = (L * L + 4.0 * L - L * r) / 4.0
+    return alpha, beta
+
+
+def alpha_beta_stable(alpha, beta) -> bool:
+    """Whether the classical α-β filter (``F = [[1, T], [0, 1]]``) is stable: ``0 < α < 2``, ``0 < β < 4 − 2α``.
+
+    Jury's test on ``z² + (α + β − 2) z + (1 − α)`` (independent of ``T``).
+    """
+    alpha = float(check_finite("alpha", alpha))
+    beta = float(check_finite("beta", beta))
+    return bool(0 < alpha < 2 and 0 < beta < 4 - 2 * alpha)
+
+
+class AlphaBetaFilter:
+    """Constant-gain (steady-state) discrete α-β filter over a batch axis.
+
+    Each step predicts ``x̂⁻ = F x̂ + b u`` and corrects with the measurement ``y`` of the first
+    state: ``r = y − x̂⁻[0]``, ``x̂ = x̂⁻ + [α, β/T] r``. With the default
+    ``F = [[1, T], [0, 1]]`` this is the classical α-β tracker (Kalata 1984); any other
+    2×2 ``F`` (e.g. ``expm(A T)`` of a sampled plant) gives a constant-gain Kalman filter.
+
+    Parameters
+    ----------
+    alpha, beta : float
+        Dimensionless gains (filter form; ``β = T·k2``).
+    T : float, > 0
+        Sampling period (s).
+    F : array_like, shape (2, 2), optional
+        State transition; default ``[[1, T], [0, 1]]``.
+    b : array_like, shape (2,), optional
+        Discrete input vector of the prediction (default zero).
+    x0 : array_like, shape (2,) or (B, 2), optional
+        Initial estimate (default zero).
+    require_stable : bool
+        Raise if the error dynamics ``(I − K H) F`` are not strictly stable.
+
+    Attributes
+    ----------
+    x_hat : numpy.ndarray, shape (2,) or (B, 2)
+        Current estimate ``x̂(k|k)``.
+    K : numpy.ndarray, shape (2,)
+        Filter-form gain ``[α, β/T]``.
+    innovation : float or numpy.ndarray, shape (B,)
+        Last ``r = y − x̂⁻[0]``.
+
+    References
+    ----------
+    Kalata (1984); Bar-Shalom, Li & Kirubarajan (2001), §6.5.
+
+    Examples
+    --------
+    >>> f = AlphaBetaFilter(0.5, 0.2, T=0.1)
+    >>> for k in range(200):
+    ...     x = f.step(2.0 * 0.1 * k)        # a ramp of slope 2
+    >>> round(float(x[1]), 6)
+    2.0
+    """
+
+    def __init__(self, alpha, beta, T, *, F=None, b=None, x0=None, require_stable: bool = True):
+        self.alpha = float(check_finite("alpha", alpha))
+        self.beta = float(check_finite("beta", beta))
+        self.T = float(check_positive("T", T))
+        if F is None:
+            F = [[1.0, self.T], [0.0, 1.0]]
+        self.F = check_matrix("F", F, shape=(2, 2))
+        self.b = np.zeros(2) if b is None else check_finite("b", np.ravel(b), shape=(2,))
+        self.K = gain_from_alpha_beta(self.alpha, self.beta, self.T)
+        if require_stable and not np.all(np.abs(self.poles) < 1.0):
+            raise ValueError(
+                f"alpha, beta must give a stable filter (|eig((I − K H) F)| < 1), got alpha={self.alpha:g}, "
+                f"beta={self.beta:g}, spectral radius {np.max(np.abs(self.poles)):.4g}"
+            )
+        self._x0 = None if x0 is None else check_finite("x0", x0)
+        if self._x0 is not None and np.shape(self._x0)[-1:] != (2,):
+            raise ValueError(f"x0 must have shape (2,) or (B, 2), got {np.shape(self._x0)}")
+        self.reset()
+
+    @property
+    def poles(self) -> np.ndarray:
+        """Eigenvalues of the estimation-error dynamics ``(I − K H) F``."""
+        H = np.array([[1.0, 0.0]])
+        return np.linalg.eigvals((np.eye(2) - self.K[:, None] @ H) @ self.F)
+
+    def reset(self, x0=None) -> None:
+        """Restore the initial estimate (``x0`` overrides the one given at construction)."""
+        if x0 is not None:
+            x0 = check_finite("x0", x0)
+            if np.shape(x0)[-1:] != (2,):
+                raise ValueError(f"x0 must have shape (2,) or (B, 2), got {np.shape(x0)}")
+            self._x0 = x0
+        self.x_hat = np.zeros(2) if self._x0 is None else np.array(self._x0, dtype=float)
+        self.innovation = 0.0
+
+    def step(self, y, u=0.0) -> np.ndarray:
+        """One predict/correct step with measurement ``y`` (scalar or shape (B,)) and input ``u``.
+
+        Returns
+        -------
+        numpy.ndarray, shape (2,) or (B, 2)
+            The updated estimate ``x̂(k|k)`` (a copy).
+        """
+        y = np.asarray(y, dtype=float)
+        if y.ndim > 1:
+            raise ValueError(f"y must be a scalar or have shape (B,), got {y.shape}")
+        if not np.all(np.isfinite(y)):
+            raise ValueError("y must be finite (no NaN or inf)")
+        u = np.asarray(u, dtype=float)
+        # prediction  x̂⁻(k) = F x̂(k−1) + b u(k−1)
+        x_pred = self.x_hat @ self.F.T + u[..., None] * self.b
+        # innovation  r(k) = y(k) − H x̂⁻(k)
+        r = y - x_pred[..., 0]
+        # correction  x̂(k) = x̂⁻(k) + [α, β/T] r(k)
+        self.x_hat = x_pred + r[..., None] * self.K
+        self.innovation = r
+        return self.x_hat.copy()
+
+
