@@ -30,6 +30,7 @@ __all__ = [
     "uniform_noise",
     "gaussian_noise",
     "euler_step",
+    "STEPPERS",
     "rk4_step",
     "simulate_sampled",
     "simulate_discrete",
@@ -116,7 +117,8 @@ def rk4_step(rhs: Callable, t: float, x: np.ndarray, u, h: float, params=None) -
     return x + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
 
 
-_STEPPERS = {"euler": euler_step, "rk4": rk4_step}
+#: Fixed-step integrators by name.
+STEPPERS = {"euler": euler_step, "rk4": rk4_step}
 
 
 # ----------------------------------------------------------------------------------------------
@@ -281,9 +283,9 @@ def simulate_sampled(
     h = check_positive("h", h)
     n_steps = check_int("n_steps", n_steps, minimum=1)
     substeps = check_int("substeps", substeps, minimum=1)
-    check_in("method", method, _STEPPERS)
+    check_in("method", method, STEPPERS)
     bound = check_positive("bound", bound) if np.isfinite(bound) else np.inf
-    step = _STEPPERS[method]
+    step = STEPPERS[method]
     x, noise, B = _prepare(x0, noise, seeds)
     if noise is not None and noise.shape[0] < n_steps:
         raise ValueError(f"noise must have at least n_steps={n_steps} rows, got {noise.shape[0]}")

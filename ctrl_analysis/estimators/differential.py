@@ -11,12 +11,13 @@ with ``a_i = K C(n0-1, i-1) a^(i-1)`` (all ``n0 - 1`` open-loop zeros at ``-a``)
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import control as ct
 import numpy as np
 
 from .._validate import check_in, check_int, check_positive
+from ..blocks import ContinuousBlock, signal_names
 from ..symbolic.differential import breakaway_gain, breakaway_point, differential_coefficients
 
 __all__ = ["DifferentialEstimator", "READINGS"]
@@ -27,7 +28,7 @@ READINGS = ("state", "corrected")
 
 
 @dataclass(frozen=True)
-class DifferentialEstimator:
+class DifferentialEstimator(ContinuousBlock):
     """Differential state estimator Σ of order ``n0`` (a chain of integrators with output injection).
 
     Parameters
@@ -40,6 +41,11 @@ class DifferentialEstimator:
     K : float, optional
         Open-loop gain, ``> 0``. Default: the breakaway design gain ``n0^n0 a / (n0-1)^(n0-1)``,
         which puts a double closed-loop pole at ``-n0 a``.
+    reading : {"state", "corrected"}
+        Which estimates the block outputs (see :meth:`estimate_matrices`); ``"corrected"`` has
+        direct feedthrough from ``y``.
+
+    Block signals: input ``y``; states ``z[0]..z[n0-1]``; outputs ``xhat[0]..xhat[n0-1]``.
 
     Attributes
     ----------
@@ -85,6 +91,7 @@ class DifferentialEstimator:
     n0: int
     a: float
     K: float | None = None
+    reading: str = "state"
     a_coeffs: np.ndarray = field(init=False, repr=False, compare=False)
 
     def __post_init__(self):
@@ -94,6 +101,7 @@ class DifferentialEstimator:
         object.__setattr__(self, "n0", n0)
         object.__setattr__(self, "a", float(a))
         object.__setattr__(self, "K", float(k))
+        check_in("reading", self.reading, READINGS)
         coeffs = differential_coefficients(n0, a, k)  # (5)+(6)
         coeffs.setflags(write=False)
         object.__setattr__(self, "a_coeffs", coeffs)
@@ -138,7 +146,7 @@ class DifferentialEstimator:
     @property
     def ss(self) -> ct.StateSpace:
         """Eq. (2) as a state-space system: input ``y``, outputs ``z[0]..z[n0-1]``."""
-        names = self._state_names()
+        names = list(self.states)
         # (2) z' = A z + B y, outputs all states
         return ct.ss(self.A, self.B, np.eye(self.n0), np.zeros((self.n0, 1)),
                      inputs="y", states=names, outputs=names)
@@ -200,44 +208,62 @@ class DifferentialEstimator:
         C, D = self.estimate_matrices(reading)
         return z @ C.T + y[..., None] * D[:, 0]
 
-    # ------------------------------------------------------------------ simulation
-    def rhs(self, t, z, y, params=None) -> np.ndarray:
-        """Right-hand side of eq. (2) in python-control's ``(t, x, u, params)`` order.
+    # ------------------------------------------------------------------ block protocol
+    inputs = ("y",)
+
+    @property
+    def states(self) -> tuple:
+        return signal_names("z", self.n0)
+
+    @property
+    def outputs(self) -> tuple:
+        return signal_names("xhat", self.n0)
+
+    @property
+    def feedthrough(self) -> bool:
+        return self.reading == "corrected"
+
+    def rhs(self, t, z, u, params=None) -> np.ndarray:
+        """Right-hand side of eq. (2), the block protocol's ``rhs(t, x, u, params)``.
 
         Parameters
         ----------
         t : float
             Time (unused: Σ is time invariant).
-        z : array_like, shape (n0,) or (B, n0)
-            States on the last axis; leading axes are batch axes.
-        y : array_like
-            Measurement: scalar, shape ``(1,)`` (python-control's input vector), or
-            broadcastable to ``z.shape[:-1]`` (a trailing axis of length 1 is allowed).
-        params : dict, optional
+        z : numpy.ndarray, shape (B, n0)
+            States (any leading batch axes are allowed).
+        u : numpy.ndarray, shape (B, 1)
+            The measurement ``y`` as a one-column input (same leading axes as ``z``).
+        params : optional
             Ignored (accepted for ``control.nlsys``).
 
         Returns
         -------
-        numpy.ndarray
-            ``dz/dt``, same shape as ``z`` broadcast with ``y``.
+        numpy.ndarray, shape (B, n0)
         """
-        z, y = self._check_zy(z, y)
-        e = (y - z[..., 0])[..., None]  # output error y - z_1
-        dz = self.a_coeffs * e  # a_i (y - z_1)
+        dz = self.a_coeffs * (u[..., :1] - z[..., :1])  # a_i (y - z_1)
         # (2) z_i' = z_(i+1) + a_i (y - z_1), i = 1..n0-1;  z_n0' = a_n0 (y - z_1)
         dz[..., :-1] += z[..., 1:]
         return dz
 
-    def nlsys(self, name: str | None = None, reading: str = "state") -> ct.NonlinearIOSystem:
+    def output(self, t, z, u, params=None) -> np.ndarray:
+        """Estimates ``x̂ = C z + D y`` of the block's reading, shape ``(B, n0)``."""
+        if self.reading == "state":
+            return z
+        C, D = self.estimate_matrices(self.reading)
+        return z @ C.T + u[..., :1] * D[:, 0]
+
+    def nlsys(self, name: str | None = None, reading: str | None = None, **names) -> ct.NonlinearIOSystem:
         """Σ as a ``control.nlsys``: input ``y``, states ``z[0..n0-1]``, outputs ``xhat[0..n0-1]``.
 
         Parameters
         ----------
         name : str, optional
             System name (for ``control.interconnect``).
-        reading : {"state", "corrected"}
-            Which estimates the outputs are (see :meth:`estimate_matrices`); ``"corrected"``
-            has direct feedthrough from ``y``.
+        reading : {"state", "corrected"}, optional
+            Which estimates the outputs are (default: the block's own ``reading``).
+        **names
+            ``inputs``, ``outputs``, ``states`` renames, as in :meth:`ContinuousBlock.nlsys`.
 
         Returns
         -------
@@ -253,26 +279,10 @@ class DifferentialEstimator:
         >>> bool(abs(resp.outputs[0, -1] - 1) < 1e-2)
         True
         """
-        check_in("reading", reading, READINGS)
-        C, D = self.estimate_matrices(reading)
-        d = D[:, 0]
-
-        def outfcn(t, z, u, params=None):
-            return C @ z + d * u[0]
-
-        return ct.nlsys(
-            lambda t, z, u, params=None: self.rhs(t, z, u[0], params),
-            outfcn,
-            inputs="y",
-            states=self._state_names(),
-            outputs=[f"xhat[{k}]" for k in range(self.n0)],
-            name=name,
-        )
+        block = self if reading is None or reading == self.reading else replace(self, reading=reading)
+        return ContinuousBlock.nlsys(block, name, **names)
 
     # ------------------------------------------------------------------ helpers
-    def _state_names(self) -> list[str]:
-        return [f"z[{k}]" for k in range(self.n0)]
-
     def _check_zy(self, z, y) -> tuple[np.ndarray, np.ndarray]:
         z = np.asarray(z, dtype=float)
         if z.ndim < 1 or z.shape[-1] != self.n0:

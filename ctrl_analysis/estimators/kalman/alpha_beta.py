@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ...blocks import DiscreteBlock
 from ..._validate import check_finite, check_matrix, check_positive
 
 
@@ -124,13 +125,18 @@ def alpha_beta_stable(alpha, beta) -> bool:
     return bool(0 < alpha < 2 and 0 < beta < 4 - 2 * alpha)
 
 
-class AlphaBetaFilter:
-    """Constant-gain (steady-state) discrete α-β filter over a batch axis.
+class AlphaBetaFilter(DiscreteBlock):
+    """Constant-gain (steady-state) discrete α-β filter, a discrete block batched over runs.
 
-    Each step predicts ``x̂⁻ = F x̂ + b u`` and corrects with the measurement ``y`` of the first
-    state: ``r = y − x̂⁻[0]``, ``x̂ = x̂⁻ + [α, β/T] r``. With the default
-    ``F = [[1, T], [0, 1]]`` this is the classical α-β tracker (Kalata 1984); any other
-    2×2 ``F`` (e.g. ``expm(A T)`` of a sampled plant) gives a constant-gain Kalman filter.
+    The block's state is the prediction ``x̂(k|k−1)``; at each sample it corrects with the
+    measurement ``y`` of the first state and outputs the estimate, then predicts::
+
+        r(k)      = y(k) − x̂(k|k−1)[0]                 innovation
+        x̂(k|k)    = x̂(k|k−1) + [α, β/T] r(k)          output (direct feedthrough from y)
+        x̂(k+1|k)  = F x̂(k|k) + b u(k)                 update
+
+    With the default ``F = [[1, T], [0, 1]]`` this is the classical α-β tracker (Kalata 1984);
+    any other 2×2 ``F`` (e.g. ``expm(A T)`` of a sampled plant) gives a constant-gain Kalman filter.
 
     Parameters
     ----------
@@ -141,20 +147,19 @@ class AlphaBetaFilter:
     F : array_like, shape (2, 2), optional
         State transition; default ``[[1, T], [0, 1]]``.
     b : array_like, shape (2,), optional
-        Discrete input vector of the prediction (default zero).
-    x0 : array_like, shape (2,) or (B, 2), optional
-        Initial estimate (default zero).
+        Discrete input vector of the prediction; when given the block has a second input ``u``.
+    x0 : array_like, shape (2,), optional
+        Initial prediction ``x̂(0|−1)`` (default zero).
     require_stable : bool
         Raise if the error dynamics ``(I − K H) F`` are not strictly stable.
 
     Attributes
     ----------
-    x_hat : numpy.ndarray, shape (2,) or (B, 2)
-        Current estimate ``x̂(k|k)``.
     K : numpy.ndarray, shape (2,)
         Filter-form gain ``[α, β/T]``.
-    innovation : float or numpy.ndarray, shape (B,)
-        Last ``r = y − x̂⁻[0]``.
+
+    Block signals: inputs ``y`` (and ``u`` with ``b``); states ``xpred[0]``, ``xpred[1]``; outputs
+    ``xhat[0]``, ``xhat[1]``.
 
     References
     ----------
@@ -162,12 +167,16 @@ class AlphaBetaFilter:
 
     Examples
     --------
+    >>> import numpy as np
     >>> f = AlphaBetaFilter(0.5, 0.2, T=0.1)
-    >>> for k in range(200):
-    ...     x = f.step(2.0 * 0.1 * k)        # a ramp of slope 2
-    >>> round(float(x[1]), 6)
+    >>> y, _ = f.run(2.0 * 0.1 * np.arange(200))     # a ramp of slope 2
+    >>> round(float(y[-1, 0, 1]), 6)
     2.0
     """
+
+    states = ("xpred[0]", "xpred[1]")
+    outputs = ("xhat[0]", "xhat[1]")
+    feedthrough = True
 
     def __init__(self, alpha, beta, T, *, F=None, b=None, x0=None, require_stable: bool = True):
         self.alpha = float(check_finite("alpha", alpha))
@@ -176,17 +185,15 @@ class AlphaBetaFilter:
         if F is None:
             F = [[1.0, self.T], [0.0, 1.0]]
         self.F = check_matrix("F", F, shape=(2, 2))
-        self.b = np.zeros(2) if b is None else check_finite("b", np.ravel(b), shape=(2,))
+        self.b = None if b is None else check_finite("b", np.ravel(b), shape=(2,))
+        self.inputs = ("y",) if self.b is None else ("y", "u")
         self.K = gain_from_alpha_beta(self.alpha, self.beta, self.T)
         if require_stable and not np.all(np.abs(self.poles) < 1.0):
             raise ValueError(
                 f"alpha, beta must give a stable filter (|eig((I − K H) F)| < 1), got alpha={self.alpha:g}, "
                 f"beta={self.beta:g}, spectral radius {np.max(np.abs(self.poles)):.4g}"
             )
-        self._x0 = None if x0 is None else check_finite("x0", x0)
-        if self._x0 is not None and np.shape(self._x0)[-1:] != (2,):
-            raise ValueError(f"x0 must have shape (2,) or (B, 2), got {np.shape(self._x0)}")
-        self.reset()
+        self.x0 = np.zeros(2) if x0 is None else check_finite("x0", np.ravel(x0), shape=(2,))
 
     @property
     def poles(self) -> np.ndarray:
@@ -194,37 +201,26 @@ class AlphaBetaFilter:
         H = np.array([[1.0, 0.0]])
         return np.linalg.eigvals((np.eye(2) - self.K[:, None] @ H) @ self.F)
 
-    def reset(self, x0=None) -> None:
-        """Restore the initial estimate (``x0`` overrides the one given at construction)."""
-        if x0 is not None:
-            x0 = check_finite("x0", x0)
-            if np.shape(x0)[-1:] != (2,):
-                raise ValueError(f"x0 must have shape (2,) or (B, 2), got {np.shape(x0)}")
-            self._x0 = x0
-        self.x_hat = np.zeros(2) if self._x0 is None else np.array(self._x0, dtype=float)
-        self.innovation = 0.0
+    def initial_state(self) -> np.ndarray:
+        return self.x0.copy()
 
-    def step(self, y, u=0.0) -> np.ndarray:
-        """One predict/correct step with measurement ``y`` (scalar or shape (B,)) and input ``u``.
+    def output(self, t, x, u, params=None) -> np.ndarray:
+        # innovation r(k) = y(k) − H x̂(k|k−1); correction x̂(k|k) = x̂(k|k−1) + [α, β/T] r(k)
+        return x + (u[:, :1] - x[:, :1]) * self.K
 
-        Returns
-        -------
-        numpy.ndarray, shape (2,) or (B, 2)
-            The updated estimate ``x̂(k|k)`` (a copy).
-        """
-        y = np.asarray(y, dtype=float)
-        if y.ndim > 1:
-            raise ValueError(f"y must be a scalar or have shape (B,), got {y.shape}")
-        if not np.all(np.isfinite(y)):
-            raise ValueError("y must be finite (no NaN or inf)")
-        u = np.asarray(u, dtype=float)
-        # prediction  x̂⁻(k) = F x̂(k−1) + b u(k−1)
-        x_pred = self.x_hat @ self.F.T + u[..., None] * self.b
-        # innovation  r(k) = y(k) − H x̂⁻(k)
-        r = y - x_pred[..., 0]
-        # correction  x̂(k) = x̂⁻(k) + [α, β/T] r(k)
-        self.x_hat = x_pred + r[..., None] * self.K
-        self.innovation = r
-        return self.x_hat.copy()
+    def update(self, t, x, u, params=None) -> np.ndarray:
+        # prediction x̂(k+1|k) = F x̂(k|k) + b u(k), written out (2×2) so a run is bit-identical
+        # whatever the batch size
+        xf = self.output(t, x, u, params)
+        F = self.F
+        x_next = np.empty_like(xf)
+        x_next[:, 0] = F[0, 0] * xf[:, 0] + F[0, 1] * xf[:, 1]
+        x_next[:, 1] = F[1, 0] * xf[:, 0] + F[1, 1] * xf[:, 1]
+        if self.b is not None:
+            x_next += u[:, 1:2] * self.b
+        return x_next
+
+    def __repr__(self) -> str:
+        return f"AlphaBetaFilter(alpha={self.alpha:g}, beta={self.beta:g}, T={self.T:g})"
 
 

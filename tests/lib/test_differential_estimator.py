@@ -61,22 +61,19 @@ def test_rhs_equals_linear_state_space(n0):
     A, B = est.A, est.B
     np.testing.assert_allclose(A, est.ss.A)
     np.testing.assert_allclose(B, est.ss.B)
-    z = rng.normal(size=n0)
-    y = 0.7
-    expected = A @ z + B[:, 0] * y
-    for y_form in (y, np.array([y]), np.float64(y)):
-        np.testing.assert_allclose(est.rhs(0.0, z, y_form), expected, rtol=1e-12)
-    # batch: states on the last axis, y per run as (B,) or (B, 1)
+    # block protocol: x of shape (B, n0), u of shape (B, 1)
     zb = rng.normal(size=(6, n0))
-    yb = rng.normal(size=6)
-    expected_b = zb @ A.T + yb[:, None] * B[:, 0]
-    np.testing.assert_allclose(est.rhs(0.0, zb, yb), expected_b, rtol=1e-12)
-    np.testing.assert_allclose(est.rhs(0.0, zb, yb[:, None]), expected_b, rtol=1e-12)
-    np.testing.assert_allclose(est.rhs(0.0, zb, 0.3), zb @ A.T + 0.3 * B[:, 0], rtol=1e-12)
+    yb = rng.normal(size=(6, 1))
+    np.testing.assert_allclose(est.rhs(0.0, zb, yb), zb @ A.T + yb @ B.T, rtol=1e-12)
     # extra leading batch axes
     zbb = rng.normal(size=(2, 3, n0))
-    ybb = rng.normal(size=(2, 3))
-    np.testing.assert_allclose(est.rhs(0.0, zbb, ybb), zbb @ A.T + ybb[..., None] * B[:, 0], rtol=1e-12)
+    ybb = rng.normal(size=(2, 3, 1))
+    np.testing.assert_allclose(est.rhs(0.0, zbb, ybb), zbb @ A.T + ybb @ B.T, rtol=1e-12)
+    # the output of the "corrected" reading has direct feedthrough from y
+    corr = DifferentialEstimator(n0, 5.0, reading="corrected")
+    C, D = corr.estimate_matrices("corrected")
+    assert corr.feedthrough and not est.feedthrough
+    np.testing.assert_allclose(corr.output(0.0, zb, yb), zb @ C.T + yb @ D.T, rtol=1e-12)
 
 
 @pytest.mark.parametrize("n0", [2, 3, 5])
@@ -89,7 +86,7 @@ def test_estimate_readings(n0):
     corrected = est.estimates(z, y, reading="corrected")
     # (11) x̂_i = z_i + a_(i-1)(y - z_1) = z_(i-1)'  (the derivative of the previous state)
     np.testing.assert_allclose(corrected[:, 0], z[:, 0])
-    np.testing.assert_allclose(corrected[:, 1:], est.rhs(0.0, z, y)[:, :-1], rtol=1e-12)
+    np.testing.assert_allclose(corrected[:, 1:], est.rhs(0.0, z, y[:, None])[:, :-1], rtol=1e-12)
     # y -> x̂_2 is s Φ(s) under the corrected reading
     C, D = est.estimate_matrices("corrected")
     sys = ct.ss(est.A, est.B, C, D)
@@ -153,9 +150,9 @@ def test_bad_call_arguments():
     with pytest.raises(ValueError, match=r"^reading "):
         est.nlsys(reading="x")
     with pytest.raises(ValueError, match=r"^z "):
-        est.rhs(0.0, np.zeros(4), 0.0)
+        est.estimates(np.zeros(4), 0.0)
     with pytest.raises(ValueError, match=r"^y "):
-        est.rhs(0.0, np.zeros((5, 3)), np.zeros(4))
+        est.estimates(np.zeros((5, 3)), np.zeros(4))
 
 
 def test_study_linear_helpers():

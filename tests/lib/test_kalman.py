@@ -171,19 +171,16 @@ def test_alpha_beta_filter_ramp_zero_steady_error_and_batch():
     alpha, beta = kalata_gains(0.5)
     f = AlphaBetaFilter(alpha, beta, T)
     ys = slope * T * np.arange(400)
-    for y in ys:
-        x = f.step(y)
+    x, _ = f.run(ys)
     # type-2 loop: a ramp is tracked with zero steady-state error, velocity = slope
-    np.testing.assert_allclose(x, [ys[-1], slope], atol=1e-9)
-    # batch axis: B independent ramps in one step call
+    np.testing.assert_allclose(x[-1, 0], [ys[-1], slope], atol=1e-9)
+    # batch axis: B independent ramps in one run, each equal to its single run
     slopes = np.array([-1.0, 0.0, 3.0])
-    fb = AlphaBetaFilter(alpha, beta, T)
-    for k in range(400):
-        xb = fb.step(slopes * T * k)
-    assert xb.shape == (3, 2)
-    np.testing.assert_allclose(xb[:, 1], slopes, atol=1e-9)
-    fb.reset()
-    np.testing.assert_allclose(fb.x_hat, [0.0, 0.0])
+    u = (slopes * T * np.arange(400)[:, None])[:, :, None]
+    xb, _ = f.run(u)
+    assert xb.shape == (400, 3, 2)
+    np.testing.assert_allclose(xb[-1, :, 1], slopes, atol=1e-9)
+    np.testing.assert_array_equal(xb[:, 2:3], f.run(u[:, 2])[0])
 
 
 def test_alpha_beta_filter_constant_acceleration_lag():
@@ -193,8 +190,7 @@ def test_alpha_beta_filter_constant_acceleration_lag():
     f = AlphaBetaFilter(alpha, beta, T)
     k = np.arange(600)
     ys = 0.5 * acc * (k * T) ** 2
-    for y in ys:
-        x = f.step(y)
+    x = f.run(ys)[0][-1, 0]
     np.testing.assert_allclose(ys[-1] - x[0], (1 - alpha) * acc * T**2 / beta, rtol=1e-8)
 
 
@@ -206,10 +202,10 @@ def test_alpha_beta_stability_region_and_errors():
     with pytest.raises(ValueError, match="T must be > 0"):
         AlphaBetaFilter(0.5, 0.2, 0.0)
     f = AlphaBetaFilter(0.5, 0.2, 0.1)
-    with pytest.raises(ValueError, match="y must be finite"):
-        f.step(np.nan)
-    with pytest.raises(ValueError, match="y must be a scalar or have shape"):
-        f.step(np.zeros((2, 2)))
+    with pytest.raises(ValueError, match="u must be finite"):
+        f.run([0.0, np.nan])
+    with pytest.raises(ValueError, match="u must have shape"):
+        f.run(np.zeros((2, 2)))
     with pytest.raises(ValueError, match="K must have 2 entries"):
         alpha_beta_from_gain([1.0, 2.0, 3.0], 0.1)
     with pytest.raises(ValueError, match="alpha must be in"):

@@ -40,11 +40,11 @@ def test_sigma_linear_form_equals_the_block_rhs():
     est = DifferentialEstimator(5, 7.0)
     rng = np.random.default_rng(0)
     z, y = rng.normal(size=(4, 5)), rng.normal(size=4)
-    np.testing.assert_allclose(sigma_linear_rhs(est)(0.0, z, y), est.rhs(0.0, z, y), rtol=1e-12)
+    np.testing.assert_allclose(sigma_linear_rhs(est)(0.0, z, y), est.rhs(0.0, z, y[:, None]), rtol=1e-12)
     rows = [DifferentialEstimator(5, a) for a in (5.0, 5.0, 34.0, 7.0)]
     per_row = sigma_linear_rhs(rows)(0.0, z, y)
     for b, e in enumerate(rows):
-        np.testing.assert_allclose(per_row[b], e.rhs(0.0, z[b], y[b]), rtol=1e-12)
+        np.testing.assert_allclose(per_row[b], e.rhs(0.0, z[b:b + 1], y[b:b + 1, None])[0], rtol=1e-12)
 
 
 def test_example2_linearisation_and_stable_preset():

@@ -1,0 +1,290 @@
+"""Block protocols: continuous, discrete and static building blocks that run in the batch engine and in python-control.
+
+Every building block follows python-control's conventions, batched:
+
+* a **continuous block** has ``rhs(t, x, u, params) -> dx/dt`` and ``output(t, x, u, params)``;
+* a **discrete block** has ``update(t, x, u, params) -> x_next`` and ``output(t, x, u, params)``;
+* a **static block** has only ``output(t, x, u, params)`` (no state; ``x`` has zero columns).
+
+``x`` has shape ``(B, n)`` (``B`` runs side by side, ``n`` the block's states) and ``u`` always has
+shape ``(B, m)``, one column per named input, in the order of :attr:`Block.inputs`. Parameters are
+fixed when the block is built (validated there); the per-step methods check nothing and create no
+Python objects beyond the arrays they return, so a hot path can later be compiled unchanged.
+
+A block names its signals (:attr:`Block.inputs`, :attr:`Block.outputs`, :attr:`Block.states`,
+each a tuple of strings, python-control style, e.g. ``"xhat[0]"``) and says whether its output
+depends on its input (:attr:`Block.feedthrough`); :class:`ctrl_analysis.loop.Loop` wires blocks by
+these names, and :meth:`nlsys` gives the same block as a ``control.nlsys`` (continuous, or discrete
+with ``dt``) for :func:`control.interconnect` and :func:`control.input_output_response`.
+"""
+
+from __future__ import annotations
+
+from typing import Callable
+
+import numpy as np
+
+from ._validate import check_in, check_int, check_positive
+
+__all__ = [
+    "Block",
+    "ContinuousBlock",
+    "DiscreteBlock",
+    "StaticBlock",
+    "SampledBlock",
+    "signal_names",
+]
+
+
+def signal_names(base: str, n: int) -> tuple[str, ...]:
+    """``("base[0]", ..., "base[n-1]")``, python-control's names for a vector signal."""
+    return tuple(f"{base}[{i}]" for i in range(check_int("n", n, minimum=0)))
+
+
+class Block:
+    """What every block has: signal names, a feedthrough flag and an initial state.
+
+    Subclasses set :attr:`inputs`, :attr:`outputs` and :attr:`states` (tuples of names, as class
+    attributes or properties) and override :meth:`output` (default: the whole state).
+    """
+
+    #: Input names, in the column order of ``u``.
+    inputs: tuple = ()
+    #: Output names, in the column order of :meth:`output`'s result.
+    outputs: tuple = ()
+    #: State names, in the column order of ``x``.
+    states: tuple = ()
+    #: Whether :meth:`output` depends on ``u`` (direct feedthrough).
+    feedthrough: bool = False
+
+    @property
+    def n_states(self) -> int:
+        return len(self.states)
+
+    def initial_state(self) -> np.ndarray:
+        """The block's default initial state, shape ``(n,)`` (zeros unless a block says otherwise)."""
+        return np.zeros(self.n_states)
+
+    def output(self, t, x, u, params=None) -> np.ndarray:
+        """Outputs, shape ``(B, p)``; default: the whole state."""
+        return x
+
+    # ------------------------------------------------------------------ python-control
+    def _io_names(self, inputs, outputs, states):
+        return (list(self.inputs if inputs is None else inputs),
+                list(self.outputs if outputs is None else outputs),
+                list(self.states if states is None else states))
+
+    def _lifted(self, fn: Callable) -> Callable:
+        """``fn`` batched ``(B, n)``/``(B, m)`` -> a python-control callback on 1-D ``x``, ``u``."""
+        n, m = self.n_states, len(self.inputs)
+
+        def call(t, x, u, params=None):
+            xb = np.asarray(x, dtype=float).reshape(1, n)
+            ub = np.asarray(u, dtype=float).reshape(1, m)
+            return np.asarray(fn(t, xb, ub, params or None), dtype=float).reshape(-1)
+
+        return call
+
+
+class ContinuousBlock(Block):
+    """A block with continuous-time state: ``dx/dt = rhs(t, x, u, params)``."""
+
+    def rhs(self, t, x, u, params=None) -> np.ndarray:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def nlsys(self, name: str | None = None, *, inputs=None, outputs=None, states=None):
+        """This block as a continuous-time ``control.nlsys`` (one trace: ``x`` and ``u`` 1-D).
+
+        Parameters
+        ----------
+        name : str, optional
+            System name for :func:`control.interconnect`.
+        inputs, outputs, states : list of str, optional
+            Rename the signals (default: :attr:`inputs`, :attr:`outputs`, :attr:`states`).
+
+        Returns
+        -------
+        control.NonlinearIOSystem
+        """
+        import control as ct
+
+        ins, outs, sts = self._io_names(inputs, outputs, states)
+        return ct.nlsys(self._lifted(self.rhs), self._lifted(self.output), inputs=ins, outputs=outs,
+                        states=sts, name=name)
+
+
+class DiscreteBlock(Block):
+    """A block with discrete-time state: ``x(k+1) = update(t_k, x(k), u(k), params)``."""
+
+    def update(self, t, x, u, params=None) -> np.ndarray:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def nlsys(self, dt=True, name: str | None = None, *, inputs=None, outputs=None, states=None):
+        """This block as a discrete-time ``control.nlsys`` with sampling period ``dt``.
+
+        python-control's discrete convention matches the block's: ``y[k] = output(t_k, x[k], u[k])``
+        and ``x[k+1] = update(t_k, x[k], u[k])``.
+
+        Parameters
+        ----------
+        dt : float or True
+            Sampling period (``True``: unspecified, as in python-control).
+        name : str, optional
+            System name for :func:`control.interconnect`.
+        inputs, outputs, states : list of str, optional
+            Rename the signals.
+
+        Returns
+        -------
+        control.NonlinearIOSystem
+        """
+        import control as ct
+
+        if dt is not True:
+            dt = check_positive("dt", dt)
+        ins, outs, sts = self._io_names(inputs, outputs, states)
+        return ct.nlsys(self._lifted(self.update), self._lifted(self.output), inputs=ins, outputs=outs,
+                        states=sts, name=name, dt=dt)
+
+    def run(self, u, x0=None, params=None, t=None):
+        """Drive the block open loop with a whole input sequence.
+
+        Parameters
+        ----------
+        u : array_like, shape (N,), (N, m) or (N, B, m)
+            Inputs at the N samples (``(N,)``: one input, one run; ``(N, m)``: one run).
+        x0 : array_like, shape (n,) or (B, n), optional
+            Initial state (default :meth:`initial_state`).
+        t : array_like, shape (N,), optional
+            Sample instants passed to the callbacks (default ``0, 1, ..., N-1``).
+
+        Returns
+        -------
+        y : numpy.ndarray, shape (N, B, p)
+            Outputs ``y(k) = output(t_k, x(k), u(k))``.
+        x : numpy.ndarray, shape (N+1, B, n)
+            States ``x(0) .. x(N)``.
+        """
+        from ._validate import check_finite
+
+        m = len(self.inputs)
+        u = np.asarray(check_finite("u", u), dtype=float)
+        if u.ndim == 1 and m == 1:
+            u = u[:, None, None]
+        elif u.ndim == 2 and u.shape[1] == m:
+            u = u[:, None, :]
+        if u.ndim != 3 or u.shape[2] != m or u.shape[0] < 1:
+            raise ValueError(f"u must have shape (N,), (N, {m}) or (N, B, {m}), got {np.shape(u)}")
+        N, B = u.shape[:2]
+        x = np.array(np.broadcast_to(self.initial_state() if x0 is None else check_finite("x0", x0),
+                                     (B, self.n_states)), dtype=float)
+        t = np.arange(N, dtype=float) if t is None else check_finite("t", t, shape=(N,))
+        xs = np.empty((N + 1, B, self.n_states))
+        ys = None
+        xs[0] = x
+        for k in range(N):
+            yk = self.output(t[k], x, u[k], params)
+            if ys is None:
+                ys = np.empty((N, B, yk.shape[1]))
+            ys[k] = yk
+            x = self.update(t[k], x, u[k], params)
+            xs[k + 1] = x
+        return ys, xs
+
+
+class StaticBlock(Block):
+    """A memoryless block ``y = fn(t, u)`` (a sum, a gain, a saturation, a reference generator).
+
+    Parameters
+    ----------
+    fn : callable
+        ``fn(t, u) -> (B, p)`` with ``u`` of shape ``(B, m)``.
+    inputs, outputs : sequence of str
+        Signal names.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> add = StaticBlock(lambda t, u: u[:, :1] + u[:, 1:], inputs=("y", "v"), outputs=("y_meas",))
+    >>> add.output(0.0, np.zeros((2, 0)), np.array([[1.0, 0.5], [2.0, -1.0]]))
+    array([[1.5],
+           [1. ]])
+    """
+
+    feedthrough = True
+
+    def __init__(self, fn: Callable, inputs, outputs):
+        if not callable(fn):
+            raise TypeError(f"fn must be callable, got {type(fn).__name__}")
+        self.fn = fn
+        self.inputs = tuple(inputs)
+        self.outputs = tuple(outputs)
+        if not self.outputs:
+            raise ValueError("outputs must name at least one signal")
+        self.feedthrough = bool(self.inputs)
+
+    def output(self, t, x, u, params=None) -> np.ndarray:
+        return self.fn(t, u)
+
+    def nlsys(self, dt=None, name: str | None = None, *, inputs=None, outputs=None):
+        """This block as a static ``control.nlsys`` (``dt=None``: usable in continuous and discrete loops)."""
+        import control as ct
+
+        ins, outs, _ = self._io_names(inputs, outputs, ())
+        m = len(ins)
+
+        def outfcn(t, x, u, params=None):
+            return np.asarray(self.fn(t, np.asarray(u, dtype=float).reshape(1, m)), dtype=float).reshape(-1)
+
+        return ct.nlsys(None, outfcn, inputs=ins, outputs=outs, name=name, dt=dt)
+
+    def __repr__(self) -> str:
+        return f"StaticBlock(inputs={self.inputs}, outputs={self.outputs})"
+
+
+class SampledBlock(DiscreteBlock):
+    """A continuous block integrated over one sample with a fixed step, its input held: a discrete block.
+
+    ``update`` advances ``block`` over ``[t, t + dt]`` with ``substeps`` steps of ``method``
+    (:func:`ctrl_analysis.simulate.rk4_step` or :func:`~ctrl_analysis.simulate.euler_step`, the
+    engine's own integrators), so ``SampledBlock(sys, dt).nlsys(dt)`` runs in python-control exactly
+    as the engine runs ``sys``. Outputs are the continuous block's outputs at the sample instant.
+
+    Parameters
+    ----------
+    block : ContinuousBlock
+    dt : float
+        Sampling period (> 0).
+    method : {"rk4", "euler"}
+    substeps : int
+        Integration steps per sample (>= 1).
+    """
+
+    def __init__(self, block: ContinuousBlock, dt: float, method: str = "rk4", substeps: int = 1):
+        from .simulate import STEPPERS
+
+        if not isinstance(block, ContinuousBlock):
+            raise TypeError(f"block must be a ContinuousBlock, got {type(block).__name__}")
+        self.block = block
+        self.dt = check_positive("dt", dt)
+        self.method = check_in("method", method, STEPPERS)
+        self.substeps = check_int("substeps", substeps, minimum=1)
+        self._step = STEPPERS[method]
+        self.inputs, self.outputs, self.states = block.inputs, block.outputs, block.states
+        self.feedthrough = block.feedthrough
+
+    def initial_state(self) -> np.ndarray:
+        return self.block.initial_state()
+
+    def update(self, t, x, u, params=None) -> np.ndarray:
+        h = self.dt / self.substeps
+        for i in range(self.substeps):
+            x = self._step(self.block.rhs, t + i * h, x, u, h, params)
+        return x
+
+    def output(self, t, x, u, params=None) -> np.ndarray:
+        return self.block.output(t, x, u, params)
+
+    def __repr__(self) -> str:
+        return f"SampledBlock({self.block!r}, dt={self.dt}, method={self.method!r}, substeps={self.substeps})"

@@ -1,0 +1,73 @@
+"""Helpers for a study's frozen parameter object: printed values and reconstructions, declared once.
+
+A study keeps everything it takes from the paper, and every value the paper does not print, in one
+frozen dataclass. Declare each field with :func:`printed` (a value the paper prints, and where) or
+:func:`reconstructed` (a value the paper does not print, or prints wrongly, and why this one);
+:func:`record_parameters` then writes all of them into a :class:`~ctrl_analysis.report.StudyResult`
+(``settings`` and ``reconstructions``), so the report can never forget a reconstruction.
+
+Examples
+--------
+>>> from dataclasses import dataclass
+>>> from ctrl_analysis.report import StudyInfo, StudyResult
+>>> @dataclass(frozen=True)
+... class Example:
+...     h: float = printed(0.001, "§4: sampling step 1 ms")
+...     r: float = reconstructed(50.0, "TD speed factor not printed; a typical value")
+>>> res = StudyResult(StudyInfo("demo", "x.txt", "paper", "nothing"))
+>>> record_parameters(res, Example(), prefix="ex1")
+>>> res.settings
+{'ex1.h': 0.001, 'ex1.r': 50.0}
+>>> res.reconstructions[0]["name"], res.reconstructions[0]["value"]
+('ex1.r', 50.0)
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+__all__ = ["printed", "reconstructed", "record_parameters", "reconstructions_of"]
+
+
+def printed(value, where: str):
+    """A dataclass field holding a value the paper prints; ``where`` says where (eq., table, section)."""
+    return _field(value, {"printed": where})
+
+
+def reconstructed(value, why: str):
+    """A dataclass field holding a value the paper does not print (or prints wrongly); ``why`` says why this one."""
+    if not why:
+        raise ValueError("why must say why the value was chosen")
+    return _field(value, {"reconstruction": why})
+
+
+def _field(value, metadata):
+    if isinstance(value, (list, dict, set)):
+        raise TypeError(f"value must be immutable (use a tuple), got {type(value).__name__}")
+    return dataclasses.field(default=value, metadata=metadata)
+
+
+def reconstructions_of(params) -> list[dict]:
+    """``[{"name", "value", "why"}]`` for every field of ``params`` declared with :func:`reconstructed`."""
+    return [{"name": f.name, "value": getattr(params, f.name), "why": f.metadata["reconstruction"]}
+            for f in dataclasses.fields(params) if "reconstruction" in f.metadata]
+
+
+def record_parameters(result, params, prefix: str = "") -> None:
+    """Write every field of ``params`` into ``result.settings`` and its reconstructions into ``result``.
+
+    Parameters
+    ----------
+    result : ctrl_analysis.report.StudyResult
+    params : dataclass instance
+        The study's frozen parameter object (possibly changed by ``dataclasses.replace``).
+    prefix : str
+        Prefix of the setting names (e.g. ``"ex1"`` gives ``"ex1.h"``).
+    """
+    if not dataclasses.is_dataclass(params):
+        raise TypeError(f"params must be a dataclass instance, got {type(params).__name__}")
+    name = (lambda n: f"{prefix}.{n}") if prefix else (lambda n: n)
+    for f in dataclasses.fields(params):
+        result.settings[name(f.name)] = getattr(params, f.name)
+    for rec in reconstructions_of(params):
+        result.reconstruction(name(rec["name"]), rec["value"], rec["why"])
