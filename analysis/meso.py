@@ -204,7 +204,7 @@ def simulate_situation(sit: Situation, rows: list, T: float | None = None, paper
     b_plant = np.array([r.b_plant for r in rows], dtype=float)
 
     pd = PDFeedforward(b0=b0, omega_c=paper.omega_c, order=paper.n)
-    lpf = LowPassFilter(paper.omega_f, order=2).digital(h, shape=(B, 4))
+    lpf = LowPassFilter(paper.omega_f, order=2).digital(h, channels=4)
 
     # noise: one draw per distinct seed (ESO and MESO runs with the same seed see the same noise)
     noise = np.zeros((K, B, 1))
@@ -221,6 +221,7 @@ def simulate_situation(sit: Situation, rows: list, T: float | None = None, paper
         "theta_cum": np.zeros((B, 4)),    # LSM result (input of W(s))
         "xh_prev": np.zeros((B, 3)),
         "u_prev": np.zeros(B),
+        "lpf": np.tile(lpf.initial_state(), (B, 1)),
     }
 
     def known(t, xh, uu, params):
@@ -256,7 +257,9 @@ def simulate_situation(sit: Situation, rows: list, T: float | None = None, paper
     def controller(k, t, z, w):
         if k > 0:
             # W(s) on the LSM result, exact ZOH (the LSM result is held between samples)
-            st["theta_used"] = np.where(is_meso[:, None], lpf.step(st["theta_cum"]), 0.0)
+            filtered = lpf.output(t, st["lpf"], st["theta_cum"])
+            st["lpf"] = lpf.update(t, st["lpf"], st["theta_cum"])
+            st["theta_used"] = np.where(is_meso[:, None], filtered, 0.0)
         th = st["theta_used"]
         xh = z[:, 2:]
         ref = np.array([np.sin(t), np.cos(t), -np.sin(t)])

@@ -20,7 +20,8 @@ import numpy as np
 from ctrl_analysis.controllers.differential_feedback import HighOrderDifferentialFeedback
 from ctrl_analysis.estimators.differential import DifferentialEstimator
 from ctrl_analysis.estimators.eso import ExtendedStateObserver
-from ctrl_analysis.estimators.tracking import SetpointPrefilter, TrackingDifferentiator, softened_setpoint
+from ctrl_analysis.estimators.lowpass import LowPassFilter
+from ctrl_analysis.estimators.tracking import TrackingDifferentiator, softened_setpoint
 from ctrl_analysis.metrics import mean_abs_error, mean_std, rmse
 from ctrl_analysis.report import StudyContext, StudyResult, new_figure
 from ctrl_analysis.simulate import draw_noise, run_seeds, simulate_sampled, uniform_noise
@@ -451,7 +452,7 @@ def example2_setpoint(p: Example2, n_steps: int):
     t = p.h * np.arange(n_steps)
     r = np.sign(np.cos(p.r_freq * t))
     if p.softener == "prefilter":
-        softener = SetpointPrefilter(p.n, p.omega)
+        softener = LowPassFilter(p.omega, p.n)
     elif p.softener == "td":
         softener = TrackingDifferentiator(p.td_r, p.h)
     else:

@@ -12,10 +12,10 @@ subtracts any known model part ``f̂`` (modified ESO), and leaves the tracking e
 
 from __future__ import annotations
 
-from math import comb
 
 import numpy as np
 
+from ..polynomials import repeated_pole_coefficients
 from .._validate import check_finite, check_int, check_positive
 
 __all__ = ["PDFeedforward", "bandwidth_gains"]
@@ -33,8 +33,8 @@ def bandwidth_gains(n: int, omega_c: float) -> np.ndarray:
     """
     n = check_int("n", n, minimum=1)
     omega_c = float(check_positive("omega_c", omega_c))
-    k = [comb(n, i - 1) * omega_c ** (n - i + 1) for i in range(1, n + 1)]
-    return np.array(k + [1.0])
+    # k_i = C(n, i-1) ω_c^(n-i+1): the coefficients of (s + ω_c)^n, lowest power first
+    return repeated_pole_coefficients(n, omega_c)[::-1].copy()
 
 
 class PDFeedforward:

@@ -18,12 +18,13 @@ conventional ESO, which lumps the known part into the extended state.
 
 from __future__ import annotations
 
-from math import comb
 from typing import Callable
 
 import numpy as np
 
 from .._validate import check_finite, check_int, check_positive
+from ..blocks import ContinuousBlock
+from ..polynomials import repeated_pole_coefficients
 
 __all__ = ["fal", "ExtendedStateObserver"]
 
@@ -81,7 +82,7 @@ def _fal(e: np.ndarray, alpha: np.ndarray, delta: float, delta_pow: np.ndarray) 
     return np.where(abs_e <= delta, e / delta_pow, outer)
 
 
-class ExtendedStateObserver:
+class ExtendedStateObserver(ContinuousBlock):
     """Continuous extended state observer of plant order ``n`` (linear, nonlinear or modified).
 
     Parameters
@@ -98,6 +99,8 @@ class ExtendedStateObserver:
         ``known(t, x_hat, u, params) -> f_known`` of shape ``x_hat.shape[:-1]``; it receives the same
         ``x_hat`` and observer input ``u = [y, u_control]`` as :meth:`rhs`. Present: modified ESO
         (MESO, the known part of the plant is fed into the n-th equation). Absent: conventional ESO.
+
+    Block signals: inputs ``y``, ``u``; states and outputs ``xhat1 .. xhat{n+1}``.
 
     Attributes
     ----------
@@ -210,7 +213,7 @@ class ExtendedStateObserver:
         n = check_int("n", n, minimum=1)
         omega_o = float(check_positive("omega_o", omega_o))
         # (s + omega_o)^(n+1) = sum_i C(n+1, i) omega_o^i s^(n+1-i)
-        return cls([comb(n + 1, i) * omega_o**i for i in range(1, n + 2)], **kw)
+        return cls(repeated_pole_coefficients(n + 1, omega_o)[1:], **kw)
 
     # ------------------------------------------------------------------------------------------
     # Dynamics
@@ -264,12 +267,15 @@ class ExtendedStateObserver:
         dx[..., n - 1] += drive
         return dx
 
-    def nlsys(self, name: str | None = None):
-        """The observer as a :class:`control.NonlinearIOSystem` (inputs ``y``, ``u``; outputs the states)."""
-        from ..simulate import continuous_nlsys
+    inputs = ("y", "u")
 
-        states = [f"xhat{i}" for i in range(1, self.nstates + 1)]
-        return continuous_nlsys(self.rhs, states=states, inputs=["y", "u"], outputs=states, name=name)
+    @property
+    def states(self) -> tuple:
+        return tuple(f"xhat{i}" for i in range(1, self.nstates + 1))
+
+    @property
+    def outputs(self) -> tuple:
+        return self.states
 
     # ------------------------------------------------------------------------------------------
     # Linear analysis
@@ -301,8 +307,7 @@ class ExtendedStateObserver:
         A, B = self._matrices()
         m = self.nstates
         return ct.ss(A, B, np.eye(m), np.zeros((m, 2)),
-                     inputs=["y", "u"], outputs=[f"xhat{i}" for i in range(1, m + 1)],
-                     states=[f"xhat{i}" for i in range(1, m + 1)])
+                     inputs=list(self.inputs), outputs=list(self.outputs), states=list(self.states))
 
     def characteristic_polynomial(self) -> np.ndarray:
         """Coefficients ``[1, L_1, ..., L_{n+1}]`` of ``det(sI - (A - LC))`` (highest power first)."""

@@ -1,90 +1,136 @@
-"""Low-pass filters ``W(s) = ω_f^m / (s + ω_f)^m`` (m = 1, 2): continuous block and exact digital form.
+"""The low-pass / prefilter ``W(s) = ω^m / (s + ω)^m``: a continuous block and its exact digital form.
 
-The same filter serves as a continuous block (:attr:`LowPassFilter.ss`, :attr:`LowPassFilter.tf`,
-:meth:`LowPassFilter.rhs`) and as a digital filter for a signal or a parameter vector sampled with a
-fixed period and held between samples (:meth:`LowPassFilter.discretize` gives the exact
-zero-order-hold discretisation; :class:`DiscreteLowPass` steps it over any number of channels and
-batch runs).
+One block serves every use of this filter in the toolkit: smoothing a measured signal or identified
+parameters (the digital form, exact for inputs held over each sample), and softening a setpoint
+while giving its first ``m − 1`` derivatives (the states of the phase-variable realisation).
 """
 
 from __future__ import annotations
 
-from math import comb
-
 import numpy as np
 
 from .._validate import check_finite, check_int, check_positive
+from ..blocks import ContinuousBlock, DiscreteBlock, signal_names
+from ..polynomials import repeated_pole_coefficients
 
 __all__ = ["LowPassFilter", "DiscreteLowPass"]
 
 
-class LowPassFilter:
-    """Continuous low-pass ``W(s) = ω_f^m / (s + ω_f)^m`` of order ``m`` (unit DC gain, m-fold pole).
+class LowPassFilter(ContinuousBlock):
+    """Continuous low-pass ``W(s) = ω^m / (s + ω)^m`` of order ``m`` (unit DC gain, m-fold pole at ``-ω``).
 
-    Controllable canonical realisation with states ``[w, w', ..., w^(m-1)]``::
+    Phase-variable (controllable canonical) realisation with states ``w = [w_0, w_1, ..., w_(m-1)]``,
+    the output and exactly its first ``m − 1`` derivatives::
 
-        w^(m) = ω_f^m (u - w) - Σ_{i=1}^{m-1} C(m, i) ω_f^i w^(m-i)
+        w_i' = w_(i+1),   i = 0..m-2
+        w_(m-1)' = ω^m u − Σ_(j=0..m-1) C(m, j) ω^(m-j) w_j
+
+    so a step in ``u`` gives a ``w_0`` without overshoot whose first ``m − 1`` derivatives are
+    continuous (a setpoint prefilter for an ``m``-th order tracking controller).
 
     Parameters
     ----------
-    omega_f : float
+    omega : float
         Corner frequency of each pole in rad/s (> 0).
     order : int
-        1 or 2.
+        ``m >= 1``.
+
+    Attributes
+    ----------
+    A, B, C : numpy.ndarray
+        Companion matrices; ``C`` picks ``w_0``.
+    tf : control.TransferFunction
+        ``u -> w_0``.
+    ss : control.StateSpace
+        Input ``u``; states and outputs ``w[0..m-1]``.
+
+    Block signals: input ``u``; states and outputs ``w[0] .. w[m-1]`` (``w[k]`` is the k-th derivative).
+
+    Raises
+    ------
+    ValueError
+        If ``order < 1`` or ``omega`` is not finite and ``> 0``.
 
     References
     ----------
-    Chen Z., Gao Q., "Modified extended state observer: analysis and implementation", Control
-    Theory & Applications 35(8), 2018, section 4: ``W(s) = ω_f² / (s + ω_f)²`` smooths the
-    identified parameters before they enter the observer and the controller.
+    Ogata K., *Modern Control Engineering*, 5th ed., §9-2 (phase-variable form). Used by Chen & Gao
+    (2018), §4, to smooth identified parameters (``m = 2``), by Gong & Wu (2010) as the digital
+    low-pass baseline, and as the setpoint softener of Qi et al. (2004), §4 (which only asks for a
+    "softened" square wave).
 
     Examples
     --------
+    >>> import control as ct
     >>> import numpy as np
-    >>> W = LowPassFilter(2.0)
-    >>> np.allclose(W.tf.den[0][0], [1, 4.0, 4.0])
-    True
+    >>> W = LowPassFilter(2.0, order=2)
+    >>> np.allclose(W.tf.den[0][0], [1, 4.0, 4.0]), float(ct.dcgain(W.tf))
+    (True, 1.0)
     """
 
-    def __init__(self, omega_f: float, order: int = 2):
-        self.omega_f = float(check_positive("omega_f", omega_f))
-        self.order = check_int("order", order, minimum=1, maximum=2)
-        m, w = self.order, self.omega_f
-        # characteristic polynomial (s + ω_f)^m = s^m + Σ C(m, i) ω_f^i s^(m-i)
-        self._den = np.array([comb(m, i) * w**i for i in range(m + 1)], dtype=float)
-        A = np.zeros((m, m))
-        A[:-1, 1:] = np.eye(m - 1)
-        A[-1, :] = -self._den[:0:-1]
+    inputs = ("u",)
+
+    def __init__(self, omega: float, order: int = 2):
+        self.omega = float(check_positive("omega", omega))
+        self.order = check_int("order", order, minimum=1, maximum=20)
+        m = self.order
+        # (s + ω)^m = s^m + C(m,1) ω s^(m-1) + ... + ω^m
+        self.den = repeated_pole_coefficients(m, self.omega)
+        self.gain = self.omega**m
+        #: last row of A: −[c_0, ..., c_(m-1)] with c_j the coefficient of s^j
+        self.coeffs = self.den[:0:-1].copy()
+        A = np.diag(np.ones(m - 1), 1)
+        A[-1, :] = -self.coeffs
         self.A = A
         self.B = np.zeros((m, 1))
-        self.B[-1, 0] = w**m
+        self.B[-1, 0] = self.gain
         self.C = np.zeros((1, m))
         self.C[0, 0] = 1.0
-
-    @property
-    def ss(self):
-        """The filter as :class:`control.StateSpace` (input ``u``, output ``w``)."""
-        import control as ct
-
-        return ct.ss(self.A, self.B, self.C, np.zeros((1, 1)), inputs="u", outputs="w")
+        self.states = self.outputs = signal_names("w", m)
 
     @property
     def tf(self):
-        """The filter as :class:`control.TransferFunction`: ``ω_f^m / (s + ω_f)^m``."""
+        """``ω^m / (s + ω)^m`` (``u -> w[0]``)."""
         import control as ct
 
-        return ct.tf([self.omega_f**self.order], self._den, inputs="u", outputs="w")
+        return ct.tf([self.gain], self.den, inputs="u", outputs="w[0]")
+
+    def derivative_tf(self, k: int):
+        """``s^k ω^m / (s + ω)^m``: ``u -> w[k]``, ``0 <= k <= m`` (a state for ``k < m``)."""
+        import control as ct
+
+        k = check_int("k", k, minimum=0, maximum=self.order)
+        num = np.zeros(k + 1)
+        num[0] = self.gain
+        return ct.tf(num, self.den, inputs="u", outputs=f"w[{k}]")
+
+    @property
+    def ss(self):
+        """Phase-variable state space: input ``u``; states and outputs ``w[0..m-1]``."""
+        import control as ct
+
+        names = list(self.states)
+        return ct.ss(self.A, self.B, np.eye(self.order), np.zeros((self.order, 1)), inputs="u", states=names,
+                     outputs=names)
 
     def rhs(self, t, x, u, params=None) -> np.ndarray:
-        """``dx/dt`` with ``x`` of shape (..., m) and ``u`` of shape (..., 1) (python-control order)."""
-        x = np.asarray(x, dtype=float)
-        u = np.asarray(u, dtype=float)[..., 0]
-        return x @ self.A.T + u[..., None] * self.B[:, 0]
+        """``dw/dt``, ``x`` of shape ``(B, m)``, ``u`` of shape ``(B, 1)`` (block protocol)."""
+        dx = np.empty_like(x)
+        # w_i' = w_(i+1)
+        dx[..., :-1] = x[..., 1:]
+        # w_(m-1)' = ω^m u − Σ c_j w_j
+        top = self.gain * u[..., 0]
+        for j in range(self.order):
+            top = top - self.coeffs[j] * x[..., j]
+        dx[..., -1] = top
+        return dx
 
     def discretize(self, h: float):
         """Exact zero-order-hold discretisation ``x(k+1) = Ad x(k) + Bd u(k)`` for sample period ``h``.
 
-        Returns ``(Ad, Bd)`` with ``Bd`` of shape (m,).
+        Returns
+        -------
+        Ad : numpy.ndarray, shape (m, m)
+        Bd : numpy.ndarray, shape (m,)
         """
         import control as ct
 
@@ -92,68 +138,96 @@ class LowPassFilter:
         sysd = ct.c2d(ct.ss(self.A, self.B, np.eye(self.order), 0), h, method="zoh")
         return np.asarray(sysd.A), np.asarray(sysd.B)[:, 0]
 
-    def digital(self, h: float, shape=(), initial=None) -> "DiscreteLowPass":
-        """A :class:`DiscreteLowPass` for sample period ``h`` over signals of ``shape``."""
-        return DiscreteLowPass(self, h, shape=shape, initial=initial)
+    def digital(self, h: float, channels: int = 1, initial=None) -> "DiscreteLowPass":
+        """A :class:`DiscreteLowPass` with sample period ``h`` filtering ``channels`` signals."""
+        return DiscreteLowPass(self, h, channels=channels, initial=initial)
+
+    def __repr__(self) -> str:
+        return f"LowPassFilter(omega={self.omega}, order={self.order})"
 
 
-class DiscreteLowPass:
-    """Digital form of a :class:`LowPassFilter` (exact for inputs held over each sample period).
+class DiscreteLowPass(DiscreteBlock):
+    """Digital form of a :class:`LowPassFilter` (exact for inputs held over each sample), a discrete block.
 
-    Filters every entry of an array of ``shape`` (e.g. ``(B, p)`` for ``B`` runs of a
-    ``p``-parameter vector) independently.
+    Filters ``channels`` signals independently (e.g. a ``p``-parameter vector). The block's state
+    holds, channel after channel, the ``m`` filter states ``[w, w', ...]``; its output is the
+    filtered value of each channel *after* the update with the current input, ``w(k+1)``, so that
+    a loop reading it sees the newest filtered sample (direct feedthrough).
 
     Parameters
     ----------
     lowpass : LowPassFilter
     h : float
         Sample period (> 0).
-    shape : tuple
-        Shape of the filtered signal.
-    initial : array_like, optional
+    channels : int
+        Number of filtered signals (>= 1).
+    initial : float or array_like, shape (channels,), optional
         Initial output (the filter starts at rest at this value; default 0).
 
     Attributes
     ----------
-    x : ndarray, shape shape + (m,)
-        Filter state ``[w, w', ...]``.
-    Ad, Bd : ndarray
-        Discretised matrices.
+    Ad, Bd : numpy.ndarray
+        Discretised matrices, shapes ``(m, m)`` and ``(m,)``.
+
+    Block signals: inputs ``u[0..channels-1]``; outputs ``w[0..channels-1]``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> f = LowPassFilter(5.0, order=2).digital(0.01)
+    >>> y, _ = f.run(np.ones(400))          # 4 s of a unit step
+    >>> round(float(y[-1, 0, 0]), 6)
+    1.0
     """
 
-    def __init__(self, lowpass: LowPassFilter, h: float, shape=(), initial=None):
+    feedthrough = True
+
+    def __init__(self, lowpass: LowPassFilter, h: float, channels: int = 1, initial=None):
         if not isinstance(lowpass, LowPassFilter):
             raise TypeError(f"lowpass must be a LowPassFilter, got {type(lowpass).__name__}")
         self.lowpass = lowpass
         self.h = float(check_positive("h", h))
-        self.shape = tuple(shape)
+        self.channels = check_int("channels", channels, minimum=1)
         self.Ad, self.Bd = lowpass.discretize(self.h)
-        self.initial = None if initial is None else np.broadcast_to(
-            check_finite("initial", initial), self.shape).copy()
-        self.reset()
+        m = lowpass.order
+        init = np.zeros(self.channels) if initial is None else np.broadcast_to(
+            check_finite("initial", initial), (self.channels,)).astype(float)
+        self._x0 = np.zeros((self.channels, m))
+        self._x0[:, 0] = init
+        self.inputs = signal_names("u", self.channels)
+        self.outputs = signal_names("w", self.channels)
+        self.states = tuple(f"w[{c}][{j}]" for c in range(self.channels) for j in range(m))
 
-    def reset(self) -> None:
-        """Back to rest at the initial output."""
-        self.x = np.zeros(self.shape + (self.lowpass.order,))
-        if self.initial is not None:
-            self.x[..., 0] = self.initial
+    def initial_state(self) -> np.ndarray:
+        return self._x0.reshape(-1).copy()
 
-    @property
-    def output(self) -> np.ndarray:
-        """Current filter output ``w`` (shape ``shape``)."""
-        return self.x[..., 0].copy()
+    def update(self, t, x, u, params=None) -> np.ndarray:
+        m, p = self.lowpass.order, self.channels
+        xs = x.reshape(x.shape[0], p, m)
+        x_next = np.empty_like(xs)
+        # x(k+1) = Ad x(k) + Bd u(k)   (exact ZOH discretisation of W(s)), written out per row
+        for i in range(m):
+            acc = self.Bd[i] * u
+            for j in range(m):
+                acc = acc + self.Ad[i, j] * xs[:, :, j]
+            x_next[:, :, i] = acc
+        return x_next.reshape(x.shape[0], p * m)
 
-    def step(self, u) -> np.ndarray:
-        """Advance one sample with input ``u`` (held over the period); return the new output."""
-        u = np.asarray(u, dtype=float)
-        # x(k+1) = Ad x(k) + Bd u(k)   (exact ZOH discretisation of W(s))
-        self.x = self.x @ self.Ad.T + u[..., None] * self.Bd
-        return self.x[..., 0].copy()
+    def output(self, t, x, u, params=None) -> np.ndarray:
+        m = self.lowpass.order
+        return self.update(t, x, u, params)[:, ::m]
 
     def filter(self, u) -> np.ndarray:
-        """Filter a whole record ``u`` of shape (N,) + shape; returns the outputs after each step."""
+        """Filter a whole record ``u`` of shape ``(N,)``, ``(N, channels)`` or ``(N, B, channels)``.
+
+        Returns the filtered values after each sample, with the shape of ``u``.
+        """
         u = np.asarray(u, dtype=float)
-        out = np.empty_like(u)
-        for k in range(u.shape[0]):
-            out[k] = self.step(u[k])
-        return out
+        shape = u.shape
+        if u.ndim == 1 and self.channels == 1:
+            u = u[:, None]
+        y, _ = self.run(u)
+        return y.reshape(shape)
+
+    def __repr__(self) -> str:
+        return f"DiscreteLowPass({self.lowpass!r}, h={self.h}, channels={self.channels})"

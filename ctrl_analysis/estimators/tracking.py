@@ -6,8 +6,8 @@ together with its derivatives ``v, v', v'', ...``:
 * :func:`fhan` — Han's time-optimal synthesis function of the discrete double integrator;
 * :class:`TrackingDifferentiator` — Han's discrete tracking differentiator (TD) built on it,
   giving ``(v, v')`` and, through the last ``fhan`` value, ``v''``;
-* :class:`SetpointPrefilter` — the linear prefilter ``ω^m / (s + ω)^m`` in phase-variable form,
-  whose states are exactly ``(v, v', ..., v^(m-1))``.
+* the linear prefilter ``ω^m / (s + ω)^m`` is :class:`~ctrl_analysis.estimators.lowpass.LowPassFilter`,
+  whose phase-variable states are exactly ``(v, v', ..., v^(m-1))``.
 
 :func:`softened_setpoint` runs either softener over a sampled reference and returns the
 derivative vector ``θ`` at every sample, ready for a differential-feedback controller.
@@ -15,17 +15,15 @@ derivative vector ``θ`` at every sample, ready for a differential-feedback cont
 
 from __future__ import annotations
 
-from math import comb
-
 import control as ct
 import numpy as np
 
+from .lowpass import LowPassFilter
 from .._validate import check_finite, check_in, check_int, check_positive
 
 __all__ = [
     "fhan",
     "TrackingDifferentiator",
-    "SetpointPrefilter",
     "softened_setpoint",
 ]
 
@@ -172,138 +170,14 @@ class TrackingDifferentiator:
                 f"substeps={self.substeps})")
 
 
-class SetpointPrefilter:
-    """Linear setpoint prefilter ``ω^m / (s + ω)^m`` in phase-variable form.
-
-    States ``q = (v, v', ..., v^(m-1))``::
-
-        q_i' = q_(i+1),   i = 1..m-1
-        q_m' = ω^m r - Σ_(j=0..m-1) C(m, j) ω^(m-j) q_(j+1)
-
-    so the states are the softened setpoint and exactly its first ``m - 1`` derivatives; a step
-    in ``r`` gives a ``v`` without overshoot whose first ``m - 1`` derivatives are continuous.
-
-    Parameters
-    ----------
-    order : int
-        ``m >= 1``; ``m = n`` gives ``v`` and the ``n - 1`` derivatives an ``n``-th order
-        differential-feedback controller needs.
-    omega : float
-        Corner frequency ``ω`` in rad/s, ``> 0`` (an ``m``-fold pole at ``-ω``).
-
-    Attributes
-    ----------
-    tf : control.TransferFunction
-        ``r -> v``.
-    ss : control.StateSpace
-        Input ``r``; states and outputs ``v, v', ...``.
-    A, B : numpy.ndarray
-        Companion matrices of the phase-variable form.
-
-    Raises
-    ------
-    ValueError
-        If ``order < 1`` or ``omega`` is not finite and ``> 0``.
-
-    References
-    ----------
-    Ogata K., *Modern Control Engineering*, 5th ed., §9-2 (phase-variable / controllable
-    canonical form). A common setpoint softener in two-degree-of-freedom designs; Qi, Chen, Xue
-    & Yuan (2004), section 4, only ask for a "softened" square wave without saying how.
-
-    Examples
-    --------
-    >>> import control as ct
-    >>> pf = SetpointPrefilter(3, 2.0)
-    >>> float(ct.dcgain(pf.tf))
-    1.0
-    """
-
-    def __init__(self, order: int, omega: float):
-        self.order = check_int("order", order, minimum=1)
-        self.omega = float(check_positive("omega", omega))
-        m, w = self.order, self.omega
-        # (s + ω)^m = s^m + Σ_j C(m, j) ω^(m-j) s^j  ->  last row -[c_0, ..., c_(m-1)]
-        self.coeffs = np.array([comb(m, j) * w ** (m - j) for j in range(m)])
-        self.gain = w**m
-        A = np.diag(np.ones(m - 1), 1)
-        A[-1, :] = -self.coeffs
-        self.A = A
-        self.B = np.zeros((m, 1))
-        self.B[-1, 0] = self.gain
-
-    @property
-    def tf(self) -> ct.TransferFunction:
-        """``ω^m / (s + ω)^m`` (``r -> v``)."""
-        den = np.concatenate(([1.0], self.coeffs[::-1]))
-        return ct.tf([self.gain], den, inputs="r", outputs="v")
-
-    def derivative_tf(self, k: int) -> ct.TransferFunction:
-        """``s^k ω^m / (s + ω)^m``: ``r -> v^(k)``, ``0 <= k <= m`` (the states for ``k < m``)."""
-        k = check_int("k", k, minimum=0, maximum=self.order)
-        num = np.zeros(k + 1)
-        num[0] = self.gain
-        den = np.concatenate(([1.0], self.coeffs[::-1]))
-        return ct.tf(num, den, inputs="r", outputs=f"v^({k})")
-
-    @property
-    def ss(self) -> ct.StateSpace:
-        """Phase-variable state space; outputs are the states ``v, v', ..., v^(m-1)``."""
-        names = self.output_names()
-        return ct.ss(self.A, self.B, np.eye(self.order), np.zeros((self.order, 1)),
-                     inputs="r", states=names, outputs=names)
-
-    def output_names(self) -> list[str]:
-        """``["v", "v'", "v''", ...]``."""
-        return ["v" + "'" * k for k in range(self.order)]
-
-    def rhs(self, t, q, r, params=None) -> np.ndarray:
-        """Right-hand side in python-control's ``(t, x, u, params)`` order.
-
-        Parameters
-        ----------
-        t : float
-            Time (unused).
-        q : array_like, shape (m,) or (B, m)
-            Prefilter states.
-        r : array_like
-            Raw reference: scalar, ``(1,)``, ``(B,)`` or ``(B, 1)``.
-
-        Returns
-        -------
-        numpy.ndarray
-            ``dq/dt`` with the shape of ``q`` (broadcast with ``r``).
-        """
-        q = np.asarray(q, dtype=float)
-        r = np.asarray(r, dtype=float)
-        if r.ndim >= 1 and r.shape[-1] == 1:
-            r = r[..., 0]
-        dq = np.empty(np.broadcast_shapes(q.shape, r.shape + (1,)))
-        # q_i' = q_(i+1)
-        dq[..., :-1] = q[..., 1:]
-        # q_m' = ω^m r - Σ c_j q_(j+1)
-        dq[..., -1] = self.gain * r - q @ self.coeffs
-        return dq
-
-    def outputs(self, q, r=None) -> np.ndarray:
-        """``(v, v', ..., v^(m-1))`` — the states themselves; with ``r`` also ``v^(m)`` appended."""
-        q = np.asarray(q, dtype=float)
-        if r is None:
-            return q.copy()
-        top = self.rhs(0.0, q, r)[..., -1:]
-        return np.concatenate([q, top], axis=-1)
-
-    def __repr__(self) -> str:
-        return f"SetpointPrefilter(order={self.order}, omega={self.omega})"
-
-
 def softened_setpoint(softener, r, h: float, *, method: str = "zoh") -> np.ndarray:
     """Soften a sampled reference and return ``θ = (v, v', v'', ...)`` at every sample.
 
     Parameters
     ----------
-    softener : SetpointPrefilter or TrackingDifferentiator
-        A :class:`SetpointPrefilter` of order ``m`` gives its ``m`` states with ``r`` held over
+    softener : LowPassFilter or TrackingDifferentiator
+        A :class:`~ctrl_analysis.estimators.lowpass.LowPassFilter` of order ``m`` (the prefilter
+        ``ω^m / (s + ω)^m``) gives its ``m`` states with ``r`` held over
         each step (zero-order hold). A
         :class:`TrackingDifferentiator` (its ``h`` must equal ``h``) gives
         ``(x1, x2, fh)``: the tracking signal, its derivative and the acceleration applied over
@@ -315,7 +189,7 @@ def softened_setpoint(softener, r, h: float, *, method: str = "zoh") -> np.ndarr
     method : {"zoh", "rk4", "euler"}
         Prefilter only: ``"zoh"`` (default) propagates the exact zero-order-hold discretisation
         (:func:`control.c2d`, :func:`control.forced_response`); ``"rk4"``/``"euler"`` integrate
-        :meth:`SetpointPrefilter.rhs` with the engine's fixed step instead.
+        :meth:`LowPassFilter.rhs` with the engine's fixed step instead.
 
     Returns
     -------
@@ -337,13 +211,13 @@ def softened_setpoint(softener, r, h: float, *, method: str = "zoh") -> np.ndarr
     if r.ndim != 1 or r.size < 1:
         raise ValueError(f"r must be a non-empty 1-D array of samples, got shape {r.shape}")
     check_in("method", method, ("zoh", "rk4", "euler"))
-    if isinstance(softener, SetpointPrefilter):
+    if isinstance(softener, LowPassFilter):
         if method == "zoh":
             # exact for r held over each step: q_(k+1) = e^(A h) q_k + ∫ e^(A s) ds B r_k
             sysd = ct.c2d(softener.ss, h, method="zoh")
             resp = ct.forced_response(sysd, T=h * np.arange(r.size), U=r)
             return np.asarray(resp.states).T.reshape(r.size, softener.order).copy()
-        res = simulate_sampled(lambda t, q, u, p: softener.rhs(t, q, u), np.zeros(softener.order),
+        res = simulate_sampled(softener.rhs, np.zeros(softener.order),
                                h, r.size, noise=r[:, None, None], method=method)
         return res.x[:-1, 0, :]
     if isinstance(softener, TrackingDifferentiator):
@@ -358,5 +232,5 @@ def softened_setpoint(softener, r, h: float, *, method: str = "zoh") -> np.ndarr
             theta[k, 2] = softener.fh
         return theta
     raise TypeError(
-        f"softener must be a SetpointPrefilter or a TrackingDifferentiator, got {type(softener).__name__}"
+        f"softener must be a LowPassFilter or a TrackingDifferentiator, got {type(softener).__name__}"
     )

@@ -8,14 +8,15 @@ from ctrl_analysis.estimators.lowpass import DiscreteLowPass, LowPassFilter
 from ctrl_analysis.simulate import simulate_sampled
 
 
-@pytest.mark.parametrize("order", [1, 2])
+@pytest.mark.parametrize("order", [1, 2, 3, 5])
 def test_tf_and_ss_agree(order):
     W = LowPassFilter(1.8, order=order)
     np.testing.assert_allclose(W.tf.dcgain(), 1.0)
-    np.testing.assert_allclose(W.ss.dcgain(), 1.0)
-    np.testing.assert_allclose(np.sort(W.ss.poles().real), -1.8, atol=1e-6)
+    S = W.ss[0, 0]
+    np.testing.assert_allclose(S.dcgain(), 1.0)
+    np.testing.assert_allclose(np.sort(S.poles().real), -1.8, atol=1e-2)
     for w in (0.1, 1.8, 30.0):
-        np.testing.assert_allclose(W.ss(1j * w), W.tf(1j * w), rtol=1e-12)
+        np.testing.assert_allclose(S(1j * w), W.tf(1j * w), rtol=1e-10)
     # magnitude at the corner: (1/sqrt 2)^order
     np.testing.assert_allclose(abs(W.tf(1j * 1.8)), 2 ** (-order / 2), rtol=1e-12)
 
@@ -42,21 +43,48 @@ def test_rhs_with_engine_matches_step_response():
 
 def test_vector_batch_filtering_and_initial():
     W = LowPassFilter(2.0)
-    dig = DiscreteLowPass(W, 0.01, shape=(3, 4), initial=1.0)
-    np.testing.assert_allclose(dig.output, np.ones((3, 4)))
-    u = np.arange(12.0).reshape(3, 4)
-    for _ in range(3000):
-        y = dig.step(u)
-    np.testing.assert_allclose(y, u, rtol=1e-8, atol=1e-12)
-    dig.reset()
-    np.testing.assert_allclose(dig.output, 1.0)
+    dig = DiscreteLowPass(W, 0.01, channels=4, initial=1.0)
+    u = np.broadcast_to(np.arange(12.0).reshape(3, 4), (3000, 3, 4))
+    y, x = dig.run(u)
+    np.testing.assert_allclose(x[0].reshape(3, 4, 2)[..., 0], 1.0)  # starts at rest at `initial`
+    np.testing.assert_allclose(y[-1], u[-1], rtol=1e-8, atol=1e-12)
+    # each run and channel of the batch equals its single-channel filter
+    one = W.digital(0.01, initial=1.0).filter(u[:, 1, 2])
+    np.testing.assert_array_equal(y[:, 1, 2], one)
+
+
+def test_prefilter_poles_and_derivative_tfs():
+    pf = LowPassFilter(2.0, 3)
+    np.testing.assert_allclose(np.sort(pf.ss.poles().real), [-2.0, -2.0, -2.0], atol=1e-4)
+    np.testing.assert_allclose(ct.ss2tf(pf.ss[0, 0]).num[0][0][-1], 8.0, rtol=1e-12)
+    # the states are u -> s^k W(s)
+    for k in range(3):
+        for w in (0.5, 2.0, 9.0):
+            np.testing.assert_allclose(pf.ss[k, 0](1j * w), pf.derivative_tf(k)(1j * w), rtol=1e-10)
+
+
+@pytest.mark.parametrize("method", ["zoh", "rk4"])
+def test_prefilter_states_are_the_derivatives_of_its_step_response(method):
+    from ctrl_analysis.estimators.tracking import softened_setpoint
+
+    h = 1e-3
+    pf = LowPassFilter(2.0, 3)
+    n = 4000
+    theta = softened_setpoint(pf, np.ones(n), h, method=method)
+    t = h * np.arange(n)
+    for k in range(3):
+        ref = ct.step_response(pf.derivative_tf(k), t).outputs
+        np.testing.assert_allclose(theta[:, k], ref, atol=1e-8, err_msg=f"v^({k})")
+    # the engine integrating pf.rhs (batch of 2) agrees too
+    res = simulate_sampled(pf.rhs, np.zeros(3), h, n, noise=np.ones((n, 2, 1)))
+    np.testing.assert_allclose(res.x[:-1, 1], theta, atol=1e-8)
 
 
 def test_bad_input():
-    with pytest.raises(ValueError, match="omega_f"):
+    with pytest.raises(ValueError, match="omega must be > 0"):
         LowPassFilter(0.0)
-    with pytest.raises(ValueError, match="order"):
-        LowPassFilter(1.0, order=3)
+    with pytest.raises(ValueError, match="order must be >= 1"):
+        LowPassFilter(1.0, order=0)
     with pytest.raises(ValueError, match="h must"):
         LowPassFilter(1.0).digital(-1.0)
     with pytest.raises(TypeError, match="lowpass"):

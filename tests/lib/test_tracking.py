@@ -4,8 +4,8 @@ import control as ct
 import numpy as np
 import pytest
 
+from ctrl_analysis.estimators.lowpass import LowPassFilter
 from ctrl_analysis.estimators.tracking import (
-    SetpointPrefilter,
     TrackingDifferentiator,
     fhan,
     softened_setpoint,
@@ -89,36 +89,6 @@ def test_td_substeps_and_errors():
         TrackingDifferentiator(r=1.0, h=0.1, substeps=0)
 
 
-def test_prefilter_tf_and_poles():
-    pf = SetpointPrefilter(3, 2.0)
-    np.testing.assert_allclose(ct.dcgain(pf.tf), 1.0, rtol=1e-12)
-    np.testing.assert_allclose(np.sort(pf.ss.poles().real), [-2.0, -2.0, -2.0], atol=1e-4)
-    # the state-space form is the same system as the transfer function
-    np.testing.assert_allclose(ct.ss2tf(pf.ss[0, 0]).num[0][0][-1], 8.0, rtol=1e-12)
-    with pytest.raises(ValueError, match="order must be >= 1"):
-        SetpointPrefilter(0, 2.0)
-    with pytest.raises(ValueError, match="omega must be > 0"):
-        SetpointPrefilter(3, -1.0)
-
-
-@pytest.mark.parametrize("method", ["zoh", "rk4"])
-def test_prefilter_states_are_the_derivatives_of_its_step_response(method):
-    h = 1e-3
-    pf = SetpointPrefilter(3, 2.0)
-    n = 4000
-    theta = softened_setpoint(pf, np.ones(n), h, method=method)
-    t = h * np.arange(n)
-    for k in range(3):
-        ref = ct.step_response(pf.derivative_tf(k), t).outputs
-        np.testing.assert_allclose(theta[:, k], ref, atol=1e-8, err_msg=f"v^({k})")
-    # the engine integrating pf.rhs (batch of 2) agrees too
-    res = simulate_sampled(lambda t_, q, u, p: pf.rhs(t_, q, u), np.zeros(3), h, n,
-                           noise=np.ones((n, 2, 1)))
-    np.testing.assert_allclose(res.x[:-1, 1], theta, atol=1e-8)
-    np.testing.assert_allclose(pf.outputs(res.x[-1, 0]), res.x[-1, 0])
-    assert pf.outputs(res.x[-1], r=np.ones((2, 1))).shape == (2, 4)
-
-
 def test_softened_setpoint_with_the_td_and_errors():
     h = 1e-3
     r = np.ones(3000)
@@ -132,4 +102,4 @@ def test_softened_setpoint_with_the_td_and_errors():
     with pytest.raises(TypeError, match="softener must be"):
         softened_setpoint(object(), r, h)
     with pytest.raises(ValueError, match="r must be"):
-        softened_setpoint(SetpointPrefilter(2, 1.0), np.ones((3, 2)), h)
+        softened_setpoint(LowPassFilter(1.0, 2), np.ones((3, 2)), h)
