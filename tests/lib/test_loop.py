@@ -156,3 +156,28 @@ def test_wiring_errors_are_clear():
         place(a, "A", inputs=["x", "y"])
     with pytest.raises(ValueError, match="all blocks continuous or all discrete"):
         Loop([place(Oscillator(1.0), "p"), place(AlphaBetaFilter(0.5, 0.2, 0.1), "f")], dt=0.1).interconnect()
+
+
+def test_feedback_loop_plant_before_its_controller():
+    """A non-feedthrough plant placed before the controller that drives it (a real feedback loop)."""
+
+    class Integrator(ContinuousBlock):
+        inputs, outputs, states = ("u",), ("y",), ("x",)
+
+        def initial_state(self):
+            return np.ones(1)
+
+        def rhs(self, t, x, u, params=None):
+            return u.copy()
+
+    gain = StaticBlock(lambda t, u: -3.0 * u, inputs=("y",), outputs=("u",))
+    loop = Loop([place(Integrator(), "plant"), place(gain, "ctrl")], dt=0.01)
+    res = loop.simulate(100)
+    # x' = -3 x, x(0) = 1: one RK4 step multiplies by the degree-4 Taylor polynomial of exp(-3h)
+    z = -3.0 * 0.01
+    np.testing.assert_allclose(res["y"][:, 0], (1 + z + z**2 / 2 + z**3 / 6 + z**4 / 24) ** np.arange(101), rtol=1e-13)
+    np.testing.assert_allclose(res["u"][:, 0], -3.0 * res["y"][:, 0], rtol=1e-12)
+    # and the same in python-control
+    resp = ct.input_output_response(loop.interconnect(), res.t, 0.0, X0=[1.0],
+                                    solve_ivp_kwargs={"rtol": 1e-10, "atol": 1e-12})
+    np.testing.assert_allclose(resp.outputs[0], res["y"][:, 0], rtol=1e-7)
