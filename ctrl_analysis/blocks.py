@@ -131,15 +131,8 @@ class ContinuousBlock(Block):
 
         Parameters
         ----------
-        t : float
-            Time (s) or sample instant ``t_k``.
-        x : numpy.ndarray, shape (B, n)
-            States of the ``B`` runs.
-        u : numpy.ndarray, shape (B, m)
-            Inputs, one column per name in :attr:`inputs`.
-        params : dict, optional
-            python-control's ``params`` argument; the blocks of this library fix their parameters
-            at construction and ignore it.
+        t, x, u, params
+            As in :meth:`Block.output`: time, states ``(B, n)``, inputs ``(B, m)``, ignored ``params``.
 
         Returns
         -------
@@ -176,19 +169,13 @@ class DiscreteBlock(Block):
 
         Parameters
         ----------
-        t : float
-            Time (s) or sample instant ``t_k``.
-        x : numpy.ndarray, shape (B, n)
-            States of the ``B`` runs.
-        u : numpy.ndarray, shape (B, m)
-            Inputs, one column per name in :attr:`inputs`.
-        params : dict, optional
-            python-control's ``params`` argument; the blocks of this library fix their parameters
-            at construction and ignore it.
+        t, x, u, params
+            The sample instant ``t_k``, ``x(k)``, ``u(k)`` and ``params``, as in :meth:`Block.output`.
 
         Returns
         -------
-        numpy.ndarray, shape (B, n)
+        x_next : numpy.ndarray, shape (B, n)
+            ``x(k+1)`` of every run.
         """
         raise NotImplementedError
 

@@ -62,16 +62,17 @@ def beta_symbols(n: int) -> tuple:
 
 
 def gain_symbols(n: int) -> tuple:
-    """``L_1 .. L_{n+1}`` (positive).
+    """``L_1 .. L_{n+1}`` (positive): the observer gains as free symbols.
 
     Parameters
     ----------
     n : int
-        Plant order (>= 1); the extended observer has ``n + 1`` states.
+        Plant order, as in :func:`beta_symbols`.
 
     Returns
     -------
     tuple of sympy.Symbol
+        ``(L1, ..., L{n+1})``.
     """
     n = check_int("n", n, minimum=1)
     return sp.symbols(f"L1:{n + 2}", positive=True)
@@ -99,7 +100,7 @@ def characteristic_coefficients(n: int):
     Parameters
     ----------
     n : int
-        Plant order (>= 1); the extended observer has ``n + 1`` states.
+        Plant order (>= 1).
 
     Returns
     -------
@@ -130,7 +131,7 @@ def observer_matrices(n: int, high_gain: bool = True):
     Parameters
     ----------
     n : int
-        Plant order (>= 1); the extended observer has ``n + 1`` states.
+        Plant order; the matrices have ``n + 1`` rows.
     high_gain : bool
         ``L_i = beta_i / eps^i`` (``True``) or free symbols ``L_i``.
 
@@ -187,7 +188,7 @@ def error_scaling_exponents(n: int) -> tuple:
     Parameters
     ----------
     n : int
-        Plant order (>= 1); the extended observer has ``n + 1`` states.
+        Plant order, one exponent per observer state (``n + 1`` in all).
 
     Returns
     -------
@@ -226,7 +227,7 @@ def bandwidth_polynomial(n: int, omega_o=None) -> sp.Expr:
     Parameters
     ----------
     n : int
-        Plant order (>= 1); the extended observer has ``n + 1`` states.
+        Plant order; the polynomial has degree ``n + 1``.
     omega_o : number, optional
         Observer bandwidth (rad/s); a positive symbol when omitted.
 

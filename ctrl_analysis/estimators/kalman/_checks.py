@@ -125,8 +125,8 @@ def controllability_rank(A, B) -> int:
 
     Parameters
     ----------
-    A : array_like, shape (n, n)
-    B : array_like, shape (n, m)
+    A, B : array_like
+        As in :func:`controllability_matrix`.
 
     Returns
     -------
@@ -142,13 +142,13 @@ def observability_rank(A, C) -> int:
 
     Parameters
     ----------
-    A : array_like, shape (n, n)
-    C : array_like, shape (p, n)
+    A, C : array_like
+        As in :func:`observability_matrix`; by duality the result equals
+        ``controllability_rank(A.T, C.T)``.
 
     Returns
     -------
     int
-        Numerical rank of ``[C; C A; …; C A^(n-1)]``.
     """
     return _rank(observability_matrix(A, C))
 
@@ -186,17 +186,20 @@ def check_controllable(A, B, *, names=("A", "B")) -> int:
 def check_observable(A, C, *, names=("A", "C")) -> int:
     """Return ``n`` if ``(A, C)`` is observable, else raise.
 
+    The dual of :func:`check_controllable`: ``(A, C)`` is observable iff ``(Aᵀ, Cᵀ)`` is
+    controllable.
+
     Parameters
     ----------
-    A : array_like, shape (n, n)
-    C : array_like, shape (p, n)
+    A, C : array_like
+        Shapes ``(n, n)`` and ``(p, n)``.
     names : tuple of str
-        Names of the two matrices in the error message.
+        What the error message calls ``A`` and ``C``.
 
     Returns
     -------
-    int
-        The rank of the observability matrix, equal to ``n``.
+    n : int
+        The order of ``A`` (the rank of ``[C; C A; …]``).
 
     Raises
     ------

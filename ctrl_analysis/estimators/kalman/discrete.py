@@ -221,13 +221,11 @@ def dare_residual(F, H, G, Q, R, P_prior) -> np.ndarray:
 
     Parameters
     ----------
-    F : array_like, shape (n, n)
-    H : array_like, shape (p, n)
-    G : array_like, shape (n, m)
-    Q : array_like, shape (m, m)
-        Process-noise covariance (symmetric, positive semidefinite).
-    R : array_like, shape (p, p)
-        Measurement-noise covariance (symmetric, positive definite).
+    F, H, G : array_like
+        Transition ``(n, n)``, measurement ``(p, n)`` and process-noise input ``(n, m)`` matrices.
+    Q, R : array_like
+        Process- and measurement-noise covariances, ``(m, m)`` positive semidefinite and
+        ``(p, p)`` positive definite.
     P_prior : array_like, shape (n, n)
         Candidate a-priori covariance.
 
