@@ -37,7 +37,19 @@ __all__ = [
 
 
 def signal_names(base: str, n: int) -> tuple[str, ...]:
-    """``("base[0]", ..., "base[n-1]")``, python-control's names for a vector signal."""
+    """``("base[0]", ..., "base[n-1]")``, python-control's names for a vector signal.
+
+    Parameters
+    ----------
+    base : str
+        Name of the vector signal.
+    n : int
+        Its length (>= 0).
+
+    Returns
+    -------
+    tuple of str
+    """
     return tuple(f"{base}[{i}]" for i in range(check_int("n", n, minimum=0)))
 
 
@@ -59,14 +71,38 @@ class Block:
 
     @property
     def n_states(self) -> int:
+        """Number of states ``n`` (the number of columns of ``x``)."""
         return len(self.states)
 
     def initial_state(self) -> np.ndarray:
-        """The block's default initial state, shape ``(n,)`` (zeros unless a block says otherwise)."""
+        """The block's default initial state (zeros unless a block says otherwise).
+
+        Returns
+        -------
+        numpy.ndarray, shape (n,)
+        """
         return np.zeros(self.n_states)
 
     def output(self, t, x, u, params=None) -> np.ndarray:
-        """Outputs, shape ``(B, p)``; default: the whole state."""
+        """The block's outputs at time ``t`` (default: the whole state).
+
+        Parameters
+        ----------
+        t : float
+            Time (s) or sample instant ``t_k``.
+        x : numpy.ndarray, shape (B, n)
+            States of the ``B`` runs.
+        u : numpy.ndarray, shape (B, m)
+            Inputs, one column per name in :attr:`inputs`.
+        params : dict, optional
+            python-control's ``params`` argument; the blocks of this library fix their parameters
+            at construction and ignore it.
+
+        Returns
+        -------
+        numpy.ndarray, shape (B, p)
+            One column per name in :attr:`outputs`.
+        """
         return x
 
     # ------------------------------------------------------------------ python-control
@@ -91,6 +127,17 @@ class ContinuousBlock(Block):
     """A block with continuous-time state: ``dx/dt = rhs(t, x, u, params)``."""
 
     def rhs(self, t, x, u, params=None) -> np.ndarray:  # pragma: no cover - abstract
+        """The state derivative ``dx/dt`` at time ``t``.
+
+        Parameters
+        ----------
+        t, x, u, params
+            As in :meth:`Block.output`: time, states ``(B, n)``, inputs ``(B, m)``, ignored ``params``.
+
+        Returns
+        -------
+        numpy.ndarray, shape (B, n)
+        """
         raise NotImplementedError
 
     def nlsys(self, name: str | None = None, *, inputs=None, outputs=None, states=None):
@@ -118,6 +165,18 @@ class DiscreteBlock(Block):
     """A block with discrete-time state: ``x(k+1) = update(t_k, x(k), u(k), params)``."""
 
     def update(self, t, x, u, params=None) -> np.ndarray:  # pragma: no cover - abstract
+        """The next state ``x(k+1)`` from the state and input at sample ``t_k``.
+
+        Parameters
+        ----------
+        t, x, u, params
+            The sample instant ``t_k``, ``x(k)``, ``u(k)`` and ``params``, as in :meth:`Block.output`.
+
+        Returns
+        -------
+        x_next : numpy.ndarray, shape (B, n)
+            ``x(k+1)`` of every run.
+        """
         raise NotImplementedError
 
     def nlsys(self, dt=True, name: str | None = None, *, inputs=None, outputs=None, states=None):
@@ -228,7 +287,21 @@ class StaticBlock(Block):
         return self.fn(t, u)
 
     def nlsys(self, dt=None, name: str | None = None, *, inputs=None, outputs=None):
-        """This block as a static ``control.nlsys`` (``dt=None``: usable in continuous and discrete loops)."""
+        """This block as a static ``control.nlsys`` (``dt=None``: usable in continuous and discrete loops).
+
+        Parameters
+        ----------
+        dt : float, True or None
+            Sampling period of the system (``None``: either).
+        name : str, optional
+            System name for :func:`control.interconnect`.
+        inputs, outputs : list of str, optional
+            Rename the signals.
+
+        Returns
+        -------
+        control.NonlinearIOSystem
+        """
         import control as ct
 
         ins, outs, _ = self._io_names(inputs, outputs, ())

@@ -30,12 +30,43 @@ __all__ = ["printed", "reconstructed", "record_parameters", "reconstructions_of"
 
 
 def printed(value, where: str):
-    """A dataclass field holding a value the paper prints; ``where`` says where (eq., table, section)."""
+    """A dataclass field holding a value the paper prints; ``where`` says where (eq., table, section).
+
+    Parameters
+    ----------
+    value : object
+        The printed value (immutable: a number, a string or a tuple).
+    where : str
+        Where the paper prints it, e.g. ``"§4, Table 1"``.
+
+    Returns
+    -------
+    dataclasses.Field
+        A field with that default and ``metadata["printed"] = where``.
+    """
     return _field(value, {"printed": where})
 
 
 def reconstructed(value, why: str):
-    """A dataclass field holding a value the paper does not print (or prints wrongly); ``why`` says why this one."""
+    """A dataclass field holding a value the paper does not print (or prints wrongly); ``why`` says why this one.
+
+    Parameters
+    ----------
+    value : object
+        The chosen value (immutable).
+    why : str
+        Why this value (non-empty): what the paper says or does not say, and how it was chosen.
+
+    Returns
+    -------
+    dataclasses.Field
+        A field with that default and ``metadata["reconstruction"] = why``.
+
+    Raises
+    ------
+    ValueError
+        If ``why`` is empty.
+    """
     if not why:
         raise ValueError("why must say why the value was chosen")
     return _field(value, {"reconstruction": why})
@@ -48,7 +79,18 @@ def _field(value, metadata):
 
 
 def reconstructions_of(params) -> list[dict]:
-    """``[{"name", "value", "why"}]`` for every field of ``params`` declared with :func:`reconstructed`."""
+    """``[{"name", "value", "why"}]`` for every field of ``params`` declared with :func:`reconstructed`.
+
+    Parameters
+    ----------
+    params : dataclass instance
+        A study's parameter object.
+
+    Returns
+    -------
+    list of dict
+        One dict per reconstructed field, in field order.
+    """
     return [{"name": f.name, "value": getattr(params, f.name), "why": f.metadata["reconstruction"]}
             for f in dataclasses.fields(params) if "reconstruction" in f.metadata]
 

@@ -247,7 +247,24 @@ class DifferentialEstimator(ContinuousBlock):
         return dz
 
     def output(self, t, z, u, params=None) -> np.ndarray:
-        """Estimates ``x̂ = C z + D y`` of the block's reading, shape ``(B, n0)``."""
+        """Estimates ``x̂ = C z + D y`` of the block's reading.
+
+        Parameters
+        ----------
+        t : float
+            Time (s).
+        z : numpy.ndarray, shape (B, n0)
+            Estimator states.
+        u : numpy.ndarray, shape (B, 1)
+            The measured signal ``y``.
+        params : dict, optional
+            Ignored (parameters are fixed at construction).
+
+        Returns
+        -------
+        numpy.ndarray, shape (B, n0)
+            ``xhat[0..n0-1]``.
+        """
         if self.reading == "state":
             return z
         C, D = self.estimate_matrices(self.reading)

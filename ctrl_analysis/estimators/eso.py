@@ -188,6 +188,10 @@ class ExtendedStateObserver(ContinuousBlock):
             Normalised gains (> 0).
         **kw
             Passed to the constructor (``b0``, ``alpha``, ``delta``, ``known``).
+
+        Returns
+        -------
+        ExtendedStateObserver
         """
         n = check_int("n", n, minimum=1)
         epsilon = float(check_positive("epsilon", epsilon))
@@ -209,6 +213,10 @@ class ExtendedStateObserver(ContinuousBlock):
             Observer bandwidth in rad/s (> 0).
         **kw
             Passed to the constructor.
+
+        Returns
+        -------
+        ExtendedStateObserver
         """
         n = check_int("n", n, minimum=1)
         omega_o = float(check_positive("omega_o", omega_o))
@@ -225,7 +233,17 @@ class ExtendedStateObserver(ContinuousBlock):
         return self.alpha is None
 
     def correction(self, e) -> np.ndarray:
-        """The output-injection terms ``L_i g_i(e)``, shape ``e.shape + (n + 1,)``."""
+        """The output-injection terms ``L_i g_i(e)``.
+
+        Parameters
+        ----------
+        e : array_like
+            Output estimation error ``y - x̂_1``.
+
+        Returns
+        -------
+        numpy.ndarray, shape ``e.shape + (n + 1,)``
+        """
         e = np.asarray(e, dtype=float)[..., None]
         if self.alpha is None:
             return self.L * e
@@ -310,7 +328,17 @@ class ExtendedStateObserver(ContinuousBlock):
                      inputs=list(self.inputs), outputs=list(self.outputs), states=list(self.states))
 
     def characteristic_polynomial(self) -> np.ndarray:
-        """Coefficients ``[1, L_1, ..., L_{n+1}]`` of ``det(sI - (A - LC))`` (highest power first)."""
+        """Coefficients ``[1, L_1, ..., L_{n+1}]`` of ``det(sI - (A - LC))`` (highest power first).
+
+        Returns
+        -------
+        numpy.ndarray, shape (n + 2,)
+
+        Raises
+        ------
+        ValueError
+            For a nonlinear observer (``alpha`` given).
+        """
         self._require_linear("characteristic_polynomial")
         return np.concatenate([[1.0], self.L])
 

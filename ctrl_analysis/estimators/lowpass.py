@@ -95,7 +95,17 @@ class LowPassFilter(ContinuousBlock):
         return ct.tf([self.gain], self.den, inputs="u", outputs="w[0]")
 
     def derivative_tf(self, k: int):
-        """``s^k ω^m / (s + ω)^m``: ``u -> w[k]``, ``0 <= k <= m`` (a state for ``k < m``)."""
+        """``s^k ω^m / (s + ω)^m``: ``u -> w[k]``, ``0 <= k <= m`` (a state for ``k < m``).
+
+        Parameters
+        ----------
+        k : int
+            Derivative order, ``0 <= k <= m``.
+
+        Returns
+        -------
+        control.TransferFunction
+        """
         import control as ct
 
         k = check_int("k", k, minimum=0, maximum=self.order)
@@ -113,7 +123,23 @@ class LowPassFilter(ContinuousBlock):
                      outputs=names)
 
     def rhs(self, t, x, u, params=None) -> np.ndarray:
-        """``dw/dt``, ``x`` of shape ``(B, m)``, ``u`` of shape ``(B, 1)`` (block protocol)."""
+        """``dw/dt`` of the phase-variable form (block protocol).
+
+        Parameters
+        ----------
+        t : float
+            Time (s).
+        x : numpy.ndarray, shape (B, m)
+            ``w, w', ..., w^(m-1)``.
+        u : numpy.ndarray, shape (B, 1)
+            Filter input.
+        params : dict, optional
+            Ignored.
+
+        Returns
+        -------
+        numpy.ndarray, shape (B, m)
+        """
         dx = np.empty_like(x)
         # w_i' = w_(i+1)
         dx[..., :-1] = x[..., 1:]
@@ -127,6 +153,11 @@ class LowPassFilter(ContinuousBlock):
     def discretize(self, h: float):
         """Exact zero-order-hold discretisation ``x(k+1) = Ad x(k) + Bd u(k)`` for sample period ``h``.
 
+        Parameters
+        ----------
+        h : float
+            Sample period (> 0).
+
         Returns
         -------
         Ad : numpy.ndarray, shape (m, m)
@@ -139,7 +170,21 @@ class LowPassFilter(ContinuousBlock):
         return np.asarray(sysd.A), np.asarray(sysd.B)[:, 0]
 
     def digital(self, h: float, channels: int = 1, initial=None) -> "DiscreteLowPass":
-        """A :class:`DiscreteLowPass` with sample period ``h`` filtering ``channels`` signals."""
+        """A :class:`DiscreteLowPass` with sample period ``h`` filtering ``channels`` signals.
+
+        Parameters
+        ----------
+        h : float
+            Sample period (> 0).
+        channels : int
+            Number of filtered signals (>= 1).
+        initial : float or array_like, shape (channels,), optional
+            Initial output (default 0).
+
+        Returns
+        -------
+        DiscreteLowPass
+        """
         return DiscreteLowPass(self, h, channels=channels, initial=initial)
 
     def __repr__(self) -> str:
@@ -220,7 +265,15 @@ class DiscreteLowPass(DiscreteBlock):
     def filter(self, u) -> np.ndarray:
         """Filter a whole record ``u`` of shape ``(N,)``, ``(N, channels)`` or ``(N, B, channels)``.
 
-        Returns the filtered values after each sample, with the shape of ``u``.
+        Parameters
+        ----------
+        u : array_like, shape (N,), (N, channels) or (N, B, channels)
+            Input record, one row per sample.
+
+        Returns
+        -------
+        numpy.ndarray
+            The filtered values after each sample, with the shape of ``u``.
         """
         u = np.asarray(u, dtype=float)
         shape = u.shape

@@ -220,6 +220,20 @@ def locus_gain(s_value, n0: int, a: float):
     """``K(s) = -s^n0 / (s + a)^(n0-1)``: the gain that places a closed-loop pole at ``s_value``.
 
     Real and positive on the real-axis branches of the locus; ``s_value`` may be an array.
+
+    Parameters
+    ----------
+    s_value : complex or array_like
+        Point(s) of the s-plane.
+    n0 : int
+        Estimator order (>= 2).
+    a : float
+        Zero location parameter (> 0).
+
+    Returns
+    -------
+    complex or numpy.ndarray
+        ``K(s)`` at each point.
     """
     n0_value, a_value = _check_n0_a(n0, a)
     return _numeric_functions()[2](np.asarray(s_value), float(n0_value), a_value)
@@ -230,6 +244,11 @@ def coefficient_formula() -> sp.Expr:
 
     Follows from the binomial expansion of ``K (s + a)^(n0-1)`` (eq. 5 with eq. 6); see
     :func:`coefficients_from_zeros` for the expansion with general zeros.
+
+    Returns
+    -------
+    sympy.Expr
+        ``a_i`` in the symbols ``K``, ``n0``, ``i``, ``a``.
 
     References
     ----------

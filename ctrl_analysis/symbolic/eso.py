@@ -46,13 +46,34 @@ EPS = sp.Symbol("epsilon", positive=True)
 
 
 def beta_symbols(n: int) -> tuple:
-    """``beta_1 .. beta_{n+1}`` (positive)."""
+    """``beta_1 .. beta_{n+1}`` (positive).
+
+    Parameters
+    ----------
+    n : int
+        Plant order (>= 1); the extended observer has ``n + 1`` states.
+
+    Returns
+    -------
+    tuple of sympy.Symbol
+    """
     n = check_int("n", n, minimum=1)
     return sp.symbols(f"beta1:{n + 2}", positive=True)
 
 
 def gain_symbols(n: int) -> tuple:
-    """``L_1 .. L_{n+1}`` (positive)."""
+    """``L_1 .. L_{n+1}`` (positive): the observer gains as free symbols.
+
+    Parameters
+    ----------
+    n : int
+        Plant order, as in :func:`beta_symbols`.
+
+    Returns
+    -------
+    tuple of sympy.Symbol
+        ``(L1, ..., L{n+1})``.
+    """
     n = check_int("n", n, minimum=1)
     return sp.symbols(f"L1:{n + 2}", positive=True)
 
@@ -74,7 +95,19 @@ def characteristic_polynomial(n: int, high_gain: bool = True) -> sp.Expr:
 
 
 def characteristic_coefficients(n: int):
-    """Numeric function ``(epsilon, beta) -> [1, beta_1/eps, ..., beta_{n+1}/eps^(n+1)]``."""
+    """Numeric function ``(epsilon, beta) -> [1, beta_1/eps, ..., beta_{n+1}/eps^(n+1)]``.
+
+    Parameters
+    ----------
+    n : int
+        Plant order (>= 1).
+
+    Returns
+    -------
+    callable
+        ``numeric(epsilon, beta) -> numpy.ndarray`` of shape ``(n + 2,)``, checking its arguments
+        (``epsilon > 0``, ``n + 1`` positive ``beta``).
+    """
     n = check_int("n", n, minimum=1)
     betas = beta_symbols(n)
     coeffs = sp.Poly(characteristic_polynomial(n), S).all_coeffs()
@@ -94,6 +127,18 @@ def observer_matrices(n: int, high_gain: bool = True):
     """Symbolic error-dynamics matrices ``(A - L C, E, C)``: ``e' = (A - L C) e + E h``.
 
     ``E`` is the unit vector on the extended state; ``C = [1, 0, ..., 0]``.
+
+    Parameters
+    ----------
+    n : int
+        Plant order; the matrices have ``n + 1`` rows.
+    high_gain : bool
+        ``L_i = beta_i / eps^i`` (``True``) or free symbols ``L_i``.
+
+    Returns
+    -------
+    (A_LC, E, C) : tuple of sympy.Matrix
+        Shapes ``(n+1, n+1)``, ``(n+1, 1)``, ``(1, n+1)``.
     """
     n = check_int("n", n, minimum=1)
     m = n + 1
@@ -139,6 +184,16 @@ def error_scaling_exponents(n: int) -> tuple:
     """Exponent ``k_i`` of ``eps`` in the steady error of ``x̂_i`` for a constant ``h``: ``n + 2 - i``.
 
     Derived from :func:`error_dc_gains` (the degree of ``eps`` in each DC gain), not assumed.
+
+    Parameters
+    ----------
+    n : int
+        Plant order, one exponent per observer state (``n + 1`` in all).
+
+    Returns
+    -------
+    tuple of int
+        ``k_1 .. k_{n+1}``.
     """
     out = []
     for g in error_dc_gains(n):
@@ -167,7 +222,19 @@ class BandwidthMatch:
 
 
 def bandwidth_polynomial(n: int, omega_o=None) -> sp.Expr:
-    """``(s + omega_o)^(n+1)`` expanded (``omega_o`` a symbol when not given)."""
+    """``(s + omega_o)^(n+1)`` expanded (``omega_o`` a symbol when not given).
+
+    Parameters
+    ----------
+    n : int
+        Plant order; the polynomial has degree ``n + 1``.
+    omega_o : number, optional
+        Observer bandwidth (rad/s); a positive symbol when omitted.
+
+    Returns
+    -------
+    sympy.Expr
+    """
     n = check_int("n", n, minimum=1)
     w = sp.Symbol("omega_o", positive=True) if omega_o is None else sp.nsimplify(omega_o)
     return sp.expand((S + w) ** (n + 1))
@@ -185,6 +252,10 @@ def bandwidth_match(beta, epsilon=None) -> BandwidthMatch:
         Converted to exact rationals with :func:`sympy.nsimplify`.
     epsilon : number, optional
         When given, ``omega_o`` is returned as a number.
+
+    Returns
+    -------
+    BandwidthMatch
 
     Examples
     --------

@@ -188,6 +188,18 @@ def second_order_gain(a21, q) -> np.ndarray:
     """Closed-form steady-state gain ``[k1, k2]`` of the 2-state problem (see :func:`derive_second_order_gain`).
 
     ``k2 = a21 + √(a21² + q)``, ``k1 = √(2 k2)``, ``q = Q/R``.
+
+    Parameters
+    ----------
+    a21 : float or array_like
+        The entry ``a21`` of the system matrix.
+    q : float or array_like, >= 0
+        Noise ratio ``Q/R``.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``[k1, k2]`` (last axis) for each ``(a21, q)``.
     """
     return derive_second_order_gain().numeric(a21, q)
 
@@ -283,7 +295,18 @@ def derive_random_walk_gain() -> RandomWalkDerivation:
 
 
 def random_walk_gain_closed_form(q):
-    """``K∞ = (√(q² + 4q) − q)/2`` of the scalar random walk, ``q = Q/R``."""
+    """``K∞ = (√(q² + 4q) − q)/2`` of the scalar random walk, ``q = Q/R``.
+
+    Parameters
+    ----------
+    q : float or array_like, >= 0
+        Noise ratio ``Q/R``.
+
+    Returns
+    -------
+    float or numpy.ndarray
+        The steady-state gain ``K∞``.
+    """
     return derive_random_walk_gain().numeric(q)
 
 
@@ -402,5 +425,15 @@ def derive_kalata_gains() -> KalataDerivation:
 
 
 def kalata_gains_closed_form(Lambda):
-    """``(α, β)`` of the steady-state α-β filter for tracking index ``Λ`` (Kalata 1984)."""
+    """``(α, β)`` of the steady-state α-β filter for tracking index ``Λ`` (Kalata 1984).
+
+    Parameters
+    ----------
+    Lambda : float or array_like, >= 0
+        Tracking index.
+
+    Returns
+    -------
+    (alpha, beta) : floats or arrays
+    """
     return derive_kalata_gains().numeric(Lambda)

@@ -121,17 +121,52 @@ def _rank(M: np.ndarray) -> int:
 
 
 def controllability_rank(A, B) -> int:
-    """Rank of the controllability matrix of ``(A, B)``."""
+    """Rank of the controllability matrix of ``(A, B)``.
+
+    Parameters
+    ----------
+    A, B : array_like
+        As in :func:`controllability_matrix`.
+
+    Returns
+    -------
+    int
+        Numerical rank of ``[B, A B, …, A^(n-1) B]`` (SVD, tolerance scaled by the largest
+        singular value).
+    """
     return _rank(controllability_matrix(A, B))
 
 
 def observability_rank(A, C) -> int:
-    """Rank of the observability matrix of ``(A, C)``."""
+    """Rank of the observability matrix of ``(A, C)``.
+
+    Parameters
+    ----------
+    A, C : array_like
+        As in :func:`observability_matrix`; by duality the result equals
+        ``controllability_rank(A.T, C.T)``.
+
+    Returns
+    -------
+    int
+    """
     return _rank(observability_matrix(A, C))
 
 
 def check_controllable(A, B, *, names=("A", "B")) -> int:
     """Return ``n`` if ``(A, B)`` is controllable, else raise.
+
+    Parameters
+    ----------
+    A : array_like, shape (n, n)
+    B : array_like, shape (n, m)
+    names : tuple of str
+        Names of the two matrices in the error message.
+
+    Returns
+    -------
+    int
+        The rank of the controllability matrix, equal to ``n``.
 
     Raises
     ------
@@ -150,6 +185,21 @@ def check_controllable(A, B, *, names=("A", "B")) -> int:
 
 def check_observable(A, C, *, names=("A", "C")) -> int:
     """Return ``n`` if ``(A, C)`` is observable, else raise.
+
+    The dual of :func:`check_controllable`: ``(A, C)`` is observable iff ``(Aᵀ, Cᵀ)`` is
+    controllable.
+
+    Parameters
+    ----------
+    A, C : array_like
+        Shapes ``(n, n)`` and ``(p, n)``.
+    names : tuple of str
+        What the error message calls ``A`` and ``C``.
+
+    Returns
+    -------
+    n : int
+        The order of ``A`` (the rank of ``[C; C A; …]``).
 
     Raises
     ------
@@ -185,6 +235,15 @@ def check_detectable(A, C, *, discrete: bool = False, names=("A", "C")) -> None:
 
     Detectability of ``(A, C)`` is what a stabilising Riccati solution needs; observability
     (:func:`check_observable`) is the stronger condition of the Kalman–Bucy stability theorem.
+
+    Parameters
+    ----------
+    A : array_like, shape (n, n)
+    C : array_like, shape (p, n)
+    discrete : bool
+        Stability region: the open unit disc (``True``) or the open left half-plane (``False``).
+    names : tuple of str
+        Names of the two matrices in the error message.
 
     Raises
     ------

@@ -43,7 +43,19 @@ def alpha_beta_from_gain(K, T):
 
 
 def gain_from_alpha_beta(alpha, beta, T) -> np.ndarray:
-    """Filter-form gain ``[α, β/T]`` (shape (2,)) of an α-β filter; inverse of :func:`alpha_beta_from_gain`."""
+    """Filter-form gain ``[α, β/T]`` of an α-β filter; inverse of :func:`alpha_beta_from_gain`.
+
+    Parameters
+    ----------
+    alpha, beta : float
+        Dimensionless gains.
+    T : float, > 0
+        Sampling period (s).
+
+    Returns
+    -------
+    numpy.ndarray, shape (2,)
+    """
     alpha = check_finite("alpha", alpha)
     beta = check_finite("beta", beta)
     T = check_positive("T", T)
@@ -56,6 +68,20 @@ def tracking_index(sigma_w, sigma_v, T):
     ``σ_w`` is the standard deviation of the (piecewise-constant) acceleration noise of the
     discrete white-noise-acceleration model ``x(k+1) = [[1, T], [0, 1]] x(k) + [T²/2, T]ᵀ w(k)``,
     ``σ_v`` that of the position measurement noise.
+
+    Parameters
+    ----------
+    sigma_w : float or array_like, >= 0
+        Standard deviation of the acceleration noise.
+    sigma_v : float, > 0
+        Standard deviation of the position measurement noise.
+    T : float, > 0
+        Sampling period (s).
+
+    Returns
+    -------
+    float or numpy.ndarray
+        ``Λ`` (dimensionless).
 
     References
     ----------
@@ -75,6 +101,16 @@ def tracking_index_from_gains(alpha, beta):
 
     Valid for ``0 < α < 1``. A pair that is not on the steady-state locus
     ``β = 2(2 − α) − 4√(1 − α)`` still yields a number, but it is not the Λ of any Kalman filter.
+
+    Parameters
+    ----------
+    alpha : float or array_like, in (0, 1)
+    beta : float or array_like
+
+    Returns
+    -------
+    float or numpy.ndarray
+        ``Λ``.
     """
     alpha = check_finite("alpha", alpha)
     beta = check_finite("beta", beta)
@@ -119,6 +155,15 @@ def alpha_beta_stable(alpha, beta) -> bool:
     """Whether the classical α-β filter (``F = [[1, T], [0, 1]]``) is stable: ``0 < α < 2``, ``0 < β < 4 − 2α``.
 
     Jury's test on ``z² + (α + β − 2) z + (1 − α)`` (independent of ``T``).
+
+    Parameters
+    ----------
+    alpha, beta : float
+        Dimensionless gains.
+
+    Returns
+    -------
+    bool
     """
     alpha = float(check_finite("alpha", alpha))
     beta = float(check_finite("beta", beta))

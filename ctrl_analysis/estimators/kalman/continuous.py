@@ -100,7 +100,18 @@ def continuous_steady_state(A, C, G, Q, R, *, require: str = "detectable") -> Co
 
 
 def continuous_steady_state_gain(A, C, G, Q, R, *, require: str = "detectable") -> np.ndarray:
-    """Steady-state Kalman–Bucy gain ``K = P̄ Cᵀ R⁻¹`` (shape (n, p)); see :func:`continuous_steady_state`."""
+    """Steady-state Kalman–Bucy gain ``K = P̄ Cᵀ R⁻¹``; see :func:`continuous_steady_state`.
+
+    Parameters
+    ----------
+    A, C, G, Q, R, require
+        As in :func:`continuous_steady_state`.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n, p)
+        The gain ``K``.
+    """
     return continuous_steady_state(A, C, G, Q, R, require=require).K
 
 
@@ -108,6 +119,23 @@ def care_residual(A, C, G, Q, R, P) -> np.ndarray:
     """Residual ``A P + P Aᵀ − P Cᵀ R⁻¹ C P + G Q Gᵀ`` of the filter ARE (zero at a solution).
 
     This is also the right-hand side ``Ṗ`` of the Riccati differential equation.
+
+    Parameters
+    ----------
+    A : array_like, shape (n, n)
+    C : array_like, shape (p, n)
+    G : array_like, shape (n, m)
+    Q : array_like, shape (m, m)
+        Process-noise intensity (symmetric, positive semidefinite).
+    R : array_like, shape (p, p)
+        Measurement-noise intensity (symmetric, positive definite).
+    P : array_like, shape (n, n)
+        Candidate solution.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n, n)
+        The residual.
     """
     A, C, G = _system(A, C, G)
     n = A.shape[0]
@@ -124,6 +152,24 @@ def riccati_rhs(t, p, A, C, GQGt, Rinv, iu) -> np.ndarray:
     ``Ṗ = A P + P Aᵀ − P Cᵀ R⁻¹ C P + G Q Gᵀ`` in python-control's ``(t, x, …)`` order; ``iu`` are
     the upper-triangular indices (``numpy.triu_indices(n)``); ``GQGt`` and ``Rinv`` are
     precomputed. Used by :func:`riccati_trajectory`.
+
+    Parameters
+    ----------
+    t : float
+        Time (unused; the equation is time invariant).
+    p : numpy.ndarray, shape (n (n+1) / 2,)
+        Upper-triangular entries of ``P``.
+    A, C : numpy.ndarray
+        System matrices.
+    GQGt, Rinv : numpy.ndarray
+        ``G Q Gᵀ`` and ``R⁻¹``.
+    iu : tuple of numpy.ndarray
+        ``numpy.triu_indices(n)``.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n (n+1) / 2,)
+        Upper-triangular entries of ``Ṗ``.
     """
     n = A.shape[0]
     P = np.empty((n, n))

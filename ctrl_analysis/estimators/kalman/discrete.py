@@ -217,7 +217,23 @@ def discrete_steady_state_batch(F, H, Qd, R, *, tol: float = 1e-12, max_iter: in
 
 
 def dare_residual(F, H, G, Q, R, P_prior) -> np.ndarray:
-    """Residual ``F P Fᵀ − F P Hᵀ (H P Hᵀ + R)⁻¹ H P Fᵀ + G Q Gᵀ − P`` of the filter DARE (a-priori ``P``)."""
+    """Residual ``F P Fᵀ − F P Hᵀ (H P Hᵀ + R)⁻¹ H P Fᵀ + G Q Gᵀ − P`` of the filter DARE (a-priori ``P``).
+
+    Parameters
+    ----------
+    F, H, G : array_like
+        Transition ``(n, n)``, measurement ``(p, n)`` and process-noise input ``(n, m)`` matrices.
+    Q, R : array_like
+        Process- and measurement-noise covariances, ``(m, m)`` positive semidefinite and
+        ``(p, p)`` positive definite.
+    P_prior : array_like, shape (n, n)
+        Candidate a-priori covariance.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n, n)
+        The residual (zero at a solution).
+    """
     F, H, G = _system(F, H, G)
     n = F.shape[0]
     Q = _covariance("Q", Q, G.shape[1], definite=False)

@@ -1,0 +1,56 @@
+"""Study skeleton (not registered in the CLI): copy this package to start a new study.
+
+A first-order lag driven by a unit step, measured in white noise and smoothed by a digital
+low-pass: one printed value per quantity (textbook closed forms), two reconstructions, one figure.
+See CONTRIBUTING.md, "Add a study".
+"""
+
+from __future__ import annotations
+
+from ctrl_analysis.report import StudyContext, StudyInfo, StudyResult
+from ctrl_analysis.simulate import run_seeds
+from ctrl_analysis.study import record_parameters
+
+from . import figures, loops, quantities
+from .paper import EXAMPLE, QUICK
+
+__all__ = ["INFO", "run"]
+
+INFO = StudyInfo(
+    name="skeleton",
+    seed_file="(none: textbook closed forms)",
+    paper="Skeleton study: first-order lag, white measurement noise, first-order digital low-pass",
+    reproduces="y(τ) of the step response, the filter's noise-reduction ratio, Fig. 1",
+)
+
+
+def run(ctx: StudyContext, params=None) -> StudyResult:
+    """Simulate the loop over the runs, record the quantities and the finding, draw Fig. 1.
+
+    Parameters
+    ----------
+    ctx : StudyContext
+        Output folder, runs, seed and ``quick`` from the CLI (or a test).
+    params : Example, optional
+        Settings (default :data:`~.paper.EXAMPLE`, or :data:`~.paper.QUICK` with ``ctx.quick``).
+
+    Returns
+    -------
+    StudyResult
+    """
+    p = params if params is not None else (QUICK if ctx.quick else EXAMPLE)
+    result = StudyResult(INFO)
+    record_parameters(result, p, prefix="ex")
+    seeds = run_seeds(ctx.seed, ctx.runs_or(100, quick_default=10))
+    result.seeds["noise"] = seeds
+    ctx.progress(f"simulating {len(seeds)} runs of {p.t_end:g} s")
+    res = loops.simulate(p, seeds)
+    for record in res.divergences():
+        result.finding(f"diverged-run-{record['run']}", f"run diverged: {record}")
+    quantities.record_step(result, p, res)
+    quantities.record_noise(result, p, res)
+    fig = figures.plot_step(res.t, res["y"][:, 0], res["y_meas"][:, 0], res["y_hat"][:, 0], tau=p.tau)
+    ctx.save_figure(result, fig, "fig1_step_response.png")
+    return result
+
+
