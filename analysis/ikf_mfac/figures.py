@@ -105,7 +105,8 @@ def plot_noise_sweep(levels, sweeps: dict, paper_levels: dict):
             m = [row[0] for row in sweeps[key][s]["noise"]]
             ax.plot(levels[key], m, marker="o", color=COLORS[s], label=SCHEME_LABELS[s])
         ax.axvline(paper_levels[key], color="k", ls=":", lw=1, label="paper's σ_v")
-        ax.set(xlabel="measurement-noise std σ_v", ylabel="RMSE", title="Example 1" if key == "ex1" else "Example 2")
+        ax.set(xlabel="measurement-noise std σ_v", ylabel="RMSE (log scale)", yscale="log",
+               title="Example 1" if key == "ex1" else "Example 2")
     _legend(axes[-1])
     return fig
 

@@ -25,9 +25,20 @@ TABLE1 = {
 class Example:
     """One simulation example of §4: plant, reference, noise, and the four schemes' parameters.
 
-    Index conventions (paper's k = 1..N; the engine's sample j is k = j + k_start): u(1:2) = 0,
-    y(1:2) = 1, the plant gives y(3) from y(2) and u(2) = 0, the controller acts from k = 3
-    (u(3) is its first output), and RMSE/SNR run over k = 1..N with y(1) = y(2) = 1 included.
+    Index conventions (paper's k = 1..N; the engine's sample j is k = j + k_start, and the time
+    the blocks see is k itself):
+
+    * u(1:2) = 0, y(1:2) = 1; the plant gives y(3) from y(2) and u(2) = 0, the controller acts
+      from k = 3 (u(3) is its first output);
+    * v(k) is column row k - 1 of ``randn(1, N)`` (one draw per sample k = 1..N and run);
+    * at sample k the law uses y*(k+1) (eq. (8), (39), (41)); y*(k) for k = 1..N comes from the
+      same formula at k - 1, so y*(1) = 1 in both examples;
+    * the PPD estimator starts from φ̂(2) = φ̂(1) = 2, y_f(2) = y(2), u(1) = 0; at k = 3
+      Δu(2) = 0, so reset (7) fires and φ̂(3) = 0.5 (the reset value) whatever y_f(2) is;
+    * the IKF starts from ŷ(2|2) = y(2) = 1, P(2|2) = P0; the TD from x1 = y(2), x2 = 0; the
+      D-MFAC band state from "outside the band";
+    * the plant's switch and r(k) use the sample k of the update y(k) -> y(k+1);
+    * RMSE and SNR run over k = 1..N on the true output, y(1) = y(2) = 1 included.
     """
 
     n: int = printed(1000, "Example 1: v(k) = 0.1 randn(1, 1000), N = 1000")
