@@ -99,7 +99,7 @@ def plot_spread(per_run: dict, runs: int):
 def plot_noise_sweep(levels, sweeps: dict, paper_levels: dict):
     """RMSE per scheme against the measurement-noise std (beyond the paper), one panel per example."""
     fig, axes = new_figure(1, 2, size=(12.0, 4.5), title="RMSE of the four schemes against the noise std σ_v "
-                                                           "(mean over seeded runs)")
+                                                           "(mean over the non-diverged seeded runs)")
     for ax, key in zip(axes, ("ex1", "ex2")):
         for s in SCHEMES:
             m = [row[0] for row in sweeps[key][s]["noise"]]
@@ -124,7 +124,7 @@ def plot_ratio_sweep(sweeps: dict, paper_q: dict):
 def plot_gain_sweep(values: dict, sweeps: dict, used: dict):
     """RMSE per scheme against ρ and λ (beyond the paper): rows examples, columns parameters."""
     fig, axes = new_figure(2, 2, size=(12.0, 7.5), title="RMSE of the four schemes against the step size ρ "
-                                                           "and the weight λ (mean over seeded runs)")
+                                                           "and the weight λ (mean over the non-diverged seeded runs)")
     for i, key in enumerate(("ex1", "ex2")):
         for j, (name, sym) in enumerate((("rho", "ρ"), ("lam", "λ"))):
             ax = axes[i, j]

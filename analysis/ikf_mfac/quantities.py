@@ -30,7 +30,9 @@ __all__ = [
 TABLE1_CELLS = {f"{ex}.{s}.{m}": f"Table 1 / {'constant' if ex == 'ex1' else 'varying'} / {m.upper()} / "
                 f"{SCHEME_LABELS[s]}" for ex in TABLE1 for m in ("rmse", "snr") for s in SCHEMES}
 
-TOLERANCE = 0.25
+#: Relative tolerances of the verdicts: the Monte Carlo mean is known to < 1 % (std/sqrt(200)),
+#: single runs spread by 2-8 % (RMSE); 10 % of RMSE, and 5 % of SNR (about 1 dB).
+TOLERANCE = {"rmse": 0.10, "snr": 0.05}
 
 
 def metrics_of(runs) -> tuple[np.ndarray, np.ndarray]:
@@ -58,7 +60,7 @@ def record_table1(result, key: str, all_runs: dict) -> dict:
             where = f"the paper's value lies above {100 * below:.1f} % of the runs"
             value = None if n == 0 else float(mean)
             result.quantity(qid, f"{TABLE1_CELLS[qid]}", value, paper=TABLE1[key][m][s], std=None if n == 0 else float(std),
-                            runs=int(n), tolerance=TOLERANCE, unit=unit,
+                            runs=int(n), tolerance=TOLERANCE[m], unit=unit,
                             note="; ".join(x for x in (note, "all runs diverged" if n == 0 else where) if x))
     return per_run
 
