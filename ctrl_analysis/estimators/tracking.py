@@ -110,8 +110,9 @@ class TrackingDifferentiator(DiscreteBlock):
     so one sample spans ``dt = substeps * h`` of the TD's own time. ``fh`` of the last sub-step
     (:meth:`acceleration`) is the acceleration of ``x1``: an estimate of ``v''``.
 
-    Block signals: input ``v``; states and outputs ``x1``, ``x2`` (no direct feedthrough: the
-    output at sample ``k`` is the state reached with the inputs up to ``k - 1``).
+    Block signals: input ``v``; states and outputs ``x1``, ``x2``. Without feedthrough (default)
+    the output at sample ``k`` is the state reached with the inputs up to ``k - 1``; with
+    ``feedthrough=True`` it is the state after this sample's steps, driven by ``v(k)`` too.
 
     Parameters
     ----------
@@ -126,6 +127,8 @@ class TrackingDifferentiator(DiscreteBlock):
         TD steps (each of length ``h``) per sample, ``>= 1``.
     x0 : array_like, shape (2,), optional
         Initial ``(x1, x2)`` (default zero).
+    feedthrough : bool
+        Output the state after the sample's steps (``True``) or before them (``False``).
 
     Attributes
     ----------
@@ -136,6 +139,8 @@ class TrackingDifferentiator(DiscreteBlock):
     ------
     ValueError
         If ``r``, ``h`` or ``h0`` is not finite and ``> 0``, or ``substeps < 1``.
+    TypeError
+        If ``feedthrough`` is not a bool.
 
     References
     ----------
@@ -157,7 +162,11 @@ class TrackingDifferentiator(DiscreteBlock):
     outputs = ("x1", "x2")
     feedthrough = False
 
-    def __init__(self, r: float, h: float, h0: float | None = None, substeps: int = 1, x0=None):
+    def __init__(self, r: float, h: float, h0: float | None = None, substeps: int = 1, x0=None,
+                 feedthrough: bool = False):
+        if not isinstance(feedthrough, (bool, np.bool_)):
+            raise TypeError(f"feedthrough must be a bool, got {type(feedthrough).__name__}")
+        self.feedthrough = bool(feedthrough)
         self.r = float(check_positive("r", r))
         self.h = float(check_positive("h", h))
         self.h0 = self.h if h0 is None else float(check_positive("h0", h0))
@@ -179,6 +188,10 @@ class TrackingDifferentiator(DiscreteBlock):
         for _ in range(self.substeps):
             x1, x2, _fh = self._substep(x1, x2, v)
         return np.stack((x1, x2), axis=1)
+
+    def output(self, t, x, u, params=None) -> np.ndarray:
+        # feedthrough: the state after this sample's steps (driven by v(k)); else the state itself
+        return self.update(t, x, u, params) if self.feedthrough else x
 
     def acceleration(self, x, u) -> np.ndarray:
         """``fh`` of the last sub-step of the sample from state ``x`` with input ``u``: shape ``(B,)``."""
