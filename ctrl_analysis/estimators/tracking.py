@@ -20,6 +20,7 @@ import numpy as np
 
 from .lowpass import LowPassFilter
 from .._validate import check_finite, check_in, check_int, check_positive
+from ..blocks import DiscreteBlock
 
 __all__ = [
     "fhan",
@@ -76,8 +77,12 @@ def fhan(x1, x2, r, h0):
     """
     r = float(check_positive("r", r))
     h0 = float(check_positive("h0", h0))
-    x1 = np.asarray(x1, dtype=float)
-    x2 = np.asarray(x2, dtype=float)
+    out = _fhan(np.asarray(x1, dtype=float), np.asarray(x2, dtype=float), r, h0)
+    return float(out) if out.ndim == 0 else out
+
+
+def _fhan(x1, x2, r, h0):
+    """Unchecked kernel of :func:`fhan` (arrays in, array out; ``r``, ``h0`` already validated)."""
     d = r * h0 * h0
     a0 = h0 * x2
     y = x1 + a0
@@ -87,83 +92,111 @@ def fhan(x1, x2, r, h0):
     a = (a0 + y - a2) * sy + a2
     sa = (np.sign(a + d) - np.sign(a - d)) * 0.5
     sign_a = np.sign(a)
-    out = -r * (a / d - sign_a) * sa - r * sign_a
-    return float(out) if out.ndim == 0 else out
+    return -r * (a / d - sign_a) * sa - r * sign_a
 
 
-class TrackingDifferentiator:
-    """Han's discrete tracking differentiator: ``x1`` tracks the input ``v``, ``x2`` its derivative.
+class TrackingDifferentiator(DiscreteBlock):
+    """Han's discrete tracking differentiator as a discrete block: ``x1`` tracks ``v``, ``x2`` its derivative.
 
-    Per sample (``substeps`` times with step ``h / substeps``)::
+    One sample runs ``substeps`` steps of the discrete TD with integration step ``h``, the input
+    ``v`` held::
 
         fh = fhan(x1 - v, x2, r, h0)
         x1 <- x1 + h x2
         x2 <- x2 + h fh
 
-    ``fh`` (kept in :attr:`fh`) is the acceleration of ``x1`` over the step: an estimate of ``v''``.
+    so one sample spans ``dt = substeps * h`` of the TD's own time. ``fh`` of the last sub-step
+    (:meth:`acceleration`) is the acceleration of ``x1``: an estimate of ``v''``.
+
+    Block signals: input ``v``; states and outputs ``x1``, ``x2``. Without feedthrough (default)
+    the output at sample ``k`` is the state reached with the inputs up to ``k - 1``; with
+    ``feedthrough=True`` it is the state after this sample's steps, driven by ``v(k)`` too.
 
     Parameters
     ----------
     r : float
         Speed factor (acceleration bound), ``> 0``: larger tracks faster.
     h : float
-        Sampling step, ``> 0``.
+        Integration step of the TD, ``> 0``.
     h0 : float, optional
         Filtering factor of :func:`fhan`, ``> 0``; default ``h`` (Han's choice without extra
         filtering).
     substeps : int
-        Integration steps per sample (``>= 1``); each uses ``h / substeps``.
+        TD steps (each of length ``h``) per sample, ``>= 1``.
+    x0 : array_like, shape (2,), optional
+        Initial ``(x1, x2)`` (default zero).
+    feedthrough : bool
+        Output the state after the sample's steps (``True``) or before them (``False``).
 
     Attributes
     ----------
-    x1, x2 : float or numpy.ndarray
-        Tracking signal and its derivative (scalars, or shape ``(B,)`` once stepped with arrays).
-    fh : float or numpy.ndarray
-        Last value of ``fhan``: the acceleration applied over the last step.
+    dt : float
+        TD time covered by one sample, ``substeps * h``.
 
     Raises
     ------
     ValueError
         If ``r``, ``h`` or ``h0`` is not finite and ``> 0``, or ``substeps < 1``.
+    TypeError
+        If ``feedthrough`` is not a bool.
 
     References
     ----------
     Han J., "From PID to active disturbance rejection control", IEEE Trans. Ind. Electron.
-    56(3), 2009, eq. (11)-(12).
+    56(3), 2009, eq. (11)-(12); Lu & Hou (2022), eq. (37) (one TD step per sample as printed;
+    how many steps run per control sample is a parameter here).
 
     Examples
     --------
+    >>> import numpy as np
     >>> td = TrackingDifferentiator(r=50.0, h=0.01)
-    >>> for _ in range(300):
-    ...     x1, x2 = td.step(1.0)
-    >>> round(float(x1), 6), round(float(x2), 6)
+    >>> y, x = td.run(np.ones(300))
+    >>> round(float(x[-1, 0, 0]), 6), round(float(x[-1, 0, 1]), 6)
     (1.0, 0.0)
     """
 
-    def __init__(self, r: float, h: float, h0: float | None = None, substeps: int = 1):
+    inputs = ("v",)
+    states = ("x1", "x2")
+    outputs = ("x1", "x2")
+    feedthrough = False
+
+    def __init__(self, r: float, h: float, h0: float | None = None, substeps: int = 1, x0=None,
+                 feedthrough: bool = False):
+        if not isinstance(feedthrough, (bool, np.bool_)):
+            raise TypeError(f"feedthrough must be a bool, got {type(feedthrough).__name__}")
+        self.feedthrough = bool(feedthrough)
         self.r = float(check_positive("r", r))
         self.h = float(check_positive("h", h))
         self.h0 = self.h if h0 is None else float(check_positive("h0", h0))
         self.substeps = check_int("substeps", substeps, minimum=1)
-        self.reset()
+        self.dt = self.h * self.substeps
+        self.x0 = np.zeros(2) if x0 is None else check_finite("x0", np.ravel(x0), shape=(2,))
 
-    def reset(self, x1=0.0, x2=0.0) -> None:
-        """Set the state (scalars, or arrays of shape ``(B,)`` for a batch)."""
-        self.x1 = check_finite("x1", x1)
-        self.x2 = check_finite("x2", x2)
-        self.fh = 0.0 * (np.asarray(self.x1) + np.asarray(self.x2))
+    def initial_state(self) -> np.ndarray:
+        return self.x0.copy()
 
-    def step(self, v):
-        """Advance one sample with input ``v`` (scalar or ``(B,)``); return ``(x1, x2)``."""
-        v = np.asarray(v, dtype=float)
-        dt = self.h / self.substeps
-        x1, x2 = self.x1, self.x2
+    def _substep(self, x1, x2, v):
+        """One TD step of length ``h``: returns ``(x1, x2, fh)``."""
+        fh = _fhan(x1 - v, x2, self.r, self.h0)
+        # (37) x1(k+1) = x1(k) + h x2(k),  x2(k+1) = x2(k) + h fh
+        return x1 + self.h * x2, x2 + self.h * fh, fh
+
+    def update(self, t, x, u, params=None) -> np.ndarray:
+        x1, x2, v = x[:, 0], x[:, 1], u[:, 0]
         for _ in range(self.substeps):
-            fh = fhan(x1 - v, x2, self.r, self.h0)
-            # (11) x1 <- x1 + h x2,  x2 <- x2 + h fhan(x1 - v, x2, r, h0)
-            x1, x2 = x1 + dt * x2, x2 + dt * fh
-        self.x1, self.x2, self.fh = x1, x2, fh
-        return x1, x2
+            x1, x2, _fh = self._substep(x1, x2, v)
+        return np.stack((x1, x2), axis=1)
+
+    def output(self, t, x, u, params=None) -> np.ndarray:
+        # feedthrough: the state after this sample's steps (driven by v(k)); else the state itself
+        return self.update(t, x, u, params) if self.feedthrough else x
+
+    def acceleration(self, x, u) -> np.ndarray:
+        """``fh`` of the last sub-step of the sample from state ``x`` with input ``u``: shape ``(B,)``."""
+        x1, x2, v = x[:, 0], x[:, 1], u[:, 0]
+        for _ in range(self.substeps):
+            x1, x2, fh = self._substep(x1, x2, v)
+        return fh
 
     def __repr__(self) -> str:
         return (f"TrackingDifferentiator(r={self.r}, h={self.h}, h0={self.h0}, "
@@ -179,9 +212,9 @@ def softened_setpoint(softener, r, h: float, *, method: str = "zoh") -> np.ndarr
         A :class:`~ctrl_analysis.estimators.lowpass.LowPassFilter` of order ``m`` (the prefilter
         ``ω^m / (s + ω)^m``) gives its ``m`` states with ``r`` held over
         each step (zero-order hold). A
-        :class:`TrackingDifferentiator` (its ``h`` must equal ``h``) gives
-        ``(x1, x2, fh)``: the tracking signal, its derivative and the acceleration applied over
-        the next step; it is reset to zero first.
+        :class:`TrackingDifferentiator` (its sample period ``dt = substeps * h`` must equal
+        ``h``) gives ``(x1, x2, fh)``: the tracking signal, its derivative and the acceleration
+        applied over the next step, from a zero initial state.
     r : array_like, shape (N,)
         Raw reference at the sample instants ``t_k = k h``.
     h : float
@@ -202,7 +235,7 @@ def softened_setpoint(softener, r, h: float, *, method: str = "zoh") -> np.ndarr
     TypeError
         If ``softener`` is neither block.
     ValueError
-        If ``r`` is not a finite 1-D array, or the TD's step differs from ``h``.
+        If ``r`` is not a finite 1-D array, or the TD's sample period differs from ``h``.
     """
     from ..simulate import simulate_sampled
 
@@ -221,15 +254,13 @@ def softened_setpoint(softener, r, h: float, *, method: str = "zoh") -> np.ndarr
                                h, r.size, noise=r[:, None, None], method=method)
         return res.x[:-1, 0, :]
     if isinstance(softener, TrackingDifferentiator):
-        if not np.isclose(softener.h, h, rtol=1e-12, atol=0.0):
-            raise ValueError(f"softener.h must equal h={h}, got {softener.h}")
-        softener.reset()
+        if not np.isclose(softener.dt, h, rtol=1e-12, atol=0.0):
+            raise ValueError(f"softener.dt (substeps * h) must equal h={h}, got {softener.dt}")
+        _, x = softener.run(r, x0=np.zeros(2))
         theta = np.empty((r.size, 3))
-        for k, rk in enumerate(r):
-            theta[k, 0], theta[k, 1] = softener.x1, softener.x2
-            softener.step(rk)
-            # with substeps > 1, fh is the last sub-step's acceleration
-            theta[k, 2] = softener.fh
+        theta[:, :2] = x[:-1, 0, :]
+        # the acceleration applied over each sample (the last sub-step's with substeps > 1)
+        theta[:, 2] = softener.acceleration(x[:-1, 0, :], r[:, None])
         return theta
     raise TypeError(
         f"softener must be a LowPassFilter or a TrackingDifferentiator, got {type(softener).__name__}"

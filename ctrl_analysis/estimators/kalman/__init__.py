@@ -29,6 +29,7 @@ from .continuous import (ContinuousSteadyState, care_residual, continuous_steady
 from .discrete import (DiscreteSteadyState, dare_residual, discrete_steady_state, discrete_steady_state_batch,
                        discretize_noise)
 from .scalar import random_walk_gain
+from .ikf import ImprovedKalmanFilter
 
 __all__ = [
     "controllability_matrix", "observability_matrix", "controllability_rank", "observability_rank",
@@ -40,4 +41,5 @@ __all__ = [
     "alpha_beta_from_gain", "gain_from_alpha_beta", "tracking_index", "tracking_index_from_gains", "kalata_gains",
     "alpha_beta_stable", "AlphaBetaFilter",
     "random_walk_gain",
+    "ImprovedKalmanFilter",
 ]

@@ -1,0 +1,121 @@
+"""Study `ikf-mfac`: Lu & Hou 2022, model-free adaptive control with disturbance rejection based on a modified Kalman filter (IKF-MFAC).
+
+The paper's values and reconstructions are in :mod:`.paper`, the plants in :mod:`.plants`, the
+closed loops (library blocks wired by :class:`~ctrl_analysis.loop.Loop`) in :mod:`.loops`, the
+Monte Carlo quantities and sweeps in :mod:`.quantities`, the findings in :mod:`.findings` and the
+figures in :mod:`.figures`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from ctrl_analysis.report import StudyContext, StudyInfo, StudyResult
+from ctrl_analysis.simulate import run_seeds
+from ctrl_analysis.study import record_parameters
+
+from . import figures as F
+from .findings import (
+    record_consistency,
+    record_ranking,
+    record_rearm,
+    record_steady_gain,
+    record_td_scan,
+    record_where_ikf_wins,
+)
+from .loops import noise_draws, run_scheme
+from .paper import EX1, EX2, SCHEMES
+from .quantities import (
+    d_mfac_rearm_variant,
+    ratio_rows,
+    record_table1,
+    run_with_sweeps,
+    sweep_table,
+    td_step_scan,
+)
+
+__all__ = ["INFO", "SWEEPS", "run"]
+
+INFO = StudyInfo(
+    name='ikf-mfac',
+    seed_file='000_1281acf4834e65d1.txt',
+    paper='Lu & Hou 2022, model-free adaptive control with disturbance rejection based on a modified Kalman filter (IKF-MFAC)',
+    reproduces='Table 1 (RMSE/SNR of MFAC, TD-MFAC, D-MFAC, IKF-MFAC, Monte Carlo), Fig. 2-6, steady IKF gain, '
+               'sweeps over noise, Q/R, rho and lambda',
+)
+
+#: Grids of the sweeps beyond the paper.
+_GAINS = {"q": (0.03, 0.1, 0.3, 1.0, 3.0, 10.0, 30.0), "rho": (0.2, 0.4, 0.6, 0.8, 1.0), "lam": (0.5, 1.0, 2.0, 4.0, 8.0)}
+SWEEPS = {"ex1": {"noise": (0.02, 0.05, 0.1, 0.2, 0.3, 0.4), **_GAINS},
+          "ex2": {"noise": (0.25, 0.5, 1.0, 1.5, 2.0), **_GAINS}}
+EXAMPLES = {"ex1": EX1, "ex2": EX2}
+
+
+def run(ctx: StudyContext) -> StudyResult:
+    """Reproduce Table 1 and Fig. 2-6 by Monte Carlo, check Table 1, and sweep beyond the paper."""
+    result = StudyResult(INFO)
+    for key, ex in EXAMPLES.items():
+        record_parameters(result, ex, key)
+    runs = ctx.runs_or(200, 10)
+    seeds = run_seeds(ctx.seed, runs)
+    sweep_seeds = seeds[: min(runs, 50)]
+    result.seeds = {"table1": seeds, "sweeps": sweep_seeds}
+    result.settings["sweeps"] = SWEEPS
+    ctx.progress(f"ikf-mfac: Table 1 ({runs} runs) and the sweeps ({len(sweep_seeds)} runs a point), side by side")
+    all_runs, points = {}, {}
+    for key, ex in EXAMPLES.items():
+        done = {s: run_with_sweeps(ex, s, seeds, sweep_seeds, SWEEPS[key]) for s in SCHEMES}
+        all_runs[key] = {s: d[0] for s, d in done.items()}
+        points[key] = {s: d[1] for s, d in done.items()}
+    per_run = {key: record_table1(result, key, all_runs[key]) for key in EXAMPLES}
+    record_ranking(result, per_run)
+    record_consistency(result, EX1.n, EX2.n)
+    record_steady_gain(result, EX2, EX2.n)
+    for key, ex in EXAMPLES.items():
+        record_rearm(result, key, ex, d_mfac_rearm_variant(ex, seeds))
+    ctx.progress("ikf-mfac: TD steps per sample")
+    scan_seeds = seeds[: min(runs, 100)]
+    scans = {key: {"runs": len(scan_seeds),
+                   "rows": td_step_scan(ex, scan_seeds, _scan_counts(ex, ctx.quick), (True,))
+                   | td_step_scan(ex, scan_seeds, (1,) if ctx.quick else (1, ex.td_substeps), (False,))}
+             for key, ex in EXAMPLES.items()}
+    record_td_scan(result, scans, {key: ex.td_substeps for key, ex in EXAMPLES.items()})
+    sweeps = {key: sweep_table(points[key], SWEEPS[key]) for key in EXAMPLES}
+    ratio = {key: ratio_rows(points[key]["ikf_mfac"], SWEEPS[key], ex) for key, ex in EXAMPLES.items()}
+    record_where_ikf_wins(result, sweeps, ratio, SWEEPS)
+    _figures(ctx, result, all_runs, per_run, sweeps, ratio, seeds)
+    return result
+
+
+def _scan_counts(ex, quick: bool) -> tuple:
+    """TD step counts tried with x1 after the steps: the chosen one and the one below it (not with --quick)."""
+    return (ex.td_substeps,) if quick else (1, 4, ex.td_substeps - 1, ex.td_substeps)
+
+
+def _figures(ctx, result, all_runs, per_run, sweeps, ratio, seeds) -> None:
+    """Fig. 2-6, the Monte Carlo spread and the three sweeps (at a lower resolution with --quick)."""
+    dpi = 70 if ctx.quick else 120
+    fig2_R = np.array([0.001, 0.01, 0.1, 1.0])
+    v = np.tile(noise_draws(EX1, seeds[:1]), (1, fig2_R.size))
+    y = run_scheme(dataclasses.replace(EX1, R=fig2_R), "ikf_mfac", v).y
+    outs = {R: y[:, i] for i, R in enumerate(fig2_R)}
+    k1 = np.arange(1, EX1.n + 1)
+    ctx.save_figure(result, F.plot_fig2(k1, all_runs["ex1"]["mfac"].y_ref, outs, ratio["ex1"], EX1.Q),
+                    "fig2_ikf_q_over_r.png", dpi=dpi)
+    for key, (fo, fe), kind in (("ex1", (3, 4), "constant"), ("ex2", (5, 6), "time-varying")):
+        r = all_runs[key]
+        ys = {s: r[s].y[:, 0] for s in SCHEMES}
+        name = f"Example {key[-1]}, {kind} reference (seed {seeds[0]})"
+        ctx.save_figure(result, F.plot_outputs(fo, f"{name}: outputs of the four schemes", r["mfac"].k,
+                                               r["mfac"].y_ref, ys), f"fig{fo}_{kind}_outputs.png", dpi=dpi)
+        ctx.save_figure(result, F.plot_errors(fe, f"{name}: absolute tracking error |y*(k) − y(k)|", r["mfac"].k,
+                                              r["mfac"].y_ref, ys), f"fig{fe}_{kind}_abs_error.png", dpi=dpi)
+    ctx.save_figure(result, F.plot_spread(per_run, len(seeds)), "table1_rmse_spread.png", dpi=dpi)
+    ctx.save_figure(result, F.plot_noise_sweep({k: SWEEPS[k]["noise"] for k in EXAMPLES}, sweeps, {"ex1": EX1.noise_std, "ex2": EX2.noise_std}),
+                    "beyond_rmse_vs_noise.png", dpi=dpi)
+    ctx.save_figure(result, F.plot_ratio_sweep(ratio, {k: e.Q / e.R for k, e in EXAMPLES.items()}),
+                    "beyond_rmse_vs_q_over_r.png", dpi=dpi)
+    ctx.save_figure(result, F.plot_gain_sweep(_GAINS, sweeps, {"rho": EX1.rho, "lam": EX1.lam}),
+                    "beyond_rmse_vs_rho_lambda.png", dpi=dpi)

@@ -1,0 +1,172 @@
+"""Monte Carlo runs, Table 1, its internal consistency, the ranking, and the sweeps beyond the paper; findings from computed numbers."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from ctrl_analysis.estimators.kalman import random_walk_gain
+from ctrl_analysis.metrics import mean_std, rmse, snr_db
+
+from .loops import noise_draws, run_scheme
+from .paper import SCHEME_LABELS, SCHEMES, TABLE1, Example
+from .plants import reference
+
+__all__ = [
+    "TABLE1_CELLS",
+    "d_mfac_rearm_variant",
+    "metrics_of",
+    "ranking",
+    "ratio_rows",
+    "record_table1",
+    "run_with_sweeps",
+    "sweep_table",
+    "table1_consistency",
+    "td_step_scan",
+]
+
+#: Table 1 cell names (the lead's ``cell=`` keyword): quantity id -> "Table 1 / row / metric / column".
+TABLE1_CELLS = {f"{ex}.{s}.{m}": f"Table 1 / {'constant' if ex == 'ex1' else 'varying'} / {m.upper()} / "
+                f"{SCHEME_LABELS[s]}" for ex in TABLE1 for m in ("rmse", "snr") for s in SCHEMES}
+
+#: Relative tolerances of the verdicts: the Monte Carlo mean is known to < 1 % (std/sqrt(200)),
+#: single runs spread by 2-8 % (RMSE); 10 % of RMSE, and 5 % of SNR (about 1 dB).
+TOLERANCE = {"rmse": 0.10, "snr": 0.05}
+
+
+def metrics_of(runs) -> tuple[np.ndarray, np.ndarray]:
+    """Per-run RMSE and SNR (dB) over k = 1..N on the true output (NaN for diverged runs)."""
+    ref = runs.y_ref[:, None]
+    with np.errstate(all="ignore"):
+        e, s = rmse(ref, runs.y), snr_db(ref, runs.y)
+    return np.where(runs.diverged, np.nan, e), np.where(runs.diverged, np.nan, s)
+
+
+def record_table1(result, key: str, all_runs: dict) -> dict:
+    """Quantities ``<key>.<scheme>.rmse|snr`` (mean ± std over the non-diverged runs); returns the per-run metrics."""
+    per_run = {}
+    for s in SCHEMES:
+        r = all_runs[s]
+        e, snr = metrics_of(r)
+        per_run[s] = (e, snr)
+        ok = ~r.diverged
+        bad = [f"run {b} at k = {k}" for b, k in zip(np.flatnonzero(r.diverged), r.diverged_step[r.diverged])]
+        note = f"{len(bad)} of {ok.size} runs diverged and are excluded ({'; '.join(bad[:5])})" if bad else ""
+        for m, vals, unit in (("rmse", e, ""), ("snr", snr, "dB")):
+            qid = f"{key}.{s}.{m}"
+            mean, std, n = mean_std(vals, ok)
+            below = float(np.mean(vals[ok] < TABLE1[key][m][s])) if n else float("nan")
+            where = f"the paper's value lies above {100 * below:.1f} % of the runs"
+            value = None if n == 0 else float(mean)
+            result.quantity(qid, f"{TABLE1_CELLS[qid]}", value, paper=TABLE1[key][m][s], std=None if n == 0 else float(std),
+                            runs=int(n), tolerance=TOLERANCE[m], unit=unit,
+                            note="; ".join(x for x in (note, "all runs diverged" if n == 0 else where) if x))
+    return per_run
+
+
+def table1_consistency(n1: int, n2: int) -> list[dict]:
+    """Every printed SNR against the SNR its printed RMSE implies, ``10 lg(mean y*²) − 20 lg RMSE``.
+
+    SNR = 10 lg(Σ y*² / Σ e²) and RMSE² = Σ e² / N give SNR = 10 lg(mean y*²) − 20 lg RMSE; for
+    |y*| = 1 (Example 1) mean y*² = 1 and SNR = −20 lg RMSE exactly.
+    """
+    rows = []
+    for key, kind, n in (("ex1", "step", n1), ("ex2", "sine", n2)):
+        p_ref = float(np.mean(reference(kind, n) ** 2))
+        for s in SCHEMES:
+            rm, sn = TABLE1[key]["rmse"][s], TABLE1[key]["snr"][s]
+            implied = 10 * np.log10(p_ref) - 20 * np.log10(rm)
+            # printed to 4 decimals: RMSE ± 5e-5 moves the implied SNR by 20/ln10 · 5e-5/RMSE, SNR ± 5e-5
+            rounding = 20.0 / np.log(10.0) * 5e-5 / rm + 5e-5
+            rows.append({"cell": TABLE1_CELLS[f"{key}.{s}.snr"], "rmse": rm, "snr_printed": sn,
+                         "snr_implied": float(implied), "diff_db": float(sn - implied), "rounding_db": float(rounding),
+                         "rmse_implied": float(np.sqrt(p_ref) * 10 ** (-sn / 20)), "mean_ref_sq": p_ref,
+                         # the signal power mean y*² this cell's own RMSE and SNR imply (same y* for every scheme)
+                         "ref_power_implied": float(10 ** ((sn + 20 * np.log10(rm)) / 10))})
+    return rows
+
+
+def d_mfac_rearm_variant(ex: Example, seeds) -> tuple:
+    """D-MFAC with the other k_m rule (``rearm`` flipped): (mean RMSE, std, runs, diverged) and (SNR ...)."""
+    r = run_scheme(dataclasses.replace(ex, rearm=not ex.rearm), "d_mfac", noise_draws(ex, seeds))
+    e, snr = metrics_of(r)
+    return mean_std(e, ~r.diverged) + (int(r.diverged.sum()),), mean_std(snr, ~r.diverged)
+
+
+def ranking(per_run: dict) -> tuple[list, dict]:
+    """Schemes ordered by mean RMSE, and the fraction of runs with RMSE(a) < RMSE(b) for each pair."""
+    means = {s: np.nanmean(per_run[s][0]) for s in SCHEMES}
+    order = sorted(SCHEMES, key=lambda s: means[s])
+    frac = {}
+    for i, a in enumerate(SCHEMES):
+        for b in SCHEMES[i + 1:]:
+            ea, eb = per_run[a][0], per_run[b][0]
+            both = np.isfinite(ea) & np.isfinite(eb)
+            frac[f"{a}<{b}"] = float(np.mean(ea[both] < eb[both])) if both.any() else float("nan")
+    return order, frac
+
+
+def td_step_scan(ex: Example, seeds, counts, feedthrough_options=(False, True)) -> dict:
+    """TD-MFAC over TD step counts per sample: {(feedthrough, count): (mean RMSE, std, runs, diverged)}."""
+    v = noise_draws(ex, seeds)
+    out = {}
+    for ft in feedthrough_options:
+        for n in counts:
+            e, _ = metrics_of(run_scheme(dataclasses.replace(ex, td_substeps=n, td_feedthrough=ft), "td_mfac", v))
+            out[(ft, n)] = mean_std(e, np.isfinite(e)) + (int(np.sum(~np.isfinite(e))),)
+    return out
+
+
+def _segments(ex: Example, scheme: str, seeds, sweep_seeds, sweeps: dict) -> list:
+    """Grid points run side by side: (sweep name, value, seeds, parameter overrides, noise std)."""
+    segs = [("table", None, list(seeds), {}, ex.noise_std)]
+    segs += [("noise", lv, sweep_seeds, {}, lv) for lv in sweeps["noise"]]
+    segs += [(name, val, sweep_seeds, {name: val}, ex.noise_std) for name in ("rho", "lam") for val in sweeps[name]]
+    if scheme == "ikf_mfac":
+        segs += [("q", q, sweep_seeds, {"Q": q * ex.R}, ex.noise_std) for q in sweeps["q"]]
+    return segs
+
+
+def run_with_sweeps(ex: Example, scheme: str, seeds, sweep_seeds, sweeps: dict):
+    """One batched run of ``scheme``: Table 1's runs and every sweep point side by side on the batch axis.
+
+    Each sweep point is a block of ``sweep_seeds`` runs with one parameter changed (noise std,
+    ``rho``, ``lam``, or ``Q`` at the example's ``R`` for IKF-MFAC); a batch equals its runs alone,
+    so Table 1's runs are the same as run by themselves.
+
+    Returns
+    -------
+    table : SchemeRuns
+        Table 1's runs.
+    points : dict
+        ``{(name, value): (mean RMSE, std, runs, diverged runs)}`` for every sweep point.
+    """
+    segs = _segments(ex, scheme, seeds, sweep_seeds, sweeps)
+    v = np.concatenate([noise_draws(ex, sd, std) for _, _, sd, _, std in segs], axis=1)
+    params = {}
+    for name in ("rho", "lam", "Q"):
+        params[name] = np.concatenate([np.full(len(sd), ov.get(name, getattr(ex, name))) for _, _, sd, ov, _ in segs])
+    runs = run_scheme(dataclasses.replace(ex, **params), scheme, v)
+    e, _ = metrics_of(runs)
+    n0 = len(seeds)
+    table = dataclasses.replace(runs, y=runs.y[:, :n0], y_m=runs.y_m[:, :n0], u=runs.u[:, :n0], y_f=runs.y_f[:, :n0],
+                                diverged=runs.diverged[:n0], diverged_step=runs.diverged_step[:n0])
+    points, start = {}, n0
+    for name, val, sd, _, _ in segs[1:]:
+        row = e[start:start + len(sd)]
+        points[(name, val)] = mean_std(row, np.isfinite(row)) + (int(np.sum(~np.isfinite(row))),)
+        start += len(sd)
+    return table, points
+
+
+def sweep_table(points: dict, sweeps: dict) -> dict:
+    """``{scheme: {name: [row per value]}}`` from the points of :func:`run_with_sweeps` (per scheme)."""
+    return {s: {name: [points[s][(name, val)] for val in sweeps[name]] for name in ("noise", "rho", "lam")}
+            for s in SCHEMES}
+
+
+def ratio_rows(points_ikf: dict, sweeps: dict, ex: Example) -> dict:
+    """IKF-MFAC mean RMSE against q = Q/R, with K∞(q)."""
+    q = list(sweeps["q"])
+    return {"q": q, "rmse": [points_ikf[("q", v)] for v in q], "k_inf": [random_walk_gain(v * ex.R, ex.R) for v in q]}

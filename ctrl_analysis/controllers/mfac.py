@@ -1,0 +1,417 @@
+"""Model-free adaptive control (compact-form dynamic linearisation): PPD estimator, control laws, and their compositions as discrete blocks.
+
+Blocks (each batched, under the protocol of :mod:`ctrl_analysis.blocks`) for any SISO discrete
+plant ``y(k+1) = f(y(k), ..., u(k), ...)`` whose (possibly filtered) output ``y_f`` the controller
+sees:
+
+* :class:`UnitDelay` — ``u(k−1)`` from ``u(k)``;
+* :class:`PPDEstimator` — the pseudo-partial-derivative estimate ``φ̂(k)`` with its reset rule;
+* :class:`CFDLLaw` — the CFDL-MFAC control law ``u(k)``;
+* :class:`DecreasingGainLaw` — the same law with a decreasing gain inside an error band (D-MFAC),
+  with the re-arming rule of the switching instant as a parameter;
+* :class:`CFDLPredictor` — the CFDL data model as a one-step predictor of the output increment
+  ``φ̂(k−1) Δu(k−1)``, the prediction an
+  :class:`~ctrl_analysis.estimators.kalman.ImprovedKalmanFilter` needs.
+
+:func:`mfac_controller` places them in a :class:`~ctrl_analysis.loop.Loop` with standard signal
+names: plain MFAC, with a tracking differentiator (TD-MFAC), with the decreasing-gain law
+(D-MFAC), or with the improved Kalman filter (IKF-MFAC, :func:`ikf_mfac`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .._validate import check_finite, check_positive
+from ..blocks import Block, DiscreteBlock, StaticBlock
+from ..estimators.kalman.ikf import _per_run
+from ..loop import place
+
+__all__ = [
+    "CFDLLaw",
+    "CFDLPredictor",
+    "DecreasingGainLaw",
+    "PPDEstimator",
+    "UnitDelay",
+    "ikf_mfac",
+    "mfac_controller",
+]
+
+
+def _check_step(name: str, value):
+    """A step size in ``(0, 1]``: a float, or a 1-D array of one value per run (a grid on the batch axis)."""
+    value = _per_run(name, check_finite(name, value))
+    if np.any(value <= 0.0) or np.any(value > 1.0):
+        raise ValueError(f"{name} must be in (0, 1], got {value}")
+    return value
+
+
+def _check_weight(name: str, value):
+    """A weight ``> 0``: a float or one value per run."""
+    value = _per_run(name, check_finite(name, value))
+    if np.any(value <= 0.0):
+        raise ValueError(f"{name} must be > 0, got {value}")
+    return value
+
+
+def _cfdl_increment(phi, e, rho, lam):
+    """(8) Δu(k) = ρ φ̂(k) e(k) / (λ + φ̂(k)²), the CFDL-MFAC control increment."""
+    return rho * phi * e / (lam + phi * phi)
+
+
+class UnitDelay(DiscreteBlock):
+    """One-sample delay ``u_prev(k) = u(k−1)``: input ``u``, state and output ``u_prev``.
+
+    Parameters
+    ----------
+    u0 : float
+        ``u(−1)``, the output at the first sample.
+    """
+
+    inputs = ("u",)
+    states = ("u_prev",)
+    outputs = ("u_prev",)
+    feedthrough = False
+
+    def __init__(self, u0: float = 0.0):
+        self.u0 = float(check_finite("u0", u0))
+
+    def initial_state(self) -> np.ndarray:
+        return np.array([self.u0])
+
+    def update(self, t, x, u, params=None) -> np.ndarray:
+        return u.copy()
+
+    def __repr__(self) -> str:
+        return f"UnitDelay(u0={self.u0:g})"
+
+
+class PPDEstimator(DiscreteBlock):
+    """Projection estimate of the pseudo partial derivative (PPD) ``φ̂(k)`` with its reset rule.
+
+    From its state ``(φ̂(k−1), y_f(k−1), u(k−2))`` and its inputs ``y_f(k)``, ``u(k−1)``::
+
+        φ̂(k) = φ̂(k−1) + η Δu(k−1) (Δy_f(k) − φ̂(k−1) Δu(k−1)) / (μ + Δu(k−1)²)     (6)
+        φ̂(k) = φ_reset  if |φ̂(k)| <= ε or |Δu(k−1)| <= ε or sign φ̂(k) ≠ sign φ̂(1)   (7)
+
+    The update stores ``(φ̂(k), y_f(k), u(k−1))``.
+
+    Block signals: inputs ``y`` (the output the controller sees, ``y_f``) and ``u_prev``
+    (``u(k−1)``); states ``phi_hat``, ``y_prev``, ``u_prev2``; output ``phi_hat``; direct
+    feedthrough.
+
+    Parameters
+    ----------
+    eta : float
+        Step size ``η`` in ``(0, 1]``.
+    mu : float
+        Weight ``μ > 0``.
+    epsilon : float
+        Reset threshold ``ε > 0``.
+    phi0 : float
+        ``φ̂(1)``, non-zero: the initial estimate, and the sign the reset rule keeps.
+    phi_reset : float, optional
+        Value after a reset, non-zero with the sign of ``phi0`` (default ``phi0``, as (7) prints;
+        the simulations of Lu & Hou use 0.5 with ``φ̂(1) = 2``).
+    y0, u0 : float
+        ``y_f`` and ``u`` before the first sample (the state's ``y_prev``, ``u_prev2``).
+
+    Raises
+    ------
+    ValueError
+        ``eta`` outside ``(0, 1]``, ``mu``/``epsilon`` not ``> 0``, ``phi0 = 0``, or a
+        ``phi_reset`` of the wrong sign.
+
+    References
+    ----------
+    Hou Z., Jin S., *Model Free Adaptive Control: Theory and Applications*, CRC Press 2013, §4.2;
+    Lu & Hou (2022), eq. (6)-(7) and (33)-(34).
+    """
+
+    inputs = ("y", "u_prev")
+    states = ("phi_hat", "y_prev", "u_prev2")
+    outputs = ("phi_hat",)
+    feedthrough = True
+
+    def __init__(self, eta: float, mu: float, epsilon: float, phi0: float, phi_reset: float | None = None,
+                 y0: float = 0.0, u0: float = 0.0):
+        self.eta = _check_step("eta", eta)
+        self.mu = float(check_positive("mu", mu))
+        self.epsilon = float(check_positive("epsilon", epsilon))
+        self.phi0 = float(check_finite("phi0", phi0))
+        if self.phi0 == 0.0:
+            raise ValueError("phi0 must be non-zero (its sign is what the reset rule keeps), got 0.0")
+        self.phi_reset = self.phi0 if phi_reset is None else float(check_finite("phi_reset", phi_reset))
+        if np.sign(self.phi_reset) != np.sign(self.phi0):
+            raise ValueError(f"phi_reset must have the sign of phi0={self.phi0:g}, got {self.phi_reset:g}")
+        self.sign0 = float(np.sign(self.phi0))
+        self.y0 = float(check_finite("y0", y0))
+        self.u0 = float(check_finite("u0", u0))
+
+    def initial_state(self) -> np.ndarray:
+        return np.array([self.phi0, self.y0, self.u0])
+
+    def output(self, t, x, u, params=None) -> np.ndarray:
+        phi_prev = x[:, 0]
+        du = u[:, 1] - x[:, 2]                                        # Δu(k−1) = u(k−1) − u(k−2)
+        dy = u[:, 0] - x[:, 1]                                        # Δy_f(k) = y_f(k) − y_f(k−1)
+        # (6) φ̂(k) = φ̂(k−1) + η Δu(k−1) (Δy_f(k) − φ̂(k−1) Δu(k−1)) / (μ + Δu(k−1)²)
+        phi = phi_prev + self.eta * du * (dy - phi_prev * du) / (self.mu + du * du)
+        # (7) reset if |φ̂(k)| <= ε or |Δu(k−1)| <= ε or sign φ̂(k) ≠ sign φ̂(1)
+        fire = (np.abs(phi) <= self.epsilon) | (np.abs(du) <= self.epsilon) | (np.sign(phi) != self.sign0)
+        return np.where(fire, self.phi_reset, phi)[:, None]
+
+    def update(self, t, x, u, params=None) -> np.ndarray:
+        x_next = np.empty_like(x)
+        x_next[:, 0] = self.output(t, x, u, params)[:, 0]
+        x_next[:, 1] = u[:, 0]
+        x_next[:, 2] = u[:, 1]
+        return x_next
+
+    def __repr__(self) -> str:
+        return (f"PPDEstimator(eta={self.eta:g}, mu={self.mu:g}, epsilon={self.epsilon:g}, phi0={self.phi0:g}, "
+                f"phi_reset={self.phi_reset:g})")
+
+
+class CFDLLaw(StaticBlock):
+    """The CFDL-MFAC control law, a static block: ``u(k) = u(k−1) + ρ φ̂(k) (y*(k+1) − y_f(k)) / (λ + φ̂(k)²)``.
+
+    Block signals: inputs ``phi_hat``, ``y`` (``y_f(k)``), ``y_ref_next`` (``y*(k+1)``),
+    ``u_prev`` (``u(k−1)``); output ``u``.
+
+    Parameters
+    ----------
+    rho : float or array_like, shape (B,)
+        Step size ``ρ`` in ``(0, 1]``; an array gives one value per run (a grid on the batch axis;
+        :meth:`nlsys` needs scalars).
+    lam : float or array_like, shape (B,)
+        Weight ``λ > 0`` on the control increment (per run as ``rho``).
+
+    Raises
+    ------
+    ValueError
+        ``rho`` outside ``(0, 1]`` or ``lam`` not ``> 0``.
+
+    References
+    ----------
+    Lu & Hou (2022), eq. (8) and (35); Hou & Jin (2013), §4.2.
+    """
+
+    def __init__(self, rho: float, lam: float):
+        self.rho = _check_step("rho", rho)
+        self.lam = _check_weight("lam", lam)
+        super().__init__(self._law, inputs=("phi_hat", "y", "y_ref_next", "u_prev"), outputs=("u",))
+
+    def _law(self, t, u):
+        # (8) u(k) = u(k−1) + ρ φ̂(k) (y*(k+1) − y_f(k)) / (λ + φ̂(k)²)
+        return (u[:, 3] + _cfdl_increment(u[:, 0], u[:, 2] - u[:, 1], self.rho, self.lam))[:, None]
+
+    def __repr__(self) -> str:
+        return f"CFDLLaw(rho={self.rho}, lam={self.lam})"
+
+
+class DecreasingGainLaw(DiscreteBlock):
+    """CFDL-MFAC law whose increment is divided by ``k − k_m + 1`` inside an error band (D-MFAC).
+
+    With ``e(k) = y*(k+1) − y_f(k)`` and ``Δu_0(k) = ρ φ̂(k) e(k) / (λ + φ̂(k)²)`` of (8)::
+
+        Δu(k) = Δu_0(k)                     if |e(k)| >= e_m
+        Δu(k) = Δu_0(k) / (k − k_m + 1)     if |e(k)| <  e_m          (36)
+
+    where ``k_m`` is the instant ``|e|`` entered the band. Whether ``k_m`` moves when ``|e|``
+    leaves the band and enters it again is not said by the paper: with ``rearm=True`` every entry
+    sets ``k_m = k``; with ``rearm=False`` only the first one does (later entries resume the
+    decreasing gain of the first). The band is entered when ``|e(k)| < e_m`` and
+    ``|e(k−1)| >= e_m`` (before the first sample ``|e|`` counts as outside).
+
+    Block signals: inputs ``phi_hat``, ``y``, ``y_ref_next``, ``u_prev`` (as :class:`CFDLLaw`);
+    states ``in_band`` (1 if ``|e(k−1)| < e_m``), ``armed`` (1 once ``k_m`` is set), ``age``
+    (``k − 1 − k_m``); output ``u``; direct feedthrough.
+
+    Parameters
+    ----------
+    rho, lam : float
+        As in :class:`CFDLLaw`.
+    e_m : float
+        Error threshold ``> 0``.
+    rearm : bool
+        Re-arm ``k_m`` at every entry into the band (default ``True``).
+
+    Raises
+    ------
+    ValueError
+        As :class:`CFDLLaw`, or ``e_m`` not ``> 0``.
+
+    References
+    ----------
+    Lu & Hou (2022), eq. (36), after Bu, Hou, Yu et al., "Robust model free adaptive control with
+    measurement disturbance", IET Control Theory Appl. 2012.
+    """
+
+    inputs = ("phi_hat", "y", "y_ref_next", "u_prev")
+    states = ("in_band", "armed", "age")
+    outputs = ("u",)
+    feedthrough = True
+
+    def __init__(self, rho: float, lam: float, e_m: float, rearm: bool = True):
+        self.rho = _check_step("rho", rho)
+        self.lam = _check_weight("lam", lam)
+        self.e_m = float(check_positive("e_m", e_m))
+        if not isinstance(rearm, (bool, np.bool_)):
+            raise TypeError(f"rearm must be a bool, got {type(rearm).__name__}")
+        self.rearm = bool(rearm)
+
+    def _band(self, x, u):
+        """``(in_band, armed, age)`` at sample ``k`` (``age = k − k_m``)."""
+        in_band = np.abs(u[:, 2] - u[:, 1]) < self.e_m
+        entering = in_band & (x[:, 0] == 0.0)
+        start = entering if self.rearm else entering & (x[:, 1] == 0.0)
+        armed = (x[:, 1] != 0.0) | entering
+        age = np.where(start, 0.0, x[:, 2] + 1.0)
+        return in_band, armed, age
+
+    def output(self, t, x, u, params=None) -> np.ndarray:
+        in_band, armed, age = self._band(x, u)
+        du = _cfdl_increment(u[:, 0], u[:, 2] - u[:, 1], self.rho, self.lam)
+        # (36) Δu(k) / (k − k_m + 1) inside the band
+        return (u[:, 3] + np.where(in_band & armed, du / (age + 1.0), du))[:, None]
+
+    def update(self, t, x, u, params=None) -> np.ndarray:
+        in_band, armed, age = self._band(x, u)
+        return np.stack((in_band.astype(float), armed.astype(float), age), axis=1)
+
+    def __repr__(self) -> str:
+        return f"DecreasingGainLaw(rho={self.rho}, lam={self.lam}, e_m={self.e_m:g}, rearm={self.rearm})"
+
+
+class CFDLPredictor(DiscreteBlock):
+    """The CFDL data model (4) as a one-step predictor: output ``δ(k) = φ̂(k−1) Δu(k−1)``.
+
+    ``y(k) ≈ y(k−1) + φ̂(k−1) Δu(k−1)``; the block stores ``(φ̂(k−1), u(k−1), u(k−2))`` and has
+    no direct feedthrough, so an :class:`~ctrl_analysis.estimators.kalman.ImprovedKalmanFilter`
+    can read its prediction (11) before the estimator and the law of sample ``k`` run.
+
+    Block signals: inputs ``phi_hat``, ``u`` (``φ̂(k)``, ``u(k)``, stored by the update);
+    states ``phi_prev``, ``u_prev``, ``u_prev2``; output ``dy_model``.
+
+    Parameters
+    ----------
+    phi0, u0, u00 : float
+        Initial ``φ̂(k0−1)``, ``u(k0−1)``, ``u(k0−2)``.
+
+    References
+    ----------
+    Lu & Hou (2022), eq. (4), (9), (11) and (28).
+    """
+
+    inputs = ("phi_hat", "u")
+    states = ("phi_prev", "u_prev", "u_prev2")
+    outputs = ("dy_model",)
+    feedthrough = False
+
+    def __init__(self, phi0: float = 0.0, u0: float = 0.0, u00: float = 0.0):
+        self.x0 = check_finite("x0", np.array([phi0, u0, u00], dtype=float))
+
+    def initial_state(self) -> np.ndarray:
+        return self.x0.copy()
+
+    def output(self, t, x, u, params=None) -> np.ndarray:
+        # (4)/(11) δ(k) = φ̂(k−1) (u(k−1) − u(k−2))
+        return (x[:, 0] * (x[:, 1] - x[:, 2]))[:, None]
+
+    def update(self, t, x, u, params=None) -> np.ndarray:
+        x_next = np.empty_like(x)
+        x_next[:, 0] = u[:, 0]
+        x_next[:, 1] = u[:, 1]
+        x_next[:, 2] = x[:, 1]
+        return x_next
+
+    def __repr__(self) -> str:
+        return f"CFDLPredictor(x0={self.x0.tolist()})"
+
+
+def mfac_controller(estimator: PPDEstimator, law: Block, output_filter: Block | None = None, *,
+                    u0: float = 0.0, measured: str = "y_m", reference: str = "y_ref_next",
+                    control: str = "u") -> list:
+    """Place an MFAC controller in a loop: delay, optional output filter, PPD estimator and law.
+
+    Signals: the loop must supply ``measured`` (``y_m(k)``) and ``reference`` (``y*(k+1)``);
+    the controller produces ``control`` (``u(k)``) and the internal signals ``u_prev``,
+    ``phi_hat``, ``y_f`` (what estimator and law see). Block names: ``delay``, ``ppd``, ``law``,
+    and ``filter`` (plus ``model`` for the IKF).
+
+    Parameters
+    ----------
+    estimator : PPDEstimator
+    law : CFDLLaw or DecreasingGainLaw
+    output_filter : TrackingDifferentiator or ImprovedKalmanFilter, optional
+        ``None``: the law sees ``y_m`` (MFAC, D-MFAC); a tracking differentiator: it sees ``x1``
+        (TD-MFAC, eq. (37)); an improved Kalman filter: it sees ``ŷ(k|k)``, predicted with a
+        :class:`CFDLPredictor` (IKF-MFAC, eq. (28)-(35)).
+    u0 : float
+        ``u(k0−1)`` before the first sample (delay and predictor).
+    measured, reference, control : str
+        Names of the measured output, the reference ``y*(k+1)`` and the control signal.
+
+    Returns
+    -------
+    list of ctrl_analysis.loop.Placed
+        To be given to :class:`~ctrl_analysis.loop.Loop` with the plant and the measurement.
+
+    Raises
+    ------
+    TypeError
+        If a block is of the wrong kind.
+
+    References
+    ----------
+    Lu & Hou (2022), Fig. 1 and eq. (6)-(8), (28)-(37).
+    """
+    from ..estimators.kalman.ikf import ImprovedKalmanFilter
+    from ..estimators.tracking import TrackingDifferentiator
+
+    if not isinstance(estimator, PPDEstimator):
+        raise TypeError(f"estimator must be a PPDEstimator, got {type(estimator).__name__}")
+    if not isinstance(law, (CFDLLaw, DecreasingGainLaw)):
+        raise TypeError(f"law must be a CFDLLaw or a DecreasingGainLaw, got {type(law).__name__}")
+    u0 = float(check_finite("u0", u0))
+    y_f = measured
+    blocks = [place(UnitDelay(u0), "delay", inputs=[control], outputs=["u_prev"])]
+    if isinstance(output_filter, TrackingDifferentiator):
+        y_f = "y_f"
+        blocks.append(place(output_filter, "filter", inputs=[measured], outputs=["y_f", "y_f_rate"]))
+    elif isinstance(output_filter, ImprovedKalmanFilter):
+        y_f = "y_f"
+        blocks.append(place(CFDLPredictor(estimator.phi0, u0, estimator.u0), "model",
+                            inputs=["phi_hat", control], outputs=["dy_model"]))
+        blocks.append(place(output_filter, "filter", inputs=[measured, "dy_model"], outputs=["y_f", "K", "P"]))
+    elif output_filter is not None:
+        raise TypeError("output_filter must be None, a TrackingDifferentiator or an ImprovedKalmanFilter, "
+                        f"got {type(output_filter).__name__}")
+    blocks.append(place(estimator, "ppd", inputs=[y_f, "u_prev"], outputs=["phi_hat"]))
+    blocks.append(place(law, "law", inputs=["phi_hat", y_f, reference, "u_prev"], outputs=[control]))
+    return blocks
+
+
+def ikf_mfac(estimator: PPDEstimator, law: CFDLLaw, ikf, **kw) -> list:
+    """IKF-MFAC (eq. (28)-(35)): :func:`mfac_controller` with an improved Kalman filter on the output.
+
+    Parameters
+    ----------
+    estimator : PPDEstimator
+    law : CFDLLaw
+    ikf : ctrl_analysis.estimators.kalman.ImprovedKalmanFilter
+    **kw
+        Passed to :func:`mfac_controller`.
+
+    Returns
+    -------
+    list of ctrl_analysis.loop.Placed
+    """
+    from ..estimators.kalman.ikf import ImprovedKalmanFilter
+
+    if not isinstance(ikf, ImprovedKalmanFilter):
+        raise TypeError(f"ikf must be an ImprovedKalmanFilter, got {type(ikf).__name__}")
+    return mfac_controller(estimator, law, ikf, **kw)
+
+

@@ -1,0 +1,113 @@
+"""The improved Kalman filter (IKF): a scalar Kalman filter whose prediction is a data model, as a discrete block."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..._validate import check_finite, check_nonnegative, check_positive
+from ...blocks import DiscreteBlock
+from .scalar import random_walk_gain
+
+__all__ = ["ImprovedKalmanFilter"]
+
+
+def _per_run(name: str, value):
+    """A checked parameter as a float, or a 1-D array of one value per run."""
+    arr = np.asarray(value, dtype=float)
+    if arr.ndim == 0:
+        return float(arr)
+    if arr.ndim != 1:
+        raise ValueError(f"{name} must be a scalar or a 1-D array of one value per run, got shape {arr.shape}")
+    return arr
+
+
+class ImprovedKalmanFilter(DiscreteBlock):
+    """Scalar Kalman filter of an output ``y`` whose one-step prediction comes from any data model.
+
+    The model says ``y(k) = y(k−1) + δ(k) + w(k−1)``, ``y_m(k) = y(k) + v(k)``, with ``δ(k)`` a
+    predicted increment known at sample ``k`` (for the CFDL data model ``δ(k) = φ̂(k−1) Δu(k−1)``,
+    see :class:`ctrl_analysis.controllers.mfac.CFDLPredictor`; ``δ = 0`` gives the scalar
+    random-walk Kalman filter). At sample ``k`` the block outputs, from its state
+    ``(ŷ(k−1|k−1), P(k−1|k−1))`` and its inputs ``y_m(k)``, ``δ(k)``::
+
+        ŷ(k|k−1) = ŷ(k−1|k−1) + δ(k)                     (11)
+        P(k|k−1) = P(k−1|k−1) + Q                         (12)
+        K(k)     = P(k|k−1) / (P(k|k−1) + R)              (13)
+        ŷ(k|k)   = ŷ(k|k−1) + K(k) (y_m(k) − ŷ(k|k−1))    (14)
+        P(k|k)   = (1 − K(k)) P(k|k−1)                    (15)
+
+    and its update stores ``(ŷ(k|k), P(k|k))``. ``K(k)`` converges to the random-walk gain
+    ``K∞(Q/R)`` (:attr:`steady_gain`, :func:`ctrl_analysis.estimators.kalman.random_walk_gain`)
+    whatever ``δ``: the variance recursion does not depend on the data.
+
+    Block signals: inputs ``y_m``, ``dy_model``; states ``y_hat``, ``P``; outputs ``y_hat``
+    (``ŷ(k|k)``), ``K``, ``P`` (``P(k|k)``); direct feedthrough.
+
+    Parameters
+    ----------
+    Q : float or array_like, shape (B,)
+        Process-noise variance of the data model, ``>= 0``; an array gives one value per run (a
+        grid on the batch axis; :meth:`nlsys` needs scalars).
+    R : float or array_like, shape (B,)
+        Measurement-noise variance, ``> 0`` (per run as ``Q``).
+    y0 : float
+        Initial estimate ``ŷ(0|0)`` (the state before the first sample).
+    P0 : float
+        Initial error variance ``P(0|0)``, ``>= 0``.
+
+    Attributes
+    ----------
+    steady_gain : float or numpy.ndarray
+        ``K∞(Q/R)``, the limit of ``K(k)``.
+
+    Raises
+    ------
+    ValueError
+        ``Q must be >= 0``, ``R must be > 0``, ``P0 must be >= 0``, or a non-finite ``y0``.
+
+    References
+    ----------
+    Lu X., Hou Z., "Model free adaptive control with disturbance rejection based on modified
+    Kalman filter", Control Theory & Applications 39(7), 2022, eq. (9), (11)-(15) (Theorem 2).
+    The increment ``δ`` is an input here, so the filter works with any data model.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> f = ImprovedKalmanFilter(Q=0.1, R=1.0, y0=0.0, P0=1.0)
+    >>> y, x = f.run(np.column_stack([np.ones(200), np.zeros(200)]))
+    >>> bool(abs(y[-1, 0, 1] - f.steady_gain) < 1e-12)
+    True
+    """
+
+    inputs = ("y_m", "dy_model")
+    states = ("y_hat", "P")
+    outputs = ("y_hat", "K", "P")
+    feedthrough = True
+
+    def __init__(self, Q: float, R: float, y0: float = 0.0, P0: float = 1.0):
+        self.Q = _per_run("Q", check_nonnegative("Q", Q))
+        self.R = _per_run("R", check_positive("R", R))
+        self.y0 = float(check_finite("y0", y0))
+        self.P0 = float(check_nonnegative("P0", P0))
+        self.steady_gain = random_walk_gain(self.Q, self.R)
+
+    def initial_state(self) -> np.ndarray:
+        return np.array([self.y0, self.P0])
+
+    def output(self, t, x, u, params=None) -> np.ndarray:
+        out = np.empty((x.shape[0], 3))
+        y_prior = x[:, 0] + u[:, 1]                      # (11) ŷ(k|k−1) = ŷ(k−1|k−1) + δ(k)
+        P_prior = x[:, 1] + self.Q                       # (12) P(k|k−1) = P(k−1|k−1) + Q
+        K = P_prior / (P_prior + self.R)                 # (13) K(k) = P(k|k−1) / (P(k|k−1) + R)
+        out[:, 0] = y_prior + K * (u[:, 0] - y_prior)    # (14) ŷ(k|k) = ŷ(k|k−1) + K (y_m(k) − ŷ(k|k−1))
+        out[:, 1] = K
+        out[:, 2] = (1.0 - K) * P_prior                  # (15) P(k|k) = (1 − K) P(k|k−1)
+        return out
+
+    def update(self, t, x, u, params=None) -> np.ndarray:
+        out = self.output(t, x, u, params)
+        return out[:, ::2].copy()
+
+    def __repr__(self) -> str:
+        return f"ImprovedKalmanFilter(Q={self.Q}, R={self.R}, y0={self.y0:g}, P0={self.P0:g})"

@@ -1,0 +1,172 @@
+"""CFDL-MFAC blocks: PPD estimator and reset, control laws, predictor, compositions, batch and python-control."""
+
+import control as ct
+import numpy as np
+import pytest
+
+from ctrl_analysis.blocks import DiscreteBlock, StaticBlock
+from ctrl_analysis.controllers.mfac import (
+    CFDLLaw,
+    CFDLPredictor,
+    DecreasingGainLaw,
+    PPDEstimator,
+    UnitDelay,
+    ikf_mfac,
+    mfac_controller,
+)
+from ctrl_analysis.estimators.kalman import ImprovedKalmanFilter
+from ctrl_analysis.estimators.tracking import TrackingDifferentiator
+from ctrl_analysis.loop import Loop, place
+from ctrl_analysis.simulate import draw_noise, gaussian_noise, run_seeds
+
+
+class StaticGainPlant(DiscreteBlock):
+    """y(k+1) = b u(k): its pseudo partial derivative is the constant b."""
+
+    inputs, outputs, states = ("u",), ("y",), ("y",)
+
+    def __init__(self, b):
+        self.b = b
+
+    def update(self, t, x, u, params=None):
+        return self.b * u
+
+
+class CubicPlant(DiscreteBlock):
+    """y(k+1) = y(k)/(1 + y(k)^2) + u(k)^3 (a nonlinear test plant)."""
+
+    inputs, outputs, states = ("u",), ("y",), ("y",)
+
+    def initial_state(self):
+        return np.array([1.0])
+
+    def update(self, t, x, u, params=None):
+        return x / (1.0 + x * x) + u * u * u
+
+
+def ppd():
+    return PPDEstimator(eta=0.5, mu=1.0, epsilon=1e-5, phi0=2.0, phi_reset=0.5)
+
+
+def ppd_out(phi_prev, dy, du):
+    # state (φ̂(k−1), y(k−1), u(k−2)) = (phi_prev, 0, 0); inputs (y(k), u(k−1)) = (dy, du)
+    return ppd().output(0.0, np.array([[phi_prev, 0.0, 0.0]]), np.array([[dy, du]]))[0, 0]
+
+
+def test_ppd_update_without_reset_is_equation_6():
+    # φ̂ = 1 + 0.5 * 1 * (2 − 1 * 1) / (1 + 1) = 1.25
+    assert ppd_out(1.0, 2.0, 1.0) == pytest.approx(1.25, rel=1e-15)
+
+
+@pytest.mark.parametrize("phi_prev, dy, du, why", [
+    (1.0, -3.0 + 2e-5, 1.0, "|phi| <= eps"),     # φ̂ = 5e-6 > 0: only the magnitude rule fires
+    (1.0, 0.3, 1e-6, "|du| <= eps"),               # φ̂ ≈ 1: only the Δu rule fires
+    (1.0, -10.0, 1.0, "sign change"),              # φ̂ = 1 + 0.25 (−11) = −1.75: only the sign rule fires
+])
+def test_ppd_reset_fires_on_each_condition(phi_prev, dy, du, why):
+    est = ppd()
+    du_ = du
+    raw = phi_prev + est.eta * du_ * (dy - phi_prev * du_) / (est.mu + du_ * du_)
+    rules = [abs(raw) <= est.epsilon, abs(du_) <= est.epsilon, np.sign(raw) != np.sign(est.phi0)]
+    assert sum(rules) == 1, why  # each case isolates one rule
+    assert ppd_out(phi_prev, dy, du) == 0.5
+
+
+def test_mfac_converges_on_a_constant_ppd_plant():
+    b = 0.8
+    loop = Loop([place(StaticGainPlant(b), "plant")]
+                        + mfac_controller(ppd(), CFDLLaw(rho=1.0, lam=2.0), measured="y"), dt=1.0)
+    res = loop.simulate(300, inputs={"y_ref_next": 1.0})
+    y = res["y"][:, 0]
+    assert abs(y[-1] - 1.0) < 1e-9
+    np.testing.assert_allclose(res["u"][-1, 0], 1.0 / b, rtol=1e-9)
+    # the error decreases monotonically once the estimator has settled (no overshoot on this plant)
+    assert np.max(np.abs(1.0 - y[50:])) < np.max(np.abs(1.0 - y[:50]))
+
+
+@pytest.mark.parametrize("rearm, divisors", [(True, [1, 1, 2, 1, 1, 2]), (False, [1, 1, 2, 1, 4, 5])])
+def test_decreasing_gain_divisors_and_rearming(rearm, divisors):
+    e = np.array([1.0, 0.1, 0.1, 1.0, 0.1, 0.1])
+    law = DecreasingGainLaw(rho=1.0, lam=1.0, e_m=0.5, rearm=rearm)
+    # inputs (phi_hat, y, y_ref_next, u_prev) = (1, 0, e, 0): Δu0 = e / 2
+    y, _ = law.run(np.column_stack([np.ones(6), np.zeros(6), e, np.zeros(6)]))
+    np.testing.assert_allclose(y[:, 0, 0], e / 2 / np.array(divisors), rtol=1e-15)
+
+
+def test_cfdl_law_and_predictor_values():
+    law = CFDLLaw(rho=0.5, lam=2.0)
+    # u = 0.3 + 0.5 * 1.5 * (2 − 1) / (2 + 2.25)
+    u = law.output(0.0, np.zeros((1, 0)), np.array([[1.5, 1.0, 2.0, 0.3]]))
+    np.testing.assert_allclose(u, [[0.3 + 0.75 / 4.25]], rtol=1e-15)
+    pred = CFDLPredictor(phi0=2.0, u0=1.0, u00=0.25)
+    assert pred.output(0.0, pred.initial_state()[None], np.zeros((1, 2)))[0, 0] == pytest.approx(1.5)
+    x1 = pred.update(0.0, pred.initial_state()[None], np.array([[3.0, 2.0]]))
+    np.testing.assert_array_equal(x1, [[3.0, 2.0, 1.0]])
+
+
+def closed_loop(scheme):
+    est = ppd()
+    law = DecreasingGainLaw(1.0, 2.0, 0.3) if scheme == "d" else CFDLLaw(1.0, 2.0)
+    filt = {"td": TrackingDifferentiator(300.0, 0.01, 0.02, substeps=3, x0=(1.0, 0.0), feedthrough=True),
+            "td_lag": TrackingDifferentiator(300.0, 0.01, 0.02, substeps=3, x0=(1.0, 0.0)),
+            "ikf": ImprovedKalmanFilter(0.05, 0.1, y0=1.0, P0=0.0)}.get(scheme)
+    meas = StaticBlock(lambda t, u: u[:, :1] + u[:, 1:2], inputs=("y", "v"), outputs=("y_m",))
+    blocks = [place(CubicPlant(), "plant"), place(meas, "meas")]
+    blocks += ikf_mfac(est, law, filt) if scheme == "ikf" else mfac_controller(est, law, filt)
+    return Loop(blocks, dt=1.0)
+
+
+@pytest.mark.parametrize("scheme", ["plain", "d", "td", "td_lag", "ikf"])
+def test_blocks_in_control_interconnect_equal_the_engine(scheme):
+    loop = closed_loop(scheme)
+    n = 120
+    v = 0.05 * np.random.default_rng(1).standard_normal(n + 1)
+    ref = np.sign(np.sin(0.05 * np.arange(n + 1)))
+    res = loop.simulate(n, inputs={"v": v, "y_ref_next": ref})
+    assert not res.diverged.any()
+    sys = loop.interconnect()
+    assert sys.isdtime() and sys.dt == 1.0
+    U = np.stack([{"v": v, "y_ref_next": ref}[s][:n] for s in loop.external])
+    resp = ct.input_output_response(sys, res.t[:n], U, X0=res.x[0, 0])
+    np.testing.assert_allclose(res.to_timeresponse(0).outputs[:, :n], resp.outputs, rtol=1e-12, atol=1e-12)
+
+
+def test_batch_equals_single_runs_and_parameter_grid_on_the_batch():
+    seeds = run_seeds(5, 3)
+    v = draw_noise(seeds, 200, gaussian_noise(0.1))[:, :, 0]
+    loop = closed_loop("ikf")
+    batch = loop.simulate(199, inputs={"v": v, "y_ref_next": 1.0})
+    for b in range(3):
+        one = loop.simulate(199, inputs={"v": v[:, b:b + 1], "y_ref_next": 1.0})
+        np.testing.assert_array_equal(batch.x[:, b:b + 1], one.x)
+    # a grid of rho on the batch axis equals the runs with scalar rho
+    rhos = np.array([0.3, 0.6, 1.0])
+    grid = Loop([place(CubicPlant(), "plant")] + mfac_controller(ppd(), CFDLLaw(rhos, 2.0), measured="y"),
+                        dt=1.0).simulate(100, inputs={"y_ref_next": 0.5}, runs=3)
+    for b, r in enumerate(rhos):
+        one = Loop([place(CubicPlant(), "plant")] + mfac_controller(ppd(), CFDLLaw(r, 2.0), measured="y"),
+                           dt=1.0).simulate(100, inputs={"y_ref_next": 0.5})
+        np.testing.assert_array_equal(grid.x[:, b:b + 1], one.x)
+
+
+def test_errors_name_the_argument():
+    with pytest.raises(ValueError, match=r"rho must be in \(0, 1\], got 1.5"):
+        CFDLLaw(1.5, 1.0)
+    with pytest.raises(ValueError, match="lam must be > 0"):
+        CFDLLaw(1.0, np.array([1.0, -1.0]))
+    with pytest.raises(ValueError, match=r"eta must be in \(0, 1\]"):
+        PPDEstimator(0.0, 1.0, 1e-5, 2.0)
+    with pytest.raises(ValueError, match="phi0 must be non-zero"):
+        PPDEstimator(0.5, 1.0, 1e-5, 0.0)
+    with pytest.raises(ValueError, match="phi_reset must have the sign of phi0"):
+        PPDEstimator(0.5, 1.0, 1e-5, 2.0, phi_reset=-0.5)
+    with pytest.raises(ValueError, match="e_m must be > 0"):
+        DecreasingGainLaw(1.0, 1.0, 0.0)
+    with pytest.raises(TypeError, match="rearm must be a bool"):
+        DecreasingGainLaw(1.0, 1.0, 0.1, rearm="yes")
+    with pytest.raises(TypeError, match="law must be"):
+        mfac_controller(ppd(), UnitDelay())
+    with pytest.raises(TypeError, match="output_filter must be"):
+        mfac_controller(ppd(), CFDLLaw(1.0, 1.0), UnitDelay())
+    with pytest.raises(TypeError, match="ikf must be"):
+        ikf_mfac(ppd(), CFDLLaw(1.0, 1.0), None)
