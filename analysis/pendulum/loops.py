@@ -9,6 +9,7 @@ cases).
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -103,9 +104,16 @@ def split_filter(filt: DiscreteBlock, name: str) -> list:
 
 def fuzzy_controller(p, lookup: bool = True):
     """The §3.2 controller: 7×7 rule table ``U = sat(sign·(E + EC))``, factors Ke, Kec, Ku (``lookup``: query table)."""
-    fc = FuzzyController(sum_rule_table(p.n_terms, p.rule_sign), Ke=p.Ke, Kec=p.Kec, Ku=p.Ku,
-                         input_range=p.input_range, output_range=p.output_range)
-    return FuzzyLookupController(fc, p.n_lookup) if lookup else fc
+    return _fuzzy(p.n_terms, p.rule_sign, p.Ke, p.Kec, p.Ku, p.input_range, p.output_range,
+                  p.n_lookup if lookup else None)
+
+
+@functools.lru_cache(maxsize=8)
+def _fuzzy(n_terms, sign, Ke, Kec, Ku, input_range, output_range, n_lookup):
+    """Built once per setting (the query table takes a second to compute); blocks are stateless, so sharing is safe."""
+    fc = FuzzyController(sum_rule_table(n_terms, sign), Ke=Ke, Kec=Kec, Ku=Ku, input_range=input_range,
+                         output_range=output_range)
+    return fc if n_lookup is None else FuzzyLookupController(fc, n_lookup)
 
 
 def sampled_model(a21: float, b2: float, T: float, sigma_w: float, sigma_v: float):
@@ -249,7 +257,7 @@ def compute_loops(p, a21: float, seeds, progress=lambda msg: None) -> LoopData:
         progress(f"closed loop: {name} ({len(seeds)} runs)")
         runs[name] = simulate_case(p, a21, seeds, filter_kind=kind, nonlinear=nonlinear)
     sign = {s: simulate_case(_replace(p, rule_sign=s), a21, [0], noise=False) for s in (1, -1)}
-    period = {T: simulate_case(_replace(p, T=T), a21, [0], noise=False) for T in (p.T, 2 * p.T)}
+    period = {T: simulate_case(_replace(p, T=T), a21, [0], noise=False) for T in p.period_check}
     angles = np.linspace(*p.recover_angles[:2], int(p.recover_angles[2]))
     progress("recovery sweeps (linear, nonlinear)")
     recovered = {nl: recovery_sweep(p, a21, angles, nonlinear=nl) for nl in (False, True)}

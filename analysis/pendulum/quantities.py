@@ -369,17 +369,20 @@ def _record_checks(result: StudyResult, d) -> None:
         + " The unprinted rule table therefore has the sign of a PD law u ≈ kp e + kd ec with kp, kd > 0.",
         evidence={"final_phi": {str(s): float(r.phi[-1, 0]) for s, r in d.sign_check.items()}})
     per = {T: _settled(r, p) for T, r in d.period_check.items()}
-    T2 = max(d.period_check)
     u_late = {T: float(np.sqrt(np.mean(r.u[r.t >= p.t_ss, 0] ** 2))) for T, r in d.period_check.items()}
+    amp = {T: float(np.ptp(r.phi[r.t >= p.t_ss, 0])) for T, r in d.period_check.items()}
+    u_eq = d.a21 * p.step / p.b2  # |u| that holds φ = r at rest: a21 φ + b2 u = 0
     result.finding(
         "sampling-period",
-        "The paper gives no sampling period. Noise-free, the fuzzy loop settles at T = "
-        + ", ".join(f"{T:g} s: {'yes' if v else 'no'} (steady-state RMS of u {u_late[T]:.3g} m/s²)"
-                    for T, v in per.items())
-        + f". At T = {T2:g} s the discrete loop is not stable in the small (the linearised PD gain on the "
-        "rate is too large for the period) and ends in a limit cycle, so the study uses T = "
-        f"{p.T:g} s (reconstruction).",
-        evidence={"settled": {str(k): v for k, v in per.items()}, "u_rms_steady": {str(k): v for k, v in u_late.items()}})
+        f"The paper gives no sampling period. Noise-free, after the 0.1 rad step (holding φ = r at rest needs "
+        f"|u| = a21·r/b2 = {u_eq:.3g} m/s²): "
+        + "; ".join(f"T = {T:g} s: {'settles' if per[T] else 'does not settle'} in the ±{p.settle_band:.0%} band, "
+                    f"steady-state RMS of u {u_late[T]:.3g} m/s², peak-to-peak φ {amp[T]:.2g} rad"
+                    for T in sorted(per))
+        + f". A steady-state RMS of u above {u_eq:.3g} m/s² is a limit cycle of the sampled loop (the rate "
+        f"gain of the fuzzy surface is large for the period). The study uses T = {p.T:g} s (reconstruction).",
+        evidence={"settled": {str(k): v for k, v in per.items()}, "u_rms_steady": {str(k): v for k, v in u_late.items()},
+                  "phi_peak_to_peak": {str(k): v for k, v in amp.items()}, "u_equilibrium": u_eq})
     result.quantity("fuzzy.lookup_max_error", f"largest |lookup − direct inference| over a 97×97 grid of e ∈ [−0.1, 0.1] rad, "
                     f"ec ∈ [−1.5, 1.5] rad/s ({p.n_lookup}×{p.n_lookup} query table, bilinear)", d.lookup_error,
                     unit="m/s²", note=f"output range ±{p.Ku * p.output_range:g} m/s²")
