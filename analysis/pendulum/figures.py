@@ -125,7 +125,7 @@ def plot_gain_interpretations(rows: list, K_paper, closest, a21_printed: float):
 
 def plot_control_surface(E, EC, U, Ku: float, Ke: float, Kec: float):
     """The fuzzy controller's control surface U(E, EC) (query table) and three slices, in physical units."""
-    fig, axes = new_figure(1, 2, size=(12.0, 5.0),
+    fig, axes = new_figure(1, 2, size=(13.0, 5.0), gridspec_kw={"wspace": 0.12},
                            title="§3.2 fuzzy controller: control surface u = Ku·U(Ke·e, Kec·ec) "
                                  "(7 triangular terms, U = sat(E + EC, ±3), min–max, centroid)")
     ax = axes[0]
@@ -166,7 +166,11 @@ def plot_fig3_states(cases: dict, T: float, run: int = 0):
             ax.set_ylabel(ylabel)
             if k == 0:
                 ax.set_title(title, fontsize=10)
-            ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(0.0, -0.12 if k else 1.0), ncol=3)
+            if k == 1:  # one legend per column, below the data
+                ax.legend(handles=[*axes[0, c].get_lines(), ax.get_lines()[0]],
+                          labels=["before: measured y = φ + v", "after: filter estimate", "true state",
+                                  "before (φ'): backward difference of y"],
+                          fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=2)
         axes[1, c].set_xlabel("t (s)")
         lim = np.nanpercentile(np.abs(rows[1][0]), 99)
         axes[1, c].set_ylim(-1.1 * lim, 1.1 * lim)
