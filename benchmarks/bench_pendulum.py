@@ -23,19 +23,19 @@ import os
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # before numpy is imported
 
-import argparse  # noqa: E402
-import dataclasses  # noqa: E402
-import math  # noqa: E402
-import sys  # noqa: E402
-import time  # noqa: E402
-from pathlib import Path  # noqa: E402
+import argparse
+import dataclasses
+import math
+import sys
+import time
+from pathlib import Path
 
-import numpy as np  # noqa: E402
+import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from analysis.pendulum import loops, paper  # noqa: E402
-from ctrl_analysis.simulate import draw_noise, gaussian_noise  # noqa: E402
+from analysis.pendulum import loops, paper
+from ctrl_analysis.simulate import draw_noise, gaussian_noise
 
 
 def best_of(fn, repeat):

@@ -17,7 +17,7 @@ from ctrl_analysis.study import record_parameters
 
 from . import figures, loops, paper, quantities, verify
 
-__all__ = ["INFO", "run", "MISSING"]
+__all__ = ["INFO", "MISSING", "run"]
 
 INFO = StudyInfo(
     name='pendulum',

@@ -6,8 +6,15 @@ import numpy as np
 
 from ctrl_analysis.report import new_figure
 
-__all__ = ["plot_riccati_convergence", "plot_gain_interpretations", "plot_filter_bode", "plot_control_surface",
-           "plot_fig3_states", "plot_fig4_output", "plot_beyond"]
+__all__ = [
+    "plot_beyond",
+    "plot_control_surface",
+    "plot_fig3_states",
+    "plot_fig4_output",
+    "plot_filter_bode",
+    "plot_gain_interpretations",
+    "plot_riccati_convergence",
+]
 
 
 def _drop_log_minor_ticks(fig) -> None:

@@ -16,14 +16,35 @@ import numpy as np
 import scipy.linalg
 
 from ctrl_analysis.blocks import ContinuousBlock, DiscreteBlock, StaticBlock
-from ctrl_analysis.controllers.fuzzy import FuzzyController, FuzzyLookupController, sum_rule_table
-from ctrl_analysis.estimators.kalman import AlphaBetaFilter, DiscreteKalmanFilter, discrete_steady_state
+from ctrl_analysis.controllers.fuzzy import (
+    FuzzyController,
+    FuzzyLookupController,
+    sum_rule_table,
+)
+from ctrl_analysis.estimators.kalman import (
+    AlphaBetaFilter,
+    DiscreteKalmanFilter,
+    discrete_steady_state,
+)
 from ctrl_analysis.loop import Loop, place
 from ctrl_analysis.simulate import draw_noise, gaussian_noise, run_seeds
 
-__all__ = ["CartPendulum", "BackwardDifference", "split_filter", "fuzzy_controller", "sampled_model",
-           "build_filter", "build_loop", "ClosedLoopRun", "simulate_case", "recovery_sweep", "CASES",
-           "LoopData", "compute_loops", "seeds_for"]
+__all__ = [
+    "CASES",
+    "BackwardDifference",
+    "CartPendulum",
+    "ClosedLoopRun",
+    "LoopData",
+    "build_filter",
+    "build_loop",
+    "compute_loops",
+    "fuzzy_controller",
+    "recovery_sweep",
+    "sampled_model",
+    "seeds_for",
+    "simulate_case",
+    "split_filter",
+]
 
 
 class CartPendulum(ContinuousBlock):

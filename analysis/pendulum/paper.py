@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 from ctrl_analysis.study import printed, reconstructed
 
-__all__ = ["Verify", "ClosedLoop", "VERIFY", "LOOP", "quick", "physical_a21"]
+__all__ = ["LOOP", "VERIFY", "ClosedLoop", "Verify", "physical_a21", "quick"]
 
 #: §4: printed "steady-state error covariance" (6×6, as extracted; entry (6,2) reads −12.5, (2,6) −125).
 P_PRINTED = (

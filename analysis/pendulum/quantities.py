@@ -13,12 +13,16 @@ from dataclasses import asdict
 import numpy as np
 
 from ctrl_analysis import metrics
-from ctrl_analysis.estimators.kalman import alpha_beta_stable, kalata_gains, tracking_index_from_gains
+from ctrl_analysis.estimators.kalman import (
+    alpha_beta_stable,
+    kalata_gains,
+    tracking_index_from_gains,
+)
 from ctrl_analysis.report import StudyResult, relative_error
 
 from .verify import NOISE_MODELS, VerifyData, fmt_vec
 
-__all__ = ["record_verify", "record_loop", "case_metrics"]
+__all__ = ["case_metrics", "record_loop", "record_verify"]
 
 
 def record_verify(result: StudyResult, d: VerifyData) -> None:
@@ -62,7 +66,7 @@ def _record_model(result: StudyResult, d: VerifyData) -> None:
 
 
 def _record_continuous(result: StudyResult, d: VerifyData) -> None:
-    P, a21, A, C, G = d.P, d.a21, d.A, d.C, d.G
+    P, a21 = d.P, d.a21
     cont, cont_alt, are_res, k_sym, k_sym_alt = d.cont, d.cont_alt, d.are_res, d.k_sym, d.k_sym_alt
     lit, lit_poles, printed_res = d.lit, d.lit_poles, d.printed_res
     # --- continuous steady state (§2, §4) -----------------------------------------------------
@@ -389,7 +393,7 @@ def _record_checks(result: StudyResult, d) -> None:
 
 
 def _fmt_stat(st, unit, digits=3) -> str:
-    mean, std, n = st
+    mean, std, _n = st
     if mean is None or not np.isfinite(mean):
         return "n/a"
     return f"{mean:.{digits}g} ± {std:.2g} {unit}"

@@ -34,8 +34,18 @@ from ctrl_analysis.symbolic.riccati import derive_second_order_gain
 
 from .paper import VERIFY, Verify
 
-__all__ = ["pendulum_matrices", "GainInterpretation", "gain_interpretations", "best_over_sampling_period",
-           "verify_printed_P", "NOISE_MODELS", "NOISE_DESCRIPTION", "VerifyData", "compute_verify", "fmt_vec"]
+__all__ = [
+    "NOISE_DESCRIPTION",
+    "NOISE_MODELS",
+    "GainInterpretation",
+    "VerifyData",
+    "best_over_sampling_period",
+    "compute_verify",
+    "fmt_vec",
+    "gain_interpretations",
+    "pendulum_matrices",
+    "verify_printed_P",
+]
 
 NOISE_MODELS = ("sampled", "per-step", "dwna")
 NOISE_DESCRIPTION = {
@@ -271,7 +281,7 @@ def _steady_states(P: Verify, a21: float):
 def _discrete_alpha_beta(P: Verify, a21: float) -> dict:
     """Discrete α-β gains at ``T_alpha_beta`` (sampled noise) and Kalata's tracking index."""
     T = P.T_alpha_beta
-    F, dss = _discrete(a21, P.Q, P.R, T, "sampled")
+    _F, dss = _discrete(a21, P.Q, P.R, T, "sampled")
     alpha, beta = alpha_beta_from_gain(dss.K_filter, T)
     # tracking index of the double-integrator part: continuous noise averaged over T has variances Q/T, R/T
     Lam = math.sqrt(P.Q / T) * T**2 / math.sqrt(P.R / T)

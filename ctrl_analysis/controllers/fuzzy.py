@@ -20,11 +20,11 @@ from .._validate import check_finite, check_int, check_positive
 from ..blocks import DiscreteBlock
 
 __all__ = [
-    "triangular_memberships",
-    "sum_rule_table",
-    "piecewise_linear_centroid",
     "FuzzyController",
     "FuzzyLookupController",
+    "piecewise_linear_centroid",
+    "sum_rule_table",
+    "triangular_memberships",
 ]
 
 
@@ -137,9 +137,10 @@ class FuzzyController(DiscreteBlock):
     Examples
     --------
     >>> import numpy as np
-    >>> fc = FuzzyController(sum_rule_table(7), Ke=1.0, Kec=1.0, Ku=1.0, input_range=6, output_range=6)
-    >>> fc.evaluate(np.array([0.0, 2.0]), np.array([0.0, 0.0])).round(6)
-    array([0., 2.])
+    >>> fc = FuzzyController(sum_rule_table(7), Ke=1.0, Kec=1.0, Ku=1.0, input_range=6, output_range=6,
+    ...                      n_grid=241)
+    >>> fc.evaluate(np.array([0.0, 2.0, 1.0]), np.array([0.0, 0.0, 0.0])).round(9) + 0.0
+    array([0., 2., 1.])
     """
 
     inputs = ("e", "ec")

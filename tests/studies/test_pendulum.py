@@ -48,7 +48,7 @@ def test_interpretations_contain_the_continuous_gain_and_miss_the_paper():
     assert rows[0].error > V.gain_tol  # the printed K is not reproduced
     f = [g for g in rows if g.kind == "discrete" and g.T == 0.01 and g.noise == "sampled" and not g.swapped
          and g.form == "filter" and g.beta_rule == "beta = T k2"][0]
-    F, ss = verify._discrete(V.a21, V.Q, V.R, 0.01, "sampled")
+    _F, ss = verify._discrete(V.a21, V.Q, V.R, 0.01, "sampled")
     np.testing.assert_allclose([f.alpha, f.beta / 0.01], ss.K_filter.ravel(), rtol=1e-8)
 
 
