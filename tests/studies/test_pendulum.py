@@ -13,8 +13,8 @@ from ctrl_analysis.symbolic.riccati import second_order_gain
 
 V, L = paper.VERIFY, paper.LOOP
 #: small settings for the tests (passed as parameters, never monkeypatched)
-SMALL = (dataclasses.replace(V, T_sweep=(1e-3, 0.5, 8), riccati_n_t=41, bode_omega=(0.1, 1e3, 40)),
-         dataclasses.replace(L, t_end=1.2, t_ss=0.7, settle_hold=0.2, runs=4, recover_angles=(0.1, 1.5, 4),
+SMALL = (dataclasses.replace(V, T_sweep=(1e-3, 0.5, 8), T_grid=(0.01, 0.1), riccati_n_t=41, bode_omega=(0.1, 1e3, 40)),
+         dataclasses.replace(L, t_end=1.2, t_ss=0.7, settle_hold=0.2, runs=4, recover_angles=(0.1, 1.5, 4), n_lookup=31,
                              period_check=(0.005,)))
 
 
