@@ -22,7 +22,27 @@ from ctrl_analysis.report import StudyResult, relative_error
 
 from .verify import NOISE_MODELS, VerifyData, fmt_vec
 
-__all__ = ["case_metrics", "record_loop", "record_verify"]
+#: The paper cell each compared quantity scores (quantities sharing a cell count once, by the first
+#: recorded: ``ss.gain_continuous``, the stated problem's gain, is the primary reading of §4's K).
+CELLS = {
+    "ss.gain_continuous": "§4 / K = PCᵀR⁻¹ = [0.950, 0.863]",
+    "ss.gain_alpha": "§4 / K = PCᵀR⁻¹ = [0.950, 0.863]",
+    "ss.gain_beta": "§4 / K = PCᵀR⁻¹ = [0.950, 0.863]",
+    "sec5.step_deg": "§5 / 0.1 rad = 5.7325°",
+}
+
+
+def cell(qid: str) -> dict:
+    """``{"cell": ...}`` for :meth:`StudyResult.quantity` when the report schema has paper cells, else ``{}``."""
+    import dataclasses
+
+    from ctrl_analysis.report import Quantity
+
+    has_cell = any(f.name == "cell" for f in dataclasses.fields(Quantity))
+    return {"cell": CELLS[qid]} if has_cell and qid in CELLS else {}
+
+
+__all__ = ["CELLS", "cell", "case_metrics", "record_loop", "record_verify"]
 
 
 def record_verify(result: StudyResult, d: VerifyData) -> None:
@@ -73,6 +93,7 @@ def _record_continuous(result: StudyResult, d: VerifyData) -> None:
     result.quantity(
         "ss.gain_continuous", f"continuous steady-state Kalman–Bucy gain K = P̄Cᵀ/R (a21 = {a21:.4f}, Q = 100, R = 50)",
         cont.K.ravel().tolist(), paper=list(P.K_printed), tolerance=P.gain_tol, unit="1/s, 1/s²",
+        **cell("ss.gain_continuous"),
         note=(f"§4 prints K = PCᵀR⁻¹ = [0.950, 0.863] (no unit); sympy closed form k2 = a21 + √(a21² + Q/R), k1 = √(2 k2) gives {fmt_vec(k_sym, 8)}; "
               f"filter poles {fmt_vec(cont.poles.real)} ± {abs(cont.poles.imag[0]):.3g}j; "
               f"with a21 = 2.6149: K = {fmt_vec(cont_alt.K)}"),
@@ -155,10 +176,11 @@ def _record_interpretations(result: StudyResult, d: VerifyData) -> None:
         "the paper's number, declared here); ss.gain_continuous is the stated problem's gain.")
     note = f"from the closest interpretation: {closest.name}; max rel. error {closest.error:.1%}"
     result.quantity("ss.gain_alpha", "α = k1 of the steady-state gain (closest interpretation, see note)",
-                    closest.alpha, paper=P.K_printed[0], tolerance=P.gain_tol, unit="", note=note)
+                    closest.alpha, paper=P.K_printed[0], tolerance=P.gain_tol, unit="", note=note,
+                    **cell("ss.gain_alpha"))
     result.quantity("ss.gain_beta", "β of the steady-state gain (closest interpretation, see note)",
                     closest.beta, paper=P.K_printed[1], tolerance=P.gain_tol, note=note,
-                    unit="1/s or – (depends on the interpretation, see note)")
+                    unit="1/s or – (depends on the interpretation, see note)", **cell("ss.gain_beta"))
     non_discrete = [g for g in rows if g.kind != "discrete" and not g.swapped]
     table = [
         "| interpretation | α | β | max rel. error |",
@@ -254,7 +276,7 @@ METRICS = {
 
 CASE_LABELS = {
     "nofilter": "no filter (e and its backward difference)",
-    "filter": "paper's suboptimal filter, K = [0.950, 0.863] read as a discrete α-β filter",
+    "filter": "paper's suboptimal filter, K = [0.950, 0.863] read as a discrete α-β filter (k2 = β/T)",
     "kf": "time-varying discrete Kalman filter (beyond the paper)",
     "kf_ss": "correct steady-state gain for the simulated noise (beyond the paper)",
     "paper_continuous": "paper's filter as printed (continuous, Euler-sampled) (beyond the paper)",
@@ -322,7 +344,7 @@ def record_loop(result: StudyResult, d, verify: VerifyData) -> None:
 def _record_step_and_noise(result: StudyResult, p, verify: VerifyData) -> None:
     deg = math.degrees(verify.P.step)
     result.quantity("sec5.step_deg", "§5 step of 0.1 rad in degrees", deg, paper=verify.P.step_deg_printed,
-                    tolerance=1e-4, unit="deg", note="0.1·180/π")
+                    tolerance=1e-4, unit="deg", note="0.1·180/π", **cell("sec5.step_deg"))
     result.finding(
         "step-degrees",
         f"§5 says 0.1 rad corresponds to {verify.P.step_deg_printed}°; 0.1·180/π = {deg:.4f}° "
@@ -430,8 +452,10 @@ def _record_beyond(result: StudyResult, d, stats) -> None:
         f"diverges in the loop in {int(pc.diverged.sum())} of {pc.diverged.size} runs"
         + (f" (first at t = {first * p.T:.3g} s)" if first is not None else "")
         + ": its estimation error grows with the unstable filter pole whatever the controller does. The time-varying "
-        f"Kalman filter and the correct steady-state gain give the same loop (angle RMS "
-        f"{_fmt_stat(stats['kf']['angle_rms'], 'rad')} and {_fmt_stat(stats['kf_ss']['angle_rms'], 'rad')}).",
+        f"Kalman filter and the correct steady-state gain give angle RMS {_fmt_stat(stats['kf']['angle_rms'], 'rad')} "
+        f"and {_fmt_stat(stats['kf_ss']['angle_rms'], 'rad')}, overshoot {_fmt_stat(stats['kf']['overshoot'], '%')} and "
+        f"{_fmt_stat(stats['kf_ss']['overshoot'], '%')}: after its transient the time-varying filter's gain is the "
+        "steady-state one.",
         evidence={"diverged_runs": int(pc.diverged.sum()), "first_step": first})
     for nl, ok in d.recovered.items():
         name = "nonlinear" if nl else "linear"

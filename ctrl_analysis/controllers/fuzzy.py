@@ -177,11 +177,33 @@ class FuzzyController(DiscreteBlock):
         self.masks = np.stack([rules == k for k in range(n_u)])  # (n_u, n_e, n_ec)
 
     def quantise(self, e, ec):
-        """``(E, EC) = (sat(Ke·e, ±X_e), sat(Kec·ec, ±X_ec))``."""
+        """Quantise the inputs: ``(E, EC) = (sat(Ke·e, ±X_e), sat(Kec·ec, ±X_ec))``.
+
+        Parameters
+        ----------
+        e, ec : ndarray
+            Physical error and error rate.
+
+        Returns
+        -------
+        E, EC : ndarray
+            Quantised inputs on the universes.
+        """
         return np.clip(self.Ke * e, -self.X_e, self.X_e), np.clip(self.Kec * ec, -self.X_ec, self.X_ec)
 
     def infer(self, E, EC):
-        """Defuzzified output on the output universe (before ``Ku``) for quantised inputs ``E``, ``EC`` (shape (B,))."""
+        """Defuzzified output on the output universe (before ``Ku``) for quantised inputs.
+
+        Parameters
+        ----------
+        E, EC : ndarray, shape (B,)
+            Quantised inputs (inside the universes).
+
+        Returns
+        -------
+        ndarray, shape (B,)
+            Centroid of ``max_{i,j} min(min(μ_Ei(E), μ_ECj(EC)), μ_U[rule[i,j]])``.
+        """
         mu_e = triangular_memberships(E, self.c_e, self.w_e)  # (B, n_e)
         mu_ec = triangular_memberships(EC, self.c_ec, self.w_ec)  # (B, n_ec)
         w = np.minimum(mu_e[:, :, None], mu_ec[:, None, :])  # rule firing: AND = min
@@ -190,13 +212,29 @@ class FuzzyController(DiscreteBlock):
         return piecewise_linear_centroid(self.z, agg)
 
     def evaluate(self, e, ec):
-        """Control ``u`` for physical inputs ``e``, ``ec`` (arrays of equal shape, any batch)."""
+        """Control ``u`` for physical inputs by direct inference.
+
+        Parameters
+        ----------
+        e, ec : array_like
+            Error and error rate, arrays of equal shape.
+
+        Returns
+        -------
+        ndarray
+            ``u``, same shape as ``e``.
+        """
         e = np.asarray(e, dtype=float)
         E, EC = self.quantise(e.reshape(-1), np.asarray(ec, dtype=float).reshape(-1))
         return (self.Ku * self.infer(E, EC)).reshape(e.shape)
 
     def control_surface(self, n_e: int = 121, n_ec: int = 121):
         """The surface ``U(E, EC)`` on a uniform grid of the quantised universes (the query table).
+
+        Parameters
+        ----------
+        n_e, n_ec : int
+            Grid points per universe (>= 2).
 
         Returns
         -------
@@ -254,7 +292,17 @@ class FuzzyLookupController(DiscreteBlock):
         self.dE, self.dEC = self.E[1] - self.E[0], self.EC[1] - self.EC[0]
 
     def lookup(self, E, EC):
-        """Bilinear interpolation of the table at quantised inputs (shape (B,)), before ``Ku``."""
+        """Bilinear interpolation of the table at quantised inputs, before ``Ku``.
+
+        Parameters
+        ----------
+        E, EC : ndarray, shape (B,)
+            Quantised inputs (inside the universes; NaN gives NaN).
+
+        Returns
+        -------
+        ndarray, shape (B,)
+        """
         fe = (E - self.E[0]) / self.dE
         fc = (EC - self.EC[0]) / self.dEC
         # clipped after the cast so that a non-finite input gives a valid cell (and a NaN output)
@@ -266,7 +314,18 @@ class FuzzyLookupController(DiscreteBlock):
                 + a * ((1.0 - b) * U[i + 1, j] + b * U[i + 1, j + 1]))
 
     def evaluate(self, e, ec):
-        """Control ``u`` for physical inputs ``e``, ``ec``."""
+        """Control ``u`` for physical inputs by table lookup.
+
+        Parameters
+        ----------
+        e, ec : array_like
+            Error and error rate, arrays of equal shape.
+
+        Returns
+        -------
+        ndarray
+            ``u``, same shape as ``e``.
+        """
         e = np.asarray(e, dtype=float)
         E, EC = self.controller.quantise(e.reshape(-1), np.asarray(ec, dtype=float).reshape(-1))
         return (self.controller.Ku * self.lookup(E, EC)).reshape(e.shape)
