@@ -151,3 +151,12 @@ def test_kalman_filter_batch_equals_single_runs():
     assert np.array_equal(yb, ys)
     with pytest.raises(ValueError, match="R must be > 0"):
         DiscreteKalmanFilter(F, [1.0, 0.0], np.eye(2), 0.0)
+
+
+def test_controller_runs_in_python_control():
+    import control as ct
+
+    fc = _fc()
+    e, ec = np.array([0.1, 0.5, 1.0, 2.0, 3.0]), np.array([0.0, 1.0, 2.0, 3.0, 4.0])
+    resp = ct.input_output_response(fc.nlsys(0.01, "fuzzy"), 0.01 * np.arange(5), np.stack([e, ec]))
+    np.testing.assert_allclose(np.ravel(resp.outputs), fc.evaluate(e, ec), rtol=0, atol=1e-12)

@@ -103,3 +103,32 @@ def test_run_smoke(tmp_path):
     assert data["settings"]["runs"] == 4
     assert all(q["verdict"] in ("agrees", "differs", "new") for q in data["quantities"])
     assert all(q["tolerance"] is not None for q in data["quantities"] if q["paper"] is not None)
+
+
+@pytest.mark.filterwarnings("ignore:Unused output")
+def test_loop_equals_python_control_interconnect():
+    """The no-filter loop with the plant as a SampledBlock runs the same in Loop and in control.interconnect."""
+    import control as ct
+
+    from ctrl_analysis.blocks import SampledBlock, StaticBlock
+    from ctrl_analysis.loop import Loop, place
+
+    p = dataclasses.replace(L, t_end=0.25, n_lookup=31)
+    N = int(round(p.t_end / p.T))
+    rng = np.random.default_rng(0)
+    w, v = rng.normal(scale=p.sigma_w, size=N), rng.normal(scale=p.sigma_v, size=N)
+    blocks = [place(SampledBlock(loops.CartPendulum(V.a21, p.b2), p.T, substeps=p.substeps), "plant"),
+              place(StaticBlock(lambda t, u: u[:, :1] + u[:, 1:], ("phi", "v"), ("y",)), "sensor"),
+              place(StaticBlock(lambda t, u: u[:, :1] - u[:, 1:], ("r", "y"), ("e",)), "error"),
+              place(loops.BackwardDifference(p.T), "diff"), place(loops.fuzzy_controller(p), "fuzzy")]
+    loop = Loop(blocks, p.T, outputs=["phi", "u"])
+    res = loop.simulate(N, inputs={"r": p.step, "w": w, "v": v})
+    engine = loops.simulate_case(p, V.a21, [0], noise=False)  # continuous plant, same loop, no noise
+    quiet = loop.simulate(N, inputs={"r": p.step, "w": np.zeros(N), "v": np.zeros(N)})
+    np.testing.assert_allclose(quiet["phi"][:, 0], engine.phi[:, 0], rtol=0, atol=1e-14)
+    sys = loop.interconnect()
+    t = p.T * np.arange(N)
+    U = np.stack([np.full(N, p.step) if s == "r" else (w if s == "w" else v) for s in loop.external])
+    resp = ct.input_output_response(sys, t, U)
+    np.testing.assert_allclose(resp.outputs[0], res["phi"][:N, 0], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(resp.outputs[1], res["u"][:N, 0], rtol=0, atol=1e-9)
