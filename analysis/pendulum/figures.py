@@ -144,6 +144,7 @@ def plot_control_surface(E, EC, U, Ku: float, Ke: float, Kec: float):
     for k, ec_q in enumerate((-3.0, 0.0, 3.0)):
         j = int(np.argmin(np.abs(EC - ec_q)))
         ax.plot(E / Ke, Ku * U[:, j], color=f"C{k}", label=f"ec = {EC[j] / Kec:.2g} rad/s (EC = {EC[j]:.2g})")
+    ax.set_xticks(np.linspace(-0.08, 0.08, 5))
     ax.set_xlabel("e  (rad)")
     ax.set_ylabel("u  (m/s²)")
     ax.set_title("slices at fixed ec", fontsize=10)

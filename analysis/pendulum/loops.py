@@ -268,6 +268,7 @@ class LoopData:
     angles: np.ndarray
     recovered: dict
     lookup_error: float
+    kf_ss_gain: tuple
 
 
 def compute_loops(p, a21: float, seeds, progress=lambda msg: None) -> LoopData:
@@ -285,8 +286,9 @@ def compute_loops(p, a21: float, seeds, progress=lambda msg: None) -> LoopData:
     direct, table = fuzzy_controller(p, lookup=False), fuzzy_controller(p, lookup=True)
     e, ec = np.meshgrid(np.linspace(-0.1, 0.1, 97), np.linspace(-1.5, 1.5, 97))
     err = float(np.max(np.abs(direct.evaluate(e, ec) - table.evaluate(e, ec))))
+    ss = build_filter("kf-ss", p, a21)
     return LoopData(p=p, a21=a21, seeds=list(seeds), runs=runs, sign_check=sign, period_check=period,
-                    angles=angles, recovered=recovered, lookup_error=err)
+                    angles=angles, recovered=recovered, lookup_error=err, kf_ss_gain=(ss.alpha, ss.beta))
 
 
 def seeds_for(base_seed: int, runs: int) -> list:

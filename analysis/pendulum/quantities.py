@@ -444,6 +444,11 @@ def _record_claim(result: StudyResult, d, stats) -> None:
 
 def _record_beyond(result: StudyResult, d, stats) -> None:
     p = d.p
+    a, b = d.kf_ss_gain
+    result.quantity("beyond.kf_ss.gain", f"steady-state (α, β = T·k2) of the simulated noise at T = {p.T:g} s, used in "
+                    "the kf_ss case", [a, b], unit="",
+                    note=f"discrete DARE of the exact sampled model (held noise, σ_w/σ_v = √(Q/R)); as a gain "
+                         f"K = [α, β/T] = [{a:.4g}, {b / p.T:.4g}] (–, 1/s), against the paper's [0.950, 0.863]")
     pc = d.runs["paper_continuous"]
     first = int(np.min(pc.diverged_step[pc.diverged])) if pc.diverged.any() else None
     result.finding(
