@@ -98,7 +98,50 @@ def sum_rule_table(n_terms: int = 7, sign: int = 1) -> np.ndarray:
     return (m + np.clip(sign * (i[:, None] + i[None, :]), -m, m)).astype(int)
 
 
-class FuzzyController(DiscreteBlock):
+class _FuzzyBlock(DiscreteBlock):
+    """What both fuzzy blocks share: signals (inputs ``e``, ``ec``; output ``u``; no state) and the
+    physical-units path ``u = Ku · surface(quantise(e, ec))``; subclasses define :meth:`_surface`."""
+
+    inputs = ("e", "ec")
+    outputs = ("u",)
+    states = ()
+    feedthrough = True
+
+    def _surface(self, E, EC):  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def _scaling(self):
+        """The :class:`FuzzyController` whose factors apply."""
+        return self
+
+    def evaluate(self, e, ec):
+        """Control ``u`` for physical inputs.
+
+        Parameters
+        ----------
+        e, ec : array_like
+            Error and error rate, arrays of equal shape.
+
+        Returns
+        -------
+        ndarray
+            ``u``, same shape as ``e``.
+        """
+        e = np.asarray(e, dtype=float)
+        fc = self._scaling()
+        E, EC = fc.quantise(e.reshape(-1), np.asarray(ec, dtype=float).reshape(-1))
+        return (fc.Ku * self._surface(E, EC)).reshape(e.shape)
+
+    def output(self, t, x, u, params=None) -> np.ndarray:
+        fc = self._scaling()
+        E, EC = fc.quantise(u[:, 0], u[:, 1])
+        return (fc.Ku * self._surface(E, EC))[:, None]
+
+    def update(self, t, x, u, params=None) -> np.ndarray:
+        return x
+
+
+class FuzzyController(_FuzzyBlock):
     """Two-input Mamdani fuzzy controller: triangular terms, min–max inference, centroid defuzzification.
 
     ``u = Ku · centroid( max_{i,j} min( min(μ_Ei(E), μ_ECj(EC)), μ_U[rule[i,j]] ) )`` with
@@ -142,11 +185,6 @@ class FuzzyController(DiscreteBlock):
     >>> fc.evaluate(np.array([0.0, 2.0, 1.0]), np.array([0.0, 0.0, 0.0])).round(9) + 0.0
     array([0., 2., 1.])
     """
-
-    inputs = ("e", "ec")
-    outputs = ("u",)
-    states = ()
-    feedthrough = True
 
     def __init__(self, rules, *, Ke, Kec, Ku, input_range=6.0, output_range=7.0, n_output_terms=None,
                  n_grid: int = 281):
@@ -211,22 +249,7 @@ class FuzzyController(DiscreteBlock):
         agg = np.max(np.minimum(act[:, None, :], self.mu_u[None]), axis=2)  # implication min, aggregation max
         return piecewise_linear_centroid(self.z, agg)
 
-    def evaluate(self, e, ec):
-        """Control ``u`` for physical inputs by direct inference.
-
-        Parameters
-        ----------
-        e, ec : array_like
-            Error and error rate, arrays of equal shape.
-
-        Returns
-        -------
-        ndarray
-            ``u``, same shape as ``e``.
-        """
-        e = np.asarray(e, dtype=float)
-        E, EC = self.quantise(e.reshape(-1), np.asarray(ec, dtype=float).reshape(-1))
-        return (self.Ku * self.infer(E, EC)).reshape(e.shape)
+    _surface = infer
 
     def control_surface(self, n_e: int = 121, n_ec: int = 121):
         """The surface ``U(E, EC)`` on a uniform grid of the quantised universes (the query table).
@@ -248,19 +271,12 @@ class FuzzyController(DiscreteBlock):
         EE, CC = np.meshgrid(E, EC, indexing="ij")
         return E, EC, self.infer(EE.ravel(), CC.ravel()).reshape(E.size, EC.size)
 
-    def output(self, t, x, u, params=None) -> np.ndarray:
-        E, EC = self.quantise(u[:, 0], u[:, 1])
-        return (self.Ku * self.infer(E, EC))[:, None]
-
-    def update(self, t, x, u, params=None) -> np.ndarray:
-        return x
-
     def __repr__(self) -> str:
         return (f"FuzzyController({self.rules.shape[0]}×{self.rules.shape[1]} rules, {self.n_u} output terms, "
                 f"Ke={self.Ke:g}, Kec={self.Kec:g}, Ku={self.Ku:g})")
 
 
-class FuzzyLookupController(DiscreteBlock):
+class FuzzyLookupController(_FuzzyBlock):
     """A fuzzy controller's control surface precomputed on a grid and interpolated bilinearly.
 
     The classical query table: :meth:`FuzzyController.control_surface` on an ``n × n`` grid of the
@@ -276,11 +292,6 @@ class FuzzyLookupController(DiscreteBlock):
 
     Block signals as :class:`FuzzyController` (inputs ``e``, ``ec``; output ``u``; no state).
     """
-
-    inputs = ("e", "ec")
-    outputs = ("u",)
-    states = ()
-    feedthrough = True
 
     def __init__(self, controller: FuzzyController, n_points=121):
         if not isinstance(controller, FuzzyController):
@@ -313,29 +324,10 @@ class FuzzyLookupController(DiscreteBlock):
         return ((1.0 - a) * ((1.0 - b) * U[i, j] + b * U[i, j + 1])
                 + a * ((1.0 - b) * U[i + 1, j] + b * U[i + 1, j + 1]))
 
-    def evaluate(self, e, ec):
-        """Control ``u`` for physical inputs by table lookup.
+    _surface = lookup
 
-        Parameters
-        ----------
-        e, ec : array_like
-            Error and error rate, arrays of equal shape.
-
-        Returns
-        -------
-        ndarray
-            ``u``, same shape as ``e``.
-        """
-        e = np.asarray(e, dtype=float)
-        E, EC = self.controller.quantise(e.reshape(-1), np.asarray(ec, dtype=float).reshape(-1))
-        return (self.controller.Ku * self.lookup(E, EC)).reshape(e.shape)
-
-    def output(self, t, x, u, params=None) -> np.ndarray:
-        E, EC = self.controller.quantise(u[:, 0], u[:, 1])
-        return (self.controller.Ku * self.lookup(E, EC))[:, None]
-
-    def update(self, t, x, u, params=None) -> np.ndarray:
-        return x
+    def _scaling(self):
+        return self.controller
 
     def __repr__(self) -> str:
         return f"FuzzyLookupController({self.controller!r}, {self.E.size}×{self.EC.size} grid)"
