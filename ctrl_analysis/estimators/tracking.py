@@ -192,7 +192,20 @@ class TrackingDifferentiator(DiscreteBlock):
         return self.update(t, x, u, params) if self.feedthrough else x
 
     def acceleration(self, x, u) -> np.ndarray:
-        """``fh`` of the last sub-step of the sample from state ``x`` with input ``u``: shape ``(B,)``."""
+        """The acceleration ``fh`` applied in the last sub-step of a sample.
+
+        Parameters
+        ----------
+        x : numpy.ndarray, shape (B, 2)
+            TD states ``(x1, x2)`` at the start of the sample.
+        u : numpy.ndarray, shape (B, 1)
+            The tracked signal ``v``, held over the sample.
+
+        Returns
+        -------
+        numpy.ndarray, shape (B,)
+            ``fhan`` of the last sub-step.
+        """
         x1, x2, v = x[:, 0], x[:, 1], u[:, 0]
         for _ in range(self.substeps):
             x1, x2, fh = self._substep(x1, x2, v)

@@ -18,6 +18,7 @@ import sympy as sp
 from .._validate import check_finite
 
 __all__ = [
+    "DEFAULT_SAMPLES",
     "A21",
     "QR",
     "LAMBDA",
@@ -106,9 +107,19 @@ def _is_stabilising(sol: dict, p11, p12, p22, samples) -> bool:
     return True
 
 
-@lru_cache(maxsize=1)
-def derive_second_order_gain() -> SecondOrderGainDerivation:
+#: Points ``(a21, q)`` at which a root is checked to be stabilising (stable, neutral and unstable a21).
+DEFAULT_SAMPLES = ((-1.0, 0.5), (0.0, 1.0), (1.0, 2.0), (10.0, 2.0), (1.0, 100.0))
+
+
+@lru_cache(maxsize=8)
+def derive_second_order_gain(samples=DEFAULT_SAMPLES) -> SecondOrderGainDerivation:
     """Solve the 2-state filter ARE symbolically and return the stabilising gain ``K(a21, q)``.
+
+    Parameters
+    ----------
+    samples : tuple of (float, float)
+        Points ``(a21, q)``, ``q > 0``, at which the chosen root must give a positive-definite ``P``
+        and a Hurwitz ``A − K C`` (a caller adds the points it uses; exactly one root must pass).
 
     Returns
     -------
@@ -116,8 +127,7 @@ def derive_second_order_gain() -> SecondOrderGainDerivation:
 
     References
     ----------
-    Kalman & Bucy (1961), filter Riccati equation; used for Li, Ji & Feng (2008), §3.1/§4,
-    whose model has this structure (the paper prints no closed form).
+    Kalman & Bucy (1961), filter Riccati equation.
 
     Examples
     --------
@@ -141,7 +151,9 @@ def derive_second_order_gain() -> SecondOrderGainDerivation:
             for r22 in sp.solve(equations[1].subs({p11: r11, p12: r12}), p22):
                 solutions.append({p11: r11, p12: r12, p22: r22})
     solutions = tuple(solutions)
-    samples = [(-1.0, 0.5), (0.0, 1.0), (2.6, 2.0), (26.0, 2.0), (1.0, 100.0)]
+    samples = tuple((float(a_), float(q_)) for a_, q_ in samples)
+    if not samples or any(q_ <= 0 for _, q_ in samples):
+        raise ValueError(f"samples must be a non-empty tuple of (a21, q) with q > 0, got {samples!r}")
     chosen = [s for s in solutions if _is_stabilising(s, p11, p12, p22, samples)]
     if len(chosen) != 1:  # pragma: no cover - a sympy change would show up here
         raise RuntimeError(f"expected one stabilising ARE root, found {len(chosen)}")

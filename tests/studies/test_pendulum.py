@@ -1,75 +1,134 @@
-"""Tests of the `pendulum` study (verify part): physics of a21, printed P and K checks, smoke run."""
+"""Tests of the `pendulum` study: physics of a21, printed P and K checks, the fuzzy closed loop, a smoke run."""
 
+import dataclasses
 import json
 
 import numpy as np
 import pytest
 
 from analysis import pendulum as pm
+from analysis.pendulum import loops, paper, verify
 from ctrl_analysis.report import StudyContext, write_results_json
 from ctrl_analysis.symbolic.riccati import second_order_gain
 
+V, L = paper.VERIFY, paper.LOOP
+#: small settings for the tests (passed as parameters, never monkeypatched)
+SMALL = (dataclasses.replace(V, T_sweep=(1e-3, 0.5, 8), T_grid=(0.01, 0.1), riccati_n_t=41, bode_omega=(0.1, 1e3, 40)),
+         dataclasses.replace(L, t_end=1.2, t_ss=0.7, settle_hold=0.2, runs=4, recover_angles=(0.1, 1.5, 4), n_lookup=31,
+                             period_check=(0.005,)))
+
 
 def test_a21_from_physics_matches_printed_digits():
-    length, a21 = pm.physical_a21()
-    np.testing.assert_allclose(a21, pm.G_ACCEL * pm.B2, rtol=1e-15)
-    np.testing.assert_allclose(length, 3 / (4 * pm.B2), rtol=1e-15)
+    length, a21 = paper.physical_a21(V.B2, V.g)
+    np.testing.assert_allclose(a21, V.g * V.B2, rtol=1e-15)
+    np.testing.assert_allclose(length, 3 / (4 * V.B2), rtol=1e-15)
     # g·B = 26.149 reproduces the printed digits 2.6149 up to the decimal point
-    np.testing.assert_allclose(a21 / 10, pm.A21_PRINTED, rtol=2e-5)
+    np.testing.assert_allclose(a21 / 10, V.a21_printed, rtol=2e-5)
     with pytest.raises(ValueError, match="b2 and g must be > 0"):
-        pm.physical_a21(b2=-1.0)
+        paper.physical_a21(-1.0, 9.8)
 
 
 def test_printed_P_is_not_a_covariance_of_the_model():
-    check = pm.verify_printed_P(pm.P_PRINTED, {"P_bar": np.eye(2)})
+    check = verify.verify_printed_P(np.array(V.P_printed), {"P_bar": np.eye(2)})
     assert check["shape"] == [6, 6]
     assert not check["symmetric"]
     assert check["asymmetric_entry"] == [2, 6]
     assert check["min_eig_symmetric_part"] < 0
     assert check["min_eig_if_symmetrised_with_larger_entry"] > 0
     assert not check["is_covariance_of_2_state_system"]
-    # a genuine 2×2 covariance passes
-    good = pm.verify_printed_P(np.array([[2.0, 0.5], [0.5, 1.0]]), {"P_bar": np.eye(2)})
+    good = verify.verify_printed_P(np.array([[2.0, 0.5], [0.5, 1.0]]), {"P_bar": np.eye(2)})
     assert good["is_covariance_of_2_state_system"]
 
 
 def test_interpretations_contain_the_continuous_gain_and_miss_the_paper():
-    rows = pm.gain_interpretations((pm.A21_PHYSICAL,), T_grid=(0.01, 0.1))
+    rows = verify.gain_interpretations((V.a21,), T_grid=(0.01, 0.1))
     cont = [g for g in rows if g.kind == "continuous" and not g.swapped][0]
-    np.testing.assert_allclose([cont.alpha, cont.beta], second_order_gain(pm.A21_PHYSICAL, pm.Q_W / pm.R_V),
-                               rtol=1e-9)
+    np.testing.assert_allclose([cont.alpha, cont.beta], second_order_gain(V.a21, V.Q / V.R), rtol=1e-9)
     assert rows == sorted(rows, key=lambda g: g.error)
-    assert rows[0].error > pm.GAIN_TOL  # the printed K is not reproduced
-    # the discrete filter/predictor rows obey L = F K (α of the predictor differs from the filter's)
+    assert rows[0].error > V.gain_tol  # the printed K is not reproduced
     f = [g for g in rows if g.kind == "discrete" and g.T == 0.01 and g.noise == "sampled" and not g.swapped
          and g.form == "filter" and g.beta_rule == "beta = T k2"][0]
-    F, ss = pm._discrete(pm.A21_PHYSICAL, pm.Q_W, pm.R_V, 0.01, "sampled")
+    _F, ss = verify._discrete(V.a21, V.Q, V.R, 0.01, "sampled")
     np.testing.assert_allclose([f.alpha, f.beta / 0.01], ss.K_filter.ravel(), rtol=1e-8)
 
 
+def test_noise_free_step_settles_at_the_equilibrium():
+    """Noise-free 0.1 rad step: φ settles near r and, at rest, a21 φ + b2 u = 0 (φ'' = 0; T = 2 ms: no limit cycle)."""
+    p = dataclasses.replace(L, t_end=1.0, T=0.002)
+    run = loops.simulate_case(p, V.a21, [0], noise=False, lookup=False)
+    assert abs(run.phi[-1, 0] - p.step) < 0.02 * p.step
+    assert abs(run.dphi[-1, 0]) < 1e-3
+    assert V.a21 * run.phi[-1, 0] + p.b2 * run.u[-1, 0] == pytest.approx(0.0, abs=1e-2)  # vs a21·r = 2.6
+
+
+def test_loop_batch_equals_single_runs_and_filter_split_is_exact():
+    p = dataclasses.replace(L, t_end=0.3)
+    batch = loops.simulate_case(p, V.a21, [3, 4, 5], filter_kind="alpha-beta")
+    single = loops.simulate_case(p, V.a21, [4], filter_kind="alpha-beta")
+    assert np.array_equal(batch.phi[:, 1], single.phi[:, 0])
+    # the split filter equals the AlphaBetaFilter run open loop on the same y and u
+    filt = loops.build_filter("alpha-beta", p, V.a21)
+    y_ab, _ = filt.run(np.stack([single.y[:-1, 0], single.u[:-1, 0]], axis=1))
+    np.testing.assert_allclose(single.phi_hat[:-1, 0], y_ab[:, 0, 0], rtol=0, atol=1e-15)
+    # the printed continuous filter, sampled, is unstable; the paper's K read as a discrete α-β filter is not
+    assert np.max(np.abs(loops.build_filter("continuous-printed", p, V.a21).poles)) > 1.0
+    assert np.max(np.abs(filt.poles)) < 1.0
+
+
 def test_run_smoke(tmp_path):
-    result = pm.run(StudyContext(out_dir=tmp_path, quick=True))
+    result = pm.run(StudyContext(out_dir=tmp_path, quick=True, runs=4), settings=SMALL)
     ids = {q.id for q in result.quantities}
     for qid in ("ss.gain_alpha", "ss.gain_beta", "ss.gain_continuous", "ss.printed_filter_stable",
-                "ss.printed_P_is_covariance"):
+                "ss.printed_P_is_covariance", "sec5.step_deg", "cl.rule_sign_ok"):
         assert qid in ids
-    verdicts = {q.id: q.verdict for q in result.quantities}
-    # verdicts are computed from value, paper and tolerance
-    for qid in ("ss.gain_alpha", "ss.gain_beta"):
-        q = result.get(qid)
-        expected = "agrees" if abs(q.value - q.paper) <= q.tolerance * abs(q.paper) else "differs"
-        assert verdicts[qid] == expected
-    assert verdicts["ss.gain_continuous"] == "new"
+    for case in ("nofilter", "filter"):
+        for m in ("overshoot", "settling_time", "angle_rms", "accel_rms"):
+            assert f"cl.{case}.{m}" in ids
+    for qid in ("ss.gain_alpha", "ss.gain_beta", "ss.gain_continuous", "sec5.step_deg"):
+        assert result.get(qid).verdict == "differs"
+    assert result.get("ss.gain_continuous").paper == [0.950, 0.863]
     assert result.get("ss.printed_filter_stable").value == 0
-    assert result.get("ss.printed_P_is_covariance").value == 0
-    np.testing.assert_allclose(result.get("ss.gain_continuous").value,
-                               second_order_gain(pm.A21_PHYSICAL, 2.0), rtol=1e-9)
+    assert result.get("cl.rule_sign_ok").value == 1
+    np.testing.assert_allclose(result.get("ss.gain_continuous").value, second_order_gain(V.a21, 2.0), rtol=1e-9)
+    np.testing.assert_allclose(result.get("sec5.step_deg").value, 5.729578, rtol=1e-6)
+    assert result.get("beyond.kf_ss.angle_rms").runs == 4
     finding_ids = {f["id"] for f in result.findings}
-    assert {"are-sign-flipped", "riccati-limit", "observability-rank", "printed-P-6x6",
-            "gain-not-reproducible", "printed-filter-unstable"} <= finding_ids
-    assert result.missing == ["fuzzy controller and closed-loop simulation (Fig. 3-4)"]
+    assert {"are-sign-flipped", "riccati-limit", "observability-rank", "printed-P-6x6", "gain-not-reproducible",
+            "printed-filter-unstable", "noise-plausibility", "rule-sign", "filter-claim", "step-degrees",
+            "nonlinear-recovery"} <= finding_ids
     for name in result.figures:
         assert (tmp_path / name).stat().st_size > 10_000
     data = json.loads(write_results_json(result, tmp_path).read_text(encoding="utf-8"))
-    assert data["settings"]["a21"] == pytest.approx(pm.A21_PHYSICAL)
+    assert data["settings"]["verify.a21"] == pytest.approx(V.a21)
+    assert data["settings"]["runs"] == 4
     assert all(q["verdict"] in ("agrees", "differs", "new") for q in data["quantities"])
+    assert all(q["tolerance"] is not None for q in data["quantities"] if q["paper"] is not None)
+
+
+@pytest.mark.filterwarnings("ignore:Unused output")
+def test_loop_equals_python_control_interconnect():
+    """The no-filter loop with the plant as a SampledBlock runs the same in Loop and in control.interconnect."""
+    import control as ct
+
+    from ctrl_analysis.blocks import SampledBlock, StaticBlock
+    from ctrl_analysis.loop import Loop, place
+
+    p = dataclasses.replace(L, t_end=0.25, n_lookup=31)
+    N = int(round(p.t_end / p.T))
+    rng = np.random.default_rng(0)
+    w, v = rng.normal(scale=p.sigma_w, size=N), rng.normal(scale=p.sigma_v, size=N)
+    blocks = [place(SampledBlock(loops.CartPendulum(V.a21, p.b2), p.T, substeps=p.substeps), "plant"),
+              place(StaticBlock(lambda t, u: u[:, :1] + u[:, 1:], ("phi", "v"), ("y",)), "sensor"),
+              place(StaticBlock(lambda t, u: u[:, :1] - u[:, 1:], ("r", "y"), ("e",)), "error"),
+              place(loops.BackwardDifference(p.T), "diff"), place(loops.fuzzy_controller(p), "fuzzy")]
+    loop = Loop(blocks, p.T, outputs=["phi", "u"])
+    res = loop.simulate(N, inputs={"r": p.step, "w": w, "v": v})
+    engine = loops.simulate_case(p, V.a21, [0], noise=False)  # continuous plant, same loop, no noise
+    quiet = loop.simulate(N, inputs={"r": p.step, "w": np.zeros(N), "v": np.zeros(N)})
+    np.testing.assert_allclose(quiet["phi"][:, 0], engine.phi[:, 0], rtol=0, atol=1e-14)
+    sys = loop.interconnect()
+    t = p.T * np.arange(N)
+    U = np.stack([np.full(N, p.step) if s == "r" else (w if s == "w" else v) for s in loop.external])
+    resp = ct.input_output_response(sys, t, U)
+    np.testing.assert_allclose(resp.outputs[0], res["phi"][:N, 0], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(resp.outputs[1], res["u"][:N, 0], rtol=0, atol=1e-9)

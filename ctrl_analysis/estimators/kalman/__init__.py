@@ -12,6 +12,7 @@ Building blocks, independent of any paper, one topic per module:
   sampled-data noise discretisation (Van Loan);
 * :mod:`.alpha_beta` — α-β gains from a 2-state filter gain, Kalata's tracking index and closed
   forms, and the constant-gain α-β filter as a discrete block;
+* :mod:`.filter` — the time-varying discrete Kalman filter as a discrete block;
 * :mod:`.scalar` — the scalar random-walk steady-state gain ``K∞(Q/R)``.
 
 Conventions
@@ -28,6 +29,7 @@ from .continuous import (ContinuousSteadyState, care_residual, continuous_steady
                          continuous_steady_state_gain, riccati_rhs, riccati_trajectory)
 from .discrete import (DiscreteSteadyState, dare_residual, discrete_steady_state, discrete_steady_state_batch,
                        discretize_noise)
+from .filter import DiscreteKalmanFilter
 from .scalar import random_walk_gain
 from .ikf import ImprovedKalmanFilter
 
@@ -39,7 +41,7 @@ __all__ = [
     "DiscreteSteadyState", "discrete_steady_state", "discrete_steady_state_batch", "dare_residual",
     "discretize_noise",
     "alpha_beta_from_gain", "gain_from_alpha_beta", "tracking_index", "tracking_index_from_gains", "kalata_gains",
-    "alpha_beta_stable", "AlphaBetaFilter",
+    "alpha_beta_stable", "AlphaBetaFilter", "DiscreteKalmanFilter",
     "random_walk_gain",
     "ImprovedKalmanFilter",
 ]

@@ -1,0 +1,296 @@
+"""The fuzzy closed loop of §5 built from library blocks through :class:`~ctrl_analysis.loop.Loop`.
+
+Signals: the cart–pendulum (continuous, linear or ``sin φ``) driven by the cart acceleration
+``u`` and the process noise ``w`` (held per sample); the measurement ``y = φ + v`` (``v`` held per
+sample); the fuzzy controller (discrete: sampled at ``T``) fed either by the raw error and its
+backward difference (``nofilter``) or by a filter's estimate (``filter`` and the beyond-the-paper
+cases).
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg
+
+from ctrl_analysis.blocks import ContinuousBlock, DiscreteBlock, StaticBlock
+from ctrl_analysis.controllers.fuzzy import (
+    FuzzyController,
+    FuzzyLookupController,
+    sum_rule_table,
+)
+from ctrl_analysis.estimators.kalman import (
+    AlphaBetaFilter,
+    DiscreteKalmanFilter,
+    discrete_steady_state,
+)
+from ctrl_analysis.loop import Loop, place
+from ctrl_analysis.simulate import draw_noise, gaussian_noise, run_seeds
+
+__all__ = [
+    "CASES",
+    "BackwardDifference",
+    "CartPendulum",
+    "ClosedLoopRun",
+    "LoopData",
+    "build_filter",
+    "build_loop",
+    "compute_loops",
+    "fuzzy_controller",
+    "recovery_sweep",
+    "sampled_model",
+    "seeds_for",
+    "simulate_case",
+    "split_filter",
+]
+
+
+class CartPendulum(ContinuousBlock):
+    """Pendulum on a cart driven by the cart acceleration (§3.1): ``φ'' = a21 φ + b u + w``.
+
+    With ``nonlinear=True``: ``φ'' = a21 sin φ + b cos φ · u + w`` (the model before linearisation,
+    ``φ'' = 3g/(4l) sin φ + 3/(4l) cos φ · u`` with ``a21 = 3g/(4l)``, ``b = 3/(4l)``).
+
+    Inputs ``u`` (m/s²), ``w`` (rad/s²); states and outputs ``phi`` (rad), ``dphi`` (rad/s).
+    """
+
+    inputs = ("u", "w")
+    outputs = ("phi", "dphi")
+    states = ("phi", "dphi")
+
+    def __init__(self, a21: float, b: float, nonlinear: bool = False):
+        self.a21, self.b, self.nonlinear = float(a21), float(b), bool(nonlinear)
+
+    def rhs(self, t, x, u, params=None):
+        phi, dphi = x[:, 0], x[:, 1]
+        if self.nonlinear:
+            acc = self.a21 * np.sin(phi) + self.b * np.cos(phi) * u[:, 0] + u[:, 1]
+        else:  # (§3.1) ẋ = A x + B u + Γ w
+            acc = self.a21 * phi + self.b * u[:, 0] + u[:, 1]
+        return np.stack([dphi, acc], axis=1)
+
+
+class BackwardDifference(DiscreteBlock):
+    """``ec(k) = (e(k) − e(k−1)) / T``: the rate the fuzzy controller gets without a filter (state ``e(k−1)``)."""
+
+    inputs = ("e",)
+    outputs = ("ec",)
+    states = ("e_prev",)
+    feedthrough = True
+
+    def __init__(self, T: float):
+        self.T = float(T)
+
+    def output(self, t, x, u, params=None):
+        return (u - x) / self.T
+
+    def update(self, t, x, u, params=None):
+        return u.copy()
+
+
+class _Predictor(DiscreteBlock):
+    """A filter block's prediction half: same state and update, output = its state (no feedthrough)."""
+
+    feedthrough = False
+
+    def __init__(self, filt: DiscreteBlock, prefix: str):
+        self.filt = filt
+        self.inputs, self.states = filt.inputs, filt.states
+        self.outputs = tuple(f"{prefix}.{s}" for s in filt.states)
+
+    def initial_state(self):
+        return self.filt.initial_state()
+
+    def update(self, t, x, u, params=None):
+        return self.filt.update(t, x, u, params)
+
+
+def split_filter(filt: DiscreteBlock, name: str) -> list:
+    """Place a filter whose output needs ``y(k)`` but not ``u(k)`` in a loop where ``u(k)`` depends on that output.
+
+    :class:`~ctrl_analysis.loop.Loop` treats feedthrough per block, so a filter with inputs
+    ``(y, u)`` and direct feedthrough closes an algebraic loop with a controller that reads its
+    estimate. The filter is placed as two blocks that reuse its own code: a predictor (its state
+    and :meth:`update`, output = state, no feedthrough) and a static corrector (its
+    :meth:`output` evaluated on the predictor's state and ``y``).
+    """
+    pred = _Predictor(filt, name)
+    n = len(filt.states)
+    corr = StaticBlock(lambda t, u: filt.output(t, u[:, :n], u[:, n:]), inputs=pred.outputs + ("y",),
+                       outputs=tuple(filt.outputs))
+    return [place(pred, f"{name}.pred"), place(corr, f"{name}.corr")]
+
+
+def fuzzy_controller(p, lookup: bool = True):
+    """The §3.2 controller: 7×7 rule table ``U = sat(sign·(E + EC))``, factors Ke, Kec, Ku (``lookup``: query table)."""
+    return _fuzzy(p.n_terms, p.rule_sign, p.Ke, p.Kec, p.Ku, p.input_range, p.output_range,
+                  p.n_lookup if lookup else None)
+
+
+@functools.lru_cache(maxsize=8)
+def _fuzzy(n_terms, sign, Ke, Kec, Ku, input_range, output_range, n_lookup):
+    """Built once per setting (the query table takes a second to compute); blocks are stateless, so sharing is safe."""
+    fc = FuzzyController(sum_rule_table(n_terms, sign), Ke=Ke, Kec=Kec, Ku=Ku, input_range=input_range,
+                         output_range=output_range)
+    return fc if n_lookup is None else FuzzyLookupController(fc, n_lookup)
+
+
+def sampled_model(a21: float, b2: float, T: float, sigma_w: float, sigma_v: float):
+    """Exact discrete model of the held-input, held-noise pendulum: ``(F, g, Qd, Rd)``.
+
+    ``x(k+1) = F x(k) + g (b2 u(k) + w(k))`` with ``F = e^{AT}``, ``g = ∫₀ᵀ e^{Aτ} dτ Γ`` (Van Loan block
+    exponential), ``Qd = σ_w² g gᵀ``, ``Rd = σ_v²``.
+    """
+    M = np.zeros((3, 3))
+    M[:2, :2] = [[0.0, 1.0], [a21, 0.0]]
+    M[1, 2] = 1.0
+    E = scipy.linalg.expm(M * T)
+    F, g = E[:2, :2], E[:2, 2]
+    return F, g, sigma_w**2 * np.outer(g, g), sigma_v**2
+
+
+def build_filter(kind: str, p, a21: float):
+    """The filter of one case: ``alpha-beta`` (the paper's printed K as a discrete α-β filter), ``kf`` (time-varying),
+    ``kf-ss`` (the correct steady-state gain), ``continuous-printed`` (the printed continuous filter, Euler-sampled)."""
+    F, g, Qd, Rd = sampled_model(a21, p.b2, p.T, p.sigma_w, p.sigma_v)
+    b = g * p.b2
+    if kind == "alpha-beta":
+        return AlphaBetaFilter(p.K_printed[0], p.K_printed[1], p.T, F=F, b=b)
+    if kind == "kf":
+        return DiscreteKalmanFilter(F, [1.0, 0.0], Qd, Rd, b=b, P0=np.diag(p.P0_kf))
+    if kind == "kf-ss":
+        ss = discrete_steady_state(F, np.array([[1.0, 0.0]]), np.eye(2), Qd, Rd)
+        alpha, beta = ss.K_filter[0, 0], p.T * ss.K_filter[1, 0]
+        return AlphaBetaFilter(alpha, beta, p.T, F=F, b=b)
+    if kind == "continuous-printed":
+        # x̂' = A x̂ + B u + K (y − C x̂) sampled by forward Euler: x̂(k+1) = (I + AT) x̂ + T B u + T K (y − C x̂)
+        # as an AlphaBetaFilter (x̂(k+1) = Fe (x̂ + K_f r) + b u) the correction gain is K_f = Fe⁻¹ T K
+        Fe = np.eye(2) + p.T * np.array([[0.0, 1.0], [a21, 0.0]])
+        Kf = np.linalg.solve(Fe, p.T * np.asarray(p.K_printed))
+        return AlphaBetaFilter(Kf[0], p.T * Kf[1], p.T, F=Fe, b=[0.0, p.T * p.b2], require_stable=False)
+    raise ValueError(f"kind must be one of 'alpha-beta', 'kf', 'kf-ss', 'continuous-printed', got {kind!r}")
+
+
+def build_loop(p, a21: float, *, filter_kind: str | None, nonlinear: bool = False, lookup: bool = True) -> Loop:
+    """The §5 loop: plant, measurement, (filter or backward difference), fuzzy controller."""
+    blocks = [place(CartPendulum(a21, p.b2, nonlinear), "plant"),
+              place(StaticBlock(lambda t, u: u[:, :1] + u[:, 1:], ("phi", "v"), ("y",)), "sensor"),
+              place(fuzzy_controller(p, lookup), "fuzzy")]
+    if filter_kind is None:
+        blocks += [place(StaticBlock(lambda t, u: u[:, :1] - u[:, 1:], ("r", "y"), ("e",)), "error"),
+                   place(BackwardDifference(p.T), "diff")]
+    else:
+        blocks += split_filter(build_filter(filter_kind, p, a21), "filter")
+        # e = r − φ̂, ec = ė = −φ̂' (r constant after the step)
+        blocks.append(place(StaticBlock(lambda t, u: np.stack([u[:, 0] - u[:, 1], -u[:, 2]], axis=1),
+                                        ("r", "xhat[0]", "xhat[1]"), ("e", "ec")), "error"))
+    return Loop(blocks, p.T, method="rk4", substeps=p.substeps)
+
+
+@dataclass
+class ClosedLoopRun:
+    """One case over B runs: time, true state, measurement, estimate (or raw), control, divergence."""
+
+    t: np.ndarray
+    phi: np.ndarray
+    dphi: np.ndarray
+    y: np.ndarray
+    e: np.ndarray
+    ec: np.ndarray
+    u: np.ndarray
+    diverged: np.ndarray
+    diverged_step: np.ndarray
+    phi_hat: np.ndarray | None = None
+    dphi_hat: np.ndarray | None = None
+
+
+def simulate_case(p, a21: float, seeds, *, filter_kind=None, nonlinear=False, phi0=0.0, noise=True,
+                  lookup=True) -> ClosedLoopRun:
+    """Simulate the §5 step (r = ``p.step``) for the runs ``seeds``; same seeds, same noise in every case."""
+    loop = build_loop(p, a21, filter_kind=filter_kind, nonlinear=nonlinear, lookup=lookup)
+    N = int(round(p.t_end / p.T))
+    B = len(seeds)
+    if noise:
+        nz = draw_noise(seeds, N, gaussian_noise(p.sigma_w), gaussian_noise(p.sigma_v))
+        w, v = nz[:, :, 0], nz[:, :, 1]
+    else:
+        w = v = np.zeros((N, B))
+    x0 = {"plant": np.tile([phi0, 0.0], (B, 1)) if np.ndim(phi0) == 0 else np.stack([phi0, 0 * phi0], 1)}
+    res = loop.simulate(N, inputs={"r": p.step, "w": w, "v": v}, x0=x0, runs=B, bound=p.bound)
+    return ClosedLoopRun(t=res.t, phi=res["phi"], dphi=res["dphi"], y=res["y"], e=res["e"], ec=res["ec"],
+                         u=res["u"], diverged=res.diverged, diverged_step=res.diverged_step,
+                         phi_hat=res.signals.get("xhat[0]"), dphi_hat=res.signals.get("xhat[1]"))
+
+
+def recovery_sweep(p, a21: float, angles, *, nonlinear: bool) -> np.ndarray:
+    """Noise-free regulation (r = 0) from each initial angle in ``angles``: True where the loop recovers.
+
+    Recovered: not flagged as diverged, ``|φ| < π/2`` throughout, and ``|φ(t_end)| < p.recover_tol``.
+    """
+    q = _replace(p, step=0.0)
+    angles = np.asarray(angles, dtype=float)
+    run = simulate_case(q, a21, list(range(angles.size)), nonlinear=nonlinear, phi0=angles, noise=False)
+    ok = ~run.diverged & np.all(np.abs(run.phi) < np.pi / 2, axis=0) & (np.abs(run.phi[-1]) < p.recover_tol)
+    return ok
+
+
+def _replace(p, **kw):
+    import dataclasses
+
+    return dataclasses.replace(p, **kw)
+
+
+#: Closed-loop cases: name -> (filter kind, nonlinear plant). ``filter`` is the paper's printed
+#: (α, β) read as a discrete α-β filter (the reading under which it is stable).
+CASES = {
+    "nofilter": (None, False),
+    "filter": ("alpha-beta", False),
+    "kf": ("kf", False),
+    "kf_ss": ("kf-ss", False),
+    "paper_continuous": ("continuous-printed", False),
+    "nonlinear.nofilter": (None, True),
+    "nonlinear.filter": ("alpha-beta", True),
+}
+
+
+@dataclass
+class LoopData:
+    """Everything the closed-loop part computes: the cases over the Monte Carlo runs and the sweeps."""
+
+    p: object
+    a21: float
+    seeds: list
+    runs: dict
+    sign_check: dict
+    period_check: dict
+    angles: np.ndarray
+    recovered: dict
+    lookup_error: float
+    kf_ss_gain: tuple
+
+
+def compute_loops(p, a21: float, seeds, progress=lambda msg: None) -> LoopData:
+    """Simulate every case of :data:`CASES` on the same noise, the rule-sign and sampling-period checks
+    (noise-free, one run) and the recovery sweeps of the linear and nonlinear plants."""
+    runs = {}
+    for name, (kind, nonlinear) in CASES.items():
+        progress(f"closed loop: {name} ({len(seeds)} runs)")
+        runs[name] = simulate_case(p, a21, seeds, filter_kind=kind, nonlinear=nonlinear)
+    sign = {s: simulate_case(_replace(p, rule_sign=s), a21, [0], noise=False) for s in (1, -1)}
+    period = {T: simulate_case(_replace(p, T=T), a21, [0], noise=False) for T in p.period_check}
+    angles = np.linspace(*p.recover_angles[:2], int(p.recover_angles[2]))
+    progress("recovery sweeps (linear, nonlinear)")
+    recovered = {nl: recovery_sweep(p, a21, angles, nonlinear=nl) for nl in (False, True)}
+    direct, table = fuzzy_controller(p, lookup=False), fuzzy_controller(p, lookup=True)
+    e, ec = np.meshgrid(np.linspace(-0.1, 0.1, 97), np.linspace(-1.5, 1.5, 97))
+    err = float(np.max(np.abs(direct.evaluate(e, ec) - table.evaluate(e, ec))))
+    ss = build_filter("kf-ss", p, a21)
+    return LoopData(p=p, a21=a21, seeds=list(seeds), runs=runs, sign_check=sign, period_check=period,
+                    angles=angles, recovered=recovered, lookup_error=err, kf_ss_gain=(ss.alpha, ss.beta))
+
+
+def seeds_for(base_seed: int, runs: int) -> list:
+    """Per-run seeds (recorded in results.json)."""
+    return run_seeds(base_seed, runs)

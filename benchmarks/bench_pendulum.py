@@ -1,0 +1,120 @@
+"""Benchmark: the fuzzy closed loop of the pendulum study (lookup vs direct inference; Loop vs a float loop).
+
+Times, in one process with ``OPENBLAS_NUM_THREADS=1``:
+
+1. one fuzzy evaluation (B = 1 and B = 100 inputs) by the query table
+   (:class:`~ctrl_analysis.controllers.fuzzy.FuzzyLookupController`, bilinear) and by direct
+   Mamdani inference (:class:`~ctrl_analysis.controllers.fuzzy.FuzzyController`);
+2. the closed loop without filter (cart–pendulum RK4 with 4 substeps, sensor, backward difference,
+   lookup controller) per sample: the engine (:class:`ctrl_analysis.loop.Loop`, B = 1 and B = 100)
+   against a straightforward plain-Python float loop of the same equations (one run, same noise,
+   same table), and checks that run 0 agrees.
+
+Usage::
+
+    OPENBLAS_NUM_THREADS=1 python benchmarks/bench_pendulum.py [--t-end 1.0] [--repeat 3]
+
+Not a test: run it by hand.
+"""
+
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # before numpy is imported
+
+import argparse
+import dataclasses
+import math
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from analysis.pendulum import loops, paper
+from ctrl_analysis.simulate import draw_noise, gaussian_noise
+
+
+def best_of(fn, repeat):
+    times = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        out = fn()
+        times.append(time.perf_counter() - t0)
+    return min(times), out
+
+
+def float_loop(p, a21, table, w, v):
+    """The no-filter loop in plain Python floats: the same equations, order and RK4 as the engine."""
+    fc, U, E0, EC0, dE, dEC = table.controller, table.U, table.E[0], table.EC[0], table.dE, table.dEC
+    nE, nEC = table.E.size, table.EC.size
+    b2, T, h = p.b2, p.T, p.T / p.substeps
+    phi, dphi, e_prev = 0.0, 0.0, 0.0
+    out = [phi]
+    for k in range(w.size):
+        y = phi + v[k]
+        e = p.step - y
+        ec = (e - e_prev) / T
+        e_prev = e
+        E = min(max(fc.Ke * e, -fc.X_e), fc.X_e)
+        EC = min(max(fc.Kec * ec, -fc.X_ec), fc.X_ec)
+        fe, fcc = (E - E0) / dE, (EC - EC0) / dEC
+        i, j = min(max(int(math.floor(fe)), 0), nE - 2), min(max(int(math.floor(fcc)), 0), nEC - 2)
+        a, b = fe - i, fcc - j
+        u = fc.Ku * ((1 - a) * ((1 - b) * U[i, j] + b * U[i, j + 1]) + a * ((1 - b) * U[i + 1, j] + b * U[i + 1, j + 1]))
+        wk = w[k]
+
+        def f(x1, x2):
+            return x2, a21 * x1 + b2 * u + wk
+
+        for _ in range(p.substeps):
+            k1 = f(phi, dphi)
+            k2 = f(phi + 0.5 * h * k1[0], dphi + 0.5 * h * k1[1])
+            k3 = f(phi + 0.5 * h * k2[0], dphi + 0.5 * h * k2[1])
+            k4 = f(phi + h * k3[0], dphi + h * k3[1])
+            phi += h / 6 * (k1[0] + 2 * k2[0] + 2 * k3[0] + k4[0])
+            dphi += h / 6 * (k1[1] + 2 * k2[1] + 2 * k3[1] + k4[1])
+        out.append(phi)
+    return np.array(out)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--t-end", type=float, default=1.0)
+    ap.add_argument("--repeat", type=int, default=3)
+    args = ap.parse_args(argv)
+    p = dataclasses.replace(paper.LOOP, t_end=args.t_end)
+    a21 = paper.VERIFY.a21
+    direct, table = loops.fuzzy_controller(p, lookup=False), loops.fuzzy_controller(p, lookup=True)
+
+    print("1. one fuzzy evaluation")
+    rng = np.random.default_rng(0)
+    for B in (1, 100):
+        u = np.stack([rng.uniform(-0.1, 0.1, B), rng.uniform(-1.5, 1.5, B)], axis=1)
+        x = np.zeros((B, 0))
+        n = 2000 if B == 1 else 200
+        td, ud = best_of(lambda: [direct.output(0.0, x, u) for _ in range(n)][-1], args.repeat)
+        tl, ul = best_of(lambda: [table.output(0.0, x, u) for _ in range(n)][-1], args.repeat)
+        print(f"   B = {B:3d}: direct {td / n * 1e6:8.1f} µs, lookup {tl / n * 1e6:6.1f} µs, "
+              f"ratio {td / tl:6.1f}; max |difference| {np.max(np.abs(ud - ul)):.3g} m/s²")
+
+    print("2. closed loop without filter, cost per sample")
+    N = int(round(p.t_end / p.T))
+    seeds = list(range(100))
+    nz = draw_noise(seeds, N, gaussian_noise(p.sigma_w), gaussian_noise(p.sigma_v))
+    res = {}
+    for B in (1, 100):
+        t, r = best_of(lambda: loops.simulate_case(p, a21, seeds[:B]), args.repeat)
+        res[B] = r
+        print(f"   engine (Loop), B = {B:3d}: {t / N * 1e6:8.1f} µs/sample, {t / N / B * 1e6:8.2f} µs/sample/run")
+    t_float, phi_float = best_of(lambda: float_loop(p, a21, table, nz[:, 0, 0], nz[:, 0, 1]), args.repeat)
+    print(f"   plain-Python float loop, 1 run: {t_float / N * 1e6:8.1f} µs/sample")
+    print(f"   run 0: max |φ_engine − φ_float| = {np.max(np.abs(res[1].phi[:, 0] - phi_float)):.3g} rad; "
+          f"B = 100 run 0 equals B = 1: {np.array_equal(res[100].phi[:, 0], res[1].phi[:, 0])}")
+
+
+if __name__ == "__main__":
+    main()
