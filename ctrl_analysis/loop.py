@@ -76,11 +76,15 @@ class LoopResponse(SimResult):
         Every signal at every sample instant (external inputs included).
     states : dict of str -> ndarray, shape (N+1, B, n)
         Each block's states (views into ``x``), when stored.
+    final_states : dict of str -> ndarray, shape (B, n)
+        Each block's state at the last instant (also when the trajectory is not stored), e.g. the
+        ``x0`` of a continuation.
     """
 
-    def __init__(self, *, signals, slices, external, outlist, state_names, **kw):
+    def __init__(self, *, signals, slices, external, outlist, state_names, x_final=None, **kw):
         super().__init__(**kw)
         self.signals = signals
+        self.x_final = x_final
         self._slices = slices
         self.external = external
         self.outlist = outlist
@@ -91,6 +95,12 @@ class LoopResponse(SimResult):
         if self.x is None:
             return {}
         return {name: self.x[:, :, sl] for name, sl in self._slices.items()}
+
+    @property
+    def final_states(self) -> dict:
+        if self.x_final is None:
+            return {}
+        return {name: self.x_final[:, sl] for name, sl in self._slices.items()}
 
     def __getitem__(self, name: str) -> np.ndarray:
         try:
@@ -259,7 +269,8 @@ class Loop:
     def _evaluate(self, order, t, x, sig, params):
         """Outputs of ``order``'s blocks at ``(t, x)`` into ``sig`` (name -> (B,) column)."""
         for p in order:
-            u = self._block_input(p, sig, x.shape[0])
+            # a block without feedthrough does not read u in output(); its inputs may not exist yet
+            u = self._block_input(p, sig, x.shape[0]) if p.block.feedthrough else np.zeros((x.shape[0], len(p.inputs)))
             y = p.block.output(t, x[:, self.slices.get(p.name, _NO_STATE)], u, params)
             for j, s in enumerate(p.outputs):
                 sig[s] = y[:, j]
@@ -368,7 +379,7 @@ class Loop:
         return LoopResponse(t=t, x=xs, u=None, y=None, diverged=diverged, diverged_step=div_step,
                             seeds=None if seeds is None else list(seeds), bound=bound, signals=sig_store,
                             slices=dict(self.slices), external=self.external, outlist=self.outlist,
-                            state_names=state_names)
+                            state_names=state_names, x_final=x)
 
     # ------------------------------------------------------------------ python-control
     def interconnect(self, name: str | None = None):
