@@ -22,7 +22,16 @@ COLORS = {"eso": "tab:red", "meso": "tab:blue", "literal": "tab:orange", "direct
 
 
 def plot_error_bode(lin):
-    """Bode plot of the disturbance-to-estimation-error transfer functions E_i(s)/H(s) of the linear ESO."""
+    """Bode plot of the disturbance-to-estimation-error transfer functions E_i(s)/H(s) of the linear ESO.
+
+    Parameters
+    ----------
+    lin : LinearAnalysis
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     w = np.logspace(-2, 3.5, 600)
     fig, (ax_m, ax_p) = new_figure(2, 1, size=(8.5, 6.5), sharex=True,
                                    title=f"Linear ESO (29), ε = {PAPER.epsilon:g}, β = (3, 3, 1): Bode plots of "
@@ -41,7 +50,18 @@ def plot_error_bode(lin):
 
 
 def plot_eps_scaling(sc: dict, lin):
-    """Left: closed-loop mean |e_i| vs ε with the ε^(n+2−i) law; right: noise std of e_i vs ε."""
+    """Left: closed-loop mean |e_i| vs ε with the ε^(n+2−i) law; right: noise std of e_i vs ε.
+
+    Parameters
+    ----------
+    sc : dict
+        From :func:`.quantities.eps_scaling`.
+    lin : LinearAnalysis
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     fig, (ax, ax2) = new_figure(1, 2, size=(13, 5.2),
                                 title="ESO estimation errors vs ε (situation 1): noise-free loop (left), "
                                       "measurement-noise part (right)")
@@ -75,7 +95,18 @@ def _window(t, T):
 def plot_situation(sim: SituationRun, series: dict, title: str, max_points: int = 4000):
     """Fig. 3 / Fig. 5: x1 in a window, tracking and estimation errors; noise off (left) and on (right).
 
-    ``series`` maps a column name ("noise off" / "noise on") to ``[(run, label, color), ...]``.
+    Parameters
+    ----------
+    sim : SituationRun
+    series : dict
+        Column title -> ``[(run, label, color), ...]`` (runs kept in ``sim.keep``).
+    title : str
+    max_points : int
+        Decimation of the full-horizon panels.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
     """
     t = sim.t
     dec = max(1, len(t) // max_points)
@@ -131,6 +162,19 @@ def plot_theta(sim: SituationRun, key: str, runs: list, title: str, max_points: 
     """Fig. 4 / Fig. 6: identified Θ per batch (markers) and the Θ in use (lines, after W(s) unless bypassed) vs the truth.
 
     A diverged run's lines stop at its divergence (marked ×).
+
+    Parameters
+    ----------
+    sim : SituationRun
+    key : {"s1", "s2"}
+    runs : list of (int, str, str)
+        ``(run, label, color)`` of runs kept in ``sim.keep``.
+    title : str
+    max_points : int
+
+    Returns
+    -------
+    matplotlib.figure.Figure
     """
     from .quantities import theta_truth
 
@@ -173,7 +217,16 @@ def plot_theta(sim: SituationRun, key: str, runs: list, title: str, max_points: 
 def plot_identifiability(per_sit: dict, threshold: float):
     """Column-scaled condition number of each LSM batch's regression, per situation and series.
 
-    ``per_sit`` maps a panel title to ``(t_batch, [(cond (nb,) or (lo, med, hi), label, style), ...])``.
+    Parameters
+    ----------
+    per_sit : dict
+        Panel title -> ``(t_batch, [(cond (nb,) or (lo, med, hi), label, style), ...])``.
+    threshold : float
+        The identifiability gate, drawn as a line.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
     """
     fig, axes = new_figure(1, 2, size=(13, 5.5), title="Identifiability of each LSM batch (Theorem 1): condition "
                                                        "number of the column-scaled regression matrix")

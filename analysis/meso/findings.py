@@ -262,7 +262,22 @@ def _summary_findings(result, sims) -> None:
 
 
 def add_findings(result: StudyResult, sims: dict, lin, sc: dict, claims: dict, horizons: dict, tol: float) -> None:
-    """Every finding of the study, in reading order."""
+    """Every finding of the study, in reading order; every number in them comes from the arguments.
+
+    Parameters
+    ----------
+    result : StudyResult
+        Holds the quantities (read) and receives the findings.
+    sims : dict of str -> SituationRun
+    lin : LinearAnalysis
+    sc : dict
+        ε-scaling (:func:`.quantities.eps_scaling`).
+    claims : dict
+        From :func:`.quantities.claim_quantities`.
+    horizons : dict of str -> float
+    tol : float
+        Relative tolerance of the table cells.
+    """
     s1, s2 = sims["s1"], sims["s2"]
     _tables_noise(result, tol)
     _literal(result, s1, s2)
@@ -275,7 +290,16 @@ def add_findings(result: StudyResult, sims: dict, lin, sc: dict, claims: dict, h
 
 
 def missing(result: StudyResult) -> list:
-    """What the reproduction does not reach, from the verdicts (for results.json ``missing``)."""
+    """What the reproduction does not reach, from the verdicts (for results.json ``missing``).
+
+    Parameters
+    ----------
+    result : StudyResult
+
+    Returns
+    -------
+    list of str
+    """
     out = []
     for key in ("s1", "s2"):
         for o in ("meso", "eso"):

@@ -47,7 +47,23 @@ GRAM_COND_LIMIT = 1.0 / np.sqrt(np.finfo(float).eps)
 
 
 def regressors(xh1, xh2, xh3, u, f, kbar) -> np.ndarray:
-    """``φ = [x̂1, x̂2, 1, x̂3, f, u, K̄]`` stacked on the last axis (any leading shape)."""
+    """``φ = [x̂1, x̂2, 1, x̂3, f, u, K̄]`` stacked on the last axis (any leading shape).
+
+    Parameters
+    ----------
+    xh1, xh2, xh3 : ndarray
+        The MESO's estimates.
+    u : ndarray
+        The control.
+    f : ndarray
+        ``XᵀΘ_used``, the model term fed to the observer.
+    kbar : ndarray
+        ``K̄`` of (14).
+
+    Returns
+    -------
+    ndarray, shape (..., 7)
+    """
     return np.stack([xh1, xh2, np.ones_like(xh1), xh3, f, u, kbar], axis=-1)
 
 
@@ -93,7 +109,21 @@ def design(variant: str, regression: str, full: bool = True, theta3_held: float 
 
 
 def theta_from_lambda(lam, k_gains, b0: float) -> np.ndarray:
-    """(18)-(19): solve ``X_Θ Θ = b0 Λ`` for Θ (n = 2)."""
+    """(18)-(19): solve ``X_Θ Θ = b0 Λ`` for Θ (n = 2).
+
+    Parameters
+    ----------
+    lam : array_like, shape (4,)
+        Λ of (15), identified from (16)-(17).
+    k_gains : array_like
+        Controller gains ``k1, k2`` (first two entries used).
+    b0 : float
+
+    Returns
+    -------
+    ndarray, shape (4,)
+        ``[θ1, θ2, θ3, θ4]``.
+    """
     k1, k2 = k_gains[0], k_gains[1]
     X_theta = np.array([
         [b0, 0.0, -(k1 + lam[0]), 0.0],
@@ -129,9 +159,31 @@ def _lsq(T_H, t_z, G=None, Phi=None, threshold=100.0):
 
 
 def solve_batch(variant, regression, theta_cum, k_gains, b0, threshold, G=None, Phi=None):
-    """One batch of one run: ``(new Θ_cum (4,), report of the regression tried first)``.
+    """One batch of one run of the identification.
 
-    ``G`` is the batch's Gram matrix of φ (the block's state) or ``Phi`` its raw rows ``(N, 7)``.
+    Parameters
+    ----------
+    variant : str
+        One of :data:`VARIANTS` except ``"none"``.
+    regression : {"reduced", "full"}
+    theta_cum : ndarray, shape (4,)
+        Current Θ (the literal rule adds to it; the gate fallback holds its θ3).
+    k_gains : array_like
+        Controller gains.
+    b0 : float
+    threshold : float
+        Identifiability gate on the column-scaled condition number.
+    G : ndarray, shape (7, 7), optional
+        The batch's Gram matrix of φ (the block's state).
+    Phi : ndarray, shape (N, 7), optional
+        The batch's raw rows of φ (exact path).
+
+    Returns
+    -------
+    theta : ndarray, shape (4,)
+        The new Θ.
+    report : ctrl_analysis.identification.IdentifiabilityReport
+        Of the regression tried first.
     """
     T_H, t_z = design(variant, regression)
     res = _lsq(T_H, t_z, G, Phi, threshold)

@@ -125,7 +125,16 @@ class ModelledESO(ContinuousBlock):
 
 
 class ParameterPath(DiscreteBlock):
-    """Θ_used = W(s)-smoothed LSM result, or the raw LSM result for runs with ``bypass`` (the literal rule without W(s))."""
+    """Θ_used = W(s)-smoothed LSM result, or the raw LSM result for runs with ``bypass`` (a discrete block).
+
+    Parameters
+    ----------
+    bypass : array_like of bool, shape (B,)
+        Runs whose observer and controller receive the LSM result without W(s) (the literal rule
+        without W(s), a claim check).
+
+    Block signals: inputs ``c[0..3]`` (LSM result), ``w[0..3]`` (after W(s)); outputs ``theta[0..3]``.
+    """
 
     inputs = signal_names("c", 4) + signal_names("w", 4)
     outputs = signal_names("theta", 4)
@@ -142,7 +151,21 @@ class ParameterPath(DiscreteBlock):
 
 
 def build_loop(sit: Situation, rows, paper: Paper = PAPER) -> Loop:
-    """The loop of situation ``sit`` with one run per row (see the module docstring)."""
+    """The loop of situation ``sit`` with one run per row.
+
+    Parameters
+    ----------
+    sit : Situation
+    rows : sequence of Row
+        One configuration per run of the batch.
+    paper : Paper
+
+    Returns
+    -------
+    ctrl_analysis.loop.Loop
+        Blocks ``plant`` (27), ``observer`` (29), ``pd`` (30)/(12), ``lsm`` (Table 1), ``W`` (W(s)) and
+        ``path``; external inputs ``level`` (θ4), ``v`` (noise), ``r[0..2]`` (ξ, ξ', ξ'').
+    """
     pd = PDFeedforward(b0=sit.b0, omega_c=paper.omega_c, order=paper.n, model=True)
     lpf = LowPassFilter(paper.omega_f, order=2).digital(paper.h, channels=4)
     ident = BatchIdentification(sit.N, paper.h, sit.b0, pd.k, sit.regression, [r.variant for r in rows],
@@ -181,7 +204,21 @@ class SituationRun:
 
 
 def x3_true(sig, rows, paper, b0):
-    """True extended state at the samples: x3 = x2' − b0 u − XᵀΘ_used (ESO: Θ_used = 0)."""
+    """True extended state at the samples: x3 = x2' − b0 u − XᵀΘ_used (ESO: Θ_used = 0).
+
+    Parameters
+    ----------
+    sig : dict of str -> ndarray, shape (n, B)
+        Signals ``x1, x2, u, level, xhat1, xhat2, theta[0..3]``.
+    rows : sequence of Row
+        The runs (their plant gain ``b``).
+    paper : Paper
+    b0 : float
+
+    Returns
+    -------
+    ndarray, shape (n, B)
+    """
     b = np.array([r.b_plant for r in rows])
     x1, x2, u = sig["x1"], sig["x2"], sig["u"]
     x2dot = paper.theta1 * x1 + paper.theta2 * x2 + sig["level"] + b * u
@@ -211,10 +248,26 @@ def simulate_situation(sit: Situation, rows, T: float, paper: Paper = PAPER, win
 
     Parameters
     ----------
+    sit : Situation
+    rows : sequence of Row
+    T : float
+        Horizon (s).
+    paper : Paper
+    window : (float, float)
+        Window of :attr:`SituationRun.window_sums` (the ε-scaling), ``[start, end)`` in s.
     keep : sequence of int
         Runs whose trajectories are kept (figures).
     exact : sequence of int
         MESO runs whose batch identifiability is also computed exactly from the raw batch (SVD).
+    bound : float
+        A run whose state (plant, observer, the identification's Gram entries) leaves ``|x| <= bound``
+        is flagged as diverged.
+    progress : callable, optional
+        ``progress(message)`` after each chunk.
+
+    Returns
+    -------
+    SituationRun
     """
     h, N, B = paper.h, sit.N, len(rows)
     K = round(T / h)

@@ -34,7 +34,17 @@ CELLS = {f"{k}.{o}.{m}": f"{SITUATIONS[k].table} / {o.upper()} / {m}" for k in (
 
 
 def linear_quantities(result: StudyResult, lin, sc: dict) -> None:
-    """ω_o, poles, error DC gains, ε-slopes of the closed-loop errors, noise std per ε."""
+    """ω_o, poles, error DC gains, ε-slopes of the closed-loop errors, noise std per ε.
+
+    Parameters
+    ----------
+    result : StudyResult
+        Receives the quantities.
+    lin : LinearAnalysis
+        From :func:`.linear.analyse`.
+    sc : dict
+        From :func:`eps_scaling`.
+    """
     eps = PAPER.epsilon
     result.quantity("leso.omega_o", "LESO bandwidth ω_o: s³ + β₁/ε s² + β₂/ε² s + β₃/ε³ = (s + ω_o)³",
                     lin.omega_o, unit="rad/s",
@@ -63,7 +73,19 @@ def linear_quantities(result: StudyResult, lin, sc: dict) -> None:
 
 
 def eps_scaling(sim: SituationRun, analysis: Analysis) -> dict:
-    """Mean |e_i| of the noise-free ESO over the analysis window, for each ε of the grid (situation 1)."""
+    """Mean |e_i| of the noise-free ESO over the analysis window, for each ε of the grid (situation 1).
+
+    Parameters
+    ----------
+    sim : SituationRun
+        Situation 1 (its rows include the ESO at every ε of ``analysis.eps_grid``, noise off).
+    analysis : Analysis
+
+    Returns
+    -------
+    dict
+        ``eps``, ``err`` (len(eps), 3), the log-log ``slope`` (3,) and the ``window``.
+    """
     eps = np.asarray(analysis.eps_grid, dtype=float)
     idx = [pick(sim.rows, "eso", "none", False, epsilon=e)[0] for e in eps]
     err = np.stack([sim.window_sums[m][idx] / sim.n_window for m in ("est_x1", "est_x2", "est_x3")], axis=1)
@@ -72,7 +94,18 @@ def eps_scaling(sim: SituationRun, analysis: Analysis) -> dict:
 
 
 def first_divergence(sim: SituationRun, idx) -> float | None:
-    """Time of the earliest divergence among runs ``idx`` (None if none diverged)."""
+    """Time of the earliest divergence among runs ``idx``.
+
+    Parameters
+    ----------
+    sim : SituationRun
+    idx : sequence of int
+
+    Returns
+    -------
+    float or None
+        None if none of the runs diverged.
+    """
     bad = [i for i in idx if sim.diverged[i]]
     if not bad:
         return None
@@ -105,7 +138,16 @@ def _table_cell(result, key, sim, idx, metric, qid, what, noise, analysis):
 
 
 def table_quantities(result: StudyResult, key: str, sim: SituationRun, analysis: Analysis) -> None:
-    """Tables 2/3: ESO and MESO (well-posed) with noise on and off, the literal rule with noise on."""
+    """Tables 2/3: ESO and MESO (well-posed) with noise on and off, the literal rule with noise on.
+
+    Parameters
+    ----------
+    result : StudyResult
+    key : {"s1", "s2"}
+    sim : SituationRun
+    analysis : Analysis
+        Its ``tolerance`` is the relative tolerance of every cell.
+    """
     rows = sim.rows
     for noise in (True, False):
         tag = f"{key}." if noise else f"{key}.nonoise."
@@ -125,7 +167,18 @@ def table_quantities(result: StudyResult, key: str, sim: SituationRun, analysis:
 
 
 def theta_truth(key: str, t, paper: Paper = PAPER) -> np.ndarray:
-    """True Θ = [θ1, θ2, θ3, θ4] of situation ``key`` at the times ``t``, shape (len(t), 4)."""
+    """True Θ = [θ1, θ2, θ3, θ4] of situation ``key`` at the times ``t`` ((31)/(32); θ4 from t_step on).
+
+    Parameters
+    ----------
+    key : {"s1", "s2"}
+    t : array_like, shape (n,)
+    paper : Paper
+
+    Returns
+    -------
+    ndarray, shape (n, 4)
+    """
     th3 = SITUATIONS[key].theta3_printed
     before = np.array([paper.theta1, paper.theta2, th3, 0.0])
     after = np.array([paper.theta1, paper.theta2, th3, paper.step])
@@ -133,7 +186,16 @@ def theta_truth(key: str, t, paper: Paper = PAPER) -> np.ndarray:
 
 
 def theta_final(result: StudyResult, key: str, sim: SituationRun, horizon: float) -> None:
-    """Θ after the last batch (well-posed, noise on): what Fig. 4 / Fig. 6 show converging."""
+    """Θ after the last batch (well-posed, noise on): what Fig. 4 / Fig. 6 show converging.
+
+    Parameters
+    ----------
+    result : StudyResult
+    key : {"s1", "s2"}
+    sim : SituationRun
+    horizon : float
+        End of the run (s), for the truth at that time.
+    """
     idx = pick(sim.rows, "meso", "wellposed", True)
     mean, std, n_ok = mean_std(sim.theta_batch[-1, idx], ~sim.diverged[idx])
     true_end = theta_truth(key, [horizon])[0]
@@ -152,7 +214,20 @@ def _one(sim, i, metric):
 
 
 def claim_quantities(result: StudyResult, sims: dict, lin, horizons: dict) -> dict:
-    """Quantities of the claims the tables do not show (Conclusion 3, (5)/(8) M <= N, §5 ε, W(s), gate)."""
+    """Quantities of the claims the tables do not show (Conclusion 3, (5)/(8) M <= N, §5 ε, W(s), gate).
+
+    Parameters
+    ----------
+    result : StudyResult
+    sims : dict of str -> SituationRun
+    lin : LinearAnalysis
+    horizons : dict of str -> float
+
+    Returns
+    -------
+    dict
+        Run indices and gate counts the findings reuse (``no_const``, ``gate``).
+    """
     s1, s2 = sims["s1"], sims["s2"]
     out = {}
     # Conclusion 3: the well-posed MESO without θ4 (noise off)
@@ -198,6 +273,21 @@ def gate_passes(sim: SituationRun, thresholds) -> tuple:
     """Situation-2 batches whose full regression passes the gate, per threshold (well-posed runs, noise on + off).
 
     Noise-off runs use the exact condition number of the raw batch, noise-on runs the block's Gram value.
+
+    Parameters
+    ----------
+    sim : SituationRun
+        Situation 2.
+    thresholds : sequence of float
+
+    Returns
+    -------
+    passes : ndarray of int
+        Batches at or below each threshold.
+    total : int
+        Batches counted.
+    cond : ndarray
+        Their condition numbers.
     """
     on = pick(sim.rows, "meso", "wellposed", True)
     off = pick(sim.rows, "meso", "wellposed", False)[0]
