@@ -76,11 +76,15 @@ class LoopResponse(SimResult):
         Every signal at every sample instant (external inputs included).
     states : dict of str -> ndarray, shape (N+1, B, n)
         Each block's states (views into ``x``), when stored.
+    final_states : dict of str -> ndarray, shape (B, n)
+        Each block's state at the last instant (also when the trajectory is not stored), e.g. the
+        ``x0`` of a continuation.
     """
 
-    def __init__(self, *, signals, slices, external, outlist, state_names, **kw):
+    def __init__(self, *, signals, slices, external, outlist, state_names, x_final=None, **kw):
         super().__init__(**kw)
         self.signals = signals
+        self.x_final = x_final
         self._slices = slices
         self.external = external
         self.outlist = outlist
@@ -91,6 +95,12 @@ class LoopResponse(SimResult):
         if self.x is None:
             return {}
         return {name: self.x[:, :, sl] for name, sl in self._slices.items()}
+
+    @property
+    def final_states(self) -> dict:
+        if self.x_final is None:
+            return {}
+        return {name: self.x_final[:, sl] for name, sl in self._slices.items()}
 
     def __getitem__(self, name: str) -> np.ndarray:
         try:
@@ -370,7 +380,7 @@ class Loop:
         return LoopResponse(t=t, x=xs, u=None, y=None, diverged=diverged, diverged_step=div_step,
                             seeds=None if seeds is None else list(seeds), bound=bound, signals=sig_store,
                             slices=dict(self.slices), external=self.external, outlist=self.outlist,
-                            state_names=state_names)
+                            state_names=state_names, x_final=x)
 
     # ------------------------------------------------------------------ python-control
     def interconnect(self, name: str | None = None):

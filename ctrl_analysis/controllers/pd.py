@@ -8,15 +8,20 @@ estimated by an extended state observer, the law
 cancels the estimated disturbance (``k_{n+1} = 1`` on ``x̂_{n+1}`` with ``ξ^(n)`` as feed-forward),
 subtracts any known model part ``f̂`` (modified ESO), and leaves the tracking error dynamics
 ``e^(n) + k_n e^(n-1) + ... + k_1 e = 0``. Bandwidth tuning places all ``n`` roots at ``-ω_c``.
+
+:class:`PDFeedforward` is a discrete block (the law is evaluated at the sample instants and held):
+with ``model=True`` the known part is an identified linear model ``f̂ = XᵀΘ``,
+``X = [x̂_1 .. x̂_n, u, 1]``, evaluated with the previous sample's ``x̂`` and ``u`` (the block's state)
+because ``X`` contains the control being computed.
 """
 
 from __future__ import annotations
 
-
 import numpy as np
 
-from ..polynomials import repeated_pole_coefficients
 from .._validate import check_finite, check_int, check_positive
+from ..blocks import DiscreteBlock, signal_names
+from ..polynomials import repeated_pole_coefficients
 
 __all__ = ["PDFeedforward", "bandwidth_gains"]
 
@@ -37,8 +42,10 @@ def bandwidth_gains(n: int, omega_c: float) -> np.ndarray:
     return repeated_pole_coefficients(n, omega_c)[::-1].copy()
 
 
-class PDFeedforward:
-    """PD (state-feedback) law with feed-forward and model compensation, batched.
+class PDFeedforward(DiscreteBlock):
+    """PD (state-feedback) law with feed-forward and model compensation: a discrete block, batched.
+
+    ``u(k) = ( Σ_{i=1}^{n+1} k_i (ξ^(i-1)(t_k) − x̂_i(k)) − f̂(k) ) / b0``, held over the sample.
 
     Parameters
     ----------
@@ -51,6 +58,14 @@ class PDFeedforward:
         ``s^n + k_n s^(n-1) + ... + k_1`` must be Hurwitz.
     order : int
         Plant order ``n`` (default 2); used with ``omega_c``.
+    model : bool
+        ``False`` (default): ``f̂ = 0`` (conventional ESO). ``True``: ``f̂ = Θᵀ [x̂_1(k-1) .. x̂_n(k-1),
+        u(k-1), 1]`` with ``Θ`` (``n + 2`` parameters) an input, the previous sample's estimates and
+        control held in the block's state (eq. (12); zero before the first sample).
+
+    Block signals: inputs ``r[0] .. r[n]`` (``ξ, ξ', .., ξ^(n)``), ``xhat1 .. xhat{n+1}`` and, with
+    ``model``, ``theta[0] .. theta[n+1]``; output ``u``; states (``model`` only)
+    ``xhat_prev[0] .. xhat_prev[n-1]``, ``u_prev``. Direct feedthrough.
 
     Attributes
     ----------
@@ -58,30 +73,43 @@ class PDFeedforward:
         ``k_1..k_{n+1}``.
     n : int
     b0 : float
+    model : bool
+
+    Raises
+    ------
+    ValueError
+        ``b0 = 0``, both or neither of ``omega_c`` / ``gains``, a non-Hurwitz gain vector.
 
     References
     ----------
     Chen Z., Gao Q., "Modified extended state observer: analysis and implementation", Control
-    Theory & Applications 35(8), 2018, eq. (12) and (30).
+    Theory & Applications 35(8), 2018, eq. (12) (model term with the previous sample) and (30).
     Zheng Q., Gao L. Q., Gao Z., "On stability analysis of active disturbance rejection control for
     nonlinear time-varying plants with unknown dynamics", CDC 2007.
 
     Examples
     --------
+    >>> import numpy as np
     >>> pd = PDFeedforward(b0=2.0, omega_c=10.0)
     >>> pd.k.tolist()
     [100.0, 20.0, 1.0]
     >>> float(pd.control([1.0, 0.0, 0.0], [0.0, 0.0, 0.0]))
     50.0
+    >>> pd.output(0.0, np.zeros((1, 0)), np.array([[1.0, 0.0, 0.0, 0.0, 0.0, 0.0]]))
+    array([[50.]])
     """
 
-    def __init__(self, b0: float, omega_c: float | None = None, gains=None, order: int = 2):
+    feedthrough = True
+
+    def __init__(self, b0: float, omega_c: float | None = None, gains=None, order: int = 2,
+                 model: bool = False):
         b0 = float(check_finite("b0", b0))
         if b0 == 0:
             raise ValueError("b0 must be non-zero, got 0")
         self.b0 = b0
         if (omega_c is None) == (gains is None):
             raise ValueError("give exactly one of omega_c or gains")
+        order = check_int("order", order, minimum=1)
         if omega_c is not None:
             self.k = bandwidth_gains(order, omega_c)
             self.omega_c = float(omega_c)
@@ -99,6 +127,14 @@ class PDFeedforward:
             self.k = g
             self.omega_c = None
         self.n = self.k.size - 1
+        if not isinstance(model, (bool, np.bool_)):
+            raise TypeError(f"model must be True or False, got {model!r}")
+        self.model = bool(model)
+        n = self.n
+        self.inputs = (signal_names("r", n + 1) + tuple(f"xhat{i}" for i in range(1, n + 2))
+                       + (signal_names("theta", n + 2) if self.model else ()))
+        self.outputs = ("u",)
+        self.states = signal_names("xhat_prev", n) + ("u_prev",) if self.model else ()
 
     def tracking_poly(self) -> np.ndarray:
         """Coefficients of the tracking-error polynomial ``s^n + k_n s^(n-1) + ... + k_1``."""
@@ -112,7 +148,7 @@ class PDFeedforward:
         return ct.tf([self.k[0]], self.tracking_poly())
 
     def control(self, ref, x_hat, f_hat=0.0) -> np.ndarray:
-        """The control ``u`` for reference derivatives ``ref`` and estimates ``x_hat``.
+        """The control ``u`` for reference derivatives ``ref`` and estimates ``x_hat`` (no state).
 
         Parameters
         ----------
@@ -132,5 +168,35 @@ class PDFeedforward:
         # (30) u = (Σ k_i (ξ^(i-1) - x̂_i) - XᵀΘ) / b0
         return (np.sum(self.k * (ref - x_hat), axis=-1) - f_hat) / self.b0
 
+    def _u(self, x, u) -> np.ndarray:
+        """(30)/(12) on the block's inputs ``u`` and state ``x``; shape (B,)."""
+        n, k = self.n, self.k
+        # Σ_{i=1}^{n+1} k_i (ξ^(i-1) - x̂_i), summed left to right
+        acc = k[0] * (u[:, 0] - u[:, n + 1])
+        for i in range(1, n + 1):
+            acc = acc + k[i] * (u[:, i] - u[:, n + 1 + i])
+        if not self.model:
+            return acc / self.b0
+        th = 2 * n + 2  # first column of Θ in u
+        # (12) XᵀΘ with the previous sample: Σ_l θ_l x̂_l(k-1) + θ_{n+1} u(k-1) + θ_{n+2}
+        f = u[:, th] * x[:, 0]
+        for i in range(1, n + 1):
+            f = f + u[:, th + i] * x[:, i]
+        f = f + u[:, th + n + 1]
+        return (acc - f) / self.b0
+
+    def output(self, t, x, u, params=None) -> np.ndarray:
+        return self._u(x, u)[:, None]
+
+    def update(self, t, x, u, params=None) -> np.ndarray:
+        if not self.model:
+            return x
+        n = self.n
+        x_next = np.empty_like(x)
+        # the state holds this sample's x̂_1..x̂_n and u for the next sample's model term (12)
+        x_next[:, :n] = u[:, n + 1:2 * n + 1]
+        x_next[:, n] = self._u(x, u)
+        return x_next
+
     def __repr__(self) -> str:
-        return f"PDFeedforward(b0={self.b0}, k={self.k.tolist()})"
+        return f"PDFeedforward(b0={self.b0}, k={self.k.tolist()}, model={self.model})"

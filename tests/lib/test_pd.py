@@ -49,6 +49,43 @@ def test_perfect_estimates_give_tracking_dynamics():
     np.testing.assert_allclose(e, exact, atol=2e-3)  # ZOH of u over 1 ms
 
 
+def test_block_output_is_the_control_law():
+    pd = PDFeedforward(b0=2.0, omega_c=10.0)
+    rng = np.random.default_rng(1)
+    ref, xh = rng.normal(size=(2, 5, 3))
+    u = pd.output(0.0, np.zeros((5, 0)), np.concatenate([ref, xh], axis=1))
+    np.testing.assert_allclose(u[:, 0], pd.control(ref, xh), rtol=1e-14)
+    assert pd.inputs == ("r[0]", "r[1]", "r[2]", "xhat1", "xhat2", "xhat3") and pd.states == ()
+
+
+def test_model_term_uses_the_previous_sample_eq12():
+    """u(k) = (Σ k_i (ξ^(i-1) − x̂_i)(k) − Θᵀ[x̂1(k-1), x̂2(k-1), u(k-1), 1]) / b0, zero before the first sample."""
+    pd = PDFeedforward(b0=3.0, omega_c=10.0, model=True)
+    rng = np.random.default_rng(2)
+    ref, xh = rng.normal(size=(2, 4, 3))
+    theta = np.array([1.3, -1.6, 0.95, 1.8])
+    useq = np.concatenate([ref, xh, np.tile(theta, (4, 1))], axis=1)
+    y, x = pd.run(useq)
+    u = y[:, 0, 0]
+    pdk = pd.control(ref, xh)
+    assert u[0] == pytest.approx(pdk[0] - theta[3] / 3.0, rel=1e-14)
+    for k in range(1, 4):
+        f_prev = theta[0] * xh[k - 1, 0] + theta[1] * xh[k - 1, 1] + theta[2] * u[k - 1] + theta[3]
+        assert u[k] == pytest.approx(pdk[k] - f_prev / 3.0, rel=1e-12)
+    np.testing.assert_allclose(x[1:, 0, :], np.column_stack([xh[:, 0], xh[:, 1], u]))
+
+
+def test_block_runs_in_control_interconnect():
+    import control as ct
+
+    pd = PDFeedforward(b0=3.0, omega_c=10.0, model=True)
+    rng = np.random.default_rng(3)
+    useq = rng.normal(size=(6, 10))
+    y, _ = pd.run(useq)
+    resp = ct.input_output_response(pd.nlsys(0.1), 0.1 * np.arange(6), useq.T, X0=np.zeros(3))
+    np.testing.assert_allclose(np.ravel(resp.outputs), y[:, 0, 0], rtol=1e-13)
+
+
 @pytest.mark.parametrize(
     "kwargs,exc,match",
     [
@@ -58,6 +95,7 @@ def test_perfect_estimates_give_tracking_dynamics():
         (dict(b0=1.0, omega_c=-1.0), ValueError, "omega_c"),
         (dict(b0=1.0, gains=[1.0, -2.0]), ValueError, "Hurwitz"),
         (dict(b0=1.0, gains=[1.0]), ValueError, "gains"),
+        (dict(b0=1.0, omega_c=1.0, model=1), TypeError, "model"),
     ],
 )
 def test_bad_input(kwargs, exc, match):

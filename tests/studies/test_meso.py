@@ -1,16 +1,27 @@
-"""Smoke test of the meso study (--quick, shortened horizons) and checks of its building pieces."""
+"""Tests of the meso study: its blocks, the closed loops against the pre-migration values, and a short run."""
 
 import json
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
-import analysis.meso as meso
+from analysis import meso
+from analysis.meso.identification import (
+    BatchIdentification,
+    equivalent_theta,
+    regressors,
+    solve_batch,
+    theta_from_lambda,
+)
+from analysis.meso.loops import Row, pick, simulate_situation, situation_rows
+from analysis.meso.paper import METRICS, PAPER, QUICK, SITUATIONS
+from ctrl_analysis.identification import batch_least_squares
 from ctrl_analysis.report import StudyContext, write_results_json
 
 
 def test_equivalent_theta_is_the_closed_loop_projection():
-    eq = meso.equivalent_theta([1.3, -1.6, 0.95, 1.8], 3.95)
+    eq = equivalent_theta([1.3, -1.6, 0.95, 1.8], 3.95)
     np.testing.assert_allclose(eq, [0.74684, -1.21519, 0.0, 1.36709], atol=1e-5)
     # on x1 = sin t, x2 = cos t with u from x2' = -x1 both models give the same disturbance
     t = np.linspace(0, 6, 50)
@@ -19,31 +30,111 @@ def test_equivalent_theta_is_the_closed_loop_projection():
     np.testing.assert_allclose(1.3 * x1 - 1.6 * x2 + 0.95 * u + 1.8, eq[0] * x1 + eq[1] * x2 + eq[3], atol=1e-12)
 
 
-def test_quick_run_writes_every_quantity(tmp_path, monkeypatch):
-    monkeypatch.setattr(meso, "QUICK", {"s1": 3.0, "s2": 6.0, "eps_T": 2.0, "eps_from": 1.0})
+def test_theta_from_lambda_inverts_eq15():
+    theta, k, b0 = np.array([1.3, -1.6, 0.95, 1.8]), np.array([100.0, 20.0, 1.0]), 3.0
+    d = b0 + theta[2]
+    # (15) λ_l = (b0 θ_l − k_l θ3)/(b0 + θ3), λ3 = θ3/(b0 + θ3), λ4 = b0 θ4/(b0 + θ3)
+    lam = np.array([(b0 * theta[0] - k[0] * theta[2]) / d, (b0 * theta[1] - k[1] * theta[2]) / d,
+                    theta[2] / d, b0 * theta[3] / d])
+    np.testing.assert_allclose(theta_from_lambda(lam, k, b0), theta, rtol=1e-12)
+
+
+def _synthetic_batch(N=400, seed=1):
+    rng = np.random.default_rng(seed)
+    xh1, xh2, u = rng.normal(size=(3, N))
+    f = 0.3 * xh1 - 0.2 * xh2 + 0.1
+    kbar = 3.0 * u + 100 * xh1 + 20 * xh2
+    xh3 = 1.3 * xh1 - 1.6 * xh2 + 0.7 - f + 1e-3 * rng.normal(size=N)   # z = x̂3 + f = 1.3 x1 − 1.6 x2 + 0.7
+    return xh1, xh2, xh3, u, f, kbar
+
+
+def test_gram_solution_equals_batch_least_squares_on_the_raw_batch():
+    xh1, xh2, xh3, u, f, kbar = _synthetic_batch()
+    Phi = regressors(xh1, xh2, xh3, u, f, kbar)
+    G = Phi.T @ Phi / len(u)
+    for variant in ("wellposed", "literal", "no_const"):
+        th_g, rep_g = solve_batch(variant, "reduced", np.zeros(4), [100.0, 20.0, 1.0], 3.0, 100.0, G=G)
+        th_r, rep_r = solve_batch(variant, "reduced", np.zeros(4), [100.0, 20.0, 1.0], 3.0, 100.0, Phi=Phi)
+        np.testing.assert_allclose(th_g, th_r, rtol=1e-10, atol=1e-12)
+        assert rep_g.cond_scaled == pytest.approx(rep_r.cond_scaled, rel=1e-8)
+    th, _ = solve_batch("wellposed", "reduced", np.zeros(4), [100.0, 20.0, 1.0], 3.0, 100.0, Phi=Phi)
+    direct = batch_least_squares(np.column_stack([xh1, xh2, np.ones_like(u)]), xh3 + f, warn=False).theta
+    np.testing.assert_allclose(th[[0, 1, 3]], direct, rtol=1e-12)
+    np.testing.assert_allclose(th, [1.3, -1.6, 0.0, 0.7], atol=1e-3)
+
+
+def test_identification_block_identifies_every_N_samples_and_accumulates_the_literal_rule():
+    xh1, xh2, xh3, u, _f, _kbar = _synthetic_batch(N=40)
+    N, h = 20, 0.1
+    block = BatchIdentification(N, h, 3.0, [100.0, 20.0, 1.0], "reduced", ["none", "wellposed", "literal"])
+    # Θ_used = [0.3, −0.2, 0, 0.1] gives f; the block's inputs: x̂1..3, u, Θ_used
+    useq = np.stack([xh1, xh2, xh3, u, 0.3 + 0 * u, -0.2 + 0 * u, 0 * u, 0.1 + 0 * u], axis=1)
+    y, x = block.run(np.repeat(useq[:, None, :], 3, axis=1), t=h * np.arange(40))
+    c = y[:, :, :4]
+    assert np.all(c[:N] == 0.0)                       # nothing before the first batch end
+    np.testing.assert_array_equal(c[:, 0], 0.0)       # "none": the ESO, Θ ≡ 0
+    np.testing.assert_allclose(x[N, 1, :4], [1.3, -1.6, 0.0, 0.7], atol=2e-3)
+    np.testing.assert_allclose(x[2 * N, 2, :4], 2 * x[N, 2, :4], rtol=0.05)   # literal: Θ̂_1 + Θ̂_2 ≈ 2 Θ̂_1
+    assert x[N, 1, 5] == 3                              # rank of [x̂1 x̂2 1]
+    with pytest.raises(ValueError, match="variants"):
+        BatchIdentification(N, h, 3.0, [100.0, 20.0, 1.0], "reduced", ["bogus"])
+
+
+@pytest.mark.parametrize("key,T,expected", [
+    ("s1", 6.0, {"est_x1": (1.874779831214e-04, 1.812548851535e-04), "est_x3": (0.2261857003809, 0.2193820323497),
+                 "track_x1": (5.998870602659e-03, 5.806761551276e-03)}),
+    ("s2", 6.0, {"est_x1": (1.661448132198e-04,) * 2, "est_x3": (0.2119518524059,) * 2,
+                 "track_x1": (4.641733768321e-03,) * 2}),
+])
+def test_loop_reproduces_the_pre_migration_values(key, T, expected):
+    """Regression values of the index-slice implementation (noise off, ESO and well-posed MESO), 1e-9 relative."""
+    rows = [Row("eso", "none", None), Row("meso", "wellposed", None)]
+    sim = simulate_situation(SITUATIONS[key], rows, T)
+    for m, (eso, mes) in expected.items():
+        np.testing.assert_allclose(sim.sums[m] / len(sim.t), [eso, mes], rtol=1e-9)
+    first = {"s1": [0.44417122, -1.64330528, 0.0, 0.46750536], "s2": [0.55580647, -1.15355044, 0.0, 0.08063086]}
+    np.testing.assert_allclose(sim.theta_batch[0, 1], first[key], rtol=1e-7, atol=1e-9)
+    np.testing.assert_array_equal(sim.theta_batch[:, 0], 0.0)
+
+
+def test_rows_select_each_configuration_once():
+    rows = situation_rows("s2", [7, 8])
+    assert len(pick(rows, "eso", "none", True)) == 2
+    assert len(pick(rows, "meso", "wellposed", False)) == 1
+    assert len(pick(rows, "meso", "wellposed", False, threshold=1000.0)) == 1
+    assert pick(rows, "eso", "none", False, b_plant=PAPER.b + 0.95)
+
+
+def test_short_run_writes_every_quantity_with_unit_and_tolerance(tmp_path):
+    analysis = replace(QUICK, horizons=(("s1", 3.0), ("s2", 6.0)), eps_window=(1.0, 3.0))
     ctx = StudyContext(out_dir=tmp_path, runs=1, seed=3, quick=True)
-    result = meso.run(ctx)
-    path = write_results_json(result, tmp_path)
-    data = json.loads(path.read_text())
+    result = meso.run(ctx, analysis=analysis)
+    data = json.loads(write_results_json(result, tmp_path).read_text())
     ids = {q["id"] for q in data["quantities"]}
-    required = {"leso.omega_o", "s1.theta_final", "s2.theta_final",
-                "leso.eps_slope.x1", "leso.eps_slope.x2", "leso.eps_slope.x3"}
+    required = {"leso.omega_o", "s1.theta_final", "s2.theta_final", "s2.gate_passes", "s1.M_sup", "s1.N_sup",
+                "s1.no_const.track_x1", "leso.eps_slope.x1", "leso.eps_slope.x2", "leso.eps_slope.x3"}
     for s in ("s1", "s2"):
         for o in ("meso", "eso"):
-            required |= {f"{s}.{o}.{m}" for m in meso.METRICS}
+            required |= {f"{s}.{o}.{m}" for m in METRICS} | {f"{s}.nonoise.{o}.{m}" for m in METRICS}
+        required |= {f"{s}.literal.meso.{m}" for m in METRICS}
     assert required <= ids
-    for q in data["quantities"]:
-        assert q["verdict"] in ("agrees", "differs", "new")
-        if q["paper"] is None:
-            assert q["verdict"] == "new"
-        else:
-            assert q["tolerance"] == meso.TOLERANCE
+    for q in result.quantities:
+        assert isinstance(q.unit, str)
+        if q.paper is not None:
+            assert q.tolerance == analysis.tolerance and q.unit in ("", "1/s", "1/s²")
     assert result.get("leso.omega_o").value == pytest.approx(20.0)
     assert result.get("s1.eso.est_x1").paper == pytest.approx(1.7115e-4)
+    assert result.get("s2.eso.est_x3_no_bu").paper == pytest.approx(0.5797)
     assert data["seeds"]["noise"] == [3]
+    assert data["missing"]
     for name in data["figures"]:
         assert (tmp_path / name).stat().st_size > 10_000
-    assert {"leso_error_bode.png", "fig3_situation1.png", "fig4_theta_situation1.png",
-            "fig5_situation2.png", "fig6_theta_situation2.png"} <= set(data["figures"])
-    assert {f["id"] for f in data["findings"]} >= {"tables-are-noise-free", "situation2-not-identifiable"}
+    assert {"leso_error_bode.png", "leso_eps_scaling.png", "fig3_situation1.png", "fig4_theta_situation1.png",
+            "fig5_situation2.png", "fig6_theta_situation2.png", "identifiability.png"} <= set(data["figures"])
+    found = {f["id"]: f["text"] for f in data["findings"]}
+    assert {"tables-are-noise-free", "situation2-not-identifiable", "identifiability-threshold",
+            "conclusion3-theta4", "m-le-n", "larger-eps-noise", "literal-without-W"} <= set(found)
+    # the counts in the sentence are the quantities' verdicts, not typed
+    n = meso.findings.noise_free_counts(result)
+    assert f"{n['off']}/10 agree" in found["tables-are-noise-free"]
     assert len(data["reconstructions"]) >= 8

@@ -1,0 +1,135 @@
+"""Study `meso`: Chen & Gao 2018, modified extended state observer: analysis and implementation.
+
+Reproduces (a) the linear observer of eq. (29): bandwidth form, poles, Bode plots of the
+disturbance-to-error transfer functions, the ε^(n+2−i) law (4)/(7) and the noise std per ε
+(:mod:`.linear`); (b) situations 1 and 2 of §4 (eq. (27)-(32)): the closed loops of plant, ESO /
+MESO, PD law (30) with the model term (12), batch least-squares identification (Table 1) and
+W(s), built from blocks (:mod:`.loops`, :mod:`.identification`); (c) Tables 2-3, Fig. 3-6 and the
+paper's claims the tables do not show (:mod:`.quantities`, :mod:`.findings`, :mod:`.figures`).
+The paper's numbers and every reconstruction are in :mod:`.paper`.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import asdict
+
+from ctrl_analysis.report import StudyContext, StudyInfo, StudyResult
+from ctrl_analysis.simulate import run_seeds
+from ctrl_analysis.study import record_parameters
+
+from . import figures, findings, linear, quantities
+from .loops import pick, simulate_situation, situation_rows
+from .paper import ANALYSIS, PAPER, QUICK, SITUATIONS
+
+__all__ = ["INFO", "run"]
+
+INFO = StudyInfo(
+    name='meso',
+    seed_file='003_69569f7e4aa9c67b.txt',
+    paper='Chen & Gao 2018, modified extended state observer: analysis and implementation',
+    reproduces='linear ESO analysis (omega_o, poles, Bode, eps-scaling, noise), Tables 2-3, Fig. 3-6, '
+               'Conclusion 3, M <= N, the identifiability gate',
+)
+
+
+def run(ctx: StudyContext, analysis=None) -> StudyResult:
+    """Reproduce the linear analysis, situations 1 and 2 (Tables 2-3, Fig. 3-6), the claims and the findings.
+
+    ``analysis`` overrides the settings (default: :data:`.paper.ANALYSIS`, or :data:`.paper.QUICK` with --quick).
+    """
+    result = StudyResult(INFO)
+    an = analysis or (QUICK if ctx.quick else ANALYSIS)
+    seeds = run_seeds(ctx.seed, ctx.runs_or(an.runs, an.quick_runs))
+    horizons = {k: an.horizon(k) for k in SITUATIONS}
+    result.seeds = {"noise": seeds}
+    record_parameters(result, PAPER)
+    for key, sit in SITUATIONS.items():
+        record_parameters(result, sit, prefix=key)
+    result.settings.update({"analysis": asdict(an), "runs": len(seeds), "quick": ctx.quick,
+                            "table_metric": "e_mean = sum |e_k| / K over every 3-ms sample of the whole run"})
+
+    ctx.progress("linear observer analysis")
+    lin = linear.analyse(PAPER, an.eps_grid)
+    ctx.save_figure(result, figures.plot_error_bode(lin), "leso_error_bode.png")
+
+    sims = {}
+    for key, sit in SITUATIONS.items():
+        rows = situation_rows(key, seeds)
+        ctx.progress(f"{key}: {horizons[key]:g} s, {len(rows)} runs on the batch axis")
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            sims[key] = simulate_situation(sit, rows, horizons[key], PAPER, window=an.eps_window,
+                                           keep=_kept(rows), exact=[i for i, r in enumerate(rows)
+                                                                    if r.observer == "meso" and r.seed is None],
+                                           bound=an.bound, progress=ctx.progress)
+
+    sc = quantities.eps_scaling(sims["s1"], an)
+    quantities.linear_quantities(result, lin, sc)
+    ctx.save_figure(result, figures.plot_eps_scaling(sc, lin), "leso_eps_scaling.png")
+    for key, sim in sims.items():
+        quantities.table_quantities(result, key, sim, an)
+        quantities.theta_final(result, key, sim, horizons[key])
+    claims = quantities.claim_quantities(result, sims, lin, horizons)
+    _figures(ctx, result, sims)
+    findings.add_findings(result, sims, lin, sc, claims, horizons, an.tolerance)
+    result.missing = findings.missing(result)
+    result.settings["cells"] = quantities.CELLS
+    return result
+
+
+def _kept(rows) -> list:
+    """Runs whose trajectories the figures draw (noise off, and the first noise seed)."""
+    keep = []
+    for noise in (False, True):
+        for o, v in (("eso", "none"), ("meso", "wellposed"), ("meso", "literal"), ("meso", "direct")):
+            keep += pick(rows, o, v, noise)[:1]
+    return keep + pick(rows, "meso", "literal", False, bypass_w=True)
+
+
+def _figures(ctx, result, sims) -> None:
+    c = figures.COLORS
+    for key, sim in sims.items():
+        sit, rows = SITUATIONS[key], sim.rows
+        fig_no = (3, 4) if key == "s1" else (5, 6)
+        series = {f"noise off (Table {2 if key == 's1' else 3} matches this case)": [
+                      (pick(rows, "eso", "none", False)[0], "ESO", c["eso"]),
+                      (pick(rows, "meso", "wellposed", False)[0], "MESO (well-posed LSM)", c["meso"])],
+                  f"noise on, 0.002·U[−1, 1] (the paper's setting; run seed {rows[pick(rows, 'eso', 'none', True)[0]].seed})": [
+                      (pick(rows, "eso", "none", True)[0], "ESO", c["eso"]),
+                      (pick(rows, "meso", "wellposed", True)[0], "MESO (well-posed LSM)", c["meso"])]}
+        title = (f"Fig. {fig_no[0]} (situation {key[1]}, b0 = {sit.b0:g}, b = {PAPER.b:g}): PD control with ESO "
+                 f"and MESO — x1, tracking and estimation errors (x3 = x2' − b0 u − XᵀΘ_used)")
+        ctx.save_figure(result, figures.plot_situation(sim, series, title), sit.figs[0])
+        runs = [(pick(rows, "meso", "wellposed", True)[0], "MESO well-posed (noise on)", c["meso"]),
+                (pick(rows, "meso", "literal", True)[0], "MESO Table-1 literal (noise on)", c["literal"]),
+                (pick(rows, "meso", "literal", False, bypass_w=True)[0], "Table-1 literal without W(s) (noise off)",
+                 c["noW"])]
+        if key == "s2":
+            runs.append((pick(rows, "meso", "direct", True)[0], "MESO direct (10) (noise on)", c["direct"]))
+        title = (f"Fig. {fig_no[1]} (situation {key[1]}): LSM-identified parameters of d(t), batch N = {sit.N} "
+                 f"({sit.N * PAPER.h:g} s)")
+        ctx.save_figure(result, figures.plot_theta(sim, key, runs, title), sit.figs[1])
+    ctx.save_figure(result, figures.plot_identifiability(_cond_series(sims), PAPER.cond_threshold),
+                    "identifiability.png")
+
+
+def _cond_series(sims) -> dict:
+    import numpy as np
+
+    out = {}
+    for key, sim in sims.items():
+        rows = sim.rows
+        on = 10.0 ** sim.log10_cond[:, pick(rows, "meso", "wellposed", True)]
+        series = [((np.nanmin(on, axis=1), np.nanmedian(on, axis=1), np.nanmax(on, axis=1)),
+                   f"well-posed, noise on ({on.shape[1]} runs)", {"color": "tab:blue", "ls": "-", "marker": "o", "ms": 3})]
+        styles = {"wellposed": ("well-posed, noise off", "tab:cyan", "--", "s"),
+                  "literal": ("Table-1 literal, noise off", "tab:orange", "-.", "^"),
+                  "direct": ("direct (10), noise off", "tab:purple", ":", "D")}
+        for v, (label, color, ls, m) in styles.items():
+            idx = pick(rows, "meso", v, False)
+            if idx:
+                series.append((sim.exact_cond[idx[0]], label, {"color": color, "ls": ls, "marker": m, "ms": 4}))
+        reg = "(22) [x̂1 x̂2 1]" if SITUATIONS[key].regression == "reduced" else "(16) [x̂1 x̂2 K̄+f 1] / (10)"
+        out[f"situation {key[1]}: regression {reg}"] = (sim.t_batch, series)
+    return out

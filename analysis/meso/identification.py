@@ -1,0 +1,293 @@
+"""The paper's batch least-squares identification of d(t) (Table 1, eq. (9)-(23)) as a discrete block.
+
+Every sample the block appends the MESO's own data to its batch, kept as the Gram matrix of the
+regressor vector ``φ = [x̂1, x̂2, 1, x̂3, f, u, K̄]`` (``f = XᵀΘ_used`` the model term fed to the
+observer, ``K̄ = b0 u + Σ k_l x̂_l`` of (14)); every ``N`` samples it solves the batch regression of
+its variant with :func:`ctrl_analysis.identification.batch_least_squares` and outputs the new Θ,
+which W(s) smooths before the observer and the controller use it.
+
+Variants (one per run, on the batch axis):
+
+* ``literal``: the paper's rule, Θ = Σ_i Θ̂_i, each Θ̂_i fitted to the residual x̂3 — (22)-(23) in
+  situation 1, (16)-(20) through Λ and X_Θ in situation 2;
+* ``wellposed``: re-identify the total disturbance ``x̂3 + XᵀΘ_used`` every batch (no accumulation);
+  in situation 2 the full regression is solved only when it passes the identifiability gate
+  (column-scaled condition number <= threshold, Theorem 1), else (22) with θ3 held;
+* ``direct``: (10) directly on ``[x̂1 x̂2 u 1]`` with the total disturbance (situation 2);
+* ``no_const``: ``wellposed`` without the non-model-class column θ_{n+2} (Conclusion 3);
+* ``none``: no identification (the conventional ESO; Θ ≡ 0).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ctrl_analysis._validate import check_in, check_int, check_positive
+from ctrl_analysis.blocks import DiscreteBlock, signal_names
+from ctrl_analysis.identification import batch_least_squares, identifiability
+
+__all__ = [
+    "PHI",
+    "VARIANTS",
+    "BatchIdentification",
+    "design",
+    "equivalent_theta",
+    "exact_report",
+    "regressors",
+    "solve_batch",
+    "theta_from_lambda",
+]
+
+VARIANTS = ("none", "wellposed", "literal", "direct", "no_const")
+#: the regressor vector whose Gram matrix the block accumulates
+PHI = ("xhat1", "xhat2", "1", "xhat3", "f", "u", "kbar")
+_NPHI = len(PHI)
+#: largest column-scaled condition number a Gram matrix resolves in double precision (1/sqrt(eps))
+GRAM_COND_LIMIT = 1.0 / np.sqrt(np.finfo(float).eps)
+
+
+def regressors(xh1, xh2, xh3, u, f, kbar) -> np.ndarray:
+    """``φ = [x̂1, x̂2, 1, x̂3, f, u, K̄]`` stacked on the last axis (any leading shape).
+
+    Parameters
+    ----------
+    xh1, xh2, xh3 : ndarray
+        The MESO's estimates.
+    u : ndarray
+        The control.
+    f : ndarray
+        ``XᵀΘ_used``, the model term fed to the observer.
+    kbar : ndarray
+        ``K̄`` of (14).
+
+    Returns
+    -------
+    ndarray, shape (..., 7)
+    """
+    return np.stack([xh1, xh2, np.ones_like(xh1), xh3, f, u, kbar], axis=-1)
+
+
+def design(variant: str, regression: str, full: bool = True, theta3_held: float = 0.0):
+    """Columns of the regression ``H`` and the regressand ``z`` as combinations of φ.
+
+    Parameters
+    ----------
+    variant : str
+        One of :data:`VARIANTS` except ``"none"``.
+    regression : {"reduced", "full"}
+        (22) with θ3 ≡ 0, or (16)-(20) / (10) with θ3.
+    full : bool
+        ``False``: the situation-2 well-posed fallback, (22) with ``θ3 = theta3_held``.
+    theta3_held : float
+
+    Returns
+    -------
+    T_H : ndarray, shape (p, 7)
+        ``H = φ T_Hᵀ``.
+    t_z : ndarray, shape (7,)
+        ``z = φ t_z``.
+    """
+    e = np.eye(_NPHI)
+    x1, x2, one, x3, f, u, kb = e
+    if variant == "literal":
+        # (22)-(23): [x̂1 x̂2 1] [θ1 θ2 θ4]ᵀ = x̂3;  (16)-(17): [x̂1 x̂2 K̄ 1] Λ = x̂3
+        cols = [x1, x2, one] if regression == "reduced" else [x1, x2, kb, one]
+        return np.array(cols), x3
+    z = x3 + f  # the total disturbance estimate x̂3 + XᵀΘ_used
+    if variant == "no_const":
+        return np.array([x1, x2]), z
+    if variant == "direct":
+        # (10) directly: [x̂1 x̂2 u 1] Θ = z
+        return np.array([x1, x2, u, one]), z
+    if regression == "reduced":
+        return np.array([x1, x2, one]), z
+    if full:
+        # (13)-(20) on the total disturbance: z = λ1 x̂1 + λ2 x̂2 + λ3 (K̄ + f) + λ4
+        return np.array([x1, x2, kb + f, one]), z
+    # the identifiable part only: z − θ3 u = [x̂1 x̂2 1] [θ1 θ2 θ4]ᵀ
+    return np.array([x1, x2, one]), z - theta3_held * u
+
+
+def theta_from_lambda(lam, k_gains, b0: float) -> np.ndarray:
+    """(18)-(19): solve ``X_Θ Θ = b0 Λ`` for Θ (n = 2).
+
+    Parameters
+    ----------
+    lam : array_like, shape (4,)
+        Λ of (15), identified from (16)-(17).
+    k_gains : array_like
+        Controller gains ``k1, k2`` (first two entries used).
+    b0 : float
+
+    Returns
+    -------
+    ndarray, shape (4,)
+        ``[θ1, θ2, θ3, θ4]``.
+    """
+    k1, k2 = k_gains[0], k_gains[1]
+    X_theta = np.array([
+        [b0, 0.0, -(k1 + lam[0]), 0.0],
+        [0.0, b0, -(k2 + lam[1]), 0.0],
+        [0.0, 0.0, 1.0 - lam[2], 0.0],
+        [0.0, 0.0, -lam[3], b0],
+    ])
+    return b0 * np.linalg.solve(X_theta, lam)
+
+
+def equivalent_theta(theta_true, b: float) -> np.ndarray:
+    """Θ that explains the total disturbance on the perfectly tracked trajectory x1 = sin t, x2 = cos t.
+
+    There ``x2' = -x1 = θ1 x1 + θ2 x2 + θ4 + b u``, so ``u = -((1 + θ1) x1 + θ2 x2 + θ4) / b`` lies in
+    span{x1, x2, 1} and ``θ3 u`` folds into the other three parameters:
+    ``Θ_eq = [θ1 - θ3 (1 + θ1)/b, θ2 (1 - θ3/b), 0, θ4 (1 - θ3/b)]``.
+    """
+    t1, t2, t3, t4 = np.asarray(theta_true, dtype=float)
+    r = t3 / b
+    return np.array([t1 - r * (1.0 + t1), t2 * (1.0 - r), 0.0, t4 * (1.0 - r)])
+
+
+def _lsq(T_H, t_z, G=None, Phi=None, threshold=100.0):
+    """Least squares of the design ``(T_H, t_z)`` from a Gram matrix ``G`` or the raw data ``Phi``."""
+    if Phi is not None:
+        return batch_least_squares(Phi @ T_H.T, Phi @ t_z, warn=False, cond_threshold=threshold)
+    T = np.vstack([T_H, t_z])
+    Ga = T @ G @ T.T
+    # a square root F of the augmented Gram (FᵀF = [H z]ᵀ[H z]) has H's singular values and LS solution
+    lam, V = np.linalg.eigh(0.5 * (Ga + Ga.T))
+    F = np.sqrt(np.clip(lam, 0.0, None))[:, None] * V.T
+    return batch_least_squares(F[:, :-1], F[:, -1], warn=False, cond_threshold=threshold)
+
+
+def solve_batch(variant, regression, theta_cum, k_gains, b0, threshold, G=None, Phi=None):
+    """One batch of one run of the identification.
+
+    Parameters
+    ----------
+    variant : str
+        One of :data:`VARIANTS` except ``"none"``.
+    regression : {"reduced", "full"}
+    theta_cum : ndarray, shape (4,)
+        Current Θ (the literal rule adds to it; the gate fallback holds its θ3).
+    k_gains : array_like
+        Controller gains.
+    b0 : float
+    threshold : float
+        Identifiability gate on the column-scaled condition number.
+    G : ndarray, shape (7, 7), optional
+        The batch's Gram matrix of φ (the block's state).
+    Phi : ndarray, shape (N, 7), optional
+        The batch's raw rows of φ (exact path).
+
+    Returns
+    -------
+    theta : ndarray, shape (4,)
+        The new Θ.
+    report : ctrl_analysis.identification.IdentifiabilityReport
+        Of the regression tried first.
+    """
+    T_H, t_z = design(variant, regression)
+    res = _lsq(T_H, t_z, G, Phi, threshold)
+    th = res.theta
+    if variant == "literal":
+        # Table 1: Θ = Σ_i Θ̂_i
+        inc = (np.array([th[0], th[1], 0.0, th[2]]) if regression == "reduced"
+               else theta_from_lambda(th, k_gains, b0))
+        return theta_cum + inc, res.report
+    if variant == "no_const":
+        return np.array([th[0], th[1], 0.0, 0.0]), res.report
+    if variant == "direct":
+        return th.copy(), res.report
+    if regression == "reduced":
+        return np.array([th[0], th[1], 0.0, th[2]]), res.report
+    if res.report.well_conditioned:
+        return theta_from_lambda(th, k_gains, b0), res.report
+    # Theorem 1 gate failed: identify only the identifiable part, θ3 held at its current value
+    T_H, t_z = design(variant, regression, full=False, theta3_held=theta_cum[2])
+    red = _lsq(T_H, t_z, G, Phi, threshold)
+    return np.array([red.theta[0], red.theta[1], theta_cum[2], red.theta[2]]), res.report
+
+
+def exact_report(variant, regression, Phi, threshold=100.0):
+    """:func:`~ctrl_analysis.identification.identifiability` of the first regression on the raw batch ``Phi``."""
+    T_H, _ = design(variant, regression)
+    return identifiability(Phi @ T_H.T, cond_threshold=threshold)
+
+
+class BatchIdentification(DiscreteBlock):
+    """Batch least squares every ``N`` samples on the MESO's estimates, one variant per run (a discrete block).
+
+    Parameters
+    ----------
+    N : int
+        Batch size in samples (>= 4).
+    h : float
+        Sample period (s); the block counts samples as ``round(t / h)``.
+    b0 : float
+        Nominal input gain (for K̄ and X_Θ).
+    k_gains : array_like, shape (3,)
+        Controller gains ``k1, k2, k3`` of (30).
+    regression : {"reduced", "full"}
+    variants : sequence of str
+        One of :data:`VARIANTS` per run (fixes the batch size B).
+    thresholds : float or sequence of float
+        Identifiability gate (column-scaled condition number) per run.
+
+    Block signals: inputs ``xhat1..3``, ``u``, ``theta[0..3]`` (the Θ in use); outputs ``c[0..3]``
+    (the latest LSM result, input of W(s)), ``log10_cond`` (column-scaled) and ``rank`` of the latest
+    batch's first regression (0 before the first batch and for ``none``); states: the
+    outputs, then the batch's Gram matrix of φ divided by N (49 entries).
+
+    References
+    ----------
+    Chen & Gao 2018, Table 1, eq. (9)-(23), Theorem 1. Departures: the batch is accumulated as a
+    Gram matrix (same solution; condition numbers above ~1e7 not resolved), the well-posed and
+    direct variants (see the module docstring).
+    """
+
+    feedthrough = False
+
+    def __init__(self, N, h, b0, k_gains, regression, variants, thresholds=100.0):
+        self.N = check_int("N", N, minimum=4)
+        self.h = float(check_positive("h", h))
+        self.b0 = float(b0)
+        self.k = np.asarray(k_gains, dtype=float)
+        self.regression = check_in("regression", regression, ("reduced", "full"))
+        self.variants = tuple(check_in("variants", v, VARIANTS) for v in variants)
+        self.thresholds = np.broadcast_to(check_positive("thresholds", thresholds), (len(self.variants),)).copy()
+        self.inputs = ("xhat1", "xhat2", "xhat3", "u") + signal_names("theta", 4)
+        self.outputs = signal_names("c", 4) + ("log10_cond", "rank")
+        self.states = self.outputs + tuple(f"G[{i}][{j}]" for i in range(_NPHI) for j in range(_NPHI))
+        self._active = [b for b, v in enumerate(self.variants) if v != "none"]
+
+    def phi(self, u) -> np.ndarray:
+        """φ of this sample from the block's inputs, shape (B, 7)."""
+        xh1, xh2, xh3, uc = u[:, 0], u[:, 1], u[:, 2], u[:, 3]
+        # f = XᵀΘ_used with X = [x̂1, x̂2, u, 1] (the term the observer receives, (29))
+        f = u[:, 4] * xh1 + u[:, 5] * xh2 + u[:, 6] * uc + u[:, 7]
+        # (14) K̄ = b0 u + Σ_l k_l x̂_l
+        kbar = self.b0 * uc + self.k[0] * xh1 + self.k[1] * xh2 + self.k[2] * xh3
+        return regressors(xh1, xh2, xh3, uc, f, kbar)
+
+    def update(self, t, x, u, params=None) -> np.ndarray:
+        phi = self.phi(u)
+        x_next = x.copy()
+        x_next[:, 6:] += (phi[:, :, None] * phi[:, None, :]).reshape(len(x), -1) / self.N
+        if (round(t / self.h) + 1) % self.N == 0:
+            self._identify(x_next)
+        return x_next
+
+    def _identify(self, x) -> None:
+        """Batch end: solve every active run's regression, reset the Gram (in place)."""
+        for b in self._active:
+            G = x[b, 6:].reshape(_NPHI, _NPHI)
+            if not np.all(np.isfinite(G)):
+                continue
+            theta, rep = solve_batch(self.variants[b], self.regression, x[b, :4], self.k, self.b0,
+                                     self.thresholds[b], G=G)
+            x[b, :4] = theta
+            # log10 keeps the state bounded (the loop flags states beyond its bound as diverged)
+            x[b, 4], x[b, 5] = np.log10(min(rep.cond_scaled, 1e99)), rep.rank
+        x[:, 6:] = 0.0
+
+    def output(self, t, x, u, params=None) -> np.ndarray:
+        return x[:, :6]

@@ -1,0 +1,393 @@
+"""The closed loops of §4 built from blocks: plant (27), (M)ESO (29), PD law (30)/(12), LSM identification, W(s).
+
+One :class:`~ctrl_analysis.loop.Loop` per situation carries every configuration on the batch axis
+(ESO / MESO, identification variant, noise seed, ε, plant gain, identifiability threshold, W(s)
+bypassed or not). It is stepped one identification batch (N samples) at a time, so memory stays
+bounded over 210 s; after each chunk the table sums, the batch-end identification records and the
+trajectories of a few runs kept for the figures are taken from the named signals.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ctrl_analysis.blocks import ContinuousBlock, DiscreteBlock, signal_names
+from ctrl_analysis.controllers.pd import PDFeedforward
+from ctrl_analysis.estimators.eso import ExtendedStateObserver
+from ctrl_analysis.estimators.lowpass import LowPassFilter
+from ctrl_analysis.loop import Loop, place
+from ctrl_analysis.simulate import draw_noise, uniform_noise
+
+from .identification import BatchIdentification, exact_report
+from .paper import PAPER, Paper, Situation
+
+__all__ = [
+    "ModelledESO",
+    "ParameterPath",
+    "Plant",
+    "Row",
+    "SituationRun",
+    "build_loop",
+    "pick",
+    "simulate_situation",
+    "situation_rows",
+    "x3_true",
+]
+
+
+@dataclass(frozen=True)
+class Row:
+    """One configuration on the batch axis.
+
+    observer : "eso" or "meso"; variant : identification variant (``"none"`` for the ESO); seed : noise
+    seed or None (noise off); b_plant : input gain of the simulated plant; epsilon : observer ε;
+    bypass_w : feed the LSM result to the observer without W(s); threshold : identifiability gate.
+    """
+
+    observer: str
+    variant: str
+    seed: int | None
+    b_plant: float = PAPER.b
+    epsilon: float = PAPER.epsilon
+    bypass_w: bool = False
+    threshold: float = PAPER.cond_threshold
+
+    @property
+    def label(self) -> str:
+        v = "" if self.observer == "eso" else f"-{self.variant}" + ("-noW" if self.bypass_w else "")
+        extra = "".join([f"/eps={self.epsilon:g}" if self.epsilon != PAPER.epsilon else "",
+                         f"/b={self.b_plant:g}" if self.b_plant != PAPER.b else "",
+                         f"/gate={self.threshold:g}" if self.threshold != PAPER.cond_threshold else ""])
+        return f"{self.observer}{v}/" + ("no-noise" if self.seed is None else f"seed{self.seed}") + extra
+
+
+class Plant(ContinuousBlock):
+    """Plant (27) with the disturbance (31)/(32): ``x1' = x2``, ``x2' = θ1 x1 + θ2 x2 + θ4 + b u``, ``y = x1 + v``.
+
+    ``b`` may differ per run (array of shape (B,)). Inputs ``u``, ``level`` (θ4, held), ``v``
+    (measurement noise, held); outputs ``x1``, ``x2``, ``y``.
+    """
+
+    inputs = ("u", "level", "v")
+    outputs = ("x1", "x2", "y")
+    states = ("x1", "x2")
+    feedthrough = True
+
+    def __init__(self, paper: Paper, b):
+        self.theta1, self.theta2 = paper.theta1, paper.theta2
+        self.b = np.asarray(b, dtype=float)
+
+    def rhs(self, t, x, u, params=None):
+        dx = np.empty_like(x)
+        dx[:, 0] = x[:, 1]
+        # (27)/(31)/(32): x2' = θ1 x1 + θ2 x2 + θ4 + b u
+        dx[:, 1] = self.theta1 * x[:, 0] + self.theta2 * x[:, 1] + u[:, 1] + self.b * u[:, 0]
+        return dx
+
+    def output(self, t, x, u, params=None):
+        # (27): y = x1 + 0.002 n0
+        return np.stack([x[:, 0], x[:, 1], x[:, 0] + u[:, 2]], axis=1)
+
+
+def _model_term(t, x_hat, u, params=None):
+    # (29) XᵀΘ with X = [x̂1, x̂2, u, 1]; u = [y, u, θ1, θ2, θ3, θ4]
+    return u[:, 2] * x_hat[:, 0] + u[:, 3] * x_hat[:, 1] + u[:, 4] * u[:, 1] + u[:, 5]
+
+
+class ModelledESO(ContinuousBlock):
+    """The linear (M)ESO (29) with the identified model XᵀΘ as the known part, Θ an input signal.
+
+    Wraps :class:`~ctrl_analysis.estimators.eso.ExtendedStateObserver` (its ``rhs`` is called, with
+    ``known = XᵀΘ``); Θ = 0 gives the conventional ESO (6). ``epsilons`` may differ per run: the runs
+    are grouped by ε, one observer per group.
+
+    Inputs ``y``, ``u``, ``theta[0..3]``; states and outputs ``xhat1..3``.
+    """
+
+    inputs = ("y", "u") + signal_names("theta", 4)
+    outputs = states = ("xhat1", "xhat2", "xhat3")
+
+    def __init__(self, paper: Paper, b0: float, epsilons):
+        eps = np.asarray(epsilons, dtype=float)
+        self.groups = [(np.flatnonzero(eps == e), ExtendedStateObserver.from_epsilon(
+            paper.n, e, paper.beta, b0=b0, known=_model_term)) for e in np.unique(eps)]
+        self.single = self.groups[0][1] if len(self.groups) == 1 else None
+
+    def rhs(self, t, x, u, params=None):
+        if self.single is not None:
+            return self.single.rhs(t, x, u, params)
+        dx = np.empty_like(x)
+        for idx, obs in self.groups:
+            dx[idx] = obs.rhs(t, x[idx], u[idx], params)
+        return dx
+
+
+class ParameterPath(DiscreteBlock):
+    """Θ_used = W(s)-smoothed LSM result, or the raw LSM result for runs with ``bypass`` (a discrete block).
+
+    Parameters
+    ----------
+    bypass : array_like of bool, shape (B,)
+        Runs whose observer and controller receive the LSM result without W(s) (the literal rule
+        without W(s), a claim check).
+
+    Block signals: inputs ``c[0..3]`` (LSM result), ``w[0..3]`` (after W(s)); outputs ``theta[0..3]``.
+    """
+
+    inputs = signal_names("c", 4) + signal_names("w", 4)
+    outputs = signal_names("theta", 4)
+    feedthrough = True
+
+    def __init__(self, bypass):
+        self.bypass = np.asarray(bypass, dtype=bool)[:, None]
+
+    def update(self, t, x, u, params=None):
+        return x
+
+    def output(self, t, x, u, params=None):
+        return np.where(self.bypass, u[:, :4], u[:, 4:])
+
+
+def build_loop(sit: Situation, rows, paper: Paper = PAPER) -> Loop:
+    """The loop of situation ``sit`` with one run per row.
+
+    Parameters
+    ----------
+    sit : Situation
+    rows : sequence of Row
+        One configuration per run of the batch.
+    paper : Paper
+
+    Returns
+    -------
+    ctrl_analysis.loop.Loop
+        Blocks ``plant`` (27), ``observer`` (29), ``pd`` (30)/(12), ``lsm`` (Table 1), ``W`` (W(s)) and
+        ``path``; external inputs ``level`` (θ4), ``v`` (noise), ``r[0..2]`` (ξ, ξ', ξ'').
+    """
+    pd = PDFeedforward(b0=sit.b0, omega_c=paper.omega_c, order=paper.n, model=True)
+    lpf = LowPassFilter(paper.omega_f, order=2).digital(paper.h, channels=4)
+    ident = BatchIdentification(sit.N, paper.h, sit.b0, pd.k, sit.regression, [r.variant for r in rows],
+                                [r.threshold for r in rows])
+    xhat = ("xhat1", "xhat2", "xhat3")
+    return Loop([
+        place(Plant(paper, [r.b_plant for r in rows]), "plant"),
+        place(ModelledESO(paper, sit.b0, [r.epsilon for r in rows]), "observer"),
+        place(pd, "pd", inputs=signal_names("r", 3) + xhat + signal_names("theta", 4)),
+        place(ident, "lsm"),
+        place(lpf, "W", inputs=signal_names("c", 4), outputs=signal_names("w", 4)),
+        place(ParameterPath([r.bypass_w for r in rows]), "path"),
+    ], paper.h)
+
+
+@dataclass
+class SituationRun:
+    """What one situation's simulation keeps (``K`` samples, ``B`` runs, ``nb`` batches)."""
+
+    rows: list
+    t: np.ndarray                       # (K,)
+    sums: dict                          # metric -> (B,) Σ|e| over the whole run
+    window_sums: dict                   # metric -> (B,) Σ|e| over analysis.eps_window
+    n_window: int
+    sup_dx3: np.ndarray                 # (B,) sup |Δx3_true / h| (step instant excluded)
+    t_batch: np.ndarray                 # (nb,)
+    theta_batch: np.ndarray             # (nb, B, 4) LSM result after each batch
+    log10_cond: np.ndarray              # (nb, B) online (Gram) column-scaled cond of the first regression
+    rank: np.ndarray                    # (nb, B)
+    exact_cond: dict = field(default_factory=dict)   # run -> (nb,) cond from the raw batch (SVD)
+    exact_rank: dict = field(default_factory=dict)
+    keep: dict = field(default_factory=dict)         # run -> {signal: (K,)} for the figures
+    diverged: np.ndarray = None
+    diverged_step: np.ndarray = None
+    b0: float = 0.0
+
+
+def x3_true(sig, rows, paper, b0):
+    """True extended state at the samples: x3 = x2' − b0 u − XᵀΘ_used (ESO: Θ_used = 0).
+
+    Parameters
+    ----------
+    sig : dict of str -> ndarray, shape (n, B)
+        Signals ``x1, x2, u, level, xhat1, xhat2, theta[0..3]``.
+    rows : sequence of Row
+        The runs (their plant gain ``b``).
+    paper : Paper
+    b0 : float
+
+    Returns
+    -------
+    ndarray, shape (n, B)
+    """
+    b = np.array([r.b_plant for r in rows])
+    x1, x2, u = sig["x1"], sig["x2"], sig["u"]
+    x2dot = paper.theta1 * x1 + paper.theta2 * x2 + sig["level"] + b * u
+    f = sig["theta[0]"] * sig["xhat1"] + sig["theta[1]"] * sig["xhat2"] + sig["theta[2]"] * u + sig["theta[3]"]
+    return x2dot - b0 * u - f
+
+
+def _chunk_errors(sig, t, rows, paper, b0):
+    """|e| of every table metric at the chunk's samples, each (n, B)."""
+    x3 = x3_true(sig, rows, paper, b0)
+    return {
+        "est_x1": np.abs(sig["x1"] - sig["xhat1"]),
+        "est_x2": np.abs(sig["x2"] - sig["xhat2"]),
+        "est_x3": np.abs(x3 - sig["xhat3"]),
+        "est_x3_no_bu": np.abs(x3 - (paper.b - b0) * sig["u"] - sig["xhat3"]),
+        "track_x1": np.abs(np.sin(t)[:, None] - sig["x1"]),
+        "track_x2": np.abs(np.cos(t)[:, None] - sig["x2"]),
+    }, x3
+
+
+_KEPT = ("x1", "x2", "xhat1", "xhat2", "xhat3", "u", "theta[0]", "theta[1]", "theta[2]", "theta[3]")
+
+
+def simulate_situation(sit: Situation, rows, T: float, paper: Paper = PAPER, window=(5.0, 10.0),
+                       keep=(), exact=(), bound: float = 1e6, progress=None) -> SituationRun:
+    """Simulate every row of situation ``sit`` over ``T`` seconds, one identification batch per chunk.
+
+    Parameters
+    ----------
+    sit : Situation
+    rows : sequence of Row
+    T : float
+        Horizon (s).
+    paper : Paper
+    window : (float, float)
+        Window of :attr:`SituationRun.window_sums` (the ε-scaling), ``[start, end)`` in s.
+    keep : sequence of int
+        Runs whose trajectories are kept (figures).
+    exact : sequence of int
+        MESO runs whose batch identifiability is also computed exactly from the raw batch (SVD).
+    bound : float
+        A run whose state (plant, observer, the identification's Gram entries) leaves ``|x| <= bound``
+        is flagged as diverged.
+    progress : callable, optional
+        ``progress(message)`` after each chunk.
+
+    Returns
+    -------
+    SituationRun
+    """
+    h, N, B = paper.h, sit.N, len(rows)
+    K = round(T / h)
+    t_all = h * np.arange(K + 1)
+    level = np.where(t_all >= paper.t_step - 0.5 * h, paper.step, 0.0)
+    noise = np.zeros((K + 1, B))
+    seeds = sorted({r.seed for r in rows if r.seed is not None})
+    if seeds:  # one draw per seed: ESO and MESO runs with the same seed see the same noise
+        drawn = draw_noise(seeds, K, uniform_noise(-1.0, 1.0))[:, :, 0]
+        for b, r in enumerate(rows):
+            if r.seed is not None:
+                noise[:K, b] = paper.noise_amp * drawn[:, seeds.index(r.seed)]
+    loop = build_loop(sit, rows, paper)
+    ident = loop.placed[3].block
+    in_window = (t_all[:K] >= window[0]) & (np.arange(K) < round(window[1] / h))
+    metrics = ("est_x1", "est_x2", "est_x3", "est_x3_no_bu", "track_x1", "track_x2")
+    out = SituationRun(rows=list(rows), t=t_all[:K], sums={m: np.zeros(B) for m in metrics},
+                       window_sums={m: np.zeros(B) for m in metrics}, n_window=int(in_window.sum()),
+                       sup_dx3=np.zeros(B), t_batch=np.empty(0), theta_batch=np.empty((0, B, 4)),
+                       log10_cond=np.empty((0, B)), rank=np.empty((0, B)),
+                       keep={b: {s: np.empty(K) for s in _KEPT} for b in keep},
+                       diverged=np.zeros(B, dtype=bool), diverged_step=np.full(B, -1), b0=sit.b0)
+    out.exact_cond = {b: [] for b in exact}
+    out.exact_rank = {b: [] for b in exact}
+    x0, k0, x3_last, tb, thb, lc, rk = None, 0, None, [], [], [], []
+    while k0 < K:
+        n = min(N, K - k0)
+        sl = slice(k0, k0 + n + 1)
+        inputs = {"level": level[sl], "v": noise[sl], "r[0]": np.sin(t_all[sl]), "r[1]": np.cos(t_all[sl]),
+                  "r[2]": -np.sin(t_all[sl])}
+        res = loop.simulate(n, inputs=inputs, x0=x0, runs=B, t0=t_all[k0], bound=bound, store_states=False)
+        new = res.diverged & ~out.diverged
+        out.diverged_step[new] = k0 + res.diverged_step[new]
+        out.diverged |= res.diverged
+        sig = {s: res[s][:n] for s in res.signals}
+        err, x3 = _chunk_errors(sig, t_all[k0:k0 + n], rows, paper, sit.b0)
+        w = in_window[k0:k0 + n]
+        for m in metrics:
+            out.sums[m] += err[m].sum(axis=0)
+            out.window_sums[m] += err[m][w].sum(axis=0)
+        _sup_dx3(out, x3, x3_last, t_all[k0:k0 + n], paper, t_from=2 * N * h)
+        x3_last = x3[-1]
+        for b in keep:
+            for s in _KEPT:
+                out.keep[b][s][k0:k0 + n] = sig[s][:, b]
+        if n == N:  # a full batch ended at the chunk's last sample: its result is the next sample's output
+            tb.append(t_all[k0 + n - 1])
+            thb.append(np.stack([res[f"c[{i}]"][n] for i in range(4)], axis=1))
+            lc.append(res["log10_cond"][n])
+            rk.append(res["rank"][n])
+            for b in exact:
+                phi = ident.phi(np.stack([sig[s][:, b] for s in ident.inputs], axis=1))
+                ok = np.all(np.isfinite(phi))
+                rep = exact_report(rows[b].variant, sit.regression, phi, rows[b].threshold) if ok else None
+                out.exact_cond[b].append(rep.cond_scaled if ok else np.nan)
+                out.exact_rank[b].append(rep.rank if ok else -1)
+        x0 = {name: np.nan_to_num(x, nan=0.0, posinf=0.0, neginf=0.0) for name, x in res.final_states.items()}
+        k0 += n
+        if progress is not None:
+            progress(f"{sit.key}: t = {k0 * h:.0f} / {T:.0f} s")
+    out.t_batch, out.theta_batch = np.array(tb), np.array(thb).reshape(-1, B, 4)
+    out.log10_cond, out.rank = np.array(lc).reshape(-1, B), np.array(rk).reshape(-1, B)
+    out.exact_cond = {b: np.array(v) for b, v in out.exact_cond.items()}
+    out.exact_rank = {b: np.array(v) for b, v in out.exact_rank.items()}
+    _cut_at_divergence(out)
+    return out
+
+
+def _cut_at_divergence(out):
+    """A diverged run's records end where it diverged (later chunks restart it from 0; never shown)."""
+    for b in np.flatnonzero(out.diverged):
+        k = out.diverged_step[b]
+        after = out.t_batch >= out.t[min(k, len(out.t) - 1)] - 0.5 * (out.t[1] - out.t[0])
+        out.theta_batch[after, b] = np.nan
+        out.log10_cond[after, b] = np.nan
+        out.rank[after, b] = -1
+        if b in out.exact_cond:
+            out.exact_cond[b] = np.where(after, np.nan, out.exact_cond[b])
+        if b in out.keep:
+            for s in _KEPT:
+                out.keep[b][s][k - 1:] = np.nan
+
+
+def _sup_dx3(out, x3, x3_last, t, paper, t_from):
+    """Update sup |Δx3/h| per run (M and N of (5)/(8)) from ``t_from`` on, skipping the θ4 step at t_step."""
+    full = x3 if x3_last is None else np.vstack([x3_last[None], x3])
+    t_end = t[1:] if x3_last is None else t
+    d = np.abs(np.diff(full, axis=0)) / paper.h
+    d[(np.abs(t_end - paper.t_step) < 0.5 * paper.h) | (t_end < t_from)] = 0.0
+    d[~np.isfinite(d)] = 0.0
+    if d.size:
+        out.sup_dx3 = np.maximum(out.sup_dx3, d.max(axis=0))
+
+
+def situation_rows(key: str, seeds, paper: Paper = PAPER) -> list:
+    """The configurations of situation ``key`` on the batch axis.
+
+    Tables: ESO, MESO well-posed and MESO literal, each with every noise seed and noise off. Claims
+    (noise off): situation 1 — the ESO at the other ε of the scaling grid, the MESO at ε = 0.1 (§5),
+    the MESO without θ4 (Conclusion 3), the literal rule without W(s); situation 2 — the direct
+    regression (10) (first seed and noise off), the ESO on the plant with 0.95 u as an extra term,
+    the well-posed MESO with other identifiability thresholds, the literal rule without W(s).
+    """
+    rows = [Row(o, v, s) for o, v in (("eso", "none"), ("meso", "wellposed"), ("meso", "literal"))
+            for s in list(seeds) + [None]]
+    if key == "s1":
+        rows += [Row("eso", "none", None, epsilon=e) for e in (0.1, 0.025, 0.0125)]
+        rows += [Row("meso", "wellposed", None, epsilon=0.1), Row("meso", "no_const", None),
+                 Row("meso", "literal", None, bypass_w=True)]
+    else:
+        rows += [Row("meso", "direct", seeds[0]), Row("meso", "direct", None),
+                 Row("eso", "none", None, b_plant=paper.b + 0.95)]
+        rows += [Row("meso", "wellposed", None, threshold=g) for g in (110.0, 1000.0)]
+        rows += [Row("meso", "literal", None, bypass_w=True)]
+    return rows
+
+
+def pick(rows, observer, variant, noise: bool, **extra) -> list:
+    """Indices of the rows with these settings (``extra`` fields default to the paper's values)."""
+    base = {"b_plant": PAPER.b, "epsilon": PAPER.epsilon, "bypass_w": False, "threshold": PAPER.cond_threshold}
+    base.update(extra)
+    return [i for i, r in enumerate(rows) if r.observer == observer and r.variant == variant
+            and (r.seed is not None) == noise and all(getattr(r, k) == v for k, v in base.items())]

@@ -1,0 +1,321 @@
+"""Quantities of the study: the linear observer, Tables 2 and 3, Θ of Fig. 4 / 6 and the checked claims.
+
+Every value is computed from a :class:`~.loops.SituationRun` or a :class:`~.linear.LinearAnalysis`;
+table cells carry the paper's printed value, a tolerance and a unit. A quantity whose runs all
+diverged has no value (``None``; the note says so).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ctrl_analysis.metrics import mean_std
+from ctrl_analysis.report import StudyResult
+
+from .identification import equivalent_theta
+from .loops import SituationRun, pick
+from .paper import METRICS, PAPER, SITUATIONS, TABLE_UNITS, TABLES, Analysis, Paper
+
+__all__ = [
+    "CELLS",
+    "claim_quantities",
+    "eps_scaling",
+    "first_divergence",
+    "gate_passes",
+    "linear_quantities",
+    "table_quantities",
+    "theta_final",
+    "theta_truth",
+]
+
+#: quantity id -> the paper cell it scores (each cell once, with the primary reading: noise on, well-posed)
+CELLS = {f"{k}.{o}.{m}": f"{SITUATIONS[k].table} / {o.upper()} / {m}" for k in ("s1", "s2")
+         for o in ("meso", "eso") for m in METRICS}
+
+
+def linear_quantities(result: StudyResult, lin, sc: dict) -> None:
+    """ω_o, poles, error DC gains, ε-slopes of the closed-loop errors, noise std per ε.
+
+    Parameters
+    ----------
+    result : StudyResult
+        Receives the quantities.
+    lin : LinearAnalysis
+        From :func:`.linear.analyse`.
+    sc : dict
+        From :func:`eps_scaling`.
+    """
+    eps = PAPER.epsilon
+    result.quantity("leso.omega_o", "LESO bandwidth ω_o: s³ + β₁/ε s² + β₂/ε² s + β₃/ε³ = (s + ω_o)³",
+                    lin.omega_o, unit="rad/s",
+                    note=f"exact (sympy): β = (3, 3, 1) = C(3, i)·1^i is a bandwidth form with ω_o = 1/ε; "
+                         f"p(s) = {lin.char_poly}")
+    result.quantity("leso.poles", "LESO poles (real parts; triple root)", lin.poles.real, unit="rad/s",
+                    note=f"numerical roots of a triple root at -{lin.omega_o:g}; |imag| <= "
+                         f"{np.max(np.abs(lin.poles.imag)):.1e}; python-control ss poles "
+                         f"{np.sort(lin.observer.ss.poles().real).round(3).tolist()}")
+    result.quantity("leso.error_dc_gains", "steady e_i per unit constant dx3/dt: (β_{i-1}/β₃) ε^(n+2-i)",
+                    lin.error_dc_gains, unit="s, s, s (e_i per unit of dx3/dt in 1/s³)",
+                    note="DC gains of E_i(s)/H(s) (python-control); sympy gives ε³/β₃, β₁ε²/β₃, β₂ε/β₃ = "
+                         f"{[eps**3, 3 * eps**2, 3 * eps]}")
+    units = ("", "1/s", "1/s²")
+    for i in range(3):
+        result.quantity(f"leso.eps_slope.x{i + 1}",
+                        f"log-log slope of mean |e_{i + 1}| vs ε (law (4)/(7): {lin.law[i]})",
+                        float(sc["slope"][i]), unit="",
+                        note=f"ESO in the noise-free situation-1 loop, ε ∈ {sc['eps'].tolist()}, mean over "
+                             f"[{sc['window'][0]:g}, {sc['window'][1]:g}) s: {np.array2string(sc['err'][:, i], precision=3)}")
+        result.quantity(f"leso.noise_std.x{i + 1}",
+                        f"steady std of e_{i + 1} caused by the measurement noise, per ε {lin.eps.tolist()}",
+                        lin.noise_std[:, i], unit=units[i],
+                        note="linear error dynamics e' = (A − LC)e − Lv, ZOH at 3 ms, v ~ 0.002·U[−1, 1] per step "
+                             "(control.dlyap); the same for ESO and MESO (§5's noise-sensitivity claim)")
+
+
+def eps_scaling(sim: SituationRun, analysis: Analysis) -> dict:
+    """Mean |e_i| of the noise-free ESO over the analysis window, for each ε of the grid (situation 1).
+
+    Parameters
+    ----------
+    sim : SituationRun
+        Situation 1 (its rows include the ESO at every ε of ``analysis.eps_grid``, noise off).
+    analysis : Analysis
+
+    Returns
+    -------
+    dict
+        ``eps``, ``err`` (len(eps), 3), the log-log ``slope`` (3,) and the ``window``.
+    """
+    eps = np.asarray(analysis.eps_grid, dtype=float)
+    idx = [pick(sim.rows, "eso", "none", False, epsilon=e)[0] for e in eps]
+    err = np.stack([sim.window_sums[m][idx] / sim.n_window for m in ("est_x1", "est_x2", "est_x3")], axis=1)
+    slope = np.array([np.polyfit(np.log(eps), np.log(err[:, i]), 1)[0] for i in range(3)])
+    return {"eps": eps, "err": err, "slope": slope, "window": analysis.eps_window}
+
+
+def first_divergence(sim: SituationRun, idx) -> float | None:
+    """Time of the earliest divergence among runs ``idx``.
+
+    Parameters
+    ----------
+    sim : SituationRun
+    idx : sequence of int
+
+    Returns
+    -------
+    float or None
+        None if none of the runs diverged.
+    """
+    bad = [i for i in idx if sim.diverged[i]]
+    if not bad:
+        return None
+    return float(sim.t[min(sim.diverged_step[i] for i in bad) - 1] + (sim.t[1] - sim.t[0]))
+
+
+def _table_cell(result, key, sim, idx, metric, qid, what, noise, analysis):
+    """One Table 2/3 cell (or its noise-off / literal twin) as a quantity."""
+    sit = SITUATIONS[key]
+    K = len(sim.t)
+    ok = ~sim.diverged[idx]
+    mean, std, n_ok = mean_std(sim.sums[metric][idx] / K, ok)
+    o = "eso" if what == "ESO" else "meso"
+    paper_v = TABLES[key][o][METRICS.index("est_x3" if metric == "est_x3_no_bu" else metric)]
+    note = f"noise {'on' if noise else 'off'}; {what}"
+    if metric == "est_x3":
+        note += "; true x3 = x2' − b0 u − XᵀΘ_used (with the (b − b0)u part)"
+    if metric == "est_x3_no_bu":
+        note += "; true x3 taken as the printed d(t) minus 0.95u (i.e. 1.3x1 − 1.6x2 + θ4) minus XᵀΘ_used"
+    t_div = first_divergence(sim, idx)
+    if t_div is not None:
+        note += f"; {len(idx) - n_ok}/{len(idx)} runs diverged (first at t = {t_div:.2f} s)"
+    if n_ok == 0:
+        note += "; all runs diverged: no value (verdict should read 'diverged')"
+    label_m = "est_x3 against x3 without (b − b0)u" if metric == "est_x3_no_bu" else metric
+    result.quantity(qid, f"{sit.table}, {what}, mean |e| {label_m}, noise {'on' if noise else 'off'}",
+                    None if n_ok == 0 else float(mean), paper=paper_v,
+                    std=None if n_ok == 0 else float(std), runs=int(n_ok), tolerance=analysis.tolerance,
+                    unit=TABLE_UNITS[metric], note=note)
+
+
+def table_quantities(result: StudyResult, key: str, sim: SituationRun, analysis: Analysis) -> None:
+    """Tables 2/3: ESO and MESO (well-posed) with noise on and off, the literal rule with noise on.
+
+    Parameters
+    ----------
+    result : StudyResult
+    key : {"s1", "s2"}
+    sim : SituationRun
+    analysis : Analysis
+        Its ``tolerance`` is the relative tolerance of every cell.
+    """
+    rows = sim.rows
+    for noise in (True, False):
+        tag = f"{key}." if noise else f"{key}.nonoise."
+        for name, o, v in (("meso", "meso", "wellposed"), ("eso", "eso", "none"), ("literal", "meso", "literal")):
+            if name == "literal" and not noise:
+                continue
+            what = {"meso": "MESO (well-posed identification)", "eso": "ESO",
+                    "literal": "MESO, Table-1 literal accumulation"}[name]
+            idx = pick(rows, o, v, noise)
+            for m in METRICS:
+                qid = f"{key}.literal.meso.{m}" if name == "literal" else f"{tag}{o}.{m}"
+                _table_cell(result, key, sim, idx, m, qid, what, noise, analysis)
+        if key == "s2":
+            for o, v, what in (("eso", "none", "ESO"), ("meso", "wellposed", "MESO (well-posed identification)")):
+                _table_cell(result, key, sim, pick(rows, o, v, noise), "est_x3_no_bu", f"{tag}{o}.est_x3_no_bu",
+                            what, noise, analysis)
+
+
+def theta_truth(key: str, t, paper: Paper = PAPER) -> np.ndarray:
+    """True Θ = [θ1, θ2, θ3, θ4] of situation ``key`` at the times ``t`` ((31)/(32); θ4 from t_step on).
+
+    Parameters
+    ----------
+    key : {"s1", "s2"}
+    t : array_like, shape (n,)
+    paper : Paper
+
+    Returns
+    -------
+    ndarray, shape (n, 4)
+    """
+    th3 = SITUATIONS[key].theta3_printed
+    before = np.array([paper.theta1, paper.theta2, th3, 0.0])
+    after = np.array([paper.theta1, paper.theta2, th3, paper.step])
+    return np.where((np.asarray(t) >= paper.t_step - 0.5 * paper.h)[:, None], after, before)
+
+
+def theta_final(result: StudyResult, key: str, sim: SituationRun, horizon: float) -> None:
+    """Θ after the last batch (well-posed, noise on): what Fig. 4 / Fig. 6 show converging.
+
+    Parameters
+    ----------
+    result : StudyResult
+    key : {"s1", "s2"}
+    sim : SituationRun
+    horizon : float
+        End of the run (s), for the truth at that time.
+    """
+    idx = pick(sim.rows, "meso", "wellposed", True)
+    mean, std, n_ok = mean_std(sim.theta_batch[-1, idx], ~sim.diverged[idx])
+    true_end = theta_truth(key, [horizon])[0]
+    note = (f"Fig. {4 if key == 's1' else 6} plots Θ converging to the truth; the paper prints no value. "
+            f"Truth Θ = {true_end.tolist()} (at t = {horizon:g} s)")
+    if key == "s2":
+        note += (f"; trajectory-equivalent Θ_eq = {equivalent_theta(true_end, PAPER.b).round(4).tolist()} "
+                 "(θ3 not identifiable in closed loop)")
+    result.quantity(f"{key}.theta_final", f"Fig. {4 if key == 's1' else 6}: identified Θ after the last LSM "
+                    "batch (well-posed, noise on)", np.asarray(mean), std=np.asarray(std), runs=int(n_ok),
+                    unit="[1/s², 1/s, 1, 1/s²]", note=note)
+
+
+def _one(sim, i, metric):
+    return float(sim.sums[metric][i] / len(sim.t))
+
+
+def claim_quantities(result: StudyResult, sims: dict, lin, horizons: dict) -> dict:
+    """Quantities of the claims the tables do not show (Conclusion 3, (5)/(8) M <= N, §5 ε, W(s), gate).
+
+    Parameters
+    ----------
+    result : StudyResult
+    sims : dict of str -> SituationRun
+    lin : LinearAnalysis
+    horizons : dict of str -> float
+
+    Returns
+    -------
+    dict
+        Run indices and gate counts the findings reuse (``no_const``, ``gate``).
+    """
+    s1, s2 = sims["s1"], sims["s2"]
+    out = {}
+    # Conclusion 3: the well-posed MESO without θ4 (noise off)
+    i_nc, i_wp = pick(s1.rows, "meso", "no_const", False)[0], pick(s1.rows, "meso", "wellposed", False)[0]
+    for m in ("track_x1", "track_x2", "est_x3"):
+        result.quantity(f"s1.no_const.{m}", f"Situation 1, MESO without θ4 (Conclusion 3), mean |e| {m}, noise off",
+                        _one(s1, i_nc, m), unit=TABLE_UNITS[m],
+                        note=f"with θ4 (well-posed, noise off): {_one(s1, i_wp, m):.4g}")
+    result.quantity("s1.no_const.theta_final", "Situation 1, MESO without θ4: Θ after the last batch, noise off",
+                    s1.theta_batch[-1, i_nc], unit="[1/s², 1/s, 1, 1/s²]",
+                    note=f"truth {theta_truth('s1', [horizons['s1']])[0].tolist()}; with θ4: "
+                         f"{np.round(s1.theta_batch[-1, i_wp], 4).tolist()}")
+    out["no_const"] = (i_nc, i_wp)
+    # (5)/(8): M = sup|d x3/dt| of the MESO's extended state, N that of the ESO's (noise off)
+    for key, sim in sims.items():
+        i_m, i_e = pick(sim.rows, "meso", "wellposed", False)[0], pick(sim.rows, "eso", "none", False)[0]
+        result.quantity(f"{key}.M_sup", f"situation {key[1]}: M of (5), sup |dx3/dt| of the MESO's extended "
+                        "state (noise off)", float(sim.sup_dx3[i_m]), unit="1/s³",
+                        note=f"N of (8) (ESO): {sim.sup_dx3[i_e]:.4g}; finite differences of the true x3 at the "
+                             f"3-ms samples from t = {2 * SITUATIONS[key].N * PAPER.h:g} s on (after the start-up, "
+                             "identical for both observers until the first batch), the θ4 step at 30 s excluded")
+        result.quantity(f"{key}.N_sup", f"situation {key[1]}: N of (8), sup |dx3/dt| of the ESO's extended state "
+                        "(noise off)", float(sim.sup_dx3[i_e]), unit="1/s³", note="see M_sup")
+    # §5: the MESO at a larger ε
+    i_m01 = pick(s1.rows, "meso", "wellposed", False, epsilon=0.1)[0]
+    for m in METRICS:
+        result.quantity(f"s1.nonoise.meso_eps0.1.{m}", f"Situation 1, MESO (well-posed) with ε = 0.1, mean |e| {m}, "
+                        "noise off", _one(s1, i_m01, m), unit=TABLE_UNITS[m],
+                        note=f"ESO with the paper's ε = 0.05: {_one(s1, pick(s1.rows, 'eso', 'none', False)[0], m):.4g}")
+    # the literal rule without W(s)
+    for key, sim in sims.items():
+        i = pick(sim.rows, "meso", "literal", False, bypass_w=True)[0]
+        t_div = first_divergence(sim, [i])
+        for m in ("track_x1", "est_x3"):
+            result.quantity(f"{key}.literal_noW.{m}", f"situation {key[1]}, Table-1 literal rule without W(s), "
+                            f"mean |e| {m}, noise off", None if sim.diverged[i] else _one(sim, i, m),
+                            unit=TABLE_UNITS[m], note=f"diverged at t = {t_div:.2f} s: no value" if t_div else "")
+    out["gate"] = _gate_quantities(result, s2)
+    return out
+
+
+def gate_passes(sim: SituationRun, thresholds) -> tuple:
+    """Situation-2 batches whose full regression passes the gate, per threshold (well-posed runs, noise on + off).
+
+    Noise-off runs use the exact condition number of the raw batch, noise-on runs the block's Gram value.
+
+    Parameters
+    ----------
+    sim : SituationRun
+        Situation 2.
+    thresholds : sequence of float
+
+    Returns
+    -------
+    passes : ndarray of int
+        Batches at or below each threshold.
+    total : int
+        Batches counted.
+    cond : ndarray
+        Their condition numbers.
+    """
+    on = pick(sim.rows, "meso", "wellposed", True)
+    off = pick(sim.rows, "meso", "wellposed", False)[0]
+    cond = np.concatenate([10.0 ** sim.log10_cond[:, on].T.ravel(), sim.exact_cond[off]])
+    cond = cond[np.isfinite(cond)]
+    return np.array([int(np.sum(cond <= g)) for g in thresholds]), int(cond.size), cond
+
+
+def _gate_quantities(result, s2) -> dict:
+    """Sensitivity of situation 2's identifiability gate: batches passing per threshold, reruns at 110 and 1000."""
+    grid = (50.0, 100.0, 104.0, 106.0, 108.0, 110.0, 200.0, 1000.0)
+    passes, total, cond = gate_passes(s2, grid)
+    result.quantity("s2.gate_passes", f"situation 2: batches passing the identifiability gate for thresholds {list(grid)} "
+                    f"(of {total})", passes, unit="batches",
+                    note="the study's threshold is 100; well-posed runs, noise on and off; column-scaled cond of "
+                         f"(16); lowest cond seen {np.min(cond):.4g}")
+    base = pick(s2.rows, "meso", "wellposed", False)[0]
+    out = {"grid": grid, "passes": passes, "total": total, "cond": cond, "reruns": {}}
+    for g in (110.0, 1000.0):
+        i = pick(s2.rows, "meso", "wellposed", False, threshold=g)[0]
+        out["reruns"][g] = i
+        result.quantity(f"s2.gate{g:g}.theta_final", f"situation 2, well-posed MESO with gate threshold {g:g}: Θ after "
+                        "the last batch, noise off", None if s2.diverged[i] else s2.theta_batch[-1, i],
+                        unit="[1/s², 1/s, 1, 1/s²]",
+                        note=f"threshold 100: {np.round(s2.theta_batch[-1, base], 4).tolist()}"
+                             + (f"; diverged at t = {first_divergence(s2, [i]):.2f} s: no value" if s2.diverged[i] else ""))
+        result.quantity(f"s2.gate{g:g}.track_x1", f"situation 2, well-posed MESO with gate threshold {g:g}: mean "
+                        "|e| track_x1, noise off", None if s2.diverged[i] else _one(s2, i, "track_x1"), unit="",
+                        note=f"threshold 100: {_one(s2, base, 'track_x1'):.4g}"
+                             + (f"; diverged at t = {first_divergence(s2, [i]):.2f} s: no value" if s2.diverged[i] else ""))
+    return out
