@@ -243,7 +243,9 @@ class RecursiveLeastSquares(DiscreteBlock):
       covariance row by row ``P[i][j]``; outputs ``theta[0..p-1]`` = ``θ(k)`` *after* the update
       with the current sample (direct feedthrough, as :class:`~ctrl_analysis.estimators.lowpass.DiscreteLowPass`),
       or the previous estimate ``θ(k−1)`` with ``feedthrough=False``;
-    * the stateful :meth:`step` / :meth:`run` (attributes :attr:`theta`, :attr:`P`, :attr:`K`).
+    * the stateful :meth:`step` / :meth:`run` (attributes :attr:`theta`, :attr:`P`, :attr:`K`);
+      ``run(H, z)`` here feeds a record and replaces the protocol's open-loop runner, which stays
+      available as ``DiscreteBlock.run(rls, u)``.
 
     Parameters
     ----------

@@ -71,8 +71,11 @@ class CKFStudy:
     runs: int = reconstructed(100, "Monte Carlo runs; the paper shows one run")
     option_runs: int = reconstructed(20, "runs of the comparison of identification options and of the "
                                      "projection switch (every option runs all three cases)")
-    kf_Q: float = reconstructed(1e-6, "process noise of the full-order KF that knows the plant (the plant is "
-                                "deterministic; a small Q keeps the filter's gain from vanishing)")
+    option_t_end: float = reconstructed(60.0, "horizon of the option and projection comparisons (steady stage "
+                                        "20-60 s), to keep `reproduce ckf` under 30 s")
+    kf_Q: float = reconstructed(0.01, "process noise of the full-order KF that knows the plant, as an input "
+                                "disturbance: Q = q b bᵀ (b the discrete input vector), q = 0.01 (std 0.1, 1 % of "
+                                "the steady control); the plant is deterministic, a small Q keeps the gain from vanishing")
     kf_P0: float = reconstructed(1.0, "initial covariance of the full-order KF")
 
 

@@ -123,7 +123,7 @@ def identification_bias(result, data_opts, p):
 def full_order_errors(d, p, plant):
     """A full-order Kalman filter that knows the plant, run on the CKF case's records: RMS errors per run."""
     sys = DiscreteLTI(plant, p.Ts)
-    kf = LinearKalmanFilter(sys.A, sys.B, sys.C, p.kf_Q, p.R, p.kf_P0)
+    kf = LinearKalmanFilter(sys.A, sys.B, sys.C, p.kf_Q * np.outer(sys.B, sys.B), p.R, p.kf_P0)
     yhat, _ = kf.run(np.stack([d["y_m"], d["u_prev"]], axis=2))
     err = yhat[:, :, 0] - d["y"]
     t = d["t"]

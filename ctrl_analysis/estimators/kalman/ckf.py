@@ -15,7 +15,8 @@ def _check_covariance(name: str, value, n: int, *, definite: bool) -> np.ndarray
     M = np.asarray(check_finite(name, value), dtype=float)
     M = M * np.eye(n) if M.ndim == 0 else check_matrix(name, M, shape=(n, n), symmetric=True)
     eig = np.linalg.eigvalsh(0.5 * (M + M.T))
-    if (definite and np.any(eig <= 0)) or np.any(eig < 0):
+    tol = 1e-12 * max(1.0, float(np.max(np.abs(eig))))  # round-off of a rank-deficient Q = q b bᵀ
+    if (definite and np.any(eig <= 0)) or np.any(eig < -tol):
         rule = "positive definite (not singular or negative)" if definite else "positive semidefinite"
         raise ValueError(f"{name} must be {rule}, got eigenvalues {eig}")
     return 0.5 * (M + M.T)
