@@ -196,7 +196,8 @@ class LinearKalmanFilter(DiscreteBlock):
         P = x[:, n:].reshape(-1, n, n)
         # x̂(k|k−1) = F x̂(k−1) + G u(k−1);  P(k|k−1) = F P Fᵀ + Q
         xp = np.einsum("ij,bj->bi", F, xh, optimize=False) + u[:, 1:2] * self.G
-        Pp = np.einsum("ij,bjk,lk->bil", F, P, F, optimize=False) + self.Q
+        FP = np.einsum("ij,bjk->bik", F, P, optimize=False)
+        Pp = np.einsum("bik,lk->bil", FP, F, optimize=False) + self.Q
         # K = P(k|k−1) Hᵀ / (H P(k|k−1) Hᵀ + R)
         PH = np.einsum("bij,j->bi", Pp, H, optimize=False)
         K = PH / (np.einsum("bi,i->b", PH, H, optimize=False) + self.R)[:, None]
@@ -204,7 +205,8 @@ class LinearKalmanFilter(DiscreteBlock):
         xf = xp + K * (u[:, 0] - np.einsum("bi,i->b", xp, H, optimize=False))[:, None]
         # P(k) = (I − K H) P(k|k−1) (I − K H)ᵀ + K R Kᵀ
         A = np.eye(n) - K[:, :, None] * H[None, None, :]
-        Pn = np.einsum("bij,bjk,blk->bil", A, Pp, A, optimize=False) + self.R * K[:, :, None] * K[:, None, :]
+        APp = np.einsum("bij,bjk->bik", A, Pp, optimize=False)
+        Pn = np.einsum("bik,blk->bil", APp, A, optimize=False) + self.R * K[:, :, None] * K[:, None, :]
         return xf, Pn
 
     def update(self, t, x, u, params=None) -> np.ndarray:
