@@ -19,24 +19,27 @@ import os
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-import argparse  # noqa: E402
-import dataclasses  # noqa: E402
-import math  # noqa: E402
-import sys  # noqa: E402
-import time  # noqa: E402
-from pathlib import Path  # noqa: E402
+import argparse
+import dataclasses
+import math
+import sys
+import time
+from pathlib import Path
 
-import numpy as np  # noqa: E402
+import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-import control as ct  # noqa: E402
+import control as ct
 
-from analysis.ckf.loops import plant_tf, simulate_cases  # noqa: E402
-from analysis.ckf.paper import PAPER  # noqa: E402
-from ctrl_analysis.estimators.kalman import CharacteristicKalmanFilter, LinearKalmanFilter  # noqa: E402
-from ctrl_analysis.estimators.lowpass import LowPassFilter  # noqa: E402
-from ctrl_analysis.plants import DiscreteLTI  # noqa: E402
+from analysis.ckf.loops import plant_tf, simulate_cases
+from analysis.ckf.paper import PAPER
+from ctrl_analysis.estimators.kalman import (
+    CharacteristicKalmanFilter,
+    LinearKalmanFilter,
+)
+from ctrl_analysis.estimators.lowpass import LowPassFilter
+from ctrl_analysis.plants import DiscreteLTI
 
 
 def per_step(block, x, u, n_steps):
@@ -128,7 +131,7 @@ def float_loop(p, v, n):
 
 def bench_loop(T, repeat):
     p = dataclasses.replace(PAPER, t_end=T)
-    n = int(round(T / p.Ts))
+    n = round(T / p.Ts)
     times = {}
     for B in (1, 100):
         best = math.inf

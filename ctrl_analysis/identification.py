@@ -24,13 +24,13 @@ from ._validate import check_finite, check_int, check_positive
 from .blocks import DiscreteBlock, signal_names
 
 __all__ = [
-    "IdentifiabilityWarning",
-    "IdentifiabilityReport",
-    "LeastSquaresResult",
-    "identifiability",
-    "batch_least_squares",
-    "RecursiveLeastSquares",
     "ArxRegressor",
+    "IdentifiabilityReport",
+    "IdentifiabilityWarning",
+    "LeastSquaresResult",
+    "RecursiveLeastSquares",
+    "batch_least_squares",
+    "identifiability",
 ]
 
 #: Default threshold on the (column-scaled) condition number above which a batch is ill-conditioned.

@@ -16,7 +16,8 @@ import numpy as np
 from ctrl_analysis.report import StudyContext, StudyInfo, StudyResult
 from ctrl_analysis.study import record_parameters
 
-from . import figures, quantities as qty
+from . import figures
+from . import quantities as qty
 from .loops import CASES, ID_OPTIONS, plant_tf, simulate_cases, split_cases
 from .paper import PAPER
 

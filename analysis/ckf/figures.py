@@ -6,8 +6,16 @@ import numpy as np
 
 from ctrl_analysis.report import new_figure
 
-__all__ = ["plot_case", "plot_steady_outputs", "plot_transient", "plot_steady_compare", "plot_filter_error",
-           "plot_parameters", "plot_q_sweep", "plot_second_plant"]
+__all__ = [
+    "plot_case",
+    "plot_filter_error",
+    "plot_parameters",
+    "plot_q_sweep",
+    "plot_second_plant",
+    "plot_steady_compare",
+    "plot_steady_outputs",
+    "plot_transient",
+]
 
 NAMES = {"nofilter": "no filter", "lpf": "LPF", "ckf": "CKF"}
 COLORS = {"nofilter": "tab:gray", "lpf": "tab:orange", "ckf": "tab:blue"}
@@ -15,6 +23,16 @@ COLORS = {"nofilter": "tab:gray", "lpf": "tab:orange", "ckf": "tab:blue"}
 
 def _legend(ax):
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
+
+
+def _plot_errors(ax, data, run):
+    """Filtered minus true output: the LPF in the LPF case, the CKF in the CKF case."""
+    for case, sig in (("lpf", "y_lpf"), ("ckf", "y_ckf")):
+        d = data[case]
+        ax.plot(d["t"], d[sig][:, run] - d["y"][:, run], color=COLORS[case], lw=0.6, label=NAMES[case])
+    ax.set_ylabel("filter error")
+    ax.set_ylim(-3, 3)
+    _legend(ax)
 
 
 def plot_case(d, case, fig_no, run=0):
@@ -82,13 +100,8 @@ def plot_steady_compare(data, t0, run=0):
 def plot_filter_error(data, run=0, title="Fig. 9: filter error (filtered − true output) over the whole run"):
     """Fig. 9: filtered minus true output, LPF (in the LPF case) and CKF (in the CKF case)."""
     fig, ax = new_figure(size=(9.0, 4.0), title=f"{title} (run {run})")
-    for case, sig in (("lpf", "y_lpf"), ("ckf", "y_ckf")):
-        d = data[case]
-        ax.plot(d["t"], d[sig][:, run] - d["y"][:, run], color=COLORS[case], lw=0.6, label=NAMES[case])
+    _plot_errors(ax, data, run)
     ax.set_xlabel("time t [s]")
-    ax.set_ylabel("filter error")
-    ax.set_ylim(-3, 3)
-    _legend(ax)
     return fig
 
 
@@ -130,13 +143,8 @@ def plot_second_plant(data, name, run=0):
                                  title=f"Fig. 12 (beyond the paper): second plant, {name} (run {run})")
     for case, d in data.items():
         ax.plot(d["t"], d["y"][:, run], color=COLORS[case], lw=0.7, label=NAMES[case])
-    for case, sig in (("lpf", "y_lpf"), ("ckf", "y_ckf")):
-        d = data[case]
-        ax_e.plot(d["t"], d[sig][:, run] - d["y"][:, run], color=COLORS[case], lw=0.6, label=NAMES[case])
+    _plot_errors(ax_e, data, run)
     ax.set_ylabel("true output x")
-    ax_e.set_ylabel("filter error")
-    ax_e.set_ylim(-3, 3)
     ax_e.set_xlabel("time t [s]")
     _legend(ax)
-    _legend(ax_e)
     return fig

@@ -20,7 +20,7 @@ from ctrl_analysis.loop import Loop, place
 from ctrl_analysis.plants import DiscreteLTI
 from ctrl_analysis.simulate import draw_noise, gaussian_noise, run_seeds
 
-__all__ = ["CASES", "ID_OPTIONS", "SIGNALS", "plant_tf", "build_loop", "simulate_cases", "split_cases"]
+__all__ = ["CASES", "ID_OPTIONS", "SIGNALS", "build_loop", "plant_tf", "simulate_cases", "split_cases"]
 
 #: Feedback cases: (selector of the LPF signal, selector of the CKF signal).
 CASES = {"nofilter": (0.0, 0.0), "lpf": (1.0, 0.0), "ckf": (0.0, 1.0)}
@@ -102,7 +102,7 @@ def simulate_cases(p, runs: int, seed: int, *, options=None, plant=None, noise_s
         ``(option, case) -> slice`` of the batch.
     """
     options = (p.id_signal,) if options is None else tuple(options)
-    n = int(round(p.t_end / p.Ts))
+    n = round(p.t_end / p.Ts)
     seeds = run_seeds(seed, runs)
     std = p.noise_std if noise_std is None else noise_std
     v = draw_noise(seeds, n + 1, gaussian_noise(std))[:, :, 0]

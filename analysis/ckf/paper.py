@@ -7,7 +7,7 @@ from dataclasses import dataclass
 from ctrl_analysis.controllers.golden_section import GOLDEN_L1, GOLDEN_L2
 from ctrl_analysis.study import printed, reconstructed
 
-__all__ = ["CKFStudy", "PAPER"]
+__all__ = ["PAPER", "CKFStudy"]
 
 
 

@@ -4,13 +4,26 @@ from __future__ import annotations
 
 import numpy as np
 
-from ctrl_analysis.estimators.kalman import CharacteristicKalmanFilter, LinearKalmanFilter
+from ctrl_analysis.estimators.kalman import (
+    CharacteristicKalmanFilter,
+    LinearKalmanFilter,
+)
 from ctrl_analysis.identification import batch_least_squares
 from ctrl_analysis.metrics import mean_std
 from ctrl_analysis.plants import DiscreteLTI
 
-__all__ = ["CELLS", "window", "record", "table1", "filter_errors", "noise_free_fit", "identification_bias",
-           "full_order_errors", "q_sweep", "claims"]
+__all__ = [
+    "CELLS",
+    "claims",
+    "filter_errors",
+    "full_order_errors",
+    "identification_bias",
+    "noise_free_fit",
+    "q_sweep",
+    "record",
+    "table1",
+    "window",
+]
 
 #: Quantity id -> the paper's cell it reproduces (``quantity(cell=...)`` is not on this branch yet).
 CELLS = {f"{c}.{q}": f"Table 1 / {c} / {q}" for c in ("nofilter", "lpf", "ckf")
@@ -151,24 +164,23 @@ def _compare(result, a, b):
     return qa.value < qb.value, f"{a} = {qa.value:.4g} ± {qa.std:.2g} vs {b} = {qb.value:.4g} ± {qb.std:.2g}"
 
 
+#: The paper's claims: (id, quantity compared, case the CKF is compared with, text).
+CLAIMS = (
+    ("transient", "filter_rmse_transient", "lpf", "the CKF filters better than the LPF in the transient (0-10 s, as Fig. 6-7)"),
+    ("transient_used", "filter_rmse_transient_used", "lpf",
+     "the CKF filters better than the LPF in the transient once fed back (2-10 s)"),
+    ("steady", "filter_rmse_steady", "lpf", "the CKF filters better than the LPF in the steady stage"),
+    ("steady_output", "y_var", "lpf", "the output is steadier with the CKF than with the LPF"),
+    ("steady_control", "u_var", "lpf", "the control is steadier with the CKF than with the LPF"),
+    ("smoother", "u_var", "nofilter", "filtering makes the control far smoother than no filter"),
+)
+
+
 def claims(result, prefix="", tag="paper plant"):
     """The paper's claims, each checked with numbers; returns ``{claim: holds}``."""
-    checks = {
-        "transient": (f"{prefix}ckf.filter_rmse_transient", f"{prefix}lpf.filter_rmse_transient",
-                      "the CKF filters better than the LPF in the transient (0-10 s, as Fig. 6-7)"),
-        "transient_used": (f"{prefix}ckf.filter_rmse_transient_used", f"{prefix}lpf.filter_rmse_transient_used",
-                           "the CKF filters better than the LPF in the transient once fed back (2-10 s)"),
-        "steady": (f"{prefix}ckf.filter_rmse_steady", f"{prefix}lpf.filter_rmse_steady",
-                   "the CKF filters better than the LPF in the steady stage"),
-        "steady_output": (f"{prefix}ckf.y_var", f"{prefix}lpf.y_var",
-                          "the output is steadier with the CKF than with the LPF"),
-        "steady_control": (f"{prefix}ckf.u_var", f"{prefix}lpf.u_var",
-                           "the control is steadier with the CKF than with the LPF"),
-        "smoother": (f"{prefix}ckf.u_var", f"{prefix}nofilter.u_var",
-                     "filtering makes the control far smoother than no filter"),
-    }
     holds = {}
-    for key, (a, b, text) in checks.items():
+    for key, q, other, text in CLAIMS:
+        a, b = f"{prefix}ckf.{q}", f"{prefix}{other}.{q}"
         ok, numbers = _compare(result, a, b)
         holds[key] = ok
         verdict = "holds" if ok else ("cannot be checked" if ok is None else "does NOT hold")

@@ -43,11 +43,11 @@ def test_logic_integral_switches_factor():
 
 
 @pytest.mark.parametrize("kwargs,match", [
-    (dict(k_I=-1.0), "k_I must be >= 0"),
-    (dict(c2=0.0), "0 < c2 <= c1 <= 1"),
-    (dict(c2=0.9, c1=0.8), "0 < c2 <= c1 <= 1"),
-    (dict(c1=1.5), "0 < c2 <= c1 <= 1"),
-    (dict(mu=-0.1), "mu must be >= 0"),
+    ({"k_I": -1.0}, "k_I must be >= 0"),
+    ({"c2": 0.0}, "0 < c2 <= c1 <= 1"),
+    ({"c2": 0.9, "c1": 0.8}, "0 < c2 <= c1 <= 1"),
+    ({"c1": 1.5}, "0 < c2 <= c1 <= 1"),
+    ({"mu": -0.1}, "mu must be >= 0"),
 ])
 def test_golden_section_bad_input(kwargs, match):
     with pytest.raises(ValueError, match=match):

@@ -2,15 +2,20 @@
 
 import warnings
 
+import control as ct
 import numpy as np
 import pytest
 
+from ctrl_analysis.blocks import DiscreteBlock
 from ctrl_analysis.identification import (
+    ArxRegressor,
     IdentifiabilityWarning,
     RecursiveLeastSquares,
     batch_least_squares,
     identifiability,
 )
+from ctrl_analysis.loop import Loop, place
+from ctrl_analysis.plants import DiscreteLTI
 
 
 def _data(N=400, noise=0.0, seed=0):
@@ -89,12 +94,12 @@ def test_rls_forgetting_tracks_jump_and_batch():
 @pytest.mark.parametrize(
     "kwargs,match",
     [
-        (dict(n_params=0), "n_params"),
-        (dict(n_params=2, forgetting=0.0), "forgetting"),
-        (dict(n_params=2, forgetting=1.1), "forgetting"),
-        (dict(n_params=2, P0=-1.0), "P0"),
-        (dict(n_params=2, P0=np.eye(3)), "P0"),
-        (dict(n_params=2, theta0=[1.0]), "theta0"),
+        ({"n_params": 0}, "n_params"),
+        ({"n_params": 2, "forgetting": 0.0}, "forgetting"),
+        ({"n_params": 2, "forgetting": 1.1}, "forgetting"),
+        ({"n_params": 2, "P0": -1.0}, "P0"),
+        ({"n_params": 2, "P0": np.eye(3)}, "P0"),
+        ({"n_params": 2, "theta0": [1.0]}, "theta0"),
     ],
 )
 def test_rls_bad_input(kwargs, match):
@@ -118,12 +123,6 @@ def test_ls_bad_input():
 # RLS as a discrete block: ARX recovery, projection, anti-windup, python-control
 # ----------------------------------------------------------------------------------------------
 
-import control as ct  # noqa: E402
-
-from ctrl_analysis.blocks import DiscreteBlock  # noqa: E402
-from ctrl_analysis.identification import ArxRegressor  # noqa: E402
-from ctrl_analysis.loop import Loop, place  # noqa: E402
-from ctrl_analysis.plants import DiscreteLTI  # noqa: E402
 
 ARX = (1.5, -0.7, 0.5)  # y(k) = 1.5 y(k-1) - 0.7 y(k-2) + 0.5 u(k-1): poles 0.75 ± 0.37j
 
@@ -178,12 +177,12 @@ def test_max_trace_bounds_covariance_windup():
 
 
 @pytest.mark.parametrize("kwargs,match", [
-    (dict(n_params=2, forgetting=-0.5), "forgetting must be in"),
-    (dict(n_params=2, P0=np.array([[1.0, 1.0], [1.0, 1.0]])), "singular or negative"),
-    (dict(n_params=2, P0=np.array([[1.0, 0.0], [0.0, -1.0]])), "singular or negative"),
-    (dict(n_params=2, lower=[1.0, 0.0], upper=[0.0, 1.0]), "lower must be <= upper"),
-    (dict(n_params=2, lower=[1.0, 1.0], theta0=[0.0, 0.0]), "theta0 must lie within"),
-    (dict(n_params=2, max_trace=0.0), "max_trace"),
+    ({"n_params": 2, "forgetting": -0.5}, "forgetting must be in"),
+    ({"n_params": 2, "P0": np.array([[1.0, 1.0], [1.0, 1.0]])}, "singular or negative"),
+    ({"n_params": 2, "P0": np.array([[1.0, 0.0], [0.0, -1.0]])}, "singular or negative"),
+    ({"n_params": 2, "lower": [1.0, 0.0], "upper": [0.0, 1.0]}, "lower must be <= upper"),
+    ({"n_params": 2, "lower": [1.0, 1.0], "theta0": [0.0, 0.0]}, "theta0 must lie within"),
+    ({"n_params": 2, "max_trace": 0.0}, "max_trace"),
 ])
 def test_rls_block_bad_input(kwargs, match):
     with pytest.raises(ValueError, match=match):

@@ -4,8 +4,11 @@ import control as ct
 import numpy as np
 import pytest
 
-from ctrl_analysis.estimators.kalman import (CharacteristicKalmanFilter, LinearKalmanFilter,
-                                             discrete_steady_state)
+from ctrl_analysis.estimators.kalman import (
+    CharacteristicKalmanFilter,
+    LinearKalmanFilter,
+    discrete_steady_state,
+)
 from ctrl_analysis.plants import DiscreteLTI
 
 F1, F2, G0 = 1.9, -0.95, 0.05  # a stable 2nd-order characteristic model (poles 0.95 ± 0.22j)
@@ -13,10 +16,10 @@ Q = np.array([[1e-3, 2e-4], [2e-4, 5e-4]])
 R = 0.5
 
 
-def textbook_kf(y, u_prev, P0, x0=np.zeros(2)):
+def textbook_kf(y, u_prev, P0):
     """The standard equations with numpy matrices (P = (I − K C) P⁻, not the Joseph form)."""
     Phi, Gam, C = np.array([[F1, F2], [1.0, 0.0]]), np.array([G0, 0.0]), np.array([[1.0, 0.0]])
-    x, P, out, Ps = x0.copy(), P0.copy(), [], []
+    x, P, out, Ps = np.zeros(2), P0.copy(), [], []
     for yk, uk in zip(y, u_prev):
         xp = Phi @ x + Gam * uk
         Pp = Phi @ P @ Phi.T + Q
@@ -69,11 +72,11 @@ def test_ckf_batch_is_stacked_single_runs_and_full_order_filter_agrees():
 
 
 @pytest.mark.parametrize("kwargs,match", [
-    (dict(R=0.0), "R must be > 0"),
-    (dict(Q=-1e-3), "Q must be positive semidefinite"),
-    (dict(Q=[[1.0, 0.0], [1.0, 1.0]]), "Q must be symmetric"),
-    (dict(P0=[[1.0, 1.0], [1.0, 1.0]]), "singular or negative"),
-    (dict(P0=-1.0), "singular or negative"),
+    ({"R": 0.0}, "R must be > 0"),
+    ({"Q": -1e-3}, "Q must be positive semidefinite"),
+    ({"Q": [[1.0, 0.0], [1.0, 1.0]]}, "Q must be symmetric"),
+    ({"P0": [[1.0, 1.0], [1.0, 1.0]]}, "singular or negative"),
+    ({"P0": -1.0}, "singular or negative"),
 ])
 def test_ckf_bad_input(kwargs, match):
     with pytest.raises(ValueError, match=match):
@@ -105,7 +108,7 @@ def test_ckf_and_plant_run_in_control_interconnect():
                  place(delay, "delay", inputs=["u"], outputs=["u_prev"]),
                  place(meas, "sensor", inputs=["y_v"], outputs=["y_m"]),
                  place(CharacteristicKalmanFilter(Q=Q, R=R), "ckf", inputs=["y_m", "u_prev", "f1", "f2", "g0"])],
-                0.1, outputs=["y", "xhat[0]"])
+                0.1, outputs=["y", "xhat[0]", "xhat[1]"])
     rng = np.random.default_rng(3)
     ext = {"u": rng.normal(size=120), "y_v": rng.normal(size=120), "f1": np.full(120, F1),
            "f2": np.full(120, F2), "g0": np.full(120, G0)}

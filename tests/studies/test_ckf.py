@@ -5,7 +5,7 @@ import json
 
 import numpy as np
 
-import analysis.ckf as ckf
+from analysis import ckf
 from analysis.ckf.loops import CASES, simulate_cases
 from analysis.ckf.paper import PAPER
 from ctrl_analysis.report import StudyContext, write_results_json

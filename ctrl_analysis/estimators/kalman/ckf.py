@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...blocks import DiscreteBlock, signal_names
 from ..._validate import check_finite, check_matrix, check_positive
+from ...blocks import DiscreteBlock, signal_names
 
 __all__ = ["CharacteristicKalmanFilter", "LinearKalmanFilter"]
 
