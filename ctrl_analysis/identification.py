@@ -406,9 +406,24 @@ class RecursiveLeastSquares(DiscreteBlock):
         self.theta, self.P = theta, P
 
     def step(self, h, z) -> np.ndarray:
-        """Update with one sample: regressor ``h`` (shape (p,) or (B, p)) and measurement ``z``.
+        """Update with one sample (the stateful interface).
 
-        Returns the new ``theta``.
+        Parameters
+        ----------
+        h : array_like, shape (p,) or (B, p)
+            Regressor ``h(k)``.
+        z : float or array_like, shape (B,)
+            Measurement ``z(k)``.
+
+        Returns
+        -------
+        numpy.ndarray, shape (p,) or (B, p)
+            The new estimate ``θ(k)`` (also in :attr:`theta`).
+
+        Raises
+        ------
+        ValueError
+            If ``h`` or ``z`` has the wrong shape (single-run mode).
         """
         h = np.asarray(h, dtype=float)
         z = np.asarray(z, dtype=float)
@@ -431,9 +446,24 @@ class RecursiveLeastSquares(DiscreteBlock):
         return self.theta
 
     def run(self, H, z) -> np.ndarray:
-        """Feed a whole record (``H`` of shape (N, p) or (N, B, p), ``z`` of shape (N,) or (N, B)).
+        """Feed a whole record sample by sample through :meth:`step`.
 
-        Returns the estimate history, shape (N, p) or (N, B, p).
+        Parameters
+        ----------
+        H : array_like, shape (N, p) or (N, B, p)
+            Regressors, one row per sample.
+        z : array_like, shape (N,) or (N, B)
+            Measurements.
+
+        Returns
+        -------
+        numpy.ndarray, shape (N, p) or (N, B, p)
+            The estimate after each sample.
+
+        Raises
+        ------
+        ValueError
+            If ``H`` and ``z`` have different numbers of samples.
         """
         H = np.asarray(H, dtype=float)
         z = np.asarray(z, dtype=float)

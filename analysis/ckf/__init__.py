@@ -18,7 +18,7 @@ from ctrl_analysis.study import record_parameters
 
 from . import figures
 from . import quantities as qty
-from .loops import CASES, ID_OPTIONS, plant_tf, simulate_cases, split_cases
+from .loops import ID_OPTIONS, plant_tf, simulate_cases, split_cases
 from .paper import PAPER
 
 __all__ = ["INFO", "run", "simulate_study"]
@@ -59,8 +59,8 @@ def run(ctx: StudyContext, p=PAPER) -> StudyResult:
     errs = qty.filter_errors(result, data, p)
     qty.claims(result)
     _paper_number(result, p, data)
-    _beyond(ctx, result, p, data, errs)
-    _figures(ctx, result, p, data)
+    extra = _beyond(ctx, result, p, data, errs)
+    _figures(ctx, result, p, data, extra)
     return result
 
 
@@ -85,7 +85,7 @@ def _paper_number(result, p, data):
 
 
 def _beyond(ctx, result, p, data, errs):
-    """Identification options, projection, full-order KF, Q sweep and the second plant."""
+    """Identification options, projection, full-order KF, Q sweep and the second plant; returns figure data."""
     ctx.progress("ckf: identification options and projection")
     p_opt = dataclasses.replace(p, t_end=min(p.t_end, p.option_t_end))
     opts = simulate_study(p_opt, p.option_runs, ctx.seed + 10_000, options=tuple(ID_OPTIONS))
@@ -130,12 +130,11 @@ def _beyond(ctx, result, p, data, errs):
     qty.table1(result, data2, p2, prefix="plant2.")
     qty.filter_errors(result, data2, p2, prefix="plant2.")
     qty.claims(result, prefix="plant2.", tag=f"second plant: {SECOND_PLANT}")
-    result._ckf_extra = {"sweep": sweep, "lpf": lpf, "data2": data2}
+    return {"sweep": sweep, "lpf": lpf, "data2": data2}
 
 
-def _figures(ctx, result, p, data):
+def _figures(ctx, result, p, data, extra):
     """Fig. 2-12."""
-    extra = result.__dict__.pop("_ckf_extra")
     for no, case in ((2, "nofilter"), (3, "lpf"), (4, "ckf")):
         ctx.save_figure(result, figures.plot_case(data[case], case, no), f"fig{no}_{case}.png")
     ctx.save_figure(result, figures.plot_steady_outputs(data, p.t_steady), "fig5_steady_outputs.png")
@@ -150,4 +149,3 @@ def _figures(ctx, result, p, data):
                     "fig10_identified_parameters.png")
     ctx.save_figure(result, figures.plot_q_sweep(Q_SWEEP, extra["sweep"], extra["lpf"]), "fig11_q_sweep.png")
     ctx.save_figure(result, figures.plot_second_plant(extra["data2"], SECOND_PLANT), "fig12_second_plant.png")
-    assert set(CASES) == set(data)

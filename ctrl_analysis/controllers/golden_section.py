@@ -45,7 +45,7 @@ class GoldenSectionController(DiscreteBlock):
 
     Block signals: inputs ``y, r, f1, f2, g0``; output ``u``; states ``e_prev`` (``e(k−1)``),
     ``r_prev`` (``r(k−1)``), ``ui_prev`` (``u_i(k−1)``), ``started`` (0 before the first sample, when
-``r(k−1) := r(k)`` and ``e(k−1) := e(k)``, then 1). Direct feedthrough.
+    ``r(k−1) := r(k)`` and ``e(k−1) := e(k)``, then 1). Direct feedthrough.
 
     Raises
     ------
