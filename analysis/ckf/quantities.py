@@ -158,10 +158,15 @@ def q_sweep(d, p, qs, runs=10):
 
 
 def _compare(result, a, b):
+    """Whether ``a < b``, and the numbers with the difference's standard error over the runs."""
     qa, qb = result.get(a), result.get(b)
     if qa.value is None or qb.value is None:
         return None, f"{a} or {b} has no value (all runs diverged)"
-    return qa.value < qb.value, f"{a} = {qa.value:.4g} ± {qa.std:.2g} vs {b} = {qb.value:.4g} ± {qb.std:.2g}"
+    diff = qa.value - qb.value
+    se = float(np.sqrt(qa.std**2 / max(qa.runs, 1) + qb.std**2 / max(qb.runs, 1)))
+    sig = "significant" if abs(diff) > 2 * se else "NOT significant"
+    return qa.value < qb.value, (f"{a} = {qa.value:.4g} ± {qa.std:.2g} vs {b} = {qb.value:.4g} ± {qb.std:.2g} "
+                                 f"(difference {diff:+.3g}, standard error {se:.2g}: {sig} at 2 SE)")
 
 
 #: The paper's claims: (id, quantity compared, case the CKF is compared with, text).
