@@ -8,8 +8,9 @@ Linear regression ``z = H θ + v`` with ``H`` the regression matrix (one row ``h
 * :func:`batch_least_squares` solves the batch problem (``θ = (HᵀH)⁻¹ Hᵀ z``, computed by an
   SVD-based solver), warns with :class:`IdentifiabilityWarning` when the problem is ill-conditioned
   and, in ``strict`` mode, raises when it is rank-deficient.
-* :class:`RecursiveLeastSquares` is the recursive form with exponential forgetting, batched over
-  independent runs.
+* :class:`RecursiveLeastSquares` is the recursive form with exponential forgetting and optional
+  projection onto box bounds, a discrete block batched over independent runs (any regressor size);
+  :class:`ArxRegressor` forms its regression from delayed signals inside a loop.
 """
 
 from __future__ import annotations
@@ -20,14 +21,16 @@ from dataclasses import dataclass
 import numpy as np
 
 from ._validate import check_finite, check_int, check_positive
+from .blocks import DiscreteBlock, signal_names
 
 __all__ = [
-    "IdentifiabilityWarning",
+    "ArxRegressor",
     "IdentifiabilityReport",
+    "IdentifiabilityWarning",
     "LeastSquaresResult",
-    "identifiability",
-    "batch_least_squares",
     "RecursiveLeastSquares",
+    "batch_least_squares",
+    "identifiability",
 ]
 
 #: Default threshold on the (column-scaled) condition number above which a batch is ill-conditioned.
@@ -220,14 +223,29 @@ def batch_least_squares(H, z, *, strict: bool = False, cond_threshold: float = D
     return LeastSquaresResult(theta=theta, residual_rms=float(np.sqrt(np.mean(resid**2))), report=report)
 
 
-class RecursiveLeastSquares:
-    """Recursive least squares with exponential forgetting, batched over independent runs.
+class RecursiveLeastSquares(DiscreteBlock):
+    """Recursive least squares with exponential forgetting and optional box projection, a discrete block.
 
     For each new sample ``z(k) = h(k)ᵀ θ + v(k)``::
 
-        K(k)     = P(k-1) h / (λ + hᵀ P(k-1) h)
-        θ(k)     = θ(k-1) + K(k) (z(k) - hᵀ θ(k-1))
-        P(k)     = [I - K(k) hᵀ] P(k-1) / λ
+        D(k) = R(k-1) h(k) [hᵀ(k) R(k-1) h(k) + λ]⁻¹
+        θ(k) = Π[θ(k-1) + D(k) (z(k) - hᵀ(k) θ(k-1))]
+        R(k) = [I - D(k) hᵀ(k)] R(k-1) / λ
+
+    with ``Π`` the projection onto the box ``lower <= θ <= upper`` (the identity without bounds).
+    The gain is called ``D`` and the covariance ``R`` in the characteristic-model literature;
+    here they are :attr:`K` and :attr:`P`.
+
+    Two interfaces share the same per-step kernel:
+
+    * the block protocol (batched, for :class:`ctrl_analysis.loop.Loop` and
+      ``control.interconnect``): inputs ``z, h[0..p-1]``; states ``theta[0..p-1]`` and the
+      covariance row by row ``P[i][j]``; outputs ``theta[0..p-1]`` = ``θ(k)`` *after* the update
+      with the current sample (direct feedthrough, as :class:`~ctrl_analysis.estimators.lowpass.DiscreteLowPass`),
+      or the previous estimate ``θ(k−1)`` with ``feedthrough=False``;
+    * the stateful :meth:`step` / :meth:`run` (attributes :attr:`theta`, :attr:`P`, :attr:`K`);
+      ``run(H, z)`` here feeds a record and replaces the protocol's open-loop runner, which stays
+      available as ``DiscreteBlock.run(rls, u)``.
 
     Parameters
     ----------
@@ -237,11 +255,23 @@ class RecursiveLeastSquares:
         Forgetting factor ``λ`` in ``(0, 1]``; ``1`` is ordinary RLS, smaller values track changes
         with an effective memory of about ``1 / (1 - λ)`` samples.
     P0 : float or array_like, shape (p, p)
-        Initial covariance (a scalar means ``P0 * I``; > 0).
+        Initial covariance (a scalar means ``P0 * I``; symmetric positive definite).
     theta0 : array_like, shape (p,), optional
-        Initial estimate (default zeros).
+        Initial estimate (default zeros; inside the bounds when given).
     batch : int, optional
-        Number of independent runs ``B``; ``None`` for a single run (arrays without a batch axis).
+        Number of independent runs ``B`` of :meth:`step`; ``None`` for a single run (arrays without
+        a batch axis). The block protocol takes ``B`` from its arrays.
+    lower, upper : array_like, shape (p,), optional
+        Box bounds of the projection (``-inf`` / ``inf`` entries leave a parameter free).
+    max_trace : float, optional
+        Anti-windup: after each update, ``R(k)`` is scaled down so that ``trace R(k) <= max_trace``
+        (with forgetting and weak excitation ``R`` otherwise grows like ``λ⁻ᵏ``, and the estimate
+        bursts). ``None`` (default) leaves ``R`` unbounded.
+    feedthrough : bool
+        Block protocol only: ``True`` (default) outputs ``θ(k)``, the estimate after the update
+        with the current sample; ``False`` outputs the stored ``θ(k−1)`` (no direct feedthrough: a
+        loop may then feed the estimate back into the regression without an algebraic loop, and
+        the output costs nothing).
 
     Attributes
     ----------
@@ -250,9 +280,17 @@ class RecursiveLeastSquares:
     K : ndarray, shape (p,) or (B, p)
         Last gain.
 
+    Raises
+    ------
+    ValueError
+        ``forgetting`` outside ``(0, 1]``, ``P0`` not symmetric positive definite, shapes that do
+        not match ``p``, ``lower > upper`` or ``theta0`` outside the bounds.
+
     References
     ----------
-    Ljung L., System Identification, 2nd ed., 1999, section 11.2 (RLS with forgetting).
+    Ljung L., System Identification, 2nd ed., 1999, section 11.2 (RLS with forgetting);
+    Goodwin G. C., Sin K. S., Adaptive Filtering, Prediction and Control, 1984, §3.3 (projection).
+    Gong & Wu 2010, eq. (9) (the ``D(k)`` line; the others are the standard form).
 
     Examples
     --------
@@ -265,7 +303,10 @@ class RecursiveLeastSquares:
     array([ 3., -2.])
     """
 
-    def __init__(self, n_params: int, forgetting: float = 1.0, P0=1e6, theta0=None, batch: int | None = None):
+    def __init__(self, n_params: int, forgetting: float = 1.0, P0=1e6, theta0=None, batch: int | None = None,
+                 lower=None, upper=None, max_trace: float | None = None, feedthrough: bool = True):
+        self.feedthrough = bool(feedthrough)
+        self.max_trace = None if max_trace is None else float(check_positive("max_trace", max_trace))
         self.n_params = check_int("n_params", n_params, minimum=1)
         forgetting = float(check_finite("forgetting", forgetting))
         if not 0.0 < forgetting <= 1.0:
@@ -275,39 +316,114 @@ class RecursiveLeastSquares:
         P0 = check_finite("P0", P0)
         if np.ndim(P0) == 0:
             if P0 <= 0:
-                raise ValueError(f"P0 must be > 0, got {P0}")
+                raise ValueError(f"P0 must be > 0 (a covariance), got {P0}")
             P0 = P0 * np.eye(p)
         else:
             P0 = np.asarray(P0, dtype=float)
             if P0.shape != (p, p):
                 raise ValueError(f"P0 must be a scalar or have shape ({p}, {p}), got {P0.shape}")
-            if not np.allclose(P0, P0.T) or np.any(np.linalg.eigvalsh(P0) <= 0):
-                raise ValueError("P0 must be symmetric positive definite")
+            if not np.allclose(P0, P0.T):
+                raise ValueError("P0 must be symmetric")
+            eig = np.linalg.eigvalsh(P0)
+            if np.any(eig <= 0):
+                raise ValueError(f"P0 must be positive definite (not singular or negative), got eigenvalues {eig}")
         self.P0 = P0
+        lower = np.full(p, -np.inf) if lower is None else np.broadcast_to(np.asarray(lower, dtype=float), (p,))
+        upper = np.full(p, np.inf) if upper is None else np.broadcast_to(np.asarray(upper, dtype=float), (p,))
+        if np.any(np.isnan(lower)) or np.any(np.isnan(upper)) or np.any(lower > upper):
+            raise ValueError(f"lower must be <= upper element-wise (no NaN), got lower={lower}, upper={upper}")
+        self.lower, self.upper = lower.copy(), upper.copy()
+        self.projected = bool(np.any(np.isfinite(lower)) or np.any(np.isfinite(upper)))
         if theta0 is None:
-            theta0 = np.zeros(p)
+            theta0 = np.clip(np.zeros(p), lower, upper)
         theta0 = np.atleast_1d(check_finite("theta0", theta0)).astype(float)
         if theta0.shape != (p,):
             raise ValueError(f"theta0 must have shape ({p},), got {theta0.shape}")
+        if np.any(theta0 < lower) or np.any(theta0 > upper):
+            raise ValueError(f"theta0 must lie within [lower, upper], got {theta0}")
         self.theta0 = theta0
         self.batch = None if batch is None else check_int("batch", batch, minimum=1)
+        self.inputs = ("z",) + signal_names("h", p)
+        self.outputs = signal_names("theta", p)
+        self.states = self.outputs + tuple(f"P[{i}][{j}]" for i in range(p) for j in range(p))
         self.reset()
 
+    # ------------------------------------------------------------------ block protocol
+    def initial_state(self) -> np.ndarray:
+        return np.concatenate([self.theta0, self.P0.reshape(-1)])
+
+    def _kernel(self, x, u):
+        """One RLS step on the batch: ``x = [θ, vec P]`` (B, p + p²), ``u = [z, h]`` (B, 1 + p).
+
+        Returns ``(θ(k), P(k), D(k))``, written out element by element so a run does not depend on
+        the batch size.
+        """
+        p, lam = self.n_params, self.forgetting
+        B = x.shape[0]
+        theta = x[:, :p]
+        P = x[:, p:].reshape(B, p, p)
+        z, h = u[:, 0], u[:, 1:]
+        # R(k-1) h(k): row sums of p terms (same order for every run, whatever B)
+        Ph = (P * h[:, None, :]).sum(axis=2)
+        # (9) D(k) = R(k-1) h(k) [hᵀ(k) R(k-1) h(k) + λ]⁻¹
+        D = Ph / (lam + (h * Ph).sum(axis=1))[:, None]
+        # θ(k) = θ(k-1) + D(k) (z(k) − hᵀ(k) θ(k-1)), then the projection onto the box
+        theta_new = theta + D * (z - (h * theta).sum(axis=1))[:, None]
+        if self.projected:
+            np.clip(theta_new, self.lower, self.upper, out=theta_new)
+        # R(k) = [I − D(k) hᵀ(k)] R(k-1) / λ = (R − D (R h)ᵀ) / λ, symmetrised against round-off
+        Pn = (P - D[:, :, None] * Ph[:, None, :]) / lam
+        P_new = (0.5 * (Pn + Pn.transpose(0, 2, 1))).reshape(B, p * p)
+        if self.max_trace is not None:
+            # anti-windup: trace R(k) <= max_trace
+            tr = P_new[:, ::p + 1].sum(axis=1)
+            P_new *= np.minimum(1.0, self.max_trace / tr)[:, None]
+        return theta_new, P_new, D
+
+    def update(self, t, x, u, params=None) -> np.ndarray:
+        theta_new, P_new, _ = self._kernel(x, u)
+        return np.concatenate([theta_new, P_new], axis=1)
+
+    def output(self, t, x, u, params=None) -> np.ndarray:
+        if not self.feedthrough:
+            return x[:, :self.n_params]
+        return self._kernel(x, u)[0]
+
+    # ------------------------------------------------------------------ stateful interface
     def reset(self) -> None:
         """Return to ``theta0`` and ``P0``."""
+        B = 1 if self.batch is None else self.batch
+        self._x = np.tile(self.initial_state(), (B, 1))
+        self.K = np.zeros((B, self.n_params))
+        self._sync()
+
+    def _sync(self):
+        p = self.n_params
+        theta = self._x[:, :p].copy()
+        P = self._x[:, p:].reshape(-1, p, p).copy()
         if self.batch is None:
-            self.theta = self.theta0.copy()
-            self.P = self.P0.copy()
-            self.K = np.zeros(self.n_params)
-        else:
-            self.theta = np.tile(self.theta0, (self.batch, 1))
-            self.P = np.tile(self.P0, (self.batch, 1, 1))
-            self.K = np.zeros((self.batch, self.n_params))
+            theta, P, self.K = theta[0], P[0], self.K[0]
+        self.theta, self.P = theta, P
 
     def step(self, h, z) -> np.ndarray:
-        """Update with one sample: regressor ``h`` (shape (p,) or (B, p)) and measurement ``z``.
+        """Update with one sample (the stateful interface).
 
-        Returns the new ``theta``.
+        Parameters
+        ----------
+        h : array_like, shape (p,) or (B, p)
+            Regressor ``h(k)``.
+        z : float or array_like, shape (B,)
+            Measurement ``z(k)``.
+
+        Returns
+        -------
+        numpy.ndarray, shape (p,) or (B, p)
+            The new estimate ``θ(k)`` (also in :attr:`theta`).
+
+        Raises
+        ------
+        ValueError
+            If ``h`` or ``z`` has the wrong shape (single-run mode).
         """
         h = np.asarray(h, dtype=float)
         z = np.asarray(z, dtype=float)
@@ -317,30 +433,37 @@ class RecursiveLeastSquares:
                 raise ValueError(f"h must have shape ({p},), got {h.shape}")
             if z.size != 1:
                 raise ValueError(f"z must be a scalar, got shape {z.shape}")
-            z = float(z)
-            Ph = self.P @ h
-            # K(k) = P h / (λ + hᵀ P h)
-            self.K = Ph / (self.forgetting + h @ Ph)
-            # θ(k) = θ(k-1) + K (z - hᵀ θ(k-1))
-            self.theta = self.theta + self.K * (z - h @ self.theta)
-            # P(k) = [I - K hᵀ] P / λ
-            self.P = (self.P - np.outer(self.K, Ph)) / self.forgetting
+            B = 1
         else:
             B = self.batch
-            h = np.broadcast_to(h, (B, p))
-            z = np.broadcast_to(z.reshape(-1) if z.ndim else z, (B,))
-            Ph = np.einsum("bij,bj->bi", self.P, h)
-            self.K = Ph / (self.forgetting + np.einsum("bi,bi->b", h, Ph))[:, None]
-            self.theta = self.theta + self.K * (z - np.einsum("bi,bi->b", h, self.theta))[:, None]
-            self.P = (self.P - self.K[:, :, None] * Ph[:, None, :]) / self.forgetting
-        # keep P symmetric against round-off
-        self.P = 0.5 * (self.P + np.swapaxes(self.P, -1, -2))
+        h = np.broadcast_to(h, (B, p))
+        z = np.broadcast_to(z.reshape(-1) if z.ndim else z, (B,))
+        u = np.concatenate([z[:, None], h], axis=1)
+        theta_new, P_new, D = self._kernel(self._x, u)
+        self._x = np.concatenate([theta_new, P_new], axis=1)
+        self.K = D
+        self._sync()
         return self.theta
 
     def run(self, H, z) -> np.ndarray:
-        """Feed a whole record (``H`` of shape (N, p) or (N, B, p), ``z`` of shape (N,) or (N, B)).
+        """Feed a whole record sample by sample through :meth:`step`.
 
-        Returns the estimate history, shape (N, p) or (N, B, p).
+        Parameters
+        ----------
+        H : array_like, shape (N, p) or (N, B, p)
+            Regressors, one row per sample.
+        z : array_like, shape (N,) or (N, B)
+            Measurements.
+
+        Returns
+        -------
+        numpy.ndarray, shape (N, p) or (N, B, p)
+            The estimate after each sample.
+
+        Raises
+        ------
+        ValueError
+            If ``H`` and ``z`` have different numbers of samples.
         """
         H = np.asarray(H, dtype=float)
         z = np.asarray(z, dtype=float)
@@ -349,4 +472,76 @@ class RecursiveLeastSquares:
         out = np.empty(H.shape[:1] + np.shape(self.theta))
         for k in range(H.shape[0]):
             out[k] = self.step(H[k], z[k])
+        return out
+
+    def __repr__(self) -> str:
+        return f"RecursiveLeastSquares(n_params={self.n_params}, forgetting={self.forgetting})"
+
+
+class ArxRegressor(DiscreteBlock):
+    """Tapped delay lines forming the ARX regression ``z = s(k−d)``, ``h = [s(k−d−1..k−d−na), u(k−d−1..k−d−nb)]``.
+
+    Feeds :class:`RecursiveLeastSquares` with the model
+    ``s(k) = a_1 s(k−1) + ... + a_na s(k−na) + b_1 u(k−1) + ... + b_nb u(k−nb)``. With ``lag`` ``d = 0``
+    the target is the current sample (direct feedthrough from ``s``); with ``d >= 1`` the whole
+    regression is ``d`` samples old and comes from the state only, so an estimator whose output is
+    ``s`` can be identified inside its own loop without an algebraic loop.
+
+    Parameters
+    ----------
+    na, nb : int
+        Numbers of output lags (>= 0) and input lags (>= 0); ``na + nb >= 1``.
+    lag : int
+        Age ``d`` of the regression (>= 0).
+
+    Block signals: inputs ``s, u``; outputs ``z, h[0..na+nb-1]``; states ``s[1..na+d]`` (``s(k−i)``)
+    and ``u[1..nb+d]`` (``u(k−i)``).
+
+    Raises
+    ------
+    ValueError
+        Negative orders or lag, or no regressor at all.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> reg = ArxRegressor(2, 1, lag=0)
+    >>> y, _ = reg.run(np.column_stack([np.arange(4.0), 10 + np.arange(4.0)]))
+    >>> y[-1, 0]          # z = s(3); h = [s(2), s(1), u(2)]
+    array([ 3.,  2.,  1., 12.])
+    """
+
+    inputs = ("s", "u")
+
+    def __init__(self, na: int, nb: int, lag: int = 0):
+        self.na = check_int("na", na, minimum=0)
+        self.nb = check_int("nb", nb, minimum=0)
+        self.lag = check_int("lag", lag, minimum=0)
+        if self.na + self.nb < 1:
+            raise ValueError(f"na + nb must be >= 1, got na={na}, nb={nb}")
+        self.ns, self.nu = self.na + self.lag, self.nb + self.lag
+        self.states = (tuple(f"s[{i}]" for i in range(1, self.ns + 1))
+                       + tuple(f"u[{i}]" for i in range(1, self.nu + 1)))
+        self.outputs = ("z",) + signal_names("h", self.na + self.nb)
+        self.feedthrough = self.lag == 0
+
+    def update(self, t, x, u, params=None) -> np.ndarray:
+        # shift both delay lines: s(k−1) <- s(k), s(k−i) <- s(k−i+1); same for u
+        x_next = np.empty_like(x)
+        ns = self.ns
+        if ns:
+            x_next[:, 0] = u[:, 0]
+            x_next[:, 1:ns] = x[:, :ns - 1]
+        if self.nu:
+            x_next[:, ns] = u[:, 1]
+            x_next[:, ns + 1:] = x[:, ns:-1]
+        return x_next
+
+    def output(self, t, x, u, params=None) -> np.ndarray:
+        d, ns = self.lag, self.ns
+        out = np.empty((x.shape[0], 1 + self.na + self.nb))
+        # z = s(k−d); h = [s(k−d−1), ..., s(k−d−na), u(k−d−1), ..., u(k−d−nb)]
+        out[:, 0] = u[:, 0] if d == 0 else x[:, d - 1]
+        out[:, 1:1 + self.na] = x[:, d:d + self.na]
+        out[:, 1 + self.na:] = x[:, ns + d:ns + d + self.nb]
         return out

@@ -98,6 +98,13 @@ class LoopResponse(SimResult):
 
     @property
     def final_states(self) -> dict:
+        """Each block's state at the last instant, also when the trajectory was not stored.
+
+        Returns
+        -------
+        dict of str -> numpy.ndarray, shape (B, n)
+            Ready to pass as ``x0`` to continue the simulation (with ``t0`` the last instant).
+        """
         if self.x_final is None:
             return {}
         return {name: self.x_final[:, sl] for name, sl in self._slices.items()}

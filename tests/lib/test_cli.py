@@ -36,7 +36,13 @@ def test_bad_input_is_one_line_and_exit_2(argv, fragment):
 
 
 def test_unbuilt_study_reports_what_is_missing(tmp_path, capsys):
-    assert main(["reproduce", "ckf", "--out", str(tmp_path), "--quick"]) == 0
-    data = json.loads((tmp_path / "ckf" / "results.json").read_text())
-    assert data["study"] == "ckf" and data["missing"]
+    import importlib
+
+    unbuilt = [n for n, m in STUDIES.items() if hasattr(importlib.import_module(m), "MISSING")]
+    if not unbuilt:
+        pytest.skip("every study is built")
+    name = unbuilt[0]
+    assert main(["reproduce", name, "--out", str(tmp_path), "--quick"]) == 0
+    data = json.loads((tmp_path / name / "results.json").read_text())
+    assert data["study"] == name and data["missing"]
     assert "not built yet" in capsys.readouterr().out

@@ -41,8 +41,6 @@ KNOWN_INCOMPLETE = {
     # ctrl_analysis/identification.py
     "ctrl_analysis.identification.IdentifiabilityReport.well_conditioned",  # missing: the whole docstring
     "ctrl_analysis.identification.IdentifiabilityReport.as_dict",  # missing: the whole docstring
-    "ctrl_analysis.identification.RecursiveLeastSquares.step",  # missing: Parameters section, Returns section
-    "ctrl_analysis.identification.RecursiveLeastSquares.run",  # missing: Parameters section, Returns section
     # ctrl_analysis/controllers/pd.py
     "ctrl_analysis.controllers.pd.PDFeedforward.tracking_poly",  # missing: Returns section
     "ctrl_analysis.controllers.pd.bandwidth_gains",  # missing: Parameters section, Returns section

@@ -2,15 +2,20 @@
 
 import warnings
 
+import control as ct
 import numpy as np
 import pytest
 
+from ctrl_analysis.blocks import DiscreteBlock
 from ctrl_analysis.identification import (
+    ArxRegressor,
     IdentifiabilityWarning,
     RecursiveLeastSquares,
     batch_least_squares,
     identifiability,
 )
+from ctrl_analysis.loop import Loop, place
+from ctrl_analysis.plants import DiscreteLTI
 
 
 def _data(N=400, noise=0.0, seed=0):
@@ -89,12 +94,12 @@ def test_rls_forgetting_tracks_jump_and_batch():
 @pytest.mark.parametrize(
     "kwargs,match",
     [
-        (dict(n_params=0), "n_params"),
-        (dict(n_params=2, forgetting=0.0), "forgetting"),
-        (dict(n_params=2, forgetting=1.1), "forgetting"),
-        (dict(n_params=2, P0=-1.0), "P0"),
-        (dict(n_params=2, P0=np.eye(3)), "P0"),
-        (dict(n_params=2, theta0=[1.0]), "theta0"),
+        ({"n_params": 0}, "n_params"),
+        ({"n_params": 2, "forgetting": 0.0}, "forgetting"),
+        ({"n_params": 2, "forgetting": 1.1}, "forgetting"),
+        ({"n_params": 2, "P0": -1.0}, "P0"),
+        ({"n_params": 2, "P0": np.eye(3)}, "P0"),
+        ({"n_params": 2, "theta0": [1.0]}, "theta0"),
     ],
 )
 def test_rls_bad_input(kwargs, match):
@@ -112,3 +117,90 @@ def test_ls_bad_input():
         batch_least_squares(H, np.full(len(z), np.nan))
     with pytest.raises(ValueError, match="h must have shape"):
         RecursiveLeastSquares(3).step(np.ones(2), 1.0)
+
+
+# ----------------------------------------------------------------------------------------------
+# RLS as a discrete block: ARX recovery, projection, anti-windup, python-control
+# ----------------------------------------------------------------------------------------------
+
+
+ARX = (1.5, -0.7, 0.5)  # y(k) = 1.5 y(k-1) - 0.7 y(k-2) + 0.5 u(k-1): poles 0.75 ± 0.37j
+
+
+def arx_loop(rls, dt=0.1):
+    plant = DiscreteLTI(ct.tf([ARX[2], 0.0], [1.0, -ARX[0], -ARX[1]], True), dt)
+    return Loop([place(plant, "plant", inputs=["u"], outputs=["y"]),
+                 place(ArxRegressor(2, 1), "reg", inputs=["y", "u"], outputs=["z", "h0", "h1", "h2"]),
+                 place(rls, "rls", inputs=["z", "h0", "h1", "h2"], outputs=["a1", "a2", "b1"])], dt)
+
+
+def test_rls_block_recovers_second_order_arx():
+    u = np.random.default_rng(5).standard_normal((400, 3))
+    res = arx_loop(RecursiveLeastSquares(3, forgetting=1.0, P0=1e4)).simulate(399, inputs={"u": u})
+    theta = np.stack([res["a1"][-1], res["a2"][-1], res["b1"][-1]], axis=1)
+    # exact data: only the prior P0 = 1e4 I biases the estimate, by ~ 1 / (P0 Σ h²) ≪ 1e-4
+    np.testing.assert_allclose(theta, np.tile(ARX, (3, 1)), atol=1e-4)
+
+
+def test_rls_block_equals_step_interface_and_batch():
+    rng = np.random.default_rng(6)
+    H, z = rng.normal(size=(50, 2, 3)), rng.normal(size=(50, 2))
+    rls = RecursiveLeastSquares(3, forgetting=0.98, P0=10.0, batch=2)
+    hist = rls.run(H, z)
+    block_run = DiscreteBlock.run  # RecursiveLeastSquares.run(H, z) is the record interface
+    y, _ = block_run(RecursiveLeastSquares(3, forgetting=0.98, P0=10.0), np.concatenate([z[:, :, None], H], axis=2))
+    np.testing.assert_array_equal(y, hist)  # block output theta(k) == step()'s theta after sample k
+    single, _ = block_run(RecursiveLeastSquares(3, forgetting=0.98, P0=10.0), np.concatenate([z[:, :1, None], H[:, :1]], 2))
+    np.testing.assert_array_equal(single[:, 0], y[:, 0])  # a run does not depend on the batch size
+
+
+def test_projection_keeps_parameters_in_bounds():
+    rng = np.random.default_rng(7)
+    H = rng.normal(size=(300, 4, 3))
+    z = H @ np.array([3.0, -2.0, 0.5]) + rng.normal(size=(300, 4))
+    lo, hi = np.array([-1.0, -1.0, 0.0]), np.array([1.0, 1.0, 0.2])
+    hist = RecursiveLeastSquares(3, 0.99, 100.0, batch=4, lower=lo, upper=hi).run(H, z)
+    assert np.all(hist >= lo) and np.all(hist <= hi)
+    assert np.any(hist[-1] == hi) and np.any(hist[-1] == lo)  # the box is active, not vacuous
+    free = RecursiveLeastSquares(3, 0.99, 100.0, batch=4).run(H, z)
+    assert np.any(free > hi) and np.any(free < lo)
+
+
+def test_max_trace_bounds_covariance_windup():
+    H = np.tile([1.0, 1.0], (2000, 1))  # no excitation: P grows like λ^-k without a bound
+    z = np.ones(2000)
+    free = RecursiveLeastSquares(2, 0.99, 1.0)
+    free.run(H, z)
+    bounded = RecursiveLeastSquares(2, 0.99, 1.0, max_trace=2.0)
+    bounded.run(H, z)
+    assert np.trace(free.P) > 1e3 and np.trace(bounded.P) <= 2.0 + 1e-12
+
+
+@pytest.mark.parametrize("kwargs,match", [
+    ({"n_params": 2, "forgetting": -0.5}, "forgetting must be in"),
+    ({"n_params": 2, "P0": np.array([[1.0, 1.0], [1.0, 1.0]])}, "singular or negative"),
+    ({"n_params": 2, "P0": np.array([[1.0, 0.0], [0.0, -1.0]])}, "singular or negative"),
+    ({"n_params": 2, "lower": [1.0, 0.0], "upper": [0.0, 1.0]}, "lower must be <= upper"),
+    ({"n_params": 2, "lower": [1.0, 1.0], "theta0": [0.0, 0.0]}, "theta0 must lie within"),
+    ({"n_params": 2, "max_trace": 0.0}, "max_trace"),
+])
+def test_rls_block_bad_input(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        RecursiveLeastSquares(**kwargs)
+
+
+def test_arx_regressor_lags_and_bad_input():
+    y, _ = ArxRegressor(1, 2, lag=1).run(np.column_stack([np.arange(5.0), 10 + np.arange(5.0)]))
+    np.testing.assert_array_equal(y[-1, 0], [3.0, 2.0, 12.0, 11.0])  # z = s(3), h = [s(2), u(2), u(1)]
+    with pytest.raises(ValueError, match="na \\+ nb"):
+        ArxRegressor(0, 0)
+
+
+def test_rls_loop_runs_in_control_interconnect():
+    loop = arx_loop(RecursiveLeastSquares(3, forgetting=0.99, P0=100.0, lower=[-2, -2, 0], upper=[2, 2, 1]))
+    u = np.random.default_rng(8).standard_normal(60)
+    res = loop.simulate(59, inputs={"u": u})
+    sys = loop.interconnect()
+    assert sys.isdtime()
+    resp = ct.input_output_response(sys, res.t, u[None, :], X0=res.x[0, 0])
+    np.testing.assert_allclose(res.to_timeresponse(0).outputs, resp.outputs, rtol=1e-10, atol=1e-12)

@@ -68,7 +68,9 @@ def test_library_never_imports_the_studies():
 
 
 def test_no_printed_paper_constant_in_the_library():
-    paper = {v for v in (_printed_values() | PAPER_NUMBERS) if v not in GENERIC}
+    # small integers (orders, sample counts, 20 s horizons) are too common to tie to a paper
+    paper = {v for v in (_printed_values() | PAPER_NUMBERS)
+             if v not in GENERIC and not (v.is_integer() and abs(v) < 100)}
     assert len(paper) > len(PAPER_NUMBERS) // 2  # the collection found something to look for
     offenders = []
     for path in _py_files(LIB):

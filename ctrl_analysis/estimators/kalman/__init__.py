@@ -25,6 +25,7 @@ from ._checks import (check_controllable, check_detectable, check_observable, co
                       controllability_rank, observability_matrix, observability_rank)
 from .alpha_beta import (AlphaBetaFilter, alpha_beta_from_gain, alpha_beta_stable, gain_from_alpha_beta,
                          kalata_gains, tracking_index, tracking_index_from_gains)
+from .ckf import CharacteristicKalmanFilter, LinearKalmanFilter
 from .continuous import (ContinuousSteadyState, care_residual, continuous_steady_state,
                          continuous_steady_state_gain, riccati_rhs, riccati_trajectory)
 from .discrete import (DiscreteSteadyState, dare_residual, discrete_steady_state, discrete_steady_state_batch,
@@ -44,4 +45,5 @@ __all__ = [
     "alpha_beta_stable", "AlphaBetaFilter", "DiscreteKalmanFilter",
     "random_walk_gain",
     "ImprovedKalmanFilter",
+    "CharacteristicKalmanFilter", "LinearKalmanFilter",
 ]

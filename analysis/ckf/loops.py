@@ -1,0 +1,134 @@
+"""The `ckf` closed loops, built from library blocks through :class:`ctrl_analysis.loop.Loop`.
+
+One loop holds every case side by side on the batch axis: plant, measurement, the digital LPF,
+the CKF, the identification (regressor + RLS) and the golden-section controller all run in every
+run; per-run selectors (external inputs) say which signal is fed back (raw, LPF or CKF, raw before
+``t_filter``) and which one forms the identification's ``z`` and ``h``. Run ``b`` of the batch
+is therefore exactly the loop of its case alone, and the three cases see the same noise.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ctrl_analysis.blocks import StaticBlock
+from ctrl_analysis.controllers.golden_section import GoldenSectionController
+from ctrl_analysis.estimators.kalman import CharacteristicKalmanFilter
+from ctrl_analysis.estimators.lowpass import LowPassFilter
+from ctrl_analysis.identification import ArxRegressor, RecursiveLeastSquares
+from ctrl_analysis.loop import Loop, place
+from ctrl_analysis.plants import DiscreteLTI
+from ctrl_analysis.simulate import draw_noise, gaussian_noise, run_seeds
+
+__all__ = ["CASES", "ID_OPTIONS", "SIGNALS", "build_loop", "plant_tf", "simulate_cases", "split_cases"]
+
+#: Feedback cases: (selector of the LPF signal, selector of the CKF signal).
+CASES = {"nofilter": (0.0, 0.0), "lpf": (1.0, 0.0), "ckf": (0.0, 1.0)}
+#: Identification options, the signal forming z and h of (9): (selector of the LPF output, of the fed-back
+#: signal); "raw" is the measurement, "lpf" the LPF output in every case, "feedback" what the controller sees.
+ID_OPTIONS = {"raw": (0.0, 0.0), "lpf": (1.0, 0.0), "feedback": (0.0, 1.0)}
+
+
+#: Signals kept from a run (the others are dropped to save memory).
+SIGNALS = ("y", "y_m", "y_fb", "y_lpf", "y_ckf", "u", "u_prev", "f1", "f2", "g0")
+
+
+def plant_tf(name: str):
+    """The plant ``name`` as a continuous ``control.TransferFunction`` (unit DC gain)."""
+    import control as ct
+
+    s = ct.tf("s")
+    if name == "interlaced":
+        return 2.285714 * (s + 2) * (s + 3) * (s + 5) * (s + 7) / ((s + 1) * (s + 2.5) * (s + 4) * (s + 6) * (s + 8))
+    if name == "resonant-delay":
+        w, z = 3.0, 0.15
+        num, den = ct.pade(0.1, 2)
+        return w**2 / (s**2 + 2 * z * w * s + w**2) / (s + 1) * ct.tf(num, den)
+    raise ValueError(f"plant must be 'interlaced' or 'resonant-delay', got {name!r}")
+
+
+def build_loop(p, plant=None) -> Loop:
+    """Plant, measurement, LPF, CKF, identification and golden-section control wired by signal names.
+
+    Parameters
+    ----------
+    p : CKFStudy
+    plant : control.TransferFunction or StateSpace, optional
+        Default ``plant_tf(p.plant)``.
+    """
+    import control as ct
+
+    sys = plant_tf(p.plant) if plant is None else plant
+    lo, hi = (p.lower, p.upper) if p.project else (None, None)
+    t_f = p.t_filter
+
+    def select(t, u):  # fed-back signal: raw before t_filter, then raw / LPF / CKF per run
+        y_m = u[:, 0]
+        if t < t_f - 1e-9:
+            return y_m[:, None]
+        return (y_m + u[:, 3] * (u[:, 1] - y_m) + u[:, 4] * (u[:, 2] - y_m))[:, None]
+
+    def select_id(t, u):  # signal of the identification: raw, LPF or fed-back per run
+        y_m = u[:, 0]
+        return (y_m + u[:, 3] * (u[:, 1] - y_m) + u[:, 4] * (u[:, 2] - y_m))[:, None]
+
+    blocks = [
+        place(DiscreteLTI(sys, p.Ts), "plant", inputs=["u"], outputs=["y"]),
+        place(StaticBlock(lambda t, u: u[:, :1] + u[:, 1:2], ("y", "v"), ("y_m",)), "meas"),
+        place(LowPassFilter(p.lpf_omega, p.lpf_order).digital(p.Ts), "lpf", inputs=["y_m"], outputs=["y_lpf"]),
+        place(DiscreteLTI(ct.tf([1.0], [1.0, 0.0], True), p.Ts), "delay", inputs=["u"], outputs=["u_prev"]),
+        place(CharacteristicKalmanFilter(Q=np.array(p.Q), R=p.R, P0=p.P0_ckf), "ckf",
+              inputs=["y_m", "u_prev", "f1", "f2", "g0"], outputs=["y_ckf", "y_ckf_prev"]),
+        place(StaticBlock(select, ("y_m", "y_lpf", "y_ckf", "sel_lpf", "sel_ckf"), ("y_fb",)), "select"),
+        place(StaticBlock(select_id, ("y_m", "y_lpf", "y_fb", "sel_id_lpf", "sel_id_fb"), ("s_id",)), "idsignal"),
+        place(ArxRegressor(2, 1, lag=0), "regressor", inputs=["s_id", "u"], outputs=["z", "h0", "h1", "h2"]),
+        place(RecursiveLeastSquares(3, p.forgetting, p.P0_rls, p.theta0, lower=lo, upper=hi,
+                                    max_trace=p.max_trace, feedthrough=False), "rls",
+              inputs=["z", "h0", "h1", "h2"], outputs=["f1", "f2", "g0"]),
+        place(GoldenSectionController(p.k_I, p.c2, mu=p.mu, l1=p.l1, l2=p.l2), "ctrl",
+              inputs=["y_fb", "r", "f1", "f2", "g0"], outputs=["u"]),
+    ]
+    return Loop(blocks, p.Ts)
+
+
+def simulate_cases(p, runs: int, seed: int, *, options=None, plant=None, noise_std=None):
+    """Run every case x identification option over ``runs`` Monte Carlo runs in one batch.
+
+    Returns
+    -------
+    res : LoopResponse
+        Batch of ``len(options) * len(CASES) * runs`` runs, ordered option, case, run.
+    index : dict
+        ``(option, case) -> slice`` of the batch.
+    """
+    options = (p.id_signal,) if options is None else tuple(options)
+    n = round(p.t_end / p.Ts)
+    seeds = run_seeds(seed, runs)
+    std = p.noise_std if noise_std is None else noise_std
+    v = draw_noise(seeds, n + 1, gaussian_noise(std))[:, :, 0]
+    combos = [(o, c) for o in options for c in CASES]
+    B = len(combos) * runs
+    sel = np.empty((4, B))
+    index = {}
+    for i, (o, c) in enumerate(combos):
+        sl = slice(i * runs, (i + 1) * runs)
+        index[(o, c)] = sl
+        sel[:, sl] = np.array(CASES[c] + ID_OPTIONS[o])[:, None]
+    loop = build_loop(p, plant)
+    res = loop.simulate(n, inputs={"v": np.tile(v, (1, len(combos))), "r": p.reference,
+                                   "sel_lpf": lambda t: sel[0], "sel_ckf": lambda t: sel[1],
+                                   "sel_id_lpf": lambda t: sel[2], "sel_id_fb": lambda t: sel[3]},
+                        runs=B, store_states=False, seeds=seeds * len(combos))
+    return res, index
+
+
+def split_cases(res, index) -> dict:
+    """``{(option, case): {"t", "ok", "diverged_step", signal: (N+1, runs)}}`` from :func:`simulate_cases`."""
+    out = {}
+    for key, sl in index.items():
+        d = {s: res[s][:, sl] for s in SIGNALS}
+        d["t"] = res.t
+        d["ok"] = ~res.diverged[sl]
+        d["diverged_step"] = res.diverged_step[sl]
+        out[key] = d
+    return out

@@ -1,0 +1,116 @@
+"""Golden-section adaptive control with maintaining tracking and a logic integral, on a 2nd-order characteristic model."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .._validate import check_finite, check_nonnegative, check_positive
+from ..blocks import DiscreteBlock
+
+__all__ = ["GOLDEN_L1", "GOLDEN_L2", "GoldenSectionController"]
+
+#: Golden-section coefficients ``l1 = 1 − 0.618``, ``l2 = (√5 − 1)/2 ≈ 0.618`` (as printed: 0.382, 0.618).
+GOLDEN_L1 = 0.382
+GOLDEN_L2 = 0.618
+
+
+class GoldenSectionController(DiscreteBlock):
+    """``u = u_0 + u_l + u_i`` for the characteristic model ``x(k+1) = f1 x(k) + f2 x(k−1) + g0 u(k)``.
+
+    With ``e(k) = y(k) − r(k)`` and the current estimates ``f̂1, f̂2, ĝ0`` (inputs)::
+
+        u_l(k) = −(l1 f̂1 e(k) + l2 f̂2 e(k−1)) / (ĝ0 + μ)              golden-section feedback
+        u_0(k) = (r(k+1) − f̂1 r(k) − f̂2 r(k−1)) / ĝ0                  maintaining tracking
+        u_i(k) = c u_i(k−1) − k_I e(k),  c = c1 if e(k) (e(k) − e(k−1)) > 0 else c2   logic integral
+        u(k)   = u_0(k) + u_l(k) + u_i(k)
+
+    ``r(k+1)`` is not known to a block fed ``r(k)``; it is taken as ``r(k)`` (exact for a constant
+    or piecewise-constant reference except at its jumps).
+
+    Parameters
+    ----------
+    k_I : float
+        Integral gain (>= 0).
+    c2 : float
+        Leak of the integral while the error shrinks, ``0 < c2 <= c1``.
+    c1 : float
+        Integral factor while the error grows (``0 < c1 <= 1``; 1 in the literature).
+    mu : float
+        Regularisation of ``1/ĝ0`` in the golden-section term: ``1/(ĝ0 + μ)`` (>= 0), as in Wu's
+        golden-section law. ``u_0`` divides by ``ĝ0`` itself (so that it holds exactly the
+        steady state of the identified model); the caller must keep ``ĝ0`` away from zero (e.g. by
+        projecting the identification onto ``ĝ0 >= g0_min``).
+    l1, l2 : float
+        Golden-section coefficients (default 0.382, 0.618).
+
+    Block signals: inputs ``y, r, f1, f2, g0``; output ``u``; states ``e_prev`` (``e(k−1)``),
+    ``r_prev`` (``r(k−1)``), ``ui_prev`` (``u_i(k−1)``), ``started`` (0 before the first sample, when
+    ``r(k−1) := r(k)`` and ``e(k−1) := e(k)``, then 1). Direct feedthrough.
+
+    Raises
+    ------
+    ValueError
+        ``k_I < 0``, ``mu < 0``, or ``c1, c2`` not with ``0 < c2 <= c1 <= 1``.
+
+    References
+    ----------
+    Wu H., Liu Y., Liu Z., et al., "Characteristic modeling and the control of flexible
+    structures", Science in China (E) 31(2), 2001 (the golden-section law, maintaining tracking,
+    logic integral); Gong & Wu 2010, eq. (16)-(20), whose formulas were lost in extraction: the
+    forms above are the standard ones. Departure: ``r(k+1) := r(k)``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> ctrl = GoldenSectionController(k_I=0.0, c2=0.9, mu=0.0)
+    >>> u = ctrl.output(0.0, ctrl.initial_state()[None, :], np.array([[0.0, 1.0, 1.9, -0.9, 0.1]]))
+    >>> round(float(u[0, 0]), 6)    # e = e(k−1) = −1: u_0 = 0, u_l = (0.382·1.9 − 0.618·0.9)/0.1
+    1.696
+    """
+
+    inputs = ("y", "r", "f1", "f2", "g0")
+    outputs = ("u",)
+    states = ("e_prev", "r_prev", "ui_prev", "started")
+    feedthrough = True
+
+    def __init__(self, k_I: float = 0.0, c2: float = 0.9, c1: float = 1.0, mu: float = 0.0,
+                 l1: float = GOLDEN_L1, l2: float = GOLDEN_L2):
+        self.k_I = float(check_nonnegative("k_I", k_I))
+        self.c1 = float(check_finite("c1", c1))
+        self.c2 = float(check_finite("c2", c2))
+        if not 0.0 < self.c2 <= self.c1 <= 1.0:
+            raise ValueError(f"c1, c2 must satisfy 0 < c2 <= c1 <= 1, got c1={self.c1}, c2={self.c2}")
+        self.mu = float(check_nonnegative("mu", mu))
+        self.l1 = float(check_positive("l1", l1))
+        self.l2 = float(check_positive("l2", l2))
+
+    def initial_state(self) -> np.ndarray:
+        return np.zeros(4)
+
+    def _kernel(self, x, u):
+        y, r, f1, f2, g0 = u[:, 0], u[:, 1], u[:, 2], u[:, 3], u[:, 4]
+        started = x[:, 3] > 0.0
+        e = y - r
+        e_prev = np.where(started, x[:, 0], e)
+        r_prev = np.where(started, x[:, 1], r)
+        ui_prev = x[:, 2]
+        inv_gl = 1.0 / (g0 + self.mu)
+        # (17) golden section u_l(k) = −(l1 f̂1 e(k) + l2 f̂2 e(k−1)) / ĝ0
+        ul = -(self.l1 * f1 * e + self.l2 * f2 * e_prev) * inv_gl
+        # (18) maintaining tracking u_0(k) = (r(k+1) − f̂1 r(k) − f̂2 r(k−1)) / ĝ0, r(k+1) := r(k)
+        u0 = (r - f1 * r - f2 * r_prev) / g0
+        # (19) logic integral u_i(k) = c u_i(k−1) − k_I e(k), c = c1 if e (e − e(k−1)) > 0 else c2
+        c = np.where(e * (e - e_prev) > 0.0, self.c1, self.c2)
+        ui = c * ui_prev - self.k_I * e
+        # (20) u = u_0 + u_l + u_i
+        return u0 + ul + ui, e, ui
+
+    def update(self, t, x, u, params=None) -> np.ndarray:
+        _, e, ui = self._kernel(x, u)
+        return np.stack([e, u[:, 1], ui, np.ones_like(e)], axis=1)
+
+    def output(self, t, x, u, params=None) -> np.ndarray:
+        return self._kernel(x, u)[0][:, None]
+
+    def __repr__(self) -> str:
+        return f"GoldenSectionController(k_I={self.k_I:g}, c2={self.c2:g}, mu={self.mu:g})"

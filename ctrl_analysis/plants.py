@@ -1,0 +1,98 @@
+"""Plants as blocks: any SISO linear system, sampled with a zero-order hold, as a discrete block."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._validate import check_positive
+from .blocks import DiscreteBlock, signal_names
+
+__all__ = ["DiscreteLTI"]
+
+
+class DiscreteLTI(DiscreteBlock):
+    """A SISO linear system ``x(k+1) = A x(k) + B u(k)``, ``y(k) = C x(k) + D u(k)`` as a discrete block.
+
+    A continuous-time ``control.TransferFunction`` or ``control.StateSpace`` is discretised with
+    ``control.c2d(sys, dt, method="zoh")`` (exact for an input held over each sample); a
+    discrete-time system is used as it is (its ``dt`` must be ``dt`` or unspecified). A delay
+    ``z⁻¹`` is ``DiscreteLTI(control.tf([1], [1, 0], True), dt)``.
+
+    Parameters
+    ----------
+    sys : control.TransferFunction or control.StateSpace
+        A single-input single-output linear system.
+    dt : float
+        Sampling period (> 0).
+    x0 : array_like, shape (n,), optional
+        Initial state (default zeros).
+
+    Attributes
+    ----------
+    A, B, C, D : numpy.ndarray
+        Discrete matrices, shapes ``(n, n)``, ``(n,)``, ``(n,)`` and scalar ``D``.
+    ss : control.StateSpace
+        The discrete system (``dt`` set).
+
+    Block signals: input ``u``; output ``y``; states ``x[0] .. x[n-1]``. Direct feedthrough iff ``D != 0``.
+
+    Raises
+    ------
+    TypeError
+        If ``sys`` is not a python-control LTI system.
+    ValueError
+        If ``sys`` is not SISO, ``dt`` is not > 0, or a discrete ``sys`` has another sampling period.
+
+    Examples
+    --------
+    >>> import control as ct
+    >>> import numpy as np
+    >>> plant = DiscreteLTI(ct.tf([1], [1, 1]), dt=0.1)
+    >>> y, _ = plant.run(np.ones(200))
+    >>> round(float(y[-1, 0, 0]), 4)
+    1.0
+    """
+
+    inputs = ("u",)
+    outputs = ("y",)
+
+    def __init__(self, sys, dt: float, x0=None):
+        import control as ct
+
+        if not isinstance(sys, (ct.TransferFunction, ct.StateSpace)):
+            raise TypeError(f"sys must be a control.TransferFunction or control.StateSpace, got {type(sys).__name__}")
+        if sys.ninputs != 1 or sys.noutputs != 1:
+            raise ValueError(f"sys must be SISO (1 input, 1 output), got {sys.ninputs} inputs and "
+                             f"{sys.noutputs} outputs")
+        self.dt = float(check_positive("dt", dt))
+        if sys.isctime(strict=True):
+            sysd = ct.c2d(ct.ss(sys), self.dt, method="zoh")
+        else:
+            if sys.dt is not True and sys.dt is not None and not np.isclose(sys.dt, self.dt):
+                raise ValueError(f"sys is discrete with dt={sys.dt}, which must equal dt={self.dt}")
+            sysd = ct.ss(sys)
+            sysd = ct.ss(sysd.A, sysd.B, sysd.C, sysd.D, self.dt)
+        self.ss = sysd
+        self.A = np.asarray(sysd.A, dtype=float)
+        self.B = np.asarray(sysd.B, dtype=float)[:, 0]
+        self.C = np.asarray(sysd.C, dtype=float)[0, :]
+        self.D = float(np.asarray(sysd.D)[0, 0])
+        n = self.A.shape[0]
+        self.states = signal_names("x", n)
+        self.feedthrough = self.D != 0.0
+        self._x0 = np.zeros(n) if x0 is None else np.asarray(x0, dtype=float).reshape(n)
+
+    def initial_state(self) -> np.ndarray:
+        return self._x0.copy()
+
+    def update(self, t, x, u, params=None) -> np.ndarray:
+        # x(k+1) = A x(k) + B u(k): per run, row sums of n products (same order whatever the batch size)
+        return (x[:, None, :] * self.A).sum(axis=2) + u[:, :1] * self.B
+
+    def output(self, t, x, u, params=None) -> np.ndarray:
+        # y(k) = C x(k) + D u(k)
+        y = (x * self.C).sum(axis=1, keepdims=True)
+        return y + self.D * u[:, :1] if self.feedthrough else y
+
+    def __repr__(self) -> str:
+        return f"DiscreteLTI(n={self.A.shape[0]}, dt={self.dt})"

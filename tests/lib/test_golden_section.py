@@ -1,0 +1,69 @@
+"""Tests of the golden-section + maintaining-tracking + logic-integral controller."""
+
+import control as ct
+import numpy as np
+import pytest
+
+from ctrl_analysis.blocks import StaticBlock
+from ctrl_analysis.controllers.golden_section import GoldenSectionController
+from ctrl_analysis.loop import Loop, place
+from ctrl_analysis.plants import DiscreteLTI
+
+F1, F2, G0 = 1.8, -0.85, 0.1  # x(k+1) = f1 x(k) + f2 x(k-1) + g0 u(k): DC gain g0 / (1 - f1 - f2) = 2
+
+
+def golden_loop(ctrl, dt=0.01):
+    plant = DiscreteLTI(ct.tf([G0, 0.0], [1.0, -F1, -F2], True), dt)  # x(k+1) = f1 x + f2 x(k-1) + g0 u(k)
+    params = StaticBlock(lambda t, u: np.tile([F1, F2, G0], (u.shape[0], 1)), (), ("f1", "f2", "g0"))
+    return Loop([place(plant, "plant", inputs=["u"], outputs=["y"]), place(params, "theta"),
+                 place(ctrl, "ctrl", inputs=["y", "r", "f1", "f2", "g0"], outputs=["u"])], dt)
+
+
+@pytest.mark.parametrize("k_I,mu", [(0.0, 0.0), (0.02, 0.0), (0.02, 0.5)])
+def test_golden_section_tracks_constant_reference(k_I, mu):
+    res = golden_loop(GoldenSectionController(k_I=k_I, c2=0.9, mu=mu)).simulate(1500, inputs={"r": 3.0})
+    assert not res.diverged.any()
+    np.testing.assert_allclose(res["y"][-50:, 0], 3.0, atol=1e-6)
+    # in steady state the control is the model's DC input, r (1 - f1 - f2) / g0
+    np.testing.assert_allclose(res["u"][-1, 0], 3.0 * (1 - F1 - F2) / G0, atol=1e-5)
+
+
+def test_golden_section_error_dynamics_are_the_golden_polynomial():
+    # exact model, μ = 0, no integral: e(k+1) = (1 − l1) f1 e(k) + (1 − l2) f2 e(k−1)
+    res = golden_loop(GoldenSectionController(k_I=0.0, c2=0.9)).simulate(40, inputs={"r": 1.0})
+    e = res["y"][:, 0] - 1.0
+    np.testing.assert_allclose(e[3:], (1 - 0.382) * F1 * e[2:-1] + (1 - 0.618) * F2 * e[1:-2], atol=1e-12)
+
+
+def test_logic_integral_switches_factor():
+    c = GoldenSectionController(k_I=1.0, c2=0.5)
+    x = np.array([[1.0, 0.0, 4.0, 1.0], [3.0, 0.0, 4.0, 1.0]])  # e(k-1) = 1 (error grows) / 3 (shrinks)
+    u = np.array([[2.0, 0.0, 1.0, -0.5, 1.0]] * 2)  # e(k) = 2
+    np.testing.assert_allclose(c.update(0.0, x, u)[:, 2], [1.0 * 4.0 - 2.0, 0.5 * 4.0 - 2.0])
+
+
+@pytest.mark.parametrize("kwargs,match", [
+    ({"k_I": -1.0}, "k_I must be >= 0"),
+    ({"c2": 0.0}, "0 < c2 <= c1 <= 1"),
+    ({"c2": 0.9, "c1": 0.8}, "0 < c2 <= c1 <= 1"),
+    ({"c1": 1.5}, "0 < c2 <= c1 <= 1"),
+    ({"mu": -0.1}, "mu must be >= 0"),
+])
+def test_golden_section_bad_input(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        GoldenSectionController(**kwargs)
+
+
+def test_golden_section_loop_runs_in_control_interconnect():
+    # the parameters are external inputs here: python-control solves the loop by fixed-point
+    # iteration from u = 0, and a static ĝ0 block would divide by 0 on the first pass
+    plant = DiscreteLTI(ct.tf([G0, 0.0], [1.0, -F1, -F2], True), 0.01)
+    loop = Loop([place(plant, "plant", inputs=["u"], outputs=["y"]),
+                 place(GoldenSectionController(k_I=0.02, c2=0.9, mu=0.1), "ctrl")], 0.01)
+    r = 2.0 + np.sign(np.sin(0.05 * np.arange(200)))
+    ext = {"r": r, "f1": np.full(200, F1), "f2": np.full(200, F2), "g0": np.full(200, G0)}
+    res = loop.simulate(199, inputs=ext)
+    sys = loop.interconnect()
+    assert sys.isdtime()
+    resp = ct.input_output_response(sys, res.t, np.stack([ext[s] for s in loop.external]), X0=res.x[0, 0])
+    np.testing.assert_allclose(res.to_timeresponse(0).outputs, resp.outputs, rtol=1e-10, atol=1e-10)
