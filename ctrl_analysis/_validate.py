@@ -7,6 +7,7 @@ import numbers
 import numpy as np
 
 __all__ = [
+    "check_real",
     "check_finite",
     "check_positive",
     "check_nonnegative",
@@ -22,16 +23,35 @@ def _is_real_scalar(value) -> bool:
     )
 
 
-def check_finite(name: str, value, *, shape=None) -> np.ndarray | float:
+def check_real(name: str, value) -> float:
+    """One real number as a float (a type check only: NaN and inf pass; see :func:`check_finite`).
+
+    A list, an array of more than one entry, a string, a bool, a complex number or ``None`` raises
+    ``TypeError("X must be a real number, got …")``.
+    """
+    if isinstance(value, np.ndarray) and value.ndim == 0:
+        value = value[()]
+    if not _is_real_scalar(value):
+        raise TypeError(f"{name} must be a real number, got {value!r}")
+    return float(value)
+
+
+def check_finite(name: str, value, *, shape=None, scalar: bool = False) -> np.ndarray | float:
     """Return ``value`` as float (scalar) or float array; raise if any entry is NaN/inf.
+
+    With ``scalar=True`` the value must be one real number (see :func:`check_real`).
 
     Raises
     ------
     TypeError
-        If ``value`` is not numeric.
+        If ``value`` is not numeric (or, with ``scalar``, not one real number).
     ValueError
         If ``value`` contains NaN or inf, or does not have ``shape``.
     """
+    if scalar:
+        value = check_real(name, value)
+    if isinstance(value, (str, bytes)) or value is None:
+        raise TypeError(f"{name} must be a real number or array, got {value!r}")
     try:
         arr = np.asarray(value, dtype=float)
     except (TypeError, ValueError):
@@ -43,17 +63,17 @@ def check_finite(name: str, value, *, shape=None) -> np.ndarray | float:
     return float(arr) if arr.ndim == 0 else arr
 
 
-def check_positive(name: str, value) -> np.ndarray | float:
-    """Finite and strictly positive (element-wise)."""
-    arr = check_finite(name, value)
+def check_positive(name: str, value, *, scalar: bool = False) -> np.ndarray | float:
+    """Finite and strictly positive (element-wise); one real number with ``scalar=True``."""
+    arr = check_finite(name, value, scalar=scalar)
     if np.any(np.asarray(arr) <= 0):
         raise ValueError(f"{name} must be > 0, got {value!r}")
     return arr
 
 
-def check_nonnegative(name: str, value) -> np.ndarray | float:
-    """Finite and >= 0 (element-wise)."""
-    arr = check_finite(name, value)
+def check_nonnegative(name: str, value, *, scalar: bool = False) -> np.ndarray | float:
+    """Finite and >= 0 (element-wise); one real number with ``scalar=True``."""
+    arr = check_finite(name, value, scalar=scalar)
     if np.any(np.asarray(arr) < 0):
         raise ValueError(f"{name} must be >= 0, got {value!r}")
     return arr

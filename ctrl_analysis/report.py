@@ -2,9 +2,14 @@
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
+import os
 import platform
+import shutil
+import signal
+import tempfile
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -17,15 +22,24 @@ __all__ = [
     "StudyInfo",
     "StudyContext",
     "StudyResult",
+    "VERDICTS",
+    "RESULTS_SCHEMA",
     "compute_verdict",
+    "count_verdicts",
     "relative_error",
+    "validate_results",
     "versions",
+    "write_text_atomic",
+    "staged_directory",
     "write_results_json",
     "write_report_md",
     "new_figure",
 ]
 
-VERDICTS = ("agrees", "differs", "new")
+VERDICTS = ("agrees", "differs", "new", "diverged")
+#: Version of the results.json layout: 2 adds ``unit`` and ``tolerance`` on every quantity, the
+#: ``diverged`` verdict, paper ``cell`` / ``primary`` and ``settings["cli"]``.
+RESULTS_SCHEMA = 2
 DEFAULT_TOLERANCE = 0.1
 
 
@@ -64,8 +78,11 @@ def relative_error(value, paper) -> float:
     return float(np.max(np.abs(v - p) / scale))
 
 
-def compute_verdict(value, paper, tolerance: float | None) -> str:
-    """``new`` without a paper value; else ``agrees`` when the relative error is within tolerance."""
+def compute_verdict(value, paper, tolerance: float | None, *, diverged: bool = False) -> str:
+    """``diverged`` when every run diverged; ``new`` without a paper value; else ``agrees`` when the
+    relative error is within tolerance, ``differs`` otherwise."""
+    if diverged:
+        return "diverged"
     if paper is None:
         return "new"
     tol = DEFAULT_TOLERANCE if tolerance is None else tolerance
@@ -78,7 +95,12 @@ def compute_verdict(value, paper, tolerance: float | None) -> str:
 class Quantity:
     """One reproduced number (or vector) beside the paper's.
 
-    ``verdict`` is computed from ``value``, ``paper`` and ``tolerance`` (relative); it is never set by hand.
+    ``verdict`` is computed from ``value``, ``paper``, ``tolerance`` (relative) and ``diverged``; it is
+    never set by hand. ``unit`` is always written ("" = dimensionless); ``tolerance`` is written
+    whenever ``paper`` is (default :data:`DEFAULT_TOLERANCE`). ``cell`` names the paper cell the
+    quantity scores (e.g. ``"Table 2 / x1 ESO"``); quantities sharing a cell are counted once, by the
+    one with ``primary=True`` (default: the first recorded). ``diverged=True`` (or ``runs_diverged``
+    equal to ``runs``) means every run diverged: no value, verdict ``diverged``.
     """
 
     id: str
@@ -90,10 +112,38 @@ class Quantity:
     tolerance: float | None = None
     note: str = ""
     unit: str = ""
+    cell: str | None = None
+    primary: bool = False
+    diverged: bool = False
+    runs_diverged: int | None = None
+
+    def __post_init__(self):
+        if not isinstance(self.unit, str):
+            raise TypeError(f"unit must be a string ('' for dimensionless), got {self.unit!r}")
+        if self.cell is not None and (not isinstance(self.cell, str) or not self.cell.strip()):
+            raise ValueError(f"cell must be a non-empty string naming the paper cell, got {self.cell!r}")
+        if self.tolerance is not None:
+            from ._validate import check_nonnegative
+
+            self.tolerance = float(check_nonnegative("tolerance", self.tolerance))
+        if self.runs is not None:
+            from ._validate import check_int
+
+            self.runs = check_int("runs", self.runs, minimum=0)
+        if self.runs_diverged is not None:
+            from ._validate import check_int
+
+            self.runs_diverged = check_int("runs_diverged", self.runs_diverged, minimum=0,
+                                           maximum=self.runs)
+            if self.runs and self.runs_diverged == self.runs:
+                self.diverged = True
+        if self.diverged and self.value is not None:
+            raise ValueError(f"quantity {self.id!r}: a diverged quantity has no value (value must be None), "
+                             f"got {self.value!r}")
 
     @property
     def verdict(self) -> str:
-        return compute_verdict(self.value, self.paper, self.tolerance)
+        return compute_verdict(self.value, self.paper, self.tolerance, diverged=self.diverged)
 
     def to_dict(self) -> dict:
         d = {
@@ -101,16 +151,21 @@ class Quantity:
             "label": self.label,
             "paper": self.paper,
             "value": self.value,
-            "std": self.std,
+            # one run has no spread: record none rather than a misleading 0
+            "std": self.std if (self.runs is None or self.runs > 1) and not self.diverged else None,
             "runs": self.runs,
+            "unit": self.unit,
             "tolerance": (DEFAULT_TOLERANCE if self.tolerance is None else self.tolerance)
             if self.paper is not None
             else None,
             "verdict": self.verdict,
             "note": self.note,
         }
-        if self.unit:
-            d["unit"] = self.unit
+        if self.cell is not None:
+            d["cell"] = self.cell
+            d["primary"] = bool(self.primary)
+        if self.runs_diverged is not None:
+            d["runs_diverged"] = self.runs_diverged
         if self.value is not None and not np.all(np.isfinite(np.asarray(self.value, dtype=float))):
             d["note"] = (self.note + " " if self.note else "") + "value is not finite (diverged run?)"
         return _to_jsonable(d)
@@ -141,7 +196,21 @@ class StudyResult:
     runtime_s: float = 0.0
 
     def quantity(self, id: str, label: str, value, paper=None, **kw) -> Quantity:
-        """Add (or replace) a quantity and return it."""
+        """Add a quantity and return it (an id may be recorded once).
+
+        Keywords are the fields of :class:`Quantity`:
+
+        - ``unit`` (str, "" = dimensionless) and ``tolerance`` (relative; default
+          :data:`DEFAULT_TOLERANCE` when ``paper`` is given) are written to results.json and REPORT.md.
+        - ``std`` and ``runs`` for Monte Carlo values (no std is written for a single run).
+        - ``cell="Table 2 / x1 ESO"`` names the paper cell the quantity scores; quantities sharing a
+          cell are counted once in the headline counts, by the one with ``primary=True`` (default: the
+          first recorded in that cell). Quantities without a cell count individually.
+        - ``diverged=True`` when every run diverged: pass ``value=None``; the verdict is
+          ``diverged``. Alternatively give ``runs`` and ``runs_diverged``; when they are equal the
+          quantity is diverged. A quantity some of whose runs diverged keeps its value (averaged
+          over the healthy runs) and can record ``runs_diverged`` for the note.
+        """
         if any(q.id == id for q in self.quantities):
             raise ValueError(f"quantity id {id!r} is already recorded in study {self.info.name!r}")
         q = Quantity(id=id, label=label, value=value, paper=paper, **kw)
@@ -166,8 +235,15 @@ class StudyResult:
         raise KeyError(id)
 
     def to_dict(self) -> dict:
+        cells: dict = {}
+        for q in self.quantities:
+            if q.cell is not None and q.primary:
+                if q.cell in cells:
+                    raise ValueError(f"cell {q.cell!r} has two primary quantities: {cells[q.cell]!r} and {q.id!r}")
+                cells[q.cell] = q.id
         return _to_jsonable(
             {
+                "schema": RESULTS_SCHEMA,
                 "study": self.info.name,
                 "seed_file": self.info.seed_file,
                 "paper": self.info.paper,
@@ -232,12 +308,166 @@ def versions() -> dict:
     }
 
 
-def write_results_json(result: StudyResult, out_dir: Path) -> Path:
-    """Write ``out_dir/results.json`` (the contract in DESIGN.md)."""
-    out_dir.mkdir(parents=True, exist_ok=True)
-    path = out_dir / "results.json"
-    path.write_text(json.dumps(result.to_dict(), indent=2, ensure_ascii=False) + "\n", encoding="utf-8")
+@contextlib.contextmanager
+def _sigint_deferred():
+    """Hold SIGINT (main thread only) while a few renames complete, so they happen together."""
+    try:
+        old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    except (AttributeError, ValueError, OSError):  # not POSIX / not the main thread
+        old = None
+    try:
+        yield
+    finally:
+        if old is not None:
+            signal.pthread_sigmask(signal.SIG_SETMASK, old)
+
+
+def _umask() -> int:
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+def write_text_atomic(path: Path, text: str) -> Path:
+    """Write ``text`` to ``path`` atomically: a temporary file beside it, flushed, then renamed.
+
+    A reader sees the old file or the complete new one, never a truncated one (e.g. on a full disk
+    the write fails and the old file stays).
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        os.chmod(tmp, 0o666 & ~_umask())  # as a plain open() would create it
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            fh.write(text)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
     return path
+
+
+@contextlib.contextmanager
+def staged_directory(target: Path):
+    """Stage a directory's new contents beside it; replace ``target`` only when the block completes.
+
+    Yields a fresh temporary directory in ``target``'s parent. On normal exit the old ``target`` is
+    moved aside, the staged directory renamed to ``target`` (SIGINT held during the swap) and the
+    old one removed; on any exception (including ``KeyboardInterrupt``) the staged directory is
+    removed and ``target`` is untouched. ``target`` is therefore complete or untouched.
+    """
+    target = Path(target)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    staged = Path(tempfile.mkdtemp(dir=target.parent, prefix=f".{target.name}.new-"))
+    try:
+        os.chmod(staged, 0o777 & ~_umask())  # as a plain mkdir would create it
+        yield staged
+        for entry in staged.iterdir():  # flush the staged files before they become visible
+            if entry.is_file():
+                with open(entry, "rb") as fh:
+                    os.fsync(fh.fileno())
+        with _sigint_deferred():
+            old = None
+            if target.exists():
+                old = Path(tempfile.mkdtemp(dir=target.parent, prefix=f".{target.name}.old-"))
+                os.replace(target, old / "dir")
+            os.replace(staged, target)
+        if old is not None:
+            shutil.rmtree(old, ignore_errors=True)
+    finally:
+        if staged.exists():
+            shutil.rmtree(staged, ignore_errors=True)
+
+
+def write_results_json(result: StudyResult, out_dir: Path) -> Path:
+    """Write ``out_dir/results.json`` atomically (the contract in DESIGN.md); validated first."""
+    data = result.to_dict()
+    validate_results(data)
+    return write_text_atomic(Path(out_dir) / "results.json",
+                             json.dumps(data, indent=2, ensure_ascii=False) + "\n")
+
+
+_QUANTITY_KEYS = ("id", "label", "paper", "value", "std", "runs", "unit", "tolerance", "verdict", "note")
+_RESULTS_KEYS = ("study", "seed_file", "settings", "reconstructions", "quantities", "findings", "figures",
+                 "runtime_s", "versions")
+
+
+def validate_results(data: dict) -> dict:
+    """Check a results.json dict against the schema; return it unchanged or raise ``ValueError``.
+
+    Rules: the top-level keys of DESIGN.md are present; every quantity has ``id``, ``label``,
+    ``paper``, ``value``, ``std``, ``runs``, ``unit`` (a string, "" = dimensionless), ``tolerance``
+    (a number >= 0 whenever ``paper`` is given), ``verdict`` in :data:`VERDICTS` and equal to the
+    verdict recomputed from the record, ``paper`` None for ``new``, ``value`` None for ``diverged``;
+    ids are unique and a paper cell has at most one primary quantity.
+    """
+    if not isinstance(data, dict):
+        raise ValueError(f"results must be a dict, got {type(data).__name__}")
+    missing = [k for k in _RESULTS_KEYS if k not in data]
+    if missing:
+        raise ValueError(f"results of study {data.get('study')!r} lack keys {missing}")
+    study = data["study"]
+    if not isinstance(data["quantities"], list):
+        raise ValueError(f"{study}: quantities must be a list")
+    seen, primaries = set(), {}
+    for i, q in enumerate(data["quantities"]):
+        where = f"{study}: quantity {q.get('id', i)!r}" if isinstance(q, dict) else f"{study}: quantity #{i}"
+        if not isinstance(q, dict):
+            raise ValueError(f"{where} must be a dict")
+        lack = [k for k in _QUANTITY_KEYS if k not in q]
+        if lack:
+            raise ValueError(f"{where} lacks keys {lack}")
+        if q["id"] in seen:
+            raise ValueError(f"{where} is recorded twice")
+        seen.add(q["id"])
+        if not isinstance(q["unit"], str):
+            raise ValueError(f"{where}: unit must be a string ('' = dimensionless), got {q['unit']!r}")
+        verdict = q["verdict"]
+        if verdict not in VERDICTS:
+            raise ValueError(f"{where}: verdict must be one of {list(VERDICTS)}, got {verdict!r}")
+        tol = q["tolerance"]
+        if q["paper"] is not None and (isinstance(tol, bool) or not isinstance(tol, (int, float))
+                                       or not math.isfinite(tol) or tol < 0):
+            raise ValueError(f"{where}: tolerance must be a number >= 0 when paper is given, got {tol!r}")
+        if verdict == "new" and q["paper"] is not None:
+            raise ValueError(f"{where}: verdict 'new' needs paper None, got {q['paper']!r}")
+        if verdict == "diverged" and q["value"] is not None:
+            raise ValueError(f"{where}: verdict 'diverged' needs value None, got {q['value']!r}")
+        recomputed = compute_verdict(q["value"], q["paper"], tol, diverged=verdict == "diverged")
+        if recomputed != verdict:
+            raise ValueError(f"{where}: verdict {verdict!r} does not follow from value, paper and tolerance "
+                             f"({recomputed!r})")
+        if q.get("cell") is not None:
+            if not isinstance(q["cell"], str):
+                raise ValueError(f"{where}: cell must be a string, got {q['cell']!r}")
+            if q.get("primary"):
+                if q["cell"] in primaries:
+                    raise ValueError(f"{where}: cell {q['cell']!r} already has primary {primaries[q['cell']]!r}")
+                primaries[q["cell"]] = q["id"]
+    return data
+
+
+def count_verdicts(results: dict) -> dict:
+    """Headline counts of one results.json dict: ``{verdict: n}`` over paper cells, each scored once.
+
+    Quantities sharing a ``cell`` count once, with the verdict of the one marked ``primary`` (default:
+    the first in that cell); quantities without a cell count individually.
+    """
+    counts = dict.fromkeys(VERDICTS, 0)
+    by_cell: dict = {}
+    for q in results["quantities"]:
+        cell = q.get("cell")
+        if cell is None:
+            counts[q["verdict"]] += 1
+        elif cell not in by_cell or (q.get("primary") and not by_cell[cell].get("primary")):
+            by_cell[cell] = q
+    for q in by_cell.values():
+        counts[q["verdict"]] += 1
+    return counts
 
 
 def _fmt(value, std=None) -> str:
@@ -264,35 +494,96 @@ def _cell(text) -> str:
     return str(text or "").replace("|", "\\|").replace("\n", " ")
 
 
+def _fmt_tolerance(q: dict) -> str:
+    tol = q.get("tolerance")
+    return "—" if tol is None else f"{100 * tol:.3g} %"
+
+
 def summary_table(results: dict) -> str:
-    """A Markdown table of the quantities of one results.json dict."""
-    rows = ["| id | quantity | paper | reproduced | verdict | note |", "|---|---|---|---|---|---|"]
+    """A Markdown table of the quantities of one results.json dict (unit "—" = dimensionless)."""
+    rows = ["| id | quantity | paper cell | paper | reproduced | unit | tolerance | verdict | note |",
+            "|---|---|---|---|---|---|---|---|---|"]
     for q in results["quantities"]:
         note = _cell(q.get("note"))
+        std = q.get("std") if (q.get("runs") or 2) > 1 else None
+        runs = f" ({q['runs']} run{'s' if q['runs'] != 1 else ''})" if q.get("runs") else ""
+        cell = _cell(q.get("cell"))
+        if cell and q.get("primary"):
+            cell += " (primary)"
         rows.append(
-            f"| `{q['id']}` | {_cell(q['label'])} | {_fmt(q['paper'])} | {_fmt(q['value'], q.get('std'))}"
-            f"{' (' + str(q['runs']) + ' runs)' if q.get('runs') else ''} | {q['verdict']} | {note} |"
+            f"| `{q['id']}` | {_cell(q['label'])} | {cell} | {_fmt(q['paper'])} | {_fmt(q['value'], std)}{runs} "
+            f"| {_cell(q.get('unit')) or '—'} | {_fmt_tolerance(q)} | {q['verdict']} | {note} |"
         )
     return "\n".join(rows)
 
 
-def write_report_md(results: list[dict], out_dir: Path) -> Path:
-    """Write ``out_dir/REPORT.md`` from the results.json dicts of several studies."""
+def _run_table(results: list[dict], this_run: dict) -> list[str]:
+    """Which studies come from this run (with base seed, runs and per-run seeds) and which are stale."""
+    rows = ["| study | from this run | base seed | runs | per-run seeds |", "|---|---|---|---|---|"]
+    for r in results:
+        name = r["study"]
+        run = this_run.get(name)
+        seeds = ", ".join(f"{k}: {_seed_summary(v)}" for k, v in (r.get("seeds") or {}).items()) or "—"
+        if run is None:
+            rows.append(f"| {name} | **no — stale** (results of an earlier run) | — | — | {_cell(seeds)} |")
+        else:
+            runs = "default" if run.get("runs") is None else run["runs"]
+            quick = " (quick)" if run.get("quick") else ""
+            rows.append(f"| {name} | yes{quick} | {run.get('seed')} | {runs} | {_cell(seeds)} |")
+    return rows
+
+
+def _seed_summary(seeds) -> str:
+    seeds = list(np.ravel(np.asarray(seeds, dtype=object))) if isinstance(seeds, (list, tuple)) else [seeds]
+    if len(seeds) <= 4:
+        return "[" + ", ".join(str(s) for s in seeds) + "]"
+    return f"[{seeds[0]}, {seeds[1]}, …, {seeds[-1]}] ({len(seeds)} seeds)"
+
+
+def write_report_md(results: list[dict], out_dir: Path, *, this_run: dict | None = None,
+                    failed: dict | None = None) -> Path:
+    """Write ``out_dir/REPORT.md`` atomically from the results.json dicts of several studies.
+
+    Parameters
+    ----------
+    results : list of dict
+        One results.json dict per study.
+    this_run : dict, optional
+        ``{study: {"seed": int, "runs": int | None, "quick": bool}}`` for the studies written by
+        this run. When given, every other study is marked stale (its results come from an earlier
+        run). ``None`` treats all studies as fresh (no provenance known).
+    failed : dict, optional
+        ``{study: reason}`` for studies that failed in this run; their old results (if any) are shown
+        as stale with the reason.
+    """
+    failed = dict(failed or {})
+    if this_run is None:
+        this_run = {r["study"]: {} for r in results}
     lines = [
         "# ctrl-analysis: reproduction report",
         "",
         "Generated by `ctrl-analysis reproduce all`. Every reproduced value below was computed by the code;",
-        "verdicts are computed from the relative tolerance shown in each study's results.json.",
+        "verdicts are computed from the relative tolerance shown beside each value (unit — = dimensionless).",
+        "Headline counts count paper cells, each scored once by its primary quantity.",
+        "",
+        "## Provenance",
+        "",
+        *_run_table(results, this_run),
         "",
     ]
+    if failed:
+        lines += ["**Failed in this run:** " + "; ".join(f"{k}: {_cell(v)}" for k, v in failed.items()), ""]
     for r in results:
-        counts = {v: sum(q["verdict"] == v for q in r["quantities"]) for v in VERDICTS}
+        counts = count_verdicts(r)
+        lines += [f"## {r['study']}", ""]
+        if r["study"] not in this_run:
+            why = f" This run failed: {_cell(failed[r['study']])}." if r["study"] in failed else ""
+            lines += [f"> **Stale:** these results are not from this run; they were written by an earlier run.{why}",
+                      ""]
         lines += [
-            f"## {r['study']}",
-            "",
             f"*{r['paper']}* — seed `{r['seed_file']}`. "
-            f"{counts['agrees']} agree, {counts['differs']} differ, {counts['new']} new; "
-            f"runtime {r['runtime_s']:.1f} s.",
+            f"{counts['agrees']} agree, {counts['differs']} differ, {counts['diverged']} diverged, "
+            f"{counts['new']} new; runtime {r['runtime_s']:.1f} s.",
             "",
         ]
         if r.get("missing"):
@@ -311,10 +602,7 @@ def write_report_md(results: list[dict], out_dir: Path) -> Path:
             lines += ["### Figures", ""]
             lines += [f"![{name}]({r['study']}/{name})" for name in r["figures"]]
             lines.append("")
-    path = out_dir / "REPORT.md"
-    out_dir.mkdir(parents=True, exist_ok=True)
-    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
-    return path
+    return write_text_atomic(Path(out_dir) / "REPORT.md", "\n".join(lines) + "\n")
 
 
 def new_figure(nrows: int = 1, ncols: int = 1, *, title: str | None = None, size=(7.0, 4.5), **kw):

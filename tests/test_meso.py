@@ -7,6 +7,7 @@ import pytest
 
 import analysis.meso as meso
 from ctrl_analysis.report import StudyContext, write_results_json
+from ctrl_analysis.simulate import run_seeds
 
 
 def test_equivalent_theta_is_the_closed_loop_projection():
@@ -40,7 +41,7 @@ def test_quick_run_writes_every_quantity(tmp_path, monkeypatch):
             assert q["tolerance"] == meso.TOLERANCE
     assert result.get("leso.omega_o").value == pytest.approx(20.0)
     assert result.get("s1.eso.est_x1").paper == pytest.approx(1.7115e-4)
-    assert data["seeds"]["noise"] == [3]
+    assert data["seeds"]["noise"] == run_seeds(3, 1)
     for name in data["figures"]:
         assert (tmp_path / name).stat().st_size > 10_000
     assert {"leso_error_bode.png", "fig3_situation1.png", "fig4_theta_situation1.png",
