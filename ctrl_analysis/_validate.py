@@ -14,6 +14,7 @@ __all__ = [
     "check_int",
     "check_in",
     "check_matrix",
+    "check_hurwitz",
 ]
 
 
@@ -113,3 +114,17 @@ def check_matrix(name: str, value, *, shape=None, square: bool = False, symmetri
     if symmetric and not np.allclose(arr, arr.T, rtol=1e-10, atol=1e-12):
         raise ValueError(f"{name} must be symmetric")
     return arr
+
+
+def check_hurwitz(name: str, poly, *, polynomial: str = "the characteristic polynomial") -> np.ndarray:
+    """Roots of ``poly`` (descending coefficients); raise unless all lie in the open left half-plane.
+
+    ``name`` is the argument that set the coefficients (e.g. ``"gains"``); ``polynomial`` says which
+    polynomial they form, for the message.
+    """
+    roots = np.roots(np.asarray(poly, dtype=float))
+    if roots.size and np.max(roots.real) >= 0:
+        worst = roots[np.argmax(roots.real)]
+        raise ValueError(f"{name} must make {polynomial} Hurwitz (all roots in the open left half-plane), "
+                         f"but it has the root {complex(worst):.4g}")
+    return roots

@@ -308,9 +308,15 @@ class RecursiveLeastSquares:
         """Update with one sample: regressor ``h`` (shape (p,) or (B, p)) and measurement ``z``.
 
         Returns the new ``theta``.
+
+        Raises
+        ------
+        ValueError
+            ``h`` or ``z`` with NaN/inf (one bad sample would make θ NaN for good) or of the wrong
+            shape; the estimator state is left unchanged.
         """
-        h = np.asarray(h, dtype=float)
-        z = np.asarray(z, dtype=float)
+        h = np.asarray(check_finite("h", h), dtype=float)
+        z = np.asarray(check_finite("z", z), dtype=float)
         p = self.n_params
         if self.batch is None:
             if h.shape != (p,):
@@ -327,8 +333,12 @@ class RecursiveLeastSquares:
             self.P = (self.P - np.outer(self.K, Ph)) / self.forgetting
         else:
             B = self.batch
+            if h.shape not in ((p,), (B, p)):
+                raise ValueError(f"h must have shape ({p},) or ({B}, {p}), got {h.shape}")
+            if z.size not in (1, B):
+                raise ValueError(f"z must be a scalar or have {B} entries (one per run), got shape {z.shape}")
             h = np.broadcast_to(h, (B, p))
-            z = np.broadcast_to(z.reshape(-1) if z.ndim else z, (B,))
+            z = np.broadcast_to(z.reshape(-1), (B,))
             Ph = np.einsum("bij,bj->bi", self.P, h)
             self.K = Ph / (self.forgetting + np.einsum("bi,bi->b", h, Ph))[:, None]
             self.theta = self.theta + self.K * (z - np.einsum("bi,bi->b", h, self.theta))[:, None]
@@ -342,8 +352,8 @@ class RecursiveLeastSquares:
 
         Returns the estimate history, shape (N, p) or (N, B, p).
         """
-        H = np.asarray(H, dtype=float)
-        z = np.asarray(z, dtype=float)
+        H = np.atleast_2d(check_finite("H", H))
+        z = np.atleast_1d(check_finite("z", z))
         if H.shape[0] != z.shape[0]:
             raise ValueError(f"H and z must have the same number of samples, got {H.shape[0]} and {z.shape[0]}")
         out = np.empty(H.shape[:1] + np.shape(self.theta))

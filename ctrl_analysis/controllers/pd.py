@@ -16,7 +16,7 @@ from math import comb
 
 import numpy as np
 
-from .._validate import check_finite, check_int, check_positive
+from .._validate import check_finite, check_hurwitz, check_int, check_positive
 
 __all__ = ["PDFeedforward", "bandwidth_gains"]
 
@@ -76,12 +76,13 @@ class PDFeedforward:
     """
 
     def __init__(self, b0: float, omega_c: float | None = None, gains=None, order: int = 2):
-        b0 = float(check_finite("b0", b0))
+        b0 = float(check_finite("b0", b0, scalar=True))
         if b0 == 0:
             raise ValueError("b0 must be non-zero, got 0")
         self.b0 = b0
+        order = check_int("order", order, minimum=1)
         if (omega_c is None) == (gains is None):
-            raise ValueError("give exactly one of omega_c or gains")
+            raise ValueError(f"give exactly one of omega_c or gains, got omega_c={omega_c!r}, gains={gains!r}")
         if omega_c is not None:
             self.k = bandwidth_gains(order, omega_c)
             self.omega_c = float(omega_c)
@@ -89,13 +90,14 @@ class PDFeedforward:
             g = np.atleast_1d(check_finite("gains", gains)).astype(float)
             if g.ndim != 1 or g.size < 1:
                 raise ValueError(f"gains must be a 1-D sequence, got shape {g.shape}")
+            if g.size == order + 1 and g[-1] != 1.0:
+                raise ValueError(f"gains: k_(n+1) must be 1 (it cancels the extended state), got {g[-1]!r}")
             if g.size == order:
                 g = np.concatenate([g, [1.0]])
             elif g.size != order + 1:
                 raise ValueError(f"gains must have n = {order} or n + 1 = {order + 1} entries, got {g.size}")
-            roots = np.roots(np.concatenate([[1.0], g[order - 1::-1]]))
-            if np.any(roots.real >= 0):
-                raise ValueError(f"gains must make s^n + k_n s^(n-1) + ... + k_1 Hurwitz, roots {roots}")
+            check_hurwitz("gains", np.concatenate([[1.0], g[order - 1::-1]]),
+                          polynomial="s^n + k_n s^(n-1) + ... + k_1")
             self.k = g
             self.omega_c = None
         self.n = self.k.size - 1
@@ -126,9 +128,25 @@ class PDFeedforward:
         Returns
         -------
         ndarray, shape (...,)
+
+        Raises
+        ------
+        ValueError
+            ``ref`` or ``x_hat`` without ``n + 1`` entries on the last axis, shapes that do not
+            broadcast, or NaN/inf in ``ref``, ``x_hat`` or ``f_hat``.
         """
-        ref = np.asarray(ref, dtype=float)
-        x_hat = np.asarray(x_hat, dtype=float)
+        ref = np.asarray(check_finite("ref", ref), dtype=float)
+        x_hat = np.asarray(check_finite("x_hat", x_hat), dtype=float)
+        f_hat = check_finite("f_hat", f_hat)
+        m = self.n + 1
+        for name, arr in (("ref", ref), ("x_hat", x_hat)):
+            if arr.ndim < 1 or arr.shape[-1] != m:
+                raise ValueError(f"{name} must have n + 1 = {m} entries on its last axis, got shape {arr.shape}")
+        try:
+            np.broadcast_shapes(ref.shape[:-1], x_hat.shape[:-1], np.shape(f_hat))
+        except ValueError:
+            raise ValueError(f"ref, x_hat and f_hat must broadcast over the batch, got shapes {ref.shape}, "
+                             f"{x_hat.shape} and {np.shape(f_hat)}") from None
         # (30) u = (Σ k_i (ξ^(i-1) - x̂_i) - XᵀΘ) / b0
         return (np.sum(self.k * (ref - x_hat), axis=-1) - f_hat) / self.b0
 

@@ -17,7 +17,7 @@ import control as ct
 import numpy as np
 
 from .._validate import check_in, check_int, check_positive
-from ..symbolic.differential import breakaway_gain, breakaway_point, differential_coefficients
+from ..symbolic.differential import MAX_ORDER, breakaway_gain, breakaway_point, differential_coefficients
 
 __all__ = ["DifferentialEstimator", "READINGS"]
 
@@ -33,13 +33,19 @@ class DifferentialEstimator:
     Parameters
     ----------
     n0 : int
-        Order of Σ (number of states), ``>= 2``. To estimate ``x`` and its first ``n - 1``
-        derivatives, take ``n0 >= n + 1``.
+        Order of Σ (number of states), ``2 <= n0 <= 30``
+        (:data:`ctrl_analysis.symbolic.differential.MAX_ORDER`: beyond it the design gain and the
+        poles cannot be computed reliably in double precision). To estimate ``x`` and its first
+        ``n - 1`` derivatives, take ``n0 >= n + 1``.
     a : float
         The ``n0 - 1`` open-loop zeros sit at ``-a``; ``> 0`` and finite, in 1/s.
     K : float, optional
         Open-loop gain, ``> 0``. Default: the breakaway design gain ``n0^n0 a / (n0-1)^(n0-1)``,
         which puts a double closed-loop pole at ``-n0 a``.
+    allow_unstable : bool, keyword
+        An explicit ``K`` that puts a closed-loop pole in the closed right half-plane raises
+        ``ValueError`` unless this is ``True`` (to study an unstable design on purpose). Same opt-out
+        as ``ExtendedStateObserver(allow_unstable=...)``; ``AlphaBetaFilter(require_stable=False)``.
 
     Attributes
     ----------
@@ -59,7 +65,8 @@ class DifferentialEstimator:
     TypeError
         If ``n0`` is not an integer.
     ValueError
-        If ``n0 < 2``, ``a`` is not finite and ``> 0``, or ``K`` is not finite and ``> 0``.
+        If ``n0 < 2`` or ``n0 > 30``, ``a`` is not finite and ``> 0``, ``K`` is not finite and
+        ``> 0``, or Σ is unstable with ``K`` (and ``allow_unstable`` is not set).
 
     References
     ----------
@@ -86,17 +93,25 @@ class DifferentialEstimator:
     a: float
     K: float | None = None
     a_coeffs: np.ndarray = field(init=False, repr=False, compare=False)
+    allow_unstable: bool = field(default=False, kw_only=True, repr=False, compare=False)
 
     def __post_init__(self):
-        n0 = check_int("n0", self.n0, minimum=2)
-        a = check_positive("a", self.a)
-        k = breakaway_gain(n0, a) if self.K is None else check_positive("K", self.K)
+        n0 = check_int("n0", self.n0, minimum=2, maximum=MAX_ORDER)
+        a = check_positive("a", self.a, scalar=True)
+        k = breakaway_gain(n0, a) if self.K is None else check_positive("K", self.K, scalar=True)
+        if not isinstance(self.allow_unstable, (bool, np.bool_)):
+            raise TypeError(f"allow_unstable must be True or False, got {self.allow_unstable!r}")
         object.__setattr__(self, "n0", n0)
         object.__setattr__(self, "a", float(a))
         object.__setattr__(self, "K", float(k))
         coeffs = differential_coefficients(n0, a, k)  # (5)+(6)
         coeffs.setflags(write=False)
         object.__setattr__(self, "a_coeffs", coeffs)
+        if self.K is not None and not self.allow_unstable:
+            worst = float(self.poles[0].real)
+            if worst >= 0:
+                raise ValueError(f"K = {k:g} makes Σ unstable (n0 = {n0}, a = {a:g}: closed-loop pole with real "
+                                 f"part {worst:.4g} >= 0); pass allow_unstable=True to study it anyway")
 
     # ------------------------------------------------------------------ linear models
     @property

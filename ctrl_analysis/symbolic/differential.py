@@ -28,6 +28,7 @@ __all__ = [
     "S",
     "A",
     "KGAIN",
+    "MAX_ORDER",
     "N0",
     "I",
     "BreakawayDerivation",
@@ -144,8 +145,16 @@ def _numeric_functions():
     return point, gain, locus
 
 
+#: Largest order n0 accepted. The design gain n0^n0 a / (n0-1)^(n0-1) overflows the generated
+#: code near n0 = 170, and well before that the closed-loop poles computed from the coefficients
+#: (a repeated pole at -n0 a, coefficients spanning many decades) lose their accuracy; no practical
+#: estimator needs more than 30 integrators.
+MAX_ORDER = 30
+
+
 def _check_n0_a(n0_value, a_value) -> tuple[int, float]:
-    return check_int("n0", n0_value, minimum=2), check_positive("a", a_value)
+    return (check_int("n0", n0_value, minimum=2, maximum=MAX_ORDER),
+            check_positive("a", a_value, scalar=True))
 
 
 def breakaway_point(n0: int, a: float) -> float:
@@ -296,6 +305,6 @@ def differential_coefficients(n0: int, a: float, K: float) -> np.ndarray:
     array([1., 4., 4.])
     """
     n0_value, a_value = _check_n0_a(n0, a)
-    k_value = check_positive("K", K)
+    k_value = check_positive("K", K, scalar=True)
     # (5)+(6) a_i = K C(n0-1, i-1) a^(i-1), i = 1..n0
     return np.array([k_value * math.comb(n0_value - 1, j) * a_value**j for j in range(n0_value)])

@@ -8,7 +8,7 @@ import numpy as np
 import scipy.integrate
 import scipy.linalg
 
-from ..._validate import check_finite, check_matrix
+from ..._validate import check_finite, check_matrix, check_positive
 
 from ._checks import (_system, _sym, _covariance, _prepare)
 
@@ -162,7 +162,7 @@ def riccati_trajectory(A, C, G, Q, R, P0, t, *, rtol: float = 1e-8, atol: float 
     ------
     ValueError
         On bad shapes, NaN, ``Q`` not >= 0, ``R`` not > 0, ``P0`` not symmetric >= 0, ``t`` not
-        strictly increasing, or a failed integration.
+        strictly increasing, ``rtol`` / ``atol`` not finite and > 0, or a failed integration.
 
     References
     ----------
@@ -174,6 +174,9 @@ def riccati_trajectory(A, C, G, Q, R, P0, t, *, rtol: float = 1e-8, atol: float 
     Q = _covariance("Q", Q, G.shape[1], definite=False)
     R = _covariance("R", R, C.shape[0], definite=True)
     P0 = _covariance("P0", P0, n, definite=False)
+    rtol = check_positive("rtol", rtol, scalar=True)
+    if atol is not None:
+        atol = check_positive("atol", atol, scalar=True)
     t = check_finite("t", t)
     t = np.atleast_1d(t)
     if t.ndim != 1 or t.size < 1:

@@ -8,7 +8,7 @@ import numpy as np
 import scipy.integrate
 import scipy.linalg
 
-from ..._validate import check_finite, check_matrix, check_positive
+from ..._validate import check_finite, check_int, check_matrix, check_positive
 
 from ._checks import (_square, _system, _sym, _symb, _covariance, _prepare)
 
@@ -97,7 +97,7 @@ def discrete_steady_state(F, H, G, Q, R, *, require: str = "detectable") -> Disc
     """
     import control as ct
 
-    F, H, G, Q, R = _prepare(F, H, G, Q, R, discrete=True, require=require)
+    F, H, G, Q, R = _prepare(F, H, G, Q, R, discrete=True, require=require, names=("F", "H", "G"))
     GQGt = _sym(G @ Q @ G.T)  # exactly symmetric (python-control checks symmetry strictly)
     # python-control: dlqe(F, G, H, Q, R) -> L (predictor form), P⁻ (DARE solution), eig(F − L H)
     L, P, E = ct.dlqe(F, np.eye(F.shape[0]), H, GQGt, R)
@@ -143,8 +143,9 @@ def discrete_steady_state_batch(F, H, Qd, R, *, tol: float = 1e-12, max_iter: in
     R : array_like, shape (B, p, p), (p, p), (B,) or scalar
         Measurement-noise covariance, > 0 (the last two forms for ``p = 1``).
     tol : float
-        Relative change of ``H_k`` at which to stop.
+        Relative change of ``H_k`` at which to stop (finite, > 0).
     max_iter : int
+        Largest number of doubling steps (>= 1).
 
     Returns
     -------
@@ -154,7 +155,10 @@ def discrete_steady_state_batch(F, H, Qd, R, *, tol: float = 1e-12, max_iter: in
     Raises
     ------
     ValueError
-        On NaN/inf, inconsistent shapes, ``R`` not > 0, or no convergence in ``max_iter``.
+        On NaN/inf, inconsistent shapes, ``R`` not > 0, ``tol`` not > 0, ``max_iter < 1``, or no
+        convergence in ``max_iter``.
+    TypeError
+        ``tol`` not a real number or ``max_iter`` not an integer.
 
     References
     ----------
@@ -163,6 +167,8 @@ def discrete_steady_state_batch(F, H, Qd, R, *, tol: float = 1e-12, max_iter: in
     S.-F. Xu, "Convergence analysis of structure-preserving doubling algorithms for Riccati-type
     matrix equations", SIAM J. Matrix Anal. Appl. 28(1), 2006.
     """
+    tol = check_positive("tol", tol, scalar=True)
+    max_iter = check_int("max_iter", max_iter, minimum=1)
     F = np.asarray(check_finite("F", F), dtype=float)
     if F.ndim != 3 or F.shape[1] != F.shape[2]:
         raise ValueError(f"F must have shape (B, n, n), got {F.shape}")
@@ -192,7 +198,7 @@ def discrete_steady_state_batch(F, H, Qd, R, *, tol: float = 1e-12, max_iter: in
     Gk = Ht @ np.linalg.solve(R, H)
     Hk = _symb(Qd).copy()
     eye = np.eye(n)
-    for _ in range(int(max_iter)):
+    for _ in range(max_iter):
         W = eye + Gk @ Hk
         WA = np.linalg.solve(W, Ak)
         WG = np.linalg.solve(W, Gk)
@@ -218,7 +224,7 @@ def discrete_steady_state_batch(F, H, Qd, R, *, tol: float = 1e-12, max_iter: in
 
 def dare_residual(F, H, G, Q, R, P_prior) -> np.ndarray:
     """Residual ``F P Fᵀ − F P Hᵀ (H P Hᵀ + R)⁻¹ H P Fᵀ + G Q Gᵀ − P`` of the filter DARE (a-priori ``P``)."""
-    F, H, G = _system(F, H, G)
+    F, H, G = _system(F, H, G, names=("F", "H", "G"))
     n = F.shape[0]
     Q = _covariance("Q", Q, G.shape[1], definite=False)
     R = _covariance("R", R, H.shape[0], definite=True)
@@ -259,7 +265,7 @@ def discretize_noise(A, G, Q, T):
     if G.shape[0] != n:
         raise ValueError(f"G must have {n} rows (the order of A), got shape {G.shape}")
     Q = _covariance("Q", Q, G.shape[1], definite=False)
-    T = check_positive("T", T)
+    T = check_positive("T", T, scalar=True)
     M = np.zeros((2 * n, 2 * n))
     M[:n, :n] = -A
     M[:n, n:] = G @ Q @ G.T
