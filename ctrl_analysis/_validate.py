@@ -9,12 +9,15 @@ import numpy as np
 __all__ = [
     "check_real",
     "check_finite",
+    "check_array",
     "check_positive",
     "check_nonnegative",
     "check_int",
     "check_in",
     "check_matrix",
     "check_hurwitz",
+    "check_bool",
+    "check_callable",
 ]
 
 
@@ -62,6 +65,16 @@ def check_finite(name: str, value, *, shape=None, scalar: bool = False) -> np.nd
     if shape is not None and arr.shape != tuple(shape):
         raise ValueError(f"{name} must have shape {tuple(shape)}, got {arr.shape}")
     return float(arr) if arr.ndim == 0 else arr
+
+
+def check_array(name: str, value) -> np.ndarray:
+    """A real float array; NaN and inf allowed (a signal of a diverged run), strings and None not."""
+    if isinstance(value, (str, bytes)) or value is None:
+        raise TypeError(f"{name} must be a real array, got {value!r}")
+    try:
+        return np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise TypeError(f"{name} must be a real array, got {value!r}") from None
 
 
 def check_positive(name: str, value, *, scalar: bool = False) -> np.ndarray | float:
@@ -128,3 +141,19 @@ def check_hurwitz(name: str, poly, *, polynomial: str = "the characteristic poly
         raise ValueError(f"{name} must make {polynomial} Hurwitz (all roots in the open left half-plane), "
                          f"but it has the root {complex(worst):.4g}")
     return roots
+
+
+def check_bool(name: str, value) -> bool:
+    """``True`` or ``False`` (numpy bools too); anything else is a ``TypeError``."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise TypeError(f"{name} must be True or False, got {value!r}")
+    return bool(value)
+
+
+def check_callable(name: str, value, signature: str = "", *, optional: bool = False):
+    """A callable (or ``None`` when ``optional``); ``signature`` documents the expected call."""
+    if value is None and optional:
+        return None
+    if not callable(value):
+        raise TypeError(f"{name} must be callable{' ' + signature if signature else ''}, got {value!r}")
+    return value

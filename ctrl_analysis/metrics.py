@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._validate import check_finite, check_int, check_positive
+from ._validate import check_array, check_finite, check_int, check_positive
 
 __all__ = [
     "mean_abs_error",
@@ -18,23 +18,13 @@ __all__ = [
 ]
 
 
-def _signal(name: str, value) -> np.ndarray:
-    """A real array (NaN allowed: a diverged run gives a NaN metric, excluded later by ``mean_std``)."""
-    if isinstance(value, (str, bytes)) or value is None:
-        raise TypeError(f"{name} must be a real array, got {value!r}")
-    try:
-        return np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        raise TypeError(f"{name} must be a real array, got {value!r}") from None
-
-
 def _pair(names: tuple[str, str], a, b, axis) -> tuple[np.ndarray, np.ndarray]:
     """Two signals of the same shape, or the same number of axes with explicit length-1 axes, or a scalar.
 
     ``(N, 1)`` against ``(N, B)`` (one truth, B estimates) is allowed; ``(N,)`` against ``(N, 1)``
     (which numpy would silently broadcast to ``(N, N)``) is not.
     """
-    a, b = _signal(names[0], a), _signal(names[1], b)
+    a, b = check_array(names[0], a), check_array(names[1], b)
     if a.shape != b.shape and a.ndim and b.ndim and (a.ndim != b.ndim or any(m != n and 1 not in (m, n) for m, n in zip(a.shape, b.shape))):
         raise ValueError(f"{names[0]} and {names[1]} must have the same shape (or the same number of axes with "
                          f"length-1 axes to broadcast), got {a.shape} and {b.shape}")
@@ -42,8 +32,8 @@ def _pair(names: tuple[str, str], a, b, axis) -> tuple[np.ndarray, np.ndarray]:
     return a, b
 
 
-def _check_axis(axis, ndim: int) -> None:
-    if axis is None:
+def _check_axis(axis, ndim: int, allow_none: bool = True) -> None:
+    if axis is None and allow_none:
         return
     axis = check_int("axis", axis)
     if not -max(ndim, 1) <= axis < max(ndim, 1):
@@ -77,7 +67,7 @@ def snr_db(reference, y, axis=0):
 
 def overshoot(t, y, final, initial=0.0, axis=0):
     """Percent overshoot of a step response from ``initial`` to ``final`` (0 when it never exceeds it)."""
-    y = _signal("y", y)
+    y = check_array("y", y)
     final = check_finite("final", final, scalar=True)
     initial = check_finite("initial", initial, scalar=True)
     _check_axis(axis, y.ndim)
@@ -103,8 +93,8 @@ def settling_time(t, y, final, initial=0.0, band=0.02, axis=0):
     final = check_finite("final", final, scalar=True)
     initial = check_finite("initial", initial, scalar=True)
     band = check_positive("band", band, scalar=True)
-    y = _signal("y", y)
-    _check_axis(axis, y.ndim)
+    y = check_array("y", y)
+    _check_axis(axis, y.ndim, allow_none=False)
     y = np.moveaxis(y, axis, 0)
     if t.ndim != 1 or np.any(np.diff(t) <= 0):
         raise ValueError(f"t must be 1-D and strictly increasing, got shape {t.shape}")
@@ -129,8 +119,8 @@ def mean_std(values, ok=None, axis=0):
     ``ok`` must be a boolean mask with one entry per run (an index array is rejected: it would be
     read as a mask silently).
     """
-    v = _signal("values", values)
-    _check_axis(axis, v.ndim)
+    v = check_array("values", values)
+    _check_axis(axis, v.ndim, allow_none=False)
     if ok is not None:
         ok = np.asarray(ok)
         if ok.dtype != bool:
@@ -163,6 +153,10 @@ def resonance_peak(sys, omega=None):
     """
     import control as ct
 
+    if omega is not None:
+        omega = np.atleast_1d(check_positive("omega", omega))
+        if omega.ndim != 1:
+            raise ValueError(f"omega must be a 1-D array of frequencies, got shape {omega.shape}")
     if omega is None:
         poles = np.abs(np.asarray(sys.poles()))
         wmax = 100.0 * max(1.0, float(poles.max(initial=1.0)))

@@ -78,6 +78,12 @@ def relative_error(value, paper) -> float:
     return float(np.max(np.abs(v - p) / scale))
 
 
+def _check_tolerance(tolerance) -> float:
+    from ._validate import check_nonnegative
+
+    return float(check_nonnegative("tolerance", tolerance, scalar=True))
+
+
 def compute_verdict(value, paper, tolerance: float | None, *, diverged: bool = False) -> str:
     """``diverged`` when every run diverged; ``new`` without a paper value; else ``agrees`` when the
     relative error is within tolerance, ``differs`` otherwise."""
@@ -85,7 +91,7 @@ def compute_verdict(value, paper, tolerance: float | None, *, diverged: bool = F
         return "diverged"
     if paper is None:
         return "new"
-    tol = DEFAULT_TOLERANCE if tolerance is None else tolerance
+    tol = DEFAULT_TOLERANCE if tolerance is None else _check_tolerance(tolerance)
     if value is None:
         return "differs"
     return "agrees" if relative_error(value, paper) <= tol else "differs"
@@ -118,14 +124,15 @@ class Quantity:
     runs_diverged: int | None = None
 
     def __post_init__(self):
+        for name in ("id", "label"):
+            if not isinstance(getattr(self, name), str) or (name == "id" and not self.id):
+                raise TypeError(f"{name} must be a non-empty string, got {getattr(self, name)!r}")
         if not isinstance(self.unit, str):
             raise TypeError(f"unit must be a string ('' for dimensionless), got {self.unit!r}")
         if self.cell is not None and (not isinstance(self.cell, str) or not self.cell.strip()):
             raise ValueError(f"cell must be a non-empty string naming the paper cell, got {self.cell!r}")
         if self.tolerance is not None:
-            from ._validate import check_nonnegative
-
-            self.tolerance = float(check_nonnegative("tolerance", self.tolerance))
+            self.tolerance = _check_tolerance(self.tolerance)
         if self.runs is not None:
             from ._validate import check_int
 
@@ -270,8 +277,22 @@ class StudyContext:
     quick: bool = False
     progress: Callable[[str], None] = lambda msg: None
 
+    def __post_init__(self):
+        from ._validate import check_callable, check_int
+
+        self.out_dir = Path(self.out_dir)
+        if self.runs is not None:
+            self.runs = check_int("runs", self.runs, minimum=1)
+        self.seed = check_int("seed", self.seed, minimum=0)
+        check_callable("progress", self.progress, "progress(message)")
+
     def runs_or(self, default: int, quick_default: int | None = None) -> int:
         """The requested number of Monte Carlo runs, or the study's default (smaller with --quick)."""
+        from ._validate import check_int
+
+        default = check_int("default", default, minimum=1)
+        if quick_default is not None:
+            quick_default = check_int("quick_default", quick_default, minimum=1)
         if self.runs is not None:
             return self.runs
         if self.quick:
@@ -406,7 +427,7 @@ def validate_results(data: dict) -> dict:
     ids are unique and a paper cell has at most one primary quantity.
     """
     if not isinstance(data, dict):
-        raise ValueError(f"results must be a dict, got {type(data).__name__}")
+        raise ValueError(f"data must be a results dict, got {type(data).__name__}")
     missing = [k for k in _RESULTS_KEYS if k not in data]
     if missing:
         raise ValueError(f"results of study {data.get('study')!r} lack keys {missing}")

@@ -21,7 +21,7 @@ from typing import Callable
 
 import numpy as np
 
-from ._validate import check_finite, check_in, check_int, check_positive, check_real
+from ._validate import check_array, check_callable, check_finite, check_in, check_int, check_positive, check_real
 
 __all__ = [
     "SimResult",
@@ -88,13 +88,20 @@ def gaussian_noise(std, mean=0.0) -> Callable:
     return sample
 
 
+def _check_seeds(seeds) -> list:
+    """A sequence of non-negative integer seeds."""
+    if isinstance(seeds, (str, bytes)) or not hasattr(seeds, "__len__"):
+        raise TypeError(f"seeds must be a sequence of non-negative integers, got {seeds!r}")
+    return [check_int("seeds", s, minimum=0) for s in seeds]
+
+
 def draw_noise(seeds, n_steps: int, *samplers: Callable) -> np.ndarray:
     """Draw the noise of every run up front: an array of shape ``(n_steps, B, m)``.
 
     Run ``b`` uses ``numpy.random.default_rng(seeds[b])``; the samplers are called in order on that
     generator and their channels concatenated, so run ``b``'s noise does not depend on ``B``.
     """
-    seeds = list(seeds)
+    seeds = _check_seeds(seeds)
     if not seeds:
         raise ValueError("seeds must contain at least one seed")
     n_steps = check_int("n_steps", n_steps, minimum=1)
@@ -220,7 +227,9 @@ def _store(buf, k, value, n_rows, B):
 
 
 def _prepare(x0, noise, seeds):
-    x0 = np.asarray(x0, dtype=float)
+    x0 = check_array("x0", x0)
+    if seeds is not None:
+        seeds = _check_seeds(seeds)
     if x0.ndim not in (1, 2):
         raise ValueError(f"x0 must have shape (n,) or (B, n), got {x0.shape}")
     if not np.all(np.isfinite(x0)):
@@ -295,12 +304,15 @@ def simulate_sampled(
     -------
     SimResult
     """
-    h = check_positive("h", h)
+    check_callable("rhs", rhs, "rhs(t, x, u, params)")
+    check_callable("controller", controller, "controller(k, t, x, w)", optional=True)
+    check_callable("observe", observe, "observe(k, t, x, u)", optional=True)
+    h = check_positive("h", h, scalar=True)
     n_steps = check_int("n_steps", n_steps, minimum=1)
     substeps = check_int("substeps", substeps, minimum=1)
     check_in("method", method, _STEPPERS)
     bound = _check_bound(bound)
-    t0 = check_finite("t0", t0)
+    t0 = check_finite("t0", t0, scalar=True)
     step = _STEPPERS[method]
     x, noise, B = _prepare(x0, noise, seeds)
     if noise is not None and noise.shape[0] < n_steps:
@@ -354,6 +366,8 @@ def simulate_discrete(
     (``None`` without noise). Divergence is detected as in :func:`simulate_sampled`.
     ``observe(k, x, w) -> (B, p)`` is stored for ``k = 0..N-1``.
     """
+    check_callable("step", step, "step(k, x, w, params)")
+    check_callable("observe", observe, "observe(k, x, w)", optional=True)
     n_steps = check_int("n_steps", n_steps, minimum=1)
     bound = _check_bound(bound)
     x, noise, B = _prepare(x0, noise, seeds)
@@ -411,6 +425,7 @@ def simulate_ivp(
     """
     from scipy.integrate import solve_ivp
 
+    check_callable("rhs", rhs, "rhs(t, x, u, params)")
     t_eval = check_finite("t_eval", t_eval)
     t_eval = np.atleast_1d(t_eval)
     if t_eval.ndim != 1 or t_eval.size < 2 or np.any(np.diff(t_eval) <= 0):
@@ -419,8 +434,7 @@ def simulate_ivp(
     atol = check_positive("atol", atol, scalar=True)
     bound = _check_bound(bound)
     check_in("method", method, _IVP_METHODS)
-    if u is not None and not callable(u):
-        raise TypeError(f"u must be callable u(t) -> (B, m), got {u!r}")
+    check_callable("u", u, "u(t) -> (B, m)", optional=True)
     x, _, B = _prepare(x0, None, None)
     n = x.shape[1]
 
@@ -487,6 +501,9 @@ def continuous_nlsys(rhs: Callable, *, states, inputs, outputs=None, output: Cal
         ``output(t, x, u, params)`` (batched like ``rhs``); default: the full state.
     """
     import control as ct
+
+    check_callable("rhs", rhs, "rhs(t, x, u, params)")
+    check_callable("output", output, "output(t, x, u, params)", optional=True)
 
     def updfcn(t, x, u, p):
         return np.asarray(rhs(t, np.atleast_2d(x), np.atleast_2d(u), p if p else params)).reshape(-1)

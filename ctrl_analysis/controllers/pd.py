@@ -32,7 +32,7 @@ def bandwidth_gains(n: int, omega_c: float) -> np.ndarray:
     Gao Z., "Scaling and bandwidth-parameterization based controller tuning", ACC 2003.
     """
     n = check_int("n", n, minimum=1)
-    omega_c = float(check_positive("omega_c", omega_c))
+    omega_c = float(check_positive("omega_c", omega_c, scalar=True))
     k = [comb(n, i - 1) * omega_c ** (n - i + 1) for i in range(1, n + 1)]
     return np.array(k + [1.0])
 
@@ -95,7 +95,7 @@ class PDFeedforward:
             if g.size == order:
                 g = np.concatenate([g, [1.0]])
             elif g.size != order + 1:
-                raise ValueError(f"gains must have n = {order} or n + 1 = {order + 1} entries, got {g.size}")
+                raise ValueError(f"gains must have n = order = {order} or n + 1 = {order + 1} entries, got {g.size}")
             check_hurwitz("gains", np.concatenate([[1.0], g[order - 1::-1]]),
                           polynomial="s^n + k_n s^(n-1) + ... + k_1")
             self.k = g

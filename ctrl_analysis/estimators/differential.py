@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 import control as ct
 import numpy as np
 
-from .._validate import check_in, check_int, check_positive
+from .._validate import check_array, check_in, check_int, check_positive
 from ..symbolic.differential import MAX_ORDER, breakaway_gain, breakaway_point, differential_coefficients
 
 __all__ = ["DifferentialEstimator", "READINGS"]
@@ -289,14 +289,15 @@ class DifferentialEstimator:
         return [f"z[{k}]" for k in range(self.n0)]
 
     def _check_zy(self, z, y) -> tuple[np.ndarray, np.ndarray]:
-        z = np.asarray(z, dtype=float)
+        z = check_array("z", z)
         if z.ndim < 1 or z.shape[-1] != self.n0:
             raise ValueError(f"z must have the {self.n0} states of Σ on its last axis, got shape {z.shape}")
-        y = np.asarray(y, dtype=float)
+        y = check_array("y", y)
         if y.ndim >= 1 and y.shape[-1] == 1 and y.ndim >= z.ndim:
             y = y[..., 0]  # python-control input vector (1,) or a column (B, 1)
         try:
-            np.broadcast_shapes(y.shape, z.shape[:-1])
+            if np.broadcast_shapes(y.shape, z.shape[:-1]) != z.shape[:-1]:
+                raise ValueError
         except ValueError:
             raise ValueError(
                 f"y must be broadcastable to z.shape[:-1] = {z.shape[:-1]}, got shape {y.shape}"

@@ -23,7 +23,7 @@ from typing import Callable
 
 import numpy as np
 
-from .._validate import check_finite, check_hurwitz, check_int, check_positive
+from .._validate import check_array, check_finite, check_hurwitz, check_int, check_positive
 
 __all__ = ["fal", "ExtendedStateObserver"]
 
@@ -65,11 +65,9 @@ def fal(e, alpha, delta):
     >>> float(fal(0.5, 0.5, 0.1))  # |e| > delta: sqrt(0.5)
     0.7071067811865476
     """
-    delta = check_positive("delta", delta)
-    alpha = np.asarray(alpha, dtype=float)
-    if not np.all(np.isfinite(alpha)):
-        raise ValueError(f"alpha must be finite (no NaN or inf), got {alpha!r}")
-    out = _fal(np.asarray(e, dtype=float), alpha, delta, np.power(delta, 1.0 - alpha))
+    delta = check_positive("delta", delta, scalar=True)
+    alpha = np.asarray(check_finite("alpha", alpha), dtype=float)
+    out = _fal(check_array("e", e), alpha, delta, np.power(delta, 1.0 - alpha))
     return float(out) if out.ndim == 0 else out
 
 
@@ -202,7 +200,7 @@ class ExtendedStateObserver:
             Passed to the constructor (``b0``, ``alpha``, ``delta``, ``known``).
         """
         n = check_int("n", n, minimum=1)
-        epsilon = float(check_positive("epsilon", epsilon))
+        epsilon = float(check_positive("epsilon", epsilon, scalar=True))
         beta = np.atleast_1d(check_positive("beta", beta)).astype(float)
         if beta.shape != (n + 1,):
             raise ValueError(f"beta must have n + 1 = {n + 1} entries, got {beta.size}")
@@ -223,7 +221,7 @@ class ExtendedStateObserver:
             Passed to the constructor.
         """
         n = check_int("n", n, minimum=1)
-        omega_o = float(check_positive("omega_o", omega_o))
+        omega_o = float(check_positive("omega_o", omega_o, scalar=True))
         # (s + omega_o)^(n+1) = sum_i C(n+1, i) omega_o^i s^(n+1-i)
         return cls([comb(n + 1, i) * omega_o**i for i in range(1, n + 2)], **kw)
 

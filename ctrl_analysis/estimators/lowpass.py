@@ -13,7 +13,7 @@ from math import comb
 
 import numpy as np
 
-from .._validate import check_finite, check_int, check_positive
+from .._validate import check_array, check_finite, check_int, check_positive
 
 __all__ = ["LowPassFilter", "DiscreteLowPass"]
 
@@ -47,7 +47,7 @@ class LowPassFilter:
     """
 
     def __init__(self, omega_f: float, order: int = 2):
-        self.omega_f = float(check_positive("omega_f", omega_f))
+        self.omega_f = float(check_positive("omega_f", omega_f, scalar=True))
         self.order = check_int("order", order, minimum=1, maximum=2)
         m, w = self.order, self.omega_f
         # characteristic polynomial (s + ω_f)^m = s^m + Σ C(m, i) ω_f^i s^(m-i)
@@ -88,7 +88,7 @@ class LowPassFilter:
         """
         import control as ct
 
-        h = float(check_positive("h", h))
+        h = float(check_positive("h", h, scalar=True))
         sysd = ct.c2d(ct.ss(self.A, self.B, np.eye(self.order), 0), h, method="zoh")
         return np.asarray(sysd.A), np.asarray(sysd.B)[:, 0]
 
@@ -125,11 +125,18 @@ class DiscreteLowPass:
         if not isinstance(lowpass, LowPassFilter):
             raise TypeError(f"lowpass must be a LowPassFilter, got {type(lowpass).__name__}")
         self.lowpass = lowpass
-        self.h = float(check_positive("h", h))
-        self.shape = tuple(shape)
+        self.h = float(check_positive("h", h, scalar=True))
+        if isinstance(shape, (int, np.integer)):
+            shape = (shape,)
+        if not isinstance(shape, (tuple, list)):
+            raise TypeError(f"shape must be a tuple of sizes (the batch shape), got {shape!r}")
+        self.shape = tuple(check_int("shape", n, minimum=1) for n in shape)
         self.Ad, self.Bd = lowpass.discretize(self.h)
-        self.initial = None if initial is None else np.broadcast_to(
-            check_finite("initial", initial), self.shape).copy()
+        if initial is not None:
+            initial = np.asarray(check_finite("initial", initial), dtype=float)
+            if initial.shape not in ((), self.shape):
+                raise ValueError(f"initial must be a scalar or have shape {self.shape}, got {initial.shape}")
+        self.initial = None if initial is None else np.broadcast_to(initial, self.shape).copy()
         self.reset()
 
     def reset(self) -> None:
@@ -144,8 +151,14 @@ class DiscreteLowPass:
         return self.x[..., 0].copy()
 
     def step(self, u) -> np.ndarray:
-        """Advance one sample with input ``u`` (held over the period); return the new output."""
-        u = np.asarray(u, dtype=float)
+        """Advance one sample with input ``u`` (held over the period); return the new output.
+
+        ``u`` is a scalar or has the batch ``shape``; NaN passes through (a diverged run stays NaN
+        in its own entry).
+        """
+        u = check_array("u", u)
+        if u.shape not in ((), self.shape):
+            raise ValueError(f"u must be a scalar or have shape {self.shape}, got {u.shape}")
         # x(k+1) = Ad x(k) + Bd u(k)   (exact ZOH discretisation of W(s))
         self.x = self.x @ self.Ad.T + u[..., None] * self.Bd
         return self.x[..., 0].copy()

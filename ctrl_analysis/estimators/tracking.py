@@ -20,7 +20,7 @@ from math import comb
 import control as ct
 import numpy as np
 
-from .._validate import check_finite, check_in, check_int, check_positive
+from .._validate import check_array, check_finite, check_in, check_int, check_positive
 
 __all__ = [
     "fhan",
@@ -76,10 +76,10 @@ def fhan(x1, x2, r, h0):
     >>> round(fhan(0.001, 0.0, 1.0, 0.1), 12)  # inside the linear layer
     -0.1
     """
-    r = float(check_positive("r", r))
-    h0 = float(check_positive("h0", h0))
-    x1 = np.asarray(x1, dtype=float)
-    x2 = np.asarray(x2, dtype=float)
+    r = float(check_positive("r", r, scalar=True))
+    h0 = float(check_positive("h0", h0, scalar=True))
+    x1 = check_array("x1", x1)
+    x2 = check_array("x2", x2)
     d = r * h0 * h0
     a0 = h0 * x2
     y = x1 + a0
@@ -143,9 +143,9 @@ class TrackingDifferentiator:
     """
 
     def __init__(self, r: float, h: float, h0: float | None = None, substeps: int = 1):
-        self.r = float(check_positive("r", r))
-        self.h = float(check_positive("h", h))
-        self.h0 = self.h if h0 is None else float(check_positive("h0", h0))
+        self.r = float(check_positive("r", r, scalar=True))
+        self.h = float(check_positive("h", h, scalar=True))
+        self.h0 = self.h if h0 is None else float(check_positive("h0", h0, scalar=True))
         self.substeps = check_int("substeps", substeps, minimum=1)
         self.reset()
 
@@ -157,7 +157,7 @@ class TrackingDifferentiator:
 
     def step(self, v):
         """Advance one sample with input ``v`` (scalar or ``(B,)``); return ``(x1, x2)``."""
-        v = np.asarray(v, dtype=float)
+        v = np.asarray(check_finite("v", v), dtype=float)
         dt = self.h / self.substeps
         x1, x2 = self.x1, self.x2
         for _ in range(self.substeps):
@@ -221,7 +221,7 @@ class SetpointPrefilter:
 
     def __init__(self, order: int, omega: float):
         self.order = check_int("order", order, minimum=1)
-        self.omega = float(check_positive("omega", omega))
+        self.omega = float(check_positive("omega", omega, scalar=True))
         m, w = self.order, self.omega
         # (s + ω)^m = s^m + Σ_j C(m, j) ω^(m-j) s^j  ->  last row -[c_0, ..., c_(m-1)]
         self.coeffs = np.array([comb(m, j) * w ** (m - j) for j in range(m)])
@@ -332,7 +332,7 @@ def softened_setpoint(softener, r, h: float, *, method: str = "zoh") -> np.ndarr
     """
     from ..simulate import simulate_sampled
 
-    h = float(check_positive("h", h))
+    h = float(check_positive("h", h, scalar=True))
     r = np.asarray(check_finite("r", r), dtype=float)
     if r.ndim != 1 or r.size < 1:
         raise ValueError(f"r must be a non-empty 1-D array of samples, got shape {r.shape}")

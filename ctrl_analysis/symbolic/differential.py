@@ -16,6 +16,7 @@ expression and as a plain numeric function.
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass
 from functools import lru_cache
 
@@ -231,7 +232,12 @@ def locus_gain(s_value, n0: int, a: float):
     Real and positive on the real-axis branches of the locus; ``s_value`` may be an array.
     """
     n0_value, a_value = _check_n0_a(n0, a)
-    return _numeric_functions()[2](np.asarray(s_value), float(n0_value), a_value)
+    s_arr = None if isinstance(s_value, (str, bytes)) or s_value is None else np.asarray(s_value)
+    if s_arr is None or s_arr.dtype.kind not in "iufc":
+        raise TypeError(f"s_value must be a number or an array of numbers, got {s_value!r}")
+    if not np.all(np.isfinite(s_arr)):
+        raise ValueError(f"s_value must be finite (no NaN or inf), got {s_value!r}")
+    return _numeric_functions()[2](s_arr, float(n0_value), a_value)
 
 
 def coefficient_formula() -> sp.Expr:
@@ -245,6 +251,17 @@ def coefficient_formula() -> sp.Expr:
     Qi, Chen, Xue & Yuan (2004), eq. (3)-(6).
     """
     return KGAIN * sp.binomial(N0 - 1, I - 1) * A ** (I - 1)
+
+
+def _sym_or_number(name: str, value):
+    """A sympy expression, or a finite real or complex number."""
+    if isinstance(value, sp.Basic):
+        return value
+    if isinstance(value, (bool, np.bool_, str, bytes)) or not isinstance(value, (numbers.Number, np.number)):
+        raise TypeError(f"{name} must hold numbers or sympy expressions, got {value!r}")
+    if not np.isfinite(complex(value)):
+        raise ValueError(f"{name} must be finite (no NaN or inf), got {value!r}")
+    return value
 
 
 def coefficients_from_zeros(zeros, gain=KGAIN) -> list:
@@ -270,7 +287,10 @@ def coefficients_from_zeros(zeros, gain=KGAIN) -> list:
     ----------
     Qi, Chen, Xue & Yuan (2004), eq. (4)-(5).
     """
-    zeros = list(zeros)
+    if isinstance(zeros, (str, bytes)) or not hasattr(zeros, "__iter__"):
+        raise TypeError(f"zeros must be a sequence of numbers or sympy expressions, got {zeros!r}")
+    zeros = [_sym_or_number("zeros", z) for z in zeros]
+    gain = _sym_or_number("gain", gain)
     if len(zeros) < 1:
         raise ValueError(f"zeros must hold at least one zero (n0 >= 2), got {len(zeros)}")
     # (4) numerator K ∏ (s - z_j), read off its coefficients (eq. 5)

@@ -20,7 +20,10 @@ def _square(name: str, value) -> np.ndarray:
     return check_matrix(name, value, square=True)
 
 
-def _system(A, C, G=None, *, names=("A", "C", "G")):
+_NO_G = object()
+
+
+def _system(A, C, G=_NO_G, *, names=("A", "C", "G")):
     """Validate A (n×n), C (p×n) and optional G (n×m); return float arrays.
 
     ``names`` are the caller's names of the three matrices (``("F", "H", "G")`` in discrete time),
@@ -32,7 +35,7 @@ def _system(A, C, G=None, *, names=("A", "C", "G")):
     C = check_matrix(c, C)
     if C.shape[1] != n:
         raise ValueError(f"{c} must have {n} columns (the order of {a}), got shape {C.shape}")
-    if G is None:
+    if G is _NO_G:
         return A, C
     G = check_matrix(g, G)
     if G.shape[0] != n:

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..._validate import check_finite, check_matrix, check_positive
+from ..._validate import check_bool, check_finite, check_matrix, check_positive
 
 
 __all__ = ["alpha_beta_from_gain", "gain_from_alpha_beta", "tracking_index", "tracking_index_from_gains", "kalata_gains", "alpha_beta_stable", "AlphaBetaFilter"]
@@ -37,15 +37,15 @@ def alpha_beta_from_gain(K, T):
     K = np.ravel(check_finite("K", K))
     if K.shape != (2,):
         raise ValueError(f"K must have 2 entries (position, velocity), got shape {np.shape(K)}")
-    T = check_positive("T", T)
+    T = check_positive("T", T, scalar=True)
     return float(K[0]), float(T * K[1])
 
 
 def gain_from_alpha_beta(alpha, beta, T) -> np.ndarray:
     """Filter-form gain ``[α, β/T]`` (shape (2,)) of an α-β filter; inverse of :func:`alpha_beta_from_gain`."""
-    alpha = check_finite("alpha", alpha)
-    beta = check_finite("beta", beta)
-    T = check_positive("T", T)
+    alpha = check_finite("alpha", alpha, scalar=True)
+    beta = check_finite("beta", beta, scalar=True)
+    T = check_positive("T", T, scalar=True)
     return np.array([alpha, beta / T], dtype=float)
 
 
@@ -119,8 +119,8 @@ def alpha_beta_stable(alpha, beta) -> bool:
 
     Jury's test on ``z² + (α + β − 2) z + (1 − α)`` (independent of ``T``).
     """
-    alpha = float(check_finite("alpha", alpha))
-    beta = float(check_finite("beta", beta))
+    alpha = float(check_finite("alpha", alpha, scalar=True))
+    beta = float(check_finite("beta", beta, scalar=True))
     return bool(0 < alpha < 2 and 0 < beta < 4 - 2 * alpha)
 
 
@@ -170,12 +170,13 @@ class AlphaBetaFilter:
     """
 
     def __init__(self, alpha, beta, T, *, F=None, b=None, x0=None, require_stable: bool = True):
-        self.alpha = float(check_finite("alpha", alpha))
-        self.beta = float(check_finite("beta", beta))
-        self.T = float(check_positive("T", T))
+        self.alpha = float(check_finite("alpha", alpha, scalar=True))
+        self.beta = float(check_finite("beta", beta, scalar=True))
+        self.T = float(check_positive("T", T, scalar=True))
         if F is None:
             F = [[1.0, self.T], [0.0, 1.0]]
         self.F = check_matrix("F", F, shape=(2, 2))
+        require_stable = check_bool("require_stable", require_stable)
         self.b = np.zeros(2) if b is None else check_finite("b", np.ravel(b), shape=(2,))
         self.K = gain_from_alpha_beta(self.alpha, self.beta, self.T)
         if require_stable and not np.all(np.abs(self.poles) < 1.0):
@@ -212,12 +213,16 @@ class AlphaBetaFilter:
         numpy.ndarray, shape (2,) or (B, 2)
             The updated estimate ``x̂(k|k)`` (a copy).
         """
-        y = np.asarray(y, dtype=float)
-        if y.ndim > 1:
-            raise ValueError(f"y must be a scalar or have shape (B,), got {y.shape}")
-        if not np.all(np.isfinite(y)):
-            raise ValueError("y must be finite (no NaN or inf)")
-        u = np.asarray(u, dtype=float)
+        y = np.asarray(check_finite("y", y), dtype=float)
+        u = np.asarray(check_finite("u", u), dtype=float)
+        for name, v in (("y", y), ("u", u)):
+            if v.ndim > 1:
+                raise ValueError(f"{name} must be a scalar or have shape (B,), got {v.shape}")
+        try:
+            np.broadcast_shapes(y.shape, u.shape, self.x_hat.shape[:-1])
+        except ValueError:
+            raise ValueError(f"y, u and the estimate must share the batch size B, got y {y.shape}, u {u.shape} "
+                             f"and x_hat {self.x_hat.shape}") from None
         # prediction  x̂⁻(k) = F x̂(k−1) + b u(k−1)
         x_pred = self.x_hat @ self.F.T + u[..., None] * self.b
         # innovation  r(k) = y(k) − H x̂⁻(k)
