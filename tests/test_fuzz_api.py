@@ -279,8 +279,7 @@ CASES = [
     ("PDFeedforward(gains)", pd.PDFeedforward, dict(b0=2.0, gains=[100.0, 20.0], order=2),
      dict(gains=ARR + [[1.0], [1.0, -1.0], [100.0, 20.0, 3.0], [NAN, 1.0]], order=INT + [0, 5])),
     ("PDFeedforward.control", _pd_control, dict(ref=[1.0, 0.0, 0.0], x_hat=[0.0, 0.0, 0.0], f_hat=0.0),
-     dict(ref=ARR + [[1.0, 0.0], [NAN, 0.0, 0.0]], x_hat=ARR + [[1.0], [NAN, 0.0, 0.0]],
-          f_hat=["abc", None, NAN])),
+     dict(ref=ARR + [[1.0, 0.0]], x_hat=ARR + [[1.0]], f_hat=["abc", None])),
     # identification
     ("identifiability", ident.identifiability, dict(H=H_REG, cond_threshold=100.0),
      dict(H=ARR + [np.ones(3), _nan_like(H_REG), np.ones((0, 2))], cond_threshold=POS)),

@@ -16,7 +16,7 @@ from math import comb
 
 import numpy as np
 
-from .._validate import check_finite, check_hurwitz, check_int, check_positive
+from .._validate import check_array, check_finite, check_hurwitz, check_int, check_positive
 
 __all__ = ["PDFeedforward", "bandwidth_gains"]
 
@@ -132,12 +132,14 @@ class PDFeedforward:
         Raises
         ------
         ValueError
-            ``ref`` or ``x_hat`` without ``n + 1`` entries on the last axis, shapes that do not
-            broadcast, or NaN/inf in ``ref``, ``x_hat`` or ``f_hat``.
+            ``ref`` or ``x_hat`` without ``n + 1`` entries on the last axis, or shapes that do not
+            broadcast. NaN passes through (the control of a diverged run is NaN, in that run only).
+        TypeError
+            A string or ``None`` for ``ref``, ``x_hat`` or ``f_hat``.
         """
-        ref = np.asarray(check_finite("ref", ref), dtype=float)
-        x_hat = np.asarray(check_finite("x_hat", x_hat), dtype=float)
-        f_hat = check_finite("f_hat", f_hat)
+        ref = check_array("ref", ref)
+        x_hat = check_array("x_hat", x_hat)
+        f_hat = check_array("f_hat", f_hat)
         m = self.n + 1
         for name, arr in (("ref", ref), ("x_hat", x_hat)):
             if arr.ndim < 1 or arr.shape[-1] != m:

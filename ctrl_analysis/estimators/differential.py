@@ -98,6 +98,7 @@ class DifferentialEstimator:
     def __post_init__(self):
         n0 = check_int("n0", self.n0, minimum=2, maximum=MAX_ORDER)
         a = check_positive("a", self.a, scalar=True)
+        explicit_gain = self.K is not None
         k = breakaway_gain(n0, a) if self.K is None else check_positive("K", self.K, scalar=True)
         if not isinstance(self.allow_unstable, (bool, np.bool_)):
             raise TypeError(f"allow_unstable must be True or False, got {self.allow_unstable!r}")
@@ -107,7 +108,7 @@ class DifferentialEstimator:
         coeffs = differential_coefficients(n0, a, k)  # (5)+(6)
         coeffs.setflags(write=False)
         object.__setattr__(self, "a_coeffs", coeffs)
-        if self.K is not None and not self.allow_unstable:
+        if explicit_gain and not self.allow_unstable:
             worst = float(self.poles[0].real)
             if worst >= 0:
                 raise ValueError(f"K = {k:g} makes Σ unstable (n0 = {n0}, a = {a:g}: closed-loop pole with real "
@@ -160,8 +161,14 @@ class DifferentialEstimator:
 
     @property
     def poles(self) -> np.ndarray:
-        """Closed-loop poles (roots of the denominator of Φ), by decreasing real part."""
-        p = np.roots(self.characteristic_polynomial)
+        """Closed-loop poles (roots of the denominator of Φ), by decreasing real part.
+
+        Computed on the normalised polynomial (``s = a σ``: ``σ^n0 + (K/a) (σ + 1)^(n0-1)``, whose
+        coefficients do not span powers of ``a``) and scaled back, so they stay accurate for every
+        ``a``; the roots of :attr:`characteristic_polynomial` itself lose accuracy for small ``a``.
+        """
+        normalised = np.concatenate(([1.0], differential_coefficients(self.n0, 1.0, self.K / self.a)))
+        p = self.a * np.roots(normalised)
         return p[np.lexsort((p.imag, -p.real))]
 
     # ------------------------------------------------------------------ estimates

@@ -92,11 +92,37 @@ def continuous_steady_state(A, C, G, Q, R, *, require: str = "detectable") -> Co
     A, C, G, Q, R = _prepare(A, C, G, Q, R, discrete=False, require=require)
     GQGt = _sym(G @ Q @ G.T)  # exactly symmetric (python-control checks symmetry strictly)
     # python-control: lqe(A, G, C, QN, RN) -> L = P Cᵀ R⁻¹, P, eig(A − L C)
-    K, P, E = ct.lqe(A, np.eye(A.shape[0]), C, GQGt, R)
+    try:
+        K, P, E = ct.lqe(A, np.eye(A.shape[0]), C, GQGt, R)
+        P = _sym(np.asarray(P, dtype=float))
+    except np.linalg.LinAlgError:
+        P = None
+    if P is None or not _care_solved(A, C, GQGt, R, P):
+        # scipy's balancing can spoil badly scaled problems (e.g. an entry of 1e-200): solve unbalanced
+        try:
+            P = _sym(scipy.linalg.solve_continuous_are(A.T, C.T, GQGt, R, balanced=False))
+        except (np.linalg.LinAlgError, ValueError) as exc:
+            raise ValueError(f"the filter ARE has no stabilising solution in double precision ({exc}); (A, C) or "
+                             "(A, G·Q^½) is numerically close to losing detectability / stabilisability") from None
+        if not _care_solved(A, C, GQGt, R, P):
+            raise ValueError("the filter ARE could not be solved accurately in double precision (residual too "
+                             "large); check the scaling of A, C, G, Q and R")
+        K = P @ C.T @ np.linalg.inv(R)  # K = P Cᵀ R⁻¹
+        E = np.linalg.eigvals(A - K @ C)
     K = np.asarray(K, dtype=float)
-    P = np.asarray(P, dtype=float)
-    P = 0.5 * (P + P.T)
     return ContinuousSteadyState(K=K, P=P, poles=np.asarray(E))
+
+
+def _care_solved(A, C, GQGt, R, P) -> bool:
+    """Whether ``P`` satisfies the filter ARE to a relative accuracy of 1e-8."""
+    scale = max(1.0, np.abs(A @ P).max(), np.abs(P @ C.T).max() ** 2 / np.abs(R).max(), np.abs(GQGt).max())
+    return bool(np.all(np.isfinite(P)) and np.abs(_care_residual(A, C, GQGt, R, P)).max() <= 1e-8 * scale)
+
+
+def _care_residual(A, C, GQGt, R, P) -> np.ndarray:
+    """Unchecked kernel of :func:`care_residual`."""
+    PCt = P @ C.T
+    return A @ P + P @ A.T - PCt @ np.linalg.solve(R, PCt.T) + GQGt
 
 
 def continuous_steady_state_gain(A, C, G, Q, R, *, require: str = "detectable") -> np.ndarray:
@@ -114,8 +140,7 @@ def care_residual(A, C, G, Q, R, P) -> np.ndarray:
     Q = _covariance("Q", Q, G.shape[1], definite=False)
     R = _covariance("R", R, C.shape[0], definite=True)
     P = check_matrix("P", P, shape=(n, n))
-    PCt = P @ C.T
-    return A @ P + P @ A.T - PCt @ np.linalg.solve(R, PCt.T) + G @ Q @ G.T
+    return _care_residual(A, C, G @ Q @ G.T, R, P)
 
 
 def riccati_rhs(t, p, A, C, GQGt, Rinv, iu) -> np.ndarray:

@@ -100,9 +100,23 @@ def discrete_steady_state(F, H, G, Q, R, *, require: str = "detectable") -> Disc
     F, H, G, Q, R = _prepare(F, H, G, Q, R, discrete=True, require=require, names=("F", "H", "G"))
     GQGt = _sym(G @ Q @ G.T)  # exactly symmetric (python-control checks symmetry strictly)
     # python-control: dlqe(F, G, H, Q, R) -> L (predictor form), P⁻ (DARE solution), eig(F − L H)
-    L, P, E = ct.dlqe(F, np.eye(F.shape[0]), H, GQGt, R)
-    P = np.asarray(P, dtype=float)
-    P = 0.5 * (P + P.T)
+    try:
+        L, P, E = ct.dlqe(F, np.eye(F.shape[0]), H, GQGt, R)
+        P = _sym(np.asarray(P, dtype=float))
+    except np.linalg.LinAlgError:
+        P = None
+    if P is None or not _dare_solved(F, H, GQGt, R, P):
+        # scipy's balancing can spoil badly scaled problems: solve unbalanced
+        try:
+            P = _sym(scipy.linalg.solve_discrete_are(F.T, H.T, GQGt, R, balanced=False))
+        except (np.linalg.LinAlgError, ValueError) as exc:
+            raise ValueError(f"the filter DARE has no stabilising solution in double precision ({exc}); (F, H) or "
+                             "(F, G·Q^½) is numerically close to losing detectability / stabilisability") from None
+        if not _dare_solved(F, H, GQGt, R, P):
+            raise ValueError("the filter DARE could not be solved accurately in double precision (residual too "
+                             "large); check the scaling of F, H, G, Q and R")
+        L = F @ np.linalg.solve(H @ P @ H.T + R, H @ P).T  # L = F P⁻ Hᵀ (H P⁻ Hᵀ + R)⁻¹
+        E = np.linalg.eigvals(F - L @ H)
     S = H @ P @ H.T + R  # innovation covariance
     K = np.linalg.solve(S, H @ P).T  # K = P⁻ Hᵀ S⁻¹ (filter form)
     P_post = P - K @ H @ P  # P(k|k) = (I − K H) P⁻
@@ -113,6 +127,18 @@ def discrete_steady_state(F, H, G, Q, R, *, require: str = "detectable") -> Disc
         P_post=0.5 * (P_post + P_post.T),
         poles=np.asarray(E),
     )
+
+
+def _dare_solved(F, H, GQGt, R, P) -> bool:
+    """Whether ``P`` (a-priori) satisfies the filter DARE to a relative accuracy of 1e-8."""
+    scale = max(1.0, np.abs(F @ P @ F.T).max(), np.abs(P).max(), np.abs(GQGt).max())
+    return bool(np.all(np.isfinite(P)) and np.abs(_dare_residual(F, H, GQGt, R, P)).max() <= 1e-8 * scale)
+
+
+def _dare_residual(F, H, GQGt, R, P) -> np.ndarray:
+    """Unchecked kernel of :func:`dare_residual`."""
+    FPHt = F @ P @ H.T
+    return F @ P @ F.T - FPHt @ np.linalg.solve(H @ P @ H.T + R, FPHt.T) + GQGt - P
 
 
 def discrete_steady_state_batch(F, H, Qd, R, *, tol: float = 1e-12, max_iter: int = 100) -> DiscreteSteadyState:
@@ -229,8 +255,7 @@ def dare_residual(F, H, G, Q, R, P_prior) -> np.ndarray:
     Q = _covariance("Q", Q, G.shape[1], definite=False)
     R = _covariance("R", R, H.shape[0], definite=True)
     P = check_matrix("P_prior", P_prior, shape=(n, n))
-    FPHt = F @ P @ H.T
-    return F @ P @ F.T - FPHt @ np.linalg.solve(H @ P @ H.T + R, FPHt.T) + G @ Q @ G.T - P
+    return _dare_residual(F, H, G @ Q @ G.T, R, P)
 
 
 def discretize_noise(A, G, Q, T):
