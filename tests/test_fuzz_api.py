@@ -19,7 +19,6 @@ import re
 
 import control as ct
 import numpy as np
-import pytest
 
 from ctrl_analysis import identification as ident
 from ctrl_analysis import metrics, report, simulate

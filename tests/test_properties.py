@@ -116,3 +116,12 @@ def test_random_walk_gain_extremes_do_not_overflow():
     assert random_walk_gain(1e200, 1.0) == 1.0  # 1 − K ≈ R/Q rounds away, never 0 from an overflow
     assert random_walk_gain(0.0, 1.0) == 0.0
     assert 0.0 < random_walk_gain(1e-200, 1.0) < 1e-99
+
+
+def test_badly_scaled_riccati_is_solved_not_silently_wrong():
+    # found by the property test: scipy's balancing returned P11 = 0 (residual 12.25) for this pair
+    A = np.array([[-1.0, 0.0, 0.0], [2.44e-200, 0.0, 1.0], [0.0, 0.0, 0.0]])
+    C = np.array([[0.0, 1.0, 0.0]])
+    sol = continuous_steady_state(A, C, 3.5 * np.eye(3), np.eye(3), 1.0)
+    assert sol.P[0, 0] == pytest.approx(3.5**2 / 2, rel=1e-9)  # the unobservable stable mode: 2 p11 = 12.25
+    assert np.abs(care_residual(A, C, 3.5 * np.eye(3), np.eye(3), 1.0, sol.P)).max() < 1e-8

@@ -241,3 +241,31 @@ def _prepare(A, C, G, Q, R, discrete: bool, require: str, names=("A", "C", "G"))
     return A, C, G, Q, R
 
 
+
+
+def _riccati_solution(primary, unbalanced, solved, equation: str, names=("A", "C", "G")):
+    """The stabilising solution of a filter Riccati equation, verified.
+
+    ``primary()`` (python-control) returns ``(gain, P, poles)``; when it fails or ``solved(P)`` is
+    False (scipy's balancing can spoil a badly scaled problem, e.g. an entry of 1e-200), ``P`` is
+    recomputed by ``unbalanced()``. Returns ``(gain, P, poles)`` of the primary solver, or
+    ``(None, P, None)`` after the fallback (the caller then derives gain and poles from ``P``).
+    """
+    a, c, g = names
+    try:
+        gain, P, poles = primary()
+        P = _sym(np.asarray(P, dtype=float))
+        if solved(P):
+            return gain, P, poles
+    except np.linalg.LinAlgError:
+        pass
+    try:
+        P = _sym(np.asarray(unbalanced(), dtype=float))
+    except (np.linalg.LinAlgError, ValueError) as exc:
+        raise ValueError(f"the filter {equation} has no stabilising solution in double precision ({exc}); "
+                         f"({a}, {c}) or ({a}, {g}·Q^½) is numerically close to losing detectability / "
+                         "stabilisability") from None
+    if not solved(P):
+        raise ValueError(f"the filter {equation} could not be solved accurately in double precision (residual "
+                         f"too large); check the scaling of {a}, {c}, {g}, Q and R")
+    return None, P, None

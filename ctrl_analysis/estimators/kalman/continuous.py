@@ -10,7 +10,7 @@ import scipy.linalg
 
 from ..._validate import check_finite, check_matrix, check_positive
 
-from ._checks import (_system, _sym, _covariance, _prepare)
+from ._checks import (_system, _sym, _covariance, _prepare, _riccati_solution)
 
 __all__ = ["ContinuousSteadyState", "continuous_steady_state", "continuous_steady_state_gain", "care_residual", "riccati_rhs", "riccati_trajectory"]
 
@@ -91,22 +91,11 @@ def continuous_steady_state(A, C, G, Q, R, *, require: str = "detectable") -> Co
 
     A, C, G, Q, R = _prepare(A, C, G, Q, R, discrete=False, require=require)
     GQGt = _sym(G @ Q @ G.T)  # exactly symmetric (python-control checks symmetry strictly)
-    # python-control: lqe(A, G, C, QN, RN) -> L = P Cᵀ R⁻¹, P, eig(A − L C)
-    try:
-        K, P, E = ct.lqe(A, np.eye(A.shape[0]), C, GQGt, R)
-        P = _sym(np.asarray(P, dtype=float))
-    except np.linalg.LinAlgError:
-        P = None
-    if P is None or not _care_solved(A, C, GQGt, R, P):
-        # scipy's balancing can spoil badly scaled problems (e.g. an entry of 1e-200): solve unbalanced
-        try:
-            P = _sym(scipy.linalg.solve_continuous_are(A.T, C.T, GQGt, R, balanced=False))
-        except (np.linalg.LinAlgError, ValueError) as exc:
-            raise ValueError(f"the filter ARE has no stabilising solution in double precision ({exc}); (A, C) or "
-                             "(A, G·Q^½) is numerically close to losing detectability / stabilisability") from None
-        if not _care_solved(A, C, GQGt, R, P):
-            raise ValueError("the filter ARE could not be solved accurately in double precision (residual too "
-                             "large); check the scaling of A, C, G, Q and R")
+    # python-control: lqe(A, G, C, QN, RN) -> L = P Cᵀ R⁻¹, P, eig(A − L C); verified, else solved unbalanced
+    K, P, E = _riccati_solution(lambda: ct.lqe(A, np.eye(A.shape[0]), C, GQGt, R),
+                                lambda: scipy.linalg.solve_continuous_are(A.T, C.T, GQGt, R, balanced=False),
+                                lambda P: _care_solved(A, C, GQGt, R, P), "ARE")
+    if K is None:
         K = P @ C.T @ np.linalg.inv(R)  # K = P Cᵀ R⁻¹
         E = np.linalg.eigvals(A - K @ C)
     K = np.asarray(K, dtype=float)

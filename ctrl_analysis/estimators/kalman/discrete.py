@@ -10,7 +10,7 @@ import scipy.linalg
 
 from ..._validate import check_finite, check_int, check_matrix, check_positive
 
-from ._checks import (_square, _system, _sym, _symb, _covariance, _prepare)
+from ._checks import (_square, _system, _sym, _symb, _covariance, _prepare, _riccati_solution)
 
 __all__ = ["DiscreteSteadyState", "discrete_steady_state", "discrete_steady_state_batch", "dare_residual", "discretize_noise"]
 
@@ -99,26 +99,16 @@ def discrete_steady_state(F, H, G, Q, R, *, require: str = "detectable") -> Disc
 
     F, H, G, Q, R = _prepare(F, H, G, Q, R, discrete=True, require=require, names=("F", "H", "G"))
     GQGt = _sym(G @ Q @ G.T)  # exactly symmetric (python-control checks symmetry strictly)
-    # python-control: dlqe(F, G, H, Q, R) -> L (predictor form), P⁻ (DARE solution), eig(F − L H)
-    try:
-        L, P, E = ct.dlqe(F, np.eye(F.shape[0]), H, GQGt, R)
-        P = _sym(np.asarray(P, dtype=float))
-    except np.linalg.LinAlgError:
-        P = None
-    if P is None or not _dare_solved(F, H, GQGt, R, P):
-        # scipy's balancing can spoil badly scaled problems: solve unbalanced
-        try:
-            P = _sym(scipy.linalg.solve_discrete_are(F.T, H.T, GQGt, R, balanced=False))
-        except (np.linalg.LinAlgError, ValueError) as exc:
-            raise ValueError(f"the filter DARE has no stabilising solution in double precision ({exc}); (F, H) or "
-                             "(F, G·Q^½) is numerically close to losing detectability / stabilisability") from None
-        if not _dare_solved(F, H, GQGt, R, P):
-            raise ValueError("the filter DARE could not be solved accurately in double precision (residual too "
-                             "large); check the scaling of F, H, G, Q and R")
-        L = F @ np.linalg.solve(H @ P @ H.T + R, H @ P).T  # L = F P⁻ Hᵀ (H P⁻ Hᵀ + R)⁻¹
-        E = np.linalg.eigvals(F - L @ H)
+    # python-control: dlqe(F, G, H, Q, R) -> L (predictor form), P⁻ (DARE solution), eig(F − L H);
+    # verified, else solved unbalanced
+    L, P, E = _riccati_solution(lambda: ct.dlqe(F, np.eye(F.shape[0]), H, GQGt, R),
+                                lambda: scipy.linalg.solve_discrete_are(F.T, H.T, GQGt, R, balanced=False),
+                                lambda P: _dare_solved(F, H, GQGt, R, P), "DARE", names=("F", "H", "G"))
     S = H @ P @ H.T + R  # innovation covariance
     K = np.linalg.solve(S, H @ P).T  # K = P⁻ Hᵀ S⁻¹ (filter form)
+    if L is None:
+        L = F @ K  # predictor form
+        E = np.linalg.eigvals(F - L @ H)
     P_post = P - K @ H @ P  # P(k|k) = (I − K H) P⁻
     return DiscreteSteadyState(
         K_filter=K,
