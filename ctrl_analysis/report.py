@@ -538,9 +538,12 @@ def summary_table(results: dict) -> str:
     return "\n".join(rows)
 
 
-def _run_table(results: list[dict], this_run: dict) -> list[str]:
+def _run_table(results: list[dict], this_run: dict, failed: dict) -> list[str]:
     """Which studies come from this run (with base seed, runs and per-run seeds) and which are stale."""
     rows = ["| study | from this run | base seed | runs | per-run seeds |", "|---|---|---|---|---|"]
+    present = {r["study"] for r in results}
+    rows += [f"| {name} | **no — failed**, and no earlier results | — | — | — |" for name in failed
+             if name not in present]
     for r in results:
         name = r["study"]
         run = this_run.get(name)
@@ -589,7 +592,7 @@ def write_report_md(results: list[dict], out_dir: Path, *, this_run: dict | None
         "",
         "## Provenance",
         "",
-        *_run_table(results, this_run),
+        *_run_table(results, this_run, failed),
         "",
     ]
     if failed:

@@ -67,9 +67,14 @@ def test_two_primaries_in_one_cell_are_rejected():
         r.to_dict()
 
 
-def test_one_run_records_no_std():
+def test_one_run_records_no_std(tmp_path):
     q = Quantity("a", "a", 1.0, paper=1.0, std=0.0, runs=1).to_dict()
     assert q["std"] is None
+    r = StudyResult(INFO)
+    r.quantity("a", "a", 1.0, paper=1.0, std=0.0, runs=1)
+    r.quantity("b", "b", 2.0, std=0.5, runs=3)
+    table = write_report_md([r.to_dict()], tmp_path).read_text()
+    assert "| 1 (1 run) |" in table and "± 0 " not in table and "| 2 ± 0.5 (3 runs) |" in table
     assert Quantity("a", "a", 1.0, std=0.2, runs=5).to_dict()["std"] == 0.2
 
 
@@ -129,7 +134,8 @@ def test_report_shows_unit_tolerance_counts_and_marks_stale(tmp_path):
     fresh = _result().to_dict()
     old = dict(_result().to_dict(), study="old-study")
     text = write_report_md([fresh, old], tmp_path, this_run={"demo": {"seed": 7, "runs": 4, "quick": False}},
-                           failed={"old-study": "ValueError: boom"}).read_text()
+                           failed={"old-study": "ValueError: boom", "never-ran": "KeyError: x"}).read_text()
+    assert "| never-ran | **no — failed**, and no earlier results |" in text
     assert "| `t2.x1.eso` | x1 ESO | Table 2 / x1 ESO | 1.05 | 1 | rad | 10 % | agrees |" in text
     assert "2 agree, 0 differ, 1 diverged, 1 new" in text
     assert "| demo | yes | 7 | 4 |" in text
