@@ -103,21 +103,23 @@ def test_failing_study_does_not_stop_others_and_is_marked_stale(tmp_path, monkey
         assert f"| {n} | yes | 7 | 3 |" in report
 
 
-@pytest.mark.parametrize("call", [
+NAN_TOLERANCE_CALLS = [
     "simulate_ivp(lambda t, x, u, p: -x, [1.0], [0.0, 1.0], rtol=nan)",
     "simulate_ivp(lambda t, x, u, p: -x, [1.0], [0.0, 1.0], atol=nan)",
     "riccati_trajectory([[0.0]], [[1.0]], [[1.0]], 1.0, 1.0, [[1.0]], [0.0, 1.0], rtol=nan)",
     "discrete_steady_state_batch([[[1.0]]], [[1.0]], [[1.0]], 1.0, tol=nan)",
-])
-def test_nan_tolerance_does_not_hang(call):
-    # run in a subprocess with a timeout: before the fix these calls never returned
-    code = ("from math import nan\n"
-            "from ctrl_analysis.simulate import simulate_ivp\n"
-            "from ctrl_analysis.estimators.kalman import riccati_trajectory, discrete_steady_state_batch\n"
-            "try:\n"
-            f"    {call}\n"
-            "except ValueError as exc:\n"
-            "    print(exc)\n")
-    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=REPO, timeout=30,
-                          env={**os.environ, "OPENBLAS_NUM_THREADS": "1"})
-    assert "tol must be finite" in proc.stdout, proc.stderr
+]
+
+
+def test_nan_tolerance_does_not_hang():
+    # one subprocess with a timeout: before the fix the first and third calls never returned
+    lines = ["from math import nan",
+             "from ctrl_analysis.simulate import simulate_ivp",
+             "from ctrl_analysis.estimators.kalman import riccati_trajectory, discrete_steady_state_batch"]
+    for call in NAN_TOLERANCE_CALLS:
+        lines += ["try:", f"    {call}", "    print('returned')", "except ValueError as exc:", "    print(exc)"]
+    proc = subprocess.run([sys.executable, "-c", "\n".join(lines)], capture_output=True, text=True, cwd=REPO,
+                          timeout=30, env={**os.environ, "OPENBLAS_NUM_THREADS": "1"})
+    out = proc.stdout.strip().splitlines()
+    assert len(out) == len(NAN_TOLERANCE_CALLS), proc.stderr
+    assert all("tol must be finite" in line for line in out), out
