@@ -89,7 +89,7 @@ def _one_line(exc: BaseException, limit: int = 400) -> str:
     return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
 
 
-def _run_study(name: str, out: Path, args, seeds_note: dict) -> dict:
+def _run_study(name: str, out: Path, args, this_run: dict) -> dict:
     """Run one study into a staged directory beside ``out/name``; move it into place when complete."""
     from analysis import load_study
 
@@ -103,7 +103,7 @@ def _run_study(name: str, out: Path, args, seeds_note: dict) -> dict:
         result.settings["cli"] = {"seed": args.seed, "runs": args.runs, "quick": bool(args.quick)}
         write_results_json(result, staged)
         data = result.to_dict()
-    seeds_note[name] = {"seed": args.seed, "runs": args.runs, "quick": bool(args.quick)}
+    this_run[name] = {"seed": args.seed, "runs": args.runs, "quick": bool(args.quick)}
     print(f"\n== {name}: {out / name / 'results.json'} ({len(result.figures)} figures, {result.runtime_s:.1f} s)")
     if data["quantities"]:
         print(summary_table(data))
@@ -138,9 +138,14 @@ def _reproduce(args) -> int:
                     results.append(json.loads(p.read_text(encoding="utf-8")))
                 except (OSError, ValueError) as exc:
                     failed.setdefault(name, f"unreadable results.json: {_one_line(exc)}")
-        print(f"\nreport: {write_report_md(results, out, this_run=this_run, failed=failed)}")
+        try:
+            print(f"\nreport: {write_report_md(results, out, this_run=this_run, failed=failed)}")
+        except OSError as exc:  # e.g. a full disk: the previous REPORT.md stays as it was
+            failed["REPORT.md"] = _one_line(exc)
+            sys.stderr.write(f"ctrl-analysis: error: REPORT.md not written: {failed['REPORT.md']}\n")
     if failed:
-        sys.stderr.write(f"ctrl-analysis: {len(failed)} of {len(dict.fromkeys(names))} studies failed: "
+        n_studies = sum(name != "REPORT.md" for name in failed)
+        sys.stderr.write(f"ctrl-analysis: {n_studies} of {len(dict.fromkeys(names))} studies failed: "
                          f"{', '.join(failed)}\n")
         return 1
     return 0

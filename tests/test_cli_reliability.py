@@ -123,3 +123,19 @@ def test_nan_tolerance_does_not_hang():
     out = proc.stdout.strip().splitlines()
     assert len(out) == len(NAN_TOLERANCE_CALLS), proc.stderr
     assert all("tol must be finite" in line for line in out), out
+
+
+def test_report_that_cannot_be_written_is_one_line_and_keeps_the_old_one(tmp_path, monkeypatch, capsys):
+    names = list(analysis.STUDIES)
+    monkeypatch.setattr(analysis, "load_study", lambda n: _fake_study(n))
+    (tmp_path / "REPORT.md").write_text("old report")
+
+    def full_disk(*args, **kw):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr("ctrl_analysis.cli.write_report_md", full_disk)
+    assert main(["reproduce", "all", "--out", str(tmp_path)]) == 1
+    err = capsys.readouterr().err
+    assert "REPORT.md not written: OSError: [Errno 28] No space left on device" in err and "Traceback" not in err
+    assert err.strip().splitlines()[-1] == f"ctrl-analysis: 0 of {len(names)} studies failed: REPORT.md"
+    assert (tmp_path / "REPORT.md").read_text() == "old report"
