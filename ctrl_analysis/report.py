@@ -17,6 +17,8 @@ from typing import Callable
 
 import numpy as np
 
+from ._validate import check_bool, check_callable, check_int, check_nonnegative
+
 __all__ = [
     "Quantity",
     "StudyInfo",
@@ -79,8 +81,6 @@ def relative_error(value, paper) -> float:
 
 
 def _check_tolerance(tolerance) -> float:
-    from ._validate import check_nonnegative
-
     return float(check_nonnegative("tolerance", tolerance, scalar=True))
 
 
@@ -133,13 +133,11 @@ class Quantity:
             raise ValueError(f"cell must be a non-empty string naming the paper cell, got {self.cell!r}")
         if self.tolerance is not None:
             self.tolerance = _check_tolerance(self.tolerance)
+        self.primary = check_bool("primary", self.primary)
+        self.diverged = check_bool("diverged", self.diverged)
         if self.runs is not None:
-            from ._validate import check_int
-
             self.runs = check_int("runs", self.runs, minimum=0)
         if self.runs_diverged is not None:
-            from ._validate import check_int
-
             self.runs_diverged = check_int("runs_diverged", self.runs_diverged, minimum=0,
                                            maximum=self.runs)
             if self.runs and self.runs_diverged == self.runs:
@@ -278,8 +276,6 @@ class StudyContext:
     progress: Callable[[str], None] = lambda msg: None
 
     def __post_init__(self):
-        from ._validate import check_callable, check_int
-
         self.out_dir = Path(self.out_dir)
         if self.runs is not None:
             self.runs = check_int("runs", self.runs, minimum=1)
@@ -288,8 +284,6 @@ class StudyContext:
 
     def runs_or(self, default: int, quick_default: int | None = None) -> int:
         """The requested number of Monte Carlo runs, or the study's default (smaller with --quick)."""
-        from ._validate import check_int
-
         default = check_int("default", default, minimum=1)
         if quick_default is not None:
             quick_default = check_int("quick_default", quick_default, minimum=1)

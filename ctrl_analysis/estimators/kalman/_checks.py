@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 
+import warnings
+
 import control as ct
 import numpy as np
 
@@ -253,7 +255,9 @@ def _riccati_solution(primary, unbalanced, solved, equation: str, names=("A", "C
     """
     a, c, g = names
     try:
-        gain, P, poles = primary()
+        with np.errstate(invalid="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # the result is verified below
+            gain, P, poles = primary()
         P = _sym(np.asarray(P, dtype=float))
         if solved(P):
             return gain, P, poles
