@@ -17,7 +17,7 @@ from typing import Callable
 
 import numpy as np
 
-from ._validate import check_bool, check_callable, check_int, check_nonnegative
+from ._validate import check_bool, check_callable, check_int, check_nonnegative, check_positive
 
 __all__ = [
     "Quantity",
@@ -400,6 +400,8 @@ def staged_directory(target: Path):
 
 def write_results_json(result: StudyResult, out_dir: Path) -> Path:
     """Write ``out_dir/results.json`` atomically (the contract in DESIGN.md); validated first."""
+    if not isinstance(result, StudyResult):
+        raise TypeError(f"result must be a StudyResult, got {type(result).__name__}")
     data = result.to_dict()
     validate_results(data)
     return write_text_atomic(Path(out_dir) / "results.json",
@@ -472,6 +474,8 @@ def count_verdicts(results: dict) -> dict:
     Quantities sharing a ``cell`` count once, with the verdict of the one marked ``primary`` (default:
     the first in that cell); quantities without a cell count individually.
     """
+    if not isinstance(results, dict) or not isinstance(results.get("quantities"), list):
+        raise ValueError(f"results must be a results.json dict with a 'quantities' list, got {type(results).__name__}")
     counts = dict.fromkeys(VERDICTS, 0)
     by_cell: dict = {}
     for q in results["quantities"]:
@@ -627,10 +631,15 @@ def new_figure(nrows: int = 1, ncols: int = 1, *, title: str | None = None, size
     """A figure in the toolkit's style (object API, grid on, readable size). Returns (fig, axes)."""
     import matplotlib
 
+    nrows = check_int("nrows", nrows, minimum=1)
+    ncols = check_int("ncols", ncols, minimum=1)
+    size = np.atleast_1d(check_positive("size", size))
+    if size.shape != (2,):
+        raise ValueError(f"size must be (width, height) in inches, got {size.tolist()}")
     matplotlib.use("Agg", force=False)
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(nrows, ncols, figsize=size, squeeze=True, constrained_layout=True, **kw)
+    fig, axes = plt.subplots(nrows, ncols, figsize=tuple(size), squeeze=True, constrained_layout=True, **kw)
     for ax in np.atleast_1d(axes).ravel():
         ax.grid(True, alpha=0.3)
     if title:

@@ -156,6 +156,13 @@ def _context(runs, seed):
     return report.StudyContext(out_dir=".", runs=runs, seed=seed)
 
 
+def _new_figure(**kw):
+    import matplotlib.pyplot as plt
+
+    fig, _ = report.new_figure(**kw)
+    plt.close(fig)
+
+
 def _runs_or(default, quick_default):
     return report.StudyContext(out_dir=".", quick=True).runs_or(default, quick_default)
 
@@ -340,6 +347,11 @@ CASES = [
     ("StudyContext.runs_or", _runs_or, dict(default=100, quick_default=5),
      dict(default=INT + [0], quick_default=opt(INT) + [0])),
     ("validate_results", report.validate_results, dict(data={"study": "s"}), dict(data=[None, [], "x"])),
+    ("count_verdicts", report.count_verdicts, dict(results={"quantities": []}), dict(results=[None, [], {"q": 1}])),
+    ("write_results_json", report.write_results_json,
+     dict(result=report.StudyResult(report.StudyInfo("s", "f", "p", "r")), out_dir=None), dict(result=[None, {}])),
+    ("new_figure", _new_figure, dict(nrows=1, ncols=2, size=(4.0, 3.0)),
+     dict(nrows=INT + [0], ncols=INT + [0], size=ARR + [(4.0,), (0.0, 3.0), (NAN, 3.0)])),
 ]
 
 
@@ -348,8 +360,9 @@ def _names_argument(message: str, arg: str) -> bool:
 
 
 def _expected_failure_for_valid(label, fn, valid):
-    """validate_results' valid call is itself invalid data; everything else must succeed as given."""
-    return label == "validate_results"
+    """Starting points not run as such: validate_results' is incomplete data, write_results_json's has
+    no directory (each bad call fails on its ``result`` before writing anything)."""
+    return label in ("validate_results", "write_results_json")
 
 
 def test_every_public_callable_rejects_bad_arguments_by_name(record_property):
