@@ -129,7 +129,9 @@ def _reproduce(args) -> int:
         except Exception as exc:  # noqa: BLE001 - any study failure is reported in one line, never a traceback
             failed[name] = _one_line(exc)
             sys.stderr.write(f"ctrl-analysis: error: study {name!r} failed: {failed[name]}\n")
-    if "all" in args.studies:
+    # `all` writes REPORT.md; a partial run refreshes an existing one, so it never shows a study's old
+    # numbers beside its new files (the studies not run now are marked stale there)
+    if "all" in args.studies or (out / "REPORT.md").exists():
         results = []
         for name in STUDIES:
             p = out / name / "results.json"
@@ -156,6 +158,8 @@ def main(argv: list[str] | None = None) -> int:
 
     0 on success, 1 when a study failed (the others still ran; failures listed at the end), 2 on a
     bad command line (checked before any work), 130 on Ctrl-C (previous output left intact).
+    ``reproduce all`` writes REPORT.md; reproducing some studies refreshes an existing REPORT.md,
+    marking the studies not run now as stale.
     """
     try:
         args = _build_parser().parse_args(argv)

@@ -139,3 +139,16 @@ def test_report_that_cannot_be_written_is_one_line_and_keeps_the_old_one(tmp_pat
     assert "REPORT.md not written: OSError: [Errno 28] No space left on device" in err and "Traceback" not in err
     assert err.strip().splitlines()[-1] == f"ctrl-analysis: 0 of {len(names)} studies failed: REPORT.md"
     assert (tmp_path / "REPORT.md").read_text() == "old report"
+
+
+def test_partial_run_refreshes_an_existing_report_and_marks_the_rest_stale(tmp_path, monkeypatch):
+    names = list(analysis.STUDIES)
+    monkeypatch.setattr(analysis, "load_study", lambda n: _fake_study(n))
+    assert main(["reproduce", "all", "--out", str(tmp_path), "--seed", "1"]) == 0
+    assert main(["reproduce", names[0], "--out", str(tmp_path), "--seed", "2"]) == 0
+    report = (tmp_path / "REPORT.md").read_text()
+    assert f"| {names[0]} | yes | 2 |" in report
+    for n in names[1:]:
+        assert f"| {n} | **no — stale**" in report
+    assert main(["reproduce", names[0], "--out", str(tmp_path / "fresh")]) == 0
+    assert not (tmp_path / "fresh" / "REPORT.md").exists()  # no report where there was none
