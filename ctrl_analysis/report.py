@@ -106,7 +106,8 @@ class Quantity:
     whenever ``paper`` is (default :data:`DEFAULT_TOLERANCE`). ``cell`` names the paper cell the
     quantity scores (e.g. ``"Table 2 / x1 ESO"``); quantities sharing a cell are counted once, by the
     one with ``primary=True`` (default: the first recorded). ``diverged=True`` (or ``runs_diverged``
-    equal to ``runs``) means every run diverged: no value, verdict ``diverged``.
+    equal to ``runs``, or ``runs=0`` healthy runs with ``value=None``) means every run diverged: no
+    value, verdict ``diverged``.
     """
 
     id: str
@@ -142,6 +143,8 @@ class Quantity:
                                            maximum=self.runs)
             if self.runs and self.runs_diverged == self.runs:
                 self.diverged = True
+        if self.runs == 0 and self.value is None:  # no run contributed a value: every run diverged
+            self.diverged = True
         if self.diverged and self.value is not None:
             raise ValueError(f"quantity {self.id!r}: a diverged quantity has no value (value must be None), "
                              f"got {self.value!r}")
@@ -212,8 +215,8 @@ class StudyResult:
           cell are counted once in the headline counts, by the one with ``primary=True`` (default: the
           first recorded in that cell). Quantities without a cell count individually.
         - ``diverged=True`` when every run diverged: pass ``value=None``; the verdict is
-          ``diverged``. Alternatively give ``runs`` and ``runs_diverged``; when they are equal the
-          quantity is diverged. A quantity some of whose runs diverged keeps its value (averaged
+          ``diverged``. Equivalently give ``runs`` and ``runs_diverged`` equal, or ``runs=0`` (the
+          number of healthy runs that contributed) with ``value=None``. A quantity some of whose runs diverged keeps its value (averaged
           over the healthy runs) and can record ``runs_diverged`` for the note.
         """
         if any(q.id == id for q in self.quantities):

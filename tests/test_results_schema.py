@@ -44,6 +44,9 @@ def test_diverged_verdict_has_no_value():
     assert q.verdict == "diverged" and q.to_dict()["value"] is None
     q2 = r.quantity("b", "runs all diverged", None, paper=1.0, runs=3, runs_diverged=3)
     assert q2.verdict == "diverged"
+    q4 = r.quantity("f", "no healthy run contributed", None, paper=1.0, runs=0)
+    assert q4.verdict == "diverged" and q4.to_dict()["verdict"] == "diverged"
+    assert r.quantity("g", "no value, one healthy run", None, paper=1.0, runs=1).verdict == "differs"
     q3 = r.quantity("c", "some runs diverged", 1.0, paper=1.0, runs=3, runs_diverged=1, std=0.1)
     assert q3.verdict == "agrees" and q3.to_dict()["runs_diverged"] == 1
     with pytest.raises(ValueError, match="diverged quantity has no value"):
