@@ -5,10 +5,11 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import tempfile
 import time
 from pathlib import Path
 
-from .report import StudyContext, summary_table, write_report_md, write_results_json
+from .report import StudyContext, staged_directory, summary_table, write_report_md, write_results_json
 
 __all__ = ["main"]
 
@@ -61,54 +62,121 @@ def _progress(study: str):
     return emit
 
 
-def main(argv: list[str] | None = None) -> int:
-    """Entry point of the console script; returns the exit status."""
-    from analysis import STUDIES, load_study
+def _check_out(text: str) -> Path:
+    """The --out directory, created if needed; a one-line usage error when it cannot hold results."""
+    if not text or not text.strip():
+        raise _UsageError("--out must name a directory, got an empty string")
+    out = Path(text)
+    if out.exists() and not out.is_dir():
+        raise _UsageError(f"--out must be a directory, got the file {text!r}")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=out):
+            pass
+    except OSError as exc:
+        raise _UsageError(f"--out {text!r} is not a writable directory ({exc.strerror or exc})") from None
+    return out
 
-    args = _build_parser().parse_args(argv)
-    if args.command == "list":
-        for name in STUDIES:
-            info = load_study(name).INFO
-            print(f"{name:24s} {info.reproduces}")
-        return 0
+
+class _UsageError(Exception):
+    """A bad command line detected after parsing: one line, exit status 2."""
+
+
+def _one_line(exc: BaseException, limit: int = 400) -> str:
+    text = " ".join(str(exc).split())
+    if len(text) > limit:
+        text = text[: limit - 1] + "…"
+    return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
+
+
+def _run_study(name: str, out: Path, args, this_run: dict) -> dict:
+    """Run one study into a staged directory beside ``out/name``; move it into place when complete."""
+    from analysis import load_study
+
+    with staged_directory(out / name) as staged:
+        ctx = StudyContext(out_dir=staged, runs=args.runs, seed=args.seed, quick=args.quick,
+                           progress=_progress(name))
+        t0 = time.perf_counter()
+        result = load_study(name).run(ctx)
+        result.runtime_s = time.perf_counter() - t0
+        # what the command line asked for, beside the study's own settings
+        result.settings["cli"] = {"seed": args.seed, "runs": args.runs, "quick": bool(args.quick)}
+        write_results_json(result, staged)
+        data = result.to_dict()
+    this_run[name] = {"seed": args.seed, "runs": args.runs, "quick": bool(args.quick)}
+    print(f"\n== {name}: {out / name / 'results.json'} ({len(result.figures)} figures, {result.runtime_s:.1f} s)")
+    if data["quantities"]:
+        print(summary_table(data))
+    if result.missing:
+        print("not built yet: " + "; ".join(result.missing))
+    return data
+
+
+def _reproduce(args) -> int:
+    from analysis import STUDIES
 
     names = list(STUDIES) if "all" in args.studies else args.studies
     unknown = [n for n in names if n not in STUDIES]
     if unknown:
-        sys.stderr.write(
-            f"ctrl-analysis: error: unknown study {unknown[0]!r}; choose from {', '.join(STUDIES)} or all\n"
-        )
-        return 2
+        raise _UsageError(f"unknown study {unknown[0]!r}; choose from {', '.join(STUDIES)} or all")
+    out = _check_out(args.out)
 
-    out = Path(args.out)
-    status = 0
+    this_run: dict = {}
+    failed: dict = {}
     for name in dict.fromkeys(names):
-        study_dir = out / name
-        ctx = StudyContext(out_dir=study_dir, runs=args.runs, seed=args.seed, quick=args.quick,
-                           progress=_progress(name))
-        t0 = time.perf_counter()
         try:
-            result = load_study(name).run(ctx)
-        except (ValueError, TypeError, RuntimeError, ArithmeticError) as exc:
-            sys.stderr.write(f"ctrl-analysis: error: study {name!r} failed: {exc}\n")
-            status = 1
-            continue
-        result.runtime_s = time.perf_counter() - t0
-        path = write_results_json(result, study_dir)
-        data = result.to_dict()
-        print(f"\n== {name}: {path} ({len(result.figures)} figures, {result.runtime_s:.1f} s)")
-        if data["quantities"]:
-            print(summary_table(data))
-        if result.missing:
-            print("not built yet: " + "; ".join(result.missing))
-    if "all" in args.studies:
+            _run_study(name, out, args, this_run)
+        except Exception as exc:  # noqa: BLE001 - any study failure is reported in one line, never a traceback
+            failed[name] = _one_line(exc)
+            sys.stderr.write(f"ctrl-analysis: error: study {name!r} failed: {failed[name]}\n")
+    # `all` writes REPORT.md; a partial run refreshes an existing one, so it never shows a study's old
+    # numbers beside its new files (the studies not run now are marked stale there)
+    if "all" in args.studies or (out / "REPORT.md").exists():
         results = []
         for name in STUDIES:
             p = out / name / "results.json"
             if p.exists():
-                results.append(json.loads(p.read_text(encoding="utf-8")))
-        print(f"\nreport: {write_report_md(results, out)}")
-    return status
+                try:
+                    results.append(json.loads(p.read_text(encoding="utf-8")))
+                except (OSError, ValueError) as exc:
+                    failed.setdefault(name, f"unreadable results.json: {_one_line(exc)}")
+        try:
+            print(f"\nreport: {write_report_md(results, out, this_run=this_run, failed=failed)}")
+        except OSError as exc:  # e.g. a full disk: the previous REPORT.md stays as it was
+            failed["REPORT.md"] = _one_line(exc)
+            sys.stderr.write(f"ctrl-analysis: error: REPORT.md not written: {failed['REPORT.md']}\n")
+    if failed:
+        n_studies = sum(name != "REPORT.md" for name in failed)
+        sys.stderr.write(f"ctrl-analysis: {n_studies} of {len(dict.fromkeys(names))} studies failed: "
+                         f"{', '.join(failed)}\n")
+        return 1
+    return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of the console script; returns the exit status.
+
+    0 on success, 1 when a study failed (the others still ran; failures listed at the end), 2 on a
+    bad command line (checked before any work), 130 on Ctrl-C (previous output left intact).
+    ``reproduce all`` writes REPORT.md; reproducing some studies refreshes an existing REPORT.md,
+    marking the studies not run now as stale.
+    """
+    try:
+        args = _build_parser().parse_args(argv)
+        if args.command == "list":
+            from analysis import STUDIES, load_study
+
+            for name in STUDIES:
+                info = load_study(name).INFO
+                print(f"{name:24s} {info.reproduces}")
+            return 0
+        return _reproduce(args)
+    except _UsageError as exc:
+        sys.stderr.write(f"ctrl-analysis: error: {exc}\n")
+        return 2
+    except KeyboardInterrupt:
+        sys.stderr.write("ctrl-analysis: interrupted; previous output left intact\n")
+        return 130
 
 
 if __name__ == "__main__":  # pragma: no cover

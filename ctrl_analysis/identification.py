@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._validate import check_finite, check_int, check_positive
+from ._validate import check_bool, check_finite, check_int, check_positive
 from .blocks import DiscreteBlock, signal_names
 
 __all__ = [
@@ -109,13 +109,16 @@ class LeastSquaresResult:
     report: IdentifiabilityReport
 
 
-def _check_regression(H, z=None):
+_NO_Z = object()
+
+
+def _check_regression(H, z=_NO_Z):
     H = np.asarray(check_finite("H", H))
     if H.ndim != 2:
         raise ValueError(f"H must be a 2-D regression matrix (samples x parameters), got ndim={H.ndim}")
     if H.shape[0] < 1 or H.shape[1] < 1:
         raise ValueError(f"H must have at least one row and one column, got shape {H.shape}")
-    if z is None:
+    if z is _NO_Z:
         return H
     z = np.atleast_1d(check_finite("z", z))
     if z.shape != (H.shape[0],):
@@ -144,7 +147,7 @@ def identifiability(H, *, cond_threshold: float = DEFAULT_COND_THRESHOLD) -> Ide
     columns of ``A`` are linearly independent.
     """
     H = _check_regression(H)
-    cond_threshold = check_positive("cond_threshold", cond_threshold)
+    cond_threshold = check_positive("cond_threshold", cond_threshold, scalar=True)
     N, p = H.shape
     s = np.linalg.svd(H, compute_uv=False)
     tol = max(N, p) * np.finfo(float).eps * (s[0] if s.size else 0.0)
@@ -205,6 +208,8 @@ def batch_least_squares(H, z, *, strict: bool = False, cond_threshold: float = D
     array([2., 1.])
     """
     H, z = _check_regression(H, z)
+    strict = check_bool("strict", strict)
+    warn = check_bool("warn", warn)
     report = identifiability(H, cond_threshold=cond_threshold)
     if not report.full_rank:
         msg = (f"H is rank-deficient: rank {report.rank} < {report.n_params} parameters "
@@ -308,7 +313,7 @@ class RecursiveLeastSquares(DiscreteBlock):
         self.feedthrough = bool(feedthrough)
         self.max_trace = None if max_trace is None else float(check_positive("max_trace", max_trace))
         self.n_params = check_int("n_params", n_params, minimum=1)
-        forgetting = float(check_finite("forgetting", forgetting))
+        forgetting = float(check_finite("forgetting", forgetting, scalar=True))
         if not 0.0 < forgetting <= 1.0:
             raise ValueError(f"forgetting must be in (0, 1], got {forgetting}")
         self.forgetting = forgetting
@@ -423,10 +428,11 @@ class RecursiveLeastSquares(DiscreteBlock):
         Raises
         ------
         ValueError
-            If ``h`` or ``z`` has the wrong shape (single-run mode).
+            ``h`` or ``z`` with NaN/inf (one bad sample would make θ NaN for good) or of the wrong
+            shape; the estimator state is left unchanged.
         """
-        h = np.asarray(h, dtype=float)
-        z = np.asarray(z, dtype=float)
+        h = np.asarray(check_finite("h", h), dtype=float)
+        z = np.asarray(check_finite("z", z), dtype=float)
         p = self.n_params
         if self.batch is None:
             if h.shape != (p,):
@@ -465,8 +471,8 @@ class RecursiveLeastSquares(DiscreteBlock):
         ValueError
             If ``H`` and ``z`` have different numbers of samples.
         """
-        H = np.asarray(H, dtype=float)
-        z = np.asarray(z, dtype=float)
+        H = np.atleast_2d(check_finite("H", H))
+        z = np.atleast_1d(check_finite("z", z))
         if H.shape[0] != z.shape[0]:
             raise ValueError(f"H and z must have the same number of samples, got {H.shape[0]} and {z.shape[0]}")
         out = np.empty(H.shape[:1] + np.shape(self.theta))

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._validate import check_finite
+from ._validate import check_array, check_finite, check_int, check_positive
 
 __all__ = [
     "mean_abs_error",
@@ -18,27 +18,59 @@ __all__ = [
 ]
 
 
+def _pair(names: tuple[str, str], a, b, axis) -> tuple[np.ndarray, np.ndarray]:
+    """Two signals of the same shape, or the same number of axes with explicit length-1 axes, or a scalar.
+
+    ``(N, 1)`` against ``(N, B)`` (one truth, B estimates) is allowed; ``(N,)`` against ``(N, 1)``
+    (which numpy would silently broadcast to ``(N, N)``) is not.
+    """
+    a, b = check_array(names[0], a), check_array(names[1], b)
+    if a.shape != b.shape and a.ndim and b.ndim and (a.ndim != b.ndim or any(m != n and 1 not in (m, n) for m, n in zip(a.shape, b.shape))):
+        raise ValueError(f"{names[0]} and {names[1]} must have the same shape (or the same number of axes with "
+                         f"length-1 axes to broadcast), got {a.shape} and {b.shape}")
+    _check_axis(axis, max(a.ndim, b.ndim))
+    return a, b
+
+
+def _check_axis(axis, ndim: int, allow_none: bool = True) -> None:
+    if axis is None and allow_none:
+        return
+    axis = check_int("axis", axis)
+    if not -max(ndim, 1) <= axis < max(ndim, 1):
+        raise ValueError(f"axis must be in [-{max(ndim, 1)}, {max(ndim, 1)}) for {ndim}-D data, got {axis}")
+
+
 def mean_abs_error(x, x_hat, axis=0):
-    """Mean of ``|x - x_hat|`` over ``axis`` (time by default): the papers' "平均误差"."""
-    return np.mean(np.abs(np.asarray(x, dtype=float) - np.asarray(x_hat, dtype=float)), axis=axis)
+    """Mean of ``|x - x_hat|`` over ``axis`` (time by default): the papers' "平均误差".
+
+    ``x`` and ``x_hat`` must have the same shape, or the same number of axes with explicit length-1
+    axes (e.g. a truth of shape ``(N, 1)`` against estimates ``(N, B)``), or one may be a scalar;
+    nothing else broadcasts.
+    """
+    x, x_hat = _pair(("x", "x_hat"), x, x_hat, axis)
+    return np.mean(np.abs(x - x_hat), axis=axis)
 
 
 def rmse(reference, y, axis=0):
-    """Root-mean-square error ``sqrt(mean((reference - y)^2))`` over ``axis``."""
-    e = np.asarray(reference, dtype=float) - np.asarray(y, dtype=float)
-    return np.sqrt(np.mean(e**2, axis=axis))
+    """Root-mean-square error ``sqrt(mean((reference - y)^2))`` over ``axis`` (same shapes, finite)."""
+    reference, y = _pair(("reference", "y"), reference, y, axis)
+    return np.sqrt(np.mean((reference - y) ** 2, axis=axis))
 
 
 def snr_db(reference, y, axis=0):
-    """Signal-to-noise ratio ``10 lg(Σ reference² / Σ (reference - y)²)`` in dB over ``axis``."""
-    r = np.asarray(reference, dtype=float)
-    e = r - np.asarray(y, dtype=float)
-    return 10.0 * np.log10(np.sum(r**2, axis=axis) / np.sum(e**2, axis=axis))
+    """Signal-to-noise ratio ``10 lg(Σ reference² / Σ (reference - y)²)`` in dB over ``axis`` (same shapes)."""
+    r, y = _pair(("reference", "y"), reference, y, axis)
+    e = r - y
+    with np.errstate(divide="ignore"):
+        return 10.0 * np.log10(np.sum(r**2, axis=axis) / np.sum(e**2, axis=axis))
 
 
 def overshoot(t, y, final, initial=0.0, axis=0):
     """Percent overshoot of a step response from ``initial`` to ``final`` (0 when it never exceeds it)."""
-    y = np.asarray(y, dtype=float)
+    y = check_array("y", y)
+    final = check_finite("final", final, scalar=True)
+    initial = check_finite("initial", initial, scalar=True)
+    _check_axis(axis, y.ndim)
     step = final - initial
     if step == 0:
         raise ValueError("final must differ from initial for an overshoot")
@@ -50,9 +82,24 @@ def settling_time(t, y, final, initial=0.0, band=0.02, axis=0):
     """First time after which ``y`` stays within ``band`` (relative to the step) of ``final``.
 
     Returns ``nan`` for a run that never settles within the record.
+
+    Raises
+    ------
+    ValueError
+        ``final``, ``initial`` or ``band`` not finite (``band`` must be > 0), ``t`` not 1-D and
+        strictly increasing, or ``t`` and ``y`` of different lengths along ``axis``.
     """
-    t = np.asarray(t, dtype=float)
-    y = np.moveaxis(np.asarray(y, dtype=float), axis, 0)
+    t = np.atleast_1d(check_finite("t", t))
+    final = check_finite("final", final, scalar=True)
+    initial = check_finite("initial", initial, scalar=True)
+    band = check_positive("band", band, scalar=True)
+    y = check_array("y", y)
+    _check_axis(axis, y.ndim, allow_none=False)
+    y = np.moveaxis(y, axis, 0)
+    if t.ndim != 1 or np.any(np.diff(t) <= 0):
+        raise ValueError(f"t must be 1-D and strictly increasing, got shape {t.shape}")
+    if y.shape[0] != t.size:
+        raise ValueError(f"y must have len(t) = {t.size} samples along axis {axis}, got {y.shape[0]}")
     step = abs(final - initial)
     if step == 0:
         raise ValueError("final must differ from initial for a settling time")
@@ -69,10 +116,19 @@ def mean_std(values, ok=None, axis=0):
     """Mean, standard deviation (ddof=1 when more than one run) and count over the runs in ``ok``.
 
     Diverged runs (``ok`` False) are excluded, never averaged; the count says how many remained.
+    ``ok`` must be a boolean mask with one entry per run (an index array is rejected: it would be
+    read as a mask silently).
     """
-    v = np.asarray(values, dtype=float)
+    v = check_array("values", values)
+    _check_axis(axis, v.ndim, allow_none=False)
     if ok is not None:
-        v = np.compress(np.asarray(ok, dtype=bool), v, axis=axis)
+        ok = np.asarray(ok)
+        if ok.dtype != bool:
+            raise TypeError(f"ok must be a boolean mask (one entry per run), got dtype {ok.dtype}")
+        n_runs = v.shape[axis] if v.ndim else 1
+        if ok.shape != (n_runs,):
+            raise ValueError(f"ok must have one entry per run ({n_runs}), got shape {ok.shape}")
+        v = np.compress(ok, v, axis=axis)
     n = v.shape[axis]
     if n == 0:
         return np.nan, np.nan, 0
@@ -84,7 +140,9 @@ def bandwidth_3db(sys, dbdrop: float = -3.0) -> float:
     """First frequency (rad/s) where the gain falls ``dbdrop`` dB below its DC value (python-control)."""
     import control as ct
 
-    check_finite("dbdrop", dbdrop)
+    dbdrop = check_finite("dbdrop", dbdrop, scalar=True)
+    if dbdrop >= 0:
+        raise ValueError(f"dbdrop must be < 0 (a drop in dB), got {dbdrop!r}")
     return float(ct.bandwidth(sys, dbdrop=dbdrop))
 
 
@@ -95,6 +153,10 @@ def resonance_peak(sys, omega=None):
     """
     import control as ct
 
+    if omega is not None:
+        omega = np.atleast_1d(check_positive("omega", omega))
+        if omega.ndim != 1:
+            raise ValueError(f"omega must be a 1-D array of frequencies, got shape {omega.shape}")
     if omega is None:
         poles = np.abs(np.asarray(sys.poles()))
         wmax = 100.0 * max(1.0, float(poles.max(initial=1.0)))

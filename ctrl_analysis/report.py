@@ -2,9 +2,14 @@
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
+import os
 import platform
+import shutil
+import signal
+import tempfile
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -12,20 +17,31 @@ from typing import Callable
 
 import numpy as np
 
+from ._validate import check_bool, check_callable, check_int, check_nonnegative, check_positive
+
 __all__ = [
     "Quantity",
     "StudyInfo",
     "StudyContext",
     "StudyResult",
+    "VERDICTS",
+    "RESULTS_SCHEMA",
     "compute_verdict",
+    "count_verdicts",
     "relative_error",
+    "validate_results",
     "versions",
+    "write_text_atomic",
+    "staged_directory",
     "write_results_json",
     "write_report_md",
     "new_figure",
 ]
 
-VERDICTS = ("agrees", "differs", "new")
+VERDICTS = ("agrees", "differs", "new", "diverged")
+#: Version of the results.json layout: 2 adds ``unit`` and ``tolerance`` on every quantity, the
+#: ``diverged`` verdict, paper ``cell`` / ``primary`` and ``settings["cli"]``.
+RESULTS_SCHEMA = 2
 DEFAULT_TOLERANCE = 0.1
 
 
@@ -64,11 +80,18 @@ def relative_error(value, paper) -> float:
     return float(np.max(np.abs(v - p) / scale))
 
 
-def compute_verdict(value, paper, tolerance: float | None) -> str:
-    """``new`` without a paper value; else ``agrees`` when the relative error is within tolerance."""
+def _check_tolerance(tolerance) -> float:
+    return float(check_nonnegative("tolerance", tolerance, scalar=True))
+
+
+def compute_verdict(value, paper, tolerance: float | None, *, diverged: bool = False) -> str:
+    """``diverged`` when every run diverged; ``new`` without a paper value; else ``agrees`` when the
+    relative error is within tolerance, ``differs`` otherwise."""
+    if diverged:
+        return "diverged"
     if paper is None:
         return "new"
-    tol = DEFAULT_TOLERANCE if tolerance is None else tolerance
+    tol = DEFAULT_TOLERANCE if tolerance is None else _check_tolerance(tolerance)
     if value is None:
         return "differs"
     return "agrees" if relative_error(value, paper) <= tol else "differs"
@@ -78,7 +101,13 @@ def compute_verdict(value, paper, tolerance: float | None) -> str:
 class Quantity:
     """One reproduced number (or vector) beside the paper's.
 
-    ``verdict`` is computed from ``value``, ``paper`` and ``tolerance`` (relative); it is never set by hand.
+    ``verdict`` is computed from ``value``, ``paper``, ``tolerance`` (relative) and ``diverged``; it is
+    never set by hand. ``unit`` is always written ("" = dimensionless); ``tolerance`` is written
+    whenever ``paper`` is (default :data:`DEFAULT_TOLERANCE`). ``cell`` names the paper cell the
+    quantity scores (e.g. ``"Table 2 / x1 ESO"``); quantities sharing a cell are counted once, by the
+    one with ``primary=True`` (default: the first recorded). ``diverged=True`` (or ``runs_diverged``
+    equal to ``runs``, or ``runs=0`` healthy runs with ``value=None``) means every run diverged: no
+    value, verdict ``diverged``.
     """
 
     id: str
@@ -90,10 +119,39 @@ class Quantity:
     tolerance: float | None = None
     note: str = ""
     unit: str = ""
+    cell: str | None = None
+    primary: bool = False
+    diverged: bool = False
+    runs_diverged: int | None = None
+
+    def __post_init__(self):
+        for name in ("id", "label"):
+            if not isinstance(getattr(self, name), str) or (name == "id" and not self.id):
+                raise TypeError(f"{name} must be a non-empty string, got {getattr(self, name)!r}")
+        if not isinstance(self.unit, str):
+            raise TypeError(f"unit must be a string ('' for dimensionless), got {self.unit!r}")
+        if self.cell is not None and (not isinstance(self.cell, str) or not self.cell.strip()):
+            raise ValueError(f"cell must be a non-empty string naming the paper cell, got {self.cell!r}")
+        if self.tolerance is not None:
+            self.tolerance = _check_tolerance(self.tolerance)
+        self.primary = check_bool("primary", self.primary)
+        self.diverged = check_bool("diverged", self.diverged)
+        if self.runs is not None:
+            self.runs = check_int("runs", self.runs, minimum=0)
+        if self.runs_diverged is not None:
+            self.runs_diverged = check_int("runs_diverged", self.runs_diverged, minimum=0,
+                                           maximum=self.runs)
+            if self.runs and self.runs_diverged == self.runs:
+                self.diverged = True
+        if self.runs == 0 and self.value is None:  # no run contributed a value: every run diverged
+            self.diverged = True
+        if self.diverged and self.value is not None:
+            raise ValueError(f"quantity {self.id!r}: a diverged quantity has no value (value must be None), "
+                             f"got {self.value!r}")
 
     @property
     def verdict(self) -> str:
-        return compute_verdict(self.value, self.paper, self.tolerance)
+        return compute_verdict(self.value, self.paper, self.tolerance, diverged=self.diverged)
 
     def to_dict(self) -> dict:
         d = {
@@ -101,16 +159,21 @@ class Quantity:
             "label": self.label,
             "paper": self.paper,
             "value": self.value,
-            "std": self.std,
+            # one run has no spread: record none rather than a misleading 0
+            "std": self.std if (self.runs is None or self.runs > 1) and not self.diverged else None,
             "runs": self.runs,
+            "unit": self.unit,
             "tolerance": (DEFAULT_TOLERANCE if self.tolerance is None else self.tolerance)
             if self.paper is not None
             else None,
             "verdict": self.verdict,
             "note": self.note,
         }
-        if self.unit:
-            d["unit"] = self.unit
+        if self.cell is not None:
+            d["cell"] = self.cell
+            d["primary"] = bool(self.primary)
+        if self.runs_diverged is not None:
+            d["runs_diverged"] = self.runs_diverged
         if self.value is not None and not np.all(np.isfinite(np.asarray(self.value, dtype=float))):
             d["note"] = (self.note + " " if self.note else "") + "value is not finite (diverged run?)"
         return _to_jsonable(d)
@@ -141,7 +204,21 @@ class StudyResult:
     runtime_s: float = 0.0
 
     def quantity(self, id: str, label: str, value, paper=None, **kw) -> Quantity:
-        """Add (or replace) a quantity and return it."""
+        """Add a quantity and return it (an id may be recorded once).
+
+        Keywords are the fields of :class:`Quantity`:
+
+        - ``unit`` (str, "" = dimensionless) and ``tolerance`` (relative; default
+          :data:`DEFAULT_TOLERANCE` when ``paper`` is given) are written to results.json and REPORT.md.
+        - ``std`` and ``runs`` for Monte Carlo values (no std is written for a single run).
+        - ``cell="Table 2 / x1 ESO"`` names the paper cell the quantity scores; quantities sharing a
+          cell are counted once in the headline counts, by the one with ``primary=True`` (default: the
+          first recorded in that cell). Quantities without a cell count individually.
+        - ``diverged=True`` when every run diverged: pass ``value=None``; the verdict is
+          ``diverged``. Equivalently give ``runs`` and ``runs_diverged`` equal, or ``runs=0`` (the
+          number of healthy runs that contributed) with ``value=None``. A quantity some of whose runs diverged keeps its value (averaged
+          over the healthy runs) and can record ``runs_diverged`` for the note.
+        """
         if any(q.id == id for q in self.quantities):
             raise ValueError(f"quantity id {id!r} is already recorded in study {self.info.name!r}")
         q = Quantity(id=id, label=label, value=value, paper=paper, **kw)
@@ -166,8 +243,15 @@ class StudyResult:
         raise KeyError(id)
 
     def to_dict(self) -> dict:
+        cells: dict = {}
+        for q in self.quantities:
+            if q.cell is not None and q.primary:
+                if q.cell in cells:
+                    raise ValueError(f"cell {q.cell!r} has two primary quantities: {cells[q.cell]!r} and {q.id!r}")
+                cells[q.cell] = q.id
         return _to_jsonable(
             {
+                "schema": RESULTS_SCHEMA,
                 "study": self.info.name,
                 "seed_file": self.info.seed_file,
                 "paper": self.info.paper,
@@ -194,8 +278,18 @@ class StudyContext:
     quick: bool = False
     progress: Callable[[str], None] = lambda msg: None
 
+    def __post_init__(self):
+        self.out_dir = Path(self.out_dir)
+        if self.runs is not None:
+            self.runs = check_int("runs", self.runs, minimum=1)
+        self.seed = check_int("seed", self.seed, minimum=0)
+        check_callable("progress", self.progress, "progress(message)")
+
     def runs_or(self, default: int, quick_default: int | None = None) -> int:
         """The requested number of Monte Carlo runs, or the study's default (smaller with --quick)."""
+        default = check_int("default", default, minimum=1)
+        if quick_default is not None:
+            quick_default = check_int("quick_default", quick_default, minimum=1)
         if self.runs is not None:
             return self.runs
         if self.quick:
@@ -232,99 +326,185 @@ def versions() -> dict:
     }
 
 
-def write_results_json(result: StudyResult, out_dir: Path) -> Path:
-    """Write ``out_dir/results.json`` (the contract in DESIGN.md)."""
-    out_dir.mkdir(parents=True, exist_ok=True)
-    path = out_dir / "results.json"
-    path.write_text(json.dumps(result.to_dict(), indent=2, ensure_ascii=False) + "\n", encoding="utf-8")
-    return path
-
-
-def _fmt(value, std=None) -> str:
-    if value is None:
-        return "—"
-    if isinstance(value, (list, tuple, np.ndarray)):
-        return "[" + ", ".join(_fmt(v) for v in np.ravel(np.asarray(value, dtype=object))) + "]"
-    if isinstance(value, bool):
-        return str(int(value))
-    if isinstance(value, (int, np.integer)):
-        return str(value)
+@contextlib.contextmanager
+def _sigint_deferred():
+    """Hold SIGINT (main thread only) while a few renames complete, so they happen together."""
     try:
-        v = float(value)
-    except (TypeError, ValueError):
-        return str(value)
-    text = f"{v:.4g}"
-    if std is not None:
-        text += f" ± {_fmt(std)}"
-    return text
+        old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    except (AttributeError, ValueError, OSError):  # not POSIX / not the main thread
+        old = None
+    try:
+        yield
+    finally:
+        if old is not None:
+            signal.pthread_sigmask(signal.SIG_SETMASK, old)
 
 
-def _cell(text) -> str:
-    """Text safe inside a Markdown table cell (pipes escaped, one line)."""
-    return str(text or "").replace("|", "\\|").replace("\n", " ")
+def _umask() -> int:
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
 
 
-def summary_table(results: dict) -> str:
-    """A Markdown table of the quantities of one results.json dict."""
-    rows = ["| id | quantity | paper | reproduced | verdict | note |", "|---|---|---|---|---|---|"]
-    for q in results["quantities"]:
-        note = _cell(q.get("note"))
-        rows.append(
-            f"| `{q['id']}` | {_cell(q['label'])} | {_fmt(q['paper'])} | {_fmt(q['value'], q.get('std'))}"
-            f"{' (' + str(q['runs']) + ' runs)' if q.get('runs') else ''} | {q['verdict']} | {note} |"
-        )
-    return "\n".join(rows)
+def write_text_atomic(path: Path, text: str) -> Path:
+    """Write ``text`` to ``path`` atomically: a temporary file beside it, flushed, then renamed.
 
-
-def write_report_md(results: list[dict], out_dir: Path) -> Path:
-    """Write ``out_dir/REPORT.md`` from the results.json dicts of several studies."""
-    lines = [
-        "# ctrl-analysis: reproduction report",
-        "",
-        "Generated by `ctrl-analysis reproduce all`. Every reproduced value below was computed by the code;",
-        "verdicts are computed from the relative tolerance shown in each study's results.json.",
-        "",
-    ]
-    for r in results:
-        counts = {v: sum(q["verdict"] == v for q in r["quantities"]) for v in VERDICTS}
-        lines += [
-            f"## {r['study']}",
-            "",
-            f"*{r['paper']}* — seed `{r['seed_file']}`. "
-            f"{counts['agrees']} agree, {counts['differs']} differ, {counts['new']} new; "
-            f"runtime {r['runtime_s']:.1f} s.",
-            "",
-        ]
-        if r.get("missing"):
-            lines += ["**Not built yet:** " + "; ".join(r["missing"]), ""]
-        if r["quantities"]:
-            lines += [summary_table(r), ""]
-        if r["reconstructions"]:
-            lines += ["### Reconstructions", ""]
-            lines += [f"- **{c['name']}** = `{_fmt(c['value'])}` — {c['why']}" for c in r["reconstructions"]]
-            lines.append("")
-        if r["findings"]:
-            lines += ["### Findings", ""]
-            lines += [f"- **{f['id']}**: {f['text']}" for f in r["findings"]]
-            lines.append("")
-        if r["figures"]:
-            lines += ["### Figures", ""]
-            lines += [f"![{name}]({r['study']}/{name})" for name in r["figures"]]
-            lines.append("")
-    path = out_dir / "REPORT.md"
-    out_dir.mkdir(parents=True, exist_ok=True)
-    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    A reader sees the old file or the complete new one, never a truncated one (e.g. on a full disk
+    the write fails and the old file stays).
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        os.chmod(tmp, 0o666 & ~_umask())  # as a plain open() would create it
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            fh.write(text)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
     return path
+
+
+@contextlib.contextmanager
+def staged_directory(target: Path):
+    """Stage a directory's new contents beside it; replace ``target`` only when the block completes.
+
+    Yields a fresh temporary directory in ``target``'s parent. On normal exit the old ``target`` is
+    moved aside, the staged directory renamed to ``target`` (SIGINT held during the swap) and the
+    old one removed; on any exception (including ``KeyboardInterrupt``) the staged directory is
+    removed and ``target`` is untouched. ``target`` is therefore complete or untouched.
+    """
+    target = Path(target)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    staged = Path(tempfile.mkdtemp(dir=target.parent, prefix=f".{target.name}.new-"))
+    try:
+        os.chmod(staged, 0o777 & ~_umask())  # as a plain mkdir would create it
+        yield staged
+        for entry in staged.iterdir():  # flush the staged files before they become visible
+            if entry.is_file():
+                with open(entry, "rb") as fh:
+                    os.fsync(fh.fileno())
+        with _sigint_deferred():
+            old = None
+            if target.exists():
+                old = Path(tempfile.mkdtemp(dir=target.parent, prefix=f".{target.name}.old-"))
+                os.replace(target, old / "dir")
+            os.replace(staged, target)
+        if old is not None:
+            shutil.rmtree(old, ignore_errors=True)
+    finally:
+        if staged.exists():
+            shutil.rmtree(staged, ignore_errors=True)
+
+
+def write_results_json(result: StudyResult, out_dir: Path) -> Path:
+    """Write ``out_dir/results.json`` atomically (the contract in DESIGN.md); validated first."""
+    if not isinstance(result, StudyResult):
+        raise TypeError(f"result must be a StudyResult, got {type(result).__name__}")
+    data = result.to_dict()
+    validate_results(data)
+    return write_text_atomic(Path(out_dir) / "results.json",
+                             json.dumps(data, indent=2, ensure_ascii=False) + "\n")
+
+
+_QUANTITY_KEYS = ("id", "label", "paper", "value", "std", "runs", "unit", "tolerance", "verdict", "note")
+_RESULTS_KEYS = ("study", "seed_file", "settings", "reconstructions", "quantities", "findings", "figures",
+                 "runtime_s", "versions")
+
+
+def validate_results(data: dict) -> dict:
+    """Check a results.json dict against the schema; return it unchanged or raise ``ValueError``.
+
+    Rules: the top-level keys of DESIGN.md are present; every quantity has ``id``, ``label``,
+    ``paper``, ``value``, ``std``, ``runs``, ``unit`` (a string, "" = dimensionless), ``tolerance``
+    (a number >= 0 whenever ``paper`` is given), ``verdict`` in :data:`VERDICTS` and equal to the
+    verdict recomputed from the record, ``paper`` None for ``new``, ``value`` None for ``diverged``;
+    ids are unique and a paper cell has at most one primary quantity.
+    """
+    if not isinstance(data, dict):
+        raise ValueError(f"data must be a results dict, got {type(data).__name__}")
+    missing = [k for k in _RESULTS_KEYS if k not in data]
+    if missing:
+        raise ValueError(f"results of study {data.get('study')!r} lack keys {missing}")
+    study = data["study"]
+    if not isinstance(data["quantities"], list):
+        raise ValueError(f"{study}: quantities must be a list")
+    seen, primaries = set(), {}
+    for i, q in enumerate(data["quantities"]):
+        where = f"{study}: quantity {q.get('id', i)!r}" if isinstance(q, dict) else f"{study}: quantity #{i}"
+        if not isinstance(q, dict):
+            raise ValueError(f"{where} must be a dict")
+        lack = [k for k in _QUANTITY_KEYS if k not in q]
+        if lack:
+            raise ValueError(f"{where} lacks keys {lack}")
+        if q["id"] in seen:
+            raise ValueError(f"{where} is recorded twice")
+        seen.add(q["id"])
+        if not isinstance(q["unit"], str):
+            raise ValueError(f"{where}: unit must be a string ('' = dimensionless), got {q['unit']!r}")
+        verdict = q["verdict"]
+        if verdict not in VERDICTS:
+            raise ValueError(f"{where}: verdict must be one of {list(VERDICTS)}, got {verdict!r}")
+        tol = q["tolerance"]
+        if q["paper"] is not None and (isinstance(tol, bool) or not isinstance(tol, (int, float))
+                                       or not math.isfinite(tol) or tol < 0):
+            raise ValueError(f"{where}: tolerance must be a number >= 0 when paper is given, got {tol!r}")
+        if verdict == "new" and q["paper"] is not None:
+            raise ValueError(f"{where}: verdict 'new' needs paper None, got {q['paper']!r}")
+        if verdict == "diverged" and q["value"] is not None:
+            raise ValueError(f"{where}: verdict 'diverged' needs value None, got {q['value']!r}")
+        recomputed = compute_verdict(q["value"], q["paper"], tol, diverged=verdict == "diverged")
+        if recomputed != verdict:
+            raise ValueError(f"{where}: verdict {verdict!r} does not follow from value, paper and tolerance "
+                             f"({recomputed!r})")
+        if q.get("cell") is not None:
+            if not isinstance(q["cell"], str):
+                raise ValueError(f"{where}: cell must be a string, got {q['cell']!r}")
+            if q.get("primary"):
+                if q["cell"] in primaries:
+                    raise ValueError(f"{where}: cell {q['cell']!r} already has primary {primaries[q['cell']]!r}")
+                primaries[q["cell"]] = q["id"]
+    return data
+
+
+def count_verdicts(results: dict) -> dict:
+    """Headline counts of one results.json dict: ``{verdict: n}`` over paper cells, each scored once.
+
+    Quantities sharing a ``cell`` count once, with the verdict of the one marked ``primary`` (default:
+    the first in that cell); quantities without a cell count individually.
+    """
+    if not isinstance(results, dict) or not isinstance(results.get("quantities"), list):
+        raise ValueError(f"results must be a results.json dict with a 'quantities' list, got {type(results).__name__}")
+    counts = dict.fromkeys(VERDICTS, 0)
+    by_cell: dict = {}
+    for q in results["quantities"]:
+        cell = q.get("cell")
+        if cell is None:
+            counts[q["verdict"]] += 1
+        elif cell not in by_cell or (q.get("primary") and not by_cell[cell].get("primary")):
+            by_cell[cell] = q
+    for q in by_cell.values():
+        counts[q["verdict"]] += 1
+    return counts
 
 
 def new_figure(nrows: int = 1, ncols: int = 1, *, title: str | None = None, size=(7.0, 4.5), **kw):
     """A figure in the toolkit's style (object API, grid on, readable size). Returns (fig, axes)."""
     import matplotlib
 
+    nrows = check_int("nrows", nrows, minimum=1)
+    ncols = check_int("ncols", ncols, minimum=1)
+    size = np.atleast_1d(check_positive("size", size))
+    if size.shape != (2,):
+        raise ValueError(f"size must be (width, height) in inches, got {size.tolist()}")
     matplotlib.use("Agg", force=False)
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(nrows, ncols, figsize=size, squeeze=True, constrained_layout=True, **kw)
+    fig, axes = plt.subplots(nrows, ncols, figsize=tuple(size), squeeze=True, constrained_layout=True, **kw)
     for ax in np.atleast_1d(axes).ravel():
         ax.grid(True, alpha=0.3)
     if title:
@@ -340,3 +520,7 @@ class Stopwatch:
 
     def elapsed(self) -> float:
         return time.perf_counter() - self.t0
+
+
+# REPORT.md writing lives in its own module; re-exported here for the public API
+from .report_md import summary_table, write_report_md  # noqa: E402,F401

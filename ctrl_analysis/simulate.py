@@ -21,7 +21,7 @@ from typing import Callable
 
 import numpy as np
 
-from ._validate import check_finite, check_in, check_int, check_positive
+from ._validate import check_array, check_callable, check_finite, check_in, check_int, check_positive, check_real
 
 __all__ = [
     "SimResult",
@@ -44,14 +44,23 @@ __all__ = [
 # ----------------------------------------------------------------------------------------------
 
 def run_seeds(base_seed: int, runs: int) -> list[int]:
-    """Per-run seeds ``base_seed, base_seed + 1, ...``; record them in results.
+    """Per-run seeds derived from ``base_seed``; record them in results.
 
-    Each seed is expanded by :func:`numpy.random.default_rng` (SeedSequence hashing), so
-    consecutive integers give independent streams.
+    The runs are the children ``numpy.random.SeedSequence(base_seed).spawn(runs)``, each recorded
+    as the integer ``child.generate_state(1)[0]`` (then expanded again by
+    :func:`numpy.random.default_rng`). Neighbouring base seeds therefore give independent sets of
+    runs (``base_seed + i`` schemes share all runs but one), and run ``i`` does not depend on
+    ``runs``.
+
+    Examples
+    --------
+    >>> a, b = run_seeds(7, 3), run_seeds(8, 3)
+    >>> len(set(a) & set(b)), run_seeds(7, 2) == a[:2]
+    (0, True)
     """
     base_seed = check_int("base_seed", base_seed, minimum=0)
     runs = check_int("runs", runs, minimum=1)
-    return [base_seed + i for i in range(runs)]
+    return [int(child.generate_state(1)[0]) for child in np.random.SeedSequence(base_seed).spawn(runs)]
 
 
 def uniform_noise(low, high) -> Callable:
@@ -80,13 +89,20 @@ def gaussian_noise(std, mean=0.0) -> Callable:
     return sample
 
 
+def _check_seeds(seeds) -> list:
+    """A sequence of non-negative integer seeds."""
+    if isinstance(seeds, (str, bytes)) or not hasattr(seeds, "__len__"):
+        raise TypeError(f"seeds must be a sequence of non-negative integers, got {seeds!r}")
+    return [check_int("seeds", s, minimum=0) for s in seeds]
+
+
 def draw_noise(seeds, n_steps: int, *samplers: Callable) -> np.ndarray:
     """Draw the noise of every run up front: an array of shape ``(n_steps, B, m)``.
 
     Run ``b`` uses ``numpy.random.default_rng(seeds[b])``; the samplers are called in order on that
     generator and their channels concatenated, so run ``b``'s noise does not depend on ``B``.
     """
-    seeds = list(seeds)
+    seeds = _check_seeds(seeds)
     if not seeds:
         raise ValueError("seeds must contain at least one seed")
     n_steps = check_int("n_steps", n_steps, minimum=1)
@@ -179,6 +195,14 @@ class SimResult:
         return out
 
 
+def _check_bound(bound) -> float:
+    """``bound`` of the divergence test: a number > 0 (``inf`` turns the test off, NaN or -inf are errors)."""
+    bound = check_real("bound", bound)
+    if not bound > 0:
+        raise ValueError(f"bound must be > 0 (inf disables the check), got {bound!r}")
+    return bound
+
+
 def _check_bad(x_new: np.ndarray, bound: float) -> np.ndarray:
     with np.errstate(invalid="ignore"):
         return ~np.all(np.isfinite(x_new), axis=1) | np.any(np.abs(x_new) > bound, axis=1)
@@ -205,7 +229,9 @@ def _store(buf, k, value, n_rows, B):
 
 
 def _prepare(x0, noise, seeds):
-    x0 = np.asarray(x0, dtype=float)
+    x0 = check_array("x0", x0)
+    if seeds is not None:
+        seeds = _check_seeds(seeds)
     if x0.ndim not in (1, 2):
         raise ValueError(f"x0 must have shape (n,) or (B, n), got {x0.shape}")
     if not np.all(np.isfinite(x0)):
@@ -280,11 +306,15 @@ def simulate_sampled(
     -------
     SimResult
     """
-    h = check_positive("h", h)
+    check_callable("rhs", rhs, "rhs(t, x, u, params)")
+    check_callable("controller", controller, "controller(k, t, x, w)", optional=True)
+    check_callable("observe", observe, "observe(k, t, x, u)", optional=True)
+    h = check_positive("h", h, scalar=True)
     n_steps = check_int("n_steps", n_steps, minimum=1)
     substeps = check_int("substeps", substeps, minimum=1)
     check_in("method", method, STEPPERS)
-    bound = check_positive("bound", bound) if np.isfinite(bound) else np.inf
+    bound = _check_bound(bound)
+    t0 = check_finite("t0", t0, scalar=True)
     step = STEPPERS[method]
     x, noise, B = _prepare(x0, noise, seeds)
     if noise is not None and noise.shape[0] < n_steps:
@@ -338,8 +368,10 @@ def simulate_discrete(
     (``None`` without noise). Divergence is detected as in :func:`simulate_sampled`.
     ``observe(k, x, w) -> (B, p)`` is stored for ``k = 0..N-1``.
     """
+    check_callable("step", step, "step(k, x, w, params)")
+    check_callable("observe", observe, "observe(k, x, w)", optional=True)
     n_steps = check_int("n_steps", n_steps, minimum=1)
-    bound = check_positive("bound", bound) if np.isfinite(bound) else np.inf
+    bound = _check_bound(bound)
     x, noise, B = _prepare(x0, noise, seeds)
     if noise is not None and noise.shape[0] < n_steps:
         raise ValueError(f"noise must have at least n_steps={n_steps} rows, got {noise.shape[0]}")
@@ -362,6 +394,9 @@ def simulate_discrete(
                      diverged_step=div_step, seeds=None if seeds is None else list(seeds), bound=bound)
 
 
+_IVP_METHODS = ("RK45", "RK23", "DOP853", "Radau", "BDF", "LSODA")
+
+
 def simulate_ivp(
     rhs: Callable,
     x0,
@@ -378,32 +413,73 @@ def simulate_ivp(
 
     The batch is flattened into one ODE of size ``B*n`` (``rhs`` is vectorised over runs), so one
     adaptive solve serves the whole batch. ``u(t) -> (B, m)`` is an optional smooth input.
-    A failed solve or a state leaving ``bound`` marks the affected runs as diverged.
+
+    A run leaving ``bound`` is frozen there (zero derivative) and flagged; the others go on. When the
+    batch solve fails (e.g. a run's derivative becomes non-finite), every run is solved on its own
+    (``rhs`` still receives the whole batch, the other rows held at ``x0``), so one diverging run
+    neither stops nor flags the healthy ones; ``info["per_run"]`` says whether that fallback ran.
+
+    Raises
+    ------
+    ValueError
+        ``t_eval`` not finite and strictly increasing, ``rtol`` / ``atol`` not finite and > 0,
+        ``bound`` NaN or not > 0, ``method`` unknown.
     """
     from scipy.integrate import solve_ivp
 
+    check_callable("rhs", rhs, "rhs(t, x, u, params)")
     t_eval = check_finite("t_eval", t_eval)
     t_eval = np.atleast_1d(t_eval)
-    if t_eval.size < 2 or np.any(np.diff(t_eval) <= 0):
+    if t_eval.ndim != 1 or t_eval.size < 2 or np.any(np.diff(t_eval) <= 0):
         raise ValueError("t_eval must be strictly increasing with at least two instants")
+    rtol = check_positive("rtol", rtol, scalar=True)
+    atol = check_positive("atol", atol, scalar=True)
+    bound = _check_bound(bound)
+    check_in("method", method, _IVP_METHODS)
+    check_callable("u", u, "u(t) -> (B, m)", optional=True)
     x, _, B = _prepare(x0, None, None)
     n = x.shape[1]
 
-    def f(t, z):
-        xb = z.reshape(B, n)
-        return np.asarray(rhs(t, xb, None if u is None else u(t), params), dtype=float).reshape(-1)
+    def solve(rows: np.ndarray):
+        """Integrate the runs ``rows``; ``rhs`` always sees the whole batch (other rows held at x0),
+        so per-run parameters stay aligned. A run past ``bound`` is frozen (zero derivative) so it
+        cannot stop or slow the others."""
+        full = x.copy()
 
-    sol = solve_ivp(f, (t_eval[0], t_eval[-1]), x.reshape(-1), t_eval=t_eval, method=method,
-                    rtol=rtol, atol=atol)
+        def f(t, z):
+            full[rows] = z.reshape(rows.size, n)
+            with np.errstate(all="ignore"):
+                dx = np.asarray(rhs(t, full, None if u is None else u(t), params), dtype=float).reshape(B, n)[rows]
+                dx[np.any(np.abs(full[rows]) > bound, axis=1)] = 0.0
+            return dx.reshape(-1)
+
+        return solve_ivp(f, (t_eval[0], t_eval[-1]), x[rows].reshape(-1), t_eval=t_eval, method=method,
+                         rtol=rtol, atol=atol)
+
+    def fill(sol, rows):
+        # a solve that failed leaves NaN after its last instant: those runs count as diverged
+        m = sol.y.shape[1]
+        xs[:m, rows] = sol.y.T.reshape(m, rows.size, n)
+
     xs = np.full((t_eval.size, B, n), np.nan)
-    m = sol.y.shape[1]
-    xs[:m] = sol.y.T.reshape(m, B, n)
+    sol = solve(np.arange(B))
+    if B > 1 and sol.status != 0:
+        statuses = []
+        for b in range(B):
+            s_b = solve(np.array([b]))
+            statuses.append(s_b.status)
+            fill(s_b, np.array([b]))
+        info = {"status": statuses, "message": "batch solve failed; each run solved on its own",
+                "nfev": None, "per_run": True}
+    else:
+        fill(sol, np.arange(B))
+        info = {"status": sol.status, "message": sol.message, "nfev": sol.nfev, "per_run": False}
     with np.errstate(invalid="ignore"):
         bad_k = ~np.all(np.isfinite(xs), axis=2) | np.any(np.abs(xs) > bound, axis=2)
     diverged = bad_k.any(axis=0)
     div_step = np.where(diverged, bad_k.argmax(axis=0), -1)
     return SimResult(t=t_eval, x=xs, u=None, y=None, diverged=diverged, diverged_step=div_step,
-                     bound=bound, info={"status": sol.status, "message": sol.message, "nfev": sol.nfev})
+                     bound=bound, info=info)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -427,6 +503,9 @@ def continuous_nlsys(rhs: Callable, *, states, inputs, outputs=None, output: Cal
         ``output(t, x, u, params)`` (batched like ``rhs``); default: the full state.
     """
     import control as ct
+
+    check_callable("rhs", rhs, "rhs(t, x, u, params)")
+    check_callable("output", output, "output(t, x, u, params)", optional=True)
 
     def updfcn(t, x, u, p):
         return np.asarray(rhs(t, np.atleast_2d(x), np.atleast_2d(u), p if p else params)).reshape(-1)

@@ -85,7 +85,7 @@ def min_stable_gain(n0: int, a: float) -> float:
     """
 
     def max_real(k):
-        return DifferentialEstimator(n0, a, k).poles.real.max()
+        return DifferentialEstimator(n0, a, k, allow_unstable=True).poles.real.max()
 
     k_design = sym.breakaway_gain(n0, a)
     lo = 1e-9 * k_design
@@ -150,7 +150,7 @@ def plot_root_locus(est: DifferentialEstimator, *, printed_K: float | None = Non
 
     fig, axes = new_figure(1, 2, title=title, size=(12.0, 5.2), width_ratios=[1.6, 1.0])
     k_min = min_stable_gain(n0, a)
-    p_min = DifferentialEstimator(n0, a, k_min).poles if k_min > 0 else np.array([])
+    p_min = DifferentialEstimator(n0, a, k_min, allow_unstable=True).poles if k_min > 0 else np.array([])
     crossing = p_min[np.abs(p_min.real) < 1e-6 * max(1.0, a)]
     views = [((2.5 * s_b, -0.3 * s_b), (1.2 * s_b, -1.2 * s_b)), ((-1.9 * a, 0.8 * a), (-1.5 * a, 1.5 * a))]
     for panel, (ax, (xlim, ylim)) in enumerate(zip(axes, views)):
@@ -162,7 +162,7 @@ def plot_root_locus(est: DifferentialEstimator, *, printed_K: float | None = Non
         ax.plot(design.real, design.imag, "x", color="C3", ms=11, mew=2.2,
                 label=f"closed-loop poles at K = {k_design:.4g} (design)")
         if printed_K is not None:
-            p_pr = DifferentialEstimator(n0, a, printed_K).poles
+            p_pr = DifferentialEstimator(n0, a, printed_K, allow_unstable=True).poles
             ax.plot(p_pr.real, p_pr.imag, "+", color="C1", ms=11, mew=2.0,
                     label=f"closed-loop poles at printed eq. (9), n = {printed_n}: K = {printed_K:.4g}")
         if crossing.size:
@@ -264,7 +264,7 @@ def _eq9_checks(result: StudyResult) -> dict:
         f"Printed values for n = 2, 3, 4, 5: {', '.join(f'{v:.6g}' for v in k_printed.values())}.",
     )
 
-    p_pr = {m: DifferentialEstimator(n0, a, k).poles for m, k in k_printed.items()}
+    p_pr = {m: DifferentialEstimator(n0, a, k, allow_unstable=True).poles for m, k in k_printed.items()}
     result.finding(
         "eq9-exponent",
         f"Eq. (9) is printed K = n0^n a/(n0-1)^(n0-1). Solving dK/ds = 0 on K(s) = -s^n0/(s+a)^(n0-1) "

@@ -12,7 +12,7 @@ from __future__ import annotations
 import control as ct
 import numpy as np
 
-from .._validate import check_finite, check_int
+from .._validate import check_array, check_finite, check_int
 
 __all__ = ["HighOrderDifferentialFeedback", "hurwitz_roots", "gains_from_poles"]
 
@@ -37,6 +37,8 @@ def hurwitz_roots(K) -> np.ndarray:
         The ``n`` roots, by decreasing real part.
     """
     K = np.atleast_1d(check_finite("K", K)).astype(float)
+    if K.ndim != 1 or K.size < 1:
+        raise ValueError(f"K must be a 1-D vector of n >= 1 gains, got shape {K.shape}")
     poly = np.concatenate(([1.0], K[::-1]))  # s^n + k_1 s^(n-1) + ... + k_n
     p = np.roots(poly)
     return p[np.lexsort((p.imag, -p.real))]
@@ -50,7 +52,14 @@ def gains_from_poles(poles) -> np.ndarray:
     >>> gains_from_poles([-1.0, -2.0])
     array([2., 3.])
     """
-    poles = np.atleast_1d(np.asarray(poles, dtype=complex))
+    try:
+        if isinstance(poles, (str, bytes)) or poles is None:
+            raise TypeError
+        poles = np.atleast_1d(np.asarray(poles, dtype=complex))
+    except (TypeError, ValueError):
+        raise TypeError(f"poles must be a sequence of real or complex numbers, got {poles!r}") from None
+    if poles.ndim != 1 or poles.size < 1:
+        raise ValueError(f"poles must be a 1-D sequence of n >= 1 poles, got shape {poles.shape}")
     if not np.all(np.isfinite(poles)):
         raise ValueError(f"poles must be finite, got {poles!r}")
     coeffs = np.poly(poles)  # [1, k_1, ..., k_n]
@@ -158,11 +167,11 @@ class HighOrderDifferentialFeedback:
         numpy.ndarray, shape (...)
             The control; a 0-d array for 1-D inputs.
         """
-        theta = np.asarray(theta, dtype=float)
-        x_hat = np.asarray(x_hat, dtype=float)
-        if theta.shape[-1] != self.n:
+        theta = check_array("theta", theta)
+        x_hat = check_array("x_hat", x_hat)
+        if theta.ndim < 1 or theta.shape[-1] != self.n:
             raise ValueError(f"theta must have n = {self.n} entries on its last axis, got {theta.shape}")
-        if x_hat.shape[-1] < self.n:
+        if x_hat.ndim < 1 or x_hat.shape[-1] < self.n:
             raise ValueError(f"x_hat must have at least n = {self.n} entries on its last axis, got {x_hat.shape}")
         # (18) u = K ε,  ε_i = θ_i - x̂_i,  K = [k_n, ..., k_1]
         return (theta - x_hat[..., : self.n]) @ self.K

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validate import check_finite, check_int, check_positive
+from .._validate import check_array, check_finite, check_hurwitz, check_int, check_positive
 from ..blocks import DiscreteBlock, signal_names
 from ..polynomials import repeated_pole_coefficients
 
@@ -37,7 +37,7 @@ def bandwidth_gains(n: int, omega_c: float) -> np.ndarray:
     Gao Z., "Scaling and bandwidth-parameterization based controller tuning", ACC 2003.
     """
     n = check_int("n", n, minimum=1)
-    omega_c = float(check_positive("omega_c", omega_c))
+    omega_c = float(check_positive("omega_c", omega_c, scalar=True))
     # k_i = C(n, i-1) ω_c^(n-i+1): the coefficients of (s + ω_c)^n, lowest power first
     return repeated_pole_coefficients(n, omega_c)[::-1].copy()
 
@@ -103,13 +103,13 @@ class PDFeedforward(DiscreteBlock):
 
     def __init__(self, b0: float, omega_c: float | None = None, gains=None, order: int = 2,
                  model: bool = False):
-        b0 = float(check_finite("b0", b0))
+        b0 = float(check_finite("b0", b0, scalar=True))
         if b0 == 0:
             raise ValueError("b0 must be non-zero, got 0")
         self.b0 = b0
-        if (omega_c is None) == (gains is None):
-            raise ValueError("give exactly one of omega_c or gains")
         order = check_int("order", order, minimum=1)
+        if (omega_c is None) == (gains is None):
+            raise ValueError(f"give exactly one of omega_c or gains, got omega_c={omega_c!r}, gains={gains!r}")
         if omega_c is not None:
             self.k = bandwidth_gains(order, omega_c)
             self.omega_c = float(omega_c)
@@ -117,13 +117,14 @@ class PDFeedforward(DiscreteBlock):
             g = np.atleast_1d(check_finite("gains", gains)).astype(float)
             if g.ndim != 1 or g.size < 1:
                 raise ValueError(f"gains must be a 1-D sequence, got shape {g.shape}")
+            if g.size == order + 1 and g[-1] != 1.0:
+                raise ValueError(f"gains: k_(n+1) must be 1 (it cancels the extended state), got {g[-1]!r}")
             if g.size == order:
                 g = np.concatenate([g, [1.0]])
             elif g.size != order + 1:
-                raise ValueError(f"gains must have n = {order} or n + 1 = {order + 1} entries, got {g.size}")
-            roots = np.roots(np.concatenate([[1.0], g[order - 1::-1]]))
-            if np.any(roots.real >= 0):
-                raise ValueError(f"gains must make s^n + k_n s^(n-1) + ... + k_1 Hurwitz, roots {roots}")
+                raise ValueError(f"gains must have n = order = {order} or n + 1 = {order + 1} entries, got {g.size}")
+            check_hurwitz("gains", np.concatenate([[1.0], g[order - 1::-1]]),
+                          polynomial="s^n + k_n s^(n-1) + ... + k_1")
             self.k = g
             self.omega_c = None
         self.n = self.k.size - 1
@@ -162,9 +163,27 @@ class PDFeedforward(DiscreteBlock):
         Returns
         -------
         ndarray, shape (...,)
+
+        Raises
+        ------
+        ValueError
+            ``ref`` or ``x_hat`` without ``n + 1`` entries on the last axis, or shapes that do not
+            broadcast. NaN passes through (the control of a diverged run is NaN, in that run only).
+        TypeError
+            A string or ``None`` for ``ref``, ``x_hat`` or ``f_hat``.
         """
-        ref = np.asarray(ref, dtype=float)
-        x_hat = np.asarray(x_hat, dtype=float)
+        ref = check_array("ref", ref)
+        x_hat = check_array("x_hat", x_hat)
+        f_hat = check_array("f_hat", f_hat)
+        m = self.n + 1
+        for name, arr in (("ref", ref), ("x_hat", x_hat)):
+            if arr.ndim < 1 or arr.shape[-1] != m:
+                raise ValueError(f"{name} must have n + 1 = {m} entries on its last axis, got shape {arr.shape}")
+        try:
+            np.broadcast_shapes(ref.shape[:-1], x_hat.shape[:-1], np.shape(f_hat))
+        except ValueError:
+            raise ValueError(f"ref, x_hat and f_hat must broadcast over the batch, got shapes {ref.shape}, "
+                             f"{x_hat.shape} and {np.shape(f_hat)}") from None
         # (30) u = (Σ k_i (ξ^(i-1) - x̂_i) - XᵀΘ) / b0
         return (np.sum(self.k * (ref - x_hat), axis=-1) - f_hat) / self.b0
 

@@ -16,9 +16,9 @@ from dataclasses import dataclass, field, replace
 import control as ct
 import numpy as np
 
-from .._validate import check_in, check_int, check_positive
+from .._validate import check_array, check_in, check_int, check_positive
 from ..blocks import ContinuousBlock, signal_names
-from ..symbolic.differential import breakaway_gain, breakaway_point, differential_coefficients
+from ..symbolic.differential import MAX_ORDER, breakaway_gain, breakaway_point, differential_coefficients
 
 __all__ = ["DifferentialEstimator", "READINGS"]
 
@@ -34,8 +34,10 @@ class DifferentialEstimator(ContinuousBlock):
     Parameters
     ----------
     n0 : int
-        Order of Σ (number of states), ``>= 2``. To estimate ``x`` and its first ``n - 1``
-        derivatives, take ``n0 >= n + 1``.
+        Order of Σ (number of states), ``2 <= n0 <= 30``
+        (:data:`ctrl_analysis.symbolic.differential.MAX_ORDER`: beyond it the design gain and the
+        poles cannot be computed reliably in double precision). To estimate ``x`` and its first
+        ``n - 1`` derivatives, take ``n0 >= n + 1``.
     a : float
         The ``n0 - 1`` open-loop zeros sit at ``-a``; ``> 0`` and finite, in 1/s.
     K : float, optional
@@ -44,6 +46,10 @@ class DifferentialEstimator(ContinuousBlock):
     reading : {"state", "corrected"}
         Which estimates the block outputs (see :meth:`estimate_matrices`); ``"corrected"`` has
         direct feedthrough from ``y``.
+    allow_unstable : bool, keyword
+        An explicit ``K`` that puts a closed-loop pole in the closed right half-plane raises
+        ``ValueError`` unless this is ``True`` (to study an unstable design on purpose). Same opt-out
+        as ``ExtendedStateObserver(allow_unstable=...)``; ``AlphaBetaFilter(require_stable=False)``.
 
     Block signals: input ``y``; states ``z[0]..z[n0-1]``; outputs ``xhat[0]..xhat[n0-1]``.
 
@@ -65,7 +71,8 @@ class DifferentialEstimator(ContinuousBlock):
     TypeError
         If ``n0`` is not an integer.
     ValueError
-        If ``n0 < 2``, ``a`` is not finite and ``> 0``, or ``K`` is not finite and ``> 0``.
+        If ``n0 < 2`` or ``n0 > 30``, ``a`` is not finite and ``> 0``, ``K`` is not finite and
+        ``> 0``, or Σ is unstable with ``K`` (and ``allow_unstable`` is not set).
 
     References
     ----------
@@ -93,11 +100,15 @@ class DifferentialEstimator(ContinuousBlock):
     K: float | None = None
     reading: str = "state"
     a_coeffs: np.ndarray = field(init=False, repr=False, compare=False)
+    allow_unstable: bool = field(default=False, kw_only=True, repr=False, compare=False)
 
     def __post_init__(self):
-        n0 = check_int("n0", self.n0, minimum=2)
-        a = check_positive("a", self.a)
-        k = breakaway_gain(n0, a) if self.K is None else check_positive("K", self.K)
+        n0 = check_int("n0", self.n0, minimum=2, maximum=MAX_ORDER)
+        a = check_positive("a", self.a, scalar=True)
+        explicit_gain = self.K is not None
+        k = breakaway_gain(n0, a) if self.K is None else check_positive("K", self.K, scalar=True)
+        if not isinstance(self.allow_unstable, (bool, np.bool_)):
+            raise TypeError(f"allow_unstable must be True or False, got {self.allow_unstable!r}")
         object.__setattr__(self, "n0", n0)
         object.__setattr__(self, "a", float(a))
         object.__setattr__(self, "K", float(k))
@@ -105,6 +116,11 @@ class DifferentialEstimator(ContinuousBlock):
         coeffs = differential_coefficients(n0, a, k)  # (5)+(6)
         coeffs.setflags(write=False)
         object.__setattr__(self, "a_coeffs", coeffs)
+        if explicit_gain and not self.allow_unstable:
+            worst = float(self.poles[0].real)
+            if worst >= 0:
+                raise ValueError(f"K = {k:g} makes Σ unstable (n0 = {n0}, a = {a:g}: closed-loop pole with real "
+                                 f"part {worst:.4g} >= 0); pass allow_unstable=True to study it anyway")
 
     # ------------------------------------------------------------------ linear models
     @property
@@ -153,8 +169,14 @@ class DifferentialEstimator(ContinuousBlock):
 
     @property
     def poles(self) -> np.ndarray:
-        """Closed-loop poles (roots of the denominator of Φ), by decreasing real part."""
-        p = np.roots(self.characteristic_polynomial)
+        """Closed-loop poles (roots of the denominator of Φ), by decreasing real part.
+
+        Computed on the normalised polynomial (``s = a σ``: ``σ^n0 + (K/a) (σ + 1)^(n0-1)``, whose
+        coefficients do not span powers of ``a``) and scaled back, so they stay accurate for every
+        ``a``; the roots of :attr:`characteristic_polynomial` itself lose accuracy for small ``a``.
+        """
+        normalised = np.concatenate(([1.0], differential_coefficients(self.n0, 1.0, self.K / self.a)))
+        p = self.a * np.roots(normalised)
         return p[np.lexsort((p.imag, -p.real))]
 
     # ------------------------------------------------------------------ estimates
@@ -301,14 +323,15 @@ class DifferentialEstimator(ContinuousBlock):
 
     # ------------------------------------------------------------------ helpers
     def _check_zy(self, z, y) -> tuple[np.ndarray, np.ndarray]:
-        z = np.asarray(z, dtype=float)
+        z = check_array("z", z)
         if z.ndim < 1 or z.shape[-1] != self.n0:
             raise ValueError(f"z must have the {self.n0} states of Σ on its last axis, got shape {z.shape}")
-        y = np.asarray(y, dtype=float)
+        y = check_array("y", y)
         if y.ndim >= 1 and y.shape[-1] == 1 and y.ndim >= z.ndim:
             y = y[..., 0]  # python-control input vector (1,) or a column (B, 1)
         try:
-            np.broadcast_shapes(y.shape, z.shape[:-1])
+            if np.broadcast_shapes(y.shape, z.shape[:-1]) != z.shape[:-1]:
+                raise ValueError
         except ValueError:
             raise ValueError(
                 f"y must be broadcastable to z.shape[:-1] = {z.shape[:-1]}, got shape {y.shape}"

@@ -22,7 +22,7 @@ from typing import Callable
 
 import numpy as np
 
-from .._validate import check_finite, check_int, check_positive
+from .._validate import check_array, check_finite, check_hurwitz, check_int, check_positive
 from ..blocks import ContinuousBlock
 from ..polynomials import repeated_pole_coefficients
 
@@ -66,11 +66,9 @@ def fal(e, alpha, delta):
     >>> float(fal(0.5, 0.5, 0.1))  # |e| > delta: sqrt(0.5)
     0.7071067811865476
     """
-    delta = check_positive("delta", delta)
-    alpha = np.asarray(alpha, dtype=float)
-    if not np.all(np.isfinite(alpha)):
-        raise ValueError(f"alpha must be finite (no NaN or inf), got {alpha!r}")
-    out = _fal(np.asarray(e, dtype=float), alpha, delta, np.power(delta, 1.0 - alpha))
+    delta = check_positive("delta", delta, scalar=True)
+    alpha = np.asarray(check_finite("alpha", alpha), dtype=float)
+    out = _fal(check_array("e", e), alpha, delta, np.power(delta, 1.0 - alpha))
     return float(out) if out.ndim == 0 else out
 
 
@@ -99,6 +97,11 @@ class ExtendedStateObserver(ContinuousBlock):
         ``known(t, x_hat, u, params) -> f_known`` of shape ``x_hat.shape[:-1]``; it receives the same
         ``x_hat`` and observer input ``u = [y, u_control]`` as :meth:`rhs`. Present: modified ESO
         (MESO, the known part of the plant is fed into the n-th equation). Absent: conventional ESO.
+    allow_unstable : bool, keyword
+        Gains whose error dynamics are not Hurwitz (``s^(n+1) + L_1 s^n + ... + L_{n+1}``; for the
+        ``fal`` ESO the same with the linear-zone gains ``L_i δ^(α_i - 1)``) raise ``ValueError``
+        unless this is ``True`` (to study an unstable design on purpose). Same opt-out as
+        ``DifferentialEstimator(allow_unstable=...)``; ``AlphaBetaFilter(require_stable=False)``.
 
     Block signals: inputs ``y``, ``u``; states and outputs ``xhat1 .. xhat{n+1}``.
 
@@ -117,8 +120,9 @@ class ExtendedStateObserver(ContinuousBlock):
     Raises
     ------
     ValueError
-        Gains not finite or not > 0, fewer than two gains, ``alpha`` of the wrong length, or
-        ``delta`` missing / not > 0 when ``alpha`` is given.
+        Gains not finite or not > 0, fewer than two gains, error dynamics not Hurwitz (unless
+        ``allow_unstable``), ``alpha`` of the wrong length, or ``delta`` missing / not > 0 when
+        ``alpha`` is given.
 
     Notes
     -----
@@ -144,7 +148,7 @@ class ExtendedStateObserver(ContinuousBlock):
     """
 
     def __init__(self, gains, b0: float = 0.0, alpha=None, delta=None,
-                 known: Callable | None = None):
+                 known: Callable | None = None, *, allow_unstable: bool = False):
         gains = np.atleast_1d(check_finite("gains", gains)).astype(float)
         if gains.ndim != 1 or gains.size < 2:
             raise ValueError(f"gains must be a 1-D sequence of n + 1 >= 2 entries, got shape {gains.shape}")
@@ -153,22 +157,31 @@ class ExtendedStateObserver(ContinuousBlock):
         self.L = gains
         self.n = gains.size - 1
         self.nstates = self.n + 1
-        self.b0 = float(check_finite("b0", b0))
+        self.b0 = float(check_finite("b0", b0, scalar=True))
         if alpha is not None:
             alpha = np.atleast_1d(check_finite("alpha", alpha)).astype(float)
             if alpha.shape != (self.nstates,):
                 raise ValueError(f"alpha must have n + 1 = {self.nstates} entries, got {alpha.size}")
             if delta is None:
                 raise ValueError("delta must be given (> 0) when alpha is given, got None")
-            delta = float(check_positive("delta", delta))
+            delta = float(check_positive("delta", delta, scalar=True))
         elif delta is not None:
-            delta = float(check_positive("delta", delta))
+            delta = float(check_positive("delta", delta, scalar=True))
         if known is not None and not callable(known):
             raise TypeError(f"known must be callable known(t, x_hat, u, params), got {known!r}")
+        if not isinstance(allow_unstable, (bool, np.bool_)):
+            raise TypeError(f"allow_unstable must be True or False, got {allow_unstable!r}")
         self.alpha = alpha
         self.delta = delta
         self._delta_pow = None if alpha is None else np.power(delta, 1.0 - alpha)
         self.known = known
+        self.allow_unstable = bool(allow_unstable)
+        if not allow_unstable:
+            # linear-zone gains: fal(e) = e / δ^(1-α) for |e| <= δ
+            small_signal = gains if alpha is None else gains / self._delta_pow
+            check_hurwitz("gains", np.concatenate([[1.0], small_signal]),
+                          polynomial="the error dynamics s^(n+1) + L_1 s^n + ... + L_(n+1)"
+                          + ("" if alpha is None else " (linear zone of fal)"))
 
     # ------------------------------------------------------------------------------------------
     # Constructors
@@ -194,7 +207,7 @@ class ExtendedStateObserver(ContinuousBlock):
         ExtendedStateObserver
         """
         n = check_int("n", n, minimum=1)
-        epsilon = float(check_positive("epsilon", epsilon))
+        epsilon = float(check_positive("epsilon", epsilon, scalar=True))
         beta = np.atleast_1d(check_positive("beta", beta)).astype(float)
         if beta.shape != (n + 1,):
             raise ValueError(f"beta must have n + 1 = {n + 1} entries, got {beta.size}")
@@ -219,7 +232,7 @@ class ExtendedStateObserver(ContinuousBlock):
         ExtendedStateObserver
         """
         n = check_int("n", n, minimum=1)
-        omega_o = float(check_positive("omega_o", omega_o))
+        omega_o = float(check_positive("omega_o", omega_o, scalar=True))
         # (s + omega_o)^(n+1) = sum_i C(n+1, i) omega_o^i s^(n+1-i)
         return cls(repeated_pole_coefficients(n + 1, omega_o)[1:], **kw)
 

@@ -70,7 +70,7 @@ class LowPassFilter(ContinuousBlock):
     inputs = ("u",)
 
     def __init__(self, omega: float, order: int = 2):
-        self.omega = float(check_positive("omega", omega))
+        self.omega = float(check_positive("omega", omega, scalar=True))
         self.order = check_int("order", order, minimum=1, maximum=20)
         m = self.order
         # (s + ω)^m = s^m + C(m,1) ω s^(m-1) + ... + ω^m
@@ -165,7 +165,7 @@ class LowPassFilter(ContinuousBlock):
         """
         import control as ct
 
-        h = float(check_positive("h", h))
+        h = float(check_positive("h", h, scalar=True))
         sysd = ct.c2d(ct.ss(self.A, self.B, np.eye(self.order), 0), h, method="zoh")
         return np.asarray(sysd.A), np.asarray(sysd.B)[:, 0]
 
@@ -231,7 +231,7 @@ class DiscreteLowPass(DiscreteBlock):
         if not isinstance(lowpass, LowPassFilter):
             raise TypeError(f"lowpass must be a LowPassFilter, got {type(lowpass).__name__}")
         self.lowpass = lowpass
-        self.h = float(check_positive("h", h))
+        self.h = float(check_positive("h", h, scalar=True))
         self.channels = check_int("channels", channels, minimum=1)
         self.Ad, self.Bd = lowpass.discretize(self.h)
         m = lowpass.order
@@ -259,8 +259,13 @@ class DiscreteLowPass(DiscreteBlock):
         return x_next.reshape(x.shape[0], p * m)
 
     def output(self, t, x, u, params=None) -> np.ndarray:
-        m = self.lowpass.order
-        return self.update(t, x, u, params)[:, ::m]
+        m, p = self.lowpass.order, self.channels
+        xs = x.reshape(x.shape[0], p, m)
+        # first row of x(k+1) = Ad x(k) + Bd u(k): the filtered value after this sample
+        acc = self.Bd[0] * u
+        for j in range(m):
+            acc = acc + self.Ad[0, j] * xs[:, :, j]
+        return acc
 
     def filter(self, u) -> np.ndarray:
         """Filter a whole record ``u`` of shape ``(N,)``, ``(N, channels)`` or ``(N, B, channels)``.

@@ -19,7 +19,7 @@ import control as ct
 import numpy as np
 
 from .lowpass import LowPassFilter
-from .._validate import check_finite, check_in, check_int, check_positive
+from .._validate import check_array, check_finite, check_in, check_int, check_positive
 from ..blocks import DiscreteBlock
 
 __all__ = [
@@ -75,9 +75,9 @@ def fhan(x1, x2, r, h0):
     >>> round(fhan(0.001, 0.0, 1.0, 0.1), 12)  # inside the linear layer
     -0.1
     """
-    r = float(check_positive("r", r))
-    h0 = float(check_positive("h0", h0))
-    out = _fhan(np.asarray(x1, dtype=float), np.asarray(x2, dtype=float), r, h0)
+    r = float(check_positive("r", r, scalar=True))
+    h0 = float(check_positive("h0", h0, scalar=True))
+    out = _fhan(check_array("x1", x1), check_array("x2", x2), r, h0)
     return float(out) if out.ndim == 0 else out
 
 
@@ -165,9 +165,9 @@ class TrackingDifferentiator(DiscreteBlock):
         if not isinstance(feedthrough, (bool, np.bool_)):
             raise TypeError(f"feedthrough must be a bool, got {type(feedthrough).__name__}")
         self.feedthrough = bool(feedthrough)
-        self.r = float(check_positive("r", r))
-        self.h = float(check_positive("h", h))
-        self.h0 = self.h if h0 is None else float(check_positive("h0", h0))
+        self.r = float(check_positive("r", r, scalar=True))
+        self.h = float(check_positive("h", h, scalar=True))
+        self.h0 = self.h if h0 is None else float(check_positive("h0", h0, scalar=True))
         self.substeps = check_int("substeps", substeps, minimum=1)
         self.dt = self.h * self.substeps
         self.x0 = np.zeros(2) if x0 is None else check_finite("x0", np.ravel(x0), shape=(2,))
@@ -252,7 +252,7 @@ def softened_setpoint(softener, r, h: float, *, method: str = "zoh") -> np.ndarr
     """
     from ..simulate import simulate_sampled
 
-    h = float(check_positive("h", h))
+    h = float(check_positive("h", h, scalar=True))
     r = np.asarray(check_finite("r", r), dtype=float)
     if r.ndim != 1 or r.size < 1:
         raise ValueError(f"r must be a non-empty 1-D array of samples, got shape {r.shape}")

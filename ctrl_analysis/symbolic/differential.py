@@ -16,6 +16,7 @@ expression and as a plain numeric function.
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass
 from functools import lru_cache
 
@@ -28,6 +29,7 @@ __all__ = [
     "S",
     "A",
     "KGAIN",
+    "MAX_ORDER",
     "N0",
     "I",
     "BreakawayDerivation",
@@ -144,8 +146,16 @@ def _numeric_functions():
     return point, gain, locus
 
 
+#: Largest order n0 accepted. The design gain n0^n0 a / (n0-1)^(n0-1) overflows the generated
+#: code near n0 = 170, and well before that the closed-loop poles computed from the coefficients
+#: (a repeated pole at -n0 a, coefficients spanning many decades) lose their accuracy; no practical
+#: estimator needs more than 30 integrators.
+MAX_ORDER = 30
+
+
 def _check_n0_a(n0_value, a_value) -> tuple[int, float]:
-    return check_int("n0", n0_value, minimum=2), check_positive("a", a_value)
+    return (check_int("n0", n0_value, minimum=2, maximum=MAX_ORDER),
+            check_positive("a", a_value, scalar=True))
 
 
 def breakaway_point(n0: int, a: float) -> float:
@@ -236,7 +246,12 @@ def locus_gain(s_value, n0: int, a: float):
         ``K(s)`` at each point.
     """
     n0_value, a_value = _check_n0_a(n0, a)
-    return _numeric_functions()[2](np.asarray(s_value), float(n0_value), a_value)
+    s_arr = None if isinstance(s_value, (str, bytes)) or s_value is None else np.asarray(s_value)
+    if s_arr is None or s_arr.dtype.kind not in "iufc":
+        raise TypeError(f"s_value must be a number or an array of numbers, got {s_value!r}")
+    if not np.all(np.isfinite(s_arr)):
+        raise ValueError(f"s_value must be finite (no NaN or inf), got {s_value!r}")
+    return _numeric_functions()[2](s_arr, float(n0_value), a_value)
 
 
 def coefficient_formula() -> sp.Expr:
@@ -255,6 +270,17 @@ def coefficient_formula() -> sp.Expr:
     Qi, Chen, Xue & Yuan (2004), eq. (3)-(6).
     """
     return KGAIN * sp.binomial(N0 - 1, I - 1) * A ** (I - 1)
+
+
+def _sym_or_number(name: str, value):
+    """A sympy expression, or a finite real or complex number."""
+    if isinstance(value, sp.Basic):
+        return value
+    if isinstance(value, (bool, np.bool_, str, bytes)) or not isinstance(value, (numbers.Number, np.number)):
+        raise TypeError(f"{name} must hold numbers or sympy expressions, got {value!r}")
+    if not np.isfinite(complex(value)):
+        raise ValueError(f"{name} must be finite (no NaN or inf), got {value!r}")
+    return value
 
 
 def coefficients_from_zeros(zeros, gain=KGAIN) -> list:
@@ -280,7 +306,10 @@ def coefficients_from_zeros(zeros, gain=KGAIN) -> list:
     ----------
     Qi, Chen, Xue & Yuan (2004), eq. (4)-(5).
     """
-    zeros = list(zeros)
+    if isinstance(zeros, (str, bytes)) or not hasattr(zeros, "__iter__"):
+        raise TypeError(f"zeros must be a sequence of numbers or sympy expressions, got {zeros!r}")
+    zeros = [_sym_or_number("zeros", z) for z in zeros]
+    gain = _sym_or_number("gain", gain)
     if len(zeros) < 1:
         raise ValueError(f"zeros must hold at least one zero (n0 >= 2), got {len(zeros)}")
     # (4) numerator K ∏ (s - z_j), read off its coefficients (eq. 5)
@@ -315,6 +344,6 @@ def differential_coefficients(n0: int, a: float, K: float) -> np.ndarray:
     array([1., 4., 4.])
     """
     n0_value, a_value = _check_n0_a(n0, a)
-    k_value = check_positive("K", K)
+    k_value = check_positive("K", K, scalar=True)
     # (5)+(6) a_i = K C(n0-1, i-1) a^(i-1), i = 1..n0
     return np.array([k_value * math.comb(n0_value - 1, j) * a_value**j for j in range(n0_value)])

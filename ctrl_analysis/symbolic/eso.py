@@ -22,7 +22,7 @@ from functools import lru_cache
 import numpy as np
 import sympy as sp
 
-from .._validate import check_int, check_positive
+from .._validate import check_bool, check_int, check_positive
 
 __all__ = [
     "S",
@@ -78,7 +78,6 @@ def gain_symbols(n: int) -> tuple:
     return sp.symbols(f"L1:{n + 2}", positive=True)
 
 
-@lru_cache(maxsize=None)
 def characteristic_polynomial(n: int, high_gain: bool = True) -> sp.Expr:
     """``det(sI - (A - L C))`` of the linear ESO of plant order ``n``.
 
@@ -90,6 +89,11 @@ def characteristic_polynomial(n: int, high_gain: bool = True) -> sp.Expr:
     Chen Z., Gao Q., "Modified extended state observer: analysis and implementation", Control
     Theory & Applications 35(8), 2018, eq. (3), (6), (29).
     """
+    return _characteristic_polynomial(check_int("n", n, minimum=1), check_bool("high_gain", high_gain))
+
+
+@lru_cache(maxsize=None)
+def _characteristic_polynomial(n: int, high_gain: bool) -> sp.Expr:
     A, _, _ = observer_matrices(n, high_gain)
     return sp.expand(sp.Matrix(A).charpoly(S).as_expr())
 
@@ -114,7 +118,7 @@ def characteristic_coefficients(n: int):
     f = sp.lambdify((EPS, betas), coeffs, "numpy")
 
     def numeric(epsilon, beta):
-        epsilon = check_positive("epsilon", epsilon)
+        epsilon = check_positive("epsilon", epsilon, scalar=True)
         beta = np.atleast_1d(check_positive("beta", beta))
         if beta.shape != (n + 1,):
             raise ValueError(f"beta must have n + 1 = {n + 1} entries, got {beta.size}")
@@ -141,6 +145,7 @@ def observer_matrices(n: int, high_gain: bool = True):
         Shapes ``(n+1, n+1)``, ``(n+1, 1)``, ``(1, n+1)``.
     """
     n = check_int("n", n, minimum=1)
+    high_gain = check_bool("high_gain", high_gain)
     m = n + 1
     if high_gain:
         L = [b / EPS**i for i, b in enumerate(beta_symbols(n), start=1)]
@@ -158,7 +163,6 @@ def observer_matrices(n: int, high_gain: bool = True):
     return A, E, C
 
 
-@lru_cache(maxsize=None)
 def error_transfer_functions(n: int, high_gain: bool = False) -> tuple:
     """``E_i(s) / H(s)`` for ``i = 1..n+1``, solved from ``(sI - (A - LC)) E = e_{n+1} H``.
 
@@ -168,15 +172,24 @@ def error_transfer_functions(n: int, high_gain: bool = False) -> tuple:
     ----------
     Chen & Gao 2018, bound (4)/(7).
     """
+    return _error_transfer_functions(check_int("n", n, minimum=1), check_bool("high_gain", high_gain))
+
+
+@lru_cache(maxsize=None)
+def _error_transfer_functions(n: int, high_gain: bool) -> tuple:
     A, E, _ = observer_matrices(n, high_gain)
     m = n + 1
     sol = (S * sp.eye(m) - A).LUsolve(E)
     return tuple(sp.factor(sp.cancel(sp.together(e))) for e in sol)
 
 
-@lru_cache(maxsize=None)
 def error_dc_gains(n: int) -> tuple:
     """DC gains of ``E_i / H`` with ``L_i = beta_i / eps^i``: ``(beta_{i-1}/beta_{n+1}) eps^(n+2-i)``."""
+    return _error_dc_gains(check_int("n", n, minimum=1))
+
+
+@lru_cache(maxsize=None)
+def _error_dc_gains(n: int) -> tuple:
     return tuple(sp.simplify(sp.limit(g, S, 0)) for g in error_transfer_functions(n, high_gain=True))
 
 
@@ -236,7 +249,8 @@ def bandwidth_polynomial(n: int, omega_o=None) -> sp.Expr:
     sympy.Expr
     """
     n = check_int("n", n, minimum=1)
-    w = sp.Symbol("omega_o", positive=True) if omega_o is None else sp.nsimplify(omega_o)
+    w = (sp.Symbol("omega_o", positive=True) if omega_o is None
+         else sp.nsimplify(check_positive("omega_o", omega_o, scalar=True)))
     return sp.expand((S + w) ** (n + 1))
 
 
@@ -263,15 +277,16 @@ def bandwidth_match(beta, epsilon=None) -> BandwidthMatch:
     >>> m.is_bandwidth, m.c, m.omega_o
     (True, 1, 10)
     """
-    beta = [sp.nsimplify(b, rational=True) for b in beta]
-    if len(beta) < 2 or any(b <= 0 for b in beta):
-        raise ValueError(f"beta must have n + 1 >= 2 positive entries, got {beta}")
+    beta_arr = np.atleast_1d(check_positive("beta", beta))
+    if beta_arr.ndim != 1 or beta_arr.size < 2:
+        raise ValueError(f"beta must have n + 1 >= 2 positive entries, got {beta!r}")
+    beta = [sp.nsimplify(b, rational=True) for b in (beta if isinstance(beta, (list, tuple)) else beta_arr)]
+    eps = None if epsilon is None else sp.nsimplify(check_positive("epsilon", epsilon, scalar=True), rational=True)
     m = len(beta)
     c = beta[0] / m  # from beta_1 = C(n+1, 1) c
     ok = all(sp.simplify(beta[i - 1] - sp.binomial(m, i) * c**i) == 0 for i in range(1, m + 1))
     if not ok:
         return BandwidthMatch(False, None, None)
-    if epsilon is None:
+    if eps is None:
         return BandwidthMatch(True, c, c / EPS)
-    eps = sp.nsimplify(check_positive("epsilon", epsilon), rational=True)
     return BandwidthMatch(True, c, sp.nsimplify(c / eps))

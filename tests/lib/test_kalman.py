@@ -292,8 +292,16 @@ def test_observable_requirement_and_discrete_errors():
     with pytest.raises(ValueError, match="require must be one of"):
         continuous_steady_state(A, C, np.eye(2), np.eye(2), 1.0, require="maybe")
     F, Gd = dwna(0.1)
-    with pytest.raises(ValueError, match=r"\(A, C\) must be detectable"):
-        discrete_steady_state(F, [[0.0, 1.0]], Gd, 1.0, 1.0)
+    with pytest.raises(ValueError, match=r"\(F, H\) must be detectable.* of F are unobservable from H"):
+        discrete_steady_state(F, [[0.0, 1.0]], Gd, 1.0, 1.0)  # errors use the caller's names
+    with pytest.raises(ValueError, match=r"H must have 2 columns \(the order of F\)"):
+        discrete_steady_state(F, [[1.0, 0.0, 0.0]], Gd, 1.0, 1.0)
+    with pytest.raises(ValueError, match=r"\(F, H\) must be observable"):
+        discrete_steady_state(F, [[0.0, 1.0]], Gd, 1.0, 1.0, require="observable")
+    with pytest.raises(ValueError, match=r"max_iter must be >= 1, got 0"):
+        discrete_steady_state_batch(F[None], C2, np.eye(2), 1.0, max_iter=0)
+    with pytest.raises(ValueError, match=r"tol must be finite"):
+        discrete_steady_state_batch(F[None], C2, np.eye(2), 1.0, tol=float("nan"))
     with pytest.raises(ValueError, match="R must be > 0"):
         discrete_steady_state(F, C2, Gd, 1.0, -2.0)
     with pytest.raises(ValueError, match="R must be > 0"):

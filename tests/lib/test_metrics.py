@@ -41,3 +41,41 @@ def test_bandwidth_and_peak_of_second_order():
     bw = wn * np.sqrt(1 - 2 * zeta**2 + np.sqrt(4 * zeta**4 - 4 * zeta**2 + 2))
     assert bandwidth_3db(sys) == pytest.approx(bw, rel=1e-3)
     assert resonance_peak(ct.tf([1], [1, 1]))[0] == 0.0
+
+
+@pytest.mark.parametrize("fn,names", [(mean_abs_error, ("x", "x_hat")), (rmse, ("reference", "y")),
+                                      (snr_db, ("reference", "y"))])
+def test_no_silent_broadcasting(fn, names):
+    with pytest.raises(ValueError, match=f"{names[0]} and {names[1]} must have the same shape"):
+        fn(np.ones(5), np.ones((5, 1)))  # numpy would silently make a (5, 5) error array
+    with pytest.raises(ValueError, match="must have the same shape"):
+        fn(np.ones(5), np.ones(4))
+    with pytest.raises(TypeError, match=f"{names[1]} must be a real array"):
+        fn(np.ones(5), "abc")
+    # one truth against B estimates with an explicit length-1 axis, or a scalar reference, is fine
+    assert fn(np.ones((5, 1)), np.full((5, 3), 2.0)).shape == (3,)
+    assert np.isfinite(fn(np.ones(5), 0.5))
+
+
+def test_mean_std_checks_the_mask():
+    v = np.array([1.0, 2.0, 3.0, 10.0])
+    assert mean_std(v, np.array([True, True, True, False]))[2] == 3
+    with pytest.raises(ValueError, match=r"ok must have one entry per run \(4\), got shape \(3,\)"):
+        mean_std(v, [True, True, True])
+    with pytest.raises(TypeError, match="ok must be a boolean mask"):
+        mean_std(v, np.array([0, 1, 2]))  # an index array would be read as a mask
+    mean, std, n = mean_std(v[:1])
+    assert (mean, n) == (1.0, 1)
+
+
+def test_settling_time_rejects_nan_final_and_bad_band():
+    t = np.linspace(0, 1, 11)
+    y = np.ones(11)
+    with pytest.raises(ValueError, match="final must be finite"):
+        settling_time(t, y, float("nan"))
+    with pytest.raises(ValueError, match="band must be > 0"):
+        settling_time(t, y, 1.0, band=0.0)
+    with pytest.raises(ValueError, match="y must have len"):
+        settling_time(t, y[:5], 1.0)
+    with pytest.raises(TypeError, match="final must be a real number"):
+        overshoot(t, y, [1.0, 2.0])

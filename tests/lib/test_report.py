@@ -52,6 +52,7 @@ def test_results_json_contract(tmp_path):
     assert q["a.b"]["verdict"] == "agrees" and q["a.b"]["runs"] == 20 and q["a.b"]["tolerance"] == 0.25
     assert q["a.c"]["value"] is None and q["a.c"]["verdict"] == "differs" and "not finite" in q["a.c"]["note"]
     assert q["a.d"]["verdict"] == "new" and q["a.d"]["tolerance"] is None
+    assert all(d["unit"] == "" for d in data["quantities"])  # the key is always present
     assert data["settings"] == {"h": 1e-3, "n": 5, "v": [0, 1, 2]}
     assert data["versions"]["control"]
 
@@ -63,7 +64,7 @@ def test_report_md_lists_tables_findings_figures(tmp_path):
     r.figures.append("fig1.png")
     r.missing.append("part B")
     text = write_report_md([r.to_dict()], tmp_path).read_text()
-    assert "| `x` | x | 1 | 2 |" in text and "differs" in text
+    assert "| `x` | x |  | 1 | 2 | — | 10 % | differs |" in text
     assert "**f1**" in text and text.count("\n| `x`") == 1 and "![fig1.png](demo/fig1.png)" in text and "part B" in text
 
 
@@ -85,4 +86,4 @@ def test_table_cells_escape_pipes(tmp_path):
     r.quantity("e", "mean |x - x_hat|", 1.0, note="a | b")
     row = [line for line in write_report_md([r.to_dict()], tmp_path).read_text().splitlines()
            if line.startswith("| `e`")][0]
-    assert row.count("|") - row.count("\\|") == 7  # six cells, seven unescaped separators
+    assert row.count("|") - row.count("\\|") == 10  # nine cells, ten unescaped separators

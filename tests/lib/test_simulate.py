@@ -46,7 +46,10 @@ def test_same_seed_same_noise_and_batch_independent():
 
 
 def test_run_seeds_and_bad_input():
-    assert run_seeds(10, 3) == [10, 11, 12]
+    seeds = run_seeds(10, 3)
+    assert seeds == [int(c.generate_state(1)[0]) for c in np.random.SeedSequence(10).spawn(3)]
+    assert run_seeds(10, 5)[:3] == seeds  # run i does not depend on the number of runs
+    assert not set(run_seeds(11, 3)) & set(seeds)  # neighbouring base seeds share no run
     with pytest.raises(ValueError, match="runs"):
         run_seeds(0, 0)
     with pytest.raises(ValueError, match="high"):
@@ -152,3 +155,47 @@ def test_continuous_block_as_nlsys_in_an_interconnection():
     # and against the linear closed loop as a python-control StateSpace
     lin = ct.ss(A - np.outer(Bm, [3.0, 0.0]), Bm.reshape(2, 1), [[1.0, 0.0]], 0)
     np.testing.assert_allclose(ct.step_response(lin, t).outputs, res.x[:, 0, 0], atol=1e-8)
+
+
+def test_ivp_one_diverging_run_does_not_poison_the_batch():
+    rate = np.array([[-1.0], [3.0], [-2.0]])
+    t = np.linspace(0.0, 10.0, 101)
+    # run 1 grows past the bound: it is frozen and flagged, the others finish unflagged
+    res = simulate_ivp(lambda t, x, u, p: rate * x, np.ones((3, 1)), t, bound=1e3)
+    assert res.diverged.tolist() == [False, True, False]
+    assert res.diverged_step[1] in (23, 24)  # e^(3t) passes 1e3 at t = 2.30 s
+    np.testing.assert_allclose(res.x[-1, [0, 2], 0], np.exp([-10.0, -20.0]), rtol=1e-5, atol=1e-9)
+
+    # run 1 blows up in finite time (x' = x^2 from 1 at t = 1) with no bound: the batch solve fails,
+    # each run is then solved on its own and only run 1 is flagged
+    def blowup(t, x, u, p):
+        out = rate * x
+        out[1] = x[1] ** 2
+        return out
+
+    res = simulate_ivp(blowup, np.ones((3, 1)), t, bound=np.inf)
+    assert res.info["per_run"] and res.diverged.tolist() == [False, True, False]
+    np.testing.assert_allclose(res.x[-1, [0, 2], 0], np.exp([-10.0, -20.0]), rtol=1e-5, atol=1e-9)
+    healthy = simulate_ivp(lambda t, x, u, p: -x, np.ones((2, 1)), t)
+    assert not healthy.info["per_run"] and not healthy.diverged.any()
+
+
+@pytest.mark.parametrize("kw,fragment", [
+    ({"rtol": float("nan")}, "rtol must be finite"),
+    ({"atol": -1.0}, "atol must be > 0"),
+    ({"rtol": [1e-6]}, "rtol must be a real number"),
+    ({"bound": float("nan")}, "bound must be > 0"),
+    ({"bound": -np.inf}, "bound must be > 0"),
+    ({"method": "Euler"}, "method must be one of"),
+])
+def test_ivp_rejects_bad_tolerances_and_bounds(kw, fragment):
+    with pytest.raises((ValueError, TypeError), match=fragment):
+        simulate_ivp(lambda t, x, u, p: -x, [1.0], [0.0, 1.0], **kw)
+
+
+@pytest.mark.parametrize("bound", [float("nan"), -np.inf, 0.0, "big"])
+def test_fixed_step_runners_reject_bad_bound(bound):
+    with pytest.raises((ValueError, TypeError), match="bound must be"):
+        simulate_sampled(linear_rhs, [1, 0], 0.1, 10, bound=bound)
+    with pytest.raises((ValueError, TypeError), match="bound must be"):
+        simulate_discrete(lambda k, x, w, p: x, [1.0], 10, bound=bound)

@@ -93,7 +93,10 @@ def test_vieta_sign_pattern(n0):
 
 def test_large_n0_does_not_overflow():
     assert sym.breakaway_gain(20, 1.0) == pytest.approx(20**20 / 19**19, rel=1e-12)
-    assert math.isfinite(sym.breakaway_gain(100, 1.0))
+    assert math.isfinite(sym.breakaway_gain(sym.MAX_ORDER, 1.0))
+    # beyond the documented maximum order a clear error, not an OverflowError from generated code
+    with pytest.raises(ValueError, match=f"n0 must be <= {sym.MAX_ORDER}, got 400"):
+        sym.breakaway_gain(400, 1.0)
 
 
 @pytest.mark.parametrize(

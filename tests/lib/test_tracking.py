@@ -10,7 +10,6 @@ from ctrl_analysis.estimators.tracking import (
     fhan,
     softened_setpoint,
 )
-from ctrl_analysis.simulate import simulate_sampled
 
 
 @pytest.mark.parametrize(

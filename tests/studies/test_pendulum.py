@@ -101,7 +101,7 @@ def test_run_smoke(tmp_path):
     data = json.loads(write_results_json(result, tmp_path).read_text(encoding="utf-8"))
     assert data["settings"]["verify.a21"] == pytest.approx(V.a21)
     assert data["settings"]["runs"] == 4
-    assert all(q["verdict"] in ("agrees", "differs", "new") for q in data["quantities"])
+    assert all(q["verdict"] in ("agrees", "differs", "new", "diverged") for q in data["quantities"])
     assert all(q["tolerance"] is not None for q in data["quantities"] if q["paper"] is not None)
 
 

@@ -11,6 +11,7 @@ from analysis import STUDIES
 from analysis._skeleton import INFO, run
 from analysis._skeleton.loops import build_loop, simulate
 from analysis._skeleton.paper import EXAMPLE, QUICK
+from ctrl_analysis.simulate import run_seeds
 from ctrl_analysis.report import StudyContext, write_results_json
 
 SMALL = dataclasses.replace(QUICK, t_end=5.5)
@@ -55,7 +56,7 @@ def test_run_writes_results_json(tmp_path):
     assert {r["name"] for r in data["reconstructions"]} == {"ex.t_end", "ex.omega_f", "ex.t_settle"}
     assert data["settings"]["ex.tau"] == EXAMPLE.tau
     assert data["figures"] == ["fig1_step_response.png"] and (tmp_path / "fig1_step_response.png").exists()
-    assert data["seeds"]["noise"] == list(range(1, 21))
+    assert data["seeds"]["noise"] == run_seeds(1, 20)
     assert data["findings"][0]["id"] == "noise-reduction"
 
 

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 
+import warnings
+
 import control as ct
 import numpy as np
 
@@ -20,22 +22,30 @@ def _square(name: str, value) -> np.ndarray:
     return check_matrix(name, value, square=True)
 
 
-def _system(A, C, G=None):
-    """Validate A (n×n), C (p×n) and optional G (n×m); return float arrays."""
-    A = _square("A", A)
+_NO_G = object()
+
+
+def _system(A, C, G=_NO_G, *, names=("A", "C", "G")):
+    """Validate A (n×n), C (p×n) and optional G (n×m); return float arrays.
+
+    ``names`` are the caller's names of the three matrices (``("F", "H", "G")`` in discrete time),
+    used in every error message.
+    """
+    a, c, g = names
+    A = _square(a, A)
     n = A.shape[0]
-    C = check_matrix("C", C)
+    C = check_matrix(c, C)
     if C.shape[1] != n:
-        raise ValueError(f"C must have {n} columns (the order of A), got shape {C.shape}")
-    if G is None:
+        raise ValueError(f"{c} must have {n} columns (the order of {a}), got shape {C.shape}")
+    if G is _NO_G:
         return A, C
-    G = check_matrix("G", G)
+    G = check_matrix(g, G)
     if G.shape[0] != n:
         # a 1-D G given as a row is read as a column
         if G.shape == (1, n):
             G = G.T
         else:
-            raise ValueError(f"G must have {n} rows (the order of A), got shape {G.shape}")
+            raise ValueError(f"{g} must have {n} rows (the order of {a}), got shape {G.shape}")
     return A, C, G
 
 
@@ -206,8 +216,9 @@ def check_observable(A, C, *, names=("A", "C")) -> int:
     ValueError
         ``(A, C) must be observable: rank [C; CA; …] = r < n``.
     """
+    A, C = _system(A, C, names=(names[0], names[1], "G"))
     r = observability_rank(A, C)
-    n = np.atleast_2d(A).shape[0]
+    n = A.shape[0]
     if r < n:
         raise ValueError(
             f"({names[0]}, {names[1]}) must be observable: rank [{names[1]}; {names[1]}{names[0]}; ...] "
@@ -250,7 +261,7 @@ def check_detectable(A, C, *, discrete: bool = False, names=("A", "C")) -> None:
     ValueError
         ``(A, C) must be detectable: mode λ of A is unobservable from C and not stable``.
     """
-    A, C = _system(A, C)
+    A, C = _system(A, C, names=(names[0], names[1], "G"))
     bad = _unobservable_bad_modes(A, C, discrete)
     if bad:
         region = "inside the unit circle" if discrete else "in the open left half-plane"
@@ -261,32 +272,63 @@ def check_detectable(A, C, *, discrete: bool = False, names=("A", "C")) -> None:
         )
 
 
-def _check_noise_reaches_marginal_modes(A, GQ, discrete: bool) -> None:
+def _check_noise_reaches_marginal_modes(A, GQ, discrete: bool, names=("A", "G")) -> None:
     """(A, G Q^½) must have no uncontrollable mode on the stability boundary."""
+    a, g = names
     n = A.shape[0]
     for lam in np.linalg.eigvals(A):
         on_boundary = abs(abs(lam) - 1) < 1e-9 if discrete else abs(lam.real) < 1e-9
         if on_boundary and _rank(np.hstack([A - lam * np.eye(n), GQ])) < n:
             where = "on the unit circle" if discrete else "on the imaginary axis"
             raise ValueError(
-                f"(A, G·Q^½) must have no uncontrollable mode {where}; mode {complex(lam):g} of A "
-                "is not excited by the process noise G w (check G and Q)"
+                f"({a}, {g}·Q^½) must have no uncontrollable mode {where}; mode {complex(lam):g} of {a} "
+                f"is not excited by the process noise {g} w (check {g} and Q)"
             )
 
 
-def _prepare(A, C, G, Q, R, discrete: bool, require: str):
-    A, C, G = _system(A, C, G)
+def _prepare(A, C, G, Q, R, discrete: bool, require: str, names=("A", "C", "G")):
+    if require not in ("detectable", "observable"):
+        raise ValueError(f"require must be one of ['detectable', 'observable'], got {require!r}")
+    A, C, G = _system(A, C, G, names=names)
     Q = _covariance("Q", Q, G.shape[1], definite=False)
     R = _covariance("R", R, C.shape[0], definite=True)
     if require == "observable":
-        check_observable(A, C)
-    elif require == "detectable":
-        check_detectable(A, C, discrete=discrete)
+        check_observable(A, C, names=names[:2])
     else:
-        raise ValueError(f"require must be one of ['detectable', 'observable'], got {require!r}")
+        check_detectable(A, C, discrete=discrete, names=names[:2])
     w, V = np.linalg.eigh(Q)
     GQ = G @ V @ np.diag(np.sqrt(np.clip(w, 0.0, None)))
-    _check_noise_reaches_marginal_modes(A, GQ, discrete)
+    _check_noise_reaches_marginal_modes(A, GQ, discrete, names=(names[0], names[2]))
     return A, C, G, Q, R
 
 
+
+
+def _riccati_solution(primary, unbalanced, solved, equation: str, names=("A", "C", "G")):
+    """The stabilising solution of a filter Riccati equation, verified.
+
+    ``primary()`` (python-control) returns ``(gain, P, poles)``; when it fails or ``solved(P)`` is
+    False (scipy's balancing can spoil a badly scaled problem, e.g. an entry of 1e-200), ``P`` is
+    recomputed by ``unbalanced()``. Returns ``(gain, P, poles)`` of the primary solver, or
+    ``(None, P, None)`` after the fallback (the caller then derives gain and poles from ``P``).
+    """
+    a, c, g = names
+    try:
+        with np.errstate(invalid="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # the result is verified below
+            gain, P, poles = primary()
+        P = _sym(np.asarray(P, dtype=float))
+        if solved(P):
+            return gain, P, poles
+    except np.linalg.LinAlgError:
+        pass
+    try:
+        P = _sym(np.asarray(unbalanced(), dtype=float))
+    except (np.linalg.LinAlgError, ValueError) as exc:
+        raise ValueError(f"the filter {equation} has no stabilising solution in double precision ({exc}); "
+                         f"({a}, {c}) or ({a}, {g}·Q^½) is numerically close to losing detectability / "
+                         "stabilisability") from None
+    if not solved(P):
+        raise ValueError(f"the filter {equation} could not be solved accurately in double precision (residual "
+                         f"too large); check the scaling of {a}, {c}, {g}, Q and R")
+    return None, P, None

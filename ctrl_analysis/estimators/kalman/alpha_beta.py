@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...blocks import DiscreteBlock
-from ..._validate import check_finite, check_matrix, check_positive
+from ..._validate import check_bool, check_finite, check_matrix, check_positive
 
 
 __all__ = ["alpha_beta_from_gain", "gain_from_alpha_beta", "tracking_index", "tracking_index_from_gains", "kalata_gains", "alpha_beta_stable", "AlphaBetaFilter"]
@@ -38,7 +38,7 @@ def alpha_beta_from_gain(K, T):
     K = np.ravel(check_finite("K", K))
     if K.shape != (2,):
         raise ValueError(f"K must have 2 entries (position, velocity), got shape {np.shape(K)}")
-    T = check_positive("T", T)
+    T = check_positive("T", T, scalar=True)
     return float(K[0]), float(T * K[1])
 
 
@@ -56,9 +56,9 @@ def gain_from_alpha_beta(alpha, beta, T) -> np.ndarray:
     -------
     numpy.ndarray, shape (2,)
     """
-    alpha = check_finite("alpha", alpha)
-    beta = check_finite("beta", beta)
-    T = check_positive("T", T)
+    alpha = check_finite("alpha", alpha, scalar=True)
+    beta = check_finite("beta", beta, scalar=True)
+    T = check_positive("T", T, scalar=True)
     return np.array([alpha, beta / T], dtype=float)
 
 
@@ -165,8 +165,8 @@ def alpha_beta_stable(alpha, beta) -> bool:
     -------
     bool
     """
-    alpha = float(check_finite("alpha", alpha))
-    beta = float(check_finite("beta", beta))
+    alpha = float(check_finite("alpha", alpha, scalar=True))
+    beta = float(check_finite("beta", beta, scalar=True))
     return bool(0 < alpha < 2 and 0 < beta < 4 - 2 * alpha)
 
 
@@ -224,12 +224,13 @@ class AlphaBetaFilter(DiscreteBlock):
     feedthrough = True
 
     def __init__(self, alpha, beta, T, *, F=None, b=None, x0=None, require_stable: bool = True):
-        self.alpha = float(check_finite("alpha", alpha))
-        self.beta = float(check_finite("beta", beta))
-        self.T = float(check_positive("T", T))
+        self.alpha = float(check_finite("alpha", alpha, scalar=True))
+        self.beta = float(check_finite("beta", beta, scalar=True))
+        self.T = float(check_positive("T", T, scalar=True))
         if F is None:
             F = [[1.0, self.T], [0.0, 1.0]]
         self.F = check_matrix("F", F, shape=(2, 2))
+        require_stable = check_bool("require_stable", require_stable)
         self.b = None if b is None else check_finite("b", np.ravel(b), shape=(2,))
         self.inputs = ("y",) if self.b is None else ("y", "u")
         self.K = gain_from_alpha_beta(self.alpha, self.beta, self.T)

@@ -8,9 +8,9 @@ import numpy as np
 import scipy.integrate
 import scipy.linalg
 
-from ..._validate import check_finite, check_matrix
+from ..._validate import check_finite, check_matrix, check_positive
 
-from ._checks import (_system, _sym, _covariance, _prepare)
+from ._checks import (_system, _sym, _covariance, _prepare, _riccati_solution)
 
 __all__ = ["ContinuousSteadyState", "continuous_steady_state", "continuous_steady_state_gain", "care_residual", "riccati_rhs", "riccati_trajectory"]
 
@@ -91,12 +91,27 @@ def continuous_steady_state(A, C, G, Q, R, *, require: str = "detectable") -> Co
 
     A, C, G, Q, R = _prepare(A, C, G, Q, R, discrete=False, require=require)
     GQGt = _sym(G @ Q @ G.T)  # exactly symmetric (python-control checks symmetry strictly)
-    # python-control: lqe(A, G, C, QN, RN) -> L = P Cᵀ R⁻¹, P, eig(A − L C)
-    K, P, E = ct.lqe(A, np.eye(A.shape[0]), C, GQGt, R)
+    # python-control: lqe(A, G, C, QN, RN) -> L = P Cᵀ R⁻¹, P, eig(A − L C); verified, else solved unbalanced
+    K, P, E = _riccati_solution(lambda: ct.lqe(A, np.eye(A.shape[0]), C, GQGt, R),
+                                lambda: scipy.linalg.solve_continuous_are(A.T, C.T, GQGt, R, balanced=False),
+                                lambda P: _care_solved(A, C, GQGt, R, P), "ARE")
+    if K is None:
+        K = P @ C.T @ np.linalg.inv(R)  # K = P Cᵀ R⁻¹
+        E = np.linalg.eigvals(A - K @ C)
     K = np.asarray(K, dtype=float)
-    P = np.asarray(P, dtype=float)
-    P = 0.5 * (P + P.T)
     return ContinuousSteadyState(K=K, P=P, poles=np.asarray(E))
+
+
+def _care_solved(A, C, GQGt, R, P) -> bool:
+    """Whether ``P`` satisfies the filter ARE to a relative accuracy of 1e-8."""
+    scale = max(1.0, np.abs(A @ P).max(), np.abs(P @ C.T).max() ** 2 / np.abs(R).max(), np.abs(GQGt).max())
+    return bool(np.all(np.isfinite(P)) and np.abs(_care_residual(A, C, GQGt, R, P)).max() <= 1e-8 * scale)
+
+
+def _care_residual(A, C, GQGt, R, P) -> np.ndarray:
+    """Unchecked kernel of :func:`care_residual`."""
+    PCt = P @ C.T
+    return A @ P + P @ A.T - PCt @ np.linalg.solve(R, PCt.T) + GQGt
 
 
 def continuous_steady_state_gain(A, C, G, Q, R, *, require: str = "detectable") -> np.ndarray:
@@ -142,8 +157,7 @@ def care_residual(A, C, G, Q, R, P) -> np.ndarray:
     Q = _covariance("Q", Q, G.shape[1], definite=False)
     R = _covariance("R", R, C.shape[0], definite=True)
     P = check_matrix("P", P, shape=(n, n))
-    PCt = P @ C.T
-    return A @ P + P @ A.T - PCt @ np.linalg.solve(R, PCt.T) + G @ Q @ G.T
+    return _care_residual(A, C, G @ Q @ G.T, R, P)
 
 
 def riccati_rhs(t, p, A, C, GQGt, Rinv, iu) -> np.ndarray:
@@ -208,7 +222,7 @@ def riccati_trajectory(A, C, G, Q, R, P0, t, *, rtol: float = 1e-8, atol: float 
     ------
     ValueError
         On bad shapes, NaN, ``Q`` not >= 0, ``R`` not > 0, ``P0`` not symmetric >= 0, ``t`` not
-        strictly increasing, or a failed integration.
+        strictly increasing, ``rtol`` / ``atol`` not finite and > 0, or a failed integration.
 
     References
     ----------
@@ -220,6 +234,9 @@ def riccati_trajectory(A, C, G, Q, R, P0, t, *, rtol: float = 1e-8, atol: float 
     Q = _covariance("Q", Q, G.shape[1], definite=False)
     R = _covariance("R", R, C.shape[0], definite=True)
     P0 = _covariance("P0", P0, n, definite=False)
+    rtol = check_positive("rtol", rtol, scalar=True)
+    if atol is not None:
+        atol = check_positive("atol", atol, scalar=True)
     t = check_finite("t", t)
     t = np.atleast_1d(t)
     if t.ndim != 1 or t.size < 1:

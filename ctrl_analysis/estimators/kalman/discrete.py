@@ -8,9 +8,9 @@ import numpy as np
 import scipy.integrate
 import scipy.linalg
 
-from ..._validate import check_finite, check_matrix, check_positive
+from ..._validate import check_finite, check_int, check_matrix, check_positive
 
-from ._checks import (_square, _system, _sym, _symb, _covariance, _prepare)
+from ._checks import (_square, _system, _sym, _symb, _covariance, _prepare, _riccati_solution)
 
 __all__ = ["DiscreteSteadyState", "discrete_steady_state", "discrete_steady_state_batch", "dare_residual", "discretize_noise"]
 
@@ -97,14 +97,18 @@ def discrete_steady_state(F, H, G, Q, R, *, require: str = "detectable") -> Disc
     """
     import control as ct
 
-    F, H, G, Q, R = _prepare(F, H, G, Q, R, discrete=True, require=require)
+    F, H, G, Q, R = _prepare(F, H, G, Q, R, discrete=True, require=require, names=("F", "H", "G"))
     GQGt = _sym(G @ Q @ G.T)  # exactly symmetric (python-control checks symmetry strictly)
-    # python-control: dlqe(F, G, H, Q, R) -> L (predictor form), P⁻ (DARE solution), eig(F − L H)
-    L, P, E = ct.dlqe(F, np.eye(F.shape[0]), H, GQGt, R)
-    P = np.asarray(P, dtype=float)
-    P = 0.5 * (P + P.T)
+    # python-control: dlqe(F, G, H, Q, R) -> L (predictor form), P⁻ (DARE solution), eig(F − L H);
+    # verified, else solved unbalanced
+    L, P, E = _riccati_solution(lambda: ct.dlqe(F, np.eye(F.shape[0]), H, GQGt, R),
+                                lambda: scipy.linalg.solve_discrete_are(F.T, H.T, GQGt, R, balanced=False),
+                                lambda P: _dare_solved(F, H, GQGt, R, P), "DARE", names=("F", "H", "G"))
     S = H @ P @ H.T + R  # innovation covariance
     K = np.linalg.solve(S, H @ P).T  # K = P⁻ Hᵀ S⁻¹ (filter form)
+    if L is None:
+        L = F @ K  # predictor form
+        E = np.linalg.eigvals(F - L @ H)
     P_post = P - K @ H @ P  # P(k|k) = (I − K H) P⁻
     return DiscreteSteadyState(
         K_filter=K,
@@ -113,6 +117,18 @@ def discrete_steady_state(F, H, G, Q, R, *, require: str = "detectable") -> Disc
         P_post=0.5 * (P_post + P_post.T),
         poles=np.asarray(E),
     )
+
+
+def _dare_solved(F, H, GQGt, R, P) -> bool:
+    """Whether ``P`` (a-priori) satisfies the filter DARE to a relative accuracy of 1e-8."""
+    scale = max(1.0, np.abs(F @ P @ F.T).max(), np.abs(P).max(), np.abs(GQGt).max())
+    return bool(np.all(np.isfinite(P)) and np.abs(_dare_residual(F, H, GQGt, R, P)).max() <= 1e-8 * scale)
+
+
+def _dare_residual(F, H, GQGt, R, P) -> np.ndarray:
+    """Unchecked kernel of :func:`dare_residual`."""
+    FPHt = F @ P @ H.T
+    return F @ P @ F.T - FPHt @ np.linalg.solve(H @ P @ H.T + R, FPHt.T) + GQGt - P
 
 
 def discrete_steady_state_batch(F, H, Qd, R, *, tol: float = 1e-12, max_iter: int = 100) -> DiscreteSteadyState:
@@ -143,8 +159,9 @@ def discrete_steady_state_batch(F, H, Qd, R, *, tol: float = 1e-12, max_iter: in
     R : array_like, shape (B, p, p), (p, p), (B,) or scalar
         Measurement-noise covariance, > 0 (the last two forms for ``p = 1``).
     tol : float
-        Relative change of ``H_k`` at which to stop.
+        Relative change of ``H_k`` at which to stop (finite, > 0).
     max_iter : int
+        Largest number of doubling steps (>= 1).
 
     Returns
     -------
@@ -154,7 +171,10 @@ def discrete_steady_state_batch(F, H, Qd, R, *, tol: float = 1e-12, max_iter: in
     Raises
     ------
     ValueError
-        On NaN/inf, inconsistent shapes, ``R`` not > 0, or no convergence in ``max_iter``.
+        On NaN/inf, inconsistent shapes, ``R`` not > 0, ``tol`` not > 0, ``max_iter < 1``, or no
+        convergence in ``max_iter``.
+    TypeError
+        ``tol`` not a real number or ``max_iter`` not an integer.
 
     References
     ----------
@@ -163,6 +183,8 @@ def discrete_steady_state_batch(F, H, Qd, R, *, tol: float = 1e-12, max_iter: in
     S.-F. Xu, "Convergence analysis of structure-preserving doubling algorithms for Riccati-type
     matrix equations", SIAM J. Matrix Anal. Appl. 28(1), 2006.
     """
+    tol = check_positive("tol", tol, scalar=True)
+    max_iter = check_int("max_iter", max_iter, minimum=1)
     F = np.asarray(check_finite("F", F), dtype=float)
     if F.ndim != 3 or F.shape[1] != F.shape[2]:
         raise ValueError(f"F must have shape (B, n, n), got {F.shape}")
@@ -192,7 +214,7 @@ def discrete_steady_state_batch(F, H, Qd, R, *, tol: float = 1e-12, max_iter: in
     Gk = Ht @ np.linalg.solve(R, H)
     Hk = _symb(Qd).copy()
     eye = np.eye(n)
-    for _ in range(int(max_iter)):
+    for _ in range(max_iter):
         W = eye + Gk @ Hk
         WA = np.linalg.solve(W, Ak)
         WG = np.linalg.solve(W, Gk)
@@ -234,13 +256,12 @@ def dare_residual(F, H, G, Q, R, P_prior) -> np.ndarray:
     numpy.ndarray, shape (n, n)
         The residual (zero at a solution).
     """
-    F, H, G = _system(F, H, G)
+    F, H, G = _system(F, H, G, names=("F", "H", "G"))
     n = F.shape[0]
     Q = _covariance("Q", Q, G.shape[1], definite=False)
     R = _covariance("R", R, H.shape[0], definite=True)
     P = check_matrix("P_prior", P_prior, shape=(n, n))
-    FPHt = F @ P @ H.T
-    return F @ P @ F.T - FPHt @ np.linalg.solve(H @ P @ H.T + R, FPHt.T) + G @ Q @ G.T - P
+    return _dare_residual(F, H, G @ Q @ G.T, R, P)
 
 
 def discretize_noise(A, G, Q, T):
@@ -275,7 +296,7 @@ def discretize_noise(A, G, Q, T):
     if G.shape[0] != n:
         raise ValueError(f"G must have {n} rows (the order of A), got shape {G.shape}")
     Q = _covariance("Q", Q, G.shape[1], definite=False)
-    T = check_positive("T", T)
+    T = check_positive("T", T, scalar=True)
     M = np.zeros((2 * n, 2 * n))
     M[:n, :n] = -A
     M[:n, n:] = G @ Q @ G.T

@@ -49,8 +49,8 @@ def random_walk_gain(Q, R):
         raise ValueError(f"Q must be >= 0, got {Q!r}")
     R = check_positive("R", R)
     q = np.asarray(Q / R, dtype=float)
-    # K∞ = (−q + √(q² + 4q)) / 2, written as 2q / (q + √(q² + 4q)) to avoid cancellation for large q
-    s = np.sqrt(q * q + 4.0 * q)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        k = np.where(q > 0, 2.0 * q / (q + s), 0.0)
+    # K∞ = (−q + √(q² + 4q)) / 2, written as 2 / (1 + √(1 + 4/q)): no cancellation for large q and no
+    # overflow of q² (the textbook form gives 0 for q > 1e154)
+    with np.errstate(divide="ignore"):
+        k = np.where(q > 0, 2.0 / (1.0 + np.sqrt(1.0 + 4.0 / np.where(q > 0, q, 1.0))), 0.0)
     return float(k) if k.ndim == 0 else k
