@@ -256,19 +256,48 @@ class Loop:
             x[:, self.slices[p.name]] = v
         return x
 
-    def _evaluate(self, order, t, x, sig, params):
-        """Outputs of ``order``'s blocks at ``(t, x)`` into ``sig`` (name -> (B,) column)."""
-        for p in order:
-            u = self._block_input(p, sig, x.shape[0])
-            y = p.block.output(t, x[:, self.slices.get(p.name, _NO_STATE)], u, params)
-            for j, s in enumerate(p.outputs):
-                sig[s] = y[:, j]
+    def _plan(self):
+        """Index arrays of the fast path, built once: every signal a column of one ``(B, n_sig)`` array."""
+        if getattr(self, "_compiled_plan", None) is not None:
+            return self._compiled_plan
+        names = list(self.external) + [s for p in self.placed for s in p.outputs]
+        col = {s: j for j, s in enumerate(names)}
 
-    def _block_input(self, p, sig, B):
-        return np.stack([sig[s] for s in p.inputs], axis=1) if p.inputs else np.zeros((B, 0))
+        def cols(sigs):
+            idx = [col[s] for s in sigs]
+            if idx and idx == list(range(idx[0], idx[0] + len(idx))):
+                return slice(idx[0], idx[0] + len(idx))  # contiguous: a view, no gather
+            return np.array(idx, dtype=np.intp)
+
+        entries = {p.name: (p.block, cols(p.inputs), cols(p.outputs), self.slices.get(p.name, _NO_STATE))
+                   for p in self.placed}
+        # at integration stages only the blocks feeding a continuous block (through static blocks) matter
+        producer = {s: p for p in self.placed for s in p.outputs}
+        needed, todo = set(), [s for p in self.continuous for s in p.inputs]
+        while todo:
+            s = todo.pop()
+            p = producer.get(s)
+            if p is None or p.name in needed or isinstance(p.block, DiscreteBlock):
+                continue
+            needed.add(p.name)
+            if p.block.feedthrough:
+                todo.extend(p.inputs)
+        stage = [entries[p.name] for p in self.stage_order if p.name in needed]
+        plan = {"names": names, "col": col, "order": [entries[p.name] for p in self.order], "stage": stage,
+                "discrete": [entries[p.name] for p in self.discrete],
+                "continuous": [entries[p.name] for p in self.continuous]}
+        self._compiled_plan = plan
+        return plan
+
+    def _memory_per_run(self, n_steps, n_stored_signals, store_states):
+        """Bytes one run's stored trajectories take (signals, plus states when stored)."""
+        width = n_stored_signals + (self.n_states if store_states else 0)
+        return 8 * (n_steps + 1) * max(width, 1)
 
     def simulate(self, n_steps: int, *, inputs=None, x0=None, runs: int | None = None, t0: float = 0.0,
-                 params=None, bound: float = 1e8, store_states: bool = True, seeds=None) -> LoopResponse:
+                 params=None, bound: float = 1e8, store_states: bool = True, seeds=None,
+                 store_signals=None, chunk_runs: int | None = None, max_bytes: float | None = None,
+                 progress=None) -> LoopResponse:
         """Step the loop ``n_steps`` samples over a batch of runs.
 
         Parameters
@@ -292,11 +321,30 @@ class Loop:
             Keep the state trajectory (``False`` saves memory in large batches).
         seeds : list, optional
             Per-run seeds, recorded in the response.
+        store_signals : sequence of str, optional
+            Signals kept in the response (default: all); fewer save memory in large batches.
+        chunk_runs : int, optional
+            Step the batch in chunks of at most this many runs (default: chosen from ``max_bytes``).
+            The per-step work of a chunk stays in cache; every run's result is the same bit for bit.
+        max_bytes : float, optional
+            Memory allowed for the working arrays of one chunk (default
+            :data:`ctrl_analysis.simulate.CHUNK_BYTES`); the batch is split into chunks that fit.
+        progress : callable, optional
+            ``progress(n)`` called after every ``n`` samples of a chunk (e.g. a tqdm ``update``).
 
         Returns
         -------
         LoopResponse
+
+        Raises
+        ------
+        MemoryError
+            If the stored trajectories of the whole batch cannot fit in ``max_bytes`` times the
+            number of chunks allowed (:data:`~ctrl_analysis.simulate.RESULT_BYTES`); the message
+            says which argument to change.
         """
+        from .simulate import CHUNK_BYTES, RESULT_BYTES, check_result_memory, chunk_bounds
+
         n_steps = check_int("n_steps", n_steps, minimum=1)
         if runs is not None:
             runs = check_int("runs", runs, minimum=1)
@@ -312,63 +360,104 @@ class Loop:
         x = self._x0(x0, B)
         if seeds is not None and len(seeds) != B:
             raise ValueError(f"seeds must have one entry per run ({B}), got {len(seeds)}")
+        plan = self._plan()
+        names, col = plan["names"], plan["col"]
+        keep = names if store_signals is None else list(dict.fromkeys(store_signals))
+        for s in keep:
+            if s not in col:
+                raise ValueError(f"store_signals names unknown signal {s!r}; signals are {names}")
+        keep_cols = np.array([col[s] for s in keep], dtype=np.intp)
+        per_run = self._memory_per_run(n_steps, len(keep), store_states)
+        check_result_memory(per_run * B, RESULT_BYTES, "Loop.simulate")
+        limit = CHUNK_BYTES if max_bytes is None else check_positive("max_bytes", max_bytes)
+        work = 8 * (8 * self.n_states + 2 * len(names)) + per_run  # temporaries + stored rows, per run
+        size = B if chunk_runs is None else check_int("chunk_runs", chunk_runs, minimum=1)
+        size = max(1, min(size, int(limit // work))) if chunk_runs is None else size
         t = t0 + self.dt * np.arange(n_steps + 1)
-        sig_store = {}
+        store = np.empty((n_steps + 1, B, len(keep)))
         xs = np.empty((n_steps + 1, B, self.n_states)) if store_states else None
         diverged = np.zeros(B, dtype=bool)
         div_step = np.full(B, -1, dtype=int)
-        step = STEPPERS[self.method]
-        h = self.dt / self.substeps
-        nc = self.n_continuous
-
-        def ext_at(k, tk, sig):
-            for s, a in held.items():
-                row = a if a.ndim == 0 else a[min(k, a.shape[0] - 1)]
-                sig[s] = np.broadcast_to(row, (B,))
-            for s, f in funcs.items():
-                sig[s] = np.broadcast_to(np.asarray(f(tk), dtype=float), (B,))
-
-        def stage_rhs(tau, xc, _u, p, sig, x_full):
-            x_full[:, :nc] = xc
-            for s, f in funcs.items():
-                sig[s] = np.broadcast_to(np.asarray(f(tau), dtype=float), (B,))
-            self._evaluate(self.stage_order, tau, x_full, sig, p)
-            return np.concatenate([p_.block.rhs(tau, x_full[:, self.slices[p_.name]],
-                                                self._block_input(p_, sig, B), p)
-                                   for p_ in self.continuous], axis=1)
-
-        with np.errstate(all="ignore"):
-            for k in range(n_steps + 1):
-                tk = t[k]
-                sig = {}
-                ext_at(k, tk, sig)
-                self._evaluate(self.order, tk, x, sig, params)
-                for s, v in sig.items():
-                    if s not in sig_store:
-                        sig_store[s] = np.empty((n_steps + 1, B))
-                    sig_store[s][k] = v
-                if xs is not None:
-                    xs[k] = x
-                if k == n_steps:
-                    break
-                x_next = x.copy()
-                for p in self.discrete:
-                    sl = self.slices[p.name]
-                    x_next[:, sl] = p.block.update(tk, x[:, sl], self._block_input(p, sig, B), params)
-                if nc:
-                    x_stage = x.copy()
-                    xc, tau = x[:, :nc], tk
-                    for _ in range(self.substeps):
-                        xc = step(lambda tt, xx, uu, pp: stage_rhs(tt, xx, uu, pp, sig, x_stage), tau, xc, None, h,
-                                  params)
-                        tau += h
-                    x_next[:, :nc] = xc
-                x = _flag_divergence(x_next, bound, diverged, div_step, k + 1)
+        # a callable input returning one value per run is sliced with its chunk
+        per_run_funcs = {s for s, f in funcs.items() if np.ndim(f(t[0])) == 1 and np.size(f(t[0])) == B > 1}
+        for lo, hi in chunk_bounds(B, size):
+            f_c = {s: (f if s not in per_run_funcs else (lambda tt, f=f, lo=lo, hi=hi: np.asarray(f(tt))[lo:hi]))
+                   for s, f in funcs.items()}
+            h_c = {s: (a[:, lo:hi] if a.ndim == 2 else a) for s, a in held.items()}
+            self._run_chunk(plan, n_steps, t, x[lo:hi], h_c, f_c, params, bound, keep_cols,
+                            store[:, lo:hi], None if xs is None else xs[:, lo:hi],
+                            diverged[lo:hi], div_step[lo:hi], progress)
+        sig_store = {s: store[:, :, j] for j, s in enumerate(keep)}
         state_names = [f"{p.name}.{s}" for p in self.continuous + self.discrete for s in p.block.states]
         return LoopResponse(t=t, x=xs, u=None, y=None, diverged=diverged, diverged_step=div_step,
                             seeds=None if seeds is None else list(seeds), bound=bound, signals=sig_store,
                             slices=dict(self.slices), external=self.external, outlist=self.outlist,
                             state_names=state_names)
+
+    def _run_chunk(self, plan, n_steps, t, x, held, funcs, params, bound, keep_cols, store, xs,
+                   diverged, div_step, progress):
+        """Step one chunk of runs, writing into the result slices ``store``, ``xs``, ``diverged``."""
+        B = x.shape[0]
+        col = plan["col"]
+        S = np.zeros((B, len(plan["names"])))  # every signal at the current instant or stage
+        per_step = []
+        for s, a in held.items():
+            if a.ndim == 0:
+                S[:, col[s]] = a  # constant: written once
+            else:
+                per_step.append((col[s], a, a.shape[0] - 1))
+        fcols = [(col[s], f) for s, f in funcs.items()]
+        order, stage, discrete, continuous = plan["order"], plan["stage"], plan["discrete"], plan["continuous"]
+        store_all = keep_cols.size == S.shape[1] and np.array_equal(keep_cols, np.arange(S.shape[1]))
+        step = STEPPERS[self.method]
+        h = self.dt / self.substeps
+        nc = self.n_continuous
+        tick = max(1, n_steps // 100)
+
+        def evaluate(blocks, tau, xx):
+            for block, ic, oc, sl in blocks:
+                S[:, oc] = block.output(tau, xx[:, sl], S[:, ic], params)
+
+        def stage_rhs(tau, xc, _u, p):
+            for j, f in fcols:
+                S[:, j] = f(tau)
+            evaluate(stage, tau, xc)  # continuous blocks come first in x: xc holds their states
+            dx = np.empty_like(xc)
+            for block, ic, _, sl in continuous:
+                dx[:, sl] = block.rhs(tau, xc[:, sl], S[:, ic], p)
+            return dx
+
+        with np.errstate(all="ignore"):
+            for k in range(n_steps + 1):
+                tk = t[k]
+                for j, a, last in per_step:
+                    S[:, j] = a[k if k < last else last]
+                for j, f in fcols:
+                    S[:, j] = f(tk)
+                evaluate(order, tk, x)
+                store[k] = S if store_all else S[:, keep_cols]
+                if xs is not None:
+                    xs[k] = x
+                if k == n_steps:
+                    break
+                if discrete:
+                    x_next = x.copy()
+                    for block, ic, _, sl in discrete:
+                        x_next[:, sl] = block.update(tk, x[:, sl], S[:, ic], params)
+                else:
+                    x_next = x
+                if nc:
+                    xc, tau = x[:, :nc], tk
+                    for _ in range(self.substeps):
+                        xc = step(stage_rhs, tau, xc, None, h, params)
+                        tau += h
+                    if discrete:
+                        x_next[:, :nc] = xc
+                    else:
+                        x_next = xc
+                x = _flag_divergence(x_next, bound, diverged, div_step, k + 1)
+                if progress is not None and (k + 1) % tick == 0:
+                    progress(tick)
 
     # ------------------------------------------------------------------ python-control
     def interconnect(self, name: str | None = None):
