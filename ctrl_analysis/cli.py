@@ -50,6 +50,10 @@ def _build_parser() -> argparse.ArgumentParser:
     rep.add_argument("--runs", type=_positive_int, default=None, help="Monte Carlo runs where noise is random")
     rep.add_argument("--seed", type=_seed, default=0, help="base seed (default: 0)")
     rep.add_argument("--quick", action="store_true", help="fewer runs / shorter horizons, for smoke tests")
+    rep.add_argument("--jobs", type=_positive_int, default=None,
+                     help="processes: studies run side by side, Monte Carlo chunks split (default: all cores)")
+    rep.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                     help="Dask scheduler for sweeps and large Monte Carlo ('local', or tcp://host:8786)")
     return parser
 
 
@@ -59,6 +63,31 @@ def _progress(study: str):
         sys.stderr.flush()
 
     return emit
+
+
+def _run_study(task) -> tuple[int, str]:
+    """Run one study (in this process or a worker) and write its results.json; (status, summary text)."""
+    from analysis import load_study
+
+    name, study_dir, runs, seed, quick, jobs, scheduler = task
+    study_dir = Path(study_dir)
+    ctx = StudyContext(out_dir=study_dir, runs=runs, seed=seed, quick=quick, progress=_progress(name),
+                       jobs=jobs, scheduler=scheduler)
+    t0 = time.perf_counter()
+    try:
+        result = load_study(name).run(ctx)
+    except (ValueError, TypeError, RuntimeError, ArithmeticError) as exc:
+        sys.stderr.write(f"ctrl-analysis: error: study {name!r} failed: {exc}\n")
+        return 1, ""
+    result.runtime_s = time.perf_counter() - t0
+    path = write_results_json(result, study_dir)
+    data = result.to_dict()
+    lines = [f"\n== {name}: {path} ({len(result.figures)} figures, {result.runtime_s:.1f} s)"]
+    if data["quantities"]:
+        lines.append(summary_table(data))
+    if result.missing:
+        lines.append("not built yet: " + "; ".join(result.missing))
+    return 0, "\n".join(lines)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -80,27 +109,20 @@ def main(argv: list[str] | None = None) -> int:
         )
         return 2
 
+    from .parallel import default_jobs, map_chunks
+
     out = Path(args.out)
+    todo = list(dict.fromkeys(names))
+    jobs = default_jobs() if args.jobs is None else args.jobs
+    # studies side by side in processes (each with its share of the cores), or one by one on a scheduler
+    side_by_side = 1 if args.scheduler is not None else min(jobs, len(todo))
+    tasks = [(name, str(out / name), args.runs, args.seed, args.quick, max(1, jobs // side_by_side),
+              args.scheduler) for name in todo]
     status = 0
-    for name in dict.fromkeys(names):
-        study_dir = out / name
-        ctx = StudyContext(out_dir=study_dir, runs=args.runs, seed=args.seed, quick=args.quick,
-                           progress=_progress(name))
-        t0 = time.perf_counter()
-        try:
-            result = load_study(name).run(ctx)
-        except (ValueError, TypeError, RuntimeError, ArithmeticError) as exc:
-            sys.stderr.write(f"ctrl-analysis: error: study {name!r} failed: {exc}\n")
-            status = 1
-            continue
-        result.runtime_s = time.perf_counter() - t0
-        path = write_results_json(result, study_dir)
-        data = result.to_dict()
-        print(f"\n== {name}: {path} ({len(result.figures)} figures, {result.runtime_s:.1f} s)")
-        if data["quantities"]:
-            print(summary_table(data))
-        if result.missing:
-            print("not built yet: " + "; ".join(result.missing))
+    for study_status, text in map_chunks(_run_study, tasks, jobs=side_by_side, desc="studies"):
+        status = max(status, study_status)
+        if text:
+            print(text)
     if "all" in args.studies:
         results = []
         for name in STUDIES:

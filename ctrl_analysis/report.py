@@ -193,6 +193,8 @@ class StudyContext:
     seed: int = 0
     quick: bool = False
     progress: Callable[[str], None] = lambda msg: None
+    jobs: int = 1
+    scheduler: str | None = None
 
     def runs_or(self, default: int, quick_default: int | None = None) -> int:
         """The requested number of Monte Carlo runs, or the study's default (smaller with --quick)."""

@@ -35,6 +35,7 @@ __all__ = [
     "rk4_step",
     "simulate_sampled",
     "chunk_bounds",
+    "check_result_memory",
     "CHUNK_BYTES",
     "simulate_discrete",
     "simulate_ivp",
