@@ -33,6 +33,7 @@ import time  # noqa: E402
 
 import numpy as np  # noqa: E402
 
+from ctrl_analysis._kernels import BlockKernel  # noqa: E402
 from ctrl_analysis.blocks import ContinuousBlock  # noqa: E402
 from ctrl_analysis.estimators.differential import DifferentialEstimator  # noqa: E402
 from ctrl_analysis.estimators.eso import ExtendedStateObserver  # noqa: E402
@@ -48,29 +49,47 @@ XI, ETA = 0.1, 0.001  # ξ ~ U[-0.1, 0.1], η ~ U[-0.001, 0.001]
 ALPHA = (1.0, 0.5, 0.25)  # fal exponents (α = 1: linear first channel)
 
 
+def plant19_rhs(t, x, u, p, dx):
+    """Eq. (19) on one run (floats) or on columns of a batch (``x.T``): ``p = [b1, b2, ω]``."""
+    c = math.cos(p[2] * t)
+    w = 1.0 if c > 0 else (-1.0 if c < 0 else 0.0)  # w = sign(cos(ω t))
+    dx[0] = x[1]
+    dx[1] = -(p[0] * x[0] + p[1] * x[0] * x[0] * x[1]) + w + u[0]
+
+
+def plant19_output(t, x, u, p, y):
+    """Outputs y = x1 + η, x1, x2."""
+    y[0] = x[0] + u[1]
+    y[1] = x[0]
+    y[2] = x[1]
+
+
 class Plant19(ContinuousBlock):
-    """Eq. (19): x1' = x2, x2' = -(b1 x1 + b2 x1² x2) + sign(cos(ω t)) + ξ; y = x1 + η."""
+    """Eq. (19): x1' = x2, x2' = -(b1 x1 + b2 x1² x2) + sign(cos(ω t)) + ξ; y = x1 + η.
+
+    The batched methods call the kernel functions on the batch's columns, so the numpy path and the
+    compiled path run one piece of code per equation.
+    """
 
     inputs, outputs, states = ("xi", "eta"), ("y", "x1", "x2"), ("x1", "x2")
     feedthrough = True
 
     def __init__(self, b1=B1, b2=B2, w_freq=W_FREQ):
         self.b1, self.b2, self.w_freq = float(b1), float(b2), float(w_freq)
+        self.p = np.array([self.b1, self.b2, self.w_freq])
 
     def rhs(self, t, x, u, params=None):
-        x1, x2 = x[:, 0], x[:, 1]
-        c = math.cos(self.w_freq * t)
-        w = 1.0 if c > 0 else (-1.0 if c < 0 else 0.0)
         dx = np.empty_like(x)
-        dx[:, 0] = x2
-        dx[:, 1] = -(self.b1 * x1 + self.b2 * x1 * x1 * x2) + w + u[:, 0]
+        plant19_rhs(t, x.T, u.T, self.p, dx.T)
         return dx
 
     def output(self, t, x, u, params=None):
         y = np.empty((x.shape[0], 3))
-        y[:, 0] = x[:, 0] + u[:, 1]
-        y[:, 1:] = x
+        plant19_output(t, x.T, u.T, self.p, y.T)
         return y
+
+    def kernel(self):
+        return BlockKernel(output=plant19_output, params=self.p, rhs=plant19_rhs)
 
 
 def han_eso(h=H):

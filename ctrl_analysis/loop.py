@@ -297,7 +297,7 @@ class Loop:
     def simulate(self, n_steps: int, *, inputs=None, x0=None, runs: int | None = None, t0: float = 0.0,
                  params=None, bound: float = 1e8, store_states: bool = True, seeds=None,
                  store_signals=None, chunk_runs: int | None = None, max_bytes: float | None = None,
-                 progress=None) -> LoopResponse:
+                 progress=None, engine: str = "auto") -> LoopResponse:
         """Step the loop ``n_steps`` samples over a batch of runs.
 
         Parameters
@@ -331,6 +331,12 @@ class Loop:
             :data:`ctrl_analysis.simulate.CHUNK_BYTES`); the batch is split into chunks that fit.
         progress : callable, optional
             ``progress(n)`` called after every ``n`` samples of a chunk (e.g. a tqdm ``update``).
+        engine : {"auto", "numpy", "compiled"}
+            ``"numpy"``: the blocks' batched methods. ``"compiled"``: one numba function for the whole
+            loop built from the blocks' kernels (:mod:`ctrl_analysis._kernels`); needs a kernel for
+            every block, no callable input and ``params=None``. ``"auto"``: compiled when possible.
+            The choice depends on the loop only, never on the batch size, so run ``b`` is the same
+            whatever the batch; the two engines agree to rounding (bit for bit without ``pow``).
 
         Returns
         -------
@@ -373,6 +379,8 @@ class Loop:
         work = 8 * (8 * self.n_states + 2 * len(names)) + per_run  # temporaries + stored rows, per run
         size = B if chunk_runs is None else check_int("chunk_runs", chunk_runs, minimum=1)
         size = max(1, min(size, int(limit // work))) if chunk_runs is None else size
+        check_in("engine", engine, ("auto", "numpy", "compiled"))
+        runner = self._compiled(engine, funcs, params, np.isfinite(bound))
         t = t0 + self.dt * np.arange(n_steps + 1)
         store = np.empty((n_steps + 1, B, len(keep)))
         xs = np.empty((n_steps + 1, B, self.n_states)) if store_states else None
@@ -384,6 +392,12 @@ class Loop:
             f_c = {s: (f if s not in per_run_funcs else (lambda tt, f=f, lo=lo, hi=hi: np.asarray(f(tt))[lo:hi]))
                    for s, f in funcs.items()}
             h_c = {s: (a[:, lo:hi] if a.ndim == 2 else a) for s, a in held.items()}
+            if runner is not None:
+                self._run_compiled(runner, plan, n_steps, t, x[lo:hi], h_c, bound, keep_cols, store[:, lo:hi],
+                                   None if xs is None else xs[:, lo:hi], diverged[lo:hi], div_step[lo:hi])
+                if progress is not None:
+                    progress(n_steps)
+                continue
             self._run_chunk(plan, n_steps, t, x[lo:hi], h_c, f_c, params, bound, keep_cols,
                             store[:, lo:hi], None if xs is None else xs[:, lo:hi],
                             diverged[lo:hi], div_step[lo:hi], progress)
@@ -393,6 +407,53 @@ class Loop:
                             seeds=None if seeds is None else list(seeds), bound=bound, signals=sig_store,
                             slices=dict(self.slices), external=self.external, outlist=self.outlist,
                             state_names=state_names)
+
+    def _compiled(self, engine, funcs, params, finite_bound):
+        """The compiled runner and the kernels' parameters, or ``None`` for the numpy path."""
+        if engine == "numpy":
+            return None
+        from . import _kernels
+
+        why = None
+        if not _kernels.available():
+            why = "numba is not installed"
+        elif funcs or params is not None:
+            why = "callable inputs and params need the numpy path"
+        kernels = {}
+        if why is None:
+            for p in self.placed:
+                k = _kernels.kernel_of(p.block)
+                if k is None:
+                    why = f"block {p.name!r} ({type(p.block).__name__}) has no kernel"
+                    break
+                kernels[p.name] = k
+        if why is not None:
+            if engine == "compiled":
+                raise ValueError(f"engine='compiled' is not possible for this loop: {why}")
+            return None
+        run = _kernels.compiled_runner(self, kernels, finite_bound)
+        return run, [np.ascontiguousarray(kernels[p.name].params, dtype=float) for p in self.placed]
+
+    def _run_compiled(self, runner, plan, n_steps, t, x, held, bound, keep_cols, store, xs, diverged, div_step):
+        """One chunk through the compiled runner, writing into the result slices."""
+        run, P = runner
+        B = x.shape[0]
+        col = plan["col"]
+        S0 = np.zeros(len(plan["names"]))
+        varying = [(s, a) for s, a in held.items() if a.ndim > 0]
+        for s, a in held.items():
+            if a.ndim == 0:
+                S0[col[s]] = a
+        H = np.empty((n_steps + 1, B, max(len(varying), 1)))
+        for j, (s, a) in enumerate(varying):
+            a2 = a if a.ndim == 2 else a[:, None]
+            m = min(a.shape[0], n_steps + 1)
+            H[:m, :, j] = a2[:m]
+            H[m:, :, j] = a2[m - 1]  # row N repeats row N-1 when absent
+        HC = np.array([col[s] for s, _ in varying], dtype=np.intp)
+        xs_arg = np.empty((0, 0, 0)) if xs is None else xs
+        run(n_steps, t, self.dt / self.substeps, self.substeps, np.ascontiguousarray(x), H, HC, S0,
+            keep_cols, store, xs_arg, float(bound), diverged, div_step, *P)
 
     def _run_chunk(self, plan, n_steps, t, x, held, funcs, params, bound, keep_cols, store, xs,
                    diverged, div_step, progress):
