@@ -26,21 +26,19 @@ Every method's agreement with the engine (run 0, the same noise) is checked and 
 
 from __future__ import annotations
 
+import math
+import time
+
 import _common  # noqa: F401  (single-threaded BLAS, repository on sys.path)
+import numpy as np
+from _common import Row, median_time
 
-import math  # noqa: E402
-import time  # noqa: E402
-
-import numpy as np  # noqa: E402
-
-from ctrl_analysis._kernels import BlockKernel  # noqa: E402
-from ctrl_analysis.blocks import ContinuousBlock  # noqa: E402
-from ctrl_analysis.estimators.differential import DifferentialEstimator  # noqa: E402
-from ctrl_analysis.estimators.eso import ExtendedStateObserver  # noqa: E402
-from ctrl_analysis.loop import Loop, place  # noqa: E402
-from ctrl_analysis.simulate import draw_noise, rk4_step, run_seeds, uniform_noise  # noqa: E402
-
-from _common import Row, median_time  # noqa: E402
+from ctrl_analysis._kernels import BlockKernel
+from ctrl_analysis.blocks import ContinuousBlock
+from ctrl_analysis.estimators.differential import DifferentialEstimator
+from ctrl_analysis.estimators.eso import ExtendedStateObserver
+from ctrl_analysis.loop import Loop, place
+from ctrl_analysis.simulate import draw_noise, rk4_step, run_seeds, uniform_noise
 
 NAME = "Example 1 (10 states, RK4)"
 H = 1e-3
@@ -247,7 +245,7 @@ def state_order(sys_c):
 
 def run(T=2.0, io_T=0.05, repeat=3, sizes=(1, 100, 1000)):
     """Time every method; returns (rows, float-loop per-run seconds, compiled per-run seconds, notes)."""
-    n = int(round(T / H))
+    n = round(T / H)
     B_max = max(sizes)
     seeds = run_seeds(0, B_max)
     noise = draw_noise(seeds, n, uniform_noise([-XI, -ETA], [XI, ETA]))
@@ -282,9 +280,11 @@ def run(T=2.0, io_T=0.05, repeat=3, sizes=(1, 100, 1000)):
     for engine in ("numpy", "compiled"):
         for B in sizes:
             inputs = {"xi": noise[:, :B, 0], "eta": noise[:, :B, 1], "uc": 0.0}
-            t_B, res = median_time(lambda: loop.simulate(n, inputs=inputs, runs=B, seeds=seeds[:B], engine=engine,
-                                                         store_signals=keep, store_states=False),  # noqa: B023
-                                   repeat)
+            def sim(inputs=inputs, B=B, engine=engine):
+                return loop.simulate(n, inputs=inputs, runs=B, seeds=seeds[:B], engine=engine, store_signals=keep,
+                                     store_states=False)
+
+            t_B, res = median_time(sim, repeat)
             res_by[engine, B] = res
             rows.append(Row(NAME, f"engine `Loop` ({engine}), B = {B}", B, t_B))
     # the single-run trace every other method is checked against: numpy engine, states kept
@@ -317,7 +317,7 @@ def run(T=2.0, io_T=0.05, repeat=3, sizes=(1, 100, 1000)):
                     f"states {d_pd:.1e}"))
 
     # python-control, adaptive: tolerance matched to RK4's accuracy at h (reference: 20 substeps)
-    n_io = int(round(io_T / H))
+    n_io = round(io_T / H)
     fine = build_loop(substeps=20).simulate(n_io, inputs={"xi": noise[:n_io, :1, 0], "eta": noise[:n_io, :1, 1],
                                                           "uc": 0.0}).x[:n_io, 0]
     scale = np.maximum(np.max(np.abs(fine), axis=0), 1e-12)

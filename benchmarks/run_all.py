@@ -11,14 +11,13 @@ never decide pass/fail; each benchmark checks that the implementations it compar
 
 from __future__ import annotations
 
-import _common  # noqa: F401  (before numpy: single-threaded BLAS)
-
 import argparse
 import os
 import platform
 import sys
 from pathlib import Path
 
+import _common  # noqa: F401  (before numpy: single-threaded BLAS)
 import bench_example1
 from _common import table
 
@@ -43,7 +42,7 @@ def main(argv=None) -> int:
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     head = (f"Python {platform.python_version()}, {os.cpu_count()} cores, load average {load:.1f} at the end; "
             f"OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS')}; medians of {args.repeat} repeats; "
-            f"Example 1 over {args.T:g} s ({int(round(args.T / bench_example1.H))} RK4 steps)")
+            f"Example 1 over {args.T:g} s ({round(args.T / bench_example1.H)} RK4 steps)")
     text = "\n".join([head, "", table(rows, base, comp), "", *[f"- {x}" for x in notes]])
     print(text)
     if args.readme:

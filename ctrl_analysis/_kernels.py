@@ -32,13 +32,22 @@ from __future__ import annotations
 import os
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
-from typing import Callable, NamedTuple
+from typing import NamedTuple
 
 import numpy as np
 
-__all__ = ["BlockKernel", "kernel_of", "available", "compile_seconds", "sigma_rhs", "copy_output",
-           "eso_rhs", "compiled_runner"]
+__all__ = [
+    "BlockKernel",
+    "available",
+    "compile_seconds",
+    "compiled_runner",
+    "copy_output",
+    "eso_rhs",
+    "kernel_of",
+    "sigma_rhs",
+]
 
 
 class BlockKernel(NamedTuple):

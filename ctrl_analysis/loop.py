@@ -23,13 +23,22 @@ batch equals the same run alone. :meth:`Loop.interconnect` builds the same arran
 from __future__ import annotations
 
 from dataclasses import dataclass
+
 import numpy as np
 
 from ._validate import check_in, check_int, check_positive
 from .blocks import Block, ContinuousBlock, DiscreteBlock
-from .simulate import STEPPERS, SimResult, _flag_divergence
+from .simulate import (
+    CHUNK_BYTES,
+    RESULT_BYTES,
+    STEPPERS,
+    SimResult,
+    _flag_divergence,
+    check_result_memory,
+    chunk_bounds,
+)
 
-__all__ = ["Placed", "place", "Loop", "LoopResponse"]
+__all__ = ["Loop", "LoopResponse", "Placed", "place"]
 
 
 @dataclass(frozen=True)
@@ -345,12 +354,10 @@ class Loop:
         Raises
         ------
         MemoryError
-            If the stored trajectories of the whole batch cannot fit in ``max_bytes`` times the
-            number of chunks allowed (:data:`~ctrl_analysis.simulate.RESULT_BYTES`); the message
-            says which argument to change.
+            If the stored trajectories of the whole batch would exceed
+            :data:`~ctrl_analysis.simulate.RESULT_BYTES` (half the physical memory); the message
+            says what to change.
         """
-        from .simulate import CHUNK_BYTES, RESULT_BYTES, check_result_memory, chunk_bounds
-
         n_steps = check_int("n_steps", n_steps, minimum=1)
         if runs is not None:
             runs = check_int("runs", runs, minimum=1)
@@ -492,7 +499,7 @@ class Loop:
             for k in range(n_steps + 1):
                 tk = t[k]
                 for j, a, last in per_step:
-                    S[:, j] = a[k if k < last else last]
+                    S[:, j] = a[min(k, last)]
                 for j, f in fcols:
                     S[:, j] = f(tk)
                 evaluate(order, tk, x)

@@ -25,14 +25,14 @@ from __future__ import annotations
 
 import math
 import os
-from typing import Callable, Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
 from ._validate import check_int
 from .progress import bar
 
-__all__ = ["default_jobs", "chunk_slices", "map_chunks", "gather", "monte_carlo", "sweep", "grid_points"]
+__all__ = ["chunk_slices", "default_jobs", "gather", "grid_points", "map_chunks", "monte_carlo", "sweep"]
 
 
 def default_jobs() -> int:
@@ -133,7 +133,8 @@ def map_chunks(fn: Callable, args: Sequence, *, jobs: int = 1, scheduler=None, d
                 pb.update(1)
             return out
         import multiprocessing as mp
-        from concurrent.futures import ProcessPoolExecutor, as_completed as done
+        from concurrent.futures import ProcessPoolExecutor
+        from concurrent.futures import as_completed as done
 
         method = "fork" if "fork" in mp.get_all_start_methods() else "spawn"
         with ProcessPoolExecutor(max_workers=min(jobs, len(args)), mp_context=mp.get_context(method)) as ex:

@@ -10,7 +10,7 @@ from __future__ import annotations
 import os
 import sys
 
-__all__ = ["bar", "enabled", "NullBar"]
+__all__ = ["NullBar", "bar", "enabled"]
 
 
 def enabled(stream=None) -> bool:

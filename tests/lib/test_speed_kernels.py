@@ -4,7 +4,13 @@ import numpy as np
 import pytest
 
 from ctrl_analysis import _kernels
-from ctrl_analysis._kernels import BlockKernel, copy_output, eso_rhs, kernel_of, sigma_rhs
+from ctrl_analysis._kernels import (
+    BlockKernel,
+    copy_output,
+    eso_rhs,
+    kernel_of,
+    sigma_rhs,
+)
 from ctrl_analysis.blocks import ContinuousBlock, DiscreteBlock
 from ctrl_analysis.estimators.differential import DifferentialEstimator
 from ctrl_analysis.estimators.eso import ExtendedStateObserver
