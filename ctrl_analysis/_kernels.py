@@ -360,7 +360,13 @@ def _runner_module(src: str, fns: dict):
         except (OSError, TypeError):  # pragma: no cover - source unavailable: key on the identity
             digest.update(repr(fns[name]).encode())
     d = cache_dir()
-    d.mkdir(parents=True, exist_ok=True)
+    try:
+        d.mkdir(parents=True, exist_ok=True)
+    except OSError:  # read-only home: a per-user temporary directory still caches within the machine
+        import tempfile
+
+        d = Path(tempfile.gettempdir()) / f"ctrl_analysis-{os.getuid() if hasattr(os, 'getuid') else 0}" / "kernels"
+        d.mkdir(parents=True, exist_ok=True)
     path = d / f"loop_{digest.hexdigest()[:20]}.py"
     if not path.exists():
         tmp = path.with_suffix(f".{os.getpid()}.tmp")

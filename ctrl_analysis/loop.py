@@ -438,7 +438,16 @@ class Loop:
             if engine == "compiled":
                 raise ValueError(f"engine='compiled' is not possible for this loop: {why}")
             return None
-        run = _kernels.compiled_runner(self, kernels, finite_bound)
+        try:
+            run = _kernels.compiled_runner(self, kernels, finite_bound)
+        except Exception as exc:  # a kernel numba cannot compile: say so, and use the numpy path under "auto"
+            if engine == "compiled":
+                raise
+            import warnings
+
+            warnings.warn(f"compiled engine unavailable for this loop ({type(exc).__name__}: {exc}); "
+                          "using the numpy engine", RuntimeWarning, stacklevel=3)
+            return None
         return run, [np.ascontiguousarray(kernels[p.name].params, dtype=float) for p in self.placed]
 
     def _run_compiled(self, runner, plan, n_steps, t, x, held, bound, keep_cols, store, xs, diverged, div_step):

@@ -170,3 +170,30 @@ def test_compiled_engine_says_why_it_cannot_run():
         osc.simulate(5, inputs={"w": 0.0, "v": 0.0}, engine="compiled")
     with pytest.raises(ValueError, match="engine"):
         osc.simulate(5, inputs={"w": 0.0, "v": 0.0}, engine="fast")
+
+
+def _plain_python(v):
+    return v
+
+
+def bad_rhs(t, x, u, p, dx):
+    dx[0] = _plain_python(-x[0]) + u[0]  # calls a plain Python function: numba cannot type this kernel
+
+
+class BadKernel(ContinuousBlock):
+    inputs, outputs, states = ("f",), ("y",), ("y",)
+
+    def rhs(self, t, x, u, params=None):
+        return -x + u
+
+    def kernel(self):
+        return BlockKernel(output=copy_output, params=np.zeros(1), rhs=bad_rhs)
+
+
+def test_auto_engine_falls_back_to_numpy_with_a_warning_when_a_kernel_does_not_compile():
+    loop = Loop([place(BadKernel(), "b")], dt=0.1)
+    with pytest.warns(RuntimeWarning, match="compiled engine unavailable"):
+        res = loop.simulate(10, inputs={"f": 1.0})
+    np.testing.assert_allclose(res["y"][-1, 0], 1 - np.exp(-1.0), rtol=1e-6)
+    with pytest.raises(Exception, match="(?i)typing|type"):
+        loop.simulate(10, inputs={"f": 1.0}, engine="compiled")
