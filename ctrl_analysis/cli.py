@@ -76,7 +76,7 @@ def _run_study(task) -> tuple[int, str]:
     t0 = time.perf_counter()
     try:
         result = load_study(name).run(ctx)
-    except (ValueError, TypeError, RuntimeError, ArithmeticError) as exc:
+    except (ValueError, TypeError, RuntimeError, ArithmeticError, MemoryError) as exc:
         sys.stderr.write(f"ctrl-analysis: error: study {name!r} failed: {exc}\n")
         return 1, ""
     result.runtime_s = time.perf_counter() - t0
