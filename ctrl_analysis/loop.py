@@ -306,7 +306,7 @@ class Loop:
     def simulate(self, n_steps: int, *, inputs=None, x0=None, runs: int | None = None, t0: float = 0.0,
                  params=None, bound: float = 1e8, store_states: bool = True, seeds=None,
                  store_signals=None, chunk_runs: int | None = None, max_bytes: float | None = None,
-                 progress=None, engine: str = "auto") -> LoopResponse:
+                 progress=None, engine: str = "auto", jobs: int = 1) -> LoopResponse:
         """Step the loop ``n_steps`` samples over a batch of runs.
 
         Parameters
@@ -346,6 +346,10 @@ class Loop:
             every block, no callable input and ``params=None``. ``"auto"``: compiled when possible.
             The choice depends on the loop only, never on the batch size, so run ``b`` is the same
             whatever the batch; the two engines agree to rounding (bit for bit without ``pow``).
+        jobs : int
+            Processes the batch is split over (:func:`ctrl_analysis.parallel.map_chunks`); the
+            result equals ``jobs=1`` bit for bit. Needs a picklable loop and no callable input
+            (otherwise the batch runs in this process, with a warning for an unpicklable loop).
 
         Returns
         -------
@@ -387,6 +391,11 @@ class Loop:
         size = B if chunk_runs is None else check_int("chunk_runs", chunk_runs, minimum=1)
         size = max(1, min(size, int(limit // work))) if chunk_runs is None else size
         check_in("engine", engine, ("auto", "numpy", "compiled"))
+        jobs = check_int("jobs", jobs, minimum=1)
+        if jobs > 1 and B > 1 and not funcs and self._picklable():
+            opts = {"t0": t0, "params": params, "bound": bound, "store_states": store_states, "store_signals": keep,
+                    "chunk_runs": chunk_runs, "max_bytes": max_bytes, "engine": engine}
+            return self._simulate_parallel(jobs, n_steps, held, x, opts, seeds)
         runner = self._compiled(engine, funcs, params, np.isfinite(bound))
         t = t0 + self.dt * np.arange(n_steps + 1)
         store = np.empty((n_steps + 1, B, len(keep)))
@@ -414,6 +423,38 @@ class Loop:
                             seeds=None if seeds is None else list(seeds), bound=bound, signals=sig_store,
                             slices=dict(self.slices), external=self.external, outlist=self.outlist,
                             state_names=state_names)
+
+    def _picklable(self) -> bool:
+        import pickle
+        import warnings
+
+        try:
+            pickle.dumps(self)
+        except (pickle.PicklingError, AttributeError, TypeError) as exc:
+            warnings.warn(f"jobs > 1 needs a picklable loop ({exc}); running the batch in this process",
+                          RuntimeWarning, stacklevel=3)
+            return False
+        return True
+
+    def _simulate_parallel(self, jobs, n_steps, held, x, opts, seeds):
+        """Chunks of the batch in ``jobs`` processes, joined into one response (bit for bit ``jobs=1``)."""
+        from .parallel import chunk_slices, map_chunks
+
+        tasks = []
+        for sl in chunk_slices(x.shape[0], chunks=jobs):
+            inputs = {s: (a[:, sl] if a.ndim == 2 else a) for s, a in held.items()}
+            x0 = {name: x[sl, bsl] for name, bsl in self.slices.items()}
+            tasks.append((self, n_steps, dict(opts, inputs=inputs, x0=x0, runs=sl.stop - sl.start)))
+        parts = map_chunks(_simulate_task, tasks, jobs=jobs)
+        first = parts[0]
+        xs = None if first.x is None else np.concatenate([p.x for p in parts], axis=1)
+        signals = {s: np.concatenate([p.signals[s] for p in parts], axis=1) for s in first.signals}
+        return LoopResponse(t=first.t, x=xs, u=None, y=None,
+                            diverged=np.concatenate([p.diverged for p in parts]),
+                            diverged_step=np.concatenate([p.diverged_step for p in parts]),
+                            seeds=None if seeds is None else list(seeds), bound=first.bound, signals=signals,
+                            slices=dict(self.slices), external=self.external, outlist=self.outlist,
+                            state_names=first.state_names)
 
     def _compiled(self, engine, funcs, params, finite_bound):
         """The compiled runner and the kernels' parameters, or ``None`` for the numpy path."""
@@ -563,3 +604,9 @@ class Loop:
 
 
 _NO_STATE = slice(0, 0)
+
+
+def _simulate_task(task):
+    """One chunk of :meth:`Loop.simulate` with ``jobs > 1`` (module level: run in a worker process)."""
+    loop, n_steps, kw = task
+    return loop.simulate(n_steps, **kw)

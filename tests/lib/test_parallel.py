@@ -177,3 +177,17 @@ def test_cli_runs_studies_side_by_side_with_jobs(tmp_path, capsys):
     with pytest.raises(SystemExit) as exc:
         main(["reproduce", "ckf", "--jobs", "0"])
     assert exc.value.code == 2
+
+
+def test_loop_simulate_with_jobs_equals_one_process_bit_for_bit():
+    seeds = run_seeds(8, 9)
+    noise = draw_noise(seeds, N_STEPS, gaussian_noise([0.3, 0.01]))
+    loop = Loop([place(Damped(), "plant"), place(DifferentialEstimator(3, 4.0), "sigma")], dt=0.01)
+    kw = {"inputs": {"w": noise[:, :, 0], "v": noise[:, :, 1]}, "seeds": seeds,
+          "x0": {"plant": np.column_stack([np.linspace(0, 1, 9), np.zeros(9)])}}
+    one = loop.simulate(N_STEPS, **kw)
+    two = loop.simulate(N_STEPS, jobs=2, **kw)
+    assert np.array_equal(one.x, two.x) and two.seeds == seeds and two.runs == 9
+    for s in one.signals:
+        assert np.array_equal(one[s], two[s])
+    assert np.array_equal(one.to_timeresponse(4).outputs, two.to_timeresponse(4).outputs)
