@@ -30,6 +30,22 @@ def median_time(fn, repeat: int) -> tuple[float, object]:
     return statistics.median(times), out
 
 
+def round_robin(fns: dict, repeat: int) -> dict:
+    """Median wall time of each ``fns[name]()`` over ``repeat`` rounds, the methods interleaved in every round.
+
+    Interleaving makes a change in the machine's load (a shared machine) hit every method alike, so
+    ratios stay meaningful when absolute times drift. Returns ``name -> (median seconds, last result)``.
+    """
+    times = {name: [] for name in fns}
+    out = {}
+    for _ in range(repeat):
+        for name, fn in fns.items():
+            t0 = time.perf_counter()
+            out[name] = fn()
+            times[name].append(time.perf_counter() - t0)
+    return {name: (statistics.median(times[name]), out[name]) for name in fns}
+
+
 @dataclass
 class Row:
     """One line of the benchmark table: a method, its runs, its median time, and its agreement."""

@@ -31,7 +31,7 @@ import time
 
 import _common  # noqa: F401  (single-threaded BLAS, repository on sys.path)
 import numpy as np
-from _common import Row, median_time
+from _common import Row, median_time, round_robin
 
 from ctrl_analysis._kernels import BlockKernel
 from ctrl_analysis.blocks import ContinuousBlock
@@ -253,11 +253,12 @@ def run(T=2.0, io_T=0.05, repeat=3, sizes=(1, 100, 1000)):
     c = coefficients(loop)
     rows, notes = [], []
 
+    from ctrl_analysis import _kernels
+
     # float loop, one run at a time (the noise converted to lists once, inside the timing)
     def py(b=0):
         return float_loop(noise[:, b, 0].tolist(), noise[:, b, 1].tolist(), n, H, c)
 
-    t_py, (xf_py, err_py) = median_time(py, repeat)
     fn_c, t_compile = compiled_loop()
     n_c = 20
     xi_c = np.ascontiguousarray(noise[:, :n_c, 0].T)
@@ -266,26 +267,28 @@ def run(T=2.0, io_T=0.05, repeat=3, sizes=(1, 100, 1000)):
     def compiled():
         return [fn_c(xi_c[b], eta_c[b], n, H, c) for b in range(n_c)]
 
-    t_c, out_c = median_time(compiled, repeat)
     notes.append(f"numba compile time of the reference: {t_compile:.2f} s (first call; cached on disk afterwards)")
-
-    from ctrl_analysis import _kernels
-
     keep = ["x1", "x2", "xhat[0]", "xhat[1]", "xhat1", "xhat2"]  # what the study's quantities need
-    res_by = {}
     c0 = _kernels.compile_seconds()
     loop.simulate(2, inputs={"xi": 0.0, "eta": 0.0, "uc": 0.0}, engine="compiled")  # compile (or load) once
     notes.append(f"compiled engine: generating + compiling (or loading from the disk cache) the loop runner "
                  f"took {_kernels.compile_seconds() - c0:.2f} s, not counted in the rows")
+    fns = {"py": py, "ref": compiled}
     for engine in ("numpy", "compiled"):
         for B in sizes:
-            inputs = {"xi": noise[:, :B, 0], "eta": noise[:, :B, 1], "uc": 0.0}
-            def sim(inputs=inputs, B=B, engine=engine):
+            def sim(B=B, engine=engine):
+                inputs = {"xi": noise[:, :B, 0], "eta": noise[:, :B, 1], "uc": 0.0}
                 return loop.simulate(n, inputs=inputs, runs=B, seeds=seeds[:B], engine=engine, store_signals=keep,
                                      store_states=False)
 
-            t_B, res = median_time(sim, repeat)
-            res_by[engine, B] = res
+            fns[engine, B] = sim
+    timed = round_robin(fns, repeat)  # every method once per round: load changes hit all alike
+    t_py, (xf_py, err_py) = timed["py"]
+    t_c, out_c = timed["ref"]
+    res_by = {}
+    for engine in ("numpy", "compiled"):
+        for B in sizes:
+            t_B, res_by[engine, B] = timed[engine, B]
             rows.append(Row(NAME, f"engine `Loop` ({engine}), B = {B}", B, t_B))
     # the single-run trace every other method is checked against: numpy engine, states kept
     res1 = loop.simulate(n, inputs={"xi": noise[:, :1, 0], "eta": noise[:, :1, 1], "uc": 0.0}, engine="numpy")
