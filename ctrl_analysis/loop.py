@@ -15,7 +15,11 @@ sample of period ``dt`` at ``t_k = t0 + k dt`` does, in python-control's callbac
 4. flag runs whose state has left ``|x| <= bound`` or become non-finite (which run, which step).
 
 The batch axis ``B`` runs Monte Carlo seeds or a parameter grid side by side; run ``b`` of a
-batch equals the same run alone. :meth:`Loop.interconnect` builds the same arrangement as a
+batch equals the same run alone. Two engines step the loop: ``"numpy"`` calls the blocks' batched
+methods; ``"compiled"`` (chosen by ``engine="auto"`` when every block has a per-run kernel, see
+:mod:`ctrl_analysis._kernels`) runs one generated numba function with the same sample and stage
+order. A batch is stepped in chunks when it is large (results unchanged) and can be split over
+processes (``jobs``, :mod:`ctrl_analysis.parallel`). :meth:`Loop.interconnect` builds the same arrangement as a
 ``control.interconnect`` (all blocks continuous, or all discrete with the loop's ``dt``), and
 :meth:`LoopResponse.to_timeresponse` converts one run to a ``control.TimeResponseData``.
 """

@@ -12,6 +12,9 @@ Conventions
 * A run whose state becomes non-finite or exceeds ``bound`` is flagged (run index and step), its
   state set to NaN from then on, and it is excluded by :attr:`SimResult.ok`; it is never silently
   averaged.
+* A batch whose working arrays exceed :data:`CHUNK_BYTES` is stepped in chunks of runs (each run's
+  result unchanged); a stored result larger than half the physical memory raises a
+  :class:`MemoryError` saying what to do (:func:`check_result_memory`).
 """
 
 from __future__ import annotations
