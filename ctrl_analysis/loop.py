@@ -347,7 +347,8 @@ class Loop:
         engine : {"auto", "numpy", "compiled"}
             ``"numpy"``: the blocks' batched methods. ``"compiled"``: one numba function for the whole
             loop built from the blocks' kernels (:mod:`ctrl_analysis._kernels`); needs a kernel for
-            every block, no callable input and ``params=None``. ``"auto"``: compiled when possible.
+            every block, no callable input and ``params=None``. ``"auto"``: compiled when possible
+            (the environment variable ``CTRL_ANALYSIS_ENGINE=numpy`` makes ``"auto"`` mean numpy).
             The choice depends on the loop only, never on the batch size, so run ``b`` is the same
             whatever the batch; the two engines agree to rounding (bit for bit without ``pow``).
         jobs : int
@@ -462,7 +463,9 @@ class Loop:
 
     def _compiled(self, engine, funcs, params, finite_bound):
         """The compiled runner and the kernels' parameters, or ``None`` for the numpy path."""
-        if engine == "numpy":
+        import os
+
+        if engine == "numpy" or (engine == "auto" and os.environ.get("CTRL_ANALYSIS_ENGINE") == "numpy"):
             return None
         from . import _kernels
 

@@ -197,3 +197,10 @@ def test_auto_engine_falls_back_to_numpy_with_a_warning_when_a_kernel_does_not_c
     np.testing.assert_allclose(res["y"][-1, 0], 1 - np.exp(-1.0), rtol=1e-6)
     with pytest.raises(Exception, match="(?i)typing|type"):
         loop.simulate(10, inputs={"f": 1.0}, engine="compiled")
+
+
+def test_environment_can_make_auto_mean_numpy(monkeypatch):
+    loop = Loop([place(DifferentialEstimator(3, 4.0), "sigma")], dt=0.01)
+    monkeypatch.setenv("CTRL_ANALYSIS_ENGINE", "numpy")
+    assert loop._compiled("auto", {}, None, True) is None
+    assert loop._compiled("compiled", {}, None, True) is not None  # an explicit request still compiles
