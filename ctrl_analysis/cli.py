@@ -51,6 +51,10 @@ def _build_parser() -> argparse.ArgumentParser:
     rep.add_argument("--runs", type=_positive_int, default=None, help="Monte Carlo runs where noise is random")
     rep.add_argument("--seed", type=_seed, default=0, help="base seed (default: 0)")
     rep.add_argument("--quick", action="store_true", help="fewer runs / shorter horizons, for smoke tests")
+    rep.add_argument("--jobs", type=_positive_int, default=None,
+                     help="processes: studies run side by side, Monte Carlo chunks split (default: all cores)")
+    rep.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                     help="Dask scheduler for sweeps and large Monte Carlo ('local', or tcp://host:8786)")
     return parser
 
 
@@ -89,27 +93,39 @@ def _one_line(exc: BaseException, limit: int = 400) -> str:
     return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
 
 
-def _run_study(name: str, out: Path, args, this_run: dict) -> dict:
-    """Run one study into a staged directory beside ``out/name``; move it into place when complete."""
+def _run_study(task) -> dict:
+    """Run one study (here or in a worker process) into a staged directory beside ``out/name``.
+
+    The directory is moved into place only when the study completed. Returns a record with the
+    study's name, its summary text and ``error`` (one line, or ``None``); never raises for a study
+    failure, so one failing study does not stop the others.
+    """
     from analysis import load_study
 
-    with staged_directory(out / name) as staged:
-        ctx = StudyContext(out_dir=staged, runs=args.runs, seed=args.seed, quick=args.quick,
-                           progress=_progress(name))
-        t0 = time.perf_counter()
-        result = load_study(name).run(ctx)
-        result.runtime_s = time.perf_counter() - t0
-        # what the command line asked for, beside the study's own settings
-        result.settings["cli"] = {"seed": args.seed, "runs": args.runs, "quick": bool(args.quick)}
-        write_results_json(result, staged)
-        data = result.to_dict()
-    this_run[name] = {"seed": args.seed, "runs": args.runs, "quick": bool(args.quick)}
-    print(f"\n== {name}: {out / name / 'results.json'} ({len(result.figures)} figures, {result.runtime_s:.1f} s)")
+    name, out, runs, seed, quick, jobs, scheduler = task
+    out = Path(out)
+    record = {"name": name, "error": None, "text": "", "run": {"seed": seed, "runs": runs, "quick": bool(quick)}}
+    try:
+        with staged_directory(out / name) as staged:
+            ctx = StudyContext(out_dir=staged, runs=runs, seed=seed, quick=quick, progress=_progress(name),
+                               jobs=jobs, scheduler=scheduler)
+            t0 = time.perf_counter()
+            result = load_study(name).run(ctx)
+            result.runtime_s = time.perf_counter() - t0
+            # what the command line asked for, beside the study's own settings
+            result.settings["cli"] = dict(record["run"])
+            write_results_json(result, staged)
+            data = result.to_dict()
+    except Exception as exc:  # noqa: BLE001 - any study failure is reported in one line, never a traceback
+        record["error"] = _one_line(exc)
+        return record
+    lines = [f"\n== {name}: {out / name / 'results.json'} ({len(result.figures)} figures, {result.runtime_s:.1f} s)"]
     if data["quantities"]:
-        print(summary_table(data))
+        lines.append(summary_table(data))
     if result.missing:
-        print("not built yet: " + "; ".join(result.missing))
-    return data
+        lines.append("not built yet: " + "; ".join(result.missing))
+    record["text"] = "\n".join(lines)
+    return record
 
 
 def _reproduce(args) -> int:
@@ -121,14 +137,24 @@ def _reproduce(args) -> int:
         raise _UsageError(f"unknown study {unknown[0]!r}; choose from {', '.join(STUDIES)} or all")
     out = _check_out(args.out)
 
+    from .parallel import default_jobs, map_chunks
+
+    todo = list(dict.fromkeys(names))
+    jobs = default_jobs() if args.jobs is None else args.jobs
+    # studies side by side in processes (each with its share of the cores), or one by one on a scheduler
+    side_by_side = 1 if args.scheduler is not None else min(jobs, len(todo))
+    tasks = [(name, str(out), args.runs, args.seed, args.quick, max(1, jobs // side_by_side), args.scheduler)
+             for name in todo]
     this_run: dict = {}
     failed: dict = {}
-    for name in dict.fromkeys(names):
-        try:
-            _run_study(name, out, args, this_run)
-        except Exception as exc:  # noqa: BLE001 - any study failure is reported in one line, never a traceback
-            failed[name] = _one_line(exc)
+    for record in map_chunks(_run_study, tasks, jobs=side_by_side, desc="studies"):
+        name = record["name"]
+        if record["error"] is not None:
+            failed[name] = record["error"]
             sys.stderr.write(f"ctrl-analysis: error: study {name!r} failed: {failed[name]}\n")
+            continue
+        this_run[name] = record["run"]
+        print(record["text"])
     # `all` writes REPORT.md; a partial run refreshes an existing one, so it never shows a study's old
     # numbers beside its new files (the studies not run now are marked stale there)
     if "all" in args.studies or (out / "REPORT.md").exists():

@@ -15,7 +15,11 @@ sample of period ``dt`` at ``t_k = t0 + k dt`` does, in python-control's callbac
 4. flag runs whose state has left ``|x| <= bound`` or become non-finite (which run, which step).
 
 The batch axis ``B`` runs Monte Carlo seeds or a parameter grid side by side; run ``b`` of a
-batch equals the same run alone. :meth:`Loop.interconnect` builds the same arrangement as a
+batch equals the same run alone. Two engines step the loop: ``"numpy"`` calls the blocks' batched
+methods; ``"compiled"`` (chosen by ``engine="auto"`` when every block has a per-run kernel, see
+:mod:`ctrl_analysis._kernels`) runs one generated numba function with the same sample and stage
+order. A batch is stepped in chunks when it is large (results unchanged) and can be split over
+processes (``jobs``, :mod:`ctrl_analysis.parallel`). :meth:`Loop.interconnect` builds the same arrangement as a
 ``control.interconnect`` (all blocks continuous, or all discrete with the loop's ``dt``), and
 :meth:`LoopResponse.to_timeresponse` converts one run to a ``control.TimeResponseData``.
 """
@@ -23,13 +27,22 @@ batch equals the same run alone. :meth:`Loop.interconnect` builds the same arran
 from __future__ import annotations
 
 from dataclasses import dataclass
+
 import numpy as np
 
 from ._validate import check_in, check_int, check_positive
 from .blocks import Block, ContinuousBlock, DiscreteBlock
-from .simulate import STEPPERS, SimResult, _flag_divergence
+from .simulate import (
+    CHUNK_BYTES,
+    RESULT_BYTES,
+    STEPPERS,
+    SimResult,
+    _flag_divergence,
+    check_result_memory,
+    chunk_bounds,
+)
 
-__all__ = ["Placed", "place", "Loop", "LoopResponse"]
+__all__ = ["Loop", "LoopResponse", "Placed", "place"]
 
 
 @dataclass(frozen=True)
@@ -273,21 +286,48 @@ class Loop:
             x[:, self.slices[p.name]] = v
         return x
 
-    def _evaluate(self, order, t, x, sig, params):
-        """Outputs of ``order``'s blocks at ``(t, x)`` into ``sig`` (name -> (B,) column)."""
-        for p in order:
-            # a block without feedthrough must not read u in output(): its inputs may not exist yet
-            # (they are produced downstream in a feedback loop), so it gets zeros
-            u = self._block_input(p, sig, x.shape[0]) if p.block.feedthrough else np.zeros((x.shape[0], len(p.inputs)))
-            y = p.block.output(t, x[:, self.slices.get(p.name, _NO_STATE)], u, params)
-            for j, s in enumerate(p.outputs):
-                sig[s] = y[:, j]
+    def _plan(self):
+        """Index arrays of the fast path, built once: every signal a column of one ``(B, n_sig)`` array."""
+        if getattr(self, "_compiled_plan", None) is not None:
+            return self._compiled_plan
+        names = list(self.external) + [s for p in self.placed for s in p.outputs]
+        col = {s: j for j, s in enumerate(names)}
 
-    def _block_input(self, p, sig, B):
-        return np.stack([sig[s] for s in p.inputs], axis=1) if p.inputs else np.zeros((B, 0))
+        def cols(sigs):
+            idx = [col[s] for s in sigs]
+            if idx and idx == list(range(idx[0], idx[0] + len(idx))):
+                return slice(idx[0], idx[0] + len(idx))  # contiguous: a view, no gather
+            return np.array(idx, dtype=np.intp)
+
+        entries = {p.name: (p.block, cols(p.inputs), cols(p.outputs), self.slices.get(p.name, _NO_STATE))
+                   for p in self.placed}
+        # at integration stages only the blocks feeding a continuous block (through static blocks) matter
+        producer = {s: p for p in self.placed for s in p.outputs}
+        needed, todo = set(), [s for p in self.continuous for s in p.inputs]
+        while todo:
+            s = todo.pop()
+            p = producer.get(s)
+            if p is None or p.name in needed or isinstance(p.block, DiscreteBlock):
+                continue
+            needed.add(p.name)
+            if p.block.feedthrough:
+                todo.extend(p.inputs)
+        stage = [entries[p.name] for p in self.stage_order if p.name in needed]
+        plan = {"names": names, "col": col, "order": [entries[p.name] for p in self.order], "stage": stage,
+                "discrete": [entries[p.name] for p in self.discrete],
+                "continuous": [entries[p.name] for p in self.continuous]}
+        self._compiled_plan = plan
+        return plan
+
+    def _memory_per_run(self, n_steps, n_stored_signals, store_states):
+        """Bytes one run's stored trajectories take (signals, plus states when stored)."""
+        width = n_stored_signals + (self.n_states if store_states else 0)
+        return 8 * (n_steps + 1) * max(width, 1)
 
     def simulate(self, n_steps: int, *, inputs=None, x0=None, runs: int | None = None, t0: float = 0.0,
-                 params=None, bound: float = 1e8, store_states: bool = True, seeds=None) -> LoopResponse:
+                 params=None, bound: float = 1e8, store_states: bool = True, seeds=None,
+                 store_signals=None, chunk_runs: int | None = None, max_bytes: float | None = None,
+                 progress=None, engine: str = "auto", jobs: int = 1) -> LoopResponse:
         """Step the loop ``n_steps`` samples over a batch of runs.
 
         Parameters
@@ -311,10 +351,38 @@ class Loop:
             Keep the state trajectory (``False`` saves memory in large batches).
         seeds : list, optional
             Per-run seeds, recorded in the response.
+        store_signals : sequence of str, optional
+            Signals kept in the response (default: all); fewer save memory in large batches.
+        chunk_runs : int, optional
+            Step the batch in chunks of at most this many runs (default: chosen from ``max_bytes``).
+            The per-step work of a chunk stays in cache; every run's result is the same bit for bit.
+        max_bytes : float, optional
+            Memory allowed for the working arrays of one chunk (default
+            :data:`ctrl_analysis.simulate.CHUNK_BYTES`); the batch is split into chunks that fit.
+        progress : callable, optional
+            ``progress(n)`` called after every ``n`` samples of a chunk (e.g. a tqdm ``update``).
+        engine : {"auto", "numpy", "compiled"}
+            ``"numpy"``: the blocks' batched methods. ``"compiled"``: one numba function for the whole
+            loop built from the blocks' kernels (:mod:`ctrl_analysis._kernels`); needs a kernel for
+            every block, no callable input and ``params=None``. ``"auto"``: compiled when possible
+            (the environment variable ``CTRL_ANALYSIS_ENGINE=numpy`` makes ``"auto"`` mean numpy).
+            The choice depends on the loop only, never on the batch size, so run ``b`` is the same
+            whatever the batch; the two engines agree to rounding (bit for bit without ``pow``).
+        jobs : int
+            Processes the batch is split over (:func:`ctrl_analysis.parallel.map_chunks`); the
+            result equals ``jobs=1`` bit for bit. Needs a picklable loop and no callable input
+            (otherwise the batch runs in this process, with a warning for an unpicklable loop).
 
         Returns
         -------
         LoopResponse
+
+        Raises
+        ------
+        MemoryError
+            If the stored trajectories of the whole batch would exceed
+            :data:`~ctrl_analysis.simulate.RESULT_BYTES` (half the physical memory); the message
+            says what to change.
         """
         n_steps = check_int("n_steps", n_steps, minimum=1)
         if runs is not None:
@@ -331,63 +399,212 @@ class Loop:
         x = self._x0(x0, B)
         if seeds is not None and len(seeds) != B:
             raise ValueError(f"seeds must have one entry per run ({B}), got {len(seeds)}")
+        plan = self._plan()
+        names, col = plan["names"], plan["col"]
+        keep = names if store_signals is None else list(dict.fromkeys(store_signals))
+        for s in keep:
+            if s not in col:
+                raise ValueError(f"store_signals names unknown signal {s!r}; signals are {names}")
+        keep_cols = np.array([col[s] for s in keep], dtype=np.intp)
+        per_run = self._memory_per_run(n_steps, len(keep), store_states)
+        check_result_memory(per_run * B, RESULT_BYTES, "Loop.simulate")
+        limit = CHUNK_BYTES if max_bytes is None else check_positive("max_bytes", max_bytes)
+        work = 8 * (8 * self.n_states + 2 * len(names)) + per_run  # temporaries + stored rows, per run
+        size = B if chunk_runs is None else check_int("chunk_runs", chunk_runs, minimum=1)
+        size = max(1, min(size, int(limit // work))) if chunk_runs is None else size
+        check_in("engine", engine, ("auto", "numpy", "compiled"))
+        jobs = check_int("jobs", jobs, minimum=1)
+        if jobs > 1 and B > 1 and not funcs and self._picklable():
+            opts = {"t0": t0, "params": params, "bound": bound, "store_states": store_states, "store_signals": keep,
+                    "chunk_runs": chunk_runs, "max_bytes": max_bytes, "engine": engine}
+            return self._simulate_parallel(jobs, n_steps, held, x, opts, seeds)
+        runner = self._compiled(engine, funcs, params, np.isfinite(bound))
         t = t0 + self.dt * np.arange(n_steps + 1)
-        sig_store = {}
+        store = np.empty((n_steps + 1, B, len(keep)))
         xs = np.empty((n_steps + 1, B, self.n_states)) if store_states else None
         diverged = np.zeros(B, dtype=bool)
         div_step = np.full(B, -1, dtype=int)
-        step = STEPPERS[self.method]
-        h = self.dt / self.substeps
-        nc = self.n_continuous
-
-        def ext_at(k, tk, sig):
-            for s, a in held.items():
-                row = a if a.ndim == 0 else a[min(k, a.shape[0] - 1)]
-                sig[s] = np.broadcast_to(row, (B,))
-            for s, f in funcs.items():
-                sig[s] = np.broadcast_to(np.asarray(f(tk), dtype=float), (B,))
-
-        def stage_rhs(tau, xc, _u, p, sig, x_full):
-            x_full[:, :nc] = xc
-            for s, f in funcs.items():
-                sig[s] = np.broadcast_to(np.asarray(f(tau), dtype=float), (B,))
-            self._evaluate(self.stage_order, tau, x_full, sig, p)
-            return np.concatenate([p_.block.rhs(tau, x_full[:, self.slices[p_.name]],
-                                                self._block_input(p_, sig, B), p)
-                                   for p_ in self.continuous], axis=1)
-
-        with np.errstate(all="ignore"):
-            for k in range(n_steps + 1):
-                tk = t[k]
-                sig = {}
-                ext_at(k, tk, sig)
-                self._evaluate(self.order, tk, x, sig, params)
-                for s, v in sig.items():
-                    if s not in sig_store:
-                        sig_store[s] = np.empty((n_steps + 1, B))
-                    sig_store[s][k] = v
-                if xs is not None:
-                    xs[k] = x
-                if k == n_steps:
-                    break
-                x_next = x.copy()
-                for p in self.discrete:
-                    sl = self.slices[p.name]
-                    x_next[:, sl] = p.block.update(tk, x[:, sl], self._block_input(p, sig, B), params)
-                if nc:
-                    x_stage = x.copy()
-                    xc, tau = x[:, :nc], tk
-                    for _ in range(self.substeps):
-                        xc = step(lambda tt, xx, uu, pp: stage_rhs(tt, xx, uu, pp, sig, x_stage), tau, xc, None, h,
-                                  params)
-                        tau += h
-                    x_next[:, :nc] = xc
-                x = _flag_divergence(x_next, bound, diverged, div_step, k + 1)
+        # a callable input returning one value per run is sliced with its chunk
+        per_run_funcs = {s for s, f in funcs.items() if np.ndim(f(t[0])) == 1 and np.size(f(t[0])) == B > 1}
+        for lo, hi in chunk_bounds(B, size):
+            f_c = {s: (f if s not in per_run_funcs else (lambda tt, f=f, lo=lo, hi=hi: np.asarray(f(tt))[lo:hi]))
+                   for s, f in funcs.items()}
+            h_c = {s: (a[:, lo:hi] if a.ndim == 2 else a) for s, a in held.items()}
+            if runner is not None:
+                self._run_compiled(runner, plan, n_steps, t, x[lo:hi], h_c, bound, keep_cols, store[:, lo:hi],
+                                   None if xs is None else xs[:, lo:hi], diverged[lo:hi], div_step[lo:hi])
+                if progress is not None:
+                    progress(n_steps)
+                continue
+            self._run_chunk(plan, n_steps, t, x[lo:hi], h_c, f_c, params, bound, keep_cols,
+                            store[:, lo:hi], None if xs is None else xs[:, lo:hi],
+                            diverged[lo:hi], div_step[lo:hi], progress)
+        sig_store = {s: store[:, :, j] for j, s in enumerate(keep)}
         state_names = [f"{p.name}.{s}" for p in self.continuous + self.discrete for s in p.block.states]
         return LoopResponse(t=t, x=xs, u=None, y=None, diverged=diverged, diverged_step=div_step,
                             seeds=None if seeds is None else list(seeds), bound=bound, signals=sig_store,
                             slices=dict(self.slices), external=self.external, outlist=self.outlist,
-                            state_names=state_names, x_final=x)
+                            state_names=state_names, x_final=x if xs is None else xs[-1].copy())
+
+    def _picklable(self) -> bool:
+        import pickle
+        import warnings
+
+        try:
+            pickle.dumps(self)
+        except (pickle.PicklingError, AttributeError, TypeError) as exc:
+            warnings.warn(f"jobs > 1 needs a picklable loop ({exc}); running the batch in this process",
+                          RuntimeWarning, stacklevel=3)
+            return False
+        return True
+
+    def _simulate_parallel(self, jobs, n_steps, held, x, opts, seeds):
+        """Chunks of the batch in ``jobs`` processes, joined into one response (bit for bit ``jobs=1``)."""
+        from .parallel import chunk_slices, map_chunks
+
+        tasks = []
+        for sl in chunk_slices(x.shape[0], chunks=jobs):
+            inputs = {s: (a[:, sl] if a.ndim == 2 else a) for s, a in held.items()}
+            x0 = {name: x[sl, bsl] for name, bsl in self.slices.items()}
+            tasks.append((self, n_steps, dict(opts, inputs=inputs, x0=x0, runs=sl.stop - sl.start)))
+        parts = map_chunks(_simulate_task, tasks, jobs=jobs)
+        first = parts[0]
+        xs = None if first.x is None else np.concatenate([p.x for p in parts], axis=1)
+        signals = {s: np.concatenate([p.signals[s] for p in parts], axis=1) for s in first.signals}
+        return LoopResponse(t=first.t, x=xs, u=None, y=None,
+                            diverged=np.concatenate([p.diverged for p in parts]),
+                            diverged_step=np.concatenate([p.diverged_step for p in parts]),
+                            seeds=None if seeds is None else list(seeds), bound=first.bound, signals=signals,
+                            slices=dict(self.slices), external=self.external, outlist=self.outlist,
+                            state_names=first.state_names)
+
+    def _compiled(self, engine, funcs, params, finite_bound):
+        """The compiled runner and the kernels' parameters, or ``None`` for the numpy path."""
+        import os
+
+        if engine == "numpy" or (engine == "auto" and os.environ.get("CTRL_ANALYSIS_ENGINE") == "numpy"):
+            return None
+        from . import _kernels
+
+        why = None
+        if not _kernels.available():
+            why = "numba is not installed"
+        elif funcs or params is not None:
+            why = "callable inputs and params need the numpy path"
+        kernels = {}
+        if why is None:
+            for p in self.placed:
+                k = _kernels.kernel_of(p.block)
+                if k is None:
+                    why = f"block {p.name!r} ({type(p.block).__name__}) has no kernel"
+                    break
+                kernels[p.name] = k
+        if why is not None:
+            if engine == "compiled":
+                raise ValueError(f"engine='compiled' is not possible for this loop: {why}")
+            return None
+        try:
+            run = _kernels.compiled_runner(self, kernels, finite_bound)
+        except Exception as exc:  # a kernel numba cannot compile: say so, and use the numpy path under "auto"
+            if engine == "compiled":
+                raise
+            import warnings
+
+            warnings.warn(f"compiled engine unavailable for this loop ({type(exc).__name__}: {exc}); "
+                          "using the numpy engine", RuntimeWarning, stacklevel=3)
+            return None
+        return run, [np.ascontiguousarray(kernels[p.name].params, dtype=float) for p in self.placed]
+
+    def _run_compiled(self, runner, plan, n_steps, t, x, held, bound, keep_cols, store, xs, diverged, div_step):
+        """One chunk through the compiled runner, writing into the result slices."""
+        run, P = runner
+        B = x.shape[0]
+        col = plan["col"]
+        S0 = np.zeros(len(plan["names"]))
+        varying = [(s, a) for s, a in held.items() if a.ndim > 0]
+        for s, a in held.items():
+            if a.ndim == 0:
+                S0[col[s]] = a
+        H = np.empty((n_steps + 1, B, max(len(varying), 1)))
+        for j, (s, a) in enumerate(varying):
+            a2 = a if a.ndim == 2 else a[:, None]
+            m = min(a.shape[0], n_steps + 1)
+            H[:m, :, j] = a2[:m]
+            H[m:, :, j] = a2[m - 1]  # row N repeats row N-1 when absent
+        HC = np.array([col[s] for s, _ in varying], dtype=np.intp)
+        xs_arg = np.empty((0, 0, 0)) if xs is None else xs
+        run(n_steps, t, self.dt / self.substeps, self.substeps, np.ascontiguousarray(x), H, HC, S0,
+            keep_cols, store, xs_arg, float(bound), diverged, div_step, *P)
+
+    def _run_chunk(self, plan, n_steps, t, x, held, funcs, params, bound, keep_cols, store, xs,
+                   diverged, div_step, progress):
+        """Step one chunk of runs, writing into the result slices ``store``, ``xs``, ``diverged``.
+
+        ``x`` (a view into the caller's state array) holds the final state on return.
+        """
+        x_out = x
+        B = x.shape[0]
+        col = plan["col"]
+        S = np.zeros((B, len(plan["names"])))  # every signal at the current instant or stage
+        per_step = []
+        for s, a in held.items():
+            if a.ndim == 0:
+                S[:, col[s]] = a  # constant: written once
+            else:
+                per_step.append((col[s], a, a.shape[0] - 1))
+        fcols = [(col[s], f) for s, f in funcs.items()]
+        order, stage, discrete, continuous = plan["order"], plan["stage"], plan["discrete"], plan["continuous"]
+        store_all = keep_cols.size == S.shape[1] and np.array_equal(keep_cols, np.arange(S.shape[1]))
+        step = STEPPERS[self.method]
+        h = self.dt / self.substeps
+        nc = self.n_continuous
+        tick = max(1, n_steps // 100)
+
+        def evaluate(blocks, tau, xx):
+            for block, ic, oc, sl in blocks:
+                S[:, oc] = block.output(tau, xx[:, sl], S[:, ic], params)
+
+        def stage_rhs(tau, xc, _u, p):
+            for j, f in fcols:
+                S[:, j] = f(tau)
+            evaluate(stage, tau, xc)  # continuous blocks come first in x: xc holds their states
+            dx = np.empty_like(xc)
+            for block, ic, _, sl in continuous:
+                dx[:, sl] = block.rhs(tau, xc[:, sl], S[:, ic], p)
+            return dx
+
+        with np.errstate(all="ignore"):
+            for k in range(n_steps + 1):
+                tk = t[k]
+                for j, a, last in per_step:
+                    S[:, j] = a[min(k, last)]
+                for j, f in fcols:
+                    S[:, j] = f(tk)
+                evaluate(order, tk, x)
+                store[k] = S if store_all else S[:, keep_cols]
+                if xs is not None:
+                    xs[k] = x
+                if k == n_steps:
+                    break
+                if discrete:
+                    x_next = x.copy()
+                    for block, ic, _, sl in discrete:
+                        x_next[:, sl] = block.update(tk, x[:, sl], S[:, ic], params)
+                else:
+                    x_next = x
+                if nc:
+                    xc, tau = x[:, :nc], tk
+                    for _ in range(self.substeps):
+                        xc = step(stage_rhs, tau, xc, None, h, params)
+                        tau += h
+                    if discrete:
+                        x_next[:, :nc] = xc
+                    else:
+                        x_next = xc
+                x = _flag_divergence(x_next, bound, diverged, div_step, k + 1)
+                if progress is not None and (k + 1) % tick == 0:
+                    progress(tick)
+        x_out[...] = x
 
     # ------------------------------------------------------------------ python-control
     def interconnect(self, name: str | None = None):
@@ -416,3 +633,9 @@ class Loop:
 
 
 _NO_STATE = slice(0, 0)
+
+
+def _simulate_task(task):
+    """One chunk of :meth:`Loop.simulate` with ``jobs > 1`` (module level: run in a worker process)."""
+    loop, n_steps, kw = task
+    return loop.simulate(n_steps, **kw)

@@ -277,6 +277,8 @@ class StudyContext:
     seed: int = 0
     quick: bool = False
     progress: Callable[[str], None] = lambda msg: None
+    jobs: int = 1
+    scheduler: str | None = None
 
     def __post_init__(self):
         self.out_dir = Path(self.out_dir)

@@ -12,10 +12,14 @@ Conventions
 * A run whose state becomes non-finite or exceeds ``bound`` is flagged (run index and step), its
   state set to NaN from then on, and it is excluded by :attr:`SimResult.ok`; it is never silently
   averaged.
+* A batch whose working arrays exceed :data:`CHUNK_BYTES` is stepped in chunks of runs (each run's
+  result unchanged); a stored result larger than half the physical memory raises a
+  :class:`MemoryError` saying what to do (:func:`check_result_memory`).
 """
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass, field
 from typing import Callable
 
@@ -33,6 +37,9 @@ __all__ = [
     "STEPPERS",
     "rk4_step",
     "simulate_sampled",
+    "chunk_bounds",
+    "check_result_memory",
+    "CHUNK_BYTES",
     "simulate_discrete",
     "simulate_ivp",
     "continuous_nlsys",
@@ -204,8 +211,13 @@ def _check_bound(bound) -> float:
 
 
 def _check_bad(x_new: np.ndarray, bound: float) -> np.ndarray:
+    """Runs whose state is non-finite or leaves ``|x| <= bound`` (NaN fails every comparison)."""
+    if x_new.shape[1] == 0:
+        return np.zeros(x_new.shape[0], dtype=bool)
     with np.errstate(invalid="ignore"):
-        return ~np.all(np.isfinite(x_new), axis=1) | np.any(np.abs(x_new) > bound, axis=1)
+        if np.isfinite(bound):
+            return ~(np.abs(x_new).max(axis=1) <= bound)
+        return ~np.isfinite(x_new).all(axis=1)
 
 
 def _flag_divergence(x, bound, diverged, div_step, step_index):
@@ -217,6 +229,51 @@ def _flag_divergence(x, bound, diverged, div_step, step_index):
         x = x.copy()
         x[diverged] = np.nan
     return x
+
+
+# ----------------------------------------------------------------------------------------------
+# Memory: chunks of a batch
+# ----------------------------------------------------------------------------------------------
+
+def _physical_memory() -> int:
+    try:
+        return int(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES"))
+    except (ValueError, OSError, AttributeError):  # pragma: no cover - non-POSIX
+        return 8 * 2**30
+
+
+#: Working memory (bytes) one chunk of a batch may use; larger batches are stepped in chunks.
+CHUNK_BYTES = 256 * 2**20
+#: Largest stored result (bytes) a runner allocates: half the machine's physical memory.
+RESULT_BYTES = _physical_memory() // 2
+
+
+def chunk_bounds(runs: int, size: int) -> list[tuple[int, int]]:
+    """``[(lo, hi), ...]`` splitting ``range(runs)`` into consecutive chunks of at most ``size`` runs.
+
+    Parameters
+    ----------
+    runs : int
+        Batch size (>= 1).
+    size : int
+        Largest chunk (>= 1).
+
+    Returns
+    -------
+    list of tuple of int
+    """
+    runs = check_int("runs", runs, minimum=1)
+    size = check_int("size", size, minimum=1)
+    return [(lo, min(lo + size, runs)) for lo in range(0, runs, size)]
+
+
+def check_result_memory(nbytes: float, limit: float, where: str) -> None:
+    """Raise a :class:`MemoryError` that says what to do when a result would not fit in ``limit`` bytes."""
+    if nbytes > limit:
+        raise MemoryError(
+            f"{where} would store {nbytes / 2**30:.1f} GiB of trajectories (limit {limit / 2**30:.1f} GiB, half "
+            f"the physical memory): pass store_states=False and keep fewer signals, or split the runs with "
+            f"ctrl_analysis.parallel.map_chunks and reduce each chunk to the quantities you need")
 
 
 def _store(buf, k, value, n_rows, B):
@@ -271,6 +328,8 @@ def simulate_sampled(
     store_states: bool = True,
     bound: float = 1e8,
     seeds=None,
+    chunk_runs: int | None = None,
+    max_bytes: float | None = None,
 ) -> SimResult:
     """Sampled-data loop: a continuous part integrated with a fixed step, inputs held per sample.
 
@@ -301,10 +360,22 @@ def simulate_sampled(
         A run whose state leaves ``|x| <= bound`` or becomes non-finite is flagged as diverged.
     seeds : list, optional
         Per-run seeds, recorded in the result.
+    chunk_runs : int, optional
+        Step the batch in chunks of at most this many runs (default: chunks only when the working
+        arrays of the whole batch exceed ``max_bytes``). Only without a ``controller`` (which may
+        keep state across calls); ``rhs`` and ``observe`` must treat runs independently, with
+        parameters shared by all runs. Each run's result is the same bit for bit.
+    max_bytes : float, optional
+        Working memory per chunk (default :data:`CHUNK_BYTES`).
 
     Returns
     -------
     SimResult
+
+    Raises
+    ------
+    MemoryError
+        If the stored states of the whole batch would exceed half the physical memory.
     """
     check_callable("rhs", rhs, "rhs(t, x, u, params)")
     check_callable("controller", controller, "controller(k, t, x, w)", optional=True)
@@ -319,6 +390,22 @@ def simulate_sampled(
     x, noise, B = _prepare(x0, noise, seeds)
     if noise is not None and noise.shape[0] < n_steps:
         raise ValueError(f"noise must have at least n_steps={n_steps} rows, got {noise.shape[0]}")
+
+    if store_states:
+        check_result_memory(8.0 * (n_steps + 1) * B * x.shape[1], RESULT_BYTES, "simulate_sampled")
+    limit = CHUNK_BYTES if max_bytes is None else check_positive("max_bytes", max_bytes)
+    size = B if chunk_runs is None else check_int("chunk_runs", chunk_runs, minimum=1)
+    if chunk_runs is None and 8 * 16 * x.shape[1] * B > limit:
+        size = max(1, int(limit // (8 * 16 * x.shape[1])))
+    if size < B:
+        if controller is not None:
+            raise ValueError("chunk_runs must be None (or >= the batch size) with a controller: a controller "
+                             f"may keep state across calls, got chunk_runs={chunk_runs}")
+        parts = [simulate_sampled(rhs, x[lo:hi], h, n_steps, noise=None if noise is None else noise[:, lo:hi],
+                                  method=method, substeps=substeps, t0=t0, params=params, observe=observe,
+                                  store_states=store_states, bound=bound, chunk_runs=hi - lo)
+                 for lo, hi in chunk_bounds(B, size)]
+        return _join(parts, seeds)
 
     t = t0 + h * np.arange(n_steps + 1)
     xs = np.empty((n_steps + 1, B, x.shape[1])) if store_states else None
@@ -348,6 +435,19 @@ def simulate_sampled(
             ys = _store(ys, n_steps, observe(n_steps, t[n_steps], x, None), n_steps + 1, B)
     return SimResult(t=t, x=xs, u=us, y=ys, diverged=diverged, diverged_step=div_step,
                      seeds=None if seeds is None else list(seeds), bound=bound)
+
+
+def _join(parts: list, seeds) -> SimResult:
+    """One :class:`SimResult` from results of consecutive chunks of a batch (runs on axis 1)."""
+
+    def cat(name, axis):
+        arrays = [getattr(p, name) for p in parts]
+        return None if arrays[0] is None else np.concatenate(arrays, axis=axis)
+
+    first = parts[0]
+    return SimResult(t=first.t, x=cat("x", 1), u=cat("u", 1), y=cat("y", 1), diverged=cat("diverged", 0),
+                     diverged_step=cat("diverged_step", 0), seeds=None if seeds is None else list(seeds),
+                     bound=first.bound)
 
 
 def simulate_discrete(

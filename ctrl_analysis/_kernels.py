@@ -1,0 +1,379 @@
+"""Compiled per-run kernels of blocks, and the compiled runner of a :class:`~ctrl_analysis.loop.Loop`.
+
+The batched block methods (``rhs``/``update``/``output`` on ``(B, n)`` arrays) pay numpy's call
+overhead on every operation, which dominates at small and medium batches. A block can also offer a
+**kernel**: plain-arithmetic functions on *one run* that numba compiles (``njit``, one thread,
+``cache=True``), with signatures
+
+* ``rhs(t, x, u, p, dx)`` (continuous) or ``update(t, x, u, p, x_next)`` (discrete), and
+* ``output(t, x, u, p, y)``,
+
+writing their result into the last argument; ``x``, ``u`` are the run's state and input vectors
+and ``p`` a float64 parameter vector fixed when the block was built. A block gives its kernel with
+a method ``kernel() -> BlockKernel`` (or ``None``); the library's Σ and ESO get theirs from
+:func:`kernel_of`'s registry. When every block of a loop has a kernel, :meth:`Loop.simulate
+<ctrl_analysis.loop.Loop.simulate>` (``engine="auto"`` or ``"compiled"``) generates one numba
+function for the whole loop — runs outermost, the same sample/stage order and the same RK4
+arithmetic as the numpy path — and runs it; otherwise it uses the numpy path.
+
+A kernel is the compiled twin of the block's numpy method: ``tests/lib/test_speed_kernels.py``
+holds each pair equal (bit for bit where no ``pow`` is involved, else to 1 ulp-level relative
+error, numpy's vectorised ``power`` and libm's ``pow`` may round differently). A kernel written
+with ``x[i]``-style indexing and no per-element branches serves both: called with ``x.T`` /
+``u.T`` / ``dx.T`` (columns of a batch) it *is* the numpy method (see ``benchmarks/bench_example1.py``,
+``Plant19``), so there is one source per equation.
+
+The generated runner is cached in memory per loop structure and process; numba's compile time
+(about a second per structure) is reported by :func:`compile_seconds`.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import NamedTuple
+
+import numpy as np
+
+__all__ = [
+    "BlockKernel",
+    "available",
+    "compile_seconds",
+    "compiled_runner",
+    "copy_output",
+    "eso_rhs",
+    "kernel_of",
+    "sigma_rhs",
+]
+
+
+class BlockKernel(NamedTuple):
+    """A block's per-run kernel functions (plain Python, numba-compilable) and its parameter vector."""
+
+    output: Callable
+    params: np.ndarray
+    rhs: Callable | None = None
+    update: Callable | None = None
+
+
+def available() -> bool:
+    """Whether numba can be imported (the compiled engine is optional)."""
+    try:
+        import numba  # noqa: F401
+    except ImportError:  # pragma: no cover - numba is installed in the project's environment
+        return False
+    return True
+
+
+# ------------------------------------------------------------------ kernels of library blocks
+def copy_output(t, x, u, p, y):
+    """Output = the whole state (``Block.output``'s default)."""
+    for i in range(x.shape[0]):
+        y[i] = x[i]
+
+
+def sigma_rhs(t, z, u, p, dz):
+    """Σ, eq. (2): ``z_i' = a_i (y - z_1) + z_(i+1)``, ``z_n0' = a_n0 (y - z_1)``; ``p = [a_1 .. a_n0]``."""
+    n = z.shape[0]
+    e = u[0] - z[0]
+    for i in range(n - 1):
+        dz[i] = p[i] * e + z[i + 1]  # (2)
+    dz[n - 1] = p[n - 1] * e
+
+
+def eso_rhs(t, x, u, p, dx):
+    """(Nonlinear) ESO: ``x̂_i' = L_i g_i(e) + x̂_(i+1)``, ``+ b0 u`` in row n, ``e = y - x̂_1``.
+
+    ``p = [linear, b0, delta, L_1..L_m, alpha_1..alpha_m, delta^(1-alpha_1)..]`` (``m = n + 1``);
+    ``g_i(e) = e`` (linear) or Han's ``fal(e, alpha_i, delta)``.
+    """
+    m = x.shape[0]
+    e = u[0] - x[0]
+    ae = abs(e)
+    if p[0] != 0.0:
+        for i in range(m):
+            dx[i] = p[3 + i] * e + 0.0  # linear ESO: g_i(e) = e
+    elif ae <= p[2]:
+        for i in range(m):
+            dx[i] = p[3 + i] * (e / p[3 + 2 * m + i]) + 0.0  # fal, linear zone: e / delta^(1-alpha)
+    else:
+        sgn = 1.0 if e > 0 else (-1.0 if e < 0 else e)  # numpy's sign (NaN stays NaN)
+        for i in range(m):
+            dx[i] = p[3 + i] * (ae ** p[3 + m + i] * sgn) + 0.0  # fal: |e|^alpha sign(e)
+    for i in range(m - 1):
+        dx[i] = dx[i] + x[i + 1]  # chain of integrators
+    dx[m - 2] = dx[m - 2] + p[1] * u[1]  # + b0 u in the n-th equation
+
+
+def _sigma_kernel(block):
+    if block.reading != "state":
+        return None  # the corrected reading's output is a matrix product: numpy path
+    return BlockKernel(output=copy_output, params=np.array(block.a_coeffs, dtype=float), rhs=sigma_rhs)
+
+
+def _eso_kernel(block):
+    if block.known is not None:
+        return None  # a Python callable inside: numpy path
+    m = block.nstates
+    linear = block.alpha is None
+    alpha = np.ones(m) if linear else block.alpha
+    dp = np.ones(m) if linear else block._delta_pow
+    delta = 1.0 if block.delta is None else block.delta
+    p = np.concatenate([[1.0 if linear else 0.0, block.b0, delta], block.L, alpha, dp]).astype(float)
+    return BlockKernel(output=copy_output, params=p, rhs=eso_rhs)
+
+
+def _registry():
+    from .estimators.differential import DifferentialEstimator
+    from .estimators.eso import ExtendedStateObserver
+
+    return {DifferentialEstimator: _sigma_kernel, ExtendedStateObserver: _eso_kernel}
+
+
+def kernel_of(block) -> BlockKernel | None:
+    """The block's kernel: its own ``kernel()`` method, the registry's, or ``None`` (numpy only).
+
+    Parameters
+    ----------
+    block : Block
+
+    Returns
+    -------
+    BlockKernel or None
+    """
+    own = getattr(block, "kernel", None)
+    if callable(own):
+        return own()
+    make = _registry().get(type(block))
+    return None if make is None else make(block)
+
+
+# ------------------------------------------------------------------ the compiled loop runner
+_JIT: dict = {}
+_RUNNERS: dict = {}
+_COMPILE = {"seconds": 0.0}
+
+
+def compile_seconds() -> float:
+    """Total seconds this process spent compiling loop runners (first call of each structure)."""
+    return _COMPILE["seconds"]
+
+
+def _jit(fn):
+    import numba
+
+    if fn not in _JIT:
+        _JIT[fn] = numba.njit(cache=True, error_model="numpy")(fn)
+    return _JIT[fn]
+
+
+def _gen_source(blocks, order, stage, discrete, continuous, nc, method, finite_bound):
+    """Python source of the runner (see :func:`compiled_runner`).
+
+    Runs are stepped side by side (steps outermost, so the result rows are written in memory
+    order); each block's state, input and output are copied through small scratch vectors
+    allocated once, so no array view is created inside the loops.
+    """
+    L = []
+    add = L.append
+    pargs = ", ".join(f"P{i}" for i in range(len(blocks)))
+
+    def call(i, kind, t, xx, out, ind):
+        """Lines evaluating block ``i`` (``kind``: out / rhs / upd) on state vector ``xx``."""
+        b = blocks[i]
+        lo, hi = b["sl"]
+        src = (lambda j: f"X[b, {lo + j}]") if xx == "X" else (lambda j: f"{xx}[{lo + j}]")
+        # every index is known here: the copies are unrolled with literal indices
+        lines = [f"XB{i}[{j}] = {src(j)}" for j in range(hi - lo)]
+        lines += [f"UB{i}[{j}] = SS[b, {c}]" for j, c in enumerate(b["ic"])]
+        if kind == "out":
+            lines.append(f"K{i}_out({t}, XB{i}, UB{i}, P{i}, YB{i})")
+            lines += [f"SS[b, {c}] = YB{i}[{j}]" for j, c in enumerate(b["oc"])]
+        else:
+            fn = "rhs" if kind == "rhs" else "upd"
+            lines.append(f"K{i}_{fn}({t}, XB{i}, UB{i}, P{i}, DB{i})")
+            lines += [f"{out}[{lo + j}] = DB{i}[{j}]" for j in range(hi - lo)]
+        return [ind + s for s in lines]
+
+    def stage_lines(tau, xx, dx, ind):
+        out = []
+        for i in stage:
+            out += call(i, "out", tau, xx, None, ind)
+        for i in continuous:
+            out += call(i, "rhs", tau, xx, dx, ind)
+        return out
+
+    add(f"def run(n_steps, t, h, substeps, X0, H, HC, S0, KEEP, store, xs, bound, diverged, div_step, {pargs}):")
+    add("    B = X0.shape[0]")
+    add("    n = X0.shape[1]")
+    for i, b in enumerate(blocks):
+        lo, hi = b["sl"]
+        add(f"    XB{i} = np.empty({hi - lo}); UB{i} = np.empty({len(b['ic'])}); YB{i} = np.empty({b['np']}); "
+            f"DB{i} = np.empty({hi - lo})")
+    add(f"    k1 = np.empty({nc}); k2 = np.empty({nc}); k3 = np.empty({nc}); k4 = np.empty({nc})")
+    add(f"    xt = np.empty({nc}); xc = np.empty({nc})")
+    add("    xn = np.empty(n)")
+    add("    X = X0.copy()")
+    add("    SS = np.empty((B, S0.shape[0]))")
+    add("    for b in range(B):")
+    add("        for j in range(S0.shape[0]):")
+    add("            SS[b, j] = S0[j]")
+    add("    for k in range(n_steps + 1):")
+    add("        tk = t[k]")
+    add("        for b in range(B):")
+    add("            for j in range(HC.shape[0]):")
+    add("                SS[b, HC[j]] = H[k, b, j]")
+    ind = " " * 12
+    for i in order:
+        L.extend(call(i, "out", "tk", "X", None, ind))
+    add("            for j in range(KEEP.shape[0]):")
+    add("                store[k, b, j] = SS[b, KEEP[j]]")
+    add("            if xs.shape[0] > 0:")
+    add("                for j in range(n):")
+    add("                    xs[k, b, j] = X[b, j]")
+    add("            if k == n_steps:")
+    add("                continue")
+    add("            for j in range(n):")
+    add("                xn[j] = X[b, j]")
+    for i in discrete:
+        L.extend(call(i, "upd", "tk", "X", "xn", ind))
+    if nc:
+        add(f"            for j in range({nc}):")
+        add("                xc[j] = X[b, j]")
+        add("            tau = tk")
+        add("            for _ in range(substeps):")
+        ind2 = " " * 16
+        if method == "rk4":
+            # the arithmetic of ctrl_analysis.simulate.rk4_step, element by element
+            L.extend(stage_lines("tau", "xc", "k1", ind2))
+            L.extend(f"                xt[{j}] = xc[{j}] + 0.5 * h * k1[{j}]" for j in range(nc))
+            L.extend(stage_lines("tau + 0.5 * h", "xt", "k2", ind2))
+            L.extend(f"                xt[{j}] = xc[{j}] + 0.5 * h * k2[{j}]" for j in range(nc))
+            L.extend(stage_lines("tau + 0.5 * h", "xt", "k3", ind2))
+            L.extend(f"                xt[{j}] = xc[{j}] + h * k3[{j}]" for j in range(nc))
+            L.extend(stage_lines("tau + h", "xt", "k4", ind2))
+            L.extend(f"                xc[{j}] = xc[{j}] + (h / 6.0) * (k1[{j}] + 2.0 * k2[{j}] + 2.0 * k3[{j}] + k4[{j}])"
+                     for j in range(nc))
+        else:
+            # ctrl_analysis.simulate.euler_step
+            L.extend(stage_lines("tau", "xc", "k1", ind2))
+            L.extend(f"                xc[{j}] = xc[{j}] + h * k1[{j}]" for j in range(nc))
+        add("                tau += h")
+        add(f"            for j in range({nc}):")
+        add("                xn[j] = xc[j]")
+    # divergence: the test of ctrl_analysis.simulate._check_bad, per run
+    add("            bad = False")
+    add("            for j in range(n):")
+    add("                if not (abs(xn[j]) <= bound):" if finite_bound else "                if not np.isfinite(xn[j]):")
+    add("                    bad = True")
+    add("            if bad and not diverged[b]:")
+    add("                diverged[b] = True")
+    add("                div_step[b] = k + 1")
+    add("                for j in range(n):")
+    add("                    xn[j] = np.nan")
+    add("            for j in range(n):")
+    add("                X[b, j] = xn[j]")
+    return "\n".join(L) + "\n"
+
+
+def compiled_runner(loop, kernels: dict, finite_bound: bool):
+    """The numba runner of ``loop`` (generated once per structure and process) and its constant arguments.
+
+    Parameters
+    ----------
+    loop : Loop
+    kernels : dict of block name -> BlockKernel
+        Every block's kernel.
+    finite_bound : bool
+        Whether the divergence bound is finite (the test differs for ``inf``).
+
+    Returns
+    -------
+    run : callable
+        ``run(n_steps, t, h, substeps, X0, H, HC, S0, KEEP, store, xs, bound, diverged, div_step, *P)``.
+    consts : dict
+        ``IC<i>``/``OC<i>`` index arrays are baked into the runner; ``P`` lists the parameter vectors.
+    """
+    import numba
+
+    plan = loop._plan()
+    col = plan["col"]
+    names = [p.name for p in loop.placed]
+    blocks = []
+    for p in loop.placed:
+        sl = loop.slices.get(p.name, slice(0, 0))
+        blocks.append({"ic": [col[s] for s in p.inputs], "oc": [col[s] for s in p.outputs],
+                       "np": len(p.outputs), "sl": (sl.start, sl.stop)})
+    idx = {n: i for i, n in enumerate(names)}
+    stage_set = {e[0] for e in plan["stage"]}
+    stage = [idx[p.name] for p in loop.stage_order if p.block in stage_set]
+    order = [idx[p.name] for p in loop.order]
+    discrete = [idx[p.name] for p in loop.discrete]
+    continuous = [idx[p.name] for p in loop.continuous]
+    key = (tuple((tuple(b["ic"]), tuple(b["oc"]), b["sl"]) for b in blocks), tuple(order), tuple(stage),
+           tuple(discrete), tuple(continuous), loop.n_continuous, loop.method, finite_bound,
+           tuple((kernels[n].output, kernels[n].rhs, kernels[n].update) for n in names))
+    if key not in _RUNNERS:
+        t0 = time.perf_counter()
+        src = _gen_source(blocks, order, stage, discrete, continuous, loop.n_continuous, loop.method, finite_bound)
+        fns = {}
+        for i, n in enumerate(names):
+            k = kernels[n]
+            fns[f"K{i}_out"] = k.output
+            if k.rhs is not None:
+                fns[f"K{i}_rhs"] = k.rhs
+            if k.update is not None:
+                fns[f"K{i}_upd"] = k.update
+        module = _runner_module(src, fns)
+        for name, fn in fns.items():
+            setattr(module, name, _jit(fn))
+        f64, i64 = numba.float64, numba.int64
+        sig = numba.void(i64, f64[::1], f64, i64, f64[:, ::1], f64[:, :, ::1], numba.intp[::1], f64[::1],
+                         numba.intp[::1], f64[:, :, :], f64[:, :, :], f64, numba.boolean[:], i64[:],
+                         *[f64[::1]] * len(names))
+        run = numba.njit(sig, cache=True, error_model="numpy")(module.run)
+        _RUNNERS[key] = (run, time.perf_counter() - t0)
+        _COMPILE["seconds"] += _RUNNERS[key][1]
+    return _RUNNERS[key][0]
+
+
+def cache_dir() -> Path:
+    """Where generated loop runners (and numba's cache of them) live: ``$CTRL_ANALYSIS_CACHE`` or ``~/.cache``."""
+    base = os.environ.get("CTRL_ANALYSIS_CACHE") or os.path.join(
+        os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"), "ctrl_analysis")
+    return Path(base) / "kernels"
+
+
+def _runner_module(src: str, fns: dict):
+    """Import the generated source from a file named by its hash (and the kernels' sources), so numba can cache it."""
+    import hashlib
+    import importlib.util
+    import inspect
+
+    digest = hashlib.sha1(src.encode())
+    for name in sorted(fns):
+        try:
+            digest.update(inspect.getsource(fns[name]).encode())
+        except (OSError, TypeError):  # pragma: no cover - source unavailable: key on the identity
+            digest.update(repr(fns[name]).encode())
+    d = cache_dir()
+    try:
+        d.mkdir(parents=True, exist_ok=True)
+    except OSError:  # read-only home: a per-user temporary directory still caches within the machine
+        import tempfile
+
+        d = Path(tempfile.gettempdir()) / f"ctrl_analysis-{os.getuid() if hasattr(os, 'getuid') else 0}" / "kernels"
+        d.mkdir(parents=True, exist_ok=True)
+    path = d / f"loop_{digest.hexdigest()[:20]}.py"
+    if not path.exists():
+        tmp = path.with_suffix(f".{os.getpid()}.tmp")
+        tmp.write_text("import numpy as np\n\n\n" + src, encoding="utf-8")
+        os.replace(tmp, path)
+    spec = importlib.util.spec_from_file_location(f"_ctrl_analysis_{path.stem}", path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module  # numba's cache re-imports the module by name
+    spec.loader.exec_module(module)
+    return module

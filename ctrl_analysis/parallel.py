@@ -1,0 +1,273 @@
+"""Every core and beyond one machine: chunks of a batch and independent studies in parallel processes or on Dask.
+
+A Monte Carlo batch is a list of seeds; each run depends only on its own seed (the noise of run
+``b`` is drawn from ``default_rng(seeds[b])``, see :func:`ctrl_analysis.simulate.draw_noise`) and
+the engine steps runs independently, so splitting the seeds into chunks, simulating the chunks
+anywhere and concatenating what each chunk returns gives, bit for bit, what one process gives.
+
+* :func:`map_chunks` — apply a function to a list of arguments, in order, serially (``jobs=1``), in
+  ``jobs`` local processes, or on a ``dask.distributed`` cluster (``scheduler``);
+* :func:`monte_carlo` — split ``seeds`` into chunks, run ``fn(seeds_chunk)`` on each, gather;
+* :func:`sweep` — a parameter grid times seeds as one flat batch axis, chunked over workers, gathered
+  back into the grid's shape;
+* :func:`gather` — concatenate chunk results (arrays, dicts or tuples of arrays, runs on axis 0).
+
+The function passed must be importable by name in a worker (defined at module level, not a lambda
+or a closure) and must reduce its chunk to the arrays the caller needs (per-run metrics rather
+than whole trajectories), which also bounds memory: a batch of 10^6 runs never exists at once.
+
+``scheduler``: ``None`` runs on this machine's processes; ``"local"`` starts a Dask
+``LocalCluster`` with ``jobs`` single-threaded workers; any other string is the address of a
+running Dask scheduler (``"tcp://host:8786"``); a ``distributed.Client`` is used as given.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Callable, Sequence
+
+import numpy as np
+
+from ._validate import check_int
+from .progress import bar
+
+__all__ = ["chunk_slices", "default_jobs", "gather", "grid_points", "map_chunks", "monte_carlo", "sweep"]
+
+
+def default_jobs() -> int:
+    """Cores this process may use (``os.sched_getaffinity`` where available, else ``os.cpu_count()``)."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # pragma: no cover - macOS / Windows
+        return max(1, os.cpu_count() or 1)
+
+
+def chunk_slices(n: int, *, chunks: int | None = None, chunk_size: int | None = None) -> list[slice]:
+    """Consecutive slices splitting ``range(n)`` into ``chunks`` near-equal pieces or pieces of ``chunk_size``.
+
+    Parameters
+    ----------
+    n : int
+        Items (>= 1).
+    chunks : int, optional
+        Number of pieces (>= 1; at most ``n`` are made). Default 1.
+    chunk_size : int, optional
+        Largest piece (>= 1); overrides ``chunks``.
+
+    Returns
+    -------
+    list of slice
+    """
+    n = check_int("n", n, minimum=1)
+    if chunk_size is not None:
+        size = check_int("chunk_size", chunk_size, minimum=1)
+    else:
+        k = check_int("chunks", 1 if chunks is None else chunks, minimum=1)
+        size = math.ceil(n / min(k, n))
+    return [slice(lo, min(lo + size, n)) for lo in range(0, n, size)]
+
+
+def _client(scheduler, jobs):
+    """A ``distributed.Client`` for ``scheduler`` and whether we own it (must close it)."""
+    from distributed import Client, LocalCluster
+
+    if isinstance(scheduler, Client):
+        return scheduler, False
+    if scheduler == "local":
+        cluster = LocalCluster(n_workers=jobs, threads_per_worker=1, processes=True, dashboard_address=None)
+        return Client(cluster), True
+    if not isinstance(scheduler, str) or not scheduler:
+        raise ValueError(f"scheduler must be None, 'local', a scheduler address or a distributed.Client, "
+                         f"got {scheduler!r}")
+    return Client(scheduler), True
+
+
+def map_chunks(fn: Callable, args: Sequence, *, jobs: int = 1, scheduler=None, desc: str = "") -> list:
+    """``[fn(a) for a in args]``, computed serially, in local processes or on Dask; results in order.
+
+    Parameters
+    ----------
+    fn : callable
+        A module-level function (picklable by name) of one argument.
+    args : sequence
+        One argument per call (e.g. chunks of seeds, study names).
+    jobs : int
+        Local processes (>= 1); ``1`` runs in this process. With ``scheduler="local"``, Dask workers.
+    scheduler : None, str or distributed.Client
+        See the module docstring.
+    desc : str
+        Label of the progress bar (one unit per finished call).
+
+    Returns
+    -------
+    list
+        ``fn(a)`` for every ``a``, in the order of ``args``.
+    """
+    jobs = check_int("jobs", jobs, minimum=1)
+    args = list(args)
+    if not callable(fn):
+        raise TypeError(f"fn must be callable, got {type(fn).__name__}")
+    out = [None] * len(args)
+    with bar(len(args), desc=desc, unit="chunk") as pb:
+        if scheduler is not None:
+            from distributed import as_completed
+
+            client, own = _client(scheduler, jobs)
+            try:
+                futures = client.map(fn, args, pure=False)
+                index = {f.key: i for i, f in enumerate(futures)}
+                for fut in as_completed(futures):
+                    out[index[fut.key]] = fut.result()
+                    pb.update(1)
+            finally:
+                if own:
+                    cluster = getattr(client, "cluster", None)
+                    client.close()
+                    if cluster is not None:
+                        cluster.close()
+            return out
+        if jobs == 1 or len(args) <= 1:
+            for i, a in enumerate(args):
+                out[i] = fn(a)
+                pb.update(1)
+            return out
+        import multiprocessing as mp
+        from concurrent.futures import ProcessPoolExecutor
+        from concurrent.futures import as_completed as done
+
+        method = "fork" if "fork" in mp.get_all_start_methods() else "spawn"
+        with ProcessPoolExecutor(max_workers=min(jobs, len(args)), mp_context=mp.get_context(method)) as ex:
+            futures = {ex.submit(fn, a): i for i, a in enumerate(args)}
+            for fut in done(futures):
+                out[futures[fut]] = fut.result()
+                pb.update(1)
+    return out
+
+
+def gather(parts: list):
+    """Concatenate chunk results along axis 0: arrays, and dicts / tuples / lists of them (recursively).
+
+    Parameters
+    ----------
+    parts : list
+        One result per chunk, all of the same structure.
+
+    Returns
+    -------
+    The same structure with every array the concatenation of the chunks' arrays.
+    """
+    if not parts:
+        raise ValueError("parts must contain at least one chunk result")
+    first = parts[0]
+    if isinstance(first, dict):
+        return {k: gather([p[k] for p in parts]) for k in first}
+    if isinstance(first, tuple):
+        return tuple(gather([p[i] for p in parts]) for i in range(len(first)))
+    if isinstance(first, list):
+        return [x for p in parts for x in p]
+    return np.concatenate([np.asarray(p) for p in parts], axis=0)
+
+
+def monte_carlo(fn: Callable, seeds: Sequence, *, jobs: int = 1, scheduler=None, chunk_size: int | None = None,
+                desc: str = ""):
+    """Run ``fn(seeds_chunk)`` on chunks of ``seeds`` and gather the results (runs on axis 0).
+
+    Parameters
+    ----------
+    fn : callable
+        Module-level ``fn(seeds) -> array, or dict/tuple of arrays`` with one row per seed.
+    seeds : sequence of int
+        Per-run seeds (e.g. :func:`ctrl_analysis.simulate.run_seeds`).
+    jobs, scheduler, desc
+        As in :func:`map_chunks`.
+    chunk_size : int, optional
+        Runs per chunk (default: one chunk per job).
+
+    Returns
+    -------
+    The gathered result: what ``fn(list(seeds))`` returns in one process, bit for bit.
+    """
+    seeds = list(seeds)
+    jobs = check_int("jobs", jobs, minimum=1)
+    parts = chunk_slices(len(seeds), chunks=jobs, chunk_size=chunk_size)
+    return gather(map_chunks(fn, [seeds[s] for s in parts], jobs=jobs, scheduler=scheduler, desc=desc))
+
+
+def grid_points(grid: dict) -> dict:
+    """Every point of a parameter grid (cartesian product, first name slowest), as flat arrays.
+
+    Parameters
+    ----------
+    grid : dict of str -> sequence of float
+        Values of each parameter.
+
+    Returns
+    -------
+    dict of str -> ndarray, shape (P,)
+    """
+    if not grid:
+        raise ValueError("grid must name at least one parameter")
+    axes = [np.asarray(v, dtype=float).reshape(-1) for v in grid.values()]
+    for name, a in zip(grid, axes):
+        if a.size == 0:
+            raise ValueError(f"grid[{name!r}] must hold at least one value")
+    mesh = np.meshgrid(*axes, indexing="ij")
+    return {name: m.reshape(-1) for name, m in zip(grid, mesh)}
+
+
+def _sweep_chunk(task):
+    fn, points, seeds = task
+    return fn(points, seeds)
+
+
+def sweep(fn: Callable, grid: dict, seeds: Sequence, *, jobs: int = 1, scheduler=None,
+          chunk_size: int | None = None, desc: str = ""):
+    """A parameter grid times seeds as one flat batch axis, chunked over workers, gathered into the grid's shape.
+
+    The batch axis holds every (point, seed) pair, point-major: run ``b = p * S + s`` is grid
+    point ``p`` (:func:`grid_points` order) with seed ``seeds[s]``.
+
+    Parameters
+    ----------
+    fn : callable
+        Module-level ``fn(points, seeds) -> array or dict/tuple of arrays`` with one row per run,
+        where ``points`` maps each parameter name to a ``(b,)`` array and ``seeds`` is a list of
+        ``b`` seeds (row ``i`` is the pair ``points[...][i]``, ``seeds[i]``).
+    grid : dict of str -> sequence of float
+        The parameter values.
+    seeds : sequence of int
+        Seeds run at every point.
+    jobs, scheduler, desc
+        As in :func:`map_chunks`.
+    chunk_size : int, optional
+        Runs per chunk (default: about four chunks per job).
+
+    Returns
+    -------
+    The gathered result with the run axis reshaped to ``grid shape + (len(seeds),)``, bit for bit
+    what ``fn`` returns on the whole batch in one process.
+    """
+    jobs = check_int("jobs", jobs, minimum=1)
+    seeds = list(seeds)
+    if not seeds:
+        raise ValueError("seeds must contain at least one seed")
+    pts = grid_points(grid)
+    S = len(seeds)
+    P = next(iter(pts.values())).size
+    flat_pts = {k: np.repeat(v, S) for k, v in pts.items()}
+    flat_seeds = seeds * P
+    n = P * S
+    parts = chunk_slices(n, chunks=4 * jobs, chunk_size=chunk_size)
+    tasks = [(fn, {k: v[s] for k, v in flat_pts.items()}, flat_seeds[s]) for s in parts]
+    out = gather(map_chunks(_sweep_chunk, tasks, jobs=jobs, scheduler=scheduler, desc=desc))
+    shape = tuple(np.asarray(v).size for v in grid.values()) + (S,)
+    return _reshape(out, shape)
+
+
+def _reshape(out, shape):
+    if isinstance(out, dict):
+        return {k: _reshape(v, shape) for k, v in out.items()}
+    if isinstance(out, tuple):
+        return tuple(_reshape(v, shape) for v in out)
+    return out.reshape(shape + out.shape[1:])

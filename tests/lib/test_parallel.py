@@ -1,0 +1,193 @@
+"""Tests of ctrl_analysis.parallel (processes, Dask), batch chunking in the engine, and progress bars."""
+
+import io
+
+import numpy as np
+import pytest
+
+from ctrl_analysis import parallel, progress
+from ctrl_analysis.blocks import ContinuousBlock
+from ctrl_analysis.estimators.differential import DifferentialEstimator
+from ctrl_analysis.loop import Loop, place
+from ctrl_analysis.simulate import (
+    check_result_memory,
+    chunk_bounds,
+    draw_noise,
+    gaussian_noise,
+    run_seeds,
+    simulate_sampled,
+    uniform_noise,
+)
+
+N_STEPS = 200
+
+
+class Damped(ContinuousBlock):
+    """x'' + c x' + k x = f + w, output y = x + v (a small noisy plant)."""
+
+    inputs, outputs, states = ("w", "v"), ("y",), ("p", "q")
+    feedthrough = True
+
+    def __init__(self, k=4.0, c=0.4):
+        self.k, self.c = k, c
+
+    def initial_state(self):
+        return np.array([1.0, 0.0])
+
+    def rhs(self, t, x, u, params=None):
+        dx = np.empty_like(x)
+        dx[:, 0] = x[:, 1]
+        dx[:, 1] = -self.k * x[:, 0] - self.c * x[:, 1] + u[:, 0]
+        return dx
+
+    def output(self, t, x, u, params=None):
+        return x[:, :1] + u[:, 1:2]
+
+
+def mc_chunk(seeds):
+    """One Monte Carlo chunk: noise from the seeds, the loop, per-run mean |y - x̂1| and final states."""
+    noise = draw_noise(seeds, N_STEPS, gaussian_noise([0.3, 0.01]))
+    loop = Loop([place(Damped(), "plant"), place(DifferentialEstimator(3, 4.0), "sigma")], dt=0.01)
+    res = loop.simulate(N_STEPS, inputs={"w": noise[:, :, 0], "v": noise[:, :, 1]}, seeds=seeds)
+    return {"err": np.mean(np.abs(res.states["plant"][:, :, 0] - res["xhat[0]"]), axis=0),
+            "x_end": res.x[-1]}
+
+
+def sweep_fn(points, seeds):
+    """A sweep chunk: the plant's stiffness k per run (a per-run parameter through the input), RMS of y."""
+    noise = draw_noise(seeds, N_STEPS, uniform_noise([-0.1, -0.01], [0.1, 0.01]))
+    k = points["k"]
+    x = np.zeros((len(seeds), 2))
+    x[:, 0] = points["x0"]
+
+    def rhs(t, xx, u, params=None):
+        dx = np.empty_like(xx)
+        dx[:, 0] = xx[:, 1]
+        dx[:, 1] = -k * xx[:, 0] - 0.4 * xx[:, 1] + u[:, 0]
+        return dx
+
+    res = simulate_sampled(rhs, x, 0.01, N_STEPS, noise=noise, seeds=seeds)
+    return np.sqrt(np.mean(res.x[:, :, 0] ** 2, axis=0))
+
+
+def test_monte_carlo_in_two_processes_equals_one_process_bit_for_bit():
+    seeds = run_seeds(11, 12)
+    one = parallel.monte_carlo(mc_chunk, seeds, jobs=1)
+    two = parallel.monte_carlo(mc_chunk, seeds, jobs=2)
+    small = parallel.monte_carlo(mc_chunk, seeds, jobs=2, chunk_size=5)
+    for other in (two, small):
+        assert np.array_equal(one["err"], other["err"]) and np.array_equal(one["x_end"], other["x_end"])
+    assert one["err"].shape == (12,) and np.all(one["err"] > 0)
+
+
+def test_map_chunks_keeps_order_and_validates():
+    assert parallel.map_chunks(abs, [-3, 1, -2, 5], jobs=2) == [3, 1, 2, 5]
+    with pytest.raises(ValueError, match="jobs must be"):
+        parallel.map_chunks(abs, [1], jobs=0)
+    with pytest.raises(ValueError, match="scheduler must be"):
+        parallel.map_chunks(abs, [1], scheduler=3)
+
+
+def test_chunk_slices_cover_the_range_once():
+    for n, k, size in ((10, 3, None), (7, 10, None), (100, 1, 33)):
+        s = parallel.chunk_slices(n, chunks=k, chunk_size=size)
+        assert np.array_equal(np.concatenate([np.arange(n)[x] for x in s]), np.arange(n))
+    assert chunk_bounds(7, 3) == [(0, 3), (3, 6), (6, 7)]
+
+
+def test_sweep_on_a_two_worker_local_cluster_equals_the_local_sweep_bit_for_bit():
+    from distributed import Client, LocalCluster
+
+    grid = {"k": [1.0, 4.0, 9.0], "x0": [0.5, 1.0]}
+    seeds = run_seeds(5, 4)
+    local = parallel.sweep(sweep_fn, grid, seeds)
+    assert local.shape == (3, 2, 4)
+    pts = parallel.grid_points(grid)
+    whole = sweep_fn({k: np.repeat(v, 4) for k, v in pts.items()}, seeds * 6).reshape(3, 2, 4)
+    assert np.array_equal(local, whole)
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=False, dashboard_address=None) as cluster, \
+            Client(cluster) as client:
+        on_dask = parallel.sweep(sweep_fn, grid, seeds, scheduler=client, chunk_size=5)
+    assert np.array_equal(local, on_dask)
+    # larger stiffness, smaller excursion from the same start: the grid axes are where they say
+    assert local[2, 1].mean() < local[0, 1].mean()
+
+
+def test_loop_chunked_batch_equals_unchunked_bit_for_bit():
+    seeds = run_seeds(2, 7)
+    noise = draw_noise(seeds, N_STEPS, gaussian_noise([0.3, 0.01]))
+    loop = Loop([place(Damped(), "plant"), place(DifferentialEstimator(3, 4.0), "sigma")], dt=0.01)
+    inputs = {"w": noise[:, :, 0], "v": noise[:, :, 1]}
+    whole = loop.simulate(N_STEPS, inputs=inputs)
+    for kw in ({"chunk_runs": 3}, {"max_bytes": 1.0}):
+        part = loop.simulate(N_STEPS, inputs=inputs, **kw)
+        assert np.array_equal(whole.x, part.x)
+        for s in whole.signals:
+            assert np.array_equal(whole[s], part[s])
+    kept = loop.simulate(N_STEPS, inputs=inputs, store_signals=["y"], store_states=False, chunk_runs=2)
+    assert list(kept.signals) == ["y"] and kept.x is None and np.array_equal(kept["y"], whole["y"])
+    with pytest.raises(ValueError, match="store_signals names unknown signal 'nope'"):
+        loop.simulate(N_STEPS, inputs=inputs, store_signals=["nope"])
+
+
+def test_simulate_sampled_chunked_equals_unchunked_and_refuses_a_controller():
+    seeds = run_seeds(0, 5)
+    pts = {"k": np.linspace(1, 5, 5), "x0": np.ones(5)}
+    whole = sweep_fn(pts, seeds)
+    noise = draw_noise(seeds, N_STEPS, uniform_noise([-0.1, -0.01], [0.1, 0.01]))
+
+    def rhs(t, x, u, params=None):
+        return np.stack([x[:, 1], -4.0 * x[:, 0] + u[:, 0]], axis=1)
+
+    a = simulate_sampled(rhs, np.ones(2), 0.01, N_STEPS, noise=noise, seeds=seeds)
+    b = simulate_sampled(rhs, np.ones(2), 0.01, N_STEPS, noise=noise, seeds=seeds, chunk_runs=2)
+    assert np.array_equal(a.x, b.x) and np.array_equal(a.u, b.u) and b.seeds == seeds
+    assert whole.shape == (5,)
+    with pytest.raises(ValueError, match="chunk_runs must be None"):
+        simulate_sampled(rhs, np.ones(2), 0.01, 10, noise=noise, chunk_runs=2,
+                         controller=lambda k, t, x, w: w)
+
+
+def test_result_too_large_raises_a_memory_error_that_says_what_to_do():
+    with pytest.raises(MemoryError, match="store_states=False.*map_chunks"):
+        check_result_memory(15 * 2**30, 4 * 2**30, "Loop.simulate")
+    check_result_memory(1.0, 4 * 2**30, "Loop.simulate")
+
+
+def test_progress_bar_is_silent_off_a_terminal(monkeypatch):
+    monkeypatch.delenv("CTRL_ANALYSIS_PROGRESS", raising=False)
+    stream = io.StringIO()
+    assert not progress.enabled(stream)
+    with progress.bar(10, desc="x", stream=stream) as pb:
+        pb.update(3)
+    assert stream.getvalue() == "" and isinstance(pb, progress.NullBar) and pb.n == 3
+    monkeypatch.setenv("CTRL_ANALYSIS_PROGRESS", "1")
+    with progress.bar(10, desc="runs", stream=stream) as pb:
+        pb.update(10)
+    assert "runs" in stream.getvalue()
+
+
+def test_cli_runs_studies_side_by_side_with_jobs(tmp_path, capsys):
+    from ctrl_analysis.cli import main
+
+    assert main(["reproduce", "ckf", "ikf-mfac", "--jobs", "2", "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert out.index("== ckf") < out.index("== ikf-mfac")  # printed in the order asked, whoever finished first
+    assert (tmp_path / "ckf" / "results.json").exists() and (tmp_path / "ikf-mfac" / "results.json").exists()
+    with pytest.raises(SystemExit) as exc:
+        main(["reproduce", "ckf", "--jobs", "0"])
+    assert exc.value.code == 2
+
+
+def test_loop_simulate_with_jobs_equals_one_process_bit_for_bit():
+    seeds = run_seeds(8, 9)
+    noise = draw_noise(seeds, N_STEPS, gaussian_noise([0.3, 0.01]))
+    loop = Loop([place(Damped(), "plant"), place(DifferentialEstimator(3, 4.0), "sigma")], dt=0.01)
+    kw = {"inputs": {"w": noise[:, :, 0], "v": noise[:, :, 1]}, "seeds": seeds,
+          "x0": {"plant": np.column_stack([np.linspace(0, 1, 9), np.zeros(9)])}}
+    one = loop.simulate(N_STEPS, **kw)
+    two = loop.simulate(N_STEPS, jobs=2, **kw)
+    assert np.array_equal(one.x, two.x) and two.seeds == seeds and two.runs == 9
+    for s in one.signals:
+        assert np.array_equal(one[s], two[s])
+    assert np.array_equal(one.to_timeresponse(4).outputs, two.to_timeresponse(4).outputs)

@@ -1,0 +1,206 @@
+"""Compiled kernels (ctrl_analysis._kernels) against the blocks' numpy methods, and the compiled Loop engine."""
+
+import numpy as np
+import pytest
+
+from ctrl_analysis import _kernels
+from ctrl_analysis._kernels import (
+    BlockKernel,
+    copy_output,
+    eso_rhs,
+    kernel_of,
+    sigma_rhs,
+)
+from ctrl_analysis.blocks import ContinuousBlock, DiscreteBlock
+from ctrl_analysis.estimators.differential import DifferentialEstimator
+from ctrl_analysis.estimators.eso import ExtendedStateObserver
+from ctrl_analysis.loop import Loop, place
+from ctrl_analysis.simulate import draw_noise, gaussian_noise, run_seeds
+
+
+def osc_rhs(t, x, u, p, dx):
+    """x'' + c x' + k x = w on one run or on batch columns; p = [k, c]."""
+    dx[0] = x[1]
+    dx[1] = -p[0] * x[0] - p[1] * x[1] + u[0]
+
+
+def osc_output(t, x, u, p, y):
+    y[0] = x[0] + u[1]
+
+
+class KOsc(ContinuousBlock):
+    """A noisy oscillator whose numpy methods are its kernel applied to the batch's columns."""
+
+    inputs, outputs, states = ("w", "v"), ("y",), ("p", "q")
+    feedthrough = True
+
+    def __init__(self, k=4.0, c=0.4):
+        self.p = np.array([k, c])
+
+    def initial_state(self):
+        return np.array([1.0, 0.0])
+
+    def rhs(self, t, x, u, params=None):
+        dx = np.empty_like(x)
+        osc_rhs(t, x.T, u.T, self.p, dx.T)
+        return dx
+
+    def output(self, t, x, u, params=None):
+        y = np.empty((x.shape[0], 1))
+        osc_output(t, x.T, u.T, self.p, y.T)
+        return y
+
+    def kernel(self):
+        return BlockKernel(output=osc_output, params=self.p, rhs=osc_rhs)
+
+
+def acc_update(t, x, u, p, xn):
+    xn[0] = x[0] + p[0] * u[0]
+
+
+class KAcc(DiscreteBlock):
+    """Discrete accumulator s(k+1) = s(k) + T y(k)."""
+
+    inputs, outputs, states = ("y",), ("s",), ("s",)
+
+    def __init__(self, T):
+        self.p = np.array([T])
+
+    def update(self, t, x, u, params=None):
+        xn = np.empty_like(x)
+        acc_update(t, x.T, u.T, self.p, xn.T)
+        return xn
+
+    def kernel(self):
+        return BlockKernel(output=copy_output, params=self.p, update=acc_update)
+
+
+def han_eso(h=1e-3):
+    return ExtendedStateObserver((1 / h, 1 / (1.6 * h**1.5), 1 / (8.6 * h**2.2)), b0=0.5,
+                                 alpha=[1.0, 0.5, 0.25], delta=h)
+
+
+def per_run(fn, k, x, u):
+    """Apply a kernel run by run (plain Python, or compiled) -> (B, n)."""
+    out = np.empty_like(x)
+    for b in range(x.shape[0]):
+        fn(0.3, x[b], u[b], k.params, out[b])
+    return out
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+def test_sigma_kernel_equals_the_block_rhs_bit_for_bit(compiled):
+    est = DifferentialEstimator(5, 7.0)
+    k = kernel_of(est)
+    rng = np.random.default_rng(0)
+    z, u = rng.standard_normal((6, 5)), rng.standard_normal((6, 1))
+    fn = _kernels._jit(sigma_rhs) if compiled else sigma_rhs
+    assert np.array_equal(per_run(fn, k, z, u), est.rhs(0.3, z, u))
+    assert kernel_of(DifferentialEstimator(3, 2.0, reading="corrected")) is None  # matrix output: numpy path
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+def test_eso_kernel_equals_the_block_rhs(compiled):
+    rng = np.random.default_rng(1)
+    fn = _kernels._jit(eso_rhs) if compiled else eso_rhs
+    for eso in (han_eso(), ExtendedStateObserver.from_bandwidth(2, 20.0, b0=2.0)):
+        k = kernel_of(eso)
+        x = rng.standard_normal((40, 3)) * 1e-3  # both sides of fal's linear zone |e| <= δ = 1e-3
+        u = rng.standard_normal((40, 2)) * 1e-3
+        got, want = per_run(fn, k, x, u), eso.rhs(0.3, x, u)
+        if eso.alpha is None:
+            assert np.array_equal(got, want)
+        else:  # |e|^α: libm's pow and numpy's vectorised power may differ in the last bit
+            np.testing.assert_allclose(got, want, rtol=4e-16, atol=0)
+    assert kernel_of(ExtendedStateObserver([3.0, 2.0], known=lambda t, x, u, p: 0.0)) is None
+
+
+def sigma_loop():
+    return Loop([place(KOsc(), "plant"), place(DifferentialEstimator(3, 4.0), "sigma"),
+                 place(KAcc(0.01), "acc", inputs=["xhat[0]"])], dt=0.01)
+
+
+def test_compiled_loop_equals_numpy_loop_bit_for_bit_without_pow():
+    seeds = run_seeds(4, 5)
+    noise = draw_noise(seeds, 300, gaussian_noise([0.3, 0.01]))
+    inputs = {"w": noise[:, :, 0], "v": noise[:, :, 1]}
+    loop = sigma_loop()
+    a = loop.simulate(300, inputs=inputs, engine="numpy")
+    b = loop.simulate(300, inputs=inputs, engine="compiled")
+    assert np.array_equal(a.x, b.x)
+    for s in a.signals:
+        assert np.array_equal(a[s], b[s]), s
+    one = loop.simulate(300, inputs={"w": noise[:, 3:4, 0], "v": noise[:, 3:4, 1]}, engine="compiled")
+    assert np.array_equal(one.x[:, 0], b.x[:, 3])
+    assert _kernels.compile_seconds() >= 0.0
+
+
+def test_compiled_loop_with_han_eso_agrees_and_is_batch_independent():
+    seeds = run_seeds(0, 6)
+    noise = draw_noise(seeds, 400, gaussian_noise([0.3, 0.001]))
+    loop = Loop([place(KOsc(), "plant"), place(han_eso(), "eso", inputs=["y", "uc"])], dt=1e-3)
+    inputs = {"w": noise[:, :, 0], "v": noise[:, :, 1], "uc": 0.2}
+    a = loop.simulate(400, inputs=inputs, engine="numpy")
+    b = loop.simulate(400, inputs=inputs)  # auto: every block has a kernel
+    np.testing.assert_allclose(b.x, a.x, rtol=0, atol=1e-9)
+    c = loop.simulate(400, inputs=inputs, chunk_runs=4)
+    assert np.array_equal(b.x, c.x) and np.array_equal(b["y"], c["y"])
+    one = loop.simulate(400, inputs={"w": noise[:, 5:, 0], "v": noise[:, 5:, 1], "uc": 0.2})
+    assert np.array_equal(one.x[:, 0], b.x[:, 5])
+
+
+def test_compiled_loop_flags_divergence_like_the_numpy_loop():
+    loop = Loop([place(KOsc(k=-400.0, c=0.0), "plant")], dt=0.01)
+    w = np.zeros((200, 2))
+    w[:, 1] = 1e-300  # run 1 starts the same; the bound decides
+    x0 = {"plant": np.array([[1e-6, 0.0], [1.0, 0.0]])}
+    a = loop.simulate(200, inputs={"w": 0.0, "v": w}, x0=x0, bound=1e3, engine="numpy")
+    b = loop.simulate(200, inputs={"w": 0.0, "v": w}, x0=x0, bound=1e3, engine="compiled")
+    assert a.diverged.all() and np.array_equal(a.diverged_step, b.diverged_step)
+    assert a.diverged_step[1] < a.diverged_step[0]
+    assert np.array_equal(np.isnan(a.x), np.isnan(b.x))
+
+
+def test_compiled_engine_says_why_it_cannot_run():
+    loop = Loop([place(DifferentialEstimator(3, 4.0), "sigma")], dt=0.01)
+    with pytest.raises(ValueError, match="callable inputs"):
+        loop.simulate(5, inputs={"y": lambda t: 1.0}, engine="compiled")
+    osc = Loop([place(KOsc(), "plant"), place(DifferentialEstimator(3, 2.0, reading="corrected"), "s")], dt=0.1)
+    with pytest.raises(ValueError, match="block 's' .* has no kernel"):
+        osc.simulate(5, inputs={"w": 0.0, "v": 0.0}, engine="compiled")
+    with pytest.raises(ValueError, match="engine"):
+        osc.simulate(5, inputs={"w": 0.0, "v": 0.0}, engine="fast")
+
+
+def _plain_python(v):
+    return v
+
+
+def bad_rhs(t, x, u, p, dx):
+    dx[0] = _plain_python(-x[0]) + u[0]  # calls a plain Python function: numba cannot type this kernel
+
+
+class BadKernel(ContinuousBlock):
+    inputs, outputs, states = ("f",), ("y",), ("y",)
+
+    def rhs(self, t, x, u, params=None):
+        return -x + u
+
+    def kernel(self):
+        return BlockKernel(output=copy_output, params=np.zeros(1), rhs=bad_rhs)
+
+
+def test_auto_engine_falls_back_to_numpy_with_a_warning_when_a_kernel_does_not_compile():
+    loop = Loop([place(BadKernel(), "b")], dt=0.1)
+    with pytest.warns(RuntimeWarning, match="compiled engine unavailable"):
+        res = loop.simulate(10, inputs={"f": 1.0})
+    np.testing.assert_allclose(res["y"][-1, 0], 1 - np.exp(-1.0), rtol=1e-6)
+    with pytest.raises(Exception, match="(?i)typing|type"):
+        loop.simulate(10, inputs={"f": 1.0}, engine="compiled")
+
+
+def test_environment_can_make_auto_mean_numpy(monkeypatch):
+    loop = Loop([place(DifferentialEstimator(3, 4.0), "sigma")], dt=0.01)
+    monkeypatch.setenv("CTRL_ANALYSIS_ENGINE", "numpy")
+    assert loop._compiled("auto", {}, None, True) is None
+    assert loop._compiled("compiled", {}, None, True) is not None  # an explicit request still compiles
