@@ -259,7 +259,9 @@ class Loop:
     def _evaluate(self, order, t, x, sig, params):
         """Outputs of ``order``'s blocks at ``(t, x)`` into ``sig`` (name -> (B,) column)."""
         for p in order:
-            u = self._block_input(p, sig, x.shape[0])
+            # a block without feedthrough must not read u in output(): its inputs may not exist yet
+            # (they are produced downstream in a feedback loop), so it gets zeros
+            u = self._block_input(p, sig, x.shape[0]) if p.block.feedthrough else np.zeros((x.shape[0], len(p.inputs)))
             y = p.block.output(t, x[:, self.slices.get(p.name, _NO_STATE)], u, params)
             for j, s in enumerate(p.outputs):
                 sig[s] = y[:, j]
