@@ -258,8 +258,9 @@ def simulate_example1(p: Example1, seeds, noise, esos=None, *, method: str | Non
     loop = example1_loop(p, esos, method=method)
     keep = ["x1", "x2", "sig[0]", "sig[1]"] + [f"eso{j}[{i}]" for j in range(len(esos)) for i in (0, 1)]
     n_steps = noise.shape[0]
-    return simulate_signals(loop, n_steps, keep, inputs={"xi": noise[:, :, 0], "eta": noise[:, :, 1], "u0": 0.0},
-                            runs=len(seeds), chunk=chunk, bound=p.bound, seeds=seeds)
+    inputs = {"xi": noise[:, :, 0], "eta": noise[:, :, 1]} | ({"u0": 0.0} if esos else {})
+    return simulate_signals(loop, n_steps, keep, inputs=inputs, runs=len(seeds), chunk=chunk, bound=p.bound,
+                            seeds=seeds)
 
 
 def linear_estimates(sys, x1, eta, h: float, outputs=(0, 1)) -> list:
@@ -293,6 +294,9 @@ def linear_estimates(sys, x1, eta, h: float, outputs=(0, 1)) -> list:
         for method, u in (("foh", x1), ("zoh", eta)):
             sd = ct.c2d(siso[o, 0], h, method=method)
             z, p_, k = ss2zpk(sd.A, sd.B, sd.C, sd.D)
-            resp = resp + sosfilt(zpk2sos(z[np.isfinite(z)], p_, k), u, axis=0)
+            z = z[np.isfinite(z)]
+            y = sosfilt(zpk2sos(z, p_, k), u, axis=0)
+            lag = p_.size - z.size  # zpk2sos pads missing zeros at z = 0 (an advance): restore the delay
+            resp = resp + (np.concatenate([np.zeros((lag,) + y.shape[1:]), y[:-lag]]) if lag else y)
         out.append(resp)
     return out
