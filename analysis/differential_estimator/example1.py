@@ -2,7 +2,7 @@
 
 The Monte Carlo runs come from :func:`.loops.simulate_example1` (plant + Σ + ESOs in one loop,
 noise held per step); the parameter sweeps of the linear estimators (Σ's ``a`` and ``n0``, the
-linear ESO's bandwidth) reuse the simulated plant output through :func:`.loops.linear_estimates`.
+linear ESO's bandwidth) reuse the simulated plant output through :class:`.loops.LinearPath`.
 """
 
 from __future__ import annotations
@@ -211,29 +211,31 @@ def fair_comparison(result: StudyResult, p: Example1, d: dict) -> dict:
     bw_s, tune = d["bw_sigma"], d["tune"]
     textbook = linearised_eso(loops.han_eso(p))
     bw_e = eso_bandwidth(textbook)
-    check = _errors(x, loops.linear_estimates(est.ss, x1, eta, p.h)) / d["err"]["sigma"]
+    path = loops.LinearPath(x1, eta, p.h)
+    check = _errors(x, path.estimates(est.ss)) / d["err"]["sigma"]
     result.quantity("ex1.fair.sigma_bandwidth", "Example 1: −3 dB bandwidth of Σ (n0 = 5, a = 7), y → z1", bw_s,
                     unit="rad/s", note="control.bandwidth")
     result.quantity("ex1.fair.textbook_eso_bandwidth", "Example 1: −3 dB bandwidth of Han's textbook ESO linearised "
                     "inside |e| < δ (gains L_i δ^(α_i - 1)), y → x̂1", bw_e, unit="rad/s")
     leso = ExtendedStateObserver.from_bandwidth(2, tune["omega_o"])
-    err_l = _errors(x, loops.linear_estimates(leso.ss, x1, eta, p.h))
+    err_l = _errors(x, path.estimates(leso.ss))
     for i in (0, 1):
         unit = "" if i == 0 else "1/s"
         quantity_ms(result, f"ex1.fair.equal_bw.leso.mean_abs_err_x{i + 1}", f"Example 1, linear ESO (ω_o = "
                     f"{tune['omega_o']:.4g} rad/s) at Σ's bandwidth, mean |x{i + 1} - x̂{i + 1}|", err_l[:, i], ok,
-                    unit=unit, note="linear estimator driven by the simulated y (loops.linear_estimates)")
+                    unit=unit, note="linear estimator driven by the simulated y (loops.LinearPath)")
         quantity_ms(result, f"ex1.fair.equal_bw.fal_eso.mean_abs_err_x{i + 1}", f"Example 1, Han's fal ESO with the "
                     f"step-size rule for h' = {tune['h_tuning'] * 1e3:.3g} ms (δ = h', linearised bandwidth = Σ's), "
                     f"mean |x{i + 1} - x̂{i + 1}|", d["err"]["eso_fal_eq"][:, i], ok, unit=unit,
                     note="simulated with plant and Σ in one loop")
     quantity_ms(result, "ex1.fair.linear_path_check_x1", "Example 1: Σ's mean |x1 - x̂1| from the linear path "
-                "(loops.linear_estimates) ÷ from the engine", check[:, 0], ok, unit="",
+                "(loops.LinearPath) ÷ from the engine", check[:, 0], ok, unit="",
                 note="validates the linear path used for the sweeps (1 = identical)")
-    return _tradeoff(result, p, d, x, x1, eta, bw_s, bw_e, tune, err_l)
+    d["path"] = path
+    return _tradeoff(result, p, d, x, bw_s, bw_e, tune, err_l)
 
 
-def _tradeoff(result, p, d, x, x1, eta, bw_s, bw_e, tune, err_l) -> dict:
+def _tradeoff(result, p, d, x, bw_s, bw_e, tune, err_l) -> dict:
     """Sweep Σ's ``a`` and the linear ESO's ω_o over one bandwidth grid; finding ``ex1-tradeoff``."""
     ok = d["ok"]
     bws = np.geomspace(bw_s / 4, 1.5 * bw_e, 10)
@@ -242,7 +244,7 @@ def _tradeoff(result, p, d, x, x1, eta, bw_s, bw_e, tune, err_l) -> dict:
         s = DifferentialEstimator(p.n0, p.a * bw / bw_s)
         e = ExtendedStateObserver.from_bandwidth(2, tune["omega_o"] * bw / bw_s)
         for k, sys in (("sigma", s.ss), ("leso", e.ss)):
-            curves[k].append(np.mean(_errors(x, loops.linear_estimates(sys, x1, eta, p.h))[ok], axis=0))
+            curves[k].append(np.mean(_errors(x, d["path"].estimates(sys))[ok], axis=0))
     curves = {k: np.array(v) for k, v in curves.items()}
     fal = {"textbook": np.mean(d["err"]["eso"][ok], axis=0), "equal_bw": np.mean(d["err"]["eso_fal_eq"][ok], axis=0)}
     result.quantity("ex1.tradeoff.bandwidths", "Example 1 trade-off: −3 dB bandwidths swept (Σ's a and the linear "
@@ -286,11 +288,11 @@ def _tradeoff(result, p, d, x, x1, eta, bw_s, bw_e, tune, err_l) -> dict:
     return {"bws": bws, "curves": curves, "fal": fal, "fal_bw": {"textbook": bw_e, "equal_bw": d["bw_sigma"]}}
 
 
-def n0_sweep(result: StudyResult, p: Example1, d: dict, n0_values=(2, 3, 4, 5, 6)) -> dict:
-    """"Larger n0 is more accurate" (remark (2)): Σ errors for n0 = 2..6 at a = 7 and at Σ(5, 7) bandwidth (n0 >= 7: the zpk form of the discretised Σ is ill-conditioned)."""
-    sig, eta, ok = d["sig"], d["noise"][:, :, 1], d["ok"]
+def n0_sweep(result: StudyResult, p: Example1, d: dict, n0_values=(2, 3, 4, 5, 6, 7, 8)) -> dict:
+    """"Larger n0 is more accurate" (remark (2)): Σ errors for n0 = 2..8 at a = 7 and at Σ(5, 7)'s bandwidth."""
+    sig, ok = d["sig"], d["ok"]
     x = np.stack([sig["x1"][:-1], sig["x2"][:-1]], axis=2)
-    x1 = np.where(ok, x[:, :, 0], 0.0)
+    path = d.get("path") or loops.LinearPath(np.where(ok, x[:, :, 0], 0.0), d["noise"][:, :, 1], p.h)
     out = {}
     for mode in ("fixed_a", "equal_bw"):
         rows = []
@@ -298,7 +300,7 @@ def n0_sweep(result: StudyResult, p: Example1, d: dict, n0_values=(2, 3, 4, 5, 6
             a = p.a
             if mode == "equal_bw":
                 a = p.a * d["bw_sigma"] / float(ct.bandwidth(DifferentialEstimator(n0, p.a).tf))
-            z = loops.linear_estimates(DifferentialEstimator(n0, a).ss, x1, eta, p.h)
+            z = path.estimates(DifferentialEstimator(n0, a).ss)
             rows.append(np.mean(_errors(x, z)[ok], axis=0))
         out[mode] = np.array(rows)
         for i in (0, 1):
@@ -319,7 +321,7 @@ def n0_sweep(result: StudyResult, p: Example1, d: dict, n0_values=(2, 3, 4, 5, 6
     return out
 
 
-def eso_divergence(result: StudyResult, p: Example1, seeds, T: float = 2.0) -> dict:
+def eso_divergence(result: StudyResult, p: Example1, seeds, T: float = 0.3) -> dict:
     """"Badly chosen ESO parameters diverge": Han's rule for a step 4× shorter than the simulation's, run at h."""
     h_bad = p.h / 4
     q = replace(p, T=min(T, p.T))

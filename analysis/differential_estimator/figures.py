@@ -146,6 +146,10 @@ def plot_tradeoff(trade: dict, sigma_point, title: str):
         e = trade["fal"][k]
         ax.loglog([e[0]], [e[1]], mk, color="C3", ms=9, label=f"{name}: {trade['fal_bw'][k]:.0f} rad/s")
     ax.loglog([sigma_point[0]], [sigma_point[1]], "*", color="k", ms=12, label="Σ as in the paper (a = 7)")
+    from matplotlib.ticker import NullFormatter
+
+    ax.xaxis.set_minor_formatter(NullFormatter())
+    ax.yaxis.set_minor_formatter(NullFormatter())
     ax.set_xlabel("mean |x1 − x̂1|  [–]")
     ax.set_ylabel("mean |x2 − x̂2|  [1/s]")
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8,
@@ -168,8 +172,8 @@ def plot_fig5(t, r, v, runs, title: str):
         ax.set_ylabel(r"$v$, $x_1$")
         ax_e.plot(t, d["x1"] - v, color="tab:red", lw=0.6)
         ax_e.set_ylabel(r"$x_1 - v$")
-        ax_x.plot(t, d["x2"], color="k", lw=1.0, label=r"$x_2$")
-        ax_x.plot(t, d["xhat2"], color="tab:green", lw=0.6, alpha=0.8, label=r"$\hat x_2 = z_2$")
+        ax_x.plot(t, d["xhat2"], color="tab:green", lw=0.6, alpha=0.7, label=r"$\hat x_2 = z_2$")
+        ax_x.plot(t, d["x2"], color="k", lw=1.0, label=r"$x_2$", zorder=3)
         ax_x.set_ylabel(r"$x_2$, $\hat x_2$ (1/s)")
         ax_x.set_xlabel("t (s)")
         ax_x.set_xlim(t[0], t[-1])
@@ -219,7 +223,8 @@ def plot_stability_map(b1s, b2s, b3s, maps, title: str):
             s = stable[:, :, k]
             ax.scatter(i1[s] + offsets[k], i2[s], marker="o", color="w", edgecolor="k", s=30)
             ax.scatter(i1[~s] + offsets[k], i2[~s], marker="X", color="k", s=36)
-            ax.text(offsets[k], len(b2s) - 0.45, f"b3={b3:g}", fontsize=6, ha="center", va="bottom")
+        for i, j in zip(i1.ravel(), i2.ravel()):
+            ax.text(i, j - 0.3, f"{lin[i, j]:+.2f}", fontsize=6, ha="center", va="center", color="0.15")
         ax.set_xticks(range(len(b1s)), [f"{v:g}" for v in b1s])
         ax.set_yticks(range(len(b2s)), [f"{v:g}" for v in b2s])
         ax.axvline(int(np.flatnonzero(np.asarray(b1s) == 0.0)[0]), color="k", lw=0.8, ls=":")
