@@ -279,7 +279,7 @@ def _tradeoff(result, p, d, x, bw_s, bw_e, tune, err_l) -> dict:
         f"bandwidths. The fal ESO's errors are {fal_r['textbook'][0]:.2f}× / {fal_r['textbook'][1]:.2f}× Σ's at "
         f"the textbook bandwidth and {fal_r['equal_bw'][0]:.2f}× / {fal_r['equal_bw'][1]:.2f}× at Σ's bandwidth. "
         f"So the paper's claim (Σ more accurate than the ESO) holds for the textbook tuning it compares with "
-        f"(ratios {m_s[0] and np.mean(d['err']['eso'][ok, 0]) / m_s[0]:.1f}× and "
+        f"(ratios {np.mean(d['err']['eso'][ok, 0]) / m_s[0]:.1f}× and "
         f"{np.mean(d['err']['eso'][ok, 1]) / m_s[1]:.0f}×), but at equal bandwidth the two observers are within "
         f"a factor {max(r.max(), 1 / r.min()):.2f} of each other: the gap comes from the tuning (bandwidth), not "
         f"from the structure of Σ.",

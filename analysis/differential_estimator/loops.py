@@ -310,8 +310,11 @@ class LinearPath:
     def __init__(self, x1, eta, h: float):
         self.n = x1.shape[0]
         self.h = float(h)
-        self.nfft = int(2 ** np.ceil(np.log2(2 * self.n)))
-        self.spectra = {"foh": np.fft.rfft(x1, self.nfft, axis=0), "zoh": np.fft.rfft(eta, self.nfft, axis=0)}
+        from scipy import fft
+
+        self._fft = fft
+        self.nfft = fft.next_fast_len(2 * self.n - 1, real=True)
+        self.spectra = {"foh": fft.rfft(x1, self.nfft, axis=0), "zoh": fft.rfft(eta, self.nfft, axis=0)}
 
     def estimates(self, sys, outputs=(0, 1)) -> list:
         """Outputs ``outputs`` of ``sys`` (a ``control.StateSpace`` whose input 0 is ``y``), each ``(N, B)``."""
@@ -320,6 +323,6 @@ class LinearPath:
             spec = 0.0
             for method, U in self.spectra.items():
                 g = impulse_response(ct.c2d(sys[o, 0], self.h, method=method), self.n)
-                spec = spec + U * np.fft.rfft(g, self.nfft)[:, None]
-            out.append(np.fft.irfft(spec, self.nfft, axis=0)[: self.n])
+                spec = spec + U * self._fft.rfft(g, self.nfft)[:, None]
+            out.append(self._fft.irfft(spec, self.nfft, axis=0)[: self.n])
         return out
