@@ -91,7 +91,7 @@ def linear_analysis(result: StudyResult, p: Example2) -> dict:
         f"stable at a = {a_star:.2f} and has every eigenvalue at Re <= -{p.stable_margin:g} 1/s from a = {a_new:g} "
         f"(max Re = {eig_new.real.max():+.2f}; Σ's slowest pole moves from {slow.real:.2f} to "
         f"{est_new.poles.real.max():.2f}). The alternative — slowing the controller, every pole × c — is stable only "
-        f"for c <= {cs['largest_stable_scale']} and never reaches the margin (best max Re = "
+        f"for c <= {cs['largest_stable_scale']:.3g} and never reaches the margin (best max Re = "
         f"{cs['best_max_real']:+.2f} at c = {cs['best_scale']:.2f}). Raising a is the smallest change that yields a "
         f"usable loop; a = {a_new:g} lies outside the range a ∈ [2, 20] the paper recommends.")
     return {"eig": eig, "a_new": a_new, "pair": eig[np.argmax(eig.real)]}

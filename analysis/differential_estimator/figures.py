@@ -224,7 +224,8 @@ def plot_stability_map(b1s, b2s, b3s, maps, title: str):
             ax.scatter(i1[s] + offsets[k], i2[s], marker="o", color="w", edgecolor="k", s=30)
             ax.scatter(i1[~s] + offsets[k], i2[~s], marker="X", color="k", s=36)
         for i, j in zip(i1.ravel(), i2.ravel()):
-            ax.text(i, j - 0.3, f"{lin[i, j]:+.2f}", fontsize=6, ha="center", va="center", color="0.15")
+            dark = abs(float(norm(lin[i, j])) - 0.5) > 0.3
+            ax.text(i, j - 0.3, f"{lin[i, j]:+.2f}", fontsize=7, ha="center", va="center", color="w" if dark else "0.1")
         ax.set_xticks(range(len(b1s)), [f"{v:g}" for v in b1s])
         ax.set_yticks(range(len(b2s)), [f"{v:g}" for v in b2s])
         ax.axvline(int(np.flatnonzero(np.asarray(b1s) == 0.0)[0]), color="k", lw=0.8, ls=":")
