@@ -30,8 +30,8 @@ INFO = StudyInfo(
 )
 
 MISSING = [
-    "Fig. 3-5 are redrawn from the reconstruction (step, horizon, ESO tuning, b1..b3, setpoint softener unprinted); "
-    "the paper's traces cannot be compared point by point",
+    ("Fig. 3-5 are redrawn from the reconstruction (step, horizon, ESO tuning, b1..b3, setpoint softener "
+     "unprinted); the paper's traces cannot be compared point by point"),
     "the ESO's x2 error of the paper (8.23e-2) is not reproduced with Han's textbook gains; no tuning is fitted to it",
 ]
 

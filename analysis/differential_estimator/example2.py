@@ -28,7 +28,9 @@ __all__ = ["stable_estimator_a", "controller_scale_threshold", "linear_analysis"
 
 def stable_estimator_a(p: Example2, a_max: float = 200.0) -> tuple[float, float]:
     """Smallest integer ``a >= p.a`` whose linearised loop has every eigenvalue at Re <= -p.stable_margin, and the bisected boundary."""
-    f = lambda a: loops.max_real_eig(loops.example2_linear(p, a))  # noqa: E731
+    def f(a):
+        return loops.max_real_eig(loops.example2_linear(p, a))
+
     a = float(np.ceil(p.a))
     while f(a) > -p.stable_margin:
         a += 1.0

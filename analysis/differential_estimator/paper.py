@@ -16,7 +16,7 @@ import numpy as np
 from ctrl_analysis.study import printed, reconstructed
 
 __all__ = ["Linear", "Example1", "Example2", "LINEAR", "EX1", "EX2", "han_eso_gains", "applied_gains",
-           "printed_eq9_gain", "printed_eq5_coefficients", "HAN_2008"]
+           "printed_eq9_gain", "printed_eq5_coefficients", "HAN_2008", "setpoint"]
 
 #: The source of the ESO exponents and of the step-size gain rule (the paper prints neither).
 HAN_2008 = ("Han Jingqing, Active Disturbance Rejection Control Technique (自抗扰控制技术), National "
