@@ -314,7 +314,9 @@ class LinearPath:
 
         self._fft = fft
         self.nfft = fft.next_fast_len(2 * self.n - 1, real=True)
-        self.spectra = {"foh": fft.rfft(x1, self.nfft, axis=0), "zoh": fft.rfft(eta, self.nfft, axis=0)}
+        # single precision: ~1e-7 relative per sample, far below the Monte Carlo spread, half the memory traffic
+        self.spectra = {m: fft.rfft(np.asarray(u, dtype=np.float32), self.nfft, axis=0)
+                        for m, u in (("foh", x1), ("zoh", eta))}
 
     def estimates(self, sys, outputs=(0, 1)) -> list:
         """Outputs ``outputs`` of ``sys`` (a ``control.StateSpace`` whose input 0 is ``y``), each ``(N, B)``."""
@@ -323,6 +325,6 @@ class LinearPath:
             spec = 0.0
             for method, U in self.spectra.items():
                 g = impulse_response(ct.c2d(sys[o, 0], self.h, method=method), self.n)
-                spec = spec + U * self._fft.rfft(g, self.nfft)[:, None]
+                spec = spec + U * self._fft.rfft(g.astype(np.float32), self.nfft)[:, None]
             out.append(self._fft.irfft(spec, self.nfft, axis=0)[: self.n])
         return out
