@@ -5,6 +5,8 @@ derivatives ``θ = (v, v', ..., v^(n-1))`` and estimates ``x̂ = (x, x', ..., x^
 output and its derivatives (e.g. from a differential estimator), and feeds back the error vector
 ``ε = θ - x̂`` through ``K = [k_n, ..., k_1]``. On a chain of ``n`` integrators with exact
 derivatives this places the closed-loop poles at the roots of ``s^n + k_1 s^(n-1) + ... + k_n``.
+The controller is a static block (:class:`~ctrl_analysis.blocks.StaticBlock`): no state, direct
+feedthrough, so it runs in :class:`~ctrl_analysis.loop.Loop` and in ``control.interconnect``.
 """
 
 from __future__ import annotations
@@ -13,6 +15,7 @@ import control as ct
 import numpy as np
 
 from .._validate import check_array, check_finite, check_int
+from ..blocks import StaticBlock, signal_names
 
 __all__ = ["HighOrderDifferentialFeedback", "hurwitz_roots", "gains_from_poles"]
 
@@ -68,24 +71,24 @@ def gains_from_poles(poles) -> np.ndarray:
     return coeffs.real[1:][::-1].copy()
 
 
-class HighOrderDifferentialFeedback:
-    """Model-free high-order differential feedback ``u = K ε``, ``ε_i = θ_i - x̂_i``.
+class HighOrderDifferentialFeedback(StaticBlock):
+    """Model-free high-order differential feedback ``u = K ε``, ``ε_i = θ_i - x̂_i``: a static block.
+
+    Stateless with direct feedthrough; inputs ``theta[0..n-1]`` (the setpoint and its first
+    ``n - 1`` derivatives) then ``xhat[0..n-1]`` (estimates of the output and its derivatives),
+    output ``u``.
 
     Parameters
     ----------
-    K : array_like
+    K : array_like, shape (n,)
         Gains in the paper's order ``[k_n, k_(n-1), ..., k_1]``, i.e. ``u = k_n ε_1 + ... + k_1 ε_n``
-        (``K[i]`` multiplies the ``i``-th derivative of the error). ``s^n + k_1 s^(n-1) + ... + k_n``
-        must be Hurwitz. A vector of length ``n + 1`` whose last entry is ``1`` is read as the
-        full coefficient list of that monic polynomial in ascending powers (``[k_n, ..., k_1, 1]``):
-        the trailing 1 is the coefficient of ``s^n``, not a gain, and is dropped. This needs ``n``.
-    n : int, optional
-        Plant order; default ``len(K)``. With ``len(K) == n + 1`` the last entry must be 1.
+        (``K[i]`` multiplies the ``i``-th derivative of the error); ``n = len(K)`` is the plant
+        order. ``s^n + k_1 s^(n-1) + ... + k_n`` must be Hurwitz.
 
     Attributes
     ----------
     K : numpy.ndarray, shape (n,)
-        The gains ``[k_n, ..., k_1]`` actually applied.
+        The gains ``[k_n, ..., k_1]``.
     n : int
         Plant order.
     poles : numpy.ndarray
@@ -95,15 +98,16 @@ class HighOrderDifferentialFeedback:
     Raises
     ------
     ValueError
-        If ``K`` is not finite, has the wrong length, has a trailing entry other than 1 when of
-        length ``n + 1``, or does not make ``s^n + k_1 s^(n-1) + ... + k_n`` Hurwitz (every root
-        with a negative real part).
+        If ``K`` is not a finite 1-D vector or does not make ``s^n + k_1 s^(n-1) + ... + k_n``
+        Hurwitz (every root with a negative real part).
 
     References
     ----------
     Qi Guoyuan, Chen Zengqiang, Xue Wei, Yuan Zhuzhi, "A new differential state estimator and
     controller for nonlinear stochastic system", Acta Electronica Sinica 32(4), 2004, eq. (18)
-    and the Hurwitz condition below it; the paper's example prints ``K`` with ``n + 1`` entries.
+    and the Hurwitz condition below it. The paper's example prints ``K`` with an extra trailing
+    entry 1 (the coefficient of ``s^n``); reading that vector is the study's business, this block
+    takes the ``n`` gains only.
 
     Examples
     --------
@@ -111,35 +115,38 @@ class HighOrderDifferentialFeedback:
     >>> ctrl = HighOrderDifferentialFeedback([6.0, 11.0, 6.0])
     >>> np.round(ctrl.poles.real, 9)
     array([-1., -2., -3.])
+    >>> ctrl.inputs
+    ('theta[0]', 'theta[1]', 'theta[2]', 'xhat[0]', 'xhat[1]', 'xhat[2]')
     >>> float(ctrl.u([1.0, 0.0, 0.0], [0.0, 0.0, 0.0]))
     6.0
     """
 
-    def __init__(self, K, n: int | None = None):
+    def __init__(self, K):
         K = np.atleast_1d(check_finite("K", K)).astype(float)
         if K.ndim != 1:
             raise ValueError(f"K must be a 1-D gain vector, got shape {K.shape}")
-        if n is None:
-            n = K.size
-        n = check_int("n", n, minimum=1)
-        if K.size == n + 1:
-            if K[-1] != 1.0:
-                raise ValueError(
-                    f"K of length n + 1 = {n + 1} must end with the leading coefficient 1 of the monic "
-                    f"polynomial s^n + k_1 s^(n-1) + ... + k_n, got K[-1] = {K[-1]}"
-                )
-            K = K[:-1]
-        elif K.size != n:
-            raise ValueError(f"K must have n = {n} gains (or n + 1 ending in 1), got {K.size}")
+        n = K.size
         poles = hurwitz_roots(K)
         if not np.all(poles.real < 0):
             raise ValueError(
                 f"K must make {_poly_text(n)} Hurwitz (all roots with negative real part), "
                 f"got K = {K.tolist()} with roots {np.round(poles, 6).tolist()}"
             )
+        K.setflags(write=False)
         self.K = K
         self.n = n
         self.poles = poles
+        self._k = tuple(float(k) for k in K)
+        super().__init__(self._law, inputs=signal_names("theta", n) + signal_names("xhat", n), outputs=("u",))
+
+    def _law(self, t, u):
+        """Per-step kernel: ``u`` of shape ``(B, 2n)`` = ``[θ, x̂]``; returns ``(B, 1)``."""
+        n, k = self.n, self._k
+        # (18) u = K ε,  ε_i = θ_i - x̂_i,  K = [k_n, ..., k_1] (written out: bit-identical per row)
+        out = k[0] * (u[:, 0] - u[:, n])
+        for i in range(1, n):
+            out = out + k[i] * (u[:, i] - u[:, n + i])
+        return out[:, None]
 
     @property
     def characteristic_polynomial(self) -> np.ndarray:
@@ -152,7 +159,7 @@ class HighOrderDifferentialFeedback:
         return self.K.reshape(1, -1).copy()
 
     def u(self, theta, x_hat) -> np.ndarray:
-        """Control ``u = K (θ - x̂)`` (eq. 18), batched.
+        """Control ``u = K (θ - x̂)`` (eq. 18) for arrays outside a loop, batched on leading axes.
 
         Parameters
         ----------
@@ -166,6 +173,11 @@ class HighOrderDifferentialFeedback:
         -------
         numpy.ndarray, shape (...)
             The control; a 0-d array for 1-D inputs.
+
+        Raises
+        ------
+        ValueError
+            If ``theta`` does not have ``n`` entries or ``x_hat`` fewer than ``n`` on the last axis.
         """
         theta = check_array("theta", theta)
         x_hat = check_array("x_hat", x_hat)
@@ -173,8 +185,10 @@ class HighOrderDifferentialFeedback:
             raise ValueError(f"theta must have n = {self.n} entries on its last axis, got {theta.shape}")
         if x_hat.ndim < 1 or x_hat.shape[-1] < self.n:
             raise ValueError(f"x_hat must have at least n = {self.n} entries on its last axis, got {x_hat.shape}")
-        # (18) u = K ε,  ε_i = θ_i - x̂_i,  K = [k_n, ..., k_1]
-        return (theta - x_hat[..., : self.n]) @ self.K
+        lead = np.broadcast_shapes(theta.shape[:-1], x_hat.shape[:-1])
+        th = np.broadcast_to(theta, lead + (self.n,)).reshape(-1, self.n)
+        xh = np.broadcast_to(x_hat[..., : self.n], lead + (self.n,)).reshape(-1, self.n)
+        return self._law(0.0, np.concatenate([th, xh], axis=1))[:, 0].reshape(lead)
 
     def closed_loop_chain(self) -> ct.StateSpace:
         """Closed loop of the chain of ``n`` integrators ``x^(n) = u`` under exact state feedback.

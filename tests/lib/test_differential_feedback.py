@@ -1,45 +1,50 @@
-"""High-order differential feedback: Hurwitz check, gain order, closed-loop poles."""
+"""High-order differential feedback: Hurwitz check, gain order, closed-loop poles, the block protocol."""
 
 import control as ct
 import numpy as np
 import pytest
 
+from ctrl_analysis.blocks import ContinuousBlock, StaticBlock
 from ctrl_analysis.controllers.differential_feedback import (
     HighOrderDifferentialFeedback,
     gains_from_poles,
     hurwitz_roots,
 )
-from ctrl_analysis.simulate import simulate_sampled
+from ctrl_analysis.loop import Loop, place
 
 
-def test_accepts_the_papers_gains_and_places_the_poles():
+class Chain(ContinuousBlock):
+    """x''' = u, all states as outputs (a test plant)."""
+
+    inputs, outputs, states = ("u",), ("x[0]", "x[1]", "x[2]"), ("x[0]", "x[1]", "x[2]")
+
+    def rhs(self, t, x, u, params=None):
+        return np.stack([x[:, 1], x[:, 2], u[:, 0]], axis=1)
+
+
+def test_places_the_poles():
     ctrl = HighOrderDifferentialFeedback([2184.0, 506.0, 39.0])
     np.testing.assert_allclose(ctrl.poles, [-12.0, -13.0, -14.0], atol=1e-9)
     np.testing.assert_allclose(ctrl.characteristic_polynomial, [1, 39, 506, 2184])
-    # the printed vector with its trailing 1 (the coefficient of s^3)
-    ctrl4 = HighOrderDifferentialFeedback([2184.0, 506.0, 39.0, 1.0], n=3)
-    np.testing.assert_array_equal(ctrl4.K, ctrl.K)
     np.testing.assert_allclose(gains_from_poles([-12, -13, -14]), [2184, 506, 39])
 
 
-@pytest.mark.parametrize("K", [[1.0, -1.0, 3.0], [6.0, 0.0, 1.0], [-1.0, 2.0]])
+@pytest.mark.parametrize("K", [[1.0, -1.0, 3.0], [6.0, 0.0, 1.0], [-1.0, 2.0],
+                               [2184.0, 506.0, 39.0, 1.0]])  # a trailing 1 is a 4th gain: not Hurwitz
 def test_rejects_non_hurwitz_gains(K):
     with pytest.raises(ValueError, match=r"K must make .* Hurwitz"):
         HighOrderDifferentialFeedback(K)
 
 
 def test_rejects_bad_shapes():
-    with pytest.raises(ValueError, match="must end with the leading coefficient 1"):
-        HighOrderDifferentialFeedback([2184.0, 506.0, 39.0, 2.0], n=3)
-    with pytest.raises(ValueError, match="K must have n = 3 gains"):
-        HighOrderDifferentialFeedback([1.0, 2.0], n=3)
     with pytest.raises(ValueError, match="K must be finite"):
         HighOrderDifferentialFeedback([1.0, np.nan])
+    with pytest.raises(ValueError, match="K must be a 1-D gain vector"):
+        HighOrderDifferentialFeedback(np.ones((2, 2)))
 
 
 def test_closed_loop_chain_poles_against_python_control():
     ctrl = HighOrderDifferentialFeedback([2184.0, 506.0, 39.0])
-    # independent construction: chain of integrators under static state feedback via ct.feedback
     n = 3
     A = np.diag(np.ones(n - 1), 1)
     B = np.zeros((n, 1))
@@ -52,25 +57,34 @@ def test_closed_loop_chain_poles_against_python_control():
     np.testing.assert_allclose(ct.dcgain(cl), 1.0, rtol=1e-12)
 
 
-def test_u_is_batched_and_simulates_the_designed_step_response():
-    ctrl = HighOrderDifferentialFeedback([6.0, 11.0, 6.0])  # poles -1, -2, -3
-    theta = np.array([[1.0, 0.0, 0.0], [2.0, 0.0, 0.0]])
-    x_hat = np.zeros((2, 5))  # a higher-order estimate vector: the first n entries are used
-    np.testing.assert_allclose(ctrl.u(theta, x_hat), [6.0, 12.0])
+def test_is_a_static_feedthrough_block():
+    ctrl = HighOrderDifferentialFeedback([6.0, 11.0, 6.0])
+    assert isinstance(ctrl, StaticBlock) and ctrl.feedthrough and ctrl.n_states == 0
+    assert ctrl.outputs == ("u",) and len(ctrl.inputs) == 6
+    rng = np.random.default_rng(1)
+    u = rng.normal(size=(7, 6))
+    expected = (u[:, :3] - u[:, 3:]) @ ctrl.K
+    np.testing.assert_allclose(ctrl.output(0.0, np.zeros((7, 0)), u)[:, 0], expected, rtol=1e-13, atol=1e-12)
+    # a row does not depend on the batch it is in
+    np.testing.assert_array_equal(ctrl.output(0.0, np.zeros((1, 0)), u[3:4]), ctrl.output(0.0, None, u)[3:4])
+    np.testing.assert_allclose(ctrl.u(u[:, :3], np.c_[u[:, 3:], np.ones(7)]), expected, rtol=1e-13, atol=1e-12)
     with pytest.raises(ValueError, match="theta must have n = 3"):
-        ctrl.u(np.zeros((2, 2)), x_hat)
+        ctrl.u(np.zeros((2, 2)), np.zeros((2, 5)))
 
-    # chain of integrators x''' = u with exact states, setpoint v = 1 (θ = (1, 0, 0))
-    def rhs(t, x, u, p):
-        dx = np.empty_like(x)
-        dx[:, :2] = x[:, 1:]
-        dx[:, 2] = ctrl.u(np.array([1.0, 0.0, 0.0]), x)
-        return dx
 
-    h, n = 1e-3, 6000
-    res = simulate_sampled(rhs, np.zeros(3), h, n)
+def test_loop_step_response_equals_the_designed_closed_loop_and_interconnect():
+    ctrl = HighOrderDifferentialFeedback([6.0, 11.0, 6.0])  # poles -1, -2, -3
+    loop = Loop([place(Chain(), "plant"),
+                 place(ctrl, "ctrl", inputs=["v", "dv", "ddv", "x[0]", "x[1]", "x[2]"])],
+                dt=1e-3, outputs=["x[0]", "u"])
+    res = loop.simulate(6000, inputs={"v": 1.0, "dv": 0.0, "ddv": 0.0}, runs=2)
     ref = ct.step_response(ctrl.closed_loop_chain(), res.t).outputs
-    np.testing.assert_allclose(res.x[:, 0, 0], ref, atol=1e-8)
+    np.testing.assert_allclose(res["x[0]"][:, 1], ref, atol=1e-8)
+    sys = loop.interconnect()
+    resp = ct.input_output_response(sys, res.t, np.stack([np.ones_like(res.t), 0 * res.t, 0 * res.t]),
+                                    solve_ivp_kwargs={"rtol": 1e-10, "atol": 1e-12})
+    np.testing.assert_allclose(resp.outputs[0], ref, atol=1e-7)
+    np.testing.assert_allclose(resp.outputs[1, 0], 6.0, rtol=1e-12)  # u(0) = k_3 (v - 0)
 
 
 def test_hurwitz_roots_order():

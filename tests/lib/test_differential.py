@@ -1,4 +1,4 @@
-"""Tests for ctrl_analysis.estimators.differential (Σ) and the linear part of its study."""
+"""Tests for ctrl_analysis.estimators.differential (Σ)."""
 
 from __future__ import annotations
 
@@ -153,39 +153,3 @@ def test_bad_call_arguments():
         est.estimates(np.zeros(4), 0.0)
     with pytest.raises(ValueError, match=r"^y "):
         est.estimates(np.zeros((5, 3)), np.zeros(4))
-
-
-def test_study_linear_helpers():
-    from analysis.differential_estimator import linear
-
-    # n0 = 3: s^3 + K s^2 + 2aK s + a^2 K is Hurwitz iff K > a/2 (Routh)
-    assert linear.min_stable_gain(3, 4.0) == pytest.approx(2.0, rel=1e-9)
-    assert linear.min_stable_gain(2, 4.0) == 0.0
-    est = DifferentialEstimator(5, 5.0)
-    peak_db, w_peak = linear.resonance_peak(est.tf)
-    w = np.logspace(0, 3, 20001)
-    assert peak_db == pytest.approx(20 * np.log10(np.abs(est.tf(1j * w)).max()), abs=1e-6)
-    bw = ct.bandwidth(est.tf)
-    assert abs(est.tf(1j * bw)) == pytest.approx(10 ** (-3 / 20), rel=1e-6)
-    assert linear.printed_eq9_gain(5, 2.0, 5) == pytest.approx(breakaway_gain(5, 2.0))
-
-
-def test_linear_study_smoke(tmp_path):
-    from analysis.differential_estimator import INFO, linear
-    from ctrl_analysis.report import StudyContext, StudyResult, write_results_json
-
-    result = StudyResult(INFO)
-    linear.run_linear(StudyContext(out_dir=tmp_path, quick=True), result)
-    ids = {q.id for q in result.quantities}
-    assert {"eq9.breakaway_point", "eq9.gain_K", "ex2.controller_poles"} <= ids
-    assert result.get("eq9.breakaway_point").verdict == "agrees"
-    assert result.get("eq9.breakaway_point").value == pytest.approx(-10.0)
-    assert result.get("eq9.gain_K").value == pytest.approx(5**5 * 2 / 4**4)
-    np.testing.assert_allclose(result.get("ex2.controller_poles").value, [-12, -13, -14], rtol=1e-9)
-    assert result.get("ex2.controller_poles").verdict == "agrees"
-    assert {"eq9-exponent", "eq5-sign", "lowpass-claim"} <= {f["id"] for f in result.findings}
-    for name in ("fig1_root_locus.png", "fig2_bode.png"):
-        assert name in result.figures and (tmp_path / name).stat().st_size > 10_000
-    assert len(result.settings["design_table"]) == 21
-    data = json.loads(write_results_json(result, tmp_path).read_text())
-    assert data["study"] == "differential-estimator"

@@ -1,0 +1,330 @@
+"""The loops of Examples 1 and 2, built from library blocks through :class:`~ctrl_analysis.loop.Loop`.
+
+The plants (19) and (20) are study blocks (they are the paper's); Σ, Han's ESO, the low-pass
+softener and the differential feedback (18) come from the library; sums are static blocks. The
+same loops give the simulations (batch engine, Monte Carlo on the batch axis) and, through
+:meth:`Loop.interconnect` and :func:`control.linearize`, the linearisation of Example 2.
+"""
+
+from __future__ import annotations
+
+import math
+
+import control as ct
+import numpy as np
+
+from ctrl_analysis.blocks import ContinuousBlock, StaticBlock, signal_names
+from ctrl_analysis.controllers.differential_feedback import HighOrderDifferentialFeedback
+from ctrl_analysis.estimators.differential import DifferentialEstimator
+from ctrl_analysis.estimators.eso import ExtendedStateObserver
+from ctrl_analysis.loop import Loop, place
+
+from .paper import Example1, Example2, han_eso_gains
+
+__all__ = ["Plant19", "Plant20", "RowGroups", "sensor", "han_eso", "example1_loop", "example2_loop",
+           "simulate_signals", "example2_linear", "max_real_eig", "simulate_example1", "impulse_response",
+           "LinearPath"]
+
+
+def _sign_cos(arg: float) -> float:
+    """``sign(cos(arg))`` for a scalar time argument (plain floats: cheaper than numpy per call)."""
+    c = math.cos(arg)
+    return float((c > 0) - (c < 0))
+
+
+class Plant19(ContinuousBlock):
+    """Plant (19) of Example 1: ``x1' = x2``, ``x2' = -(b1 x1 + b2 x1² x2) + w + ξ``, ``w = sign(cos(ω_w t))``.
+
+    Input ``xi`` (the process noise ξ, held per step); states and outputs ``x1``, ``x2``.
+
+    Parameters
+    ----------
+    p : Example1
+        ``b1``, ``b2`` and ``w_freq`` are read from it.
+    """
+
+    inputs, outputs, states = ("xi",), ("x1", "x2"), ("x1", "x2")
+
+    def __init__(self, p: Example1):
+        self.b1, self.b2, self.w_freq = float(p.b1), float(p.b2), float(p.w_freq)
+
+    def rhs(self, t, X, U, params=None):
+        x1 = X[:, 0]
+        x2 = X[:, 1]
+        dX = np.empty_like(X)
+        dX[:, 0] = x2  # (19) x1' = x2
+        # (19) x2' = -(b1 x1 + b2 x1² x2) + w + ξ,  w = sign(cos(0.3 t))
+        dX[:, 1] = (_sign_cos(self.w_freq * t) + U[:, 0]) - x1 * (self.b1 + self.b2 * x1 * x2)
+        return dX
+
+
+class Plant20(ContinuousBlock):
+    """Plant (20) of Example 2: ``x''' = b1 x1 - (b2 - x1²) x2 - b3 x3|x3| + w + ξ + u``.
+
+    Inputs ``u`` (control), ``xi`` (process noise); states and outputs ``x1, x2, x3``. ``b1``,
+    ``b2``, ``b3`` may be arrays of shape ``(B,)``: a parameter grid on the batch axis.
+
+    Parameters
+    ----------
+    p : Example2
+    b : tuple of three floats or arrays, optional
+        ``(b1, b2, b3)``; default ``p``'s.
+    w_amp : float, optional
+        Amplitude of ``w = w_amp sign(cos(ω_w t))``; 0 makes the origin an equilibrium.
+    """
+
+    inputs, outputs, states = ("u", "xi"), ("x1", "x2", "x3"), ("x1", "x2", "x3")
+
+    def __init__(self, p: Example2, b=None, w_amp=None):
+        b1, b2, b3 = (p.b1, p.b2, p.b3) if b is None else b
+        self.b1, self.b2, self.b3 = (np.asarray(v, dtype=float) if np.ndim(v) else float(v) for v in (b1, b2, b3))
+        self.w_amp = float(p.w_amp if w_amp is None else w_amp)
+        self.w_freq = float(p.w_freq)
+
+    def rhs(self, t, X, U, params=None):
+        x1, x2, x3 = X[:, 0], X[:, 1], X[:, 2]
+        dX = np.empty_like(X)
+        dX[:, 0] = x2  # (20) x1' = x2
+        dX[:, 1] = x3  # (20) x2' = x3
+        # (20) x3' = b1 x1 - (b2 - x1²) x2 - b3 x3 |x3| + w + ξ + u,  w = 0.2 sign(cos(0.5 t))
+        dX[:, 2] = (self.b1 * x1 - (self.b2 - x1 * x1) * x2 - self.b3 * x3 * np.abs(x3)
+                    + self.w_amp * _sign_cos(self.w_freq * t) + U[:, 1] + U[:, 0])
+        return dX
+
+
+class RowGroups(ContinuousBlock):
+    """Several blocks with the same signals, each on its own consecutive group of batch rows.
+
+    Puts presets that differ in a block's parameters (e.g. Σ with two values of ``a``) on one batch.
+    Row ``b`` of group ``j`` runs ``blocks[j]`` exactly as it would alone.
+
+    Parameters
+    ----------
+    blocks : sequence of ContinuousBlock
+        Equal ``inputs``, ``outputs``, ``states`` and ``feedthrough``.
+    rows : sequence of int
+        Rows per group (their sum is the batch size the loop must be run with).
+    """
+
+    def __init__(self, blocks, rows):
+        b0 = blocks[0]
+        for b in blocks:
+            if (b.inputs, b.outputs, b.states, b.feedthrough) != (b0.inputs, b0.outputs, b0.states, b0.feedthrough):
+                raise ValueError("blocks must have equal inputs, outputs, states and feedthrough")
+        if len(rows) != len(blocks) or min(rows) < 1:
+            raise ValueError(f"rows must give one count >= 1 per block, got {list(rows)}")
+        self.blocks = tuple(blocks)
+        edges = np.concatenate(([0], np.cumsum(rows)))
+        self.slices = tuple(slice(int(a), int(b)) for a, b in zip(edges[:-1], edges[1:]))
+        self.inputs, self.outputs, self.states = b0.inputs, b0.outputs, b0.states
+        self.feedthrough = b0.feedthrough
+
+    def _each(self, fn, t, x, u, params):
+        return np.concatenate([getattr(b, fn)(t, x[s], u[s], params) for b, s in zip(self.blocks, self.slices)])
+
+    def rhs(self, t, x, u, params=None):
+        return self._each("rhs", t, x, u, params)
+
+    def output(self, t, x, u, params=None):
+        return self._each("output", t, x, u, params)
+
+
+def sensor(signal: str = "x1") -> StaticBlock:
+    """``y = x1 + η`` (19)/(20), a static sum block."""
+    return StaticBlock(lambda t, u: u[:, :1] + u[:, 1:2], inputs=(signal, "eta"), outputs=("y",))
+
+
+def han_eso(p: Example1, tuning_h: float | None = None) -> ExtendedStateObserver:
+    """Han's third-order nonlinear ESO with the step-size gains for ``tuning_h`` (default ``p.eso_tuning_h``).
+
+    ``δ = tuning_h`` when a ``tuning_h`` is given, else ``p.eso_delta``. Han's form with
+    ``e = z1 - y`` and minus signs equals the library's ``e = y - z1`` with plus signs (fal is odd).
+    """
+    h_t = p.eso_tuning_h if tuning_h is None else tuning_h
+    delta = p.eso_delta if tuning_h is None else tuning_h
+    return ExtendedStateObserver(han_eso_gains(h_t), b0=0.0, alpha=list(p.eso_alpha), delta=delta)
+
+
+def example1_loop(p: Example1, esos=None, *, method: str | None = None, h: float | None = None) -> Loop:
+    """Plant (19) + sensor + Σ (outputs ``sig[i]``) + ESOs (outputs ``eso{j}[i]``), external ``xi``, ``eta``, ``u0``.
+
+    Parameters
+    ----------
+    p : Example1
+    esos : sequence of ExtendedStateObserver, optional
+        Observers run side by side on the same ``y`` (default: Han's ESO of :func:`han_eso`);
+        ``[]`` runs Σ alone.
+    method, h : optional
+        Integrator and step (default ``p.method``, ``p.h``).
+    """
+    esos = [han_eso(p)] if esos is None else list(esos)
+    sigma = DifferentialEstimator(p.n0, p.a, reading="state")
+    blocks = [place(Plant19(p), "plant"), place(sensor(), "sensor"),
+              place(sigma, "sigma", outputs=signal_names("sig", p.n0))]
+    for j, eso in enumerate(esos):
+        blocks.append(place(eso, f"eso{j}", inputs=["y", "u0"], outputs=signal_names(f"eso{j}", 3)))
+    return Loop(blocks, p.h if h is None else h, method=p.method if method is None else method)
+
+
+def example2_loop(p: Example2, a_values=(None,), rows=None, *, b=None, w_amp=None, sigma_reading=None,
+                  extra_gain: float = 0.0) -> Loop:
+    """Plant (20) + sensor + Σ + controller (18); external ``theta[0..2]``, ``xi``, ``eta``.
+
+    Parameters
+    ----------
+    p : Example2
+    a_values : sequence of float
+        Σ's ``a`` per group of rows (``None``: ``p.a``); several values need ``rows``.
+    rows : sequence of int, optional
+        Rows per ``a`` group.
+    b, w_amp :
+        Passed to :class:`Plant20`.
+    sigma_reading : {"state", "corrected"}, optional
+        Σ's estimate reading (default ``p.reading``).
+    extra_gain : float
+        If non-zero, adds ``extra_gain · (0 - x̂4)`` to ``u``: the reading in which the printed
+        trailing 1 multiplies ε4 = θ4 - x̂4 with θ4 = v''' = 0 (a sensitivity of the linear analysis).
+    """
+    reading = p.reading if sigma_reading is None else sigma_reading
+    ests = [DifferentialEstimator(p.n0, p.a if a is None else a, reading=reading) for a in a_values]
+    sigma = ests[0] if len(ests) == 1 else RowGroups(ests, rows)
+    ctrl = HighOrderDifferentialFeedback(p.K)
+    u_name = "u" if extra_gain == 0.0 else "u18"
+    blocks = [place(Plant20(p, b, w_amp), "plant"), place(sensor(), "sensor"),
+              place(sigma, "sigma"),
+              place(ctrl, "ctrl", inputs=list(signal_names("theta", 3)) + list(signal_names("xhat", 3)),
+                    outputs=[u_name])]
+    if extra_gain != 0.0:
+        blocks.append(place(StaticBlock(lambda t, u: u[:, :1] - extra_gain * u[:, 1:2], inputs=("u18", "xhat[3]"),
+                                        outputs=("u",)), "eps4"))
+    return Loop(blocks, p.h)
+
+
+def simulate_signals(loop: Loop, n_steps: int, keep, *, inputs, runs: int, chunk: int = 2000, bound: float = 1e8,
+                     seeds=None):
+    """Run ``loop`` in time chunks (to bound memory), keeping only the signals ``keep``.
+
+    The state is carried exactly from chunk to chunk, so the result equals one long run.
+
+    Returns
+    -------
+    signals : dict of str -> ndarray, shape (N+1, B)
+    diverged : ndarray of bool, shape (B,)
+    diverged_step : ndarray of int, shape (B,)
+        First step at which the run left ``|x| <= bound`` (-1 if never).
+    """
+    out = {s: np.empty((n_steps + 1, runs)) for s in keep}
+    diverged = np.zeros(runs, dtype=bool)
+    step = np.full(runs, -1)
+    x0 = None
+    for k0 in range(0, n_steps, chunk):
+        n = min(chunk, n_steps - k0)
+        ins = {s: (v[k0:k0 + n + 1] if isinstance(v, np.ndarray) and v.ndim else v) for s, v in inputs.items()}
+        res = loop.simulate(n, inputs=ins, x0=x0, runs=runs, t0=k0 * loop.dt, bound=bound, seeds=seeds)
+        for s in keep:
+            out[s][k0:k0 + n + 1] = res[s]
+        new = res.diverged & ~diverged
+        step[new] = k0 + res.diverged_step[new]
+        diverged |= res.diverged
+        x0 = {name: np.nan_to_num(x[-1]) for name, x in res.states.items() if x.shape[2]}
+    return out, diverged, step
+
+
+def example2_linear(p: Example2, a: float | None = None, b1: float | None = None, b2: float | None = None, *,
+                    reading: str | None = None, extra_gain: float = 0.0) -> np.ndarray:
+    """State matrix of Example 2's loop linearised about the origin (w = 0, no noise), by :func:`control.linearize`.
+
+    The loop of :func:`example2_loop` as a ``control.interconnect`` (plant, sensor, Σ, controller)
+    linearised at x = 0, inputs (θ, ξ, η) = 0. ``b3`` drops out (x3|x3| has zero slope at 0).
+    """
+    b = (p.b1 if b1 is None else b1, p.b2 if b2 is None else b2, p.b3)
+    loop = example2_loop(p, (a,), b=b, w_amp=0.0, sigma_reading=reading, extra_gain=extra_gain)
+    sys = loop.interconnect()
+    lin = ct.linearize(sys, np.zeros(sys.nstates), np.zeros(sys.ninputs))
+    return np.asarray(lin.A)
+
+
+def max_real_eig(M) -> float:
+    """Largest real part of the eigenvalues of ``M``."""
+    return float(np.max(np.linalg.eigvals(M).real))
+
+
+def simulate_example1(p: Example1, seeds, noise, esos=None, *, method: str | None = None, chunk: int = 2000):
+    """Example 1 over ``seeds`` (one batch row each) with the held noise ``[ξ, η]`` of shape ``(N, B, 2)``.
+
+    Returns ``(signals, diverged, diverged_step)`` of :func:`simulate_signals` with ``x1``, ``x2``,
+    Σ's ``sig[0]``, ``sig[1]`` and each ESO's ``eso{j}[0]``, ``eso{j}[1]``.
+    """
+    esos = [han_eso(p)] if esos is None else list(esos)
+    loop = example1_loop(p, esos, method=method)
+    keep = ["x1", "x2", "sig[0]", "sig[1]"] + [f"eso{j}[{i}]" for j in range(len(esos)) for i in (0, 1)]
+    n_steps = noise.shape[0]
+    inputs = {"xi": noise[:, :, 0], "eta": noise[:, :, 1]} | ({"u0": 0.0} if esos else {})
+    return simulate_signals(loop, n_steps, keep, inputs=inputs, runs=len(seeds), chunk=chunk, bound=p.bound,
+                            seeds=seeds)
+
+
+def impulse_response(sysd, n: int, block: int = 128) -> np.ndarray:
+    """First ``n`` samples of a discrete SISO system's impulse response, ``D, CB, CAB, CA²B, ...``.
+
+    Powers of ``A`` in blocks of ``block`` (a few hundred small products for any ``n``), so no
+    polynomial (transfer-function or zero-pole) form is ever formed: those are ill-conditioned for
+    Σ's clustered poles near z = 1.
+    """
+    A, b, c = np.asarray(sysd.A), np.asarray(sysd.B)[:, 0], np.asarray(sysd.C)[0]
+    G = np.empty((A.shape[0], block))
+    for j in range(block):  # A^j B
+        G[:, j] = b
+        b = A @ b
+    A_block = np.linalg.matrix_power(A, block)
+    h = np.empty(n)
+    h[0] = float(np.asarray(sysd.D)[0, 0])
+    row = c
+    for k in range(1, n, block):  # h_k = C A^(k-1) B
+        seg = row @ G
+        h[k:k + block] = seg[:min(block, n - k)]
+        row = row @ A_block
+    return h
+
+
+class LinearPath:
+    """Linear estimators (input ``y``) driven by ``y(t) = x1(t) + η_k``, evaluated at the samples without the engine.
+
+    The plant output ``x1`` is smooth: its part of the response uses the first-order-hold
+    discretisation (exact for ``x1`` linear between samples); the held noise ``η`` uses the
+    zero-order hold (exact). Both by :func:`control.c2d`; the responses are convolutions with the
+    discrete impulse responses (:func:`impulse_response`) done by FFT over the whole batch, the
+    input spectra computed once: parameter sweeps of linear estimators cost a few FFTs each.
+    Zero initial state.
+
+    Parameters
+    ----------
+    x1 : ndarray, shape (N, B)
+        Plant output at the samples (finite).
+    eta : ndarray, shape (N, B)
+        Measurement noise held over each step.
+    h : float
+        Sampling step.
+    """
+
+    def __init__(self, x1, eta, h: float):
+        self.n = x1.shape[0]
+        self.h = float(h)
+        from scipy import fft
+
+        self._fft = fft
+        self.nfft = fft.next_fast_len(2 * self.n - 1, real=True)
+        # single precision: ~1e-7 relative per sample, far below the Monte Carlo spread, half the memory traffic
+        self.spectra = {m: fft.rfft(np.asarray(u, dtype=np.float32), self.nfft, axis=0)
+                        for m, u in (("foh", x1), ("zoh", eta))}
+
+    def estimates(self, sys, outputs=(0, 1)) -> list:
+        """Outputs ``outputs`` of ``sys`` (a ``control.StateSpace`` whose input 0 is ``y``), each ``(N, B)``."""
+        out = []
+        for o in outputs:
+            spec = 0.0
+            for method, U in self.spectra.items():
+                g = impulse_response(ct.c2d(sys[o, 0], self.h, method=method), self.n)
+                spec = spec + U * self._fft.rfft(g.astype(np.float32), self.nfft)[:, None]
+            out.append(self._fft.irfft(spec, self.nfft, axis=0)[: self.n])
+        return out

@@ -1,0 +1,186 @@
+"""What Qi, Chen, Xue & Yuan (2004) print, and every value the study reconstructs, in frozen objects.
+
+:data:`LINEAR` holds the linear part (eq. 5-9, Fig. 1-2, controller (18)), :data:`EX1` Example 1
+(eq. 19, Fig. 3-4) and :data:`EX2` Example 2 (eq. 20, Fig. 5). Each field is declared with
+:func:`~ctrl_analysis.study.printed` (where the paper prints it) or
+:func:`~ctrl_analysis.study.reconstructed` (why this value); quick settings are
+``dataclasses.replace(EX1, T=2.0)``, never module globals.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ctrl_analysis.study import printed, reconstructed
+
+__all__ = ["Linear", "Example1", "Example2", "LINEAR", "EX1", "EX2", "han_eso_gains", "applied_gains",
+           "printed_eq9_gain", "printed_eq5_coefficients", "HAN_2008", "setpoint", "CELLS"]
+
+#: The source of the ESO exponents and of the step-size gain rule (the paper prints neither).
+HAN_2008 = ("Han Jingqing, Active Disturbance Rejection Control Technique (自抗扰控制技术), National "
+            "Defense Industry Press, Beijing, 2008, ESO chapter")
+
+
+@dataclass(frozen=True)
+class Linear:
+    """The linear part: Fig. 1 and Fig. 2 settings, eq. (8)-(9), controller (18) of Example 2."""
+
+    fig1_n0: int = printed(5, "Fig. 1: root locus for n0 = 5")
+    fig1_a: float = printed(2.0, "Fig. 1: a = 2")
+    fig2_n0: int = printed(5, "Fig. 2: Bode plot for n0 = 5")
+    fig2_a: float = printed(5.0, "Fig. 2: a = 5")
+    breakaway: float = printed(-10.0, "text above eq. (8): breakaway point s = -n0 a (n0 = 5, a = 2)")
+    eq9_n: int = reconstructed(
+        4, "eq. (9) is printed K = n0^n a/(n0-1)^(n0-1) with n the plant order, which Fig. 1 does not fix; "
+           "n = n0 - 1 = 4 (the largest order an n0 = 5 estimator serves) is drawn in Fig. 1; only the figure "
+           "uses it, the quantity eq9.gain_K carries no paper value")
+    ex2_K: tuple = printed((2184.0, 506.0, 39.0, 1.0), "§4 Example 2: K = [2184, 506, 39, 1]")
+    ex2_poles: tuple = printed((-12.0, -13.0, -14.0), "§4 Example 2: roots of s^3 + 39 s^2 + 506 s + 2184")
+    table_n0: tuple = (2, 3, 4, 5, 6, 7, 8)  # design table (beyond the paper)
+    table_a: tuple = (2.0, 5.0, 7.0)  # a of Fig. 1, Fig. 2 / Example 2, Example 1
+
+
+def han_eso_gains(h: float) -> tuple[float, float, float]:
+    """Han's step-size rule for the third-order nonlinear ESO: ``β01 = 1/h``, ``β02 = 1/(1.6 h^1.5)``, ``β03 = 1/(8.6 h^2.2)``.
+
+    Parameters
+    ----------
+    h : float
+        The step the gains are designed for (s).
+
+    Returns
+    -------
+    tuple of float
+
+    References
+    ----------
+    Han (2008), ESO chapter (:data:`HAN_2008`): the rule with ``fal`` exponents 0.5, 0.25 and
+    ``δ = h``, as quoted throughout the ADRC literature (not checked against the book here).
+    The paper's ESO reference, Han 1995 ([8]), prints no gains.
+    """
+    return 1.0 / h, 1.0 / (1.6 * h**1.5), 1.0 / (8.6 * h**2.2)
+
+
+@dataclass(frozen=True)
+class Example1:
+    """Example 1, eq. (19): plant + Σ (n0 = 5, a = 7) against Han's nonlinear ESO."""
+
+    b1: float = printed(3.0, "§4 Example 1, eq. (19)")
+    b2: float = printed(1.0, "§4 Example 1, eq. (19)")
+    w_freq: float = printed(0.3, "§4 Example 1: w = sign(cos(0.3 t)), rad/s")
+    xi_bound: float = printed(0.1, "§4 Example 1: ξ ~ U[-0.1, 0.1]")
+    eta_bound: float = printed(0.001, "§4 Example 1: η ~ U[-0.001, 0.001]")
+    n0: int = printed(5, "§4 Example 1: Σ with n0 = 5")
+    a: float = printed(7.0, "§4 Example 1: Σ with a = 7")
+    sigma_err: tuple = printed((1.3179e-4, 5.4e-3), "§4 Example 1, Fig. 3: mean errors of Σ")
+    eso_err: tuple = printed((5.769e-4, 8.23e-2), "§4 Example 1, Fig. 4: mean errors of the ESO of [7]")
+    h: float = reconstructed(1e-3, "the paper prints no step; 1 ms fixed step, noise drawn once per step and "
+                                   "held (white noise of a sampled simulation), as the spec suggests first")
+    T: float = reconstructed(20.0, "the paper prints no horizon; 20 s (spec); mean errors include the start-up "
+                                   "transient from zero initial states")
+    method: str = reconstructed("rk4", "classical RK4 on plant + Σ + ESO together; Euler and a halved step are "
+                                       "reported as sensitivities")
+    eso_alpha: tuple = reconstructed(
+        (1.0, 0.5, 0.25), f"the paper prints no ESO parameter at all; the fal exponents 0.5, 0.25 of the second "
+                          f"and third channel and the linear first channel (α = 1) are Han's textbook defaults "
+                          f"({HAN_2008})")
+    eso_tuning_h: float = reconstructed(
+        1e-3, f"the paper prints no β0i; Han's step-size rule β01 = 1/h, β02 = 1/(1.6 h^1.5), β03 = 1/(8.6 h^2.2) "
+              f"({HAN_2008}) for the simulation step h = 1 ms; not tuned toward the paper's numbers")
+    eso_delta: float = reconstructed(1e-3, "δ of fal is unprinted; δ = h goes with Han's step-size rule")
+    reading: str = reconstructed("state", "remark (1): with measurement noise the states z_i of Σ are the "
+                                          "estimates; eq. (11)'s corrected reading is reported as a sensitivity")
+    tolerance: float = 0.25  # relative: Monte Carlo spread and the unprinted step/horizon/ESO tuning
+    t_sens: float = 5.0  # s, window of the half-step sensitivity
+    bound: float = 1e8  # |state| beyond this: diverged
+
+
+@dataclass(frozen=True)
+class Example2:
+    """Example 2, eq. (20): third-order plant + Σ + high-order differential feedback (18)."""
+
+    b1: float = reconstructed(1.0, "b1, b2, b3 are 'arbitrary' (b3 > 0); b1 = 1 (open-loop unstable plant, the "
+                                   "case the paper singles out)")
+    b2: float = reconstructed(2.0, "'arbitrary'; spec reconstruction")
+    b3: float = reconstructed(1.0, "'arbitrary', b3 > 0; spec reconstruction")
+    w_amp: float = printed(0.2, "§4 Example 2: w = 0.2 sign(cos(0.5 t))")
+    w_freq: float = printed(0.5, "§4 Example 2: w = 0.2 sign(cos(0.5 t)), rad/s")
+    r_freq: float = printed(0.15, "§4 Example 2: r = sign(cos(0.15 t)), rad/s")
+    xi_bound: float = printed(0.1, "§4 Example 2: noise as in Example 1")
+    eta_bound: float = printed(0.001, "§4 Example 2: noise as in Example 1")
+    K: tuple = reconstructed(
+        (2184.0, 506.0, 39.0),
+        "the printed K = [2184, 506, 39, 1] is read as the ascending coefficients of the monic s^3 + 39 s^2 + "
+        "506 s + 2184: the trailing 1 is the coefficient of s^3 and enters no gain, u = 2184 ε1 + 506 ε2 + 39 ε3 "
+        "— the only reading under which the printed roots -12, -13, -14 are the closed-loop poles on x''' = u "
+        "(with u += ε4 the s^3 coefficient would be 2)")
+    n0: int = printed(5, "§4 Example 2: Σ with n0 = 5")
+    a: float = printed(5.0, "§4 Example 2: Σ with a = 5")
+    reading: str = reconstructed("state", "remark (1): with noise the states z_i are the estimates fed back, "
+                                          "x̂_i = z_i, i = 1..3")
+    omega: float = reconstructed(
+        2.0, "the paper 'softens' r = sign(cos 0.15 t) without saying how; r through ω³/(s+ω)³ "
+             "(LowPassFilter, exact zero-order hold), whose phase-variable states are θ = (v, v', v'') exactly")
+    h: float = reconstructed(1e-3, "unprinted; 1 ms RK4 step and noise held per step as in Example 1; the control "
+                                   "u = K ε is evaluated at every integration stage (θ and the noise held)")
+    T: float = reconstructed(30.0, "unprinted; 30 s covers the rise at 0 s and the switch of r at 10.5 s")
+    bound: float = 1e6  # |state| beyond this: diverged
+    stable_margin: float = 1.0  # 1/s, decay margin required of the stable preset
+    ripple_tol: float = 0.01  # settled: half peak-to-peak of x1 - v over the last quarter below this
+    sweep_b1: tuple = (-100.0, -10.0, 0.0, 1.0, 10.0, 100.0)
+    sweep_b2: tuple = (-100.0, -10.0, 0.0, 2.0, 10.0, 100.0)
+    sweep_b3: tuple = (0.1, 1.0, 10.0)
+
+
+LINEAR = Linear()
+EX1 = Example1()
+EX2 = Example2()
+
+
+def applied_gains(printed_K) -> tuple:
+    """The gains ``[k_3, k_2, k_1]`` the study applies, from the printed ``[k_3, k_2, k_1, 1]``.
+
+    Raises
+    ------
+    ValueError
+        If the printed vector does not end with the leading coefficient 1.
+    """
+    if printed_K[-1] != 1.0:
+        raise ValueError(f"printed_K must end with the leading coefficient 1, got {printed_K[-1]}")
+    return tuple(printed_K[:-1])
+
+
+def printed_eq9_gain(n0, a, n):
+    """Eq. (9) as printed: ``K = n0^n a / (n0 - 1)^(n0-1)`` (numbers or sympy symbols)."""
+    return n0**n * a / (n0 - 1) ** (n0 - 1)
+
+
+def printed_eq5_coefficients(zeros, K):
+    """The coefficients eq. (5) prints: ``(a_1, a_2, a_n0) = (K, -K Σ z_i, (-1)^n0 K ∏ z_i)`` (the rest elided)."""
+    import sympy as sp
+
+    zeros = list(zeros)
+    n0 = len(zeros) + 1
+    return K, -K * sum(zeros), (-1) ** n0 * K * sp.prod(zeros)
+
+
+def setpoint(p: Example2, n_steps: int) -> np.ndarray:
+    """``r_k = sign(cos(0.15 t_k))`` at ``t_k = k h`` (Example 2's raw square wave)."""
+    return np.sign(np.cos(p.r_freq * p.h * np.arange(n_steps)))
+
+
+#: The paper cell of each quantity with a paper value (for counting each printed cell once, until
+#: ``StudyResult.quantity`` takes a ``cell=`` keyword). The two ratios are not separate cells: they
+#: are computed from the four printed errors of §4 Example 1.
+CELLS = {
+    "eq9.breakaway_point": "§3, text above eq. (8): s = -n0 a",
+    "ex2.controller_poles": "§4 Example 2: roots -12, -13, -14",
+    "ex1.sigma.mean_abs_err_x1": "§4 Example 1 (Fig. 3): Σ |ε̄1|",
+    "ex1.sigma.mean_abs_err_x2": "§4 Example 1 (Fig. 3): Σ |ε̄2|",
+    "ex1.eso.mean_abs_err_x1": "§4 Example 1 (Fig. 4): ESO |ε̄1|",
+    "ex1.eso.mean_abs_err_x2": "§4 Example 1 (Fig. 4): ESO |ε̄2|",
+    "ex1.eso_over_sigma_x1": None,  # derived from the two x1 cells above
+    "ex1.eso_over_sigma_x2": None,  # derived from the two x2 cells above
+}

@@ -1,0 +1,147 @@
+"""The differential-estimator study: linear helpers, the loops of Examples 1-2, the linear path, a smoke run."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import replace
+
+import control as ct
+import numpy as np
+import pytest
+
+from analysis.differential_estimator import INFO, run
+from analysis.differential_estimator import example1, example2, linear_checks, loops
+from analysis.differential_estimator.paper import EX1, EX2, LINEAR, applied_gains, printed_eq9_gain
+from ctrl_analysis.estimators.differential import DifferentialEstimator
+from ctrl_analysis.report import StudyContext, StudyResult, compute_verdict, write_results_json
+from ctrl_analysis.simulate import run_seeds
+from ctrl_analysis.symbolic.differential import breakaway_gain
+
+
+def test_linear_helpers():
+    # n0 = 3: s^3 + K s^2 + 2aK s + a^2 K is Hurwitz iff K > a/2 (Routh)
+    assert linear_checks.min_stable_gain(3, 4.0) == pytest.approx(2.0, rel=1e-9)
+    assert linear_checks.min_stable_gain(2, 4.0) == 0.0
+    est = DifferentialEstimator(5, 5.0)
+    peak_db, _ = linear_checks.peak(est)
+    w = np.logspace(0, 3, 20001)
+    assert peak_db == pytest.approx(20 * np.log10(np.abs(est.tf(1j * w)).max()), abs=1e-6)
+    assert printed_eq9_gain(5, 2.0, 5) == pytest.approx(breakaway_gain(5, 2.0))
+    assert applied_gains(LINEAR.ex2_K) == EX2.K
+    with pytest.raises(ValueError, match="printed_K must end with the leading coefficient 1"):
+        applied_gains((1.0, 2.0))
+
+
+def test_linear_part_records_eq9_without_a_paper_gain(tmp_path):
+    result = StudyResult(INFO)
+    linear_checks.eq9_checks(result, LINEAR)
+    linear_checks.controller_poles(result, LINEAR)
+    assert result.get("eq9.breakaway_point").verdict == "agrees"
+    q = result.get("eq9.gain_K")
+    assert q.paper is None and q.value == pytest.approx(5**5 * 2 / 4**4)
+    assert "n = 2, 3, 4, 5" in q.note
+    np.testing.assert_allclose(result.get("ex2.controller_poles").value, [-12, -13, -14], rtol=1e-9)
+
+
+def test_example1_loop_is_batch_invariant_and_matches_interconnect():
+    p = replace(EX1, T=0.3)
+    seeds = run_seeds(4, 3)
+    noise = example1.draw(p, seeds)
+    sig, div, _ = loops.simulate_example1(p, seeds, noise, chunk=120)
+    alone, _, _ = loops.simulate_example1(p, seeds[1:2], noise[:, 1:2], chunk=300)
+    assert not div.any()
+    for s in ("x1", "sig[1]", "eso0[1]"):
+        np.testing.assert_array_equal(sig[s][:, 1], alone[s][:, 0])  # chunked, batched == one run alone
+    # Σ alone, noise-free: the engine's RK4 equals python-control's interconnect
+    loop = loops.example1_loop(p, [])
+    res = loop.simulate(300, inputs={"xi": 0.0, "eta": 0.0})
+    sys = loop.interconnect()
+    resp = ct.input_output_response(sys, res.t, np.zeros((2, res.t.size)), X0=np.zeros(sys.nstates),
+                                    solve_ivp_kwargs={"rtol": 1e-10, "atol": 1e-12})
+    np.testing.assert_allclose(res["sig[1]"][:, 0], resp.outputs[list(loop.outlist).index("sig[1]")], atol=1e-8)
+
+
+def test_linear_path_equals_the_engine():
+    p = replace(EX1, T=1.0)
+    seeds = run_seeds(0, 2)
+    noise = example1.draw(p, seeds)
+    sig, _, _ = loops.simulate_example1(p, seeds, noise, [])
+    est = DifferentialEstimator(p.n0, p.a)
+    z1, z2 = loops.LinearPath(sig["x1"][:-1], noise[:, :, 1], p.h).estimates(est.ss)
+    scale = np.abs(sig["sig[1]"]).max()
+    np.testing.assert_allclose(z2, sig["sig[1]"][:-1], atol=1e-4 * scale)
+    np.testing.assert_allclose(z1, sig["sig[0]"][:-1], atol=1e-5 * np.abs(sig["sig[0]"]).max())
+
+
+def test_linearised_eso_and_equal_bandwidth():
+    eso = loops.han_eso(EX1)
+    lin = example1.linearised_eso(eso)
+    np.testing.assert_allclose(lin.L, eso.L * EX1.eso_delta ** (np.array(EX1.eso_alpha) - 1))
+    bw = float(ct.bandwidth(DifferentialEstimator(EX1.n0, EX1.a).tf))
+    tune = example1.equal_bandwidth_tuning(EX1, bw)
+    from ctrl_analysis.estimators.eso import ExtendedStateObserver
+
+    assert example1.eso_bandwidth(ExtendedStateObserver.from_bandwidth(2, tune["omega_o"])) == pytest.approx(bw)
+    assert example1.eso_bandwidth(lin) > 10 * bw  # the textbook ESO is much wider than Σ
+
+
+def _assembled(p, a, b1, b2):
+    """Linearised Example 2 assembled by hand from the blocks' matrices (independent of control.linearize)."""
+    est = DifferentialEstimator(p.n0, a)
+    K = np.asarray(p.K)
+    M = np.zeros((3 + p.n0, 3 + p.n0))
+    M[0, 1] = M[1, 2] = 1.0
+    M[2, 0], M[2, 1] = b1, -b2
+    M[2, 3:6] -= K  # u = -K z[0..2] at θ = 0 (state reading)
+    M[3:, 3:] = est.A
+    M[3:, 0] = est.B[:, 0]
+    return M
+
+
+@pytest.mark.parametrize("a, b1, b2", [(5.0, 1.0, 2.0), (34.0, -10.0, 100.0)])
+def test_example2_linearisation_matches_the_assembled_matrix(a, b1, b2):
+    A = loops.example2_linear(EX2, a, b1, b2)
+    M = _assembled(EX2, a, b1, b2)
+    np.testing.assert_allclose(np.sort_complex(np.linalg.eigvals(A)), np.sort_complex(np.linalg.eigvals(M)),
+                               rtol=1e-6, atol=1e-6)
+
+
+def test_stable_preset_is_the_smallest_integer_a_with_the_margin():
+    assert loops.max_real_eig(loops.example2_linear(EX2)) > 0  # the printed loop is unstable
+    a_new, a_star = example2.stable_estimator_a(EX2)
+    assert a_star < a_new
+    assert loops.max_real_eig(loops.example2_linear(EX2, a_new)) <= -EX2.stable_margin
+    assert loops.max_real_eig(loops.example2_linear(EX2, a_new - 1)) > -EX2.stable_margin
+
+
+def test_plant_is_never_hurwitz():
+    result = StudyResult(INFO)
+    example2.nonminimum_phase(result, EX2)
+    assert all(v >= -1e-12 for v in result.get("ex2.plant.max_real_pole").value)
+
+
+def test_quick_run_smoke(tmp_path):
+    ctx = StudyContext(out_dir=tmp_path, quick=True, runs=2, seed=5)
+    ex2 = replace(EX2, T=1.0, sweep_b1=(-10.0, 0.0, 10.0), sweep_b2=(2.0,), sweep_b3=(1.0,))
+    result = run(ctx, ex1=replace(EX1, T=0.4, t_sens=0.2), ex2=ex2)
+    ids = {q.id for q in result.quantities}
+    assert {"eq9.gain_K", "ex1.sigma.mean_abs_err_x1", "ex1.eso_over_sigma_x2", "ex1.fair.equal_bw.leso.mean_abs_err_x2",
+            "ex1.tradeoff.sigma.err_x2", "ex1.n0_sweep.fixed_a.err_x1", "ex2.literal.max_real_eig",
+            "ex2.sweep.fraction_stable", "ex2.sweep.literal.fraction_stable"} <= ids
+    from analysis.differential_estimator.paper import CELLS
+
+    assert {q.id for q in result.quantities if q.paper is not None} == set(CELLS)
+    for q in result.quantities:
+        assert q.verdict == compute_verdict(q.value, q.paper, q.tolerance)
+        assert q.unit is not None
+        if q.paper is not None:
+            assert q.tolerance is not None
+    assert result.get("ex1.eso_over_sigma_x1").paper == pytest.approx(5.769e-4 / 1.3179e-4, rel=1e-3)
+    assert result.seeds["ex1"] == run_seeds(5, 2)
+    for name in result.figures:
+        assert (tmp_path / name).stat().st_size > 10_000
+    assert {"fig5_tracking_a5_and_a34.png", "ex1_tradeoff.png", "fig_ex2_stability_map.png"} <= set(result.figures)
+    names = {r["name"] for r in result.reconstructions}
+    assert {"ex1.h", "ex1.eso_alpha", "ex1.eso_tuning_h", "ex2.K", "ex2.omega"} <= names
+    data = json.loads(write_results_json(result, tmp_path).read_text())
+    assert data["missing"]
