@@ -377,3 +377,66 @@ def _runner_module(src: str, fns: dict):
     sys.modules[spec.name] = module  # numba's cache re-imports the module by name
     spec.loader.exec_module(module)
     return module
+
+
+# ----------------------------------------------------------------------------------------------
+# the compiled path of Loop.simulate
+# ----------------------------------------------------------------------------------------------
+
+def compiled_for(loop, engine, funcs, params, finite_bound):
+    """The compiled runner and the kernels' parameters, or ``None`` for the numpy path."""
+    import os
+
+    if engine == "numpy" or (engine == "auto" and os.environ.get("CTRL_ANALYSIS_ENGINE") == "numpy"):
+        return None
+    
+    why = None
+    if not available():
+        why = "numba is not installed"
+    elif funcs or params is not None:
+        why = "callable inputs and params need the numpy path"
+    kernels = {}
+    if why is None:
+        for p in loop.placed:
+            k = kernel_of(p.block)
+            if k is None:
+                why = f"block {p.name!r} ({type(p.block).__name__}) has no kernel"
+                break
+            kernels[p.name] = k
+    if why is not None:
+        if engine == "compiled":
+            raise ValueError(f"engine='compiled' is not possible for this loop: {why}")
+        return None
+    try:
+        run = compiled_runner(loop, kernels, finite_bound)
+    except Exception as exc:  # a kernel numba cannot compile: say so, and use the numpy path under "auto"
+        if engine == "compiled":
+            raise
+        import warnings
+
+        warnings.warn(f"compiled engine unavailable for this loop ({type(exc).__name__}: {exc}); "
+                      "using the numpy engine", RuntimeWarning, stacklevel=3)
+        return None
+    return run, [np.ascontiguousarray(kernels[p.name].params, dtype=float) for p in loop.placed]
+
+
+def run_compiled(loop, runner, plan, n_steps, t, x, held, bound, keep_cols, store, xs, diverged, div_step):
+    """One chunk through the compiled runner, writing into the result slices."""
+    run, P = runner
+    B = x.shape[0]
+    col = plan["col"]
+    S0 = np.zeros(len(plan["names"]))
+    varying = [(s, a) for s, a in held.items() if a.ndim > 0]
+    for s, a in held.items():
+        if a.ndim == 0:
+            S0[col[s]] = a
+    H = np.empty((n_steps + 1, B, max(len(varying), 1)))
+    for j, (s, a) in enumerate(varying):
+        a2 = a if a.ndim == 2 else a[:, None]
+        m = min(a.shape[0], n_steps + 1)
+        H[:m, :, j] = a2[:m]
+        H[m:, :, j] = a2[m - 1]  # row N repeats row N-1 when absent
+    HC = np.array([col[s] for s, _ in varying], dtype=np.intp)
+    xs_arg = np.empty((0, 0, 0)) if xs is None else xs
+    run(n_steps, t, loop.dt / loop.substeps, loop.substeps, np.ascontiguousarray(x), H, HC, S0,
+        keep_cols, store, xs_arg, float(bound), diverged, div_step, *P)

@@ -480,61 +480,15 @@ class Loop:
 
     def _compiled(self, engine, funcs, params, finite_bound):
         """The compiled runner and the kernels' parameters, or ``None`` for the numpy path."""
-        import os
+        from ._kernels import compiled_for
 
-        if engine == "numpy" or (engine == "auto" and os.environ.get("CTRL_ANALYSIS_ENGINE") == "numpy"):
-            return None
-        from . import _kernels
-
-        why = None
-        if not _kernels.available():
-            why = "numba is not installed"
-        elif funcs or params is not None:
-            why = "callable inputs and params need the numpy path"
-        kernels = {}
-        if why is None:
-            for p in self.placed:
-                k = _kernels.kernel_of(p.block)
-                if k is None:
-                    why = f"block {p.name!r} ({type(p.block).__name__}) has no kernel"
-                    break
-                kernels[p.name] = k
-        if why is not None:
-            if engine == "compiled":
-                raise ValueError(f"engine='compiled' is not possible for this loop: {why}")
-            return None
-        try:
-            run = _kernels.compiled_runner(self, kernels, finite_bound)
-        except Exception as exc:  # a kernel numba cannot compile: say so, and use the numpy path under "auto"
-            if engine == "compiled":
-                raise
-            import warnings
-
-            warnings.warn(f"compiled engine unavailable for this loop ({type(exc).__name__}: {exc}); "
-                          "using the numpy engine", RuntimeWarning, stacklevel=3)
-            return None
-        return run, [np.ascontiguousarray(kernels[p.name].params, dtype=float) for p in self.placed]
+        return compiled_for(self, engine, funcs, params, finite_bound)
 
     def _run_compiled(self, runner, plan, n_steps, t, x, held, bound, keep_cols, store, xs, diverged, div_step):
         """One chunk through the compiled runner, writing into the result slices."""
-        run, P = runner
-        B = x.shape[0]
-        col = plan["col"]
-        S0 = np.zeros(len(plan["names"]))
-        varying = [(s, a) for s, a in held.items() if a.ndim > 0]
-        for s, a in held.items():
-            if a.ndim == 0:
-                S0[col[s]] = a
-        H = np.empty((n_steps + 1, B, max(len(varying), 1)))
-        for j, (s, a) in enumerate(varying):
-            a2 = a if a.ndim == 2 else a[:, None]
-            m = min(a.shape[0], n_steps + 1)
-            H[:m, :, j] = a2[:m]
-            H[m:, :, j] = a2[m - 1]  # row N repeats row N-1 when absent
-        HC = np.array([col[s] for s, _ in varying], dtype=np.intp)
-        xs_arg = np.empty((0, 0, 0)) if xs is None else xs
-        run(n_steps, t, self.dt / self.substeps, self.substeps, np.ascontiguousarray(x), H, HC, S0,
-            keep_cols, store, xs_arg, float(bound), diverged, div_step, *P)
+        from ._kernels import run_compiled
+
+        run_compiled(self, runner, plan, n_steps, t, x, held, bound, keep_cols, store, xs, diverged, div_step)
 
     def _run_chunk(self, plan, n_steps, t, x, held, funcs, params, bound, keep_cols, store, xs,
                    diverged, div_step, progress):

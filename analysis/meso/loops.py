@@ -273,13 +273,7 @@ def simulate_situation(sit: Situation, rows, T: float, paper: Paper = PAPER, win
     K = round(T / h)
     t_all = h * np.arange(K + 1)
     level = np.where(t_all >= paper.t_step - 0.5 * h, paper.step, 0.0)
-    noise = np.zeros((K + 1, B))
-    seeds = sorted({r.seed for r in rows if r.seed is not None})
-    if seeds:  # one draw per seed: ESO and MESO runs with the same seed see the same noise
-        drawn = draw_noise(seeds, K, uniform_noise(-1.0, 1.0))[:, :, 0]
-        for b, r in enumerate(rows):
-            if r.seed is not None:
-                noise[:K, b] = paper.noise_amp * drawn[:, seeds.index(r.seed)]
+    noise = _situation_noise(rows, K, paper)
     loop = build_loop(sit, rows, paper)
     ident = loop.placed[3].block
     in_window = (t_all[:K] >= window[0]) & (np.arange(K) < round(window[1] / h))
@@ -318,22 +312,44 @@ def simulate_situation(sit: Situation, rows, T: float, paper: Paper = PAPER, win
             thb.append(np.stack([res[f"c[{i}]"][n] for i in range(4)], axis=1))
             lc.append(res["log10_cond"][n])
             rk.append(res["rank"][n])
-            for b in exact:
-                phi = ident.phi(np.stack([sig[s][:, b] for s in ident.inputs], axis=1))
-                ok = np.all(np.isfinite(phi))
-                rep = exact_report(rows[b].variant, sit.regression, phi, rows[b].threshold) if ok else None
-                out.exact_cond[b].append(rep.cond_scaled if ok else np.nan)
-                out.exact_rank[b].append(rep.rank if ok else -1)
+            _record_exact(out, sig, ident, rows, sit, exact)
         x0 = {name: np.nan_to_num(x, nan=0.0, posinf=0.0, neginf=0.0) for name, x in res.final_states.items()}
         k0 += n
         if progress is not None:
             progress(f"{sit.key}: t = {k0 * h:.0f} / {T:.0f} s")
+    _finish(out, tb, thb, lc, rk, B)
+    return out
+
+
+def _finish(out, tb, thb, lc, rk, B: int) -> None:
+    """Stack the per-batch records and cut every diverged run's records at its divergence."""
     out.t_batch, out.theta_batch = np.array(tb), np.array(thb).reshape(-1, B, 4)
     out.log10_cond, out.rank = np.array(lc).reshape(-1, B), np.array(rk).reshape(-1, B)
     out.exact_cond = {b: np.array(v) for b, v in out.exact_cond.items()}
     out.exact_rank = {b: np.array(v) for b, v in out.exact_rank.items()}
     _cut_at_divergence(out)
-    return out
+
+
+def _situation_noise(rows, K: int, paper: Paper) -> np.ndarray:
+    """Measurement noise ``(K + 1, B)``: one draw per seed (ESO and MESO runs with one seed share it)."""
+    noise = np.zeros((K + 1, len(rows)))
+    seeds = sorted({r.seed for r in rows if r.seed is not None})
+    if seeds:
+        drawn = draw_noise(seeds, K, uniform_noise(-1.0, 1.0))[:, :, 0]
+        for b, r in enumerate(rows):
+            if r.seed is not None:
+                noise[:K, b] = paper.noise_amp * drawn[:, seeds.index(r.seed)]
+    return noise
+
+
+def _record_exact(out, sig, ident, rows, sit, exact) -> None:
+    """Exact (SVD) identifiability of the batch that just ended, for the runs in ``exact``."""
+    for b in exact:
+        phi = ident.phi(np.stack([sig[s][:, b] for s in ident.inputs], axis=1))
+        ok = np.all(np.isfinite(phi))
+        rep = exact_report(rows[b].variant, sit.regression, phi, rows[b].threshold) if ok else None
+        out.exact_cond[b].append(rep.cond_scaled if ok else np.nan)
+        out.exact_rank[b].append(rep.rank if ok else -1)
 
 
 def _cut_at_divergence(out):

@@ -31,6 +31,11 @@ GENERIC = {0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 10.0, 0.5, 0.25, 0.1, 0.
            0.382, 0.618}
 
 
+def _significant_digits(v: float) -> int:
+    digits = f"{abs(v):.12e}".split("e")[0].replace(".", "").rstrip("0")
+    return len(digits)
+
+
 def _py_files(folder: Path):
     return sorted(p for p in folder.rglob("*.py") if "__pycache__" not in p.parts)
 
@@ -68,9 +73,9 @@ def test_library_never_imports_the_studies():
 
 
 def test_no_printed_paper_constant_in_the_library():
-    # small integers (orders, sample counts, 20 s horizons) are too common to tie to a paper
+    # one-significant-digit numbers (0.3, 20, 500) and small integers are too common to tie to a paper
     paper = {v for v in (_printed_values() | PAPER_NUMBERS)
-             if v not in GENERIC and not (v.is_integer() and abs(v) < 100)}
+             if v not in GENERIC and not (v.is_integer() and abs(v) < 100) and _significant_digits(v) > 1}
     assert len(paper) > len(PAPER_NUMBERS) // 2  # the collection found something to look for
     offenders = []
     for path in _py_files(LIB):
