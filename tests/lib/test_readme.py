@@ -1,4 +1,4 @@
-"""The README's API example runs and does what it says (z_2 tracks the derivative of the sine)."""
+"""The README's examples run and do what they say (one per block family)."""
 
 import re
 from pathlib import Path
@@ -8,12 +8,47 @@ import numpy as np
 README = Path(__file__).resolve().parents[2] / "README.md"
 
 
-def test_readme_example_runs_and_estimates_the_derivative(capsys):
+def _examples():
     blocks = re.findall(r"```python\n(.*?)```", README.read_text(encoding="utf-8"), re.S)
-    assert blocks, "README has no python example"
+    assert len(blocks) == 5, "README has one example per family: estimator, filter, MFAC, fuzzy, identification"
+    return blocks
+
+
+def _run(code):
     scope = {}
-    exec(compile(blocks[0], "README.md", "exec"), scope)
-    res = scope["res"]
-    assert res.x.shape == (5001, 50, 4) and not res.diverged.any()
+    exec(compile(code, "README.md", "exec"), scope)
+    return scope
+
+
+def test_estimator_example_estimates_the_derivative(capsys):
+    s = _run(_examples()[0])
+    res = s["res"]
+    assert res["xhat[1]"].shape == (5001, 50) and not res.diverged.any()
     # derivative estimate of sin at t = 5 s within 0.02 of cos(5) in every run
     np.testing.assert_allclose(res["xhat[1]"][-1], np.cos(5.0), atol=0.02)
+
+
+def test_filter_example_tracks_the_velocity(capsys):
+    s = _run(_examples()[1])
+    assert np.all(np.abs(s["ab"].poles) < 1)
+    # (α + β/2)² = 2β for Kalata's gains; the velocity estimate is within 10 % of 3 m/s
+    assert abs((s["alpha"] + s["beta"] / 2) ** 2 - 2 * s["beta"]) < 1e-12
+    assert abs(s["y"][-1, 0, 1] - 3.0) < 0.3
+
+
+def test_mfac_example_tracks_both_setpoints(capsys):
+    s = _run(_examples()[2])
+    y = s["res"]["y"][:, 0]
+    assert abs(y[199] - 1.0) < 1e-6 and abs(y[-1] + 0.5) < 1e-6
+
+
+def test_fuzzy_example_lookup_matches_inference(capsys):
+    s = _run(_examples()[3])
+    direct, table = s["fuzzy"].evaluate(s["e"], s["ec"]), s["table"].evaluate(s["e"], s["ec"])
+    assert abs(direct[0]) < 1e-9  # odd-symmetric rule table: zero at the origin
+    np.testing.assert_allclose(table, direct, atol=0.01 * 10)  # within 1 % of the output range ±10
+
+
+def test_identification_example_recovers_the_arx_parameters(capsys):
+    s = _run(_examples()[4])
+    np.testing.assert_allclose(s["theta"][-1], [1.5, -0.7, 0.5], atol=0.01)
