@@ -1,0 +1,26 @@
+"""`ctrl-analysis reproduce all --quick` end to end: every study writes a results.json that passes the schema."""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+from analysis import STUDIES
+from ctrl_analysis.report import validate_results
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+def test_reproduce_all_quick_writes_valid_results(tmp_path):
+    proc = subprocess.run([sys.executable, "-m", "ctrl_analysis.cli", "reproduce", "all", "--quick", "--out",
+                           str(tmp_path)], capture_output=True, text=True, cwd=REPO, timeout=300)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert "Traceback" not in proc.stderr
+    for name in STUDIES:
+        data = json.loads((tmp_path / name / "results.json").read_text(encoding="utf-8"))
+        validate_results(data)  # raises ValueError on any schema violation
+        assert data["study"] == name and data["quantities"], name
+        for fig in data["figures"]:
+            assert (tmp_path / name / fig).stat().st_size > 5_000, (name, fig)
+    report = (tmp_path / "REPORT.md").read_text(encoding="utf-8")
+    assert all(f"## {name}" in report or f"`{name}`" in report for name in STUDIES)
