@@ -79,16 +79,10 @@ def copy_output(t, x, u, p, y):
 
     Parameters
     ----------
-    t : float
-        Time (unused).
-    x : numpy.ndarray, shape (n,)
-        State of one run.
-    u : numpy.ndarray, shape (m,)
-        Inputs of one run.
-    p : numpy.ndarray
-        Unused.
+    t, x, u, p
+        Time, one run's state, its inputs and the parameters (only ``x`` is read).
     y : numpy.ndarray
-        Written in place (nothing is returned: a compiled kernel allocates nothing).
+        The output, overwritten with ``x`` (a compiled kernel returns nothing and allocates nothing).
     """
     for i in range(x.shape[0]):
         y[i] = x[i]
@@ -99,16 +93,10 @@ def sigma_rhs(t, z, u, p, dz):
 
     Parameters
     ----------
-    t : float
-        Time (unused).
-    z : numpy.ndarray, shape (n,)
-        State of one run.
-    u : numpy.ndarray, shape (m,)
-        Inputs of one run.
-    p : numpy.ndarray
-        The block's parameters (see above).
+    t, z, u, p
+        Time (unused), Σ's state of one run, its input ``[y]`` and the gains ``a_i``.
     dz : numpy.ndarray
-        Written in place (nothing is returned: a compiled kernel allocates nothing).
+        The derivative ``z'``, written in place.
     """
     n = z.shape[0]
     e = u[0] - z[0]
@@ -124,16 +112,11 @@ def eso_rhs(t, x, u, p, dx):
     ``g_i(e) = e`` (linear) or Han's ``fal(e, alpha_i, delta)``.
     Parameters
     ----------
-    t : float
-        Time (unused).
-    x : numpy.ndarray, shape (n,)
-        State of one run.
-    u : numpy.ndarray, shape (m,)
-        Inputs of one run.
-    p : numpy.ndarray
-        The block's parameters (see above).
+    t, x, u, p
+        Time (unused), the observer state ``x̂`` of one run, its inputs ``[y, u]`` and the packed
+        parameters above.
     dx : numpy.ndarray
-        Written in place (nothing is returned: a compiled kernel allocates nothing).
+        The derivative ``x̂'``, written in place.
     """
     m = x.shape[0]
     e = u[0] - x[0]

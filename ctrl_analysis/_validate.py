@@ -41,7 +41,7 @@ def check_real(name: str, value) -> float:
     name : str
         The argument's name, for the message.
     value : object
-        The value to check.
+        Expected: one real number (NaN and inf pass).
 
     Returns
     -------
@@ -68,7 +68,7 @@ def check_finite(name: str, value, *, shape=None, scalar: bool = False) -> np.nd
     name : str
         The argument's name, for the message.
     value : array_like
-        The value to check.
+        Expected: a finite number or array.
     shape : tuple of int, optional
         The shape ``value`` must have.
     scalar : bool
@@ -109,7 +109,7 @@ def check_array(name: str, value) -> np.ndarray:
     name : str
         The argument's name, for the message.
     value : array_like
-        The value to check.
+        Expected: a real array (NaN and inf pass).
 
     Returns
     -------
@@ -137,7 +137,7 @@ def check_positive(name: str, value, *, scalar: bool = False) -> np.ndarray | fl
     name : str
         The argument's name, for the message.
     value : array_like
-        The value to check.
+        Expected: finite entries > 0.
     scalar : bool
         With ``True`` the value must be one real number.
 
@@ -164,13 +164,14 @@ def check_nonnegative(name: str, value, *, scalar: bool = False) -> np.ndarray |
     name : str
         The argument's name, for the message.
     value : array_like
-        The value to check.
+        Expected: finite entries >= 0.
     scalar : bool
-        With ``True`` the value must be one real number.
+        As in :func:`check_positive`.
 
     Returns
     -------
     float or numpy.ndarray
+        ``value`` as a float (with ``scalar``) or a float array.
 
     Raises
     ------
@@ -191,7 +192,7 @@ def check_int(name: str, value, *, minimum: int | None = None, maximum: int | No
     name : str
         The argument's name, for the message.
     value : object
-        The value to check.
+        Expected: an integer (not a bool).
     minimum, maximum : int, optional
         Inclusive bounds.
 
@@ -227,7 +228,7 @@ def check_in(name: str, value, allowed) -> object:
     name : str
         The argument's name, for the message.
     value : object
-        The value to check.
+        Expected: one of ``allowed``.
     allowed : collection
         The admissible values.
 
@@ -258,7 +259,7 @@ def check_matrix(name: str, value, *, shape=None, square: bool = False, symmetri
     name : str
         The argument's name, for the message.
     value : array_like
-        The value to check (a scalar or a vector is promoted to a 1-row matrix).
+        Expected: a finite matrix (a scalar or a vector is promoted to a 1-row matrix).
     shape : tuple of int, optional
         The shape the matrix must have.
     square, symmetric : bool
@@ -323,7 +324,7 @@ def check_bool(name: str, value) -> bool:
     name : str
         The argument's name, for the message.
     value : object
-        The value to check.
+        Expected: True or False.
 
     Returns
     -------
@@ -342,7 +343,7 @@ def check_callable(name: str, value, signature: str = "", *, optional: bool = Fa
     name : str
         The argument's name, for the message.
     value : object
-        The value to check.
+        Expected: a callable.
     signature : str
         The expected call, e.g. ``"f(t, x)"``, for the message.
     optional : bool
@@ -373,7 +374,7 @@ def check_str(name: str, value, *, empty: bool = False) -> str:
     name : str
         The argument's name, for the message.
     value : object
-        The value to check.
+        Expected: a string.
     empty : bool
         Whether ``""`` (or only blanks) is accepted.
 

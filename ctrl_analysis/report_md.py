@@ -47,7 +47,7 @@ def summary_table(results: dict) -> str:
     Parameters
     ----------
     results : dict
-        A results.json dict.
+        One study's results.json dict (its ``quantities`` are read).
 
     Returns
     -------

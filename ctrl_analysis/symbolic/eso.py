@@ -183,7 +183,7 @@ def error_transfer_functions(n: int, high_gain: bool = False) -> tuple:
     n : int
         Plant order (>= 1).
     high_gain : bool
-        Gains ``beta_i / eps^i`` (True) or free symbols ``L_i`` (False).
+        As in :func:`characteristic_polynomial`.
 
     Returns
     -------
@@ -211,7 +211,7 @@ def error_dc_gains(n: int) -> tuple:
     Parameters
     ----------
     n : int
-        Plant order (>= 1).
+        Plant order (>= 1); the limits ``s -> 0`` of :func:`error_transfer_functions` are taken.
 
     Returns
     -------

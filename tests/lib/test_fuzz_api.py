@@ -538,9 +538,6 @@ def build_cases(tmp):
 
 
 def _new_figure_object():
-    import matplotlib
-
-    matplotlib.use("Agg")
     from matplotlib.figure import Figure
 
     return Figure()
