@@ -60,7 +60,12 @@ class BlockKernel(NamedTuple):
 
 
 def available() -> bool:
-    """Whether numba can be imported (the compiled engine is optional)."""
+    """Whether numba can be imported (the compiled engine is optional).
+
+    Returns
+    -------
+    bool
+    """
     try:
         import numba  # noqa: F401
     except ImportError:  # pragma: no cover - numba is installed in the project's environment
@@ -70,13 +75,29 @@ def available() -> bool:
 
 # ------------------------------------------------------------------ kernels of library blocks
 def copy_output(t, x, u, p, y):
-    """Output = the whole state (``Block.output``'s default)."""
+    """Output = the whole state (``Block.output``'s default).
+
+    Parameters
+    ----------
+    t, x, u, p
+        Time, one run's state, its inputs and the parameters (only ``x`` is read).
+    y : numpy.ndarray
+        The output, overwritten with ``x`` (a compiled kernel returns nothing and allocates nothing).
+    """
     for i in range(x.shape[0]):
         y[i] = x[i]
 
 
 def sigma_rhs(t, z, u, p, dz):
-    """Σ, eq. (2): ``z_i' = a_i (y - z_1) + z_(i+1)``, ``z_n0' = a_n0 (y - z_1)``; ``p = [a_1 .. a_n0]``."""
+    """Σ, eq. (2): ``z_i' = a_i (y - z_1) + z_(i+1)``, ``z_n0' = a_n0 (y - z_1)``; ``p = [a_1 .. a_n0]``.
+
+    Parameters
+    ----------
+    t, z, u, p
+        Time (unused), Σ's state of one run, its input ``[y]`` and the gains ``a_i``.
+    dz : numpy.ndarray
+        The derivative ``z'``, written in place.
+    """
     n = z.shape[0]
     e = u[0] - z[0]
     for i in range(n - 1):
@@ -89,6 +110,13 @@ def eso_rhs(t, x, u, p, dx):
 
     ``p = [linear, b0, delta, L_1..L_m, alpha_1..alpha_m, delta^(1-alpha_1)..]`` (``m = n + 1``);
     ``g_i(e) = e`` (linear) or Han's ``fal(e, alpha_i, delta)``.
+    Parameters
+    ----------
+    t, x, u, p
+        Time (unused), the observer state ``x̂`` of one run, its inputs ``[y, u]`` and the packed
+        parameters above.
+    dx : numpy.ndarray
+        The derivative ``x̂'``, written in place.
     """
     m = x.shape[0]
     e = u[0] - x[0]
@@ -158,7 +186,12 @@ _COMPILE = {"seconds": 0.0}
 
 
 def compile_seconds() -> float:
-    """Total seconds this process spent compiling loop runners (first call of each structure)."""
+    """Total seconds this process spent compiling loop runners (first call of each structure).
+
+    Returns
+    -------
+    float
+    """
     return _COMPILE["seconds"]
 
 

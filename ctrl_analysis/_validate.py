@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import numbers
+import os
+from pathlib import Path
 
 import numpy as np
 
@@ -18,6 +20,10 @@ __all__ = [
     "check_hurwitz",
     "check_bool",
     "check_callable",
+    "check_str",
+    "check_names",
+    "check_path",
+    "check_vector",
 ]
 
 
@@ -30,8 +36,22 @@ def _is_real_scalar(value) -> bool:
 def check_real(name: str, value) -> float:
     """One real number as a float (a type check only: NaN and inf pass; see :func:`check_finite`).
 
-    A list, an array of more than one entry, a string, a bool, a complex number or ``None`` raises
-    ``TypeError("X must be a real number, got …")``.
+    Parameters
+    ----------
+    name : str
+        The argument's name, for the message.
+    value : object
+        Expected: one real number (NaN and inf pass).
+
+    Returns
+    -------
+    float
+
+    Raises
+    ------
+    TypeError
+        ``"X must be a real number, got …"`` for a list, an array of more than one entry, a string,
+        a bool, a complex number or ``None``.
     """
     if isinstance(value, np.ndarray) and value.ndim == 0:
         value = value[()]
@@ -43,7 +63,21 @@ def check_real(name: str, value) -> float:
 def check_finite(name: str, value, *, shape=None, scalar: bool = False) -> np.ndarray | float:
     """Return ``value`` as float (scalar) or float array; raise if any entry is NaN/inf.
 
-    With ``scalar=True`` the value must be one real number (see :func:`check_real`).
+    Parameters
+    ----------
+    name : str
+        The argument's name, for the message.
+    value : array_like
+        Expected: a finite number or array.
+    shape : tuple of int, optional
+        The shape ``value`` must have.
+    scalar : bool
+        With ``True`` the value must be one real number (see :func:`check_real`).
+
+    Returns
+    -------
+    float or numpy.ndarray
+        A float for a 0-d value, else a float array.
 
     Raises
     ------
@@ -68,7 +102,25 @@ def check_finite(name: str, value, *, shape=None, scalar: bool = False) -> np.nd
 
 
 def check_array(name: str, value) -> np.ndarray:
-    """A real float array; NaN and inf allowed (a signal of a diverged run), strings and None not."""
+    """A real float array; NaN and inf allowed (a signal of a diverged run), strings and None not.
+
+    Parameters
+    ----------
+    name : str
+        The argument's name, for the message.
+    value : array_like
+        Expected: a real array (NaN and inf pass).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``value`` as a float array.
+
+    Raises
+    ------
+    TypeError
+        If ``value`` is a string, ``None`` or not convertible to a float array.
+    """
     if isinstance(value, (str, bytes)) or value is None:
         raise TypeError(f"{name} must be a real array, got {value!r}")
     try:
@@ -78,7 +130,26 @@ def check_array(name: str, value) -> np.ndarray:
 
 
 def check_positive(name: str, value, *, scalar: bool = False) -> np.ndarray | float:
-    """Finite and strictly positive (element-wise); one real number with ``scalar=True``."""
+    """Finite and strictly positive (element-wise); one real number with ``scalar=True``.
+
+    Parameters
+    ----------
+    name : str
+        The argument's name, for the message.
+    value : array_like
+        Expected: finite entries > 0.
+    scalar : bool
+        With ``True`` the value must be one real number.
+
+    Returns
+    -------
+    float or numpy.ndarray
+
+    Raises
+    ------
+    TypeError, ValueError
+        As :func:`check_finite`; ``ValueError`` also for an entry ``<= 0``.
+    """
     arr = check_finite(name, value, scalar=scalar)
     if np.any(np.asarray(arr) <= 0):
         raise ValueError(f"{name} must be > 0, got {value!r}")
@@ -86,7 +157,27 @@ def check_positive(name: str, value, *, scalar: bool = False) -> np.ndarray | fl
 
 
 def check_nonnegative(name: str, value, *, scalar: bool = False) -> np.ndarray | float:
-    """Finite and >= 0 (element-wise); one real number with ``scalar=True``."""
+    """Finite and >= 0 (element-wise); one real number with ``scalar=True``.
+
+    Parameters
+    ----------
+    name : str
+        The argument's name, for the message.
+    value : array_like
+        Expected: finite entries >= 0.
+    scalar : bool
+        As in :func:`check_positive`.
+
+    Returns
+    -------
+    float or numpy.ndarray
+        ``value`` as a float (with ``scalar``) or a float array.
+
+    Raises
+    ------
+    TypeError, ValueError
+        As :func:`check_finite`; ``ValueError`` also for an entry ``< 0``.
+    """
     arr = check_finite(name, value, scalar=scalar)
     if np.any(np.asarray(arr) < 0):
         raise ValueError(f"{name} must be >= 0, got {value!r}")
@@ -94,7 +185,28 @@ def check_nonnegative(name: str, value, *, scalar: bool = False) -> np.ndarray |
 
 
 def check_int(name: str, value, *, minimum: int | None = None, maximum: int | None = None) -> int:
-    """An integer (not bool) within the given bounds."""
+    """An integer (not bool) within the given bounds; an integral float such as ``3.0`` is accepted.
+
+    Parameters
+    ----------
+    name : str
+        The argument's name, for the message.
+    value : object
+        Expected: an integer (not a bool).
+    minimum, maximum : int, optional
+        Inclusive bounds.
+
+    Returns
+    -------
+    int
+
+    Raises
+    ------
+    TypeError
+        If ``value`` is not an integer.
+    ValueError
+        If it lies outside ``[minimum, maximum]``.
+    """
     if isinstance(value, bool) or not isinstance(value, (numbers.Integral, np.integer)):
         if isinstance(value, (float, np.floating)) and float(value).is_integer():
             value = int(value)
@@ -109,14 +221,59 @@ def check_int(name: str, value, *, minimum: int | None = None, maximum: int | No
 
 
 def check_in(name: str, value, allowed) -> object:
-    """One of ``allowed``."""
-    if value not in allowed:
+    """One of ``allowed``.
+
+    Parameters
+    ----------
+    name : str
+        The argument's name, for the message.
+    value : object
+        Expected: one of ``allowed``.
+    allowed : collection
+        The admissible values.
+
+    Returns
+    -------
+    object
+        ``value`` itself.
+
+    Raises
+    ------
+    ValueError
+        If ``value`` is not in ``allowed``.
+    """
+    try:
+        ok = value in allowed
+    except TypeError:  # unhashable value against a set or dict
+        ok = False
+    if not ok:
         raise ValueError(f"{name} must be one of {sorted(allowed)!r}, got {value!r}")
     return value
 
 
 def check_matrix(name: str, value, *, shape=None, square: bool = False, symmetric: bool = False) -> np.ndarray:
-    """A finite 2-D float array, optionally of a given shape, square or symmetric."""
+    """A finite 2-D float array, optionally of a given shape, square or symmetric.
+
+    Parameters
+    ----------
+    name : str
+        The argument's name, for the message.
+    value : array_like
+        Expected: a finite matrix (a scalar or a vector is promoted to a 1-row matrix).
+    shape : tuple of int, optional
+        The shape the matrix must have.
+    square, symmetric : bool
+        Require a square (symmetric) matrix.
+
+    Returns
+    -------
+    numpy.ndarray, 2-D
+
+    Raises
+    ------
+    TypeError, ValueError
+        As :func:`check_finite`, or when a shape rule fails.
+    """
     arr = np.atleast_2d(check_finite(name, value))
     if arr.ndim != 2:
         raise ValueError(f"{name} must be a 2-D matrix, got ndim={arr.ndim}")
@@ -132,8 +289,24 @@ def check_matrix(name: str, value, *, shape=None, square: bool = False, symmetri
 def check_hurwitz(name: str, poly, *, polynomial: str = "the characteristic polynomial") -> np.ndarray:
     """Roots of ``poly`` (descending coefficients); raise unless all lie in the open left half-plane.
 
-    ``name`` is the argument that set the coefficients (e.g. ``"gains"``); ``polynomial`` says which
-    polynomial they form, for the message.
+    Parameters
+    ----------
+    name : str
+        The argument that set the coefficients (e.g. ``"gains"``), for the message.
+    poly : array_like
+        Polynomial coefficients, highest power first.
+    polynomial : str
+        Which polynomial they form, for the message.
+
+    Returns
+    -------
+    numpy.ndarray
+        The roots.
+
+    Raises
+    ------
+    ValueError
+        If a root has a non-negative real part.
     """
     roots = np.roots(np.asarray(poly, dtype=float))
     if roots.size and np.max(roots.real) >= 0:
@@ -144,16 +317,179 @@ def check_hurwitz(name: str, poly, *, polynomial: str = "the characteristic poly
 
 
 def check_bool(name: str, value) -> bool:
-    """``True`` or ``False`` (numpy bools too); anything else is a ``TypeError``."""
+    """``True`` or ``False`` (numpy bools too); anything else is a ``TypeError``.
+
+    Parameters
+    ----------
+    name : str
+        The argument's name, for the message.
+    value : object
+        Expected: True or False.
+
+    Returns
+    -------
+    bool
+    """
     if not isinstance(value, (bool, np.bool_)):
         raise TypeError(f"{name} must be True or False, got {value!r}")
     return bool(value)
 
 
 def check_callable(name: str, value, signature: str = "", *, optional: bool = False):
-    """A callable (or ``None`` when ``optional``); ``signature`` documents the expected call."""
+    """A callable (or ``None`` when ``optional``); ``signature`` documents the expected call.
+
+    Parameters
+    ----------
+    name : str
+        The argument's name, for the message.
+    value : object
+        Expected: a callable.
+    signature : str
+        The expected call, e.g. ``"f(t, x)"``, for the message.
+    optional : bool
+        Whether ``None`` is accepted.
+
+    Returns
+    -------
+    callable or None
+        ``value`` itself.
+
+    Raises
+    ------
+    TypeError
+        If ``value`` is not callable.
+    """
     if value is None and optional:
         return None
     if not callable(value):
         raise TypeError(f"{name} must be callable{' ' + signature if signature else ''}, got {value!r}")
     return value
+
+
+def check_str(name: str, value, *, empty: bool = False) -> str:
+    """A string, non-empty unless ``empty``.
+
+    Parameters
+    ----------
+    name : str
+        The argument's name, for the message.
+    value : object
+        Expected: a string.
+    empty : bool
+        Whether ``""`` (or only blanks) is accepted.
+
+    Returns
+    -------
+    str
+
+    Raises
+    ------
+    TypeError
+        If ``value`` is not a string.
+    ValueError
+        If it is blank and ``empty`` is False.
+    """
+    if not isinstance(value, str):
+        raise TypeError(f"{name} must be a string, got {value!r}")
+    if not empty and not value.strip():
+        raise ValueError(f"{name} must be a non-empty string, got {value!r}")
+    return value
+
+
+def check_names(name: str, value, *, length: int | None = None) -> tuple:
+    """A sequence of non-empty strings (signal names) as a tuple, optionally of a given length.
+
+    Parameters
+    ----------
+    name : str
+        The argument's name, for the message.
+    value : sequence of str
+        The names; a single string is rejected (it would be split into characters).
+    length : int, optional
+        How many names there must be.
+
+    Returns
+    -------
+    tuple of str
+
+    Raises
+    ------
+    TypeError
+        If ``value`` is not a sequence of strings.
+    ValueError
+        If a name is empty or the length differs.
+    """
+    if isinstance(value, (str, bytes)) or not isinstance(value, (list, tuple)):
+        raise TypeError(f"{name} must be a list or tuple of signal names, got {value!r}")
+    for item in value:
+        check_str(name, item)
+    if length is not None and len(value) != length:
+        raise ValueError(f"{name} must name {length} signals, got {len(value)}: {tuple(value)!r}")
+    return tuple(value)
+
+
+def check_path(name: str, value) -> Path:
+    """A non-empty file-system path (``str`` or ``os.PathLike``) as a :class:`~pathlib.Path`.
+
+    Parameters
+    ----------
+    name : str
+        The argument's name, for the message.
+    value : str or os.PathLike
+        The path.
+
+    Returns
+    -------
+    pathlib.Path
+
+    Raises
+    ------
+    TypeError
+        If ``value`` is not a path.
+    ValueError
+        If it is empty (which would silently mean the current directory).
+    """
+    if not isinstance(value, (str, os.PathLike)):
+        raise TypeError(f"{name} must be a path (str or os.PathLike), got {value!r}")
+    if not os.fspath(value).strip():
+        raise ValueError(f"{name} must be a non-empty path, got {value!r}")
+    return Path(value)
+
+
+def check_vector(name: str, value, n: int, *, allow_inf: bool = False, broadcast: bool = True) -> np.ndarray:
+    """A float vector of length ``n`` (a scalar is repeated ``n`` times when ``broadcast``).
+
+    Parameters
+    ----------
+    name : str
+        The argument's name, for the message.
+    value : float or array_like, shape (n,)
+        The value to check.
+    n : int
+        The length required.
+    allow_inf : bool
+        Whether ``±inf`` entries are accepted (bounds); NaN never is.
+    broadcast : bool
+        Whether a scalar stands for ``n`` equal entries.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n,)
+        A fresh float array.
+
+    Raises
+    ------
+    TypeError
+        If ``value`` is not numeric.
+    ValueError
+        If it has NaN (or inf without ``allow_inf``) or another length.
+    """
+    arr = check_array(name, value) if allow_inf else np.asarray(check_finite(name, value), dtype=float)
+    if np.any(np.isnan(arr)):
+        raise ValueError(f"{name} must not contain NaN, got {value!r}")
+    if arr.ndim == 0 and broadcast:
+        arr = np.full(n, float(arr))
+    if arr.shape != (n,):
+        rule = f"one number or shape ({n},)" if broadcast else f"shape ({n},)"
+        raise ValueError(f"{name} must be {rule}, got shape {arr.shape}")
+    return arr.copy()

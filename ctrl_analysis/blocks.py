@@ -24,7 +24,7 @@ from typing import Callable
 
 import numpy as np
 
-from ._validate import check_in, check_int, check_positive
+from ._validate import check_in, check_int, check_names, check_positive, check_str
 
 __all__ = [
     "Block",
@@ -50,6 +50,7 @@ def signal_names(base: str, n: int) -> tuple[str, ...]:
     -------
     tuple of str
     """
+    base = check_str("base", base)
     return tuple(f"{base}[{i}]" for i in range(check_int("n", n, minimum=0)))
 
 
@@ -106,7 +107,9 @@ class Block:
         return x
 
     # ------------------------------------------------------------------ python-control
-    def _io_names(self, inputs, outputs, states):
+    def _io_names(self, inputs, outputs, states, name=None):
+        if name is not None:
+            check_str("name", name)
         return (list(self.inputs if inputs is None else inputs),
                 list(self.outputs if outputs is None else outputs),
                 list(self.states if states is None else states))
@@ -156,7 +159,7 @@ class ContinuousBlock(Block):
         """
         import control as ct
 
-        ins, outs, sts = self._io_names(inputs, outputs, states)
+        ins, outs, sts = self._io_names(inputs, outputs, states, name)
         return ct.nlsys(self._lifted(self.rhs), self._lifted(self.output), inputs=ins, outputs=outs,
                         states=sts, name=name)
 
@@ -202,7 +205,7 @@ class DiscreteBlock(Block):
 
         if dt is not True:
             dt = check_positive("dt", dt)
-        ins, outs, sts = self._io_names(inputs, outputs, states)
+        ins, outs, sts = self._io_names(inputs, outputs, states, name)
         return ct.nlsys(self._lifted(self.update), self._lifted(self.output), inputs=ins, outputs=outs,
                         states=sts, name=name, dt=dt)
 
@@ -236,8 +239,10 @@ class DiscreteBlock(Block):
         if u.ndim != 3 or u.shape[2] != m or u.shape[0] < 1:
             raise ValueError(f"u must have shape (N,), (N, {m}) or (N, B, {m}), got {np.shape(u)}")
         N, B = u.shape[:2]
-        x = np.array(np.broadcast_to(self.initial_state() if x0 is None else check_finite("x0", x0),
-                                     (B, self.n_states)), dtype=float)
+        x = np.array(self.initial_state() if x0 is None else check_finite("x0", x0), dtype=float, ndmin=1)
+        if x.shape not in ((self.n_states,), (B, self.n_states)):
+            raise ValueError(f"x0 must have shape ({self.n_states},) or ({B}, {self.n_states}), got {x.shape}")
+        x = np.array(np.broadcast_to(x, (B, self.n_states)), dtype=float)
         t = np.arange(N, dtype=float) if t is None else check_finite("t", t, shape=(N,))
         xs = np.empty((N + 1, B, self.n_states))
         ys = None
@@ -277,8 +282,8 @@ class StaticBlock(Block):
         if not callable(fn):
             raise TypeError(f"fn must be callable, got {type(fn).__name__}")
         self.fn = fn
-        self.inputs = tuple(inputs)
-        self.outputs = tuple(outputs)
+        self.inputs = check_names("inputs", inputs)
+        self.outputs = check_names("outputs", outputs)
         if not self.outputs:
             raise ValueError("outputs must name at least one signal")
         self.feedthrough = bool(self.inputs)
@@ -304,7 +309,7 @@ class StaticBlock(Block):
         """
         import control as ct
 
-        ins, outs, _ = self._io_names(inputs, outputs, ())
+        ins, outs, _ = self._io_names(inputs, outputs, (), name)
         m = len(ins)
 
         def outfcn(t, x, u, params=None):
@@ -340,7 +345,7 @@ class SampledBlock(DiscreteBlock):
         if not isinstance(block, ContinuousBlock):
             raise TypeError(f"block must be a ContinuousBlock, got {type(block).__name__}")
         self.block = block
-        self.dt = check_positive("dt", dt)
+        self.dt = check_positive("dt", dt, scalar=True)
         self.method = check_in("method", method, STEPPERS)
         self.substeps = check_int("substeps", substeps, minimum=1)
         self._step = STEPPERS[method]

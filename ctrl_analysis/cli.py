@@ -186,6 +186,16 @@ def main(argv: list[str] | None = None) -> int:
     bad command line (checked before any work), 130 on Ctrl-C (previous output left intact).
     ``reproduce all`` writes REPORT.md; reproducing some studies refreshes an existing REPORT.md,
     marking the studies not run now as stale.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        The arguments after the program name (default ``sys.argv[1:]``).
+
+    Returns
+    -------
+    int
+        The exit status.
     """
     try:
         args = _build_parser().parse_args(argv)

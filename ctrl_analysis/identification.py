@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._validate import check_bool, check_finite, check_int, check_positive
+from ._validate import check_bool, check_finite, check_int, check_positive, check_vector
 from .blocks import DiscreteBlock, signal_names
 
 __all__ = [
@@ -77,9 +77,17 @@ class IdentifiabilityReport:
 
     @property
     def well_conditioned(self) -> bool:
+        """Whether the regressor has full column rank and a scaled condition number within the threshold."""
         return self.full_rank and self.cond_scaled <= self.threshold
 
     def as_dict(self) -> dict:
+        """The report as a JSON-ready dict (for results.json).
+
+        Returns
+        -------
+        dict
+            The fields by name, singular values as a list.
+        """
         return {
             "n_rows": self.n_rows,
             "n_params": self.n_params,
@@ -310,8 +318,8 @@ class RecursiveLeastSquares(DiscreteBlock):
 
     def __init__(self, n_params: int, forgetting: float = 1.0, P0=1e6, theta0=None, batch: int | None = None,
                  lower=None, upper=None, max_trace: float | None = None, feedthrough: bool = True):
-        self.feedthrough = bool(feedthrough)
-        self.max_trace = None if max_trace is None else float(check_positive("max_trace", max_trace))
+        self.feedthrough = check_bool("feedthrough", feedthrough)
+        self.max_trace = None if max_trace is None else float(check_positive("max_trace", max_trace, scalar=True))
         self.n_params = check_int("n_params", n_params, minimum=1)
         forgetting = float(check_finite("forgetting", forgetting, scalar=True))
         if not 0.0 < forgetting <= 1.0:
@@ -333,8 +341,8 @@ class RecursiveLeastSquares(DiscreteBlock):
             if np.any(eig <= 0):
                 raise ValueError(f"P0 must be positive definite (not singular or negative), got eigenvalues {eig}")
         self.P0 = P0
-        lower = np.full(p, -np.inf) if lower is None else np.broadcast_to(np.asarray(lower, dtype=float), (p,))
-        upper = np.full(p, np.inf) if upper is None else np.broadcast_to(np.asarray(upper, dtype=float), (p,))
+        lower = np.full(p, -np.inf) if lower is None else check_vector("lower", lower, p, allow_inf=True)
+        upper = np.full(p, np.inf) if upper is None else check_vector("upper", upper, p, allow_inf=True)
         if np.any(np.isnan(lower)) or np.any(np.isnan(upper)) or np.any(lower > upper):
             raise ValueError(f"lower must be <= upper element-wise (no NaN), got lower={lower}, upper={upper}")
         self.lower, self.upper = lower.copy(), upper.copy()

@@ -46,19 +46,62 @@ def mean_abs_error(x, x_hat, axis=0):
     ``x`` and ``x_hat`` must have the same shape, or the same number of axes with explicit length-1
     axes (e.g. a truth of shape ``(N, 1)`` against estimates ``(N, B)``), or one may be a scalar;
     nothing else broadcasts.
+
+    Parameters
+    ----------
+    x, x_hat : array_like
+        True values and estimates.
+    axis : int or None
+        Axis averaged over (time by default); ``None`` for all.
+
+    Returns
+    -------
+    float or numpy.ndarray
+        The mean absolute error, with ``axis`` removed.
+
+    Raises
+    ------
+    ValueError
+        Shapes that would broadcast silently, or an ``axis`` out of range.
     """
     x, x_hat = _pair(("x", "x_hat"), x, x_hat, axis)
     return np.mean(np.abs(x - x_hat), axis=axis)
 
 
 def rmse(reference, y, axis=0):
-    """Root-mean-square error ``sqrt(mean((reference - y)^2))`` over ``axis`` (same shapes, finite)."""
+    """Root-mean-square error ``sqrt(mean((reference - y)^2))`` over ``axis`` (same shapes, finite).
+
+    Parameters
+    ----------
+    reference, y : array_like
+        Reference and signal, shapes as in :func:`mean_abs_error`.
+    axis : int or None
+        Axis averaged over (time by default); ``None`` for all.
+
+    Returns
+    -------
+    float or numpy.ndarray
+        The RMSE, with ``axis`` removed.
+    """
     reference, y = _pair(("reference", "y"), reference, y, axis)
     return np.sqrt(np.mean((reference - y) ** 2, axis=axis))
 
 
 def snr_db(reference, y, axis=0):
-    """Signal-to-noise ratio ``10 lg(Σ reference² / Σ (reference - y)²)`` in dB over ``axis`` (same shapes)."""
+    """Signal-to-noise ratio ``10 lg(Σ reference² / Σ (reference - y)²)`` in dB over ``axis`` (same shapes).
+
+    Parameters
+    ----------
+    reference, y : array_like
+        Clean reference and noisy (or estimated) signal, shapes as in :func:`mean_abs_error`.
+    axis : int or None
+        Axis averaged over (time by default); ``None`` for all.
+
+    Returns
+    -------
+    float or numpy.ndarray
+        The SNR in dB (``inf`` when ``y`` equals ``reference``), with ``axis`` removed.
+    """
     r, y = _pair(("reference", "y"), reference, y, axis)
     e = r - y
     with np.errstate(divide="ignore"):
@@ -66,7 +109,24 @@ def snr_db(reference, y, axis=0):
 
 
 def overshoot(t, y, final, initial=0.0, axis=0):
-    """Percent overshoot of a step response from ``initial`` to ``final`` (0 when it never exceeds it)."""
+    """Percent overshoot of a step response from ``initial`` to ``final`` (0 when it never exceeds it).
+
+    Parameters
+    ----------
+    t : array_like
+        Sample times (unused; kept for a signature shared with :func:`settling_time`).
+    y : array_like
+        The response.
+    final, initial : float
+        Final and initial values of the step (different).
+    axis : int
+        Time axis of ``y``.
+
+    Returns
+    -------
+    float or numpy.ndarray
+        ``max(peak − 1, 0) · 100`` with the peak relative to the step, per run.
+    """
     y = check_array("y", y)
     final = check_finite("final", final, scalar=True)
     initial = check_finite("initial", initial, scalar=True)
@@ -81,7 +141,23 @@ def overshoot(t, y, final, initial=0.0, axis=0):
 def settling_time(t, y, final, initial=0.0, band=0.02, axis=0):
     """First time after which ``y`` stays within ``band`` (relative to the step) of ``final``.
 
-    Returns ``nan`` for a run that never settles within the record.
+    Parameters
+    ----------
+    t : array_like, shape (N,)
+        Strictly increasing sample times.
+    y : array_like
+        The response, ``N`` samples along ``axis``.
+    final, initial : float
+        Final and initial values of the step (different).
+    band : float
+        Half-width of the band, relative to the step size (> 0; 0.02 = 2 %).
+    axis : int
+        Time axis of ``y``.
+
+    Returns
+    -------
+    float or numpy.ndarray
+        The settling time per run; ``nan`` for a run that never settles within the record.
 
     Raises
     ------
@@ -118,6 +194,22 @@ def mean_std(values, ok=None, axis=0):
     Diverged runs (``ok`` False) are excluded, never averaged; the count says how many remained.
     ``ok`` must be a boolean mask with one entry per run (an index array is rejected: it would be
     read as a mask silently).
+
+    Parameters
+    ----------
+    values : array_like
+        One value per run along ``axis``.
+    ok : array_like of bool, shape (runs,), optional
+        Which runs to keep (default all).
+    axis : int
+        The run axis.
+
+    Returns
+    -------
+    mean, std : float or numpy.ndarray
+        ``nan`` when no run is kept; ``std`` is 0 for a single run.
+    count : int
+        Runs kept.
     """
     v = check_array("values", values)
     _check_axis(axis, v.ndim, allow_none=False)
@@ -137,7 +229,20 @@ def mean_std(values, ok=None, axis=0):
 
 
 def bandwidth_3db(sys, dbdrop: float = -3.0) -> float:
-    """First frequency (rad/s) where the gain falls ``dbdrop`` dB below its DC value (python-control)."""
+    """First frequency (rad/s) where the gain falls ``dbdrop`` dB below its DC value (python-control).
+
+    Parameters
+    ----------
+    sys : control.LTI
+        A SISO system with a finite, non-zero DC gain.
+    dbdrop : float
+        The drop in dB (< 0).
+
+    Returns
+    -------
+    float
+        The bandwidth in rad/s (``control.bandwidth``).
+    """
     import control as ct
 
     dbdrop = check_finite("dbdrop", dbdrop, scalar=True)
@@ -146,13 +251,34 @@ def bandwidth_3db(sys, dbdrop: float = -3.0) -> float:
     return float(ct.bandwidth(sys, dbdrop=dbdrop))
 
 
+def _check_lti(sys):
+    import control as ct
+
+    if not isinstance(sys, ct.LTI):
+        raise TypeError(f"sys must be a python-control LTI system (TransferFunction or StateSpace), got {sys!r}")
+    return sys
+
+
 def resonance_peak(sys, omega=None):
     """Peak magnitude of a SISO system relative to its DC gain, in dB, and the frequency of the peak.
 
-    Returns ``(peak_db, omega_peak)``; ``peak_db`` is 0 when the gain never exceeds its DC value.
+    Parameters
+    ----------
+    sys : control.LTI
+        A SISO system with a finite, non-zero DC gain.
+    omega : array_like, optional
+        Frequencies (rad/s, > 0) to search; default a log grid up to 100× the largest pole modulus.
+
+    Returns
+    -------
+    peak_db : float
+        Peak gain over the DC gain in dB; 0 when the gain never exceeds its DC value.
+    omega_peak : float
+        Frequency of the peak (rad/s).
     """
     import control as ct
 
+    _check_lti(sys)
     if omega is not None:
         omega = np.atleast_1d(check_positive("omega", omega))
         if omega.ndim != 1:

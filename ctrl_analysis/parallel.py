@@ -29,14 +29,20 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from ._validate import check_int
+from ._validate import check_int, check_str
 from .progress import bar
 
 __all__ = ["chunk_slices", "default_jobs", "gather", "grid_points", "map_chunks", "monte_carlo", "sweep"]
 
 
 def default_jobs() -> int:
-    """Cores this process may use (``os.sched_getaffinity`` where available, else ``os.cpu_count()``)."""
+    """Cores this process may use (``os.sched_getaffinity`` where available, else ``os.cpu_count()``).
+
+    Returns
+    -------
+    int
+        At least 1.
+    """
     try:
         return max(1, len(os.sched_getaffinity(0)))
     except AttributeError:  # pragma: no cover - macOS / Windows
@@ -66,6 +72,23 @@ def chunk_slices(n: int, *, chunks: int | None = None, chunk_size: int | None = 
         k = check_int("chunks", 1 if chunks is None else chunks, minimum=1)
         size = math.ceil(n / min(k, n))
     return [slice(lo, min(lo + size, n)) for lo in range(0, n, size)]
+
+
+def _sequence(name: str, value) -> list:
+    """``value`` as a list; a string, a mapping or a non-iterable raises a TypeError naming ``name``."""
+    if isinstance(value, (str, bytes, dict)) or not hasattr(value, "__iter__"):
+        raise TypeError(f"{name} must be a sequence (list, tuple, range or array), got {value!r}")
+    return list(value)
+
+
+def _check_scheduler(scheduler):
+    """None, "local", a "host:port" address or a ``distributed.Client``."""
+    if scheduler is None or scheduler == "local" or type(scheduler).__name__ == "Client":
+        return scheduler
+    if not isinstance(scheduler, str) or ":" not in scheduler:
+        raise ValueError(f"scheduler must be None, 'local', a scheduler address such as 'tcp://host:8786' "
+                         f"or a distributed.Client, got {scheduler!r}")
+    return scheduler
 
 
 def _client(scheduler, jobs):
@@ -105,9 +128,11 @@ def map_chunks(fn: Callable, args: Sequence, *, jobs: int = 1, scheduler=None, d
         ``fn(a)`` for every ``a``, in the order of ``args``.
     """
     jobs = check_int("jobs", jobs, minimum=1)
-    args = list(args)
+    args = _sequence("args", args)
     if not callable(fn):
         raise TypeError(f"fn must be callable, got {type(fn).__name__}")
+    scheduler = _check_scheduler(scheduler)
+    check_str("desc", desc, empty=True)
     out = [None] * len(args)
     with bar(len(args), desc=desc, unit="chunk") as pb:
         if scheduler is not None:
@@ -157,6 +182,8 @@ def gather(parts: list):
     -------
     The same structure with every array the concatenation of the chunks' arrays.
     """
+    if not isinstance(parts, (list, tuple)):
+        raise TypeError(f"parts must be a list of chunk results, got {parts!r}")
     if not parts:
         raise ValueError("parts must contain at least one chunk result")
     first = parts[0]
@@ -188,7 +215,9 @@ def monte_carlo(fn: Callable, seeds: Sequence, *, jobs: int = 1, scheduler=None,
     -------
     The gathered result: what ``fn(list(seeds))`` returns in one process, bit for bit.
     """
-    seeds = list(seeds)
+    seeds = _sequence("seeds", seeds)
+    if not seeds:
+        raise ValueError("seeds must contain at least one seed")
     jobs = check_int("jobs", jobs, minimum=1)
     parts = chunk_slices(len(seeds), chunks=jobs, chunk_size=chunk_size)
     return gather(map_chunks(fn, [seeds[s] for s in parts], jobs=jobs, scheduler=scheduler, desc=desc))
@@ -206,8 +235,12 @@ def grid_points(grid: dict) -> dict:
     -------
     dict of str -> ndarray, shape (P,)
     """
+    if not isinstance(grid, dict):
+        raise TypeError(f"grid must be a dict of parameter name -> values, got {grid!r}")
     if not grid:
         raise ValueError("grid must name at least one parameter")
+    for name in grid:
+        check_str("grid", name)
     axes = [np.asarray(v, dtype=float).reshape(-1) for v in grid.values()]
     for name, a in zip(grid, axes):
         if a.size == 0:
@@ -249,7 +282,9 @@ def sweep(fn: Callable, grid: dict, seeds: Sequence, *, jobs: int = 1, scheduler
     what ``fn`` returns on the whole batch in one process.
     """
     jobs = check_int("jobs", jobs, minimum=1)
-    seeds = list(seeds)
+    if not callable(fn):
+        raise TypeError(f"fn must be callable fn(points, seeds), got {fn!r}")
+    seeds = _sequence("seeds", seeds)
     if not seeds:
         raise ValueError("seeds must contain at least one seed")
     pts = grid_points(grid)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._validate import check_positive
+from ._validate import check_positive, check_vector
 from .blocks import DiscreteBlock, signal_names
 
 __all__ = ["DiscreteLTI"]
@@ -64,7 +64,7 @@ class DiscreteLTI(DiscreteBlock):
         if sys.ninputs != 1 or sys.noutputs != 1:
             raise ValueError(f"sys must be SISO (1 input, 1 output), got {sys.ninputs} inputs and "
                              f"{sys.noutputs} outputs")
-        self.dt = float(check_positive("dt", dt))
+        self.dt = float(check_positive("dt", dt, scalar=True))
         if sys.isctime(strict=True):
             sysd = ct.c2d(ct.ss(sys), self.dt, method="zoh")
         else:
@@ -80,7 +80,7 @@ class DiscreteLTI(DiscreteBlock):
         n = self.A.shape[0]
         self.states = signal_names("x", n)
         self.feedthrough = self.D != 0.0
-        self._x0 = np.zeros(n) if x0 is None else np.asarray(x0, dtype=float).reshape(n)
+        self._x0 = np.zeros(n) if x0 is None else check_vector("x0", x0, n, broadcast=False)
 
     def initial_state(self) -> np.ndarray:
         return self._x0.copy()

@@ -35,5 +35,5 @@ def repeated_pole_coefficients(m: int, omega: float) -> np.ndarray:
     array([ 1.,  6., 12.,  8.])
     """
     m = check_int("m", m, minimum=0)
-    omega = float(check_positive("omega", omega))
+    omega = float(check_positive("omega", omega, scalar=True))
     return np.array([comb(m, i) * omega**i for i in range(m + 1)], dtype=float)

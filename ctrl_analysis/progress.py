@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import os
 import sys
+from ._validate import check_int, check_str
 
 __all__ = ["NullBar", "bar", "enabled"]
 
@@ -28,11 +29,20 @@ def enabled(stream=None) -> bool:
     forced = os.environ.get("CTRL_ANALYSIS_PROGRESS")
     if forced in ("0", "1"):
         return forced == "1"
-    stream = sys.stderr if stream is None else stream
+    stream = _check_stream(stream)
     try:
         return bool(stream.isatty())
     except (AttributeError, ValueError):
         return False
+
+
+def _check_stream(stream):
+    """``sys.stderr`` for ``None``, else a writable text stream (anything with ``write``)."""
+    if stream is None:
+        return sys.stderr
+    if not callable(getattr(stream, "write", None)):
+        raise TypeError(f"stream must be a writable file-like object (with write()), got {stream!r}")
+    return stream
 
 
 class NullBar:
@@ -41,12 +51,29 @@ class NullBar:
     n = 0
 
     def update(self, n: int = 1) -> None:
+        """Count ``n`` more units (nothing is shown).
+
+        Parameters
+        ----------
+        n : int
+            Units finished.
+        """
         self.n += n
 
     def set_postfix_str(self, s: str = "", refresh: bool = True) -> None:
+        """Ignore a postfix text (tqdm's signature).
+
+        Parameters
+        ----------
+        s : str
+            The text tqdm would show after the bar.
+        refresh : bool
+            Whether tqdm would redraw.
+        """
         return None
 
     def close(self) -> None:
+        """Do nothing (tqdm's signature)."""
         return None
 
     def __enter__(self):
@@ -75,7 +102,11 @@ def bar(total: int | None = None, desc: str = "", unit: str = "it", stream=None)
     tqdm.tqdm or NullBar
         A tqdm bar on ``stream`` when :func:`enabled`, otherwise a :class:`NullBar`.
     """
-    stream = sys.stderr if stream is None else stream
+    if total is not None:
+        total = check_int("total", total, minimum=0)
+    check_str("desc", desc, empty=True)
+    check_str("unit", unit)
+    stream = _check_stream(stream)
     if not enabled(stream):
         return NullBar()
     from tqdm import tqdm

@@ -17,7 +17,8 @@ from typing import Callable
 
 import numpy as np
 
-from ._validate import check_bool, check_callable, check_int, check_nonnegative, check_positive
+from ._validate import (check_array, check_bool, check_callable, check_int, check_nonnegative, check_path,
+                        check_positive, check_str)
 
 __all__ = [
     "Quantity",
@@ -72,8 +73,8 @@ def relative_error(value, paper) -> float:
 
     Vectors must have the same length; a length mismatch or a non-finite value gives ``inf``.
     """
-    v = np.atleast_1d(np.asarray(value, dtype=float))
-    p = np.atleast_1d(np.asarray(paper, dtype=float))
+    v = np.atleast_1d(check_array("value", value))
+    p = np.atleast_1d(check_array("paper", paper))
     if v.shape != p.shape or not np.all(np.isfinite(v)):
         return math.inf
     scale = np.where(p == 0, 1.0, np.abs(p))
@@ -87,7 +88,7 @@ def _check_tolerance(tolerance) -> float:
 def compute_verdict(value, paper, tolerance: float | None, *, diverged: bool = False) -> str:
     """``diverged`` when every run diverged; ``new`` without a paper value; else ``agrees`` when the
     relative error is within tolerance, ``differs`` otherwise."""
-    if diverged:
+    if check_bool("diverged", diverged):
         return "diverged"
     if paper is None:
         return "new"
@@ -188,6 +189,11 @@ class StudyInfo:
     paper: str
     reproduces: str
 
+    def __post_init__(self):
+        check_str("name", self.name)
+        for name in ("seed_file", "paper", "reproduces"):
+            check_str(name, getattr(self, name), empty=True)
+
 
 @dataclass
 class StudyResult:
@@ -202,6 +208,10 @@ class StudyResult:
     missing: list = field(default_factory=list)
     seeds: dict = field(default_factory=dict)
     runtime_s: float = 0.0
+
+    def __post_init__(self):
+        if not isinstance(self.info, StudyInfo):
+            raise TypeError(f"info must be a StudyInfo, got {self.info!r}")
 
     def quantity(self, id: str, label: str, value, paper=None, **kw) -> Quantity:
         """Add a quantity and return it (an id may be recorded once).
@@ -227,11 +237,11 @@ class StudyResult:
 
     def reconstruction(self, name: str, value, why: str) -> None:
         """Record a value the paper does not print (or prints wrongly) and the reason for the choice."""
-        self.reconstructions.append({"name": name, "value": value, "why": why})
+        self.reconstructions.append({"name": check_str("name", name), "value": value, "why": check_str("why", why)})
 
     def finding(self, id: str, text: str, evidence=None) -> None:
         """Record an erratum, an inconsistency, an irreproducible claim or an instability."""
-        item = {"id": id, "text": text}
+        item = {"id": check_str("id", id), "text": check_str("text", text)}
         if evidence is not None:
             item["evidence"] = evidence
         self.findings.append(item)
@@ -302,6 +312,11 @@ class StudyContext:
         """Save ``fig`` as ``out_dir/filename``, close it and list it in ``result.figures``."""
         import matplotlib.pyplot as plt
 
+        if not isinstance(result, StudyResult) or not hasattr(fig, "savefig"):
+            raise TypeError(f"result must be a StudyResult and fig a matplotlib Figure, got {result!r}, {fig!r}")
+        if Path(check_str("filename", filename)).name != filename or filename in (".", ".."):
+            raise ValueError(f"filename must be a plain file name inside out_dir (no directory), got {filename!r}")
+        dpi = check_int("dpi", dpi, minimum=1)
         self.out_dir.mkdir(parents=True, exist_ok=True)
         path = self.out_dir / filename
         fig.savefig(path, dpi=dpi, bbox_inches="tight")
@@ -312,7 +327,12 @@ class StudyContext:
 
 
 def versions() -> dict:
-    """Versions of Python and the numeric stack, recorded in every results.json."""
+    """Versions of Python and the numeric stack, recorded in every results.json.
+
+    Returns
+    -------
+    dict of str -> str
+    """
     import control
     import matplotlib
     import scipy
@@ -353,8 +373,21 @@ def write_text_atomic(path: Path, text: str) -> Path:
 
     A reader sees the old file or the complete new one, never a truncated one (e.g. on a full disk
     the write fails and the old file stays).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file (non-empty path; its directory is created).
+    text : str
+        The whole content.
+
+    Returns
+    -------
+    pathlib.Path
     """
-    path = Path(path)
+    path = check_path("path", path)
+    if not isinstance(text, str):
+        raise TypeError(f"text must be a str, got {type(text).__name__}")
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
     try:
@@ -379,8 +412,18 @@ def staged_directory(target: Path):
     moved aside, the staged directory renamed to ``target`` (SIGINT held during the swap) and the
     old one removed; on any exception (including ``KeyboardInterrupt``) the staged directory is
     removed and ``target`` is untouched. ``target`` is therefore complete or untouched.
+
+    Parameters
+    ----------
+    target : str or os.PathLike
+        The directory to replace (non-empty path).
+
+    Yields
+    ------
+    pathlib.Path
+        The staging directory to write into.
     """
-    target = Path(target)
+    target = check_path("target", target)
     target.parent.mkdir(parents=True, exist_ok=True)
     staged = Path(tempfile.mkdtemp(dir=target.parent, prefix=f".{target.name}.new-"))
     try:
@@ -407,9 +450,10 @@ def write_results_json(result: StudyResult, out_dir: Path) -> Path:
     """Write ``out_dir/results.json`` atomically (the contract in DESIGN.md); validated first."""
     if not isinstance(result, StudyResult):
         raise TypeError(f"result must be a StudyResult, got {type(result).__name__}")
+    out_dir = check_path("out_dir", out_dir)
     data = result.to_dict()
     validate_results(data)
-    return write_text_atomic(Path(out_dir) / "results.json",
+    return write_text_atomic(out_dir / "results.json",
                              json.dumps(data, indent=2, ensure_ascii=False) + "\n")
 
 
@@ -426,6 +470,16 @@ def validate_results(data: dict) -> dict:
     (a number >= 0 whenever ``paper`` is given), ``verdict`` in :data:`VERDICTS` and equal to the
     verdict recomputed from the record, ``paper`` None for ``new``, ``value`` None for ``diverged``;
     ids are unique and a paper cell has at most one primary quantity.
+
+    Parameters
+    ----------
+    data : dict
+        A results.json dict.
+
+    Returns
+    -------
+    dict
+        ``data`` itself.
     """
     if not isinstance(data, dict):
         raise ValueError(f"data must be a results dict, got {type(data).__name__}")
@@ -478,6 +532,16 @@ def count_verdicts(results: dict) -> dict:
 
     Quantities sharing a ``cell`` count once, with the verdict of the one marked ``primary`` (default:
     the first in that cell); quantities without a cell count individually.
+
+    Parameters
+    ----------
+    results : dict
+        A results.json dict.
+
+    Returns
+    -------
+    dict of str -> int
+        Count per verdict of :data:`VERDICTS`.
     """
     if not isinstance(results, dict) or not isinstance(results.get("quantities"), list):
         raise ValueError(f"results must be a results.json dict with a 'quantities' list, got {type(results).__name__}")

@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ._validate import check_path
 from .report import count_verdicts, write_text_atomic
 
 __all__ = ["summary_table", "write_report_md"]
@@ -41,7 +42,20 @@ def _fmt_tolerance(q: dict) -> str:
 
 
 def summary_table(results: dict) -> str:
-    """A Markdown table of the quantities of one results.json dict (unit "—" = dimensionless)."""
+    """A Markdown table of the quantities of one results.json dict (unit "—" = dimensionless).
+
+    Parameters
+    ----------
+    results : dict
+        One study's results.json dict (its ``quantities`` are read).
+
+    Returns
+    -------
+    str
+        The table, one row per quantity.
+    """
+    if not isinstance(results, dict) or not isinstance(results.get("quantities"), list):
+        raise TypeError(f"results must be a results.json dict with a 'quantities' list, got {results!r:.80}")
     rows = ["| id | quantity | paper cell | paper | reproduced | unit | tolerance | verdict | note |",
             "|---|---|---|---|---|---|---|---|---|"]
     for q in results["quantities"]:
@@ -92,6 +106,8 @@ def write_report_md(results: list[dict], out_dir: Path, *, this_run: dict | None
     ----------
     results : list of dict
         One results.json dict per study.
+    out_dir : str or os.PathLike
+        Directory of REPORT.md (non-empty path).
     this_run : dict, optional
         ``{study: {"seed": int, "runs": int | None, "quick": bool}}`` for the studies written by
         this run. When given, every other study is marked stale (its results come from an earlier
@@ -99,7 +115,18 @@ def write_report_md(results: list[dict], out_dir: Path, *, this_run: dict | None
     failed : dict, optional
         ``{study: reason}`` for studies that failed in this run; their old results (if any) are shown
         as stale with the reason.
+
+    Returns
+    -------
+    pathlib.Path
+        The file written.
     """
+    if not isinstance(results, (list, tuple)) or not all(isinstance(r, dict) and "study" in r for r in results):
+        raise TypeError(f"results must be a list of results.json dicts, got {results!r:.80}")
+    out_dir = check_path("out_dir", out_dir)
+    for name, value in (("this_run", this_run), ("failed", failed)):
+        if value is not None and not isinstance(value, dict):
+            raise TypeError(f"{name} must be a dict keyed by study name, got {value!r}")
     failed = dict(failed or {})
     if this_run is None:
         this_run = {r["study"]: {} for r in results}
@@ -146,4 +173,4 @@ def write_report_md(results: list[dict], out_dir: Path, *, this_run: dict | None
             lines += ["### Figures", ""]
             lines += [f"![{name}]({r['study']}/{name})" for name in r["figures"]]
             lines.append("")
-    return write_text_atomic(Path(out_dir) / "REPORT.md", "\n".join(lines) + "\n")
+    return write_text_atomic(out_dir / "REPORT.md", "\n".join(lines) + "\n")

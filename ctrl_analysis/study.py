@@ -25,6 +25,7 @@ Examples
 from __future__ import annotations
 
 import dataclasses
+from ._validate import check_str
 
 __all__ = ["printed", "reconstructed", "record_parameters", "reconstructions_of"]
 
@@ -44,7 +45,7 @@ def printed(value, where: str):
     dataclasses.Field
         A field with that default and ``metadata["printed"] = where``.
     """
-    return _field(value, {"printed": where})
+    return _field(value, {"printed": check_str("where", where)})
 
 
 def reconstructed(value, why: str):
@@ -67,8 +68,9 @@ def reconstructed(value, why: str):
     ValueError
         If ``why`` is empty.
     """
-    if not why:
-        raise ValueError("why must say why the value was chosen")
+    if not isinstance(why, str) or not why.strip():
+        raise (TypeError if not isinstance(why, str) else ValueError)(
+            f"why must be a non-empty string saying why the value was chosen, got {why!r}")
     return _field(value, {"reconstruction": why})
 
 
@@ -91,6 +93,8 @@ def reconstructions_of(params) -> list[dict]:
     list of dict
         One dict per reconstructed field, in field order.
     """
+    if not dataclasses.is_dataclass(params) or isinstance(params, type):
+        raise TypeError(f"params must be a dataclass instance, got {params!r}")
     return [{"name": f.name, "value": getattr(params, f.name), "why": f.metadata["reconstruction"]}
             for f in dataclasses.fields(params) if "reconstruction" in f.metadata]
 
@@ -106,8 +110,11 @@ def record_parameters(result, params, prefix: str = "") -> None:
     prefix : str
         Prefix of the setting names (e.g. ``"ex1"`` gives ``"ex1.h"``).
     """
-    if not dataclasses.is_dataclass(params):
+    if not dataclasses.is_dataclass(params) or isinstance(params, type):
         raise TypeError(f"params must be a dataclass instance, got {type(params).__name__}")
+    if not hasattr(result, "settings") or not hasattr(result, "reconstruction"):
+        raise TypeError(f"result must be a StudyResult, got {type(result).__name__}")
+    check_str("prefix", prefix, empty=True)
     name = (lambda n: f"{prefix}.{n}") if prefix else (lambda n: n)
     for f in dataclasses.fields(params):
         result.settings[name(f.name)] = getattr(params, f.name)

@@ -14,7 +14,7 @@ from __future__ import annotations
 import control as ct
 import numpy as np
 
-from .._validate import check_array, check_finite, check_int
+from .._validate import check_array, check_finite
 from ..blocks import StaticBlock, signal_names
 
 __all__ = ["HighOrderDifferentialFeedback", "hurwitz_roots", "gains_from_poles"]
@@ -49,6 +49,16 @@ def hurwitz_roots(K) -> np.ndarray:
 
 def gains_from_poles(poles) -> np.ndarray:
     """``K = [k_n, ..., k_1]`` that puts the roots of ``s^n + k_1 s^(n-1) + ... + k_n`` at ``poles``.
+
+    Parameters
+    ----------
+    poles : array_like of complex
+        The ``n`` desired roots (finite; complex ones in conjugate pairs).
+
+    Returns
+    -------
+    numpy.ndarray, shape (n,)
+        Real gains in the paper's order ``[k_n, ..., k_1]``.
 
     Examples
     --------
@@ -195,6 +205,11 @@ class HighOrderDifferentialFeedback(StaticBlock):
 
         Input ``v`` (a constant setpoint entering as ``θ = (v, 0, ..., 0)``), output ``x``; its
         poles are :attr:`poles` and its DC gain is 1.
+
+        Returns
+        -------
+        control.StateSpace
+            The ``n``-state closed loop ``v -> x``.
         """
         n = self.n
         A = np.diag(np.ones(n - 1), 1)

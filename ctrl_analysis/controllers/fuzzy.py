@@ -91,7 +91,7 @@ def sum_rule_table(n_terms: int = 7, sign: int = 1) -> np.ndarray:
     n = check_int("n_terms", n_terms, minimum=3)
     if n % 2 == 0:
         raise ValueError(f"n_terms must be odd, got {n}")
-    if sign not in (1, -1):
+    if isinstance(sign, bool) or sign not in (1, -1):
         raise ValueError(f"sign must be 1 or -1, got {sign!r}")
     m = (n - 1) // 2
     i = np.arange(n) - m
@@ -192,17 +192,21 @@ class FuzzyController(_FuzzyBlock):
         if rules.ndim != 2 or rules.shape[0] < 2 or rules.shape[1] < 2 or not np.issubdtype(rules.dtype, np.integer):
             raise ValueError(f"rules must be a 2-D integer table with at least 2×2 entries, got {rules!r}")
         self.rules = rules.copy()
-        self.Ke = check_positive("Ke", Ke)
-        self.Kec = check_positive("Kec", Kec)
-        self.Ku = check_positive("Ku", Ku)
-        xr = np.broadcast_to(np.asarray(check_finite("input_range", input_range), dtype=float), (2,))
+        self.Ke = check_positive("Ke", Ke, scalar=True)
+        self.Kec = check_positive("Kec", Kec, scalar=True)
+        self.Ku = check_positive("Ku", Ku, scalar=True)
+        xr = np.asarray(check_finite("input_range", input_range), dtype=float)
+        if xr.shape not in ((), (1,), (2,)):
+            raise ValueError(f"input_range must be one number or two (for e and ec), got shape {xr.shape}")
+        xr = np.broadcast_to(xr, (2,))
         if np.any(xr <= 0):
             raise ValueError(f"input_range must be > 0, got {input_range!r}")
         self.X_e, self.X_ec = float(xr[0]), float(xr[1])
-        self.Y = check_positive("output_range", output_range)
+        self.Y = check_positive("output_range", output_range, scalar=True)
         n_u = int(rules.max()) + 1 if n_output_terms is None else check_int("n_output_terms", n_output_terms, minimum=2)
         if rules.min() < 0 or rules.max() >= n_u:
-            raise ValueError(f"rules must hold output term indices in [0, {n_u - 1}], got [{rules.min()}, {rules.max()}]")
+            raise ValueError(f"rules must hold output term indices in [0, {n_u - 1}] (n_output_terms={n_u}), "
+                             f"got [{rules.min()}, {rules.max()}]")
         self.n_u = n_u
         self.n_grid = check_int("n_grid", n_grid, minimum=3)
         self.c_e = np.linspace(-self.X_e, self.X_e, rules.shape[0])
@@ -296,8 +300,10 @@ class FuzzyLookupController(_FuzzyBlock):
     def __init__(self, controller: FuzzyController, n_points=121):
         if not isinstance(controller, FuzzyController):
             raise TypeError(f"controller must be a FuzzyController, got {type(controller).__name__}")
-        n = np.broadcast_to(np.asarray(n_points), (2,))
-        n_e, n_ec = (check_int("n_points", int(v), minimum=2) for v in n)
+        n = np.asarray(n_points, dtype=object)
+        if n.shape not in ((), (1,), (2,)):
+            raise ValueError(f"n_points must be one integer or two, got {n_points!r}")
+        n_e, n_ec = (check_int("n_points", v, minimum=2) for v in np.broadcast_to(n, (2,)))
         self.controller = controller
         self.E, self.EC, self.U = controller.control_surface(n_e, n_ec)
         self.dE, self.dEC = self.E[1] - self.E[0], self.EC[1] - self.EC[0]

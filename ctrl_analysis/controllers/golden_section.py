@@ -75,14 +75,14 @@ class GoldenSectionController(DiscreteBlock):
 
     def __init__(self, k_I: float = 0.0, c2: float = 0.9, c1: float = 1.0, mu: float = 0.0,
                  l1: float = GOLDEN_L1, l2: float = GOLDEN_L2):
-        self.k_I = float(check_nonnegative("k_I", k_I))
-        self.c1 = float(check_finite("c1", c1))
-        self.c2 = float(check_finite("c2", c2))
+        self.k_I = float(check_nonnegative("k_I", k_I, scalar=True))
+        self.c1 = float(check_finite("c1", c1, scalar=True))
+        self.c2 = float(check_finite("c2", c2, scalar=True))
         if not 0.0 < self.c2 <= self.c1 <= 1.0:
             raise ValueError(f"c1, c2 must satisfy 0 < c2 <= c1 <= 1, got c1={self.c1}, c2={self.c2}")
-        self.mu = float(check_nonnegative("mu", mu))
-        self.l1 = float(check_positive("l1", l1))
-        self.l2 = float(check_positive("l2", l2))
+        self.mu = float(check_nonnegative("mu", mu, scalar=True))
+        self.l1 = float(check_positive("l1", l1, scalar=True))
+        self.l2 = float(check_positive("l2", l2, scalar=True))
 
     def initial_state(self) -> np.ndarray:
         return np.zeros(4)

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validate import check_finite, check_positive
+from .._validate import check_finite, check_positive, check_str
 from ..blocks import Block, DiscreteBlock, StaticBlock
 from ..estimators.kalman.ikf import _per_run
 from ..loop import place
@@ -74,7 +74,7 @@ class UnitDelay(DiscreteBlock):
     feedthrough = False
 
     def __init__(self, u0: float = 0.0):
-        self.u0 = float(check_finite("u0", u0))
+        self.u0 = float(check_finite("u0", u0, scalar=True))
 
     def initial_state(self) -> np.ndarray:
         return np.array([self.u0])
@@ -136,17 +136,17 @@ class PPDEstimator(DiscreteBlock):
     def __init__(self, eta: float, mu: float, epsilon: float, phi0: float, phi_reset: float | None = None,
                  y0: float = 0.0, u0: float = 0.0):
         self.eta = _check_step("eta", eta)
-        self.mu = float(check_positive("mu", mu))
-        self.epsilon = float(check_positive("epsilon", epsilon))
-        self.phi0 = float(check_finite("phi0", phi0))
+        self.mu = float(check_positive("mu", mu, scalar=True))
+        self.epsilon = float(check_positive("epsilon", epsilon, scalar=True))
+        self.phi0 = float(check_finite("phi0", phi0, scalar=True))
         if self.phi0 == 0.0:
             raise ValueError("phi0 must be non-zero (its sign is what the reset rule keeps), got 0.0")
-        self.phi_reset = self.phi0 if phi_reset is None else float(check_finite("phi_reset", phi_reset))
+        self.phi_reset = self.phi0 if phi_reset is None else float(check_finite("phi_reset", phi_reset, scalar=True))
         if np.sign(self.phi_reset) != np.sign(self.phi0):
             raise ValueError(f"phi_reset must have the sign of phi0={self.phi0:g}, got {self.phi_reset:g}")
         self.sign0 = float(np.sign(self.phi0))
-        self.y0 = float(check_finite("y0", y0))
-        self.u0 = float(check_finite("u0", u0))
+        self.y0 = float(check_finite("y0", y0, scalar=True))
+        self.u0 = float(check_finite("u0", u0, scalar=True))
 
     def initial_state(self) -> np.ndarray:
         return np.array([self.phi0, self.y0, self.u0])
@@ -256,7 +256,7 @@ class DecreasingGainLaw(DiscreteBlock):
     def __init__(self, rho: float, lam: float, e_m: float, rearm: bool = True):
         self.rho = _check_step("rho", rho)
         self.lam = _check_weight("lam", lam)
-        self.e_m = float(check_positive("e_m", e_m))
+        self.e_m = float(check_positive("e_m", e_m, scalar=True))
         if not isinstance(rearm, (bool, np.bool_)):
             raise TypeError(f"rearm must be a bool, got {type(rearm).__name__}")
         self.rearm = bool(rearm)
@@ -310,7 +310,8 @@ class CFDLPredictor(DiscreteBlock):
     feedthrough = False
 
     def __init__(self, phi0: float = 0.0, u0: float = 0.0, u00: float = 0.0):
-        self.x0 = check_finite("x0", np.array([phi0, u0, u00], dtype=float))
+        self.x0 = np.array([check_finite(name, value, scalar=True)
+                            for name, value in (("phi0", phi0), ("u0", u0), ("u00", u00))])
 
     def initial_state(self) -> np.ndarray:
         return self.x0.copy()
@@ -374,7 +375,9 @@ def mfac_controller(estimator: PPDEstimator, law: Block, output_filter: Block | 
         raise TypeError(f"estimator must be a PPDEstimator, got {type(estimator).__name__}")
     if not isinstance(law, (CFDLLaw, DecreasingGainLaw)):
         raise TypeError(f"law must be a CFDLLaw or a DecreasingGainLaw, got {type(law).__name__}")
-    u0 = float(check_finite("u0", u0))
+    u0 = float(check_finite("u0", u0, scalar=True))
+    for name, value in (("measured", measured), ("reference", reference), ("control", control)):
+        check_str(name, value)
     y_f = measured
     blocks = [place(UnitDelay(u0), "delay", inputs=[control], outputs=["u_prev"])]
     if isinstance(output_filter, TrackingDifferentiator):

@@ -32,6 +32,18 @@ def bandwidth_gains(n: int, omega_c: float) -> np.ndarray:
     ``s^n + k_n s^(n-1) + ... + k_1 = (s + ω_c)^n`` so ``k_i = C(n, i-1) ω_c^(n-i+1)``; for ``n = 2``:
     ``k_1 = ω_c², k_2 = 2 ω_c, k_3 = 1``.
 
+    Parameters
+    ----------
+    n : int
+        Order of the tracked chain (>= 1).
+    omega_c : float
+        Controller bandwidth ω_c (> 0).
+
+    Returns
+    -------
+    numpy.ndarray, shape (n + 1,)
+        ``[k_1, ..., k_n, k_{n+1} = 1]``.
+
     References
     ----------
     Gao Z., "Scaling and bandwidth-parameterization based controller tuning", ACC 2003.
@@ -138,7 +150,13 @@ class PDFeedforward(DiscreteBlock):
         self.states = signal_names("xhat_prev", n) + ("u_prev",) if self.model else ()
 
     def tracking_poly(self) -> np.ndarray:
-        """Coefficients of the tracking-error polynomial ``s^n + k_n s^(n-1) + ... + k_1``."""
+        """Coefficients of the tracking-error polynomial ``s^n + k_n s^(n-1) + ... + k_1``.
+
+        Returns
+        -------
+        numpy.ndarray, shape (n + 1,)
+            Highest power first (``numpy.roots`` order).
+        """
         return np.concatenate([[1.0], self.k[self.n - 1::-1]])
 
     @property

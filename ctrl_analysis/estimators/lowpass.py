@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validate import check_finite, check_int, check_positive
+from .._validate import check_array, check_int, check_positive, check_vector
 from ..blocks import ContinuousBlock, DiscreteBlock, signal_names
 from ..polynomials import repeated_pole_coefficients
 
@@ -235,8 +235,7 @@ class DiscreteLowPass(DiscreteBlock):
         self.channels = check_int("channels", channels, minimum=1)
         self.Ad, self.Bd = lowpass.discretize(self.h)
         m = lowpass.order
-        init = np.zeros(self.channels) if initial is None else np.broadcast_to(
-            check_finite("initial", initial), (self.channels,)).astype(float)
+        init = np.zeros(self.channels) if initial is None else check_vector("initial", initial, self.channels)
         self._x0 = np.zeros((self.channels, m))
         self._x0[:, 0] = init
         self.inputs = signal_names("u", self.channels)
@@ -280,7 +279,7 @@ class DiscreteLowPass(DiscreteBlock):
         numpy.ndarray
             The filtered values after each sample, with the shape of ``u``.
         """
-        u = np.asarray(u, dtype=float)
+        u = np.asarray(check_array("u", u), dtype=float)
         shape = u.shape
         if u.ndim == 1 and self.channels == 1:
             u = u[:, None]

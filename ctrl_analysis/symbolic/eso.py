@@ -84,6 +84,18 @@ def characteristic_polynomial(n: int, high_gain: bool = True) -> sp.Expr:
     With ``high_gain`` the gains are ``L_i = beta_i / eps^i`` (paper eq. (29)); otherwise the
     symbols ``L_i``.
 
+    Parameters
+    ----------
+    n : int
+        Plant order (>= 1); the observer has ``n + 1`` states.
+    high_gain : bool
+        Gains ``beta_i / eps^i`` (True) or free symbols ``L_i`` (False).
+
+    Returns
+    -------
+    sympy.Expr
+        The monic polynomial of degree ``n + 1`` in ``s``.
+
     References
     ----------
     Chen Z., Gao Q., "Modified extended state observer: analysis and implementation", Control
@@ -166,7 +178,17 @@ def observer_matrices(n: int, high_gain: bool = True):
 def error_transfer_functions(n: int, high_gain: bool = False) -> tuple:
     """``E_i(s) / H(s)`` for ``i = 1..n+1``, solved from ``(sI - (A - LC)) E = e_{n+1} H``.
 
-    Returns a tuple of simplified rational expressions in ``s`` (and ``L_i`` or ``beta_i, eps``).
+    Parameters
+    ----------
+    n : int
+        Plant order (>= 1).
+    high_gain : bool
+        As in :func:`characteristic_polynomial`.
+
+    Returns
+    -------
+    tuple of sympy.Expr
+        ``n + 1`` simplified rational expressions in ``s`` (and ``L_i`` or ``beta_i, eps``).
 
     References
     ----------
@@ -184,7 +206,18 @@ def _error_transfer_functions(n: int, high_gain: bool) -> tuple:
 
 
 def error_dc_gains(n: int) -> tuple:
-    """DC gains of ``E_i / H`` with ``L_i = beta_i / eps^i``: ``(beta_{i-1}/beta_{n+1}) eps^(n+2-i)``."""
+    """DC gains of ``E_i / H`` with ``L_i = beta_i / eps^i``: ``(beta_{i-1}/beta_{n+1}) eps^(n+2-i)``.
+
+    Parameters
+    ----------
+    n : int
+        Plant order (>= 1); the limits ``s -> 0`` of :func:`error_transfer_functions` are taken.
+
+    Returns
+    -------
+    tuple of sympy.Expr
+        One DC gain per observer state, ``n + 1`` in all.
+    """
     return _error_dc_gains(check_int("n", n, minimum=1))
 
 

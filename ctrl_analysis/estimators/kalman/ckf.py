@@ -88,7 +88,7 @@ class CharacteristicKalmanFilter(DiscreteBlock):
 
     def __init__(self, Q=1e-4, R=1.0, P0=1.0, x0=None):
         self.Q = _check_covariance("Q", Q, 2, definite=False)
-        self.R = float(check_positive("R", R))
+        self.R = float(check_positive("R", R, scalar=True))
         self.P0 = _check_covariance("P0", P0, 2, definite=True)
         self.x0 = np.zeros(2) if x0 is None else check_finite("x0", np.ravel(x0), shape=(2,))
 
@@ -178,10 +178,12 @@ class LinearKalmanFilter(DiscreteBlock):
     def __init__(self, F, G, H, Q, R, P0=1.0, x0=None):
         self.F = check_matrix("F", F, square=True)
         n = self.F.shape[0]
-        self.G = check_finite("G", np.ravel(G), shape=(n,))
-        self.H = check_finite("H", np.ravel(H), shape=(n,))
+        self.G, self.H = np.ravel(check_finite("G", G)), np.ravel(check_finite("H", H))
+        for name, vec in (("G", self.G), ("H", self.H)):
+            if vec.shape != (n,):
+                raise ValueError(f"{name} must have {n} entries to match F ({n}×{n}), got {vec.size}")
         self.Q = _check_covariance("Q", Q, n, definite=False)
-        self.R = float(check_positive("R", R))
+        self.R = float(check_positive("R", R, scalar=True))
         self.P0 = _check_covariance("P0", P0, n, definite=True)
         self.x0 = np.zeros(n) if x0 is None else check_finite("x0", np.ravel(x0), shape=(n,))
         self.n = n

@@ -60,15 +60,19 @@ class DiscreteKalmanFilter(DiscreteBlock):
         if self.F.shape != (n, n):
             raise ValueError(f"F must be square, got shape {self.F.shape}")
         self.n = n
-        self.h = check_finite("h", np.ravel(h), shape=(n,))
+        self.h = np.ravel(check_finite("h", h))
+        if self.h.shape != (n,):
+            raise ValueError(f"h must have {n} entries to match F ({n}×{n}), got shape {np.shape(h)}")
         self.Qd = check_matrix("Qd", Qd, shape=(n, n))
         if not np.allclose(self.Qd, self.Qd.T) or np.min(np.linalg.eigvalsh(self.Qd)) < -1e-12 * max(1.0, np.abs(self.Qd).max()):
             raise ValueError(f"Qd must be symmetric positive semidefinite, got {self.Qd.tolist()}")
-        self.R = check_positive("R", R)
+        self.R = check_positive("R", R, scalar=True)
         self.b = None if b is None else check_finite("b", np.ravel(b), shape=(n,))
         self.inputs = ("y",) if self.b is None else ("y", "u")
         self.x0 = np.zeros(n) if x0 is None else check_finite("x0", np.ravel(x0), shape=(n,))
-        self.P0 = np.eye(n) if P0 is None else check_matrix("P0", P0, shape=(n, n))
+        self.P0 = np.eye(n) if P0 is None else check_matrix("P0", P0, shape=(n, n), symmetric=True)
+        if np.min(np.linalg.eigvalsh(self.P0)) < -1e-12 * max(1.0, np.abs(self.P0).max()):
+            raise ValueError(f"P0 must be positive semidefinite (a covariance), got {self.P0.tolist()}")
         self.outputs = signal_names("xhat", n)
         self.states = signal_names("xpred", n) + tuple(f"P[{i},{j}]" for i in range(n) for j in range(n))
 

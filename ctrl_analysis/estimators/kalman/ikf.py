@@ -88,8 +88,8 @@ class ImprovedKalmanFilter(DiscreteBlock):
     def __init__(self, Q: float, R: float, y0: float = 0.0, P0: float = 1.0):
         self.Q = _per_run("Q", check_nonnegative("Q", Q))
         self.R = _per_run("R", check_positive("R", R))
-        self.y0 = float(check_finite("y0", y0))
-        self.P0 = float(check_nonnegative("P0", P0))
+        self.y0 = float(check_finite("y0", y0, scalar=True))
+        self.P0 = float(check_nonnegative("P0", P0, scalar=True))
         self.steady_gain = random_walk_gain(self.Q, self.R)
 
     def initial_state(self) -> np.ndarray:
