@@ -29,6 +29,18 @@ def run_seeds(base_seed: int, runs: int) -> list[int]:
     runs (``base_seed + i`` schemes share all runs but one), and run ``i`` does not depend on
     ``runs``.
 
+    Parameters
+    ----------
+    base_seed : int
+        The study's base seed (``--seed``), >= 0.
+    runs : int
+        Number of Monte Carlo runs, >= 1.
+
+    Returns
+    -------
+    list of int
+        One seed per run.
+
     Examples
     --------
     >>> a, b = run_seeds(7, 3), run_seeds(8, 3)
@@ -41,7 +53,18 @@ def run_seeds(base_seed: int, runs: int) -> list[int]:
 
 
 def uniform_noise(low, high) -> Callable:
-    """Sampler of white noise uniform on ``[low, high]`` per channel (scalars or equal-length vectors)."""
+    """Sampler of white noise uniform on ``[low, high]`` per channel.
+
+    Parameters
+    ----------
+    low, high : float or array_like
+        Bounds per channel (scalars, or vectors of equal length with ``high >= low``).
+
+    Returns
+    -------
+    callable
+        ``sample(rng, n_steps) -> (n_steps, channels)``, for :func:`draw_noise`.
+    """
     low = np.atleast_1d(check_finite("low", low))
     high = np.atleast_1d(check_finite("high", high))
     if low.shape != high.shape or np.any(high < low):
@@ -54,7 +77,20 @@ def uniform_noise(low, high) -> Callable:
 
 
 def gaussian_noise(std, mean=0.0) -> Callable:
-    """Sampler of white Gaussian noise with standard deviation ``std`` per channel."""
+    """Sampler of white Gaussian noise with standard deviation ``std`` per channel.
+
+    Parameters
+    ----------
+    std : float or array_like
+        Standard deviation per channel (>= 0).
+    mean : float or array_like
+        Mean per channel (broadcast to ``std``).
+
+    Returns
+    -------
+    callable
+        ``sample(rng, n_steps) -> (n_steps, channels)``, for :func:`draw_noise`.
+    """
     std = np.atleast_1d(check_finite("std", std))
     if np.any(std < 0):
         raise ValueError(f"std must be >= 0, got {std}")
@@ -78,6 +114,20 @@ def draw_noise(seeds, n_steps: int, *samplers: Callable) -> np.ndarray:
 
     Run ``b`` uses ``numpy.random.default_rng(seeds[b])``; the samplers are called in order on that
     generator and their channels concatenated, so run ``b``'s noise does not depend on ``B``.
+
+    Parameters
+    ----------
+    seeds : sequence of int
+        One seed per run (e.g. from :func:`run_seeds`).
+    n_steps : int
+        Number of samples (>= 1).
+    *samplers : callable
+        Samplers such as :func:`uniform_noise`, :func:`gaussian_noise`.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n_steps, B, m)
+        ``m`` the total number of channels of the samplers.
     """
     seeds = _check_seeds(seeds)
     if not seeds:
