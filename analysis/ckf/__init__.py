@@ -50,7 +50,6 @@ def run(ctx: StudyContext, p=PAPER) -> StudyResult:
     if ctx.quick:
         p = dataclasses.replace(p, t_end=30.0, option_runs=3)
     record_parameters(result, p)
-    result.settings["cells"] = qty.CELLS
     runs = ctx.runs_or(p.runs, 4)
     result.seeds = {"base": ctx.seed, "runs": runs}
     ctx.progress(f"ckf: {runs} runs x 3 cases, {p.t_end:g} s at Ts = {p.Ts:g} s")

@@ -17,7 +17,7 @@ from ctrl_analysis.simulate import run_seeds
 from ctrl_analysis.study import record_parameters
 
 from . import example1, example2, figures, linear_checks
-from .paper import CELLS, EX1, EX2, LINEAR
+from .paper import EX1, EX2, LINEAR
 
 __all__ = ["INFO", "run"]
 
@@ -46,7 +46,6 @@ def run(ctx: StudyContext, ex1=None, ex2=None) -> StudyResult:
     for prefix, params in (("linear", LINEAR), ("ex1", p1), ("ex2", p2)):
         record_parameters(result, params, prefix)
     result.missing = list(MISSING)
-    result.settings["paper_cells"] = dict(CELLS)
     _linear(ctx, result)
     _example1(ctx, result, p1, runs)
     _example2(ctx, result, p2, runs)

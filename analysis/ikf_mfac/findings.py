@@ -11,7 +11,7 @@ from ctrl_analysis.symbolic.riccati import (
 )
 
 from .paper import SCHEME_LABELS, SCHEMES, TABLE1
-from .quantities import ranking, table1_consistency
+from .quantities import TOLERANCE, ranking, table1_cell, table1_consistency
 
 __all__ = ["record_consistency", "record_ranking", "record_rearm", "record_steady_gain", "record_td_scan", "record_where_ikf_wins"]
 
@@ -75,8 +75,8 @@ def record_rearm(result, key: str, ex, variant: tuple) -> None:
                    f"'{closer}' is closer to it. Eq. (36) does not say which.")
     for metric, mean, std, unit in (("rmse", m, sd, ""), ("snr", ms, ss, "dB")):
         result.quantity(f"{key}.d_mfac_other_rearm.{metric}", f"{key}: D-MFAC {metric.upper()} with k_m {rule}",
-                        None if n == 0 else float(mean), std=None if n == 0 else float(std), runs=int(n), unit=unit,
-                        note=f"{div} runs diverged" if div else "")
+                        None if n == 0 else float(mean), std=None if n == 0 else float(std), runs=int(n) + int(div),
+                        runs_diverged=int(div), unit=unit, note=f"{div} runs diverged and are excluded" if div else "")
 
 
 def record_td_scan(result, scans: dict, chosen: dict) -> None:
@@ -87,6 +87,13 @@ def record_td_scan(result, scans: dict, chosen: dict) -> None:
         lit = scan["rows"][(False, 1)]
         result.quantity(f"{key}.td_mfac_literal.diverged_runs", f"{key}: TD-MFAC as printed (one TD step per "
                         "sample, x1 before the step), diverged runs", lit[3], unit="runs", runs=runs)
+        # the same Table 1 cell as TD-MFAC under the literal reading (not the primary reading)
+        result.quantity(f"{key}.td_mfac_literal.rmse", f"{key}: TD-MFAC RMSE as printed (one TD step per sample)",
+                        None if lit[2] == 0 else float(lit[0]), paper=TABLE1[key]["rmse"]["td_mfac"],
+                        std=None if lit[2] == 0 else float(lit[1]), runs=runs, runs_diverged=int(lit[3]),
+                        tolerance=TOLERANCE["rmse"], unit="", cell=table1_cell(key, "td_mfac", "rmse"), primary=False,
+                        note=f"{lit[3]} of {runs} runs diverged" + (" and are excluded" if lit[2] else "")
+                        + "; the study's primary reading runs several TD steps per sample (td-steps-per-sample)")
         ok = [n for (ft, n), r in sorted(scan["rows"].items()) if ft and r[3] == 0]
         lag = [(n, r[3]) for (ft, n), r in sorted(scan["rows"].items()) if not ft]
         smallest = min(ok) if ok else None
