@@ -74,7 +74,6 @@ def run(ctx: StudyContext, analysis=None) -> StudyResult:
     _figures(ctx, result, sims)
     findings.add_findings(result, sims, lin, sc, claims, horizons, an.tolerance)
     result.missing = findings.missing(result)
-    result.settings["cells"] = quantities.CELLS
     return result
 
 
