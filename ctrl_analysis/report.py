@@ -199,6 +199,8 @@ class StudyResult:
     quantities: list = field(default_factory=list)
     findings: list = field(default_factory=list)
     figures: list = field(default_factory=list)
+    #: figure file name -> caption (what is plotted and which paper figure it redraws), shown in REPORT.md
+    captions: dict = field(default_factory=dict)
     missing: list = field(default_factory=list)
     seeds: dict = field(default_factory=dict)
     runtime_s: float = 0.0
@@ -260,6 +262,7 @@ class StudyResult:
                 "quantities": [q.to_dict() for q in self.quantities],
                 "findings": self.findings,
                 "figures": self.figures,
+                "captions": {name: self.captions[name] for name in self.figures if name in self.captions},
                 "missing": self.missing,
                 "seeds": self.seeds,
                 "runtime_s": round(self.runtime_s, 3),
@@ -298,10 +301,18 @@ class StudyContext:
             return quick_default if quick_default is not None else max(1, min(default, 3))
         return default
 
-    def save_figure(self, result: StudyResult, fig, filename: str, dpi: int = 120) -> Path:
-        """Save ``fig`` as ``out_dir/filename``, close it and list it in ``result.figures``."""
+    def save_figure(self, result: StudyResult, fig, filename: str, dpi: int = 120, caption: str | None = None) -> Path:
+        """Save ``fig`` as ``out_dir/filename``, close it and list it in ``result.figures``.
+
+        ``caption`` (what is plotted, which paper figure it redraws, what to compare) goes to
+        ``result.captions[filename]`` and is printed under the figure in REPORT.md.
+        """
         import matplotlib.pyplot as plt
 
+        if caption is not None:
+            if not isinstance(caption, str) or not caption.strip():
+                raise ValueError(f"caption must be a non-empty string, got {caption!r}")
+            result.captions[filename] = caption
         self.out_dir.mkdir(parents=True, exist_ok=True)
         path = self.out_dir / filename
         fig.savefig(path, dpi=dpi, bbox_inches="tight")
@@ -470,6 +481,12 @@ def validate_results(data: dict) -> dict:
                 if q["cell"] in primaries:
                     raise ValueError(f"{where}: cell {q['cell']!r} already has primary {primaries[q['cell']]!r}")
                 primaries[q["cell"]] = q["id"]
+    captions = data.get("captions", {})
+    if not isinstance(captions, dict) or not all(isinstance(v, str) and v.strip() for v in captions.values()):
+        raise ValueError(f"{study}: captions must map figure names to non-empty strings, got {captions!r}")
+    stray = [name for name in captions if name not in data["figures"]]
+    if stray:
+        raise ValueError(f"{study}: captions {stray} name no figure of the study")
     return data
 
 
@@ -508,7 +525,7 @@ def new_figure(nrows: int = 1, ncols: int = 1, *, title: str | None = None, size
 
     fig, axes = plt.subplots(nrows, ncols, figsize=tuple(size), squeeze=True, constrained_layout=True, **kw)
     for ax in np.atleast_1d(axes).ravel():
-        ax.grid(True, alpha=0.3)
+        ax.grid(True, alpha=0.25)
     if title:
         fig.suptitle(title)
     return fig, axes
@@ -524,5 +541,11 @@ class Stopwatch:
         return time.perf_counter() - self.t0
 
 
-# REPORT.md writing lives in its own module; re-exported here for the public API
-from .report_md import summary_table, write_report_md  # noqa: E402,F401
+def __getattr__(name):
+    """REPORT.md writing lives in :mod:`.report_md`; its functions are re-exported here lazily (so either
+    module can be imported first)."""
+    if name in ("summary_table", "write_report_md"):
+        from . import report_md
+
+        return getattr(report_md, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -49,7 +49,7 @@ def quantity_ms(result, id_, label, values, ok, paper=None, tolerance=None, unit
 
 def ex1_cell(who: str, i: int) -> str:
     """The paper cell of Example 1's mean error of Σ (Fig. 3) or the ESO (Fig. 4) for x_{i+1}."""
-    return f"§4 Example 1 (Fig. {3 if who == 'sigma' else 4}): {'Σ' if who == 'sigma' else 'ESO'} |ε̄{i + 1}|"
+    return f"§4 Example 1 / {'Σ (Fig. 3)' if who == 'sigma' else 'ESO (Fig. 4)'} / |ε̄{i + 1}|"
 
 
 def linearised_eso(eso: ExtendedStateObserver) -> ExtendedStateObserver:
