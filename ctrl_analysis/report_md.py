@@ -13,9 +13,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .report import count_verdicts, relative_error, write_text_atomic
+from .report import relative_error, write_text_atomic
 
-__all__ = ["GLOSSARY", "overview_table", "paper_tables", "study_summary", "summarise", "summary_table",
+__all__ = ["GLOSSARY", "overview_table", "paper_tables", "study_summary", "summarise", "summary_table", "tally",
            "write_report_md"]
 
 #: Longest list quoted as is; longer numeric lists are summarised as min / median / max.
@@ -67,20 +67,22 @@ GLOSSARY = {
     "fal": "Han's nonlinear gain function fal(e, α, δ): |e|^α sign(e) outside |e| < δ, linear inside.",
     "Σ": "the differential state estimator of the differential-estimator paper, a chain of integrators "
          "with poles designed at the root-locus breakaway point.",
+    "est_xi / track_xi": "the meso tables' columns: mean |estimation error| of x_i, and mean |tracking error| of "
+                         "x_i, over the run.",
     "RMSE": "root-mean-square error.",
     "SNR": "signal-to-noise ratio, 10 lg(Σ y*² / Σ e²) in dB.",
     "mean ± std": "mean and standard deviation over the Monte Carlo runs that did not diverge.",
 }
 
 
-def _fmt(value, std=None) -> str:
+def _fmt(value, std=None, digits: int = 4) -> str:
     if value is None:
         return "—"
     if isinstance(value, (list, tuple, np.ndarray)):
         flat = list(np.ravel(np.asarray(value, dtype=object)))
         if len(flat) > MAX_LIST and _numeric(flat):
             return _array_summary(flat)
-        return "[" + ", ".join(_fmt(v) for v in flat) + "]"
+        return "[" + ", ".join(_fmt(v, digits=digits) for v in flat) + "]"
     if isinstance(value, bool):
         return str(int(value))
     if isinstance(value, (int, np.integer)):
@@ -89,10 +91,16 @@ def _fmt(value, std=None) -> str:
         v = float(value)
     except (TypeError, ValueError):
         return str(value)
-    text = f"{v:.4g}"
+    text = f"{v:.{digits}g}"
     if std is not None:
         text += f" ± {_fmt(std)}"
     return text
+
+
+def _digits(q: dict) -> int:
+    """Significant digits that show a difference the tolerance can resolve (4, or 6 for tight tolerances)."""
+    tol = q.get("tolerance")
+    return 6 if tol is not None and tol < 1e-3 else 4
 
 
 def _numeric(items) -> bool:
@@ -199,16 +207,48 @@ def _scored(results: dict, uncelled: bool = False) -> dict:
     return by_cell
 
 
+def _signed_error(value, paper) -> float:
+    """(value − paper) / |paper| for scalars (sign shows the direction); the largest |relative error| for vectors."""
+    if np.ndim(value) == 0 and np.ndim(paper) == 0 and value is not None and paper not in (None, 0):
+        return (float(value) - float(paper)) / abs(float(paper))
+    return relative_error(value, paper)
+
+
+def tally(results: dict) -> dict:
+    """What the overview counts for one results.json dict.
+
+    Printed paper cells (each scored once by its primary quantity; a quantity with a paper value and
+    no cell is its own cell) by verdict, cells whose printed value was lost (``paper`` None), and
+    new quantities (no cell, no paper value) with how many of them diverged.
+
+    Parameters
+    ----------
+    results : dict
+
+    Returns
+    -------
+    dict
+        ``agrees``, ``differs``, ``diverged``, ``printed``, ``lost``, ``new``, ``new_diverged``.
+    """
+    scored = _scored(results, uncelled=True)
+    printed = [q for q in scored.values() if q["paper"] is not None]
+    new = [q for q in results["quantities"] if q.get("cell") is None and q["paper"] is None]
+    out = {v: sum(q["verdict"] == v for q in printed) for v in ("agrees", "differs", "diverged")}
+    out.update(printed=len(printed), lost=len(scored) - len(printed), new=len(new),
+               new_diverged=sum(q["verdict"] == "diverged" for q in new))
+    return out
+
+
 def _reproduced(q: dict) -> str:
     if q["verdict"] == "diverged":
         return "diverged" + _runs(q)
     std = q.get("std") if (q.get("runs") or 2) > 1 else None
-    text = _fmt(q["value"], std)
+    text = _fmt(q["value"], std, digits=_digits(q))
     mark = MARK[q["verdict"]]
     if q["paper"] is not None and q["value"] is not None:
-        err = relative_error(q["value"], q["paper"])
-        if np.isfinite(err):
-            text += f" ({100 * err:.0f} %)" if err >= 0.005 else ""
+        err = _signed_error(q["value"], q["paper"])
+        if np.isfinite(err) and err != 0:
+            text += f" ({100 * err:+.0f} %)" if abs(err) >= 0.01 else f" ({100 * err:+.2g} %)"
     return f"{text} {mark}".strip()
 
 
@@ -251,7 +291,7 @@ def paper_tables(results: dict) -> list[str]:
             cells = []
             for c in cols:
                 q = entries.get(c)
-                cells += ["", ""] if q is None else [_fmt(q["paper"]), _cell(_reproduced(q))]
+                cells += ["", ""] if q is None else [_fmt(q["paper"], digits=_digits(q)), _cell(_reproduced(q))]
             lines.append(f"| {_cell(row)} | " + " | ".join(cells) + " |")
         units = {q.get("unit") or "—" for e in g["rows"].values() for q in e.values()}
         tols = {_fmt_tolerance(q) for e in g["rows"].values() for q in e.values()}
@@ -260,16 +300,25 @@ def paper_tables(results: dict) -> list[str]:
     if text_cells:
         lines += ["**Values printed in the text:**", "", "| paper cell | paper | reproduced | unit | tolerance |",
                   "|---|---|---|---|---|"]
-        lines += [f"| {_cell(c)} | {_fmt(q['paper'])} | {_cell(_reproduced(q))} | {_cell(q.get('unit')) or '—'} | "
+        lines += [f"| {_cell(c)} | {_fmt(q['paper'], digits=_digits(q))} | {_cell(_reproduced(q))} | {_cell(q.get('unit')) or '—'} | "
                   f"{_fmt_tolerance(q)} |" for c, q in text_cells]
         lines.append("")
     return lines
 
 
+#: Abbreviations a sentence does not end on ("Eq. (9)", "Fig. 3", "e.g. x").
+_ABBREVIATIONS = {"eq", "eqs", "fig", "figs", "ref", "refs", "sec", "no", "vs", "e.g", "i.e", "cf", "approx"}
+
+
 def _first_sentence(text: str, limit: int = 220) -> str:
     text = _shorten_lists(" ".join(str(text).split()))
-    m = re.search(r"(?<=[.!?])\s+(?=[A-Z(\[])", text)
-    first = text[:m.start()] if m else text
+    first = text
+    for m in re.finditer(r"(?<=[.!?])\s+(?=[A-Z(\[*])", text):
+        word = re.search(r"([\w.]*)[.!?]$", text[:m.start()])
+        if word and (word.group(1).lower() in _ABBREVIATIONS or len(word.group(1)) <= 1):
+            continue
+        first = text[:m.start()]
+        break
     return first if len(first) <= limit else first[:limit - 1].rstrip(" ,;") + "…"
 
 
@@ -294,9 +343,8 @@ def study_summary(results: dict, n_findings: int = 3) -> list[str]:
         by_table.setdefault(cell.split(" / ")[0], []).append(q)
     agree = [f"{t}: {sum(q['verdict'] == 'agrees' for q in qs)} of {sum(q['paper'] is not None for q in qs)}"
              for t, qs in by_table.items() if any(q["paper"] is not None for q in qs)]
-    lost = sum(q["paper"] is None for q in scored.values())
-    n_printed = sum(q["paper"] is not None for q in scored.values())
-    n_agree = sum(q["verdict"] == "agrees" for q in scored.values())
+    t = tally(results)
+    lost, n_printed, n_agree = t["lost"], t["printed"], t["agrees"]
     line1 = (f"**Agrees:** {n_agree} of {n_printed} printed paper cells within tolerance"
              + (f" ({'; '.join(agree)})" if agree else "")
              + (f"; {lost} cells whose printed values were lost in extraction are reproduced without verdict"
@@ -307,9 +355,9 @@ def study_summary(results: dict, n_findings: int = 3) -> list[str]:
         if q["verdict"] == "diverged":
             parts.append(f"{c} (all runs diverged)")
         else:
-            err = relative_error(q["value"], q["paper"]) if q["value"] is not None else np.inf
-            parts.append(f"{c} ({_fmt(q['value'])} vs {_fmt(q['paper'])}"
-                         + (f", {100 * err:+.0f} %" if np.isfinite(err) else "") + ")")
+            err = _signed_error(q["value"], q["paper"]) if q["value"] is not None else np.inf
+            pct = "" if not np.isfinite(err) else (f", {100 * err:+.0f} %" if abs(err) >= 0.01 else f", {100 * err:+.2g} %")
+            parts.append(f"{c} ({_fmt(q['value'], digits=_digits(q))} vs {_fmt(q['paper'], digits=_digits(q))}{pct})")
     if len(bad) > 6:
         parts.append(f"and {len(bad) - 6} more")
     line2 = "**Does not agree:** " + ("; ".join(parts) if parts else "no printed cell differs") + "."
@@ -322,14 +370,15 @@ def study_summary(results: dict, n_findings: int = 3) -> list[str]:
 
 def overview_table(results: list[dict], this_run: dict) -> list[str]:
     """The opening table: per study the cell verdict counts, new quantities, findings, runtime, provenance."""
-    rows = ["| study | paper | from this run | cells agree | cells differ | cells diverged | new quantities "
-            "| findings | figures | runtime |", "|---|---|---|---|---|---|---|---|---|---|"]
+    rows = ["| study | paper | from this run | cells agree | cells differ | cells diverged | cells not printed "
+            "| new quantities | findings | figures | runtime |", "|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in results:
-        c = count_verdicts(r)
+        c = tally(r)
         run = this_run.get(r["study"])
         fresh = "no (stale)" if run is None else ("yes (quick)" if run.get("quick") else "yes")
+        new = f"{c['new']}" + (f" ({c['new_diverged']} diverged)" if c["new_diverged"] else "")
         rows.append(f"| [{r['study']}](#{_anchor(r['study'])}) | {_cell(r['paper'])} | {fresh} | {c['agrees']} "
-                    f"| {c['differs']} | {c['diverged']} | {c['new']} | {len(r.get('findings') or [])} "
+                    f"| {c['differs']} | {c['diverged']} | {c['lost']} | {new} | {len(r.get('findings') or [])} "
                     f"| {len(r.get('figures') or [])} | {r['runtime_s']:.0f} s |")
     return rows
 
@@ -365,14 +414,16 @@ def _seed_summary(seeds) -> str:
 
 
 def _study_section(r: dict, this_run: dict, failed: dict) -> list[str]:
-    counts = count_verdicts(r)
+    c = tally(r)
     lines = [f"## {r['study']}", ""]
     if r["study"] not in this_run:
         why = f" This run failed: {_cell(failed[r['study']])}." if r["study"] in failed else ""
         lines += [f"> **Stale:** these results are not from this run; they were written by an earlier run.{why}", ""]
-    lines += [f"*{r['paper']}* — seed `{r['seed_file']}`. Paper cells: {counts['agrees']} agree, "
-              f"{counts['differs']} differ, {counts['diverged']} diverged; {counts['new']} new quantities; "
-              f"runtime {r['runtime_s']:.1f} s.", ""]
+    lines += [f"*{r['paper']}* — seed `{r['seed_file']}`. Paper cells: {c['agrees']} agree, {c['differs']} differ, "
+              f"{c['diverged']} diverged"
+              + (f", {c['lost']} without a printed value (lost in extraction)" if c["lost"] else "")
+              + f"; {c['new']} new quantities" + (f" ({c['new_diverged']} diverged)" if c["new_diverged"] else "")
+              + f"; runtime {r['runtime_s']:.1f} s.", ""]
     if r["quantities"]:
         lines += study_summary(r) + [""]
     if r.get("missing"):
@@ -407,10 +458,17 @@ def _study_section(r: dict, this_run: dict, failed: dict) -> list[str]:
     return lines
 
 
+#: Patterns of glossary terms whose name is not the text they stand for.
+_GLOSSARY_PATTERNS = {"est_xi / track_xi": r"(?:est|track)_x\d"}
+
+
 def _glossary(text: str) -> list[str]:
-    used = [(term, what) for term, what in GLOSSARY.items()
-            if any(re.search(rf"(?<![A-Za-z]){re.escape(t.strip())}(?![A-Za-z])", text)
-                   for t in term.split("/"))]
+    def used_in(term):
+        if term in _GLOSSARY_PATTERNS:
+            return re.search(_GLOSSARY_PATTERNS[term], text)
+        return any(re.search(rf"(?<![A-Za-z]){re.escape(t.strip())}(?![A-Za-z])", text) for t in term.split("/"))
+
+    used = [(term, what) for term, what in GLOSSARY.items() if used_in(term)]
     if not used:
         return []
     return ["## Glossary", "", *[f"- **{term}**: {what}" for term, what in used], ""]
@@ -449,8 +507,9 @@ def write_report_md(results: list[dict], out_dir: Path, *, this_run: dict | None
         "",
         "Generated by `ctrl-analysis reproduce all` from the `results.json` of each study. Every reproduced value "
         "was computed by the code; every verdict is computed from the relative tolerance shown beside the value "
-        "(unit — = dimensionless). The counts score each paper cell once, by its primary reading; quantities "
-        "the paper does not print are counted as new. The glossary at the end explains the terms.",
+        "(unit — = dimensionless). The counts score each printed paper cell once, by its primary reading "
+        "(cells whose printed value was lost in the extracted text are counted apart); quantities the paper does "
+        "not print are counted as new. The glossary at the end explains the terms.",
         "",
         "## Overview",
         "",

@@ -56,10 +56,11 @@ def run(ctx: StudyContext, p=PAPER) -> StudyResult:
     data = simulate_study(p, runs, ctx.seed)[p.id_signal]
     qty.table1(result, data, p)
     errs = qty.filter_errors(result, data, p)
-    qty.claims(result)
+    holds = qty.claims(result)
     _paper_number(result, p, data)
     extra = _beyond(ctx, result, p, data, errs)
     _figures(ctx, result, p, data, extra)
+    result.missing = qty.missing(result, holds)
     return result
 
 

@@ -17,6 +17,7 @@ __all__ = [
     "filter_errors",
     "full_order_errors",
     "identification_bias",
+    "missing",
     "noise_free_fit",
     "q_sweep",
     "record",
@@ -199,3 +200,29 @@ def claims(result, prefix="", tag="paper plant"):
         verdict = "holds" if ok else ("cannot be checked" if ok is None else "does NOT hold")
         result.finding(f"claim-{prefix}{key}", f"[{tag}] Claim '{text}' {verdict}: {numbers}.")
     return holds
+
+
+def missing(result, holds: dict) -> list:
+    """What the study does not reproduce, generated from the verdicts and the checked claims.
+
+    Parameters
+    ----------
+    result : StudyResult
+    holds : dict
+        ``{claim: True | False | None}`` from :func:`claims` on the paper plant.
+
+    Returns
+    -------
+    list of str
+    """
+    lost = [q.id for q in result.quantities if q.cell and q.cell.startswith("Table 1") and q.paper is None]
+    out = [f"Table 1's printed numbers were lost in the extracted text: its {len(lost)} cells are reproduced "
+           "without a verdict", "plant (12) was lost in the extracted text: every number comes from the "
+           "reconstructed plant (reconstruction plant)"]
+    u = result.get("nofilter.u_rms")
+    if u.verdict != "agrees":
+        out.append(f"the control RMS without a filter: {u.value:.3g} against the printed {u.paper} (set by the "
+                   "reconstructed regularisation μ, finding u-rms-scale)")
+    text = {key: t for key, _, _, t in CLAIMS}
+    out += [f"claim not reproduced: {text[k]}" for k, ok in holds.items() if ok is not True]
+    return out

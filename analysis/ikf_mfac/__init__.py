@@ -18,6 +18,7 @@ from ctrl_analysis.study import record_parameters
 
 from . import figures as F
 from .findings import (
+    missing,
     record_consistency,
     record_ranking,
     record_rearm,
@@ -85,6 +86,7 @@ def run(ctx: StudyContext) -> StudyResult:
     sweeps = {key: sweep_table(points[key], SWEEPS[key]) for key in EXAMPLES}
     ratio = {key: ratio_rows(points[key]["ikf_mfac"], SWEEPS[key], ex) for key, ex in EXAMPLES.items()}
     record_where_ikf_wins(result, sweeps, ratio, SWEEPS)
+    result.missing = missing(result)
     _figures(ctx, result, all_runs, per_run, sweeps, ratio, seeds)
     return result
 

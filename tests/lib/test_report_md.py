@@ -4,7 +4,7 @@ side-by-side paper tables, generated summaries, summarised evidence, captions an
 import re
 
 from ctrl_analysis.report import StudyContext, StudyInfo, StudyResult, count_verdicts
-from ctrl_analysis.report_md import paper_tables, study_summary, summarise, write_report_md
+from ctrl_analysis.report_md import paper_tables, study_summary, summarise, tally, write_report_md
 
 INFO = StudyInfo(name="demo", seed_file="x.txt", paper="A paper", reproduces="things")
 
@@ -52,8 +52,16 @@ def test_overview_counts_each_cell_once_and_diverged(tmp_path):
     # the §5 step differs (5.7296 against the printed 5.7325 at 1e-4)
     assert counts == {"agrees": 2, "differs": 2, "diverged": 1, "new": 1}
     overview = text.split("## Overview")[1].split("###")[0]
-    assert "| [demo](#demo) | A paper | yes | 2 | 2 | 1 | 1 | 2 | 2 |" in overview
+    assert "| [demo](#demo) | A paper | yes | 2 | 2 | 1 | 0 | 1 | 2 | 2 |" in overview
     assert text.index("## Overview") < text.index("## demo")
+    assert tally(data) == {"agrees": 2, "differs": 2, "diverged": 1, "printed": 5, "lost": 0, "new": 1,
+                           "new_diverged": 0}
+    # a new quantity whose runs all diverged is not a diverged paper cell
+    r = _result()
+    r.quantity("beyond", "beyond the paper, all runs diverged", None, runs=3, runs_diverged=3, unit="")
+    r.quantity("lost", "a cell whose printed value was lost", 1.0, unit="", cell="Table 9 / a / b", primary=True)
+    t = tally(r.to_dict())
+    assert (t["diverged"], t["new"], t["new_diverged"], t["lost"]) == (1, 2, 1, 1)
 
 
 def test_side_by_side_table_is_laid_out_as_the_paper(tmp_path):
@@ -62,10 +70,11 @@ def test_side_by_side_table_is_laid_out_as_the_paper(tmp_path):
     head = next(line for line in lines if line.startswith("| |"))
     assert head == "| | est_x1 (paper) | est_x1 (here) | est_x2 (paper) | est_x2 (here) |"
     eso = next(line for line in lines if line.startswith("| ESO |"))
-    assert eso.startswith("| ESO | 1 | 2 ± 0.1 (100 %) ✗ | 0.5 | 0.5 ✓ |")
+    assert eso.startswith("| ESO | 1 | 2 ± 0.1 (+100 %) ✗ | 0.5 | 0.5 ✓ |")
     meso = next(line for line in lines if line.startswith("| MESO |"))
     assert "diverged (4 runs, 4 diverged)" in meso
-    assert any(line.startswith("| §5 / 0.1 rad = 5.7325° | 5.732 | 5.73 ✗") for line in lines)
+    # a tight tolerance shows enough digits to see the difference
+    assert any(line.startswith("| §5 / 0.1 rad = 5.7325° | 5.7325 | 5.7296 (-0.051 %) ✗") for line in lines)
     # the tables come before the long quantity list
     section = text.split("## demo")[1]
     assert section.index("printed beside reproduced") < section.index("### All quantities")
