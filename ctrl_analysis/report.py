@@ -34,7 +34,6 @@ __all__ = [
     "write_text_atomic",
     "staged_directory",
     "write_results_json",
-    "write_report_md",
     "new_figure",
 ]
 

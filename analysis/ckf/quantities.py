@@ -216,9 +216,10 @@ def missing(result, holds: dict) -> list:
     list of str
     """
     lost = [q.id for q in result.quantities if q.cell and q.cell.startswith("Table 1") and q.paper is None]
-    out = [f"Table 1's printed numbers were lost in the extracted text: its {len(lost)} cells are reproduced "
-           "without a verdict", "plant (12) was lost in the extracted text: every number comes from the "
-           "reconstructed plant (reconstruction plant)"]
+    out = [(f"Table 1's printed numbers were lost in the extracted text: its {len(lost)} cells are reproduced "
+            "without a verdict"),
+           ("plant (12) was lost in the extracted text: every number comes from the reconstructed plant "
+            "(reconstruction plant)")]
     u = result.get("nofilter.u_rms")
     if u.verdict != "agrees":
         out.append(f"the control RMS without a filter: {u.value:.3g} against the printed {u.paper} (set by the "

@@ -4,7 +4,13 @@ side-by-side paper tables, generated summaries, summarised evidence, captions an
 import re
 
 from ctrl_analysis.report import StudyContext, StudyInfo, StudyResult, count_verdicts
-from ctrl_analysis.report_md import paper_tables, study_summary, summarise, tally, write_report_md
+from ctrl_analysis.report_md import (
+    paper_tables,
+    study_summary,
+    summarise,
+    tally,
+    write_report_md,
+)
 
 INFO = StudyInfo(name="demo", seed_file="x.txt", paper="A paper", reproduces="things")
 
