@@ -106,10 +106,11 @@ def _example1(ctx, result, p, runs):
     sp = np.mean(d["err"]["sigma"][d["ok"]], axis=0)
     ctx.save_figure(result, figures.plot_tradeoff(trade, sp, f"Example 1: mean x2 error against mean x1 error, Σ and "
                     f"ESOs over their −3 dB bandwidth ({int(d['ok'].sum())} runs each)"), "ex1_tradeoff.png",
-                    caption="Beyond the paper (the fair comparison): mean x2 error against mean x1 error for Σ (sweeping "
-                            "a) and for the linear and fal ESOs (sweeping their bandwidth); the paper's tuning point is "
-                            "marked. A curve lower-left is better at every bandwidth (findings ex1-fair-equal-bandwidth, "
-                            "ex1-tradeoff).")
+                    caption="Beyond the paper (the fair comparison): mean x2 error against mean x1 error for Σ "
+                            "(sweeping a; labels give its −3 dB bandwidth) and the linear ESO (sweeping ω_o), with Han's "
+                            "fal ESO at two tunings (textbook gains; Σ's bandwidth) and Σ as in the paper (star). Lower "
+                            "left is better; points at equal bandwidth compare the observers fairly (findings "
+                            "ex1-fair-equal-bandwidth, ex1-tradeoff).")
 
 
 def _example2(ctx, result, p, runs):

@@ -107,8 +107,9 @@ def _figures(ctx, result, all_runs, per_run, sweeps, ratio, seeds) -> None:
     ctx.save_figure(result, F.plot_fig2(k1, all_runs["ex1"]["mfac"].y_ref, outs, ratio["ex1"], EX1.Q),
                     "fig2_ikf_q_over_r.png", dpi=dpi,
                     caption="Redraws the paper's Fig. 2: IKF-MFAC's output in Example 1 (one run) for measurement "
-                            "variances R = 0.001 to 1 at the paper's Q, and the IKF's steady gain K∞ against q = Q/R; "
-                            "shows how Q/R trades noise rejection against lag.")
+                            "variances R = 0.001 to 1 at the paper's Q (left), and beyond the paper the mean RMSE ± std "
+                            "over the sweep's runs with the IKF's steady gain K∞ against q = Q/R (right); diverged "
+                            "runs are counted on the plot and excluded from the means.")
     for key, (fo, fe), kind in (("ex1", (3, 4), "constant"), ("ex2", (5, 6), "time-varying")):
         r = all_runs[key]
         ys = {s: r[s].y[:, 0] for s in SCHEMES}

@@ -121,7 +121,9 @@ def _figures(ctx, result, sims) -> None:
                  f"({sit.N * PAPER.h:g} s)")
         ctx.save_figure(result, figures.plot_theta(sim, key, runs, title), sit.figs[1],
                         caption=f"Redraws the paper's Fig. {fig_no[1]} (situation {key[1]}): the four LSM-identified "
-                                "parameters Θ of d(t) after each batch against their true values (dashed), for the "
+                                "parameters Θ of d(t) after each batch against their true values (dashed"
+                                + ("; dotted: the trajectory-equivalent Θ, since θ3 is not identifiable in closed loop"
+                                   if key == "s2" else "") + "), for the "
                                 "well-posed MESO, the Table-1 literal accumulation and the literal rule without W(s)"
                                 + (" and the direct rule (10)" if key == "s2" else "") + ". A diverged run's trace "
                                 "stops where it diverged (quantities " + key + ".theta_final, " + key + ".literal.*).")
