@@ -61,8 +61,13 @@ GLOSSARY = {
     "RLS": "recursive least squares (with forgetting factor λ).",
     "ESO": "extended state observer (Han): an observer whose extra state estimates the total disturbance.",
     "LESO": "linear ESO with gains in bandwidth form, poles at −ω_o.",
-    "MESO": "model-assisted ESO: an ESO whose model part is identified by least squares (LSM) on batches, "
-            "so its extended state only carries the model error.",
+    "MESO": "modified ESO (meso paper): an ESO with a model term XᵀΘ whose parameters Θ are identified by "
+            "least squares (LSM) on batches of data, so its extended state only carries what the model misses.",
+    "ARE / DARE": "algebraic / discrete algebraic Riccati equation, whose solution gives a Kalman filter's "
+                  "steady-state gain.",
+    "α-β filter": "a two-state (position, rate) tracking filter with constant gains α and β.",
+    "RK4": "the classical fourth-order Runge-Kutta integrator (fixed step).",
+    "ZOH": "zero-order hold: a sampled signal held constant over each sampling period.",
     "LSM": "least-squares method (batch identification).",
     "fal": "Han's nonlinear gain function fal(e, α, δ): |e|^α sign(e) outside |e| < δ, linear inside.",
     "Σ": "the differential state estimator of the differential-estimator paper, a chain of integrators "
@@ -459,7 +464,7 @@ def _study_section(r: dict, this_run: dict, failed: dict) -> list[str]:
 
 
 #: Patterns of glossary terms whose name is not the text they stand for.
-_GLOSSARY_PATTERNS = {"est_xi / track_xi": r"(?:est|track)_x\d"}
+_GLOSSARY_PATTERNS = {"est_xi / track_xi": r"(?:est|track)_x\d", "Kalata index": r"Kalata"}
 
 
 def _glossary(text: str) -> list[str]:
@@ -468,6 +473,9 @@ def _glossary(text: str) -> list[str]:
             return re.search(_GLOSSARY_PATTERNS[term], text)
         return any(re.search(rf"(?<![A-Za-z]){re.escape(t.strip())}(?![A-Za-z])", text) for t in term.split("/"))
 
+    used = [(term, what) for term, what in GLOSSARY.items() if used_in(term)]
+    # terms the listed definitions themselves use (e.g. MFAC's CFDL and PPD)
+    text = text + " " + " ".join(what for _, what in used)
     used = [(term, what) for term, what in GLOSSARY.items() if used_in(term)]
     if not used:
         return []
