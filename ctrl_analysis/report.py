@@ -363,6 +363,18 @@ def write_text_atomic(path: Path, text: str) -> Path:
 
     A reader sees the old file or the complete new one, never a truncated one (e.g. on a full disk
     the write fails and the old file stays).
+
+    Parameters
+    ----------
+    path : Path
+        The file to write (its folder is created).
+    text : str
+        Its new content (UTF-8).
+
+    Returns
+    -------
+    Path
+        ``path``.
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -389,6 +401,16 @@ def staged_directory(target: Path):
     moved aside, the staged directory renamed to ``target`` (SIGINT held during the swap) and the
     old one removed; on any exception (including ``KeyboardInterrupt``) the staged directory is
     removed and ``target`` is untouched. ``target`` is therefore complete or untouched.
+
+    Parameters
+    ----------
+    target : Path
+        The directory to replace.
+
+    Yields
+    ------
+    Path
+        The staged directory to fill.
     """
     target = Path(target)
     target.parent.mkdir(parents=True, exist_ok=True)
@@ -435,7 +457,23 @@ def validate_results(data: dict) -> dict:
     ``paper``, ``value``, ``std``, ``runs``, ``unit`` (a string, "" = dimensionless), ``tolerance``
     (a number >= 0 whenever ``paper`` is given), ``verdict`` in :data:`VERDICTS` and equal to the
     verdict recomputed from the record, ``paper`` None for ``new``, ``value`` None for ``diverged``;
-    ids are unique and a paper cell has at most one primary quantity.
+    ids are unique and a paper cell has at most one primary quantity; ``captions``, when present, map
+    figures of the study to non-empty strings.
+
+    Parameters
+    ----------
+    data : dict
+        A results.json dict.
+
+    Returns
+    -------
+    dict
+        ``data``, unchanged.
+
+    Raises
+    ------
+    ValueError
+        Naming the study, the quantity and the broken rule.
     """
     if not isinstance(data, dict):
         raise ValueError(f"data must be a results dict, got {type(data).__name__}")
@@ -494,6 +532,21 @@ def count_verdicts(results: dict) -> dict:
 
     Quantities sharing a ``cell`` count once, with the verdict of the one marked ``primary`` (default:
     the first in that cell); quantities without a cell count individually.
+
+    Parameters
+    ----------
+    results : dict
+        A results.json dict.
+
+    Returns
+    -------
+    dict
+        ``{verdict: count}`` for every verdict of :data:`VERDICTS`.
+
+    Raises
+    ------
+    ValueError
+        If ``results`` has no ``quantities`` list.
     """
     if not isinstance(results, dict) or not isinstance(results.get("quantities"), list):
         raise ValueError(f"results must be a results.json dict with a 'quantities' list, got {type(results).__name__}")

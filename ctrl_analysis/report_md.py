@@ -180,7 +180,19 @@ def _runs(q: dict) -> str:
 
 
 def summary_table(results: dict) -> str:
-    """A Markdown table of the quantities of one results.json dict (unit "—" = dimensionless)."""
+    """A Markdown table of the quantities of one results.json dict (unit "—" = dimensionless).
+
+    Parameters
+    ----------
+    results : dict
+        One results.json dict.
+
+    Returns
+    -------
+    str
+        The table: id, label, paper cell, paper, reproduced (± std, runs, diverged runs), unit,
+        tolerance, verdict and note; long numeric arrays summarised as min / median / max.
+    """
     rows = ["| id | quantity | paper cell | paper | reproduced | unit | tolerance | verdict | note |",
             "|---|---|---|---|---|---|---|---|---|"]
     for q in results["quantities"]:
@@ -374,7 +386,20 @@ def study_summary(results: dict, n_findings: int = 3) -> list[str]:
 
 
 def overview_table(results: list[dict], this_run: dict) -> list[str]:
-    """The opening table: per study the cell verdict counts, new quantities, findings, runtime, provenance."""
+    """The opening table: per study the cell verdict counts, new quantities, findings, runtime, provenance.
+
+    Parameters
+    ----------
+    results : list of dict
+        One results.json dict per study, in the order shown.
+    this_run : dict
+        ``{study: {...}}`` for the studies written by this run (the others are marked stale).
+
+    Returns
+    -------
+    list of str
+        Markdown lines, counted with :func:`tally`.
+    """
     rows = [("| study | paper | from this run | cells agree | cells differ | cells diverged | cells not printed "
              "| new quantities | findings | figures | runtime |"), "|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in results:

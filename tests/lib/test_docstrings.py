@@ -71,7 +71,6 @@ KNOWN_INCOMPLETE = {
     "ctrl_analysis.report.relative_error",  # missing: Parameters section, Returns section
     "ctrl_analysis.report.versions",  # missing: Returns section
     "ctrl_analysis.report.write_results_json",  # missing: Parameters section, Returns section
-    "ctrl_analysis.report.write_report_md",  # missing: Parameters section, Returns section
     "ctrl_analysis.report.new_figure",  # missing: Parameters section, Returns section
     # ctrl_analysis/simulate.py
     "ctrl_analysis.simulate.SimResult.runs",  # missing: the whole docstring
