@@ -185,7 +185,7 @@ def summary_table(results: dict) -> str:
     Parameters
     ----------
     results : dict
-        One results.json dict.
+        A study's results.json, as loaded.
 
     Returns
     -------
@@ -327,12 +327,12 @@ def paper_tables(results: dict) -> list[str]:
 _ABBREVIATIONS = {"eq", "eqs", "fig", "figs", "ref", "refs", "sec", "no", "vs", "e.g", "i.e", "cf", "approx"}
 
 
-def _first_sentence(text: str, limit: int = 220) -> str:
+def _first_sentence(text: str, limit: int = 180) -> str:
     text = _shorten_lists(" ".join(str(text).split()))
     first = text
     for m in re.finditer(r"(?<=[.!?])\s+(?=[A-Z(\[*])", text):
         word = re.search(r"([\w.]*)[.!?]$", text[:m.start()])
-        if word and (word.group(1).lower() in _ABBREVIATIONS or len(word.group(1)) <= 1):
+        if word and word.group(1) and (word.group(1).lower() in _ABBREVIATIONS or len(word.group(1)) == 1):
             continue
         first = text[:m.start()]
         break
