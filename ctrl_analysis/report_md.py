@@ -332,7 +332,8 @@ def _first_sentence(text: str, limit: int = 180) -> str:
     first = text
     for m in re.finditer(r"(?<=[.!?])\s+(?=[A-Z(\[*])", text):
         word = re.search(r"([\w.]*)[.!?]$", text[:m.start()])
-        if word and word.group(1) and (word.group(1).lower() in _ABBREVIATIONS or len(word.group(1)) == 1):
+        if word and word.group(1) and (word.group(1).lower() in _ABBREVIATIONS
+                                      or (len(word.group(1)) == 1 and word.group(1).isalpha())):
             continue
         first = text[:m.start()]
         break
