@@ -2,14 +2,9 @@
 
 from __future__ import annotations
 
-import contextlib
 import json
 import math
-import os
 import platform
-import shutil
-import signal
-import tempfile
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -17,6 +12,7 @@ from typing import Callable
 
 import numpy as np
 
+from .atomic import staged_directory, write_text_atomic  # noqa: F401 (public API)
 from ._validate import (check_array, check_bool, check_callable, check_int, check_nonnegative, check_path,
                         check_positive, check_str)
 
@@ -35,7 +31,6 @@ __all__ = [
     "write_text_atomic",
     "staged_directory",
     "write_results_json",
-    "write_report_md",
     "new_figure",
 ]
 
@@ -205,6 +200,8 @@ class StudyResult:
     quantities: list = field(default_factory=list)
     findings: list = field(default_factory=list)
     figures: list = field(default_factory=list)
+    #: figure file name -> caption (what is plotted and which paper figure it redraws), shown in REPORT.md
+    captions: dict = field(default_factory=dict)
     missing: list = field(default_factory=list)
     seeds: dict = field(default_factory=dict)
     runtime_s: float = 0.0
@@ -270,6 +267,7 @@ class StudyResult:
                 "quantities": [q.to_dict() for q in self.quantities],
                 "findings": self.findings,
                 "figures": self.figures,
+                "captions": {name: self.captions[name] for name in self.figures if name in self.captions},
                 "missing": self.missing,
                 "seeds": self.seeds,
                 "runtime_s": round(self.runtime_s, 3),
@@ -308,8 +306,12 @@ class StudyContext:
             return quick_default if quick_default is not None else max(1, min(default, 3))
         return default
 
-    def save_figure(self, result: StudyResult, fig, filename: str, dpi: int = 120) -> Path:
-        """Save ``fig`` as ``out_dir/filename``, close it and list it in ``result.figures``."""
+    def save_figure(self, result: StudyResult, fig, filename: str, dpi: int = 120, caption: str | None = None) -> Path:
+        """Save ``fig`` as ``out_dir/filename``, close it and list it in ``result.figures``.
+
+        ``caption`` (what is plotted, which paper figure it redraws, what to compare) goes to
+        ``result.captions[filename]`` and is printed under the figure in REPORT.md.
+        """
         import matplotlib.pyplot as plt
 
         if not isinstance(result, StudyResult) or not hasattr(fig, "savefig"):
@@ -317,6 +319,10 @@ class StudyContext:
         if Path(check_str("filename", filename)).name != filename or filename in (".", ".."):
             raise ValueError(f"filename must be a plain file name inside out_dir (no directory), got {filename!r}")
         dpi = check_int("dpi", dpi, minimum=1)
+        if caption is not None:
+            if not isinstance(caption, str) or not caption.strip():
+                raise ValueError(f"caption must be a non-empty string, got {caption!r}")
+            result.captions[filename] = caption
         self.out_dir.mkdir(parents=True, exist_ok=True)
         path = self.out_dir / filename
         fig.savefig(path, dpi=dpi, bbox_inches="tight")
@@ -348,104 +354,6 @@ def versions() -> dict:
     }
 
 
-@contextlib.contextmanager
-def _sigint_deferred():
-    """Hold SIGINT (main thread only) while a few renames complete, so they happen together."""
-    try:
-        old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
-    except (AttributeError, ValueError, OSError):  # not POSIX / not the main thread
-        old = None
-    try:
-        yield
-    finally:
-        if old is not None:
-            signal.pthread_sigmask(signal.SIG_SETMASK, old)
-
-
-def _umask() -> int:
-    mask = os.umask(0o022)
-    os.umask(mask)
-    return mask
-
-
-def write_text_atomic(path: Path, text: str) -> Path:
-    """Write ``text`` to ``path`` atomically: a temporary file beside it, flushed, then renamed.
-
-    A reader sees the old file or the complete new one, never a truncated one (e.g. on a full disk
-    the write fails and the old file stays).
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The file (non-empty path; its directory is created).
-    text : str
-        The whole content.
-
-    Returns
-    -------
-    pathlib.Path
-    """
-    path = check_path("path", path)
-    if not isinstance(text, str):
-        raise TypeError(f"text must be a str, got {type(text).__name__}")
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        os.chmod(tmp, 0o666 & ~_umask())  # as a plain open() would create it
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-        raise
-    return path
-
-
-@contextlib.contextmanager
-def staged_directory(target: Path):
-    """Stage a directory's new contents beside it; replace ``target`` only when the block completes.
-
-    Yields a fresh temporary directory in ``target``'s parent. On normal exit the old ``target`` is
-    moved aside, the staged directory renamed to ``target`` (SIGINT held during the swap) and the
-    old one removed; on any exception (including ``KeyboardInterrupt``) the staged directory is
-    removed and ``target`` is untouched. ``target`` is therefore complete or untouched.
-
-    Parameters
-    ----------
-    target : str or os.PathLike
-        The directory to replace (non-empty path).
-
-    Yields
-    ------
-    pathlib.Path
-        The staging directory to write into.
-    """
-    target = check_path("target", target)
-    target.parent.mkdir(parents=True, exist_ok=True)
-    staged = Path(tempfile.mkdtemp(dir=target.parent, prefix=f".{target.name}.new-"))
-    try:
-        os.chmod(staged, 0o777 & ~_umask())  # as a plain mkdir would create it
-        yield staged
-        for entry in staged.iterdir():  # flush the staged files before they become visible
-            if entry.is_file():
-                with open(entry, "rb") as fh:
-                    os.fsync(fh.fileno())
-        with _sigint_deferred():
-            old = None
-            if target.exists():
-                old = Path(tempfile.mkdtemp(dir=target.parent, prefix=f".{target.name}.old-"))
-                os.replace(target, old / "dir")
-            os.replace(staged, target)
-        if old is not None:
-            shutil.rmtree(old, ignore_errors=True)
-    finally:
-        if staged.exists():
-            shutil.rmtree(staged, ignore_errors=True)
-
-
 def write_results_json(result: StudyResult, out_dir: Path) -> Path:
     """Write ``out_dir/results.json`` atomically (the contract in DESIGN.md); validated first."""
     if not isinstance(result, StudyResult):
@@ -469,7 +377,8 @@ def validate_results(data: dict) -> dict:
     ``paper``, ``value``, ``std``, ``runs``, ``unit`` (a string, "" = dimensionless), ``tolerance``
     (a number >= 0 whenever ``paper`` is given), ``verdict`` in :data:`VERDICTS` and equal to the
     verdict recomputed from the record, ``paper`` None for ``new``, ``value`` None for ``diverged``;
-    ids are unique and a paper cell has at most one primary quantity.
+    ids are unique and a paper cell has at most one primary quantity; ``captions``, when present, map
+    figures of the study to non-empty strings.
 
     Parameters
     ----------
@@ -479,7 +388,12 @@ def validate_results(data: dict) -> dict:
     Returns
     -------
     dict
-        ``data`` itself.
+        ``data``, unchanged.
+
+    Raises
+    ------
+    ValueError
+        Naming the study, the quantity and the broken rule.
     """
     if not isinstance(data, dict):
         raise ValueError(f"data must be a results dict, got {type(data).__name__}")
@@ -524,6 +438,12 @@ def validate_results(data: dict) -> dict:
                 if q["cell"] in primaries:
                     raise ValueError(f"{where}: cell {q['cell']!r} already has primary {primaries[q['cell']]!r}")
                 primaries[q["cell"]] = q["id"]
+    captions = data.get("captions", {})
+    if not isinstance(captions, dict) or not all(isinstance(v, str) and v.strip() for v in captions.values()):
+        raise ValueError(f"{study}: captions must map figure names to non-empty strings, got {captions!r}")
+    stray = [name for name in captions if name not in data["figures"]]
+    if stray:
+        raise ValueError(f"{study}: captions {stray} name no figure of the study")
     return data
 
 
@@ -540,8 +460,13 @@ def count_verdicts(results: dict) -> dict:
 
     Returns
     -------
-    dict of str -> int
-        Count per verdict of :data:`VERDICTS`.
+    dict
+        ``{verdict: count}`` for every verdict of :data:`VERDICTS`.
+
+    Raises
+    ------
+    ValueError
+        If ``results`` has no ``quantities`` list.
     """
     if not isinstance(results, dict) or not isinstance(results.get("quantities"), list):
         raise ValueError(f"results must be a results.json dict with a 'quantities' list, got {type(results).__name__}")
@@ -572,7 +497,7 @@ def new_figure(nrows: int = 1, ncols: int = 1, *, title: str | None = None, size
 
     fig, axes = plt.subplots(nrows, ncols, figsize=tuple(size), squeeze=True, constrained_layout=True, **kw)
     for ax in np.atleast_1d(axes).ravel():
-        ax.grid(True, alpha=0.3)
+        ax.grid(True, alpha=0.25)
     if title:
         fig.suptitle(title)
     return fig, axes
@@ -588,5 +513,11 @@ class Stopwatch:
         return time.perf_counter() - self.t0
 
 
-# REPORT.md writing lives in its own module; re-exported here for the public API
-from .report_md import summary_table, write_report_md  # noqa: E402,F401
+def __getattr__(name):
+    """REPORT.md writing lives in :mod:`.report_md`; its functions are re-exported here lazily (so either
+    module can be imported first)."""
+    if name in ("summary_table", "write_report_md"):
+        from . import report_md
+
+        return getattr(report_md, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

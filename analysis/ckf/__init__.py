@@ -50,17 +50,17 @@ def run(ctx: StudyContext, p=PAPER) -> StudyResult:
     if ctx.quick:
         p = dataclasses.replace(p, t_end=30.0, option_runs=3)
     record_parameters(result, p)
-    result.settings["cells"] = qty.CELLS
     runs = ctx.runs_or(p.runs, 4)
     result.seeds = {"base": ctx.seed, "runs": runs}
     ctx.progress(f"ckf: {runs} runs x 3 cases, {p.t_end:g} s at Ts = {p.Ts:g} s")
     data = simulate_study(p, runs, ctx.seed)[p.id_signal]
     qty.table1(result, data, p)
     errs = qty.filter_errors(result, data, p)
-    qty.claims(result)
+    holds = qty.claims(result)
     _paper_number(result, p, data)
     extra = _beyond(ctx, result, p, data, errs)
     _figures(ctx, result, p, data, extra)
+    result.missing = qty.missing(result, holds)
     return result
 
 
@@ -136,16 +136,38 @@ def _beyond(ctx, result, p, data, errs):
 def _figures(ctx, result, p, data, extra):
     """Fig. 2-12."""
     for no, case in ((2, "nofilter"), (3, "lpf"), (4, "ckf")):
-        ctx.save_figure(result, figures.plot_case(data[case], case, no), f"fig{no}_{case}.png")
-    ctx.save_figure(result, figures.plot_steady_outputs(data, p.t_steady), "fig5_steady_outputs.png")
-    ctx.save_figure(result, figures.plot_transient(data["lpf"], "lpf", 6), "fig6_lpf_transient.png")
-    ctx.save_figure(result, figures.plot_transient(data["ckf"], "ckf", 7), "fig7_ckf_transient.png")
-    ctx.save_figure(result, figures.plot_steady_compare(data, p.t_steady), "fig8_steady_lpf_vs_ckf.png")
-    ctx.save_figure(result, figures.plot_filter_error(data), "fig9_filter_error.png")
+        ctx.save_figure(result, figures.plot_case(data[case], case, no), f"fig{no}_{case}.png",
+                        caption=f"Redraws the paper's Fig. {no}: true output, measurement and control of the "
+                                f"golden-section loop {'without a filter' if case == 'nofilter' else 'with the ' + qty.TABLE1_ROWS[case]}"
+                                " over the whole run (one run); the plant is the study's reconstruction.")
+    ctx.save_figure(result, figures.plot_steady_outputs(data, p.t_steady), "fig5_steady_outputs.png",
+                    caption="Redraws the paper's Fig. 5: the three true outputs (no filter, LPF, CKF) in the steady "
+                            "stage, zoomed in; Table 1's output mean and variance summarise them.")
+    ctx.save_figure(result, figures.plot_transient(data["lpf"], "lpf", 6), "fig6_lpf_transient.png",
+                    caption="Redraws the paper's Fig. 6: the LPF's output against the true output and the measurement "
+                            "in the transient (0-10 s); the LPF lags.")
+    ctx.save_figure(result, figures.plot_transient(data["ckf"], "ckf", 7), "fig7_ckf_transient.png",
+                    caption="Redraws the paper's Fig. 7: the CKF's output against the true output and the measurement "
+                            "in the transient (0-10 s), to compare with Fig. 6.")
+    ctx.save_figure(result, figures.plot_steady_compare(data, p.t_steady), "fig8_steady_lpf_vs_ckf.png",
+                    caption="Redraws the paper's Fig. 8: steady-stage output and control with the LPF and with the "
+                            "CKF; the paper claims both are steadier with the CKF (findings claim-steady_*).")
+    ctx.save_figure(result, figures.plot_filter_error(data), "fig9_filter_error.png",
+                    caption="Redraws the paper's Fig. 9: filter error (filtered minus true output) of the LPF and the "
+                            "CKF over the whole run; the paper claims the CKF's is smaller in both stages (findings "
+                            "claim-transient, claim-steady).")
     d = data["ckf"]
     wins = [(a, a + 10.0) for a in np.arange(0.0, p.t_end, 10.0)]
     fits = np.array([qty.noise_free_fit(d, p, a, b)[0].mean(0) for a, b in wins])
     ctx.save_figure(result, figures.plot_parameters(d, wins, fits, qty.noise_free_fit(d, p)[0].mean(0)),
-                    "fig10_identified_parameters.png")
-    ctx.save_figure(result, figures.plot_q_sweep(Q_SWEEP, extra["sweep"], extra["lpf"]), "fig11_q_sweep.png")
-    ctx.save_figure(result, figures.plot_second_plant(extra["data2"], SECOND_PLANT), "fig12_second_plant.png")
+                    "fig10_identified_parameters.png",
+                    caption="Beyond the paper: the identified f̂1, f̂2, ĝ0 of the characteristic model over time (CKF "
+                            "case) against the noise-free least-squares fit of the true plant on 10-s windows and on "
+                            "the whole steady stage (finding identified-parameters).")
+    ctx.save_figure(result, figures.plot_q_sweep(Q_SWEEP, extra["sweep"], extra["lpf"]), "fig11_q_sweep.png",
+                    caption="Beyond the paper: the CKF's transient and steady RMS error against its process-noise "
+                            "level Q = q I (the CKF run alone on the LPF case's records), with the LPF's errors as "
+                            "reference lines (finding q-sweep).")
+    ctx.save_figure(result, figures.plot_second_plant(extra["data2"], SECOND_PLANT), "fig12_second_plant.png",
+                    caption="Beyond the paper: the three loops on a second plant (a resonant plant with a delay), to "
+                            "see whether the paper's claims hold beyond its own plant (findings claim-plant2.*).")

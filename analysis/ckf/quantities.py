@@ -13,11 +13,11 @@ from ctrl_analysis.metrics import mean_std
 from ctrl_analysis.plants import DiscreteLTI
 
 __all__ = [
-    "CELLS",
     "claims",
     "filter_errors",
     "full_order_errors",
     "identification_bias",
+    "missing",
     "noise_free_fit",
     "q_sweep",
     "record",
@@ -25,10 +25,10 @@ __all__ = [
     "window",
 ]
 
-#: Quantity id -> the paper's cell it reproduces (``quantity(cell=...)`` is not on this branch yet).
-CELLS = {f"{c}.{q}": f"Table 1 / {c} / {q}" for c in ("nofilter", "lpf", "ckf")
-         for q in ("y_mean", "y_var", "u_mean", "u_var")}
-CELLS["nofilter.u_rms"] = "§3 text / control RMS without filter"
+#: Table 1's rows and columns as the paper names them (its numbers were lost in the extracted text).
+TABLE1_ROWS = {"nofilter": "no filter", "lpf": "LPF", "ckf": "CKF"}
+TABLE1_COLUMNS = {"y_mean": "output mean", "y_var": "output variance", "u_mean": "control mean",
+                  "u_var": "control variance"}
 PARAMS = ("f1", "f2", "g0")
 
 
@@ -37,8 +37,11 @@ def window(t, t0, t1=np.inf):
     return (t >= t0 - 1e-9) & ((t < t1 - 1e-9) if np.isfinite(t1) else True)
 
 
-def record(result, id, label, per_run, ok, unit="", paper=None, tolerance=None, note=""):
-    """Add a quantity as mean ± std over the runs in ``ok`` (diverged runs excluded and counted)."""
+def record(result, id, label, per_run, ok, unit="", paper=None, tolerance=None, note="", **cell):
+    """Add a quantity as mean ± std over the runs in ``ok`` (diverged runs excluded and counted).
+
+    ``runs`` is every run, ``runs_diverged`` the excluded ones; ``cell`` / ``primary`` pass through.
+    """
     per_run = np.asarray(per_run, dtype=float)
     mean, std, n = mean_std(per_run, ok)
     lost = int(np.size(ok) - np.count_nonzero(ok))
@@ -46,9 +49,10 @@ def record(result, id, label, per_run, ok, unit="", paper=None, tolerance=None, 
         note = (note + " " if note else "") + f"{lost} diverged run(s) excluded"
     if n == 0:
         note = (note + " " if note else "") + "all runs diverged"
-        return result.quantity(id, label, None, paper=paper, runs=0, unit=unit, tolerance=tolerance, note=note)
-    return result.quantity(id, label, float(mean), paper=paper, std=float(std), runs=int(n), unit=unit,
-                           tolerance=tolerance, note=note)
+        return result.quantity(id, label, None, paper=paper, runs=int(np.size(ok)), runs_diverged=int(np.size(ok)),
+                               diverged=True, unit=unit, tolerance=tolerance, note=note, **cell)
+    return result.quantity(id, label, float(mean), paper=paper, std=float(std), runs=int(np.size(ok)),
+                           runs_diverged=lost, unit=unit, tolerance=tolerance, note=note, **cell)
 
 
 def table1(result, data, p, prefix=""):
@@ -61,13 +65,17 @@ def table1(result, data, p, prefix=""):
         per = {"y_mean": y.mean(0), "y_var": y.var(0), "u_mean": u.mean(0), "u_var": u.var(0)}
         for q, v in per.items():
             what = {"y": "true output", "u": "control"}[q[0]] + (" mean" if "mean" in q else " variance")
-            record(result, f"{prefix}{case}.{q}", f"{case}: {what} over {p.t_steady:g}-{p.t_end:g} s", v, d["ok"])
+            # the paper's Table 1 cell (its number was lost in extraction: paper None, verdict new)
+            cell = {} if prefix else {"cell": f"Table 1 / {TABLE1_ROWS[case]} / {TABLE1_COLUMNS[q]}", "primary": True}
+            record(result, f"{prefix}{case}.{q}", f"{case}: {what} over {p.t_steady:g}-{p.t_end:g} s", v, d["ok"],
+                   **cell)
         stats[case] = per
     if not prefix:
         record(result, "nofilter.u_rms", "no filter: RMS of the control about its mean (steady stage)",
                np.sqrt(stats["nofilter"]["u_var"]), data["nofilter"]["ok"], paper=p.u_rms_nofilter, tolerance=0.25,
                note=f"read as the RMS about the mean ('the signal stays within the mean ± 3 RMS'); it scales "
-                    f"as 1/(ĝ0 + μ) with the reconstructed μ = {p.mu:g}")
+                    f"as 1/(ĝ0 + μ) with the reconstructed μ = {p.mu:g}",
+               cell="§3 text / control RMS without filter", primary=True)
     return stats
 
 
@@ -163,7 +171,8 @@ def _compare(result, a, b):
     if qa.value is None or qb.value is None:
         return None, f"{a} or {b} has no value (all runs diverged)"
     diff = qa.value - qb.value
-    se = float(np.sqrt(qa.std**2 / max(qa.runs, 1) + qb.std**2 / max(qb.runs, 1)))
+    na, nb = (max(q.runs - (q.runs_diverged or 0), 1) for q in (qa, qb))  # the runs the means are over
+    se = float(np.sqrt(qa.std**2 / na + qb.std**2 / nb))
     sig = "significant" if abs(diff) > 2 * se else "NOT significant"
     return qa.value < qb.value, (f"{a} = {qa.value:.4g} ± {qa.std:.2g} vs {b} = {qb.value:.4g} ± {qb.std:.2g} "
                                  f"(difference {diff:+.3g}, standard error {se:.2g}: {sig} at 2 SE)")
@@ -191,3 +200,30 @@ def claims(result, prefix="", tag="paper plant"):
         verdict = "holds" if ok else ("cannot be checked" if ok is None else "does NOT hold")
         result.finding(f"claim-{prefix}{key}", f"[{tag}] Claim '{text}' {verdict}: {numbers}.")
     return holds
+
+
+def missing(result, holds: dict) -> list:
+    """What the study does not reproduce, generated from the verdicts and the checked claims.
+
+    Parameters
+    ----------
+    result : StudyResult
+    holds : dict
+        ``{claim: True | False | None}`` from :func:`claims` on the paper plant.
+
+    Returns
+    -------
+    list of str
+    """
+    lost = [q.id for q in result.quantities if q.cell and q.cell.startswith("Table 1") and q.paper is None]
+    out = [(f"Table 1's printed numbers were lost in the extracted text: its {len(lost)} cells are reproduced "
+            "without a verdict"),
+           ("plant (12) was lost in the extracted text: every number comes from the reconstructed plant "
+            "(reconstruction plant)")]
+    u = result.get("nofilter.u_rms")
+    if u.verdict != "agrees":
+        out.append(f"the control RMS without a filter: {u.value:.3g} against the printed {u.paper} (set by the "
+                   "reconstructed regularisation μ, finding u-rms-scale)")
+    text = {key: t for key, _, _, t in CLAIMS}
+    out += [f"claim not reproduced: {text[k]}" for k, ok in holds.items() if ok is not True]
+    return out

@@ -22,7 +22,7 @@ from ctrl_analysis.simulate import draw_noise, uniform_noise
 from . import loops
 from .paper import Example1, han_eso_gains
 
-__all__ = ["draw", "quantity_ms", "linearised_eso", "eso_bandwidth", "equal_bandwidth_tuning", "simulate",
+__all__ = ["draw", "ex1_cell", "quantity_ms", "linearised_eso", "eso_bandwidth", "equal_bandwidth_tuning", "simulate",
            "main_quantities", "sensitivities", "fair_comparison", "n0_sweep", "eso_divergence"]
 
 
@@ -32,11 +32,24 @@ def draw(p: Example1, seeds, n_steps: int | None = None, h: float | None = None)
     return draw_noise(seeds, n, uniform_noise([-p.xi_bound, -p.eta_bound], [p.xi_bound, p.eta_bound]))
 
 
-def quantity_ms(result, id_, label, values, ok, paper=None, tolerance=None, unit="", note=""):
-    """Mean ± std over the runs in ``ok`` (diverged runs excluded) as a quantity."""
+def quantity_ms(result, id_, label, values, ok, paper=None, tolerance=None, unit="", note="", **cell):
+    """Mean ± std over the runs in ``ok`` (diverged runs excluded) as a quantity.
+
+    ``runs`` is every run, ``runs_diverged`` those outside ``ok``; ``cell`` / ``primary`` pass through.
+    A quantity none of whose runs is in ``ok`` is recorded as diverged (no value).
+    """
+    ok = np.asarray(ok, dtype=bool)
     m, s, n = mean_std(values, ok)
-    return result.quantity(id_, label, float(m), paper=paper, std=float(s), runs=int(n),
-                           tolerance=tolerance if paper is not None else None, unit=unit, note=note)
+    lost = int(ok.size - np.count_nonzero(ok))
+    value, std = (float(m), float(s)) if n else (None, None)
+    return result.quantity(id_, label, value, paper=paper, std=std, runs=int(ok.size), runs_diverged=lost,
+                           diverged=not n, tolerance=tolerance if paper is not None else None, unit=unit, note=note,
+                           **cell)
+
+
+def ex1_cell(who: str, i: int) -> str:
+    """The paper cell of Example 1's mean error of Σ (Fig. 3) or the ESO (Fig. 4) for x_{i+1}."""
+    return f"§4 Example 1 / {'Σ (Fig. 3)' if who == 'sigma' else 'ESO (Fig. 4)'} / |ε̄{i + 1}|"
 
 
 def linearised_eso(eso: ExtendedStateObserver) -> ExtendedStateObserver:
@@ -95,14 +108,17 @@ def main_quantities(result: StudyResult, p: Example1, d: dict) -> None:
             quantity_ms(result, f"ex1.{who}.mean_abs_err_x{i + 1}", f"Example 1, {name}, mean |x{i + 1} - x̂{i + 1}|",
                         err[who][:, i], ok, paper=paper[i], tolerance=p.tolerance, unit="" if i == 0 else "1/s",
                         note=f"RK4, h = {p.h * 1e3:g} ms, {p.T:g} s, "
-                             + ("state reading" if who == "sigma" else "Han's textbook β, δ = h"))
+                             + ("state reading" if who == "sigma" else "Han's textbook β, δ = h"),
+                        cell=ex1_cell(who, i), primary=True)
     ratio = err["eso"] / err["sigma"]
     paper_ratio = [p.eso_err[i] / p.sigma_err[i] for i in (0, 1)]
     for i in (0, 1):
         quantity_ms(result, f"ex1.eso_over_sigma_x{i + 1}", f"Example 1, ESO error / Σ error, x{i + 1}", ratio[:, i],
                     ok, paper=round(paper_ratio[i], 3), tolerance=p.tolerance, unit="",
                     note=f"> 1: Σ more accurate (the paper's claim); paper value = {p.eso_err[i]:g} / "
-                         f"{p.sigma_err[i]:g}, the ratio of its own printed errors")
+                         f"{p.sigma_err[i]:g}, the ratio of its own printed errors (not a cell of its own: scored "
+                         "with the ESO cell, not counted)",
+                    cell=ex1_cell("eso", i), primary=False)
     r_m = np.mean(ratio[ok], axis=0)
     holds = bool(np.all(ratio[ok] > 1.0))
     result.finding(

@@ -83,7 +83,7 @@ def eq9_checks(result: StudyResult, L: Linear) -> dict:
     near = np.sort(np.abs(cl_poles - s_b))[:2]
     result.quantity(
         "eq9.breakaway_point", "Breakaway point of the root locus of G, n0 = 5, a = 2 (derived: -n0 a)",
-        s_b, paper=L.breakaway, tolerance=1e-6, unit="1/s",
+        s_b, paper=L.breakaway, tolerance=1e-6, unit="1/s", cell="§3, text above eq. (8): s = -n0 a", primary=True,
         note=f"sympy: dK/ds = 0 <=> {sp.sstr(d.dK_ds_reduced)} = 0 (besides s = 0); python-control: the two "
              f"closed-loop poles of feedback(G, 1) nearest to {s_b:g} lie within {near.max():.1e} of it.")
     result.quantity(
@@ -193,7 +193,8 @@ def controller_poles(result: StudyResult, L: Linear) -> None:
                                          "polynomial": [1.0, *K[::-1]]}
     result.quantity(
         "ex2.controller_poles", "Example 2: roots of s^3 + 39 s^2 + 506 s + 2184 (controller (18))",
-        roots.real, paper=list(L.ex2_poles), tolerance=1e-6, unit="1/s",
+        roots.real, paper=list(L.ex2_poles), tolerance=1e-6, unit="1/s", cell="§4 Example 2: roots -12, -13, -14",
+        primary=True,
         note=f"numpy.roots; max |Im| = {np.abs(roots.imag).max():.1e}. Read as polynomial coefficients, the printed "
              f"K = [2184, 506, 39, 1] runs from s^0 to s^3 (the trailing 1 is the coefficient of s^3); the study "
              f"applies K = [2184, 506, 39] (reconstruction ex2.K).")

@@ -16,7 +16,7 @@ import numpy as np
 from ctrl_analysis.study import printed, reconstructed
 
 __all__ = ["Linear", "Example1", "Example2", "LINEAR", "EX1", "EX2", "han_eso_gains", "applied_gains",
-           "printed_eq9_gain", "printed_eq5_coefficients", "HAN_2008", "setpoint", "CELLS"]
+           "printed_eq9_gain", "printed_eq5_coefficients", "HAN_2008", "setpoint"]
 
 #: The source of the ESO exponents and of the step-size gain rule (the paper prints neither).
 HAN_2008 = ("Han Jingqing, Active Disturbance Rejection Control Technique (自抗扰控制技术), National "
@@ -169,18 +169,3 @@ def printed_eq5_coefficients(zeros, K):
 def setpoint(p: Example2, n_steps: int) -> np.ndarray:
     """``r_k = sign(cos(0.15 t_k))`` at ``t_k = k h`` (Example 2's raw square wave)."""
     return np.sign(np.cos(p.r_freq * p.h * np.arange(n_steps)))
-
-
-#: The paper cell of each quantity with a paper value (for counting each printed cell once, until
-#: ``StudyResult.quantity`` takes a ``cell=`` keyword). The two ratios are not separate cells: they
-#: are computed from the four printed errors of §4 Example 1.
-CELLS = {
-    "eq9.breakaway_point": "§3, text above eq. (8): s = -n0 a",
-    "ex2.controller_poles": "§4 Example 2: roots -12, -13, -14",
-    "ex1.sigma.mean_abs_err_x1": "§4 Example 1 (Fig. 3): Σ |ε̄1|",
-    "ex1.sigma.mean_abs_err_x2": "§4 Example 1 (Fig. 3): Σ |ε̄2|",
-    "ex1.eso.mean_abs_err_x1": "§4 Example 1 (Fig. 4): ESO |ε̄1|",
-    "ex1.eso.mean_abs_err_x2": "§4 Example 1 (Fig. 4): ESO |ε̄2|",
-    "ex1.eso_over_sigma_x1": None,  # derived from the two x1 cells above
-    "ex1.eso_over_sigma_x2": None,  # derived from the two x2 cells above
-}

@@ -14,7 +14,7 @@ from .paper import SCHEME_LABELS, SCHEMES, TABLE1, Example
 from .plants import reference
 
 __all__ = [
-    "TABLE1_CELLS",
+    "table1_cell",
     "d_mfac_rearm_variant",
     "metrics_of",
     "ranking",
@@ -26,9 +26,11 @@ __all__ = [
     "td_step_scan",
 ]
 
-#: Table 1 cell names (the lead's ``cell=`` keyword): quantity id -> "Table 1 / row / metric / column".
-TABLE1_CELLS = {f"{ex}.{s}.{m}": f"Table 1 / {'constant' if ex == 'ex1' else 'varying'} / {m.upper()} / "
-                f"{SCHEME_LABELS[s]}" for ex in TABLE1 for m in ("rmse", "snr") for s in SCHEMES}
+
+
+def table1_cell(key: str, scheme: str, metric: str) -> str:
+    """The paper cell a Table 1 quantity scores: ``"Table 1 / constant|varying / RMSE|SNR / <scheme>"``."""
+    return f"Table 1 / {'constant' if key == 'ex1' else 'varying'} / {metric.upper()} / {SCHEME_LABELS[scheme]}"
 
 #: Relative tolerances of the verdicts: the Monte Carlo mean is known to < 1 % (std/sqrt(200)),
 #: single runs spread by 2-8 % (RMSE); 10 % of RMSE, and 5 % of SNR (about 1 dB).
@@ -54,13 +56,14 @@ def record_table1(result, key: str, all_runs: dict) -> dict:
         bad = [f"run {b} at k = {k}" for b, k in zip(np.flatnonzero(r.diverged), r.diverged_step[r.diverged])]
         note = f"{len(bad)} of {ok.size} runs diverged and are excluded ({'; '.join(bad[:5])})" if bad else ""
         for m, vals, unit in (("rmse", e, ""), ("snr", snr, "dB")):
-            qid = f"{key}.{s}.{m}"
             mean, std, n = mean_std(vals, ok)
             below = float(np.mean(vals[ok] < TABLE1[key][m][s])) if n else float("nan")
             where = f"the paper's value lies above {100 * below:.1f} % of the runs"
-            value = None if n == 0 else float(mean)
-            result.quantity(qid, f"{TABLE1_CELLS[qid]}", value, paper=TABLE1[key][m][s], std=None if n == 0 else float(std),
-                            runs=int(n), tolerance=TOLERANCE[m], unit=unit,
+            cell = table1_cell(key, s, m)
+            # runs = all runs, runs_diverged = the excluded ones; the mean is over the others
+            result.quantity(f"{key}.{s}.{m}", cell, None if n == 0 else float(mean), paper=TABLE1[key][m][s],
+                            std=None if n == 0 else float(std), runs=int(ok.size), runs_diverged=len(bad),
+                            tolerance=TOLERANCE[m], unit=unit, cell=cell, primary=True,
                             note="; ".join(x for x in (note, "all runs diverged" if n == 0 else where) if x))
     return per_run
 
@@ -79,7 +82,7 @@ def table1_consistency(n1: int, n2: int) -> list[dict]:
             implied = 10 * np.log10(p_ref) - 20 * np.log10(rm)
             # printed to 4 decimals: RMSE ± 5e-5 moves the implied SNR by 20/ln10 · 5e-5/RMSE, SNR ± 5e-5
             rounding = 20.0 / np.log(10.0) * 5e-5 / rm + 5e-5
-            rows.append({"cell": TABLE1_CELLS[f"{key}.{s}.snr"], "rmse": rm, "snr_printed": sn,
+            rows.append({"cell": table1_cell(key, s, "snr"), "rmse": rm, "snr_printed": sn,
                          "snr_implied": float(implied), "diff_db": float(sn - implied), "rounding_db": float(rounding),
                          "rmse_implied": float(np.sqrt(p_ref) * 10 ** (-sn / 20)), "mean_ref_sq": p_ref,
                          # the signal power mean y*² this cell's own RMSE and SNR imply (same y* for every scheme)

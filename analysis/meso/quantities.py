@@ -17,7 +17,7 @@ from .loops import SituationRun, pick
 from .paper import METRICS, PAPER, SITUATIONS, TABLE_UNITS, TABLES, Analysis, Paper
 
 __all__ = [
-    "CELLS",
+    "table_cell",
     "claim_quantities",
     "eps_scaling",
     "first_divergence",
@@ -28,9 +28,12 @@ __all__ = [
     "theta_truth",
 ]
 
-#: quantity id -> the paper cell it scores (each cell once, with the primary reading: noise on, well-posed)
-CELLS = {f"{k}.{o}.{m}": f"{SITUATIONS[k].table} / {o.upper()} / {m}" for k in ("s1", "s2")
-         for o in ("meso", "eso") for m in METRICS}
+
+def table_cell(key: str, observer: str, metric: str) -> str:
+    """The paper cell (``"Table 2 / MESO / est_x1"``) a Table 2/3 quantity scores; ``est_x3_no_bu`` is a
+    reading of the ``est_x3`` cell."""
+    metric = "est_x3" if metric == "est_x3_no_bu" else metric
+    return f"{SITUATIONS[key].table} / {observer.upper()} / {metric}"
 
 
 def linear_quantities(result: StudyResult, lin, sc: dict) -> None:
@@ -129,12 +132,15 @@ def _table_cell(result, key, sim, idx, metric, qid, what, noise, analysis):
     if t_div is not None:
         note += f"; {len(idx) - n_ok}/{len(idx)} runs diverged (first at t = {t_div:.2f} s)"
     if n_ok == 0:
-        note += "; all runs diverged: no value (verdict should read 'diverged')"
+        note += "; all runs diverged: no value"
     label_m = "est_x3 against x3 without (b − b0)u" if metric == "est_x3_no_bu" else metric
+    # each cell is scored once, by its primary reading: noise on, well-posed identification, x3 with (b − b0)u
+    primary = qid == f"{key}.{o}.{metric}" and metric != "est_x3_no_bu"
     result.quantity(qid, f"{sit.table}, {what}, mean |e| {label_m}, noise {'on' if noise else 'off'}",
                     None if n_ok == 0 else float(mean), paper=paper_v,
-                    std=None if n_ok == 0 else float(std), runs=int(n_ok), tolerance=analysis.tolerance,
-                    unit=TABLE_UNITS[metric], note=note)
+                    std=None if n_ok == 0 else float(std), runs=len(idx), runs_diverged=len(idx) - int(n_ok),
+                    diverged=n_ok == 0, tolerance=analysis.tolerance, unit=TABLE_UNITS[metric], note=note,
+                    cell=table_cell(key, o, metric), primary=primary)
 
 
 def table_quantities(result: StudyResult, key: str, sim: SituationRun, analysis: Analysis) -> None:
@@ -205,7 +211,8 @@ def theta_final(result: StudyResult, key: str, sim: SituationRun, horizon: float
         note += (f"; trajectory-equivalent Θ_eq = {equivalent_theta(true_end, PAPER.b).round(4).tolist()} "
                  "(θ3 not identifiable in closed loop)")
     result.quantity(f"{key}.theta_final", f"Fig. {4 if key == 's1' else 6}: identified Θ after the last LSM "
-                    "batch (well-posed, noise on)", np.asarray(mean), std=np.asarray(std), runs=int(n_ok),
+                    "batch (well-posed, noise on)", None if n_ok == 0 else np.asarray(mean),
+                    std=None if n_ok == 0 else np.asarray(std), runs=len(idx), runs_diverged=len(idx) - int(n_ok),
                     unit="[1/s², 1/s, 1, 1/s²]", note=note)
 
 
@@ -264,7 +271,7 @@ def claim_quantities(result: StudyResult, sims: dict, lin, horizons: dict) -> di
         for m in ("track_x1", "est_x3"):
             result.quantity(f"{key}.literal_noW.{m}", f"situation {key[1]}, Table-1 literal rule without W(s), "
                             f"mean |e| {m}, noise off", None if sim.diverged[i] else _one(sim, i, m),
-                            unit=TABLE_UNITS[m], note=f"diverged at t = {t_div:.2f} s: no value" if t_div else "")
+                            diverged=bool(sim.diverged[i]), runs=1, unit=TABLE_UNITS[m], note=f"diverged at t = {t_div:.2f} s: no value" if t_div else "")
     out["gate"] = _gate_quantities(result, s2)
     return out
 
@@ -311,11 +318,12 @@ def _gate_quantities(result, s2) -> dict:
         out["reruns"][g] = i
         result.quantity(f"s2.gate{g:g}.theta_final", f"situation 2, well-posed MESO with gate threshold {g:g}: Θ after "
                         "the last batch, noise off", None if s2.diverged[i] else s2.theta_batch[-1, i],
-                        unit="[1/s², 1/s, 1, 1/s²]",
+                        diverged=bool(s2.diverged[i]), runs=1, unit="[1/s², 1/s, 1, 1/s²]",
                         note=f"threshold 100: {np.round(s2.theta_batch[-1, base], 4).tolist()}"
                              + (f"; diverged at t = {first_divergence(s2, [i]):.2f} s: no value" if s2.diverged[i] else ""))
         result.quantity(f"s2.gate{g:g}.track_x1", f"situation 2, well-posed MESO with gate threshold {g:g}: mean "
-                        "|e| track_x1, noise off", None if s2.diverged[i] else _one(s2, i, "track_x1"), unit="",
+                        "|e| track_x1, noise off", None if s2.diverged[i] else _one(s2, i, "track_x1"),
+                        diverged=bool(s2.diverged[i]), runs=1, unit="",
                         note=f"threshold 100: {_one(s2, base, 'track_x1'):.4g}"
                              + (f"; diverged at t = {first_divergence(s2, [i]):.2f} s: no value" if s2.diverged[i] else ""))
     return out

@@ -22,27 +22,13 @@ from ctrl_analysis.report import StudyResult, relative_error
 
 from .verify import NOISE_MODELS, VerifyData, fmt_vec
 
-#: The paper cell each compared quantity scores (quantities sharing a cell count once, by the first
-#: recorded: ``ss.gain_continuous``, the stated problem's gain, is the primary reading of §4's K).
-CELLS = {
-    "ss.gain_continuous": "§4 / K = PCᵀR⁻¹ = [0.950, 0.863]",
-    "ss.gain_alpha": "§4 / K = PCᵀR⁻¹ = [0.950, 0.863]",
-    "ss.gain_beta": "§4 / K = PCᵀR⁻¹ = [0.950, 0.863]",
-    "sec5.step_deg": "§5 / 0.1 rad = 5.7325°",
-}
+#: The paper cells the compared quantities score: §4's printed gain (``ss.gain_continuous``, the stated
+#: problem's gain, is its primary reading; α/β of the closest interpretation are secondary) and §5's step.
+CELL_GAIN = "§4 / K = PCᵀR⁻¹ = [0.950, 0.863]"
+CELL_STEP = "§5 / 0.1 rad = 5.7325°"
 
 
-def cell(qid: str) -> dict:
-    """``{"cell": ...}`` for :meth:`StudyResult.quantity` when the report schema has paper cells, else ``{}``."""
-    import dataclasses
-
-    from ctrl_analysis.report import Quantity
-
-    has_cell = any(f.name == "cell" for f in dataclasses.fields(Quantity))
-    return {"cell": CELLS[qid]} if has_cell and qid in CELLS else {}
-
-
-__all__ = ["CELLS", "cell", "case_metrics", "record_loop", "record_verify"]
+__all__ = ["CELL_GAIN", "CELL_STEP", "case_metrics", "record_loop", "record_verify"]
 
 
 def record_verify(result: StudyResult, d: VerifyData) -> None:
@@ -93,7 +79,7 @@ def _record_continuous(result: StudyResult, d: VerifyData) -> None:
     result.quantity(
         "ss.gain_continuous", f"continuous steady-state Kalman–Bucy gain K = P̄Cᵀ/R (a21 = {a21:.4f}, Q = 100, R = 50)",
         cont.K.ravel().tolist(), paper=list(P.K_printed), tolerance=P.gain_tol, unit="1/s, 1/s²",
-        **cell("ss.gain_continuous"),
+        cell=CELL_GAIN, primary=True,
         note=(f"§4 prints K = PCᵀR⁻¹ = [0.950, 0.863] (no unit); sympy closed form k2 = a21 + √(a21² + Q/R), k1 = √(2 k2) gives {fmt_vec(k_sym, 8)}; "
               f"filter poles {fmt_vec(cont.poles.real)} ± {abs(cont.poles.imag[0]):.3g}j; "
               f"with a21 = 2.6149: K = {fmt_vec(cont_alt.K)}"),
@@ -177,10 +163,10 @@ def _record_interpretations(result: StudyResult, d: VerifyData) -> None:
     note = f"from the closest interpretation: {closest.name}; max rel. error {closest.error:.1%}"
     result.quantity("ss.gain_alpha", "α = k1 of the steady-state gain (closest interpretation, see note)",
                     closest.alpha, paper=P.K_printed[0], tolerance=P.gain_tol, unit="", note=note,
-                    **cell("ss.gain_alpha"))
+                    cell=CELL_GAIN, primary=False)
     result.quantity("ss.gain_beta", "β of the steady-state gain (closest interpretation, see note)",
                     closest.beta, paper=P.K_printed[1], tolerance=P.gain_tol, note=note,
-                    unit="1/s or – (depends on the interpretation, see note)", **cell("ss.gain_beta"))
+                    unit="1/s or – (depends on the interpretation, see note)", cell=CELL_GAIN, primary=False)
     non_discrete = [g for g in rows if g.kind != "discrete" and not g.swapped]
     table = [
         "| interpretation | α | β | max rel. error |",
@@ -325,8 +311,10 @@ def _record_case(result: StudyResult, name: str, run, p) -> dict:
         if ok.any() and not ok.all():
             note += f"; {int((~ok).sum())} diverged runs excluded: " + ", ".join(
                 f"run {i} at step {run.diverged_step[i]}" for i in np.flatnonzero(~ok)[:5])
+        # runs = every run, runs_diverged = the excluded ones (all of them: verdict diverged)
         result.quantity(qid, f"{label} — {CASE_LABELS[name]}", None if mean is None else float(mean),
-                        std=None if std is None else float(std), runs=int(n), unit=unit, note=note)
+                        std=None if std is None else float(std), runs=int(ok.size), runs_diverged=int((~ok).sum()),
+                        diverged=not ok.any(), unit=unit, note=note)
         out[key] = (mean, std, n)
     return out
 
@@ -344,7 +332,7 @@ def record_loop(result: StudyResult, d, verify: VerifyData) -> None:
 def _record_step_and_noise(result: StudyResult, p, verify: VerifyData) -> None:
     deg = math.degrees(verify.P.step)
     result.quantity("sec5.step_deg", "§5 step of 0.1 rad in degrees", deg, paper=verify.P.step_deg_printed,
-                    tolerance=1e-4, unit="deg", note="0.1·180/π", **cell("sec5.step_deg"))
+                    tolerance=1e-4, unit="deg", note="0.1·180/π", cell=CELL_STEP, primary=True)
     result.finding(
         "step-degrees",
         f"§5 says 0.1 rad corresponds to {verify.P.step_deg_printed}°; 0.1·180/π = {deg:.4f}° "

@@ -42,10 +42,6 @@ KNOWN_INCOMPLETE = {
     # ctrl_analysis/simulate.py
     "ctrl_analysis.simulate.SimResult.runs",  # missing: the whole docstring
     "ctrl_analysis.simulate.SimResult.divergences",  # missing: Returns section
-    "ctrl_analysis.simulate.run_seeds",  # missing: Parameters section, Returns section
-    "ctrl_analysis.simulate.draw_noise",  # missing: Parameters section, Returns section
-    "ctrl_analysis.simulate.uniform_noise",  # missing: Parameters section, Returns section
-    "ctrl_analysis.simulate.gaussian_noise",  # missing: Parameters section, Returns section
     "ctrl_analysis.simulate.euler_step",  # missing: Parameters section, Returns section
     "ctrl_analysis.simulate.rk4_step",  # missing: Parameters section, Returns section
     "ctrl_analysis.simulate.simulate_discrete",  # missing: Parameters section, Returns section

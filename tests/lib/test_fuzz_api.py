@@ -532,6 +532,9 @@ def build_cases(tmp):
         ("new_figure", _new_figure, dict(nrows=1, ncols=2, size=(4.0, 3.0)),
          dict(nrows=INT + [0], ncols=INT + [0], size=ARR + [(4.0,), (0.0, 3.0), (NAN, 3.0)])),
         ("summary_table", report_md.summary_table, dict(results=results), dict(results=[None, [], "x"])),
+        ("tally", report_md.tally, dict(results=results), dict(results=[None, [], "x", {"study": "s"}])),
+        ("overview_table", report_md.overview_table, dict(results=[results], this_run={}),
+         dict(results=[None, 3, [None], ["x"]], this_run=[None, 3, "x"])),
         ("write_report_md", report_md.write_report_md, dict(results=[results], out_dir=tmp / "report"),
          dict(results=[None, 3, [None], ["x"]], out_dir=[None, 3, ""], this_run=[3, "x"], failed=[3, "x"])),
     ]

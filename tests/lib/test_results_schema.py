@@ -122,6 +122,9 @@ def test_committed_results_json_validates(path):
         pytest.skip(f"{path.parent.name}/results.json predates schema {RESULTS_SCHEMA}; regenerate with "
                     "`ctrl-analysis reproduce all`")
     validate_results(data)
+    # every figure has its caption, and every printed value names the paper cell it scores
+    assert set(data.get("captions", {})) == set(data["figures"]), "figures without a caption"
+    assert not [q["id"] for q in data["quantities"] if q["paper"] is not None and not q.get("cell")]
 
 
 def test_real_cli_output_validates(tmp_path):
@@ -140,7 +143,7 @@ def test_report_shows_unit_tolerance_counts_and_marks_stale(tmp_path):
                            failed={"old-study": "ValueError: boom", "never-ran": "KeyError: x"}).read_text()
     assert "| never-ran | **no — failed**, and no earlier results |" in text
     assert "| `t2.x1.eso` | x1 ESO | Table 2 / x1 ESO | 1.05 | 1 | rad | 10 % | agrees |" in text
-    assert "2 agree, 0 differ, 1 diverged, 1 new" in text
+    assert "Paper cells: 2 agree, 0 differ, 1 diverged; 1 new quantities;" in text
     assert "| demo | yes | 7 | 4 |" in text
     assert "| old-study | **no — stale**" in text
     stale_section = text.split("## old-study")[1]
