@@ -30,13 +30,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._validate import check_in, check_int, check_positive
+from ._validate import (check_bool, check_callable, check_finite, check_in, check_int, check_names, check_positive,
+                        check_real, check_str)
 from .blocks import Block, ContinuousBlock, DiscreteBlock
+from .response import LoopResponse
 from .simulate import (
     CHUNK_BYTES,
     RESULT_BYTES,
     STEPPERS,
-    SimResult,
     _flag_divergence,
     check_result_memory,
     chunk_bounds,
@@ -47,7 +48,16 @@ __all__ = ["Loop", "LoopResponse", "Placed", "place"]
 
 @dataclass(frozen=True)
 class Placed:
-    """A block placed in a loop under a name, with its signals (possibly renamed)."""
+    """A block placed in a loop under a name, with its signals (possibly renamed); made by :func:`place`.
+
+    Attributes
+    ----------
+    block : Block
+    name : str
+        Unique name in the loop.
+    inputs, outputs : tuple of str
+        The signals the block reads and writes.
+    """
 
     block: Block
     name: str
@@ -66,81 +76,21 @@ def place(block: Block, name: str, *, inputs=None, outputs=None) -> Placed:
         Unique name in the loop (states are reported under it).
     inputs, outputs : sequence of str, optional
         Signal names replacing ``block.inputs`` / ``block.outputs`` (same length and order).
+
+    Returns
+    -------
+    Placed
+        The block with its name and signals, for :class:`Loop`.
     """
     if not isinstance(block, Block):
         raise TypeError(f"block must be a ctrl_analysis.blocks.Block, got {type(block).__name__}")
     if not isinstance(name, str) or not name:
         raise ValueError(f"name must be a non-empty string, got {name!r}")
-    ins = tuple(block.inputs if inputs is None else inputs)
-    outs = tuple(block.outputs if outputs is None else outputs)
-    if len(ins) != len(block.inputs):
-        raise ValueError(f"inputs of {name!r} must name {len(block.inputs)} signals, got {len(ins)}")
-    if len(outs) != len(block.outputs):
-        raise ValueError(f"outputs of {name!r} must name {len(block.outputs)} signals, got {len(outs)}")
+    ins = tuple(block.inputs) if inputs is None else check_names(f"inputs of {name!r}", inputs,
+                                                                  length=len(block.inputs))
+    outs = tuple(block.outputs) if outputs is None else check_names(f"outputs of {name!r}", outputs,
+                                                                     length=len(block.outputs))
     return Placed(block, name, ins, outs)
-
-
-class LoopResponse(SimResult):
-    """A :class:`~ctrl_analysis.simulate.SimResult` that also keeps every signal by name.
-
-    Attributes
-    ----------
-    signals : dict of str -> ndarray, shape (N+1, B)
-        Every signal at every sample instant (external inputs included).
-    states : dict of str -> ndarray, shape (N+1, B, n)
-        Each block's states (views into ``x``), when stored.
-    final_states : dict of str -> ndarray, shape (B, n)
-        Each block's state at the last instant (also when the trajectory is not stored), e.g. the
-        ``x0`` of a continuation.
-    """
-
-    def __init__(self, *, signals, slices, external, outlist, state_names, x_final=None, **kw):
-        super().__init__(**kw)
-        self.signals = signals
-        self.x_final = x_final
-        self._slices = slices
-        self.external = external
-        self.outlist = outlist
-        self.state_names = state_names
-
-    @property
-    def states(self) -> dict:
-        if self.x is None:
-            return {}
-        return {name: self.x[:, :, sl] for name, sl in self._slices.items()}
-
-    @property
-    def final_states(self) -> dict:
-        """Each block's state at the last instant, also when the trajectory was not stored.
-
-        Returns
-        -------
-        dict of str -> numpy.ndarray, shape (B, n)
-            Ready to pass as ``x0`` to continue the simulation (with ``t0`` the last instant).
-        """
-        if self.x_final is None:
-            return {}
-        return {name: self.x_final[:, sl] for name, sl in self._slices.items()}
-
-    def __getitem__(self, name: str) -> np.ndarray:
-        try:
-            return self.signals[name]
-        except KeyError:
-            raise KeyError(f"no signal {name!r}; signals are {sorted(self.signals)}") from None
-
-    def to_timeresponse(self, run: int = 0, outputs=None):
-        """Run ``run`` as a ``control.TimeResponseData`` (outputs: the loop's ``outputs`` by default)."""
-        import control as ct
-
-        run = check_int("run", run, minimum=0, maximum=self.runs - 1)
-        outs = list(self.outlist if outputs is None else outputs)
-        y = np.stack([self[n][:, run] for n in outs])
-        u = np.stack([self[n][:, run] for n in self.external]) if self.external else None
-        x = self.x[:, run, :].T if self.x is not None else None
-        return ct.TimeResponseData(self.t, y, x, u, output_labels=outs,
-                                   input_labels=list(self.external) or None,
-                                   state_labels=self.state_names if x is not None else None,
-                                   issiso=False)
 
 
 class Loop:
@@ -182,15 +132,17 @@ class Loop:
     """
 
     def __init__(self, blocks, dt: float, *, method: str = "rk4", substeps: int = 1, outputs=None):
-        self.dt = check_positive("dt", dt)
+        self.dt = check_positive("dt", dt, scalar=True)
         self.method = check_in("method", method, STEPPERS)
         self.substeps = check_int("substeps", substeps, minimum=1)
+        if not isinstance(blocks, (list, tuple)):
+            raise TypeError(f"blocks must be a list of blocks (or place(...) results), got {blocks!r:.80}")
         placed = [b if isinstance(b, Placed) else place(b, f"b{i}") for i, b in enumerate(blocks)]
         if not placed:
             raise ValueError("blocks must contain at least one block")
         names = [p.name for p in placed]
         if len(set(names)) != len(names):
-            raise ValueError(f"block names must be unique, got {names}")
+            raise ValueError(f"blocks: block names must be unique, got {names}")
         producer = {}
         for p in placed:
             for s in p.outputs:
@@ -199,7 +151,7 @@ class Loop:
                 producer[s] = p.name
         self.placed = placed
         self.external = tuple(dict.fromkeys(s for p in placed for s in p.inputs if s not in producer))
-        self.outlist = tuple(producer) if outputs is None else tuple(outputs)
+        self.outlist = tuple(producer) if outputs is None else check_names("outputs", outputs)
         for s in self.outlist:
             if s not in producer and s not in self.external:
                 raise ValueError(f"outputs names unknown signal {s!r}")
@@ -243,6 +195,8 @@ class Loop:
     # ------------------------------------------------------------------ simulation
     def _inputs(self, inputs, n_steps, runs):
         """External inputs -> (held arrays (N+1, B), callables); infers B."""
+        if inputs is not None and not isinstance(inputs, dict):
+            raise TypeError(f"inputs must be a dict of signal name -> value, got {inputs!r:.80}")
         inputs = dict(inputs or {})
         unknown = set(inputs) - set(self.external)
         if unknown:
@@ -257,16 +211,19 @@ class Loop:
             if callable(v):
                 funcs[s] = v
                 continue
-            a = np.asarray(v, dtype=float)
+            try:
+                a = np.asarray(v, dtype=float)
+            except (TypeError, ValueError):
+                raise TypeError(f"inputs[{s!r}] must be a number, an array or a callable f(t), got {v!r:.80}") from None
             if a.ndim == 2:
                 if B is not None and a.shape[1] != B:
                     raise ValueError(f"input {s!r} has {a.shape[1]} runs, expected {B}")
                 B = a.shape[1]
-            if a.ndim > 2 or (a.ndim >= 1 and a.shape[0] < n_steps):
-                raise ValueError(f"input {s!r} must be a scalar, shape (N,) or (N, B) with N >= {n_steps} rows, "
-                                 f"got shape {a.shape}")
+            if a.ndim > 2 or (a.ndim >= 1 and a.shape[0] not in (n_steps, n_steps + 1)):
+                raise ValueError(f"inputs[{s!r}] must be a scalar or have shape (N,) or (N, B) with N = {n_steps} "
+                                 f"or {n_steps + 1} rows, got shape {a.shape}")
             if not np.all(np.isfinite(a)):
-                raise ValueError(f"input {s!r} must be finite (no NaN or inf)")
+                raise ValueError(f"inputs[{s!r}] must be finite (no NaN or inf)")
             held[s] = a
         return held, funcs, (1 if B is None else B)
 
@@ -387,11 +344,23 @@ class Loop:
         n_steps = check_int("n_steps", n_steps, minimum=1)
         if runs is not None:
             runs = check_int("runs", runs, minimum=1)
+        bound = check_real("bound", bound)
         if not np.isfinite(bound):
             if bound != np.inf:
                 raise ValueError(f"bound must be > 0 (or inf), got {bound}")
         else:
             bound = check_positive("bound", bound)
+        t0 = float(check_finite("t0", t0, scalar=True))
+        store_states = check_bool("store_states", store_states)
+        if x0 is not None and not isinstance(x0, dict):
+            raise TypeError(f"x0 must be a dict of block name -> initial state, got {x0!r:.80}")
+        if seeds is not None and (isinstance(seeds, (str, bytes)) or not hasattr(seeds, "__len__")):
+            raise TypeError(f"seeds must be a sequence of one seed per run, got {seeds!r:.80}")
+        if store_signals is not None:
+            store_signals = check_names("store_signals", store_signals)
+        if max_bytes is not None:
+            max_bytes = check_positive("max_bytes", max_bytes, scalar=True)
+        check_callable("progress", progress, "progress(n)", optional=True)
         held, funcs, B = self._inputs(inputs, n_steps, runs)
         x0_B = max((np.ndim(v) == 2 and np.shape(v)[0]) or 1 for v in (x0 or {}).values()) if x0 else 1
         if B == 1 and x0_B > 1:
@@ -567,9 +536,25 @@ class Loop:
         All blocks must be continuous (or static), giving a continuous system, or all discrete (or
         static), giving a discrete system with the loop's ``dt``. Inputs are the loop's external
         inputs, outputs its ``outputs``.
+
+        Parameters
+        ----------
+        name : str, optional
+            System name.
+
+        Returns
+        -------
+        control.InterconnectedSystem
+
+        Raises
+        ------
+        ValueError
+            If the loop mixes continuous and discrete blocks.
         """
         import control as ct
 
+        if name is not None:
+            check_str("name", name)
         has_c, has_d = bool(self.continuous), bool(self.discrete)
         if has_c and has_d:
             raise ValueError("interconnect needs all blocks continuous or all discrete; wrap continuous blocks "

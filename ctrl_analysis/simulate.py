@@ -25,7 +25,8 @@ from typing import Callable
 
 import numpy as np
 
-from ._validate import check_array, check_callable, check_finite, check_in, check_int, check_positive, check_real
+from ._validate import (check_array, check_callable, check_finite, check_in, check_int, check_nonnegative,
+                        check_positive, check_real)
 from .noise import _check_seeds, draw_noise, gaussian_noise, run_seeds, uniform_noise  # noqa: F401 (public API)
 
 __all__ = [
@@ -193,7 +194,28 @@ def chunk_bounds(runs: int, size: int) -> list[tuple[int, int]]:
 
 
 def check_result_memory(nbytes: float, limit: float, where: str) -> None:
-    """Raise a :class:`MemoryError` that says what to do when a result would not fit in ``limit`` bytes."""
+    """Raise a :class:`MemoryError` that says what to do when a result would not fit in ``limit`` bytes.
+
+    Parameters
+    ----------
+    nbytes : float
+        Bytes the result would take (>= 0).
+    limit : float
+        Bytes allowed (> 0).
+    where : str
+        What would store them, for the message.
+
+    Returns
+    -------
+    None
+
+    Raises
+    ------
+    MemoryError
+        If ``nbytes > limit``.
+    """
+    nbytes = check_nonnegative("nbytes", nbytes, scalar=True)
+    limit = check_positive("limit", limit, scalar=True)
     if nbytes > limit:
         raise MemoryError(
             f"{where} would store {nbytes / 2**30:.1f} GiB of trajectories (limit {limit / 2**30:.1f} GiB, half "

@@ -47,7 +47,6 @@ KNOWN_INCOMPLETE = {
     "ctrl_analysis.simulate.simulate_discrete",  # missing: Parameters section, Returns section
     "ctrl_analysis.simulate.simulate_ivp",  # missing: Parameters section, Returns section
     "ctrl_analysis.simulate.continuous_nlsys",  # missing: Returns section
-    "ctrl_analysis.simulate.check_result_memory",  # missing: Parameters section
     # ctrl_analysis/report.py
     "ctrl_analysis.report.Quantity",  # missing: Parameters (or Attributes) section
     "ctrl_analysis.report.Quantity.to_dict",  # missing: the whole docstring
@@ -67,12 +66,6 @@ KNOWN_INCOMPLETE = {
     "ctrl_analysis.report.new_figure",  # missing: Parameters section, Returns section
     "ctrl_analysis.report.relative_error",  # missing: Parameters section, Returns section
     "ctrl_analysis.report.write_results_json",  # missing: Parameters section, Returns section
-    # ctrl_analysis/loop.py
-    "ctrl_analysis.loop.Placed",  # missing: Parameters section (or Attributes)
-    "ctrl_analysis.loop.place",  # missing: Returns section
-    "ctrl_analysis.loop.Loop.interconnect",  # missing: Parameters section, Returns section
-    "ctrl_analysis.loop.LoopResponse.states",  # missing: the whole docstring
-    "ctrl_analysis.loop.LoopResponse.to_timeresponse",  # missing: Parameters section, Returns section
 }
 
 _SECTION = re.compile(r"^(\w[\w ]*)\n[ \t]*-{3,}[ \t]*$", re.MULTILINE)

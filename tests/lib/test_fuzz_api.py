@@ -605,28 +605,7 @@ NOT_FUZZED = {
 #: Findings in ``loop.py`` and ``simulate.py``, files being split on another branch: (case, argument)
 #: -> what the argument check needs. They are tried and reported but do not fail the test; an entry
 #: whose inputs are all rejected properly is stale and fails it (remove the line once fixed).
-PENDING_IN_LOOP_AND_SIMULATE = {
-    ("place", "inputs"): "check_names('inputs', inputs, length=len(block.inputs)) (an int, [3] pass or fail obscurely)",
-    ("place", "outputs"): "check_names('outputs', outputs, length=len(block.outputs))",
-    ("Loop", "dt"): "check_positive('dt', dt, scalar=True) (a list is accepted)",
-    ("Loop", "outputs"): "check_names('outputs', outputs) (an int fails obscurely, a string 'y' is split into letters)",
-    ("Loop(blocks)", "blocks"): "blocks must be a list of blocks/Placed (None, 3 fail obscurely); "
-                                "name 'blocks' in the duplicate-name error",
-    ("Loop.simulate", "inputs"): "inputs must be a dict; name the input in conversion errors ('abc'); "
-                                 "reject an array whose length is neither N nor N+1; mention 'inputs' in the NaN message",
-    ("Loop.simulate", "x0"): "x0 must be a dict of block name -> state (an int raises AttributeError)",
-    ("Loop.simulate", "t0"): "check_finite('t0', t0, scalar=True) (NaN/inf/complex accepted, strings fail obscurely)",
-    ("Loop.simulate", "bound"): "check_real first, then the positive check (strings/None fail in numpy; [1.0] accepted)",
-    ("Loop.simulate", "store_states"): "check_bool('store_states', ...)",
-    ("Loop.simulate", "seeds"): "seeds must be a sequence of one seed per run (an int fails obscurely)",
-    ("Loop.simulate", "store_signals"): "check_names('store_signals', ...)",
-    ("Loop.simulate", "max_bytes"): "check_positive('max_bytes', max_bytes, scalar=True)",
-    ("Loop.simulate", "progress"): "check_callable('progress', progress, 'progress(n)', optional=True)",
-    ("Loop.interconnect", "name"): "check_str('name', name) when given",
-    ("check_result_memory", "nbytes"): "check_nonnegative('nbytes', nbytes, scalar=True) (NaN silently passes)",
-    ("check_result_memory", "limit"): "check_positive('limit', limit, scalar=True) (NaN passes, 0 or -1 raise "
-                                      "MemoryError instead of ValueError)",
-}
+PENDING_IN_LOOP_AND_SIMULATE = {}  # every entry fixed in loop.py / simulate.py
 
 
 def _public_callables():
