@@ -52,3 +52,18 @@ def test_fuzzy_example_lookup_matches_inference(capsys):
 def test_identification_example_recovers_the_arx_parameters(capsys):
     s = _run(_examples()[4])
     np.testing.assert_allclose(s["theta"][-1], [1.5, -0.7, 0.5], atol=0.01)
+
+
+def test_readme_verdict_overview_is_the_generated_one():
+    """The README's overview table is what report_md.overview_table makes of the committed results."""
+    import json
+
+    from analysis import STUDIES
+    from ctrl_analysis.report_md import overview_table
+
+    root = README.parent
+    results = [json.loads((root / "figures" / n / "results.json").read_text(encoding="utf-8")) for n in STUDIES]
+    table = "\n".join(overview_table(results, {r["study"]: r["settings"].get("cli", {}) for r in results}))
+    text = README.read_text(encoding="utf-8")
+    shown = text[text.index("\n", text.index("<!-- overview")) + 1:text.index("<!-- /overview -->")].strip()
+    assert shown == table.replace("](#", "](figures/REPORT.md#")
