@@ -15,16 +15,33 @@ import numpy as np
 
 from ctrl_analysis._kernels import BlockKernel, copy_output
 from ctrl_analysis.blocks import ContinuousBlock, StaticBlock, signal_names
-from ctrl_analysis.controllers.differential_feedback import HighOrderDifferentialFeedback
+from ctrl_analysis.controllers.differential_feedback import (
+    HighOrderDifferentialFeedback,
+)
 from ctrl_analysis.estimators.differential import DifferentialEstimator
 from ctrl_analysis.estimators.eso import ExtendedStateObserver
 from ctrl_analysis.loop import Loop, place
 
 from .paper import Example1, Example2, han_eso_gains
 
-__all__ = ["Plant19", "Sensor", "plant19_rhs", "sensor_output", "Plant20", "RowGroups", "sensor", "han_eso", "example1_loop", "example2_loop",
-           "simulate_signals", "example2_linear", "max_real_eig", "simulate_example1", "impulse_response",
-           "LinearPath"]
+__all__ = [
+    "LinearPath",
+    "Plant19",
+    "Plant20",
+    "RowGroups",
+    "Sensor",
+    "example1_loop",
+    "example2_linear",
+    "example2_loop",
+    "han_eso",
+    "impulse_response",
+    "max_real_eig",
+    "plant19_rhs",
+    "sensor",
+    "sensor_output",
+    "simulate_example1",
+    "simulate_signals",
+]
 
 
 def _sign_cos(arg: float) -> float:
