@@ -162,7 +162,7 @@ def run(repeat=3, T=20.0):
     from _common import Row
 
     times, t_float, err, n = bench_loop(T, repeat)
-    rows = [Row(NAME, "float loop (plain Python, CKF case), 1 run", 1, t_float, f"max |y, u difference| {err:.1e}")]
+    rows = [Row(NAME, "float loop (plain Python, CKF case), 1 run", 1, t_float, f"largest y, u difference {err:.1e}")]
     rows += [Row(NAME, f"engine `Loop` (numpy), B = {3 * B} (3 cases x {B})", 3 * B, t,
                  "same loop, all three cases on the batch axis") for B, t in times.items()]
     notes = [f"{T:g} s = {n} samples; best of {repeat} repeats (one closed loop is long)",
