@@ -62,14 +62,14 @@ class Row:
         return self.seconds / self.runs
 
 
-def table(rows: list[Row], baseline: dict[str, float], compiled: dict[str, float]) -> str:
-    """Markdown table: per-run time, speed-up over the float loop, and ratio to the compiled reference."""
+def table(rows: list[Row], baseline: dict[str, float], compiled: dict[str, float | None]) -> str:
+    """Markdown table: per-run time, speed-up over the float loop, and ratio to the compiled reference (— if none)."""
     head = ("| benchmark | method | runs | median total (s) | per run (ms) | float loop / this | "
             "this / compiled | agreement |")
     lines = [head, "| --- | --- | ---: | ---: | ---: | ---: | ---: | --- |"]
     for r in rows:
         speed = baseline[r.bench] / r.per_run
-        vs_c = r.per_run / compiled[r.bench]
+        vs_c = "—" if compiled[r.bench] is None else f"{r.per_run / compiled[r.bench]:.2f}"
         lines.append(f"| {r.bench} | {r.method} | {r.runs} | {r.seconds:.3f} | {1e3 * r.per_run:.3f} | "
-                     f"{speed:.2f} | {vs_c:.2f} | {r.agreement} |")
+                     f"{speed:.2f} | {vs_c} | {r.agreement} |")
     return "\n".join(lines)

@@ -151,6 +151,26 @@ def bench_loop(T, repeat):
     return times, best, err, n
 
 
+NAME = "ckf closed loop (CKF case, 20 s)"
+
+
+def run(repeat=3, T=20.0):
+    """Rows for ``run_all.py``: the float loop (1 run) and the engine at B = 3 and 300 (3 cases x runs).
+
+    Returns ``(rows, float-loop seconds per run, None (no compiled reference), notes)``.
+    """
+    from _common import Row
+
+    times, t_float, err, n = bench_loop(T, repeat)
+    rows = [Row(NAME, "float loop (plain Python, CKF case), 1 run", 1, t_float, f"largest y, u difference {err:.1e}")]
+    rows += [Row(NAME, f"engine `Loop` (numpy), B = {3 * B} (3 cases x {B})", 3 * B, t,
+                 "same loop, all three cases on the batch axis") for B, t in times.items()]
+    notes = [f"{T:g} s = {n} samples; best of {repeat} repeats (one closed loop is long)",
+             "filters alone, µs per step (output + update), CKF (2 states) vs full-order KF: "
+             + "; ".join(f"n = {k}, B = {B}: {tc:.0f} vs {tf:.0f} ({r:.1f}x)" for k, B, tc, tf, r in bench_filters())]
+    return rows, t_float, None, notes
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--T", type=float, default=20.0, help="closed-loop horizon in seconds")

@@ -103,6 +103,37 @@ def float_run(ex, scheme: str, v: list) -> list:
     return y
 
 
+NAME = "ikf-mfac Table 1 (4 schemes x 2 examples)"
+
+
+def run(repeat=3, runs=200, float_runs=20):
+    """Rows for ``run_all.py``: the float loop and the engine, per run of one scheme on one example.
+
+    Returns ``(rows, float-loop seconds per run, None (no compiled reference), notes)``.
+    """
+    from _common import Row, median_time
+
+    seeds = run_seeds(0, runs)
+    work = []
+    for ex in (EX1, EX2):
+        v = noise_draws(ex, seeds)
+        work += [(ex, s, v) for s in SCHEMES]
+    t_eng, res = median_time(lambda: [run_scheme(ex, s, v) for ex, s, v in work], repeat)
+    t_flt, ys = median_time(lambda: [[float_run(ex, s, v[:, b].tolist()) for b in range(float_runs)]
+                                     for ex, s, v in work], 1)
+    worst = 0.0
+    for (ex, _, _), r, y in zip(work, res, ys):
+        ref = reference(ex.reference, ex.n)
+        ok = ~r.diverged[:float_runs]
+        e_eng, e_flt = rmse(ref[:, None], r.y[:, :float_runs])[ok], rmse(ref[:, None], np.array(y).T)[ok]
+        worst = max(worst, float(np.max(np.abs(e_eng - e_flt) / e_flt)))
+    n = len(work)
+    rows = [Row(NAME, f"float loop (plain Python), {float_runs} runs a scheme", n * float_runs, t_flt,
+                f"RMSE rel. {worst:.1e} (runs 0..{float_runs - 1})"),
+            Row(NAME, f"engine (numpy, batched), B = {runs} a scheme", n * runs, t_eng, "same runs, same noise")]
+    return rows, t_flt / (n * float_runs), None, [f"float loop timed once on {float_runs} runs a scheme"]
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--runs", type=int, default=200)

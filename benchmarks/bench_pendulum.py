@@ -81,6 +81,42 @@ def float_loop(p, a21, table, w, v):
     return np.array(out)
 
 
+NAME = "pendulum fuzzy loop (no filter, 1 s)"
+
+
+def run(repeat=3, t_end=1.0):
+    """Rows for ``run_all.py``: the float loop (1 run) and the engine at B = 1 and 100.
+
+    Returns ``(rows, float-loop seconds per run, None (no compiled reference), notes)``.
+    """
+    from _common import Row
+
+    p = dataclasses.replace(paper.LOOP, t_end=t_end)
+    a21 = paper.VERIFY.a21
+    table = loops.fuzzy_controller(p, lookup=True)
+    N = int(round(p.t_end / p.T))
+    seeds = list(range(100))
+    nz = draw_noise(seeds, N, gaussian_noise(p.sigma_w), gaussian_noise(p.sigma_v))
+    res, rows = {}, []
+    t_float, phi_float = best_of(lambda: float_loop(p, a21, table, nz[:, 0, 0], nz[:, 0, 1]), repeat)
+    rows.append(Row(NAME, "float loop (plain Python), 1 run", 1, t_float, ""))
+    for B in (1, 100):
+        t, res[B] = best_of(lambda: loops.simulate_case(p, a21, seeds[:B]), repeat)
+        rows.append(Row(NAME, f"engine `Loop` (numpy), B = {B}", B, t, ""))
+    rows[0].agreement = f"φ vs engine run 0: {np.max(np.abs(res[1].phi[:, 0] - phi_float)):.1e} rad"
+    rows[2].agreement = f"run 0 = its B = 1 run bit for bit: {np.array_equal(res[100].phi[:, 0], res[1].phi[:, 0])}"
+    notes = [f"{N} samples, RK4 with 4 substeps; best of {repeat} repeats"]
+    direct, rng = loops.fuzzy_controller(p, lookup=False), np.random.default_rng(0)
+    for B in (1, 100):
+        u = np.stack([rng.uniform(-0.1, 0.1, B), rng.uniform(-1.5, 1.5, B)], axis=1)
+        x, n = np.zeros((B, 0)), (200 if B == 1 else 20)
+        td, ud = best_of(lambda: [direct.output(0.0, x, u) for _ in range(n)][-1], repeat)
+        tl, ul = best_of(lambda: [table.output(0.0, x, u) for _ in range(n)][-1], repeat)
+        notes.append(f"one fuzzy evaluation, B = {B}: direct Mamdani {td / n * 1e6:.0f} µs, query table "
+                     f"{tl / n * 1e6:.0f} µs ({td / tl:.0f}x); max |difference| {np.max(np.abs(ud - ul)):.3g} m/s²")
+    return rows, t_float, None, notes
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--t-end", type=float, default=1.0)

@@ -249,7 +249,7 @@ def _gen_source(blocks, order, stage, discrete, continuous, nc, method, finite_b
     add(f"    k1 = np.empty({nc}); k2 = np.empty({nc}); k3 = np.empty({nc}); k4 = np.empty({nc})")
     add(f"    xt = np.empty({nc}); xc = np.empty({nc})")
     add("    xn = np.empty(n)")
-    add("    X = X0.copy()")
+    add("    X = X0  # stepped in place: the caller reads the final state from it")
     add("    SS = np.empty((B, S0.shape[0]))")
     add("    for b in range(B):")
     add("        for j in range(S0.shape[0]):")
@@ -471,5 +471,7 @@ def run_compiled(loop, runner, plan, n_steps, t, x, held, bound, keep_cols, stor
         H[m:, :, j] = a2[m - 1]  # row N repeats row N-1 when absent
     HC = np.array([col[s] for s, _ in varying], dtype=np.intp)
     xs_arg = np.empty((0, 0, 0)) if xs is None else xs
-    run(n_steps, t, loop.dt / loop.substeps, loop.substeps, np.ascontiguousarray(x), H, HC, S0,
+    X = np.array(x, dtype=float, order="C")  # a copy, stepped in place by the runner
+    run(n_steps, t, loop.dt / loop.substeps, loop.substeps, X, H, HC, S0,
         keep_cols, store, xs_arg, float(bound), diverged, div_step, *P)
+    x[...] = X  # the final state, as the numpy path leaves it (final_states, chunk carry-over)

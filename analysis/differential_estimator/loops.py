@@ -13,17 +13,35 @@ import math
 import control as ct
 import numpy as np
 
+from ctrl_analysis._kernels import BlockKernel, copy_output
 from ctrl_analysis.blocks import ContinuousBlock, StaticBlock, signal_names
-from ctrl_analysis.controllers.differential_feedback import HighOrderDifferentialFeedback
+from ctrl_analysis.controllers.differential_feedback import (
+    HighOrderDifferentialFeedback,
+)
 from ctrl_analysis.estimators.differential import DifferentialEstimator
 from ctrl_analysis.estimators.eso import ExtendedStateObserver
 from ctrl_analysis.loop import Loop, place
 
 from .paper import Example1, Example2, han_eso_gains
 
-__all__ = ["Plant19", "Plant20", "RowGroups", "sensor", "han_eso", "example1_loop", "example2_loop",
-           "simulate_signals", "example2_linear", "max_real_eig", "simulate_example1", "impulse_response",
-           "LinearPath"]
+__all__ = [
+    "LinearPath",
+    "Plant19",
+    "Plant20",
+    "RowGroups",
+    "Sensor",
+    "example1_loop",
+    "example2_linear",
+    "example2_loop",
+    "han_eso",
+    "impulse_response",
+    "max_real_eig",
+    "plant19_rhs",
+    "sensor",
+    "sensor_output",
+    "simulate_example1",
+    "simulate_signals",
+]
 
 
 def _sign_cos(arg: float) -> float:
@@ -32,10 +50,26 @@ def _sign_cos(arg: float) -> float:
     return float((c > 0) - (c < 0))
 
 
+def plant19_rhs(t, x, u, p, dx):
+    """Kernel of :class:`Plant19` (one run; on a batch's columns it is the numpy method); ``p = [b1, b2, ω_w]``."""
+    c = math.cos(p[2] * t)
+    w = 1.0 if c > 0 else (-1.0 if c < 0 else 0.0)  # w = sign(cos(ω_w t))
+    dx[0] = x[1]  # (19) x1' = x2
+    # (19) x2' = -(b1 x1 + b2 x1² x2) + w + ξ
+    dx[1] = (w + u[0]) - x[0] * (p[0] + p[1] * x[0] * x[1])
+
+
+def sensor_output(t, x, u, p, y):
+    """Kernel of :func:`sensor`: ``y = x1 + η`` (19)/(20)."""
+    y[0] = u[0] + u[1]
+
+
 class Plant19(ContinuousBlock):
     """Plant (19) of Example 1: ``x1' = x2``, ``x2' = -(b1 x1 + b2 x1² x2) + w + ξ``, ``w = sign(cos(ω_w t))``.
 
-    Input ``xi`` (the process noise ξ, held per step); states and outputs ``x1``, ``x2``.
+    Input ``xi`` (the process noise ξ, held per step); states and outputs ``x1``, ``x2``. The batched
+    ``rhs`` applies the kernel :func:`plant19_rhs` to the batch's columns (one piece of code for the
+    numpy and the compiled engine).
 
     Parameters
     ----------
@@ -47,15 +81,33 @@ class Plant19(ContinuousBlock):
 
     def __init__(self, p: Example1):
         self.b1, self.b2, self.w_freq = float(p.b1), float(p.b2), float(p.w_freq)
+        self.p = np.array([self.b1, self.b2, self.w_freq])
 
     def rhs(self, t, X, U, params=None):
-        x1 = X[:, 0]
-        x2 = X[:, 1]
         dX = np.empty_like(X)
-        dX[:, 0] = x2  # (19) x1' = x2
-        # (19) x2' = -(b1 x1 + b2 x1² x2) + w + ξ,  w = sign(cos(0.3 t))
-        dX[:, 1] = (_sign_cos(self.w_freq * t) + U[:, 0]) - x1 * (self.b1 + self.b2 * x1 * x2)
+        plant19_rhs(t, X.T, U.T, self.p, dX.T)
         return dX
+
+    def kernel(self) -> BlockKernel:
+        """The per-run kernel (:mod:`ctrl_analysis._kernels`): output = state, ``rhs`` = :func:`plant19_rhs`."""
+        return BlockKernel(output=copy_output, params=self.p, rhs=plant19_rhs)
+
+
+class Sensor(StaticBlock):
+    """``y = x1 + η`` (19)/(20), a static sum block with a kernel (:func:`sensor_output`)."""
+
+    def __init__(self, signal: str = "x1"):
+        super().__init__(self._sum, inputs=(signal, "eta"), outputs=("y",))
+
+    @staticmethod
+    def _sum(t, u):
+        y = np.empty((u.shape[0], 1))
+        sensor_output(t, None, u.T, None, y.T)
+        return y
+
+    def kernel(self) -> BlockKernel:
+        """The per-run kernel: :func:`sensor_output`."""
+        return BlockKernel(output=sensor_output, params=np.zeros(1))
 
 
 class Plant20(ContinuousBlock):
@@ -129,9 +181,9 @@ class RowGroups(ContinuousBlock):
         return self._each("output", t, x, u, params)
 
 
-def sensor(signal: str = "x1") -> StaticBlock:
-    """``y = x1 + η`` (19)/(20), a static sum block."""
-    return StaticBlock(lambda t, u: u[:, :1] + u[:, 1:2], inputs=(signal, "eta"), outputs=("y",))
+def sensor(signal: str = "x1") -> Sensor:
+    """``y = x1 + η`` (19)/(20), a static sum block (:class:`Sensor`)."""
+    return Sensor(signal)
 
 
 def han_eso(p: Example1, tuning_h: float | None = None) -> ExtendedStateObserver:
@@ -220,13 +272,14 @@ def simulate_signals(loop: Loop, n_steps: int, keep, *, inputs, runs: int, chunk
     for k0 in range(0, n_steps, chunk):
         n = min(chunk, n_steps - k0)
         ins = {s: (v[k0:k0 + n + 1] if isinstance(v, np.ndarray) and v.ndim else v) for s, v in inputs.items()}
-        res = loop.simulate(n, inputs=ins, x0=x0, runs=runs, t0=k0 * loop.dt, bound=bound, seeds=seeds)
+        res = loop.simulate(n, inputs=ins, x0=x0, runs=runs, t0=k0 * loop.dt, bound=bound, seeds=seeds,
+                            store_signals=list(keep), store_states=False)
         for s in keep:
             out[s][k0:k0 + n + 1] = res[s]
         new = res.diverged & ~diverged
         step[new] = k0 + res.diverged_step[new]
         diverged |= res.diverged
-        x0 = {name: np.nan_to_num(x[-1]) for name, x in res.states.items() if x.shape[2]}
+        x0 = {name: np.nan_to_num(x) for name, x in res.final_states.items() if x.shape[1]}
     return out, diverged, step
 
 

@@ -87,8 +87,11 @@ class Plant(ContinuousBlock):
         return dx
 
     def output(self, t, x, u, params=None):
+        y = np.empty((x.shape[0], 3))
+        y[:, :2] = x
         # (27): y = x1 + 0.002 n0
-        return np.stack([x[:, 0], x[:, 1], x[:, 0] + u[:, 2]], axis=1)
+        np.add(x[:, 0], u[:, 2], out=y[:, 2])
+        return y
 
 
 def _model_term(t, x_hat, u, params=None):

@@ -133,6 +133,11 @@ def test_compiled_loop_equals_numpy_loop_bit_for_bit_without_pow():
     one = loop.simulate(300, inputs={"w": noise[:, 3:4, 0], "v": noise[:, 3:4, 1]}, engine="compiled")
     assert np.array_equal(one.x[:, 0], b.x[:, 3])
     assert _kernels.compile_seconds() >= 0.0
+    # without stored states the final state still comes back (chunk carry-over), on both paths
+    fa = loop.simulate(300, inputs=inputs, engine="numpy", store_states=False).final_states
+    fb = loop.simulate(300, inputs=inputs, engine="compiled", store_states=False).final_states
+    for name, sl in loop.slices.items():
+        assert np.array_equal(fa[name], a.x[-1][:, sl]) and np.array_equal(fb[name], a.x[-1][:, sl]), name
 
 
 def test_compiled_loop_with_han_eso_agrees_and_is_batch_independent():
@@ -204,3 +209,26 @@ def test_environment_can_make_auto_mean_numpy(monkeypatch):
     monkeypatch.setenv("CTRL_ANALYSIS_ENGINE", "numpy")
     assert loop._compiled("auto", {}, None, True) is None
     assert loop._compiled("compiled", {}, None, True) is not None  # an explicit request still compiles
+
+
+def test_study_kernels_are_the_numpy_methods():
+    """Kernels of study blocks (differential-estimator's plant (19) and sensor), run by run in plain Python."""
+    from analysis.differential_estimator.loops import Plant19, sensor
+    from analysis.differential_estimator.paper import EX1
+
+    rng = np.random.default_rng(3)
+    plant, sens = Plant19(EX1), sensor()
+    x, u = rng.normal(size=(7, 2)), rng.normal(size=(7, 1))
+    for t in (0.0, 2.0, 7.0):
+        k = plant.kernel()
+        out = np.empty_like(x)
+        for b in range(7):
+            k.rhs(t, x[b], u[b], k.params, out[b])
+        assert np.array_equal(out, plant.rhs(t, x, u))
+    u2 = rng.normal(size=(7, 2))
+    k = sens.kernel()
+    y = np.empty((7, 1))
+    for b in range(7):
+        k.output(0.0, None, u2[b], k.params, y[b])
+    assert np.array_equal(y, sens.output(0.0, np.zeros((7, 0)), u2))
+    assert np.array_equal(y[:, 0], u2[:, 0] + u2[:, 1])
