@@ -310,7 +310,8 @@ class StudyContext:
         """Save ``fig`` as ``out_dir/filename``, close it and list it in ``result.figures``.
 
         ``caption`` (what is plotted, which paper figure it redraws, what to compare) goes to
-        ``result.captions[filename]`` and is printed under the figure in REPORT.md.
+        ``result.captions[filename]`` and is printed under the figure in REPORT.md. In quick mode (a
+        smoke test) the figure is rendered at no more than 50 dpi: rendering is most of its cost.
         """
         import matplotlib.pyplot as plt
 
@@ -319,13 +320,15 @@ class StudyContext:
         if Path(check_str("filename", filename)).name != filename or filename in (".", ".."):
             raise ValueError(f"filename must be a plain file name inside out_dir (no directory), got {filename!r}")
         dpi = check_int("dpi", dpi, minimum=1)
+        if self.quick:
+            dpi = min(dpi, 50)
         if caption is not None:
             if not isinstance(caption, str) or not caption.strip():
                 raise ValueError(f"caption must be a non-empty string, got {caption!r}")
             result.captions[filename] = caption
         self.out_dir.mkdir(parents=True, exist_ok=True)
         path = self.out_dir / filename
-        fig.savefig(path, dpi=dpi, bbox_inches="tight")
+        fig.savefig(path, dpi=dpi, bbox_inches=None if self.quick else "tight")
         plt.close(fig)
         if filename not in result.figures:
             result.figures.append(filename)

@@ -45,4 +45,4 @@ def test_unbuilt_study_reports_what_is_missing(tmp_path, capsys):
     assert main(["reproduce", name, "--out", str(tmp_path), "--quick"]) == 0
     data = json.loads((tmp_path / name / "results.json").read_text())
     assert data["study"] == name and data["missing"]
-    assert "not built yet" in capsys.readouterr().out
+    assert "not reproduced" in capsys.readouterr().out

@@ -170,7 +170,7 @@ def test_progress_bar_is_silent_off_a_terminal(monkeypatch):
 def test_cli_runs_studies_side_by_side_with_jobs(tmp_path, capsys):
     from ctrl_analysis.cli import main
 
-    assert main(["reproduce", "ckf", "ikf-mfac", "--jobs", "2", "--out", str(tmp_path)]) == 0
+    assert main(["reproduce", "ckf", "ikf-mfac", "--quick", "--jobs", "2", "--out", str(tmp_path)]) == 0
     out = capsys.readouterr().out
     assert out.index("== ckf") < out.index("== ikf-mfac")  # printed in the order asked, whoever finished first
     assert (tmp_path / "ckf" / "results.json").exists() and (tmp_path / "ikf-mfac" / "results.json").exists()
