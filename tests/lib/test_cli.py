@@ -1,6 +1,5 @@
 """CLI: exit codes, one-line errors, files written."""
 
-import json
 import subprocess
 import sys
 
@@ -35,14 +34,3 @@ def test_bad_input_is_one_line_and_exit_2(argv, fragment):
     assert len(lines) == 1 and fragment in lines[0] and "Traceback" not in proc.stderr
 
 
-def test_unbuilt_study_reports_what_is_missing(tmp_path, capsys):
-    import importlib
-
-    unbuilt = [n for n, m in STUDIES.items() if hasattr(importlib.import_module(m), "MISSING")]
-    if not unbuilt:
-        pytest.skip("every study is built")
-    name = unbuilt[0]
-    assert main(["reproduce", name, "--out", str(tmp_path), "--quick"]) == 0
-    data = json.loads((tmp_path / name / "results.json").read_text())
-    assert data["study"] == name and data["missing"]
-    assert "not reproduced" in capsys.readouterr().out

@@ -127,15 +127,6 @@ def test_committed_results_json_validates(path):
     assert not [q["id"] for q in data["quantities"] if q["paper"] is not None and not q.get("cell")]
 
 
-def test_real_cli_output_validates(tmp_path):
-    from ctrl_analysis.cli import main
-
-    assert main(["reproduce", "ckf", "ikf-mfac", "--quick", "--out", str(tmp_path)]) == 0
-    for name in ("ckf", "ikf-mfac"):
-        data = validate_results(json.loads((tmp_path / name / "results.json").read_text()))
-        assert data["settings"]["cli"] == {"seed": 0, "runs": None, "quick": True}
-
-
 def test_report_shows_unit_tolerance_counts_and_marks_stale(tmp_path):
     fresh = _result().to_dict()
     old = dict(_result().to_dict(), study="old-study")
