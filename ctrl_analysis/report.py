@@ -1,19 +1,24 @@
-"""Results records, computed verdicts, results.json and REPORT.md, and the shared figure style."""
+"""What a study is handed (StudyContext), results.json writing and its schema check, and the figure style.
+
+The result records themselves (:class:`Quantity`, :class:`StudyResult`, computed verdicts) are in
+:mod:`ctrl_analysis.results` and re-exported here; REPORT.md is written by :mod:`ctrl_analysis.report_md`.
+"""
 
 from __future__ import annotations
 
 import json
 import math
-import platform
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
 import numpy as np
 
 from .atomic import staged_directory, write_text_atomic  # noqa: F401 (public API)
-from ._validate import (check_array, check_bool, check_callable, check_int, check_nonnegative, check_path,
+from .results import (DEFAULT_TOLERANCE, RESULTS_SCHEMA, VERDICTS, Quantity, StudyInfo,  # noqa: F401 (public API)
+                      StudyResult, compute_verdict, relative_error, versions)
+from ._validate import (check_callable, check_int, check_path,
                         check_positive, check_str)
 
 __all__ = [
@@ -34,257 +39,46 @@ __all__ = [
     "new_figure",
 ]
 
-VERDICTS = ("agrees", "differs", "new", "diverged")
-#: Version of the results.json layout: 2 adds ``unit`` and ``tolerance`` on every quantity, the
-#: ``diverged`` verdict, paper ``cell`` / ``primary`` and ``settings["cli"]``.
-RESULTS_SCHEMA = 2
-DEFAULT_TOLERANCE = 0.1
+def _silent(message: str) -> None:
+    """The default progress sink of :class:`StudyContext`: discard the message.
 
+    Parameters
+    ----------
+    message : str
 
-def _to_jsonable(value):
-    """numpy → plain Python; non-finite floats → None (JSON has no NaN)."""
-    if isinstance(value, dict):
-        return {str(k): _to_jsonable(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_to_jsonable(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return _to_jsonable(value.tolist())
-    if isinstance(value, (np.bool_, bool)):
-        return bool(value)
-    if isinstance(value, (np.integer,)):
-        return int(value)
-    if isinstance(value, (float, np.floating)):
-        value = float(value)
-        return value if math.isfinite(value) else None
-    if isinstance(value, complex):
-        return [_to_jsonable(value.real), _to_jsonable(value.imag)]
-    if isinstance(value, Path):
-        return str(value)
-    return value
-
-
-def relative_error(value, paper) -> float:
-    """Largest element-wise relative error |value - paper| / |paper| (absolute where paper == 0).
-
-    Vectors must have the same length; a length mismatch or a non-finite value gives ``inf``.
+    Returns
+    -------
+    None
     """
-    v = np.atleast_1d(check_array("value", value))
-    p = np.atleast_1d(check_array("paper", paper))
-    if v.shape != p.shape or not np.all(np.isfinite(v)):
-        return math.inf
-    scale = np.where(p == 0, 1.0, np.abs(p))
-    return float(np.max(np.abs(v - p) / scale))
-
-
-def _check_tolerance(tolerance) -> float:
-    return float(check_nonnegative("tolerance", tolerance, scalar=True))
-
-
-def compute_verdict(value, paper, tolerance: float | None, *, diverged: bool = False) -> str:
-    """``diverged`` when every run diverged; ``new`` without a paper value; else ``agrees`` when the
-    relative error is within tolerance, ``differs`` otherwise."""
-    if check_bool("diverged", diverged):
-        return "diverged"
-    if paper is None:
-        return "new"
-    tol = DEFAULT_TOLERANCE if tolerance is None else _check_tolerance(tolerance)
-    if value is None:
-        return "differs"
-    return "agrees" if relative_error(value, paper) <= tol else "differs"
-
-
-@dataclass
-class Quantity:
-    """One reproduced number (or vector) beside the paper's.
-
-    ``verdict`` is computed from ``value``, ``paper``, ``tolerance`` (relative) and ``diverged``; it is
-    never set by hand. ``unit`` is always written ("" = dimensionless); ``tolerance`` is written
-    whenever ``paper`` is (default :data:`DEFAULT_TOLERANCE`). ``cell`` names the paper cell the
-    quantity scores (e.g. ``"Table 2 / x1 ESO"``); quantities sharing a cell are counted once, by the
-    one with ``primary=True`` (default: the first recorded). ``diverged=True`` (or ``runs_diverged``
-    equal to ``runs``, or ``runs=0`` healthy runs with ``value=None``) means every run diverged: no
-    value, verdict ``diverged``.
-    """
-
-    id: str
-    label: str
-    value: object
-    paper: object = None
-    std: object = None
-    runs: int | None = None
-    tolerance: float | None = None
-    note: str = ""
-    unit: str = ""
-    cell: str | None = None
-    primary: bool = False
-    diverged: bool = False
-    runs_diverged: int | None = None
-
-    def __post_init__(self):
-        for name in ("id", "label"):
-            if not isinstance(getattr(self, name), str) or (name == "id" and not self.id):
-                raise TypeError(f"{name} must be a non-empty string, got {getattr(self, name)!r}")
-        if not isinstance(self.unit, str):
-            raise TypeError(f"unit must be a string ('' for dimensionless), got {self.unit!r}")
-        if self.cell is not None and (not isinstance(self.cell, str) or not self.cell.strip()):
-            raise ValueError(f"cell must be a non-empty string naming the paper cell, got {self.cell!r}")
-        if self.tolerance is not None:
-            self.tolerance = _check_tolerance(self.tolerance)
-        self.primary = check_bool("primary", self.primary)
-        self.diverged = check_bool("diverged", self.diverged)
-        if self.runs is not None:
-            self.runs = check_int("runs", self.runs, minimum=0)
-        if self.runs_diverged is not None:
-            self.runs_diverged = check_int("runs_diverged", self.runs_diverged, minimum=0,
-                                           maximum=self.runs)
-            if self.runs and self.runs_diverged == self.runs:
-                self.diverged = True
-        if self.runs == 0 and self.value is None:  # no run contributed a value: every run diverged
-            self.diverged = True
-        if self.diverged and self.value is not None:
-            raise ValueError(f"quantity {self.id!r}: a diverged quantity has no value (value must be None), "
-                             f"got {self.value!r}")
-
-    @property
-    def verdict(self) -> str:
-        return compute_verdict(self.value, self.paper, self.tolerance, diverged=self.diverged)
-
-    def to_dict(self) -> dict:
-        d = {
-            "id": self.id,
-            "label": self.label,
-            "paper": self.paper,
-            "value": self.value,
-            # one run has no spread: record none rather than a misleading 0
-            "std": self.std if (self.runs is None or self.runs > 1) and not self.diverged else None,
-            "runs": self.runs,
-            "unit": self.unit,
-            "tolerance": (DEFAULT_TOLERANCE if self.tolerance is None else self.tolerance)
-            if self.paper is not None
-            else None,
-            "verdict": self.verdict,
-            "note": self.note,
-        }
-        if self.cell is not None:
-            d["cell"] = self.cell
-            d["primary"] = bool(self.primary)
-        if self.runs_diverged is not None:
-            d["runs_diverged"] = self.runs_diverged
-        if self.value is not None and not np.all(np.isfinite(np.asarray(self.value, dtype=float))):
-            d["note"] = (self.note + " " if self.note else "") + "value is not finite (diverged run?)"
-        return _to_jsonable(d)
-
-
-@dataclass(frozen=True)
-class StudyInfo:
-    """What a study is: its CLI name, seed file, paper and what it reproduces."""
-
-    name: str
-    seed_file: str
-    paper: str
-    reproduces: str
-
-    def __post_init__(self):
-        check_str("name", self.name)
-        for name in ("seed_file", "paper", "reproduces"):
-            check_str(name, getattr(self, name), empty=True)
-
-
-@dataclass
-class StudyResult:
-    """Everything one study reproduced; serialised to results.json."""
-
-    info: StudyInfo
-    settings: dict = field(default_factory=dict)
-    reconstructions: list = field(default_factory=list)
-    quantities: list = field(default_factory=list)
-    findings: list = field(default_factory=list)
-    figures: list = field(default_factory=list)
-    #: figure file name -> caption (what is plotted and which paper figure it redraws), shown in REPORT.md
-    captions: dict = field(default_factory=dict)
-    missing: list = field(default_factory=list)
-    seeds: dict = field(default_factory=dict)
-    runtime_s: float = 0.0
-
-    def __post_init__(self):
-        if not isinstance(self.info, StudyInfo):
-            raise TypeError(f"info must be a StudyInfo, got {self.info!r}")
-
-    def quantity(self, id: str, label: str, value, paper=None, **kw) -> Quantity:
-        """Add a quantity and return it (an id may be recorded once).
-
-        Keywords are the fields of :class:`Quantity`:
-
-        - ``unit`` (str, "" = dimensionless) and ``tolerance`` (relative; default
-          :data:`DEFAULT_TOLERANCE` when ``paper`` is given) are written to results.json and REPORT.md.
-        - ``std`` and ``runs`` for Monte Carlo values (no std is written for a single run).
-        - ``cell="Table 2 / x1 ESO"`` names the paper cell the quantity scores; quantities sharing a
-          cell are counted once in the headline counts, by the one with ``primary=True`` (default: the
-          first recorded in that cell). Quantities without a cell count individually.
-        - ``diverged=True`` when every run diverged: pass ``value=None``; the verdict is
-          ``diverged``. Equivalently give ``runs`` and ``runs_diverged`` equal, or ``runs=0`` (the
-          number of healthy runs that contributed) with ``value=None``. A quantity some of whose runs diverged keeps its value (averaged
-          over the healthy runs) and can record ``runs_diverged`` for the note.
-        """
-        if any(q.id == id for q in self.quantities):
-            raise ValueError(f"quantity id {id!r} is already recorded in study {self.info.name!r}")
-        q = Quantity(id=id, label=label, value=value, paper=paper, **kw)
-        self.quantities.append(q)
-        return q
-
-    def reconstruction(self, name: str, value, why: str) -> None:
-        """Record a value the paper does not print (or prints wrongly) and the reason for the choice."""
-        self.reconstructions.append({"name": check_str("name", name), "value": value, "why": check_str("why", why)})
-
-    def finding(self, id: str, text: str, evidence=None) -> None:
-        """Record an erratum, an inconsistency, an irreproducible claim or an instability."""
-        item = {"id": check_str("id", id), "text": check_str("text", text)}
-        if evidence is not None:
-            item["evidence"] = evidence
-        self.findings.append(item)
-
-    def get(self, id: str) -> Quantity:
-        for q in self.quantities:
-            if q.id == id:
-                return q
-        raise KeyError(id)
-
-    def to_dict(self) -> dict:
-        cells: dict = {}
-        for q in self.quantities:
-            if q.cell is not None and q.primary:
-                if q.cell in cells:
-                    raise ValueError(f"cell {q.cell!r} has two primary quantities: {cells[q.cell]!r} and {q.id!r}")
-                cells[q.cell] = q.id
-        return _to_jsonable(
-            {
-                "schema": RESULTS_SCHEMA,
-                "study": self.info.name,
-                "seed_file": self.info.seed_file,
-                "paper": self.info.paper,
-                "settings": self.settings,
-                "reconstructions": self.reconstructions,
-                "quantities": [q.to_dict() for q in self.quantities],
-                "findings": self.findings,
-                "figures": self.figures,
-                "captions": {name: self.captions[name] for name in self.figures if name in self.captions},
-                "missing": self.missing,
-                "seeds": self.seeds,
-                "runtime_s": round(self.runtime_s, 3),
-                "versions": versions(),
-            }
-        )
 
 
 @dataclass
 class StudyContext:
-    """What the CLI hands a study: where to write, how many runs, which seed, quick or full."""
+    """What the CLI hands a study: where to write, how many runs, which seed, quick or full.
+
+    Parameters
+    ----------
+    out_dir : Path
+        Where the study writes its figures (a staging directory during a CLI run).
+    runs : int, optional
+        Monte Carlo runs asked for (``--runs``); ``None``: the study's default.
+    seed : int
+        Base seed (``--seed``).
+    quick : bool
+        Fewer runs and shorter horizons, figures at low resolution (``--quick``).
+    progress : callable
+        ``progress(message)``, where the study reports what it is doing.
+    jobs : int
+        Processes the study may use (``--jobs``).
+    scheduler : str, optional
+        A Dask scheduler address (``--scheduler``).
+    """
 
     out_dir: Path
     runs: int | None = None
     seed: int = 0
     quick: bool = False
-    progress: Callable[[str], None] = lambda msg: None
+    progress: Callable[[str], None] = _silent
     jobs: int = 1
     scheduler: str | None = None
 
@@ -296,7 +90,19 @@ class StudyContext:
         check_callable("progress", self.progress, "progress(message)")
 
     def runs_or(self, default: int, quick_default: int | None = None) -> int:
-        """The requested number of Monte Carlo runs, or the study's default (smaller with --quick)."""
+        """The requested number of Monte Carlo runs, or the study's default (smaller with --quick).
+
+        Parameters
+        ----------
+        default : int
+            The study's default number of runs.
+        quick_default : int, optional
+            The default with ``--quick`` (else ``min(default, 3)``).
+
+        Returns
+        -------
+        int
+        """
         default = check_int("default", default, minimum=1)
         if quick_default is not None:
             quick_default = check_int("quick_default", quick_default, minimum=1)
@@ -311,7 +117,23 @@ class StudyContext:
 
         ``caption`` (what is plotted, which paper figure it redraws, what to compare) goes to
         ``result.captions[filename]`` and is printed under the figure in REPORT.md. In quick mode (a
-        smoke test) the figure is rendered at no more than 50 dpi: rendering is most of its cost.
+        smoke test) the figure is rendered at no more than 50 dpi and without the tight bounding box:
+        rendering is most of its cost.
+
+        Parameters
+        ----------
+        result : StudyResult
+        fig : matplotlib.figure.Figure
+        filename : str
+            A plain file name (no directory).
+        dpi : int
+            Resolution.
+        caption : str, optional
+
+        Returns
+        -------
+        Path
+            The file written.
         """
         import matplotlib.pyplot as plt
 
@@ -335,30 +157,24 @@ class StudyContext:
         return path
 
 
-def versions() -> dict:
-    """Versions of Python and the numeric stack, recorded in every results.json.
+def write_results_json(result: StudyResult, out_dir: Path) -> Path:
+    """Write ``out_dir/results.json`` atomically (the contract in DESIGN.md); validated first.
+
+    Parameters
+    ----------
+    result : StudyResult
+    out_dir : str or Path
 
     Returns
     -------
-    dict of str -> str
+    Path
+        The file written.
+
+    Raises
+    ------
+    ValueError
+        If the record breaks the schema (:func:`validate_results`).
     """
-    import control
-    import matplotlib
-    import scipy
-    import sympy
-
-    return {
-        "python": platform.python_version(),
-        "control": control.__version__,
-        "numpy": np.__version__,
-        "scipy": scipy.__version__,
-        "sympy": sympy.__version__,
-        "matplotlib": matplotlib.__version__,
-    }
-
-
-def write_results_json(result: StudyResult, out_dir: Path) -> Path:
-    """Write ``out_dir/results.json`` atomically (the contract in DESIGN.md); validated first."""
     if not isinstance(result, StudyResult):
         raise TypeError(f"result must be a StudyResult, got {type(result).__name__}")
     out_dir = check_path("out_dir", out_dir)
@@ -487,7 +303,24 @@ def count_verdicts(results: dict) -> dict:
 
 
 def new_figure(nrows: int = 1, ncols: int = 1, *, title: str | None = None, size=(7.0, 4.5), **kw):
-    """A figure in the toolkit's style (object API, grid on, readable size). Returns (fig, axes)."""
+    """A figure in the toolkit's style (object API, grid on, readable size, constrained layout).
+
+    Parameters
+    ----------
+    nrows, ncols : int
+        Subplot grid.
+    title : str, optional
+        Figure title (what is plotted, never a conclusion).
+    size : (float, float)
+        Width and height in inches.
+    **kw
+        Passed to :func:`matplotlib.pyplot.subplots` (e.g. ``sharex``).
+
+    Returns
+    -------
+    fig : matplotlib.figure.Figure
+    axes : matplotlib.axes.Axes or numpy.ndarray of them
+    """
     import matplotlib
 
     nrows = check_int("nrows", nrows, minimum=1)

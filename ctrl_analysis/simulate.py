@@ -53,12 +53,46 @@ __all__ = [
 # ----------------------------------------------------------------------------------------------
 
 def euler_step(rhs: Callable, t: float, x: np.ndarray, u, h: float, params=None) -> np.ndarray:
-    """One forward-Euler step of ``x' = rhs(t, x, u, params)`` with ``u`` held."""
+    """One forward-Euler step of ``x' = rhs(t, x, u, params)`` with ``u`` held.
+
+    Parameters
+    ----------
+    rhs : callable
+        ``rhs(t, x, u, params) -> dx/dt``, batched.
+    t, h : float
+        Start of the step and its length.
+    x : numpy.ndarray, shape (B, n)
+    u : object
+        Held input passed to ``rhs``.
+    params : optional
+
+    Returns
+    -------
+    numpy.ndarray, shape (B, n)
+        The state at ``t + h``.
+    """
     return x + h * rhs(t, x, u, params)
 
 
 def rk4_step(rhs: Callable, t: float, x: np.ndarray, u, h: float, params=None) -> np.ndarray:
-    """One classical Runge-Kutta step of ``x' = rhs(t, x, u, params)`` with ``u`` held over the step."""
+    """One classical Runge-Kutta step of ``x' = rhs(t, x, u, params)`` with ``u`` held over the step.
+
+    Parameters
+    ----------
+    rhs : callable
+        ``rhs(t, x, u, params) -> dx/dt``, batched.
+    t, h : float
+        Start of the step and its length.
+    x : numpy.ndarray, shape (B, n)
+    u : object
+        Held input passed to ``rhs``.
+    params : optional
+
+    Returns
+    -------
+    numpy.ndarray, shape (B, n)
+        The state at ``t + h``.
+    """
     k1 = rhs(t, x, u, params)
     k2 = rhs(t + 0.5 * h, x + 0.5 * h * k1, u, params)
     k3 = rhs(t + 0.5 * h, x + 0.5 * h * k2, u, params)
@@ -112,10 +146,22 @@ class SimResult:
 
     @property
     def runs(self) -> int:
+        """Number of runs in the batch.
+
+        Returns
+        -------
+        int
+        """
         return int(self.diverged.size)
 
     def divergences(self) -> list[dict]:
-        """One record per diverged run: index, step, time and seed."""
+        """One record per diverged run.
+
+        Returns
+        -------
+        list of dict
+            ``run`` (index), ``step``, ``t`` and ``seed`` of each diverged run.
+        """
         out = []
         for b in np.flatnonzero(self.diverged):
             k = int(self.diverged_step[b])
@@ -414,6 +460,20 @@ def simulate_discrete(
     ``step`` receives ``x`` of shape ``(B, n)`` and the noise row ``w(k)`` of shape ``(B, m)``
     (``None`` without noise). Divergence is detected as in :func:`simulate_sampled`.
     ``observe(k, x, w) -> (B, p)`` is stored for ``k = 0..N-1``.
+
+    Parameters
+    ----------
+    step : callable
+        ``step(k, x, w, params) -> x_next``.
+    x0 : array_like, shape (n,) or (B, n)
+    n_steps : int
+    noise : ndarray, shape (n_steps, B, m), optional
+    params, observe, store_states, bound, seeds
+        As in :func:`simulate_sampled`.
+
+    Returns
+    -------
+    SimResult
     """
     check_callable("step", step, "step(k, x, w, params)")
     check_callable("observe", observe, "observe(k, x, w)", optional=True)
@@ -441,92 +501,6 @@ def simulate_discrete(
                      diverged_step=div_step, seeds=None if seeds is None else list(seeds), bound=bound)
 
 
-_IVP_METHODS = ("RK45", "RK23", "DOP853", "Radau", "BDF", "LSODA")
-
-
-def simulate_ivp(
-    rhs: Callable,
-    x0,
-    t_eval,
-    *,
-    u: Callable | None = None,
-    params=None,
-    method: str = "RK45",
-    rtol: float = 1e-8,
-    atol: float = 1e-10,
-    bound: float = 1e8,
-) -> SimResult:
-    """Smooth, deterministic loop integrated adaptively by :func:`scipy.integrate.solve_ivp`.
-
-    The batch is flattened into one ODE of size ``B*n`` (``rhs`` is vectorised over runs), so one
-    adaptive solve serves the whole batch. ``u(t) -> (B, m)`` is an optional smooth input.
-
-    A run leaving ``bound`` is frozen there (zero derivative) and flagged; the others go on. When the
-    batch solve fails (e.g. a run's derivative becomes non-finite), every run is solved on its own
-    (``rhs`` still receives the whole batch, the other rows held at ``x0``), so one diverging run
-    neither stops nor flags the healthy ones; ``info["per_run"]`` says whether that fallback ran.
-
-    Raises
-    ------
-    ValueError
-        ``t_eval`` not finite and strictly increasing, ``rtol`` / ``atol`` not finite and > 0,
-        ``bound`` NaN or not > 0, ``method`` unknown.
-    """
-    from scipy.integrate import solve_ivp
-
-    check_callable("rhs", rhs, "rhs(t, x, u, params)")
-    t_eval = check_finite("t_eval", t_eval)
-    t_eval = np.atleast_1d(t_eval)
-    if t_eval.ndim != 1 or t_eval.size < 2 or np.any(np.diff(t_eval) <= 0):
-        raise ValueError("t_eval must be strictly increasing with at least two instants")
-    rtol = check_positive("rtol", rtol, scalar=True)
-    atol = check_positive("atol", atol, scalar=True)
-    bound = _check_bound(bound)
-    check_in("method", method, _IVP_METHODS)
-    check_callable("u", u, "u(t) -> (B, m)", optional=True)
-    x, _, B = _prepare(x0, None, None)
-    n = x.shape[1]
-
-    def solve(rows: np.ndarray):
-        """Integrate the runs ``rows``; ``rhs`` always sees the whole batch (other rows held at x0),
-        so per-run parameters stay aligned. A run past ``bound`` is frozen (zero derivative) so it
-        cannot stop or slow the others."""
-        full = x.copy()
-
-        def f(t, z):
-            full[rows] = z.reshape(rows.size, n)
-            with np.errstate(all="ignore"):
-                dx = np.asarray(rhs(t, full, None if u is None else u(t), params), dtype=float).reshape(B, n)[rows]
-                dx[np.any(np.abs(full[rows]) > bound, axis=1)] = 0.0
-            return dx.reshape(-1)
-
-        return solve_ivp(f, (t_eval[0], t_eval[-1]), x[rows].reshape(-1), t_eval=t_eval, method=method,
-                         rtol=rtol, atol=atol)
-
-    def fill(sol, rows):
-        # a solve that failed leaves NaN after its last instant: those runs count as diverged
-        m = sol.y.shape[1]
-        xs[:m, rows] = sol.y.T.reshape(m, rows.size, n)
-
-    xs = np.full((t_eval.size, B, n), np.nan)
-    sol = solve(np.arange(B))
-    if B > 1 and sol.status != 0:
-        statuses = []
-        for b in range(B):
-            s_b = solve(np.array([b]))
-            statuses.append(s_b.status)
-            fill(s_b, np.array([b]))
-        info = {"status": statuses, "message": "batch solve failed; each run solved on its own",
-                "nfev": None, "per_run": True}
-    else:
-        fill(sol, np.arange(B))
-        info = {"status": sol.status, "message": sol.message, "nfev": sol.nfev, "per_run": False}
-    with np.errstate(invalid="ignore"):
-        bad_k = ~np.all(np.isfinite(xs), axis=2) | np.any(np.abs(xs) > bound, axis=2)
-    diverged = bad_k.any(axis=0)
-    div_step = np.where(diverged, bad_k.argmax(axis=0), -1)
-    return SimResult(t=t_eval, x=xs, u=None, y=None, diverged=diverged, diverged_step=div_step,
-                     bound=bound, info=info)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -548,6 +522,10 @@ def continuous_nlsys(rhs: Callable, *, states, inputs, outputs=None, output: Cal
         Signal counts or names, as for :func:`control.nlsys`.
     output : callable, optional
         ``output(t, x, u, params)`` (batched like ``rhs``); default: the full state.
+
+    Returns
+    -------
+    control.NonlinearIOSystem
     """
     import control as ct
 
@@ -565,3 +543,7 @@ def continuous_nlsys(rhs: Callable, *, states, inputs, outputs=None, output: Cal
     if outputs is None:
         outputs = states
     return ct.nlsys(updfcn, outfcn, states=states, inputs=inputs, outputs=outputs, name=name)
+
+
+# the adaptive path lives in its own module; re-exported here for the public API
+from .ivp import simulate_ivp  # noqa: E402,F401

@@ -34,39 +34,8 @@ import warnings
 import ctrl_analysis
 
 #: Names (``module.qualname`` where the object is defined) whose docstrings are known to be
-#: incomplete; the section(s) missing are in the comment. ``loop.py`` and ``simulate.py`` are being
-#: split by the lead on a parallel branch; ``report.py`` is at the 600-line limit of
-#: test_layering.py (its complete docstrings need the module split first). Remove a line once its
-#: docstring is complete. Nothing else may be added here: fix the docstring instead.
-KNOWN_INCOMPLETE = {
-    # ctrl_analysis/simulate.py
-    "ctrl_analysis.simulate.SimResult.runs",  # missing: the whole docstring
-    "ctrl_analysis.simulate.SimResult.divergences",  # missing: Returns section
-    "ctrl_analysis.simulate.euler_step",  # missing: Parameters section, Returns section
-    "ctrl_analysis.simulate.rk4_step",  # missing: Parameters section, Returns section
-    "ctrl_analysis.simulate.simulate_discrete",  # missing: Parameters section, Returns section
-    "ctrl_analysis.simulate.simulate_ivp",  # missing: Parameters section, Returns section
-    "ctrl_analysis.simulate.continuous_nlsys",  # missing: Returns section
-    # ctrl_analysis/report.py
-    "ctrl_analysis.report.Quantity",  # missing: Parameters (or Attributes) section
-    "ctrl_analysis.report.Quantity.to_dict",  # missing: the whole docstring
-    "ctrl_analysis.report.Quantity.verdict",  # missing: the whole docstring
-    "ctrl_analysis.report.StudyContext",  # missing: Parameters (or Attributes) section
-    "ctrl_analysis.report.StudyContext.progress",  # missing: the whole docstring (a lambda default)
-    "ctrl_analysis.report.StudyContext.runs_or",  # missing: Parameters section, Returns section
-    "ctrl_analysis.report.StudyContext.save_figure",  # missing: Parameters section, Returns section
-    "ctrl_analysis.report.StudyInfo",  # missing: Parameters (or Attributes) section
-    "ctrl_analysis.report.StudyResult",  # missing: Parameters (or Attributes) section
-    "ctrl_analysis.report.StudyResult.finding",  # missing: Parameters section
-    "ctrl_analysis.report.StudyResult.get",  # missing: the whole docstring
-    "ctrl_analysis.report.StudyResult.quantity",  # missing: Parameters section, Returns section
-    "ctrl_analysis.report.StudyResult.reconstruction",  # missing: Parameters section
-    "ctrl_analysis.report.StudyResult.to_dict",  # missing: the whole docstring
-    "ctrl_analysis.report.compute_verdict",  # missing: one-line summary, Parameters, Returns
-    "ctrl_analysis.report.new_figure",  # missing: Parameters section, Returns section
-    "ctrl_analysis.report.relative_error",  # missing: Parameters section, Returns section
-    "ctrl_analysis.report.write_results_json",  # missing: Parameters section, Returns section
-}
+#: incomplete. Empty: every public name is documented; nothing may be added here, fix the docstring.
+KNOWN_INCOMPLETE: set = set()
 
 _SECTION = re.compile(r"^(\w[\w ]*)\n[ \t]*-{3,}[ \t]*$", re.MULTILINE)
 
