@@ -56,8 +56,12 @@ def plot_riccati_convergence(t, trajectories: dict, P_bar, a21: float, Q: float,
     return fig
 
 
-def plot_filter_bode(filters: dict, omega):
-    """Bode magnitude/phase of the steady-state filters y → (φ̂, φ̂') (python-control frequency_response)."""
+def plot_filter_bode(filters: dict, omega, plant_poles=None):
+    """Bode magnitude/phase of the steady-state filters y → (φ̂, φ̂') (python-control frequency_response).
+
+    ``plant_poles``, if given, holds one frequency (rad/s) per filter, in the order of ``filters``: the
+    pendulum's unstable open-loop pole √a21, drawn as a dotted vertical line in the filter's colour.
+    """
     import control as ct
 
     fig, axes = new_figure(2, 2, size=(10.0, 6.5), sharex=True,
@@ -74,6 +78,11 @@ def plot_filter_bode(filters: dict, omega):
             axes[0, col].set_ylabel("magnitude (dB)")
             axes[1, col].set_ylabel("phase (deg)")
             axes[1, col].set_xlabel("ω (rad/s)")
+    if plant_poles is not None:
+        for k, w in enumerate(plant_poles):
+            for ax in axes.ravel():
+                ax.axvline(w, color=f"C{k}", ls=":", lw=1.0,
+                           label=f"pendulum pole √a21 = {w:.3g} rad/s" if ax is axes[0, 0] or ax is axes[0, 1] else None)
     for ax in axes[0]:
         ax.legend(fontsize=7, loc="lower left")
     _drop_log_minor_ticks(fig)
@@ -167,20 +176,22 @@ def plot_fig3_states(cases: dict, T: float, run: int = 0):
                 (dy, r.dphi_hat[:, run], r.dphi[:, run], "φ'  (rad/s)", "backward difference of y"))
         for k, (raw, est, true, ylabel, rawlabel) in enumerate(rows):
             ax = axes[k, c]
-            ax.plot(t, raw, color="0.6", lw=0.6, label=f"before: {rawlabel}")
-            ax.plot(t, est, color="C0", lw=1.2, label="after: filter estimate")
-            ax.plot(t, true, color="k", lw=1.0, ls="--", label="true state")
+            # the estimate under the raw signal, so that a raw trace equal to the estimate stays visible
+            ax.plot(t, est, color="C0", lw=1.4, label="after: filter estimate", zorder=2)
+            ax.plot(t, raw, color="0.35", lw=0.5, alpha=0.8, label=f"before: {rawlabel}", zorder=3)
+            ax.plot(t, true, color="k", lw=1.0, ls="--", label="true state", zorder=4)
             ax.set_ylabel(ylabel)
             if k == 0:
                 ax.set_title(title, fontsize=10)
             if k == 1:  # one legend per column, below the data
-                ax.legend(handles=[*axes[0, c].get_lines(), ax.get_lines()[0]],
-                          labels=["before: measured y = φ + v", "after: filter estimate", "true state",
-                                  "before (φ'): backward difference of y"],
+                ax.legend(handles=ax.get_lines()[:3],
+                          labels=["after: filter estimate",
+                                  "before: measured y = φ + v (top), its backward difference (bottom)",
+                                  "true state"],
                           fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=2)
         axes[1, c].set_xlabel("t (s)")
-        lim = np.nanpercentile(np.abs(rows[1][0]), 99)
-        axes[1, c].set_ylim(-1.1 * lim, 1.1 * lim)
+        lim = max(float(np.nanmax(np.abs(x))) for x in rows[1][:3])  # whole range: nothing clipped
+        axes[1, c].set_ylim(-1.05 * lim, 1.05 * lim)
     return fig
 
 
