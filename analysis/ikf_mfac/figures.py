@@ -25,18 +25,42 @@ def _legend(ax):
     ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize=8)
 
 
-def plot_fig2(k, y_ref, outputs: dict, sweep: dict, Q: float):
+def _mark_diverged(ax, x, rows, color, label: str) -> str:
+    """Ring each sweep point whose mean excludes diverged runs; return '<label> n/N at x, ...' ('' if none)."""
+    parts = []
+    for xi, row in zip(x, rows):
+        mean, _, ok, bad = row
+        if not bad:
+            continue
+        parts.append(f"{bad}/{ok + bad} at {xi:g}" + ("" if ok and np.isfinite(mean) else " (no mean)"))
+        if ok and np.isfinite(mean):
+            ax.plot([xi], [mean], "o", ms=12, mfc="none", mec=color, mew=1.2)
+    return f"{label} {', '.join(parts)}" if parts else ""
+
+
+def _title_with_diverged(ax, title: str, notes: list) -> None:
+    notes = [n for n in notes if n]
+    ax.set_title(title + ("\ndiverged runs (ringed, excluded): " + "; ".join(notes) if notes else ""),
+                 fontsize=10 if notes else None)
+
+
+def plot_fig2(k, y_ref, outputs: dict, sweep: dict, Q: float, q_used: float):
     """Fig. 2: IKF-MFAC outputs for increasing R at fixed Q (one run), and mean RMSE and K∞ against Q/R."""
     fig, (a1, a2) = new_figure(1, 2, size=(12.0, 4.5),
                                title=f"Fig. 2 — Example 1: IKF-MFAC output for R increasing at Q = {Q:g}, "
                                      "and mean RMSE against Q/R")
     a1.plot(k, y_ref, "k--", lw=1, label="y*")
+    lim = 2.5
     for R, y in outputs.items():
-        gone = np.max(np.abs(y)) > 10.0
-        a1.plot(k, y, lw=0.9, label=f"R = {R:g} (Q/R = {Q / R:.3g})" + (", diverges" if gone else ""))
-    a1.set(xlabel="sample k", ylabel="output y(k)", ylim=(-2.5, 2.5))
+        peak = np.max(np.abs(y)) if np.all(np.isfinite(y)) else np.inf
+        gone = ", diverges" if peak > 10.0 else (f", leaves the axes (max |y| = {peak:.2g})" if peak > lim else "")
+        a1.plot(k, y, lw=0.9, label=f"R = {R:g} (Q/R = {Q / R:.3g})" + gone)
+    a1.set(xlabel="sample k", ylabel="output y(k)", ylim=(-lim, lim))
     a1.legend(loc="lower left", fontsize=8)
     _ratio_axes(a2, sweep, "Example 1")
+    a2.axvline(q_used, color="k", ls=":", lw=1)
+    a2.set_title(f"Beyond the paper: mean RMSE against Q/R at the study's R (dotted: Q/R used, {q_used:.3g})",
+                 fontsize=10)
     return fig
 
 
@@ -101,12 +125,14 @@ def plot_noise_sweep(levels, sweeps: dict, paper_levels: dict):
     fig, axes = new_figure(1, 2, size=(12.0, 4.5), title="RMSE of the four schemes against the noise std σ_v "
                                                            "(mean over the non-diverged seeded runs)")
     for ax, key in zip(axes, ("ex1", "ex2")):
+        notes = []
         for s in SCHEMES:
             m = [row[0] for row in sweeps[key][s]["noise"]]
             ax.plot(levels[key], m, marker="o", color=COLORS[s], label=SCHEME_LABELS[s])
+            notes.append(_mark_diverged(ax, levels[key], sweeps[key][s]["noise"], COLORS[s], SCHEME_LABELS[s]))
         ax.axvline(paper_levels[key], color="k", ls=":", lw=1, label="paper's σ_v")
-        ax.set(xlabel="measurement-noise std σ_v", ylabel="RMSE (log scale)", yscale="log",
-               title="Example 1" if key == "ex1" else "Example 2")
+        ax.set(xlabel="measurement-noise std σ_v", ylabel="RMSE (log scale)", yscale="log")
+        _title_with_diverged(ax, "Example 1" if key == "ex1" else "Example 2", notes)
     _legend(axes[-1])
     return fig
 
@@ -128,10 +154,13 @@ def plot_gain_sweep(values: dict, sweeps: dict, used: dict):
     for i, key in enumerate(("ex1", "ex2")):
         for j, (name, sym) in enumerate((("rho", "ρ"), ("lam", "λ"))):
             ax = axes[i, j]
+            notes = []
             for s in SCHEMES:
                 ax.plot(values[name], [row[0] for row in sweeps[key][s][name]], marker="o", color=COLORS[s],
                         label=SCHEME_LABELS[s])
+                notes.append(_mark_diverged(ax, values[name], sweeps[key][s][name], COLORS[s], SCHEME_LABELS[s]))
             ax.axvline(used[name], color="k", ls=":", lw=1, label="paper's value")
-            ax.set(xlabel=sym, ylabel="RMSE", title=("Example 1" if key == "ex1" else "Example 2") + f", RMSE vs {sym}")
+            ax.set(xlabel=sym, ylabel="RMSE")
+            _title_with_diverged(ax, ("Example 1" if key == "ex1" else "Example 2") + f", RMSE vs {sym}", notes)
     _legend(axes[0, 1])
     return fig

@@ -97,16 +97,20 @@ def record_td_scan(result, scans: dict, chosen: dict) -> None:
                         None if lit[2] == 0 else float(lit[0]), paper=TABLE1[key]["rmse"]["td_mfac"],
                         std=None if lit[2] == 0 else float(lit[1]), runs=runs, runs_diverged=int(lit[3]),
                         tolerance=TOLERANCE["rmse"], unit="", cell=table1_cell(key, "td_mfac", "rmse"), primary=False,
-                        note=f"{lit[3]} of {runs} runs diverged" + (" and are excluded" if lit[2] else "")
+                        note=f"{lit[3]} of {runs} runs diverged"
+                        + (f" and are excluded (the value is the mean of the other {lit[2]})" if lit[2] else "")
                         + "; the study's primary reading runs several TD steps per sample (td-steps-per-sample)")
         ok = [n for (ft, n), r in sorted(scan["rows"].items()) if ft and r[3] == 0]
         lag = [(n, r[3]) for (ft, n), r in sorted(scan["rows"].items()) if not ft]
-        smallest = min(ok) if ok else None
+        tried = sorted(n for ft, n in scan["rows"] if ft)
+        used = scan["rows"][(True, chosen[key])]
+        clean = (f"the smallest count with no diverged run is {min(ok)}" if ok
+                 else "no count is free of diverged runs")
         texts.append(f"{key}: one step per sample diverges in {lit[3]} of {runs} runs; with x1 taken before the "
                      f"sample's steps (one-sample lag) the diverged runs per step count are {lag}; with x1 after "
-                     f"them the smallest count (of those tried, {sorted(n for ft, n in scan['rows'] if ft)}) with no "
-                     f"diverged run is {smallest} (used: {chosen[key]}), where TD-MFAC's mean RMSE is "
-                     f"{scan['rows'][(True, chosen[key])][0]:.4f} against plain MFAC's "
+                     f"them, of the counts tried ({tried}), {clean}; the count used, {chosen[key]}, has {used[3]} "
+                     f"diverged run(s) of {runs}, and TD-MFAC's mean RMSE is "
+                     f"{used[0]:.4f} there (these {runs} runs) against plain MFAC's "
                      f"{result.get(f'{key}.mfac.rmse').value:.4f} (Table 1's runs)")
     result.finding("td-steps-per-sample", "The paper runs the TD (37) with h = 0.001/0.0035 but does not say how "
                    "many TD steps run per control sample. " + "; ".join(texts) + ". With more steps per sample x1 "
