@@ -33,6 +33,12 @@ MISSING = [
     ("Fig. 3-5 are redrawn from the reconstruction (step, horizon, ESO tuning, b1..b3, setpoint softener "
      "unprinted); the paper's traces cannot be compared point by point"),
     "the ESO's x2 error of the paper (8.23e-2) is not reproduced with Han's textbook gains; no tuning is fitted to it",
+    ("Fig. 5's tracking is not reproduced in the printed configuration (Σ a = 5, K = [2184, 506, 39]): the "
+     "linearised loop is unstable and x1 oscillates about v (finding ex2-literal-simulation); it is reproduced only "
+     "with the study's stable preset fast_estimator (a larger Σ bandwidth)"),
+    ("the robustness claim (stable for b1 > 0 'with the effect of Fig. 5') does not hold for the printed "
+     "configuration (quantity ex2.sweep.literal.fraction_stable); it holds for the preset fast_estimator over the "
+     "mapped grid (finding ex2-robustness)"),
 ]
 
 
@@ -76,7 +82,9 @@ def _linear(ctx, result):
     ctx.save_figure(result, figures.plot_normalised_magnitude(LINEAR.table_n0, title="Beyond the paper: |Φ(jω)| of Σ "
                     "at the design gain, against ω/a, n0 = 2..8"), "extra_phi_magnitude_vs_n0.png",
                     caption="Beyond the paper: |Φ(jω)| of Σ at the design gain against the normalised frequency ω/a "
-                            "for n0 = 2 to 8; the bandwidth scales with a, and n0 sets the roll-off.")
+                            "for n0 = 2 to 8; the bandwidth scales with a, and n0 sets the bandwidth ω_b/a and the resonance "
+                            "peak; every n0 rolls off at the same −20 dB/decade (Φ has relative degree 1; finding "
+                            "lowpass-claim).")
 
 
 def _example1(ctx, result, p, runs):
@@ -96,16 +104,18 @@ def _example1(ctx, result, p, runs):
                     f"estimate z2 (n0 = {p.n0}, a = {p.a:g}; seed {seeds[b]})", r"$\hat x_2 = z_2$ (Σ)"),
                     "fig3_sigma_x2.png",
                     caption="Redraws the paper's Fig. 3 (Example 1): the true x2 and Σ's estimate z2 (state reading) "
-                            "in one run; its mean error over the runs is the §4 Example 1 Σ |ε̄2| cell.")
+                            "in one run, the error, and a 0.5 s zoom; its mean error over the runs is the §4 Example 1 Σ "
+                            "|ε̄2| cell.")
     ctx.save_figure(result, figures.plot_x2(t, s["x2"][:, b], s["eso0[1]"][:, b], f"Fig. 4 — Example 1: x2 and "
                     f"Han's nonlinear ESO estimate (textbook gains; seed {seeds[b]})", r"$\hat x_2$ (ESO)"),
                     "fig4_eso_x2.png",
                     caption="Redraws the paper's Fig. 4 (Example 1): the true x2 and the estimate of Han's nonlinear "
-                            "ESO with textbook gains (the paper prints none) in the same run; its mean error is the ESO "
-                            "|ε̄2| cell.")
+                            "ESO with textbook gains (the paper prints none) in the same run, the error, and a 0.5 s zoom "
+                            "where the high-frequency noise that fills the full-length traces is resolved; its mean error "
+                            "is the ESO |ε̄2| cell.")
     sp = np.mean(d["err"]["sigma"][d["ok"]], axis=0)
-    ctx.save_figure(result, figures.plot_tradeoff(trade, sp, f"Example 1: mean x2 error against mean x1 error, Σ and "
-                    f"ESOs over their −3 dB bandwidth ({int(d['ok'].sum())} runs each)"), "ex1_tradeoff.png",
+    ctx.save_figure(result, figures.plot_tradeoff(trade, sp, f"Beyond the paper, Example 1: mean x2 error against mean x1 "
+                    f"error over the −3 dB bandwidth\n(Σ and ESOs, {int(d['ok'].sum())} runs each)"), "ex1_tradeoff.png",
                     caption="Beyond the paper (the fair comparison): mean x2 error against mean x1 error for Σ "
                             "(sweeping a; labels give its −3 dB bandwidth) and the linear ESO (sweeping ω_o), with Han's "
                             "fal ESO at two tunings (textbook gains; Σ's bandwidth) and Σ as in the paper (star). Lower "
@@ -135,7 +145,9 @@ def _example2(ctx, result, p, runs):
                     f"{lin['a_new']:g}"), f"fig5_tracking_a5_and_a{lin['a_new']:g}.png",
                     caption="Redraws the paper's Fig. 5 (Example 2): setpoint, output x1 and Σ's estimates x̂ against "
                             f"the true states under controller (18), in the paper's configuration (a = {p.a:g}) and with "
-                            f"the study's preset a = {lin['a_new']:g} beside it (one run each).")
+                            f"the study's preset a = {lin['a_new']:g} beside it (one run each). In the paper's configuration x1 "
+                            "oscillates about v (the linearised loop is unstable, finding ex2-literal-unstable); only "
+                            "the preset tracks v.")
     n = len(t) - 1
     zoom = slice(n - int(round(2.0 / p.h)), n)
     b = pick[0]
@@ -145,15 +157,16 @@ def _example2(ctx, result, p, runs):
         f"Example 2 as printed (Σ a = {p.a:g}, K = [2184, 506, 39]): output and control (seed {d['seeds'][b]})",
         f"last 2 s: amplitude {q['amp'][b]:.3g}, {q['freq'][b]:.2f} Hz (linearised pair {pair.real:+.1f} ± "
         f"{abs(pair.imag):.1f}j rad/s)"), "fig_ex2_literal.png",
-        caption="Beyond the paper: Example 2 run exactly as printed: output and control over the whole run and the "
+        caption="Beyond the paper: Example 2 in the printed configuration (Σ a = 5, K read as [2184, 506, 39]; "
+                "b1..b3 and the setpoint softener reconstructed): output and control over the whole run and the "
                 "last 2 s, where a sustained oscillation appears; its amplitude and frequency are compared with the "
                 "linearised closed loop's complex pole pair.")
     maps = [(f"{name} (Σ a = {d['a'][j]:g})", q["maps"][name]["stable"], q["maps"][name]["lin"])
             for j, name in enumerate(("literal", "fast_estimator"))]
     ctx.save_figure(result, figures.plot_stability_map(
         np.asarray(p.sweep_b1), np.asarray(p.sweep_b2), p.sweep_b3, maps,
-        f"Example 2 over (b1, b2, b3): linearised max Re λ (colour) and simulated outcome (markers), {p.T:g} s per "
-        "point"), "fig_ex2_stability_map.png",
+        f"Beyond the paper, Example 2 over (b1, b2, b3): linearised max Re λ (colour), simulated outcome "
+        f"(markers, {p.T:g} s)"), "fig_ex2_stability_map.png",
         caption="Beyond the paper: robustness of Example 2 over the plant parameters (b1, b2, b3): colour is the "
                 "largest real part of the linearised closed loop's eigenvalues, markers the simulated outcome (settles / "
                 "oscillates / diverges), for the printed a and the preset (quantities ex2.sweep.*).")

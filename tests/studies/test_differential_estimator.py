@@ -128,16 +128,17 @@ def test_quick_run_smoke(tmp_path):
     assert {"eq9.gain_K", "ex1.sigma.mean_abs_err_x1", "ex1.eso_over_sigma_x2", "ex1.fair.equal_bw.leso.mean_abs_err_x2",
             "ex1.tradeoff.sigma.err_x2", "ex1.n0_sweep.fixed_a.err_x1", "ex2.literal.max_real_eig",
             "ex2.sweep.fraction_stable", "ex2.sweep.literal.fraction_stable"} <= ids
-    # every quantity with a paper value names its cell; the two printed-error ratios ride on the ESO cells
+    # every quantity with a paper value names its cell; the ESO/Σ ratios are not printed: no paper value
     assert all(q.cell for q in result.quantities if q.paper is not None)
     primaries = {q.cell for q in result.quantities if q.primary}
-    assert len(primaries) == 6 and result.get("ex1.eso_over_sigma_x1").primary is False
+    assert len(primaries) == 6 and result.get("ex1.eso_over_sigma_x1").cell is None
     for q in result.quantities:
         assert q.verdict == compute_verdict(q.value, q.paper, q.tolerance, diverged=q.diverged)
         assert q.unit is not None
         if q.paper is not None:
             assert q.tolerance is not None
-    assert result.get("ex1.eso_over_sigma_x1").paper == pytest.approx(5.769e-4 / 1.3179e-4, rel=1e-3)
+    assert result.get("ex1.eso_over_sigma_x1").paper is None
+    assert "0.0005769 / 0.00013179 = 4.38" in result.get("ex1.eso_over_sigma_x1").note
     assert result.seeds["ex1"] == run_seeds(5, 2)
     for name in result.figures:
         assert (tmp_path / name).stat().st_size > 10_000
