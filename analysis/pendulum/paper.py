@@ -135,7 +135,7 @@ class ClosedLoop:
     settle_band: float = reconstructed(0.05, "settling band ±5 % of the step (the 2 % band lies inside the noise)")
     settle_hold: float = reconstructed(0.5, "a run counts as settled only if it stays in the band for the last 0.5 s "
                                            "of the record (otherwise its settling time is not defined)")
-    t_ss: float = reconstructed(1.5, "start of the steady-state window (s) for angle_rms and accel_rms")
+    t_ss: float = reconstructed(1.5, "start of the steady-state window (s) for angle_rms and accel_rms; the overshoot is the peak before it")
     bound: float = reconstructed(1e3, "a run whose state leaves |x| ≤ 1000 is flagged as diverged")
     runs: int = reconstructed(100, "Monte Carlo runs (default; --runs overrides, --quick uses 10)")
     recover_angles: tuple = reconstructed((0.02, 1.56, 78), "initial angles swept for the largest recoverable angle "
