@@ -54,8 +54,9 @@ class CKFStudy:
                                   "the effect of switching it off is reported")
     id_signal: str = reconstructed(
         "lpf", "which signals form z and h in (9) is not printed; options: 'raw' measurement, 'lpf' output "
-        "(in every case), 'feedback' (what the controller sees); 'lpf' has the smallest bias against the "
-        "noise-free fit and is the only one under which all three loops track (ident.* quantities)")
+        "(in every case), 'feedback' (what the controller sees); 'lpf' is the only one under which all three "
+        "loops track in every run (ident.*.tracking_fraction); its f̂1, f̂2 bias against the noise-free fit is "
+        "not the smallest (ident.* quantities, finding identification-signal)")
     l1: float = reconstructed(GOLDEN_L1, "golden-section coefficient of refs [6]-[8]; eq. (16) lost in extraction")
     l2: float = reconstructed(GOLDEN_L2, "golden-section coefficient of refs [6]-[8]; eq. (16) lost in extraction")
     k_I: float = reconstructed(0.005, "logic-integral gain of eq. (18) not printed; small, so the integral "
