@@ -34,14 +34,14 @@ def plot_error_bode(lin):
     """
     w = np.logspace(-2, 3.5, 600)
     fig, (ax_m, ax_p) = new_figure(2, 1, size=(8.5, 6.5), sharex=True,
-                                   title=f"Linear ESO (29), ε = {PAPER.epsilon:g}, β = (3, 3, 1): Bode plots of "
-                                         "disturbance → estimation error")
+                                   title=f"Linear ESO (6) / MESO (29) error dynamics, ε = {PAPER.epsilon:g}, β = (3, 3, 1): "
+                                         "Bode plots of disturbance → estimation error (no paper figure)")
     for i, g in enumerate(lin.observer.disturbance_error_tf(), start=1):
         c = np.squeeze(ct.frequency_response(g, w).complex)
         ax_m.semilogx(w, 20 * np.log10(np.abs(c)), label=f"$E_{i}(s)/H(s)$, $e_{i} = x_{i} - \\hat x_{i}$")
         ax_p.semilogx(w, np.degrees(np.unwrap(np.angle(c))))
     ax_m.axvline(lin.omega_o, color="k", ls=":", lw=1, label=f"$\\omega_o$ = {lin.omega_o:g} rad/s")
-    ax_m.set_ylabel("magnitude (dB)")
+    ax_m.set_ylabel("magnitude (dB; $E_1/H$ in s³, $E_2/H$ in s², $E_3/H$ in s)", fontsize=9)
     ax_m.set_title("input h = dx₃/dt (derivative of the total disturbance)", fontsize=9)
     ax_p.set_ylabel("phase (deg)")
     ax_p.set_xlabel("frequency ω (rad/s)")
@@ -64,7 +64,7 @@ def plot_eps_scaling(sc: dict, lin):
     """
     fig, (ax, ax2) = new_figure(1, 2, size=(13, 5.2),
                                 title="ESO estimation errors vs ε (situation 1): noise-free loop (left), "
-                                      "measurement-noise part (right)")
+                                      "measurement-noise part (right) (no paper figure)")
     eps = sc["eps"]
     i0 = list(eps).index(PAPER.epsilon)
     for i in range(3):
@@ -92,7 +92,7 @@ def _window(t, T):
     return (t >= lo) & (t <= lo + 15.0)
 
 
-def plot_situation(sim: SituationRun, series: dict, title: str, max_points: int = 4000):
+def plot_situation(sim: SituationRun, series: dict, title: str, max_points: int = 4000, smooth: dict | None = None):
     """Fig. 3 / Fig. 5: x1 in a window, tracking and estimation errors; noise off (left) and on (right).
 
     Parameters
@@ -103,6 +103,10 @@ def plot_situation(sim: SituationRun, series: dict, title: str, max_points: int 
     title : str
     max_points : int
         Decimation of the full-horizon panels.
+    smooth : dict, optional
+        Column title -> window (s). In those columns the estimation errors are drawn faint and
+        overlaid with their centred moving average over the window, so that the noise band of one
+        observer does not hide the other's error.
 
     Returns
     -------
@@ -121,7 +125,12 @@ def plot_situation(sim: SituationRun, series: dict, title: str, max_points: int 
             x3_of[b] = _x3(sim, b)
             for r, y in ((1, np.sin(t) - k["x1"]), (2, k["x1"] - k["xhat1"]), (3, k["x2"] - k["xhat2"]),
                          (4, x3_of[b] - k["xhat3"])):
-                ax[r, c].plot(t[::dec], y[::dec], color=color, lw=0.6, label=name)
+                if r >= 2 and col in (smooth or {}):
+                    ax[r, c].plot(t[::dec], y[::dec], color=color, lw=0.4, alpha=0.3)
+                    ax[r, c].plot(t, _moving_average(y, max(1, int(round(smooth[col] / (t[1] - t[0]))))),
+                                  color=color, lw=1.2, label=name)
+                else:
+                    ax[r, c].plot(t[::dec], y[::dec], color=color, lw=0.6, label=name)
         ax[0, c].set_title(col, fontsize=11)
     labels = ["$x_1$ (window around the θ4 step)", "tracking error ξ − $x_1$", "estimation error $x_1 − \\hat x_1$",
               "estimation error $x_2 − \\hat x_2$ (1/s)", "estimation error $x_3 − \\hat x_3$ (1/s²)"]
@@ -136,6 +145,14 @@ def plot_situation(sim: SituationRun, series: dict, title: str, max_points: int 
     handles, labs = ax[0, 0].get_legend_handles_labels()
     fig.legend(handles, labs, loc="outside lower center", ncol=3, fontsize=9)
     return fig
+
+
+def _moving_average(y, n):
+    """Centred moving average of ``y`` over ``n`` samples (shorter at the ends)."""
+    c = np.concatenate([[0.0], np.cumsum(np.nan_to_num(y))])
+    i = np.arange(len(y))
+    lo, hi = np.clip(i - n // 2, 0, len(y)), np.clip(i + n - n // 2, 0, len(y))
+    return (c[hi] - c[lo]) / (hi - lo)
 
 
 def _x3(sim, b):
@@ -220,7 +237,8 @@ def plot_identifiability(per_sit: dict, threshold: float):
     Parameters
     ----------
     per_sit : dict
-        Panel title -> ``(t_batch, [(cond (nb,) or (lo, med, hi), label, style), ...])``.
+        Panel title -> ``(t_batch, [(cond (nb,) or (lo, med, hi), label, style), ...], gated)``; the
+        threshold line is drawn only in panels with ``gated`` true (where the gate decides anything).
     threshold : float
         The identifiability gate, drawn as a line.
 
@@ -229,8 +247,8 @@ def plot_identifiability(per_sit: dict, threshold: float):
     matplotlib.figure.Figure
     """
     fig, axes = new_figure(1, 2, size=(13, 5.5), title="Identifiability of each LSM batch (Theorem 1): condition "
-                                                       "number of the column-scaled regression matrix")
-    for ax, (name, (tb, series)) in zip(np.atleast_1d(axes), per_sit.items()):
+                                                       "number of the column-scaled regression matrix (no paper figure)")
+    for ax, (name, (tb, series, gated)) in zip(np.atleast_1d(axes), per_sit.items()):
         for values, label, style in series:
             if isinstance(values, tuple):
                 lo, med, hi = values
@@ -238,8 +256,12 @@ def plot_identifiability(per_sit: dict, threshold: float):
                 ax.semilogy(tb, med, label=f"{label}: median", **style)
             else:
                 ax.semilogy(tb, values, label=label, **style)
-        ax.axhline(threshold, color="k", ls=":", lw=1.2, label=f"gate threshold {threshold:g}")
+        if gated:
+            ax.axhline(threshold, color="k", ls=":", lw=1.2,
+                       label=f"gate threshold {threshold:g} (well-posed full regression only)")
         ax.set_yscale("log")
+        # cond >= 1; at least up to 10× the threshold, so that a flat series is not blown up to fill the panel
+        ax.set_ylim(1.0, max(ax.get_ylim()[1], 10.0 * threshold))
         ax.set_title(name, fontsize=10)
         ax.set_xlabel("end of batch t (s)")
         ax.set_ylabel("cond (column-scaled)")

@@ -177,7 +177,8 @@ def _x3_reference(result, s2) -> None:
         f"against the true extended state d + (b − b0)u; MESO {_fmt(bm.value)} vs {_fmt(am.value)} (paper {am.paper}). "
         f"The large, nearly equal x3 errors of both observers in Table 3 are therefore the omitted 0.95|u|, not "
         f"estimation error. Reading 0.95u as an extra term on top of b = {PAPER.b:g} (total gain {PAPER.b + 0.95:g}) "
-        f"fits worse: ESO est_x3 {s2.sums['est_x3'][iB] / K:.4g} / {s2.sums['est_x3_no_bu'][iB] / K:.4g}, track_x1 "
+        f"fits worse: ESO est_x3 {s2.sums['est_x3'][iB] / K:.4g} against its true extended state, "
+        f"{s2.sums['est_x3_no_bu'][iB] / K:.4g} against the reference without 0.95u, track_x1 "
         f"{s2.sums['track_x1'][iB] / K:.4g} (paper {result.get('s2.eso.track_x1').paper}, same-plant reading "
         f"{_fmt(result.get('s2.nonoise.eso.track_x1').value)}).")
 

@@ -58,7 +58,7 @@ def linear_quantities(result: StudyResult, lin, sc: dict) -> None:
                          f"{np.max(np.abs(lin.poles.imag)):.1e}; python-control ss poles "
                          f"{np.sort(lin.observer.ss.poles().real).round(3).tolist()}")
     result.quantity("leso.error_dc_gains", "steady e_i per unit constant dx3/dt: (β_{i-1}/β₃) ε^(n+2-i)",
-                    lin.error_dc_gains, unit="s, s, s (e_i per unit of dx3/dt in 1/s³)",
+                    lin.error_dc_gains, unit="s³, s², s (e_i per unit of dx3/dt in 1/s³)",
                     note="DC gains of E_i(s)/H(s) (python-control); sympy gives ε³/β₃, β₁ε²/β₃, β₂ε/β₃ = "
                          f"{[eps**3, 3 * eps**2, 3 * eps]}")
     units = ("", "1/s", "1/s²")
