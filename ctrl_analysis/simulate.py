@@ -79,19 +79,13 @@ def rk4_step(rhs: Callable, t: float, x: np.ndarray, u, h: float, params=None) -
 
     Parameters
     ----------
-    rhs : callable
-        ``rhs(t, x, u, params) -> dx/dt``, batched.
-    t, h : float
-        Start of the step and its length.
-    x : numpy.ndarray, shape (B, n)
-    u : object
-        Held input passed to ``rhs``.
-    params : optional
+    rhs, t, x, u, h, params
+        As for :func:`euler_step`.
 
     Returns
     -------
     numpy.ndarray, shape (B, n)
-        The state at ``t + h``.
+        The state at ``t + h`` (local error O(h⁵)).
     """
     k1 = rhs(t, x, u, params)
     k2 = rhs(t + 0.5 * h, x + 0.5 * h * k1, u, params)
