@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import json
 import math
-import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
@@ -337,16 +336,6 @@ def new_figure(nrows: int = 1, ncols: int = 1, *, title: str | None = None, size
     if title:
         fig.suptitle(title)
     return fig, axes
-
-
-class Stopwatch:
-    """Wall-clock timer for ``runtime_s``."""
-
-    def __init__(self):
-        self.t0 = time.perf_counter()
-
-    def elapsed(self) -> float:
-        return time.perf_counter() - self.t0
 
 
 def __getattr__(name):

@@ -14,7 +14,7 @@ import control as ct
 import numpy as np
 
 from ctrl_analysis._kernels import BlockKernel, copy_output
-from ctrl_analysis.blocks import ContinuousBlock, StaticBlock, signal_names
+from ctrl_analysis.blocks import ContinuousBlock, RowGroups, StaticBlock, signal_names
 from ctrl_analysis.controllers.differential_feedback import (
     HighOrderDifferentialFeedback,
 )
@@ -28,7 +28,6 @@ __all__ = [
     "LinearPath",
     "Plant19",
     "Plant20",
-    "RowGroups",
     "Sensor",
     "example1_loop",
     "example2_linear",
@@ -142,43 +141,6 @@ class Plant20(ContinuousBlock):
         dX[:, 2] = (self.b1 * x1 - (self.b2 - x1 * x1) * x2 - self.b3 * x3 * np.abs(x3)
                     + self.w_amp * _sign_cos(self.w_freq * t) + U[:, 1] + U[:, 0])
         return dX
-
-
-class RowGroups(ContinuousBlock):
-    """Several blocks with the same signals, each on its own consecutive group of batch rows.
-
-    Puts presets that differ in a block's parameters (e.g. Σ with two values of ``a``) on one batch.
-    Row ``b`` of group ``j`` runs ``blocks[j]`` exactly as it would alone.
-
-    Parameters
-    ----------
-    blocks : sequence of ContinuousBlock
-        Equal ``inputs``, ``outputs``, ``states`` and ``feedthrough``.
-    rows : sequence of int
-        Rows per group (their sum is the batch size the loop must be run with).
-    """
-
-    def __init__(self, blocks, rows):
-        b0 = blocks[0]
-        for b in blocks:
-            if (b.inputs, b.outputs, b.states, b.feedthrough) != (b0.inputs, b0.outputs, b0.states, b0.feedthrough):
-                raise ValueError("blocks must have equal inputs, outputs, states and feedthrough")
-        if len(rows) != len(blocks) or min(rows) < 1:
-            raise ValueError(f"rows must give one count >= 1 per block, got {list(rows)}")
-        self.blocks = tuple(blocks)
-        edges = np.concatenate(([0], np.cumsum(rows)))
-        self.slices = tuple(slice(int(a), int(b)) for a, b in zip(edges[:-1], edges[1:]))
-        self.inputs, self.outputs, self.states = b0.inputs, b0.outputs, b0.states
-        self.feedthrough = b0.feedthrough
-
-    def _each(self, fn, t, x, u, params):
-        return np.concatenate([getattr(b, fn)(t, x[s], u[s], params) for b, s in zip(self.blocks, self.slices)])
-
-    def rhs(self, t, x, u, params=None):
-        return self._each("rhs", t, x, u, params)
-
-    def output(self, t, x, u, params=None):
-        return self._each("output", t, x, u, params)
 
 
 def sensor(signal: str = "x1") -> Sensor:

@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ctrl_analysis.blocks import ContinuousBlock, DiscreteBlock, signal_names
+from ctrl_analysis.blocks import ContinuousBlock, DiscreteBlock, RowGroups, signal_names
 from ctrl_analysis.controllers.pd import PDFeedforward
 from ctrl_analysis.estimators.eso import ExtendedStateObserver
 from ctrl_analysis.estimators.lowpass import LowPassFilter
@@ -99,32 +99,23 @@ def _model_term(t, x_hat, u, params=None):
     return u[:, 2] * x_hat[:, 0] + u[:, 3] * x_hat[:, 1] + u[:, 4] * u[:, 1] + u[:, 5]
 
 
-class ModelledESO(ContinuousBlock):
+class ModelledESO(RowGroups):
     """The linear (M)ESO (29) with the identified model XᵀΘ as the known part, Θ an input signal.
 
     Wraps :class:`~ctrl_analysis.estimators.eso.ExtendedStateObserver` (its ``rhs`` is called, with
     ``known = XᵀΘ``); Θ = 0 gives the conventional ESO (6). ``epsilons`` may differ per run: the runs
-    are grouped by ε, one observer per group.
+    are grouped by ε, one observer per group (:class:`~ctrl_analysis.blocks.RowGroups`).
 
     Inputs ``y``, ``u``, ``theta[0..3]``; states and outputs ``xhat1..3``.
     """
 
-    inputs = ("y", "u") + signal_names("theta", 4)
-    outputs = states = ("xhat1", "xhat2", "xhat3")
-
     def __init__(self, paper: Paper, b0: float, epsilons):
         eps = np.asarray(epsilons, dtype=float)
-        self.groups = [(np.flatnonzero(eps == e), ExtendedStateObserver.from_epsilon(
-            paper.n, e, paper.beta, b0=b0, known=_model_term)) for e in np.unique(eps)]
-        self.single = self.groups[0][1] if len(self.groups) == 1 else None
-
-    def rhs(self, t, x, u, params=None):
-        if self.single is not None:
-            return self.single.rhs(t, x, u, params)
-        dx = np.empty_like(x)
-        for idx, obs in self.groups:
-            dx[idx] = obs.rhs(t, x[idx], u[idx], params)
-        return dx
+        values = np.unique(eps)
+        super().__init__([ExtendedStateObserver.from_epsilon(paper.n, e, paper.beta, b0=b0, known=_model_term)
+                          for e in values], [np.flatnonzero(eps == e) for e in values])
+        # the observer reads u[:, :2]; the model term reads Θ from the columns after them
+        self.inputs = ("y", "u") + signal_names("theta", 4)
 
 
 class ParameterPath(DiscreteBlock):

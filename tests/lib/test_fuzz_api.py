@@ -263,6 +263,8 @@ def build_cases(tmp):
         # blocks and loops
         ("StaticBlock", blocks.StaticBlock, dict(fn=lambda t, u: u, inputs=("a",), outputs=("b",)),
          dict(fn=CALLABLE, inputs=[None, 3, ["a", 3]], outputs=[None, 3, [1.5]])),
+        ("RowGroups", blocks.RowGroups, dict(blocks=[LPF, LPF], rows=[1, 2]),
+         dict(blocks=[None, 3, [], [None], [LPF, 3]], rows=[None, "ab", [1], [0, 1], [1.5, 1], [1, 2, 3]])),
         ("SampledBlock", blocks.SampledBlock, dict(block=LPF, dt=0.01, method="rk4", substeps=1),
          dict(block=NOT_A_BLOCK + [PLANT], dt=POS, method=CHOICE, substeps=INT + [0])),
         ("signal_names", blocks.signal_names, dict(base="x", n=3), dict(base=[None, 3, ""], n=INT + [-1])),
