@@ -9,7 +9,10 @@ overhead on every operation, which dominates at small and medium batches. A bloc
 * ``output(t, x, u, p, y)``,
 
 writing their result into the last argument; ``x``, ``u`` are the run's state and input vectors
-and ``p`` a float64 parameter vector fixed when the block was built. A block gives its kernel with
+and ``p`` a float64 parameter vector fixed when the block was built. ``BlockKernel.params`` is
+either that vector (shared by every run) or a ``(B, n_p)`` array whose row ``b`` is run ``b``'s
+vector (per-run parameters: a plant gain, an observer bandwidth, a case flag that differ across the
+batch); the engine slices the rows with the batch when it splits it into chunks or processes. A block gives its kernel with
 a method ``kernel() -> BlockKernel`` (or ``None``); the library's Σ and ESO get theirs from
 :func:`kernel_of`'s registry. When every block of a loop has a kernel, :meth:`Loop.simulate
 <ctrl_analysis.loop.Loop.simulate>` (``engine="auto"`` or ``"compiled"``) generates one numba
@@ -45,13 +48,17 @@ __all__ = [
     "compiled_runner",
     "copy_output",
     "eso_rhs",
+    "gain_output",
     "kernel_of",
     "sigma_rhs",
 ]
 
 
 class BlockKernel(NamedTuple):
-    """A block's per-run kernel functions (plain Python, numba-compilable) and its parameter vector."""
+    """A block's per-run kernel functions (plain Python, numba-compilable) and its parameters.
+
+    ``params`` is a 1-D vector shared by every run or a 2-D ``(B, n_p)`` array, one row per run.
+    """
 
     output: Callable
     params: np.ndarray
@@ -86,6 +93,24 @@ def copy_output(t, x, u, p, y):
     """
     for i in range(x.shape[0]):
         y[i] = x[i]
+
+
+def gain_output(t, x, u, p, y):
+    """Static gain ``y = D u`` with ``p = D`` flattened row-major (:class:`~ctrl_analysis.blocks.StaticGain`).
+
+    Parameters
+    ----------
+    t, x, u, p
+        Time and state (unused), one run's input vector and the flattened gain matrix.
+    y : numpy.ndarray
+        The output, written in place (summed left to right, as the block's numpy method).
+    """
+    m = u.shape[0]
+    for i in range(y.shape[0]):
+        acc = 0.0
+        for j in range(m):
+            acc += p[i * m + j] * u[j]
+        y[i] = acc
 
 
 def sigma_rhs(t, z, u, p, dz):
@@ -222,12 +247,13 @@ def _gen_source(blocks, order, stage, discrete, continuous, nc, method, finite_b
         # every index is known here: the copies are unrolled with literal indices
         lines = [f"XB{i}[{j}] = {src(j)}" for j in range(hi - lo)]
         lines += [f"UB{i}[{j}] = SS[b, {c}]" for j, c in enumerate(b["ic"])]
+        pr = f"P{i}[b]" if b["per_run"] else f"P{i}[0]"
         if kind == "out":
-            lines.append(f"K{i}_out({t}, XB{i}, UB{i}, P{i}, YB{i})")
+            lines.append(f"K{i}_out({t}, XB{i}, UB{i}, {pr}, YB{i})")
             lines += [f"SS[b, {c}] = YB{i}[{j}]" for j, c in enumerate(b["oc"])]
         else:
             fn = "rhs" if kind == "rhs" else "upd"
-            lines.append(f"K{i}_{fn}({t}, XB{i}, UB{i}, P{i}, DB{i})")
+            lines.append(f"K{i}_{fn}({t}, XB{i}, UB{i}, {pr}, DB{i})")
             lines += [f"{out}[{lo + j}] = DB{i}[{j}]" for j in range(hi - lo)]
         return [ind + s for s in lines]
 
@@ -339,14 +365,15 @@ def compiled_runner(loop, kernels: dict, finite_bound: bool):
     for p in loop.placed:
         sl = loop.slices.get(p.name, slice(0, 0))
         blocks.append({"ic": [col[s] for s in p.inputs], "oc": [col[s] for s in p.outputs],
-                       "np": len(p.outputs), "sl": (sl.start, sl.stop)})
+                       "np": len(p.outputs), "sl": (sl.start, sl.stop),
+                       "per_run": np.ndim(kernels[p.name].params) == 2})
     idx = {n: i for i, n in enumerate(names)}
     stage_set = {e[0] for e in plan["stage"]}
     stage = [idx[p.name] for p in loop.stage_order if p.block in stage_set]
     order = [idx[p.name] for p in loop.order]
     discrete = [idx[p.name] for p in loop.discrete]
     continuous = [idx[p.name] for p in loop.continuous]
-    key = (tuple((tuple(b["ic"]), tuple(b["oc"]), b["sl"]) for b in blocks), tuple(order), tuple(stage),
+    key = (tuple((tuple(b["ic"]), tuple(b["oc"]), b["sl"], b["per_run"]) for b in blocks), tuple(order), tuple(stage),
            tuple(discrete), tuple(continuous), loop.n_continuous, loop.method, finite_bound,
            tuple((kernels[n].output, kernels[n].rhs, kernels[n].update) for n in names))
     if key not in _RUNNERS:
@@ -366,7 +393,7 @@ def compiled_runner(loop, kernels: dict, finite_bound: bool):
         f64, i64 = numba.float64, numba.int64
         sig = numba.void(i64, f64[::1], f64, i64, f64[:, ::1], f64[:, :, ::1], numba.intp[::1], f64[::1],
                          numba.intp[::1], f64[:, :, :], f64[:, :, :], f64, numba.boolean[:], i64[:],
-                         *[f64[::1]] * len(names))
+                         *[f64[:, ::1]] * len(names))
         run = numba.njit(sig, cache=True, error_model="numpy")(module.run)
         _RUNNERS[key] = (run, time.perf_counter() - t0)
         _COMPILE["seconds"] += _RUNNERS[key][1]
@@ -450,13 +477,55 @@ def compiled_for(loop, engine, funcs, params, finite_bound):
         warnings.warn(f"compiled engine unavailable for this loop ({type(exc).__name__}: {exc}); "
                       "using the numpy engine", RuntimeWarning, stacklevel=3)
         return None
-    return run, [np.ascontiguousarray(kernels[p.name].params, dtype=float) for p in loop.placed]
+    P = [_params_2d(p.name, kernels[p.name].params) for p in loop.placed]
+    return run, P, {p.name: np.ndim(kernels[p.name].params) == 2 for p in loop.placed}
 
 
-def run_compiled(loop, runner, plan, n_steps, t, x, held, bound, keep_cols, store, xs, diverged, div_step):
-    """One chunk through the compiled runner, writing into the result slices."""
-    run, P = runner
+def _params_2d(name, params):
+    """A kernel's parameters as a C-contiguous ``(1, n_p)`` (shared) or ``(B, n_p)`` (per run) array."""
+    a = np.asarray(params, dtype=float)
+    if a.ndim not in (1, 2):
+        raise ValueError(f"block {name!r}: kernel params must be 1-D (shared) or 2-D (one row per run), "
+                         f"got shape {a.shape}")
+    return np.ascontiguousarray(a[None, :] if a.ndim == 1 else a)
+
+
+def per_run_rows(loop, runner) -> int | None:
+    """The number of runs the per-run kernel parameters describe (``None`` when all are shared).
+
+    Parameters
+    ----------
+    loop : Loop
+    runner : tuple
+        What :func:`compiled_for` returned.
+
+    Returns
+    -------
+    int or None
+
+    Raises
+    ------
+    ValueError
+        If two blocks' per-run parameters disagree on the number of runs.
+    """
+    _, P, per_run = runner
+    rows = {Pi.shape[0] for Pi, p in zip(P, loop.placed) if per_run[p.name]}
+    if len(rows) > 1:
+        raise ValueError(f"per-run kernel parameters of the blocks have different numbers of rows: {sorted(rows)}")
+    return rows.pop() if rows else None
+
+
+def run_compiled(loop, runner, plan, n_steps, t, x, held, bound, keep_cols, store, xs, diverged, div_step,
+                 rows=(0, None)):
+    """One chunk through the compiled runner, writing into the result slices.
+
+    ``rows = (lo, hi)`` are the chunk's runs within the batch: per-run kernel parameters are sliced
+    to them.
+    """
+    run, P, per_run = runner
     B = x.shape[0]
+    lo = rows[0]
+    P = [Pi[lo:lo + B] if per_run[p.name] else Pi for Pi, p in zip(P, loop.placed)]
     col = plan["col"]
     S0 = np.zeros(len(plan["names"]))
     varying = [(s, a) for s, a in held.items() if a.ndim > 0]

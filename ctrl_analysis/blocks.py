@@ -24,13 +24,14 @@ from typing import Callable
 
 import numpy as np
 
-from ._validate import check_in, check_int, check_names, check_positive, check_str
+from ._validate import check_finite, check_in, check_int, check_names, check_positive, check_str
 
 __all__ = [
     "Block",
     "ContinuousBlock",
     "DiscreteBlock",
     "StaticBlock",
+    "StaticGain",
     "SampledBlock",
     "RowGroups",
     "signal_names",
@@ -320,6 +321,71 @@ class StaticBlock(Block):
 
     def __repr__(self) -> str:
         return f"StaticBlock(inputs={self.inputs}, outputs={self.outputs})"
+
+
+class StaticGain(StaticBlock):
+    """A static gain ``y = D u`` (sums, differences, scalings, per-run selections), with a compiled kernel.
+
+    The common static blocks of a loop (a measurement ``y + v``, an error ``r - y``, a case switch
+    that routes one of several signals) are gains; written as one they run in the compiled engine.
+
+    Parameters
+    ----------
+    D : array_like, shape (p, m) or (B, p, m)
+        The gain matrix, shared by every run, or one per run (row ``b`` for run ``b``; e.g. which
+        filter a run feeds back).
+    inputs, outputs : sequence of str
+        Signal names: ``m`` inputs, ``p`` outputs.
+
+    Raises
+    ------
+    ValueError
+        If ``D`` is not finite, has the wrong number of dimensions, or its shape does not match the
+        numbers of inputs and outputs.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> meas = StaticGain([[1.0, 1.0]], inputs=("y", "v"), outputs=("y_meas",))
+    >>> meas.output(0.0, np.zeros((2, 0)), np.array([[1.0, 0.5], [2.0, -1.0]]))
+    array([[1.5],
+           [1. ]])
+    """
+
+    def __init__(self, D, inputs, outputs):
+        D = check_finite("D", D)
+        ins, outs = check_names("inputs", inputs), check_names("outputs", outputs)
+        if D.ndim not in (2, 3):
+            raise ValueError(f"D must have shape (p, m) or (B, p, m), got shape {D.shape}")
+        if D.shape[-2:] != (len(outs), len(ins)):
+            raise ValueError(f"D must have shape (p, m) = ({len(outs)}, {len(ins)}) (outputs, inputs) "
+                             f"[or (B, p, m)], got {D.shape}")
+        self.D = D
+        super().__init__(self._apply, ins, outs)
+
+    def _apply(self, t, u):
+        # y_i = sum_j D_ij u_j, summed left to right as the kernel does (bit-identical engines)
+        D = self.D if self.D.ndim == 3 else self.D[None]
+        y = np.zeros((u.shape[0], D.shape[1]))
+        for i in range(D.shape[1]):
+            for j in range(D.shape[2]):
+                y[:, i] += D[:, i, j] * u[:, j]
+        return y
+
+    def kernel(self):
+        """The compiled kernel: :func:`ctrl_analysis._kernels.gain_output` with ``D`` flattened (per run if 3-D).
+
+        Returns
+        -------
+        ctrl_analysis._kernels.BlockKernel
+        """
+        from ._kernels import BlockKernel, gain_output
+
+        p = self.D.reshape(self.D.shape[0], -1) if self.D.ndim == 3 else self.D.reshape(-1)
+        return BlockKernel(output=gain_output, params=p)
+
+    def __repr__(self) -> str:
+        return f"StaticGain(D shape {self.D.shape}, inputs={self.inputs}, outputs={self.outputs})"
 
 
 class SampledBlock(DiscreteBlock):

@@ -284,7 +284,7 @@ class Loop:
     def simulate(self, n_steps: int, *, inputs=None, x0=None, runs: int | None = None, t0: float = 0.0,
                  params=None, bound: float = 1e8, store_states: bool = True, seeds=None,
                  store_signals=None, chunk_runs: int | None = None, max_bytes: float | None = None,
-                 progress=None, engine: str = "auto", jobs: int = 1) -> LoopResponse:
+                 progress=None, engine: str = "auto", jobs: int = 1, run_offset: int = 0) -> LoopResponse:
         """Step the loop ``n_steps`` samples over a batch of runs.
 
         Parameters
@@ -329,6 +329,10 @@ class Loop:
             Processes the batch is split over (:func:`ctrl_analysis.parallel.map_chunks`); the
             result equals ``jobs=1`` bit for bit. Needs a picklable loop and no callable input
             (otherwise the batch runs in this process, with a warning for an unpicklable loop).
+        run_offset : int
+            Index of this batch's first run among the rows of per-run kernel parameters (see
+            :class:`~ctrl_analysis._kernels.BlockKernel`); set by the engine when it splits a batch over
+            processes. Per-run parameters must cover runs ``run_offset .. run_offset + B - 1``.
 
         Returns
         -------
@@ -385,9 +389,18 @@ class Loop:
         jobs = check_int("jobs", jobs, minimum=1)
         if jobs > 1 and B > 1 and not funcs and self._picklable():
             opts = {"t0": t0, "params": params, "bound": bound, "store_states": store_states, "store_signals": keep,
-                    "chunk_runs": chunk_runs, "max_bytes": max_bytes, "engine": engine}
+                    "chunk_runs": chunk_runs, "max_bytes": max_bytes, "engine": engine,
+                    "run_offset": check_int("run_offset", run_offset, minimum=0)}
             return self._simulate_parallel(jobs, n_steps, held, x, opts, seeds)
+        run_offset = check_int("run_offset", run_offset, minimum=0)
         runner = self._compiled(engine, funcs, params, np.isfinite(bound))
+        if runner is not None:
+            from ._kernels import per_run_rows
+
+            rows = per_run_rows(self, runner)
+            if rows is not None and rows < run_offset + B:
+                raise ValueError(f"the loop's per-run block parameters describe {rows} runs, but runs "
+                                 f"{run_offset}..{run_offset + B - 1} were asked for (runs/inputs/x0 set B = {B})")
         t = t0 + self.dt * np.arange(n_steps + 1)
         store = np.empty((n_steps + 1, B, len(keep)))
         xs = np.empty((n_steps + 1, B, self.n_states)) if store_states else None
@@ -401,7 +414,8 @@ class Loop:
             h_c = {s: (a[:, lo:hi] if a.ndim == 2 else a) for s, a in held.items()}
             if runner is not None:
                 self._run_compiled(runner, plan, n_steps, t, x[lo:hi], h_c, bound, keep_cols, store[:, lo:hi],
-                                   None if xs is None else xs[:, lo:hi], diverged[lo:hi], div_step[lo:hi])
+                                   None if xs is None else xs[:, lo:hi], diverged[lo:hi], div_step[lo:hi],
+                                   run_offset + lo)
                 if progress is not None:
                     progress(n_steps)
                 continue
@@ -435,7 +449,8 @@ class Loop:
         for sl in chunk_slices(x.shape[0], chunks=jobs):
             inputs = {s: (a[:, sl] if a.ndim == 2 else a) for s, a in held.items()}
             x0 = {name: x[sl, bsl] for name, bsl in self.slices.items()}
-            tasks.append((self, n_steps, dict(opts, inputs=inputs, x0=x0, runs=sl.stop - sl.start)))
+            tasks.append((self, n_steps, dict(opts, inputs=inputs, x0=x0, runs=sl.stop - sl.start,
+                                              run_offset=opts["run_offset"] + sl.start)))
         parts = map_chunks(_simulate_task, tasks, jobs=jobs)
         first = parts[0]
         xs = None if first.x is None else np.concatenate([p.x for p in parts], axis=1)
@@ -453,11 +468,13 @@ class Loop:
 
         return compiled_for(self, engine, funcs, params, finite_bound)
 
-    def _run_compiled(self, runner, plan, n_steps, t, x, held, bound, keep_cols, store, xs, diverged, div_step):
+    def _run_compiled(self, runner, plan, n_steps, t, x, held, bound, keep_cols, store, xs, diverged, div_step,
+                      first_run=0):
         """One chunk through the compiled runner, writing into the result slices."""
         from ._kernels import run_compiled
 
-        run_compiled(self, runner, plan, n_steps, t, x, held, bound, keep_cols, store, xs, diverged, div_step)
+        run_compiled(self, runner, plan, n_steps, t, x, held, bound, keep_cols, store, xs, diverged, div_step,
+                     rows=(first_run, None))
 
     def _run_chunk(self, plan, n_steps, t, x, held, funcs, params, bound, keep_cols, store, xs,
                    diverged, div_step, progress):

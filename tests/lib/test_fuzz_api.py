@@ -263,6 +263,9 @@ def build_cases(tmp):
         # blocks and loops
         ("StaticBlock", blocks.StaticBlock, dict(fn=lambda t, u: u, inputs=("a",), outputs=("b",)),
          dict(fn=CALLABLE, inputs=[None, 3, ["a", 3]], outputs=[None, 3, [1.5]])),
+        ("StaticGain", blocks.StaticGain, dict(D=[[1.0, -1.0]], inputs=("r", "y"), outputs=("e",)),
+         dict(D=ARR + [[1.0, 2.0], [[1.0]], np.ones((2, 2, 2)), [[NAN, 1.0]]], inputs=[None, 3, ["a", 3]],
+              outputs=[None, 3, [1.5]])),
         ("RowGroups", blocks.RowGroups, dict(blocks=[LPF, LPF], rows=[1, 2]),
          dict(blocks=[None, 3, [], [None], [LPF, 3]], rows=[None, "ab", [1], [0, 1], [1.5, 1], [1, 2, 3]])),
         ("SampledBlock", blocks.SampledBlock, dict(block=LPF, dt=0.01, method="rk4", substeps=1),
