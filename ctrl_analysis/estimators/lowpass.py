@@ -241,30 +241,32 @@ class DiscreteLowPass(DiscreteBlock):
         self.inputs = signal_names("u", self.channels)
         self.outputs = signal_names("w", self.channels)
         self.states = tuple(f"w[{c}][{j}]" for c in range(self.channels) for j in range(m))
+        # kernel parameters: [m, Ad (row-major), Bd]
+        self._p = np.concatenate([[float(m)], self.Ad.reshape(-1), self.Bd])
 
     def initial_state(self) -> np.ndarray:
         return self._x0.reshape(-1).copy()
 
     def update(self, t, x, u, params=None) -> np.ndarray:
-        m, p = self.lowpass.order, self.channels
-        xs = x.reshape(x.shape[0], p, m)
-        x_next = np.empty_like(xs)
-        # x(k+1) = Ad x(k) + Bd u(k)   (exact ZOH discretisation of W(s)), written out per row
-        for i in range(m):
-            acc = self.Bd[i] * u
-            for j in range(m):
-                acc = acc + self.Ad[i, j] * xs[:, :, j]
-            x_next[:, :, i] = acc
-        return x_next.reshape(x.shape[0], p * m)
+        x_next = np.empty_like(x)
+        lowpass_update(t, x.T, u.T, self._p, x_next.T)  # the kernel on the batch's columns: one source
+        return x_next
 
     def output(self, t, x, u, params=None) -> np.ndarray:
-        m, p = self.lowpass.order, self.channels
-        xs = x.reshape(x.shape[0], p, m)
-        # first row of x(k+1) = Ad x(k) + Bd u(k): the filtered value after this sample
-        acc = self.Bd[0] * u
-        for j in range(m):
-            acc = acc + self.Ad[0, j] * xs[:, :, j]
-        return acc
+        y = np.empty((x.shape[0], self.channels))
+        lowpass_output(t, x.T, u.T, self._p, y.T)
+        return y
+
+    def kernel(self):
+        """The compiled engine's kernel (:func:`lowpass_update`, :func:`lowpass_output`; the numpy methods call them too).
+
+        Returns
+        -------
+        ctrl_analysis._kernels.BlockKernel
+        """
+        from .._kernels import BlockKernel
+
+        return BlockKernel(output=lowpass_output, params=self._p, update=lowpass_update)
 
     def filter(self, u) -> np.ndarray:
         """Filter a whole record ``u`` of shape ``(N,)``, ``(N, channels)`` or ``(N, B, channels)``.
@@ -288,3 +290,50 @@ class DiscreteLowPass(DiscreteBlock):
 
     def __repr__(self) -> str:
         return f"DiscreteLowPass({self.lowpass!r}, h={self.h}, channels={self.channels})"
+
+
+def lowpass_update(t, x, u, p, x_next):
+    """Discrete W(s), every channel: ``x(k+1) = Ad x(k) + Bd u(k)`` (exact ZOH), ``p = [m, Ad, Bd]``.
+
+    Written with scalar indexing only, so it is both the compiled kernel of one run (``x`` of shape
+    ``(channels·m,)``) and, called on a batch's transposed arrays, :class:`DiscreteLowPass`'s numpy
+    method.
+
+    Parameters
+    ----------
+    t : float
+        Time (unused).
+    x : numpy.ndarray
+        Filter states, channel-major: ``x[c·m + j]``.
+    u : numpy.ndarray
+        One input per channel.
+    p : numpy.ndarray
+        ``[m, Ad (m·m, row-major), Bd (m)]``.
+    x_next : numpy.ndarray
+        Next states, written in place.
+    """
+    m = int(p[0])
+    for c in range(u.shape[0]):
+        for i in range(m):
+            acc = p[1 + m * m + i] * u[c]
+            for j in range(m):
+                acc = acc + p[1 + i * m + j] * x[c * m + j]
+            x_next[c * m + i] = acc
+
+
+def lowpass_output(t, x, u, p, y):
+    """The filtered value after this sample: the first row of :func:`lowpass_update` (direct feedthrough).
+
+    Parameters
+    ----------
+    t, x, u, p
+        As :func:`lowpass_update`.
+    y : numpy.ndarray
+        One output per channel, written in place.
+    """
+    m = int(p[0])
+    for c in range(u.shape[0]):
+        acc = p[1 + m * m] * u[c]
+        for j in range(m):
+            acc = acc + p[1 + j] * x[c * m + j]
+        y[c] = acc
