@@ -26,8 +26,9 @@ with ``x[i]``-style indexing and no per-element branches serves both: called wit
 ``u.T`` / ``dx.T`` (columns of a batch) it *is* the numpy method (see ``benchmarks/bench_example1.py``,
 ``Plant19``), so there is one source per equation.
 
-The generated runner is cached in memory per loop structure and process; numba's compile time
-(about a second per structure) is reported by :func:`compile_seconds`.
+The generated runner is cached in memory per loop structure and process, and on disk (numba's
+cache, :func:`cache_dir`); numba's compile time (a few seconds per structure on a cold cache) is
+reported by :func:`compile_seconds`.
 """
 
 from __future__ import annotations
@@ -224,7 +225,7 @@ def _jit(fn):
     import numba
 
     if fn not in _JIT:
-        _JIT[fn] = numba.njit(cache=True, error_model="numpy")(fn)
+        _JIT[fn] = numba.njit(cache=True, error_model="numpy", inline="always")(fn)
     return _JIT[fn]
 
 
@@ -232,8 +233,10 @@ def _gen_source(blocks, order, stage, discrete, continuous, nc, method, finite_b
     """Python source of the runner (see :func:`compiled_runner`).
 
     Runs are stepped side by side (steps outermost, so the result rows are written in memory
-    order); each block's state, input and output are copied through small scratch vectors
-    allocated once, so no array view is created inside the loops.
+    order; runs outermost was measured 1.5x slower at B = 1000, its strided stores miss the TLB).
+    The kernels are compiled with ``inline="always"`` so the whole loop is one function (measured
+    2.2x faster than calls at B = 1000, about a second more compile time per structure); states and
+    derivatives are passed as views, inputs and outputs through small scratch vectors allocated once.
     """
     L = []
     add = L.append
@@ -243,18 +246,17 @@ def _gen_source(blocks, order, stage, discrete, continuous, nc, method, finite_b
         """Lines evaluating block ``i`` (``kind``: out / rhs / upd) on state vector ``xx``."""
         b = blocks[i]
         lo, hi = b["sl"]
-        src = (lambda j: f"X[b, {lo + j}]") if xx == "X" else (lambda j: f"{xx}[{lo + j}]")
-        # every index is known here: the copies are unrolled with literal indices
-        lines = [f"XB{i}[{j}] = {src(j)}" for j in range(hi - lo)]
-        lines += [f"UB{i}[{j}] = SS[b, {c}]" for j, c in enumerate(b["ic"])]
-        pr = f"P{i}[b]" if b["per_run"] else f"P{i}[0]"
+        # the state and the derivative / next state are passed as views (inlined kernels: pointer
+        # arithmetic); the inputs are gathered from the signal row with literal indices
+        xv = f"X[b, {lo}:{hi}]" if xx == "X" else f"{xx}[{lo}:{hi}]"
+        lines = [f"UB{i}[{j}] = SS[b, {c}]" for j, c in enumerate(b["ic"])]
+        pr = f"P{i}[b]" if b["per_run"] else f"P{i}"
         if kind == "out":
-            lines.append(f"K{i}_out({t}, XB{i}, UB{i}, {pr}, YB{i})")
+            lines.append(f"K{i}_out({t}, {xv}, UB{i}, {pr}, YB{i})")
             lines += [f"SS[b, {c}] = YB{i}[{j}]" for j, c in enumerate(b["oc"])]
         else:
             fn = "rhs" if kind == "rhs" else "upd"
-            lines.append(f"K{i}_{fn}({t}, XB{i}, UB{i}, {pr}, DB{i})")
-            lines += [f"{out}[{lo + j}] = DB{i}[{j}]" for j in range(hi - lo)]
+            lines.append(f"K{i}_{fn}({t}, {xv}, UB{i}, {pr}, {out}[{lo}:{hi}])")
         return [ind + s for s in lines]
 
     def stage_lines(tau, xx, dx, ind):
@@ -393,7 +395,7 @@ def compiled_runner(loop, kernels: dict, finite_bound: bool):
         f64, i64 = numba.float64, numba.int64
         sig = numba.void(i64, f64[::1], f64, i64, f64[:, ::1], f64[:, :, ::1], numba.intp[::1], f64[::1],
                          numba.intp[::1], f64[:, :, :], f64[:, :, :], f64, numba.boolean[:], i64[:],
-                         *[f64[:, ::1]] * len(names))
+                         *[f64[:, ::1] if b["per_run"] else f64[::1] for b in blocks])
         run = numba.njit(sig, cache=True, error_model="numpy")(module.run)
         _RUNNERS[key] = (run, time.perf_counter() - t0)
         _COMPILE["seconds"] += _RUNNERS[key][1]
@@ -525,7 +527,7 @@ def run_compiled(loop, runner, plan, n_steps, t, x, held, bound, keep_cols, stor
     run, P, per_run = runner
     B = x.shape[0]
     lo = rows[0]
-    P = [Pi[lo:lo + B] if per_run[p.name] else Pi for Pi, p in zip(P, loop.placed)]
+    P = [Pi[lo:lo + B] if per_run[p.name] else Pi[0] for Pi, p in zip(P, loop.placed)]
     col = plan["col"]
     S0 = np.zeros(len(plan["names"]))
     varying = [(s, a) for s, a in held.items() if a.ndim > 0]
