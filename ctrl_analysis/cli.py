@@ -59,9 +59,10 @@ def _build_parser() -> argparse.ArgumentParser:
 
 
 def _progress(study: str):
+    from .progress import write
+
     def emit(msg: str) -> None:
-        sys.stderr.write(f"[{study}] {msg}\n")
-        sys.stderr.flush()
+        write(f"[{study}] {msg}")  # through tqdm when bars are drawn, so they stay intact
 
     return emit
 
@@ -100,10 +101,19 @@ def _run_study(task) -> dict:
     study's name, its summary text and ``error`` (one line, or ``None``); never raises for a study
     failure, so one failing study does not stop the others.
     """
+    from .progress import set_context
+
+    name, out, runs, seed, quick, jobs, scheduler, position = task
+    set_context(name, position)  # the study's own bars (long simulations) carry its name, on their own line
+    try:
+        return _run_study_here(name, Path(out), runs, seed, quick, jobs, scheduler)
+    finally:
+        set_context()
+
+
+def _run_study_here(name, out, runs, seed, quick, jobs, scheduler) -> dict:
     from analysis import load_study
 
-    name, out, runs, seed, quick, jobs, scheduler = task
-    out = Path(out)
     record = {"name": name, "error": None, "text": "", "run": {"seed": seed, "runs": runs, "quick": bool(quick)}}
     try:
         with staged_directory(out / name) as staged:
@@ -154,8 +164,8 @@ def _reproduce(args) -> int:
     # longest first (by the runtime of the previous output, unknown first): side by side, the run
     # then ends with the longest study instead of starting it last; summaries print in the asked order
     start = sorted(todo, key=lambda name: -_previous_runtime(out / name))
-    tasks = [(name, str(out), args.runs, args.seed, args.quick, max(1, jobs // side_by_side), args.scheduler)
-             for name in start]
+    tasks = [(name, str(out), args.runs, args.seed, args.quick, max(1, jobs // side_by_side), args.scheduler,
+              1 + i % side_by_side if side_by_side > 1 else None) for i, name in enumerate(start)]
     if side_by_side > 1:  # import the studies (numpy, scipy, control, matplotlib) once, before the workers fork
         for name in todo:
             load_study(name)

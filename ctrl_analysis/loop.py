@@ -43,7 +43,11 @@ from .simulate import (
     chunk_bounds,
 )
 
-__all__ = ["Loop", "LoopResponse", "Placed", "place"]
+__all__ = ["AUTO_BAR_WORK", "Loop", "LoopResponse", "Placed", "place"]
+
+#: Run-samples (runs x samples) from which :meth:`Loop.simulate` shows a progress bar of its own
+#: (when stderr is a terminal): about a second of work on the numpy engine.
+AUTO_BAR_WORK = 2_000_000
 
 
 @dataclass(frozen=True)
@@ -316,8 +320,11 @@ class Loop:
         max_bytes : float, optional
             Memory allowed for the working arrays of one chunk (default
             :data:`ctrl_analysis.simulate.CHUNK_BYTES`); the batch is split into chunks that fit.
-        progress : callable, optional
-            ``progress(n)`` called after every ``n`` samples of a chunk (e.g. a tqdm ``update``).
+        progress : callable, bool or None
+            ``progress(n)`` is called as work completes, ``n`` counting run-samples (one run advanced
+            one sample; the total is ``B * n_steps``), e.g. a tqdm ``update``. ``None`` (default): a
+            progress bar of its own (:func:`ctrl_analysis.progress.bar`, stderr, only when it is a
+            terminal) for long simulations (``B * n_steps >= AUTO_BAR_WORK``); ``False``: none.
         engine : {"auto", "numpy", "compiled"}
             ``"numpy"``: the blocks' batched methods. ``"compiled"``: one numba function for the whole
             loop built from the blocks' kernels (:mod:`ctrl_analysis._kernels`); needs a kernel for
@@ -364,7 +371,8 @@ class Loop:
             store_signals = check_names("store_signals", store_signals)
         if max_bytes is not None:
             max_bytes = check_positive("max_bytes", max_bytes, scalar=True)
-        check_callable("progress", progress, "progress(n)", optional=True)
+        if not isinstance(progress, bool):
+            check_callable("progress", progress, "progress(n)", optional=True)
         held, funcs, B = self._inputs(inputs, n_steps, runs)
         x0_B = max((np.ndim(v) == 2 and np.shape(v)[0]) or 1 for v in (x0 or {}).values()) if x0 else 1
         if B == 1 and x0_B > 1:
@@ -408,20 +416,13 @@ class Loop:
         div_step = np.full(B, -1, dtype=int)
         # a callable input returning one value per run is sliced with its chunk
         per_run_funcs = {s for s, f in funcs.items() if np.ndim(f(t[0])) == 1 and np.size(f(t[0])) == B > 1}
-        for lo, hi in chunk_bounds(B, size):
-            f_c = {s: (f if s not in per_run_funcs else (lambda tt, f=f, lo=lo, hi=hi: np.asarray(f(tt))[lo:hi]))
-                   for s, f in funcs.items()}
-            h_c = {s: (a[:, lo:hi] if a.ndim == 2 else a) for s, a in held.items()}
-            if runner is not None:
-                self._run_compiled(runner, plan, n_steps, t, x[lo:hi], h_c, bound, keep_cols, store[:, lo:hi],
-                                   None if xs is None else xs[:, lo:hi], diverged[lo:hi], div_step[lo:hi],
-                                   run_offset + lo)
-                if progress is not None:
-                    progress(n_steps)
-                continue
-            self._run_chunk(plan, n_steps, t, x[lo:hi], h_c, f_c, params, bound, keep_cols,
-                            store[:, lo:hi], None if xs is None else xs[:, lo:hi],
-                            diverged[lo:hi], div_step[lo:hi], progress)
+        from .progress import enabled, updater
+
+        auto = progress is None and B * n_steps >= AUTO_BAR_WORK and enabled()
+        with updater(progress if callable(progress) else auto, B * n_steps,
+                     f"{B} runs x {n_steps} samples", "run-sample") as pbar:
+            self._run_chunks(plan, runner, n_steps, t, x, held, funcs, per_run_funcs, params, bound, keep_cols,
+                             store, xs, diverged, div_step, chunk_bounds(B, size), run_offset, pbar)
         sig_store = {s: store[:, :, j] for j, s in enumerate(keep)}
         state_names = [f"{p.name}.{s}" for p in self.continuous + self.discrete for s in p.block.states]
         return LoopResponse(t=t, x=xs, u=None, y=None, diverged=diverged, diverged_step=div_step,
@@ -429,38 +430,39 @@ class Loop:
                             slices=dict(self.slices), external=self.external, outlist=self.outlist,
                             state_names=state_names, x_final=x if xs is None else xs[-1].copy())
 
-    def _picklable(self) -> bool:
-        import pickle
-        import warnings
+    def _run_chunks(self, plan, runner, n_steps, t, x, held, funcs, per_run_funcs, params, bound, keep_cols,
+                    store, xs, diverged, div_step, bounds, run_offset, progress):
+        """Step every chunk ``(lo, hi)`` of the batch (compiled or numpy), reporting run-samples to ``progress``."""
+        for lo, hi in bounds:
+            f_c = {s: (f if s not in per_run_funcs else (lambda tt, f=f, lo=lo, hi=hi: np.asarray(f(tt))[lo:hi]))
+                   for s, f in funcs.items()}
+            h_c = {s: (a[:, lo:hi] if a.ndim == 2 else a) for s, a in held.items()}
+            if runner is None:
+                self._run_chunk(plan, n_steps, t, x[lo:hi], h_c, f_c, params, bound, keep_cols,
+                                store[:, lo:hi], None if xs is None else xs[:, lo:hi],
+                                diverged[lo:hi], div_step[lo:hi], progress)
+                continue
+            # compiled: one call per chunk, or (with progress) about 20 calls over its runs (runs are
+            # independent: the same numbers either way)
+            parts = [(lo, hi)] if progress is None else chunk_bounds(hi - lo, max(1, -(-(hi - lo) // 20)))
+            for a, b in parts if progress is None else [(lo + a, lo + b) for a, b in parts]:
+                h_p = {s: (v[:, a:b] if v.ndim == 2 else v) for s, v in held.items()}
+                self._run_compiled(runner, plan, n_steps, t, x[a:b], h_p, bound, keep_cols, store[:, a:b],
+                                   None if xs is None else xs[:, a:b], diverged[a:b], div_step[a:b],
+                                   run_offset + a)
+                if progress is not None:
+                    progress((b - a) * n_steps)
 
-        try:
-            pickle.dumps(self)
-        except (pickle.PicklingError, AttributeError, TypeError) as exc:
-            warnings.warn(f"jobs > 1 needs a picklable loop ({exc}); running the batch in this process",
-                          RuntimeWarning, stacklevel=3)
-            return False
-        return True
+    def _picklable(self) -> bool:
+        from .parallel import picklable
+
+        return picklable(self)
 
     def _simulate_parallel(self, jobs, n_steps, held, x, opts, seeds):
         """Chunks of the batch in ``jobs`` processes, joined into one response (bit for bit ``jobs=1``)."""
-        from .parallel import chunk_slices, map_chunks
+        from .parallel import simulate_chunks
 
-        tasks = []
-        for sl in chunk_slices(x.shape[0], chunks=jobs):
-            inputs = {s: (a[:, sl] if a.ndim == 2 else a) for s, a in held.items()}
-            x0 = {name: x[sl, bsl] for name, bsl in self.slices.items()}
-            tasks.append((self, n_steps, dict(opts, inputs=inputs, x0=x0, runs=sl.stop - sl.start,
-                                              run_offset=opts["run_offset"] + sl.start)))
-        parts = map_chunks(_simulate_task, tasks, jobs=jobs)
-        first = parts[0]
-        xs = None if first.x is None else np.concatenate([p.x for p in parts], axis=1)
-        signals = {s: np.concatenate([p.signals[s] for p in parts], axis=1) for s in first.signals}
-        return LoopResponse(t=first.t, x=xs, u=None, y=None,
-                            diverged=np.concatenate([p.diverged for p in parts]),
-                            diverged_step=np.concatenate([p.diverged_step for p in parts]),
-                            seeds=None if seeds is None else list(seeds), bound=first.bound, signals=signals,
-                            slices=dict(self.slices), external=self.external, outlist=self.outlist,
-                            state_names=first.state_names)
+        return simulate_chunks(self, jobs, n_steps, held, x, opts, seeds)
 
     def _compiled(self, engine, funcs, params, finite_bound):
         """The compiled runner and the kernels' parameters, or ``None`` for the numpy path."""
@@ -543,7 +545,7 @@ class Loop:
                         x_next = xc
                 x = _flag_divergence(x_next, bound, diverged, div_step, k + 1)
                 if progress is not None and (k + 1) % tick == 0:
-                    progress(tick)
+                    progress(tick * B)
         x_out[...] = x
 
     # ------------------------------------------------------------------ python-control
@@ -589,9 +591,3 @@ class Loop:
 
 
 _NO_STATE = slice(0, 0)
-
-
-def _simulate_task(task):
-    """One chunk of :meth:`Loop.simulate` with ``jobs > 1`` (module level: run in a worker process)."""
-    loop, n_steps, kw = task
-    return loop.simulate(n_steps, **kw)

@@ -11,7 +11,46 @@ import os
 import sys
 from ._validate import check_int, check_str
 
-__all__ = ["NullBar", "bar", "enabled"]
+__all__ = ["NullBar", "bar", "enabled", "set_context", "updater", "write"]
+
+# what the CLI sets in each process that runs a study: the label in front of every bar, and the
+# terminal line the process's bars use (studies side by side draw on different lines)
+_CONTEXT: dict = {"label": "", "position": None}
+
+
+def set_context(label: str = "", position: int | None = None) -> None:
+    """Label (e.g. the study's name) and terminal line of every bar this process shows from now on.
+
+    Parameters
+    ----------
+    label : str
+        Text put in front of every bar's description (``""``: none).
+    position : int, optional
+        tqdm's ``position`` (the line, counted from the cursor) for this process's bars.
+    """
+    check_str("label", label, empty=True)
+    if position is not None:
+        position = check_int("position", position, minimum=0)
+    _CONTEXT["label"], _CONTEXT["position"] = label, position
+
+
+def write(message: str, stream=None) -> None:
+    """Write one line to ``stream`` (default stderr) without breaking the bars drawn there.
+
+    Parameters
+    ----------
+    message : str
+    stream : file-like, optional
+    """
+    check_str("message", message, empty=True)
+    stream = _check_stream(stream)
+    if enabled(stream):
+        from tqdm import tqdm
+
+        tqdm.write(message, file=stream)
+    else:
+        stream.write(message + "\n")
+        stream.flush()
 
 
 def enabled(stream=None) -> bool:
@@ -100,7 +139,8 @@ def bar(total: int | None = None, desc: str = "", unit: str = "it", stream=None)
     Returns
     -------
     tqdm.tqdm or NullBar
-        A tqdm bar on ``stream`` when :func:`enabled`, otherwise a :class:`NullBar`.
+        A tqdm bar on ``stream`` when :func:`enabled`, otherwise a :class:`NullBar`; labelled and
+        positioned as :func:`set_context` said.
     """
     if total is not None:
         total = check_int("total", total, minimum=0)
@@ -111,4 +151,52 @@ def bar(total: int | None = None, desc: str = "", unit: str = "it", stream=None)
         return NullBar()
     from tqdm import tqdm
 
-    return tqdm(total=total, desc=desc, unit=unit, file=stream, leave=False, dynamic_ncols=True)
+    label = _CONTEXT["label"]
+    desc = f"{label}: {desc}" if label and desc else (label or desc)
+    return tqdm(total=total, desc=desc, unit=unit, file=stream, leave=False, dynamic_ncols=True,
+                position=_CONTEXT["position"], unit_scale=True)
+
+
+def updater(progress, total: int, desc: str = "", unit: str = "it"):
+    """A context manager giving a ``progress(n)`` callable for a long loop, or ``None``.
+
+    Parameters
+    ----------
+    progress : callable or bool
+        A callable is given back unchanged (the caller's own sink); ``True``: a :func:`bar` of
+        ``total`` units (a no-op :class:`NullBar` when stderr is not a terminal); ``False``: ``None``.
+    total : int
+        Units of work of the bar.
+    desc, unit : str
+        The bar's label and unit.
+
+    Returns
+    -------
+    contextlib.AbstractContextManager
+        Entering it gives the callable (or ``None``); leaving it closes the bar.
+    """
+    import contextlib
+
+    if not (callable(progress) or isinstance(progress, bool)):
+        raise TypeError(f"progress must be a callable progress(n) or a bool, got {progress!r:.80}")
+    total = check_int("total", total, minimum=0)
+    check_str("desc", desc, empty=True)
+    check_str("unit", unit)
+    if callable(progress):
+        return contextlib.nullcontext(progress)
+    if progress is True:
+        return _Updating(bar(total, desc=desc, unit=unit))
+    return contextlib.nullcontext(None)
+
+
+class _Updating:
+    """Enter a bar, give its ``update``; leave it, close it."""
+
+    def __init__(self, pbar):
+        self.pbar = pbar
+
+    def __enter__(self):
+        return self.pbar.update
+
+    def __exit__(self, *exc):
+        self.pbar.close()
