@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
 
-from ctrl_analysis.blocks import StaticBlock
+from ctrl_analysis.blocks import StaticGain
 from ctrl_analysis.controllers.mfac import (
     CFDLLaw,
     DecreasingGainLaw,
@@ -28,9 +29,18 @@ __all__ = ["SchemeRuns", "build_loop", "noise_draws", "run_scheme"]
 BOUND = 1e4
 
 
-def _measurement() -> StaticBlock:
+def _measurement() -> StaticGain:
     # (5) y_m(k) = y(k) + v(k)
-    return StaticBlock(lambda t, u: u[:, :1] + u[:, 1:2], inputs=("y", "v"), outputs=("y_m",))
+    return StaticGain([[1.0, 1.0]], inputs=("y", "v"), outputs=("y_m",))
+
+
+def _per_run(ex: Example, runs: int) -> Example:
+    """``ex`` with the parameters the sweeps vary (ρ, λ, Q, R) as one value per run.
+
+    Every batch then builds the same compiled loop (per-run kernel parameters), whatever varies.
+    """
+    return dataclasses.replace(ex, **{name: np.broadcast_to(np.asarray(getattr(ex, name), dtype=float), (runs,)).copy()
+                                      for name in ("rho", "lam", "Q", "R")})
 
 
 def build_loop(ex: Example, scheme: str) -> Loop:
@@ -83,7 +93,7 @@ def run_scheme(ex: Example, scheme: str, v: np.ndarray) -> SchemeRuns:
     The engine starts at ``k = ex.k_start`` with ``y(k_start)`` from the plant; the given
     ``y(1:k_start−1)``, ``u(1:k_start−1)`` are put in front, so every returned row is ``k = 1..N``.
     """
-    loop = build_loop(ex, scheme)
+    loop = build_loop(_per_run(ex, v.shape[1]), scheme)
     ks, n = ex.k_start, ex.n
     n_steps = n - ks
     plant = loop.placed[0].block
