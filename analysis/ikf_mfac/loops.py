@@ -87,8 +87,11 @@ class SchemeRuns:
     diverged_step: np.ndarray
 
 
-def run_scheme(ex: Example, scheme: str, v: np.ndarray) -> SchemeRuns:
+def run_scheme(ex: Example, scheme: str, v: np.ndarray, engine: str = "auto") -> SchemeRuns:
     """Run ``scheme`` for every column of the noise ``v`` (shape ``(N, B)``, ``v[k−1] = v(k)``).
+
+    ``engine`` is :meth:`Loop.simulate <ctrl_analysis.loop.Loop.simulate>`'s (``"auto"``: compiled,
+    every block has a kernel; ``"numpy"``: the blocks' batched methods, the same numbers).
 
     The engine starts at ``k = ex.k_start`` with ``y(k_start)`` from the plant; the given
     ``y(1:k_start−1)``, ``u(1:k_start−1)`` are put in front, so every returned row is ``k = 1..N``.
@@ -100,7 +103,7 @@ def run_scheme(ex: Example, scheme: str, v: np.ndarray) -> SchemeRuns:
     k_eng = ks + np.arange(n_steps + 1)
     res = loop.simulate(n_steps, t0=float(ks), inputs={"v": v[ks - 1:], "y_ref_next": reference_next(ex.reference, k_eng)},
                         x0={"plant": plant_start_state(plant, ex.y_init, ex.u_init, ks)}, bound=BOUND,
-                        store_states=False)
+                        store_states=False, engine=engine)
     B = v.shape[1]
     head = np.full((ks - 1, B), ex.y_init)
     y = np.vstack([head, res["y"]])
