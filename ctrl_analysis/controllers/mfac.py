@@ -483,7 +483,8 @@ def mfac_controller(estimator: PPDEstimator, law: Block, output_filter: Block | 
     Signals: the loop must supply ``measured`` (``y_m(k)``) and ``reference`` (``y*(k+1)``);
     the controller produces ``control`` (``u(k)``) and the internal signals ``u_prev``,
     ``phi_hat``, ``y_f`` (what estimator and law see). Block names: ``delay``, ``ppd``, ``law``,
-    and ``filter`` (plus ``model`` for the IKF).
+    and ``filter`` (plus ``model`` for the IKF; a TD with feedthrough is placed as its steps,
+    ``filter``, and two delays ``filter_x1``, ``filter_x2`` holding its state).
 
     Parameters
     ----------
@@ -524,7 +525,15 @@ def mfac_controller(estimator: PPDEstimator, law: Block, output_filter: Block | 
         check_str(name, value)
     y_f = measured
     blocks = [place(UnitDelay(u0), "delay", inputs=[control], outputs=["u_prev"])]
-    if isinstance(output_filter, TrackingDifferentiator):
+    if isinstance(output_filter, TrackingDifferentiator) and output_filter.feedthrough:
+        # the TD's steps once per sample (the block's output and update would run them twice): its
+        # state (x1, x2) in two delays fed by the steps' outputs, the same numbers
+        y_f = "y_f"
+        blocks.append(place(output_filter.step_block(), "filter", inputs=[measured, "td_x1", "td_x2"],
+                            outputs=["y_f", "y_f_rate"]))
+        blocks += [place(UnitDelay(output_filter.x0[i]), f"filter_x{i + 1}", inputs=[s], outputs=[f"td_x{i + 1}"])
+                   for i, s in enumerate(("y_f", "y_f_rate"))]
+    elif isinstance(output_filter, TrackingDifferentiator):
         y_f = "y_f"
         blocks.append(place(output_filter, "filter", inputs=[measured], outputs=["y_f", "y_f_rate"]))
     elif isinstance(output_filter, ImprovedKalmanFilter):

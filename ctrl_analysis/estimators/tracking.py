@@ -20,7 +20,7 @@ import numpy as np
 
 from .lowpass import LowPassFilter
 from .._validate import check_array, check_finite, check_in, check_int, check_positive
-from ..blocks import DiscreteBlock
+from ..blocks import DiscreteBlock, StaticBlock
 from .kalman.ikf import _jitable
 
 __all__ = [
@@ -131,6 +131,25 @@ def td_update(t, x, u, p, x_next):
     x1, x2, _fh = _td_steps(x[0], x[1], u[0], p[0], p[1], p[2], int(p[3]))
     x_next[0] = x1
     x_next[1] = x2
+
+
+def td_step_output(t, x, u, p, y):
+    """Kernel of :class:`TDStep` and its numpy method: ``y = (x1, x2)`` after the steps, ``u = (v, x1, x2)``.
+
+    Parameters
+    ----------
+    t, x : float, numpy.ndarray
+        Time and (empty) state, unused.
+    u : numpy.ndarray
+        ``(v, x1, x2)``: the tracked signal and the TD state before the sample's steps.
+    p : numpy.ndarray
+        As :func:`td_update`.
+    y : numpy.ndarray
+        ``(x1, x2)`` after the steps, written in place.
+    """
+    x1, x2, _fh = _td_steps(u[1], u[2], u[0], p[0], p[1], p[2], int(p[3]))
+    y[0] = x1
+    y[1] = x2
 
 
 def td_output(t, x, u, p, y):
@@ -253,6 +272,19 @@ class TrackingDifferentiator(DiscreteBlock):
 
         return BlockKernel(output=td_output, params=self._p, update=td_update)
 
+    def step_block(self):
+        """The sample's steps as a static block (inputs ``v``, ``x1``, ``x2``; outputs ``x1``, ``x2`` after them).
+
+        With two :class:`~ctrl_analysis.controllers.mfac.UnitDelay` blocks holding its outputs it is
+        this TD with feedthrough, computing the steps once per sample where the block's output and
+        update compute them twice (same numbers).
+
+        Returns
+        -------
+        TDStep
+        """
+        return TDStep(self)
+
     def acceleration(self, x, u) -> np.ndarray:
         """The acceleration ``fh`` applied in the last sub-step of a sample.
 
@@ -273,6 +305,41 @@ class TrackingDifferentiator(DiscreteBlock):
     def __repr__(self) -> str:
         return (f"TrackingDifferentiator(r={self.r}, h={self.h}, h0={self.h0}, "
                 f"substeps={self.substeps})")
+
+
+class TDStep(StaticBlock):
+    """The steps of one sample of a :class:`TrackingDifferentiator`, a static block with a compiled kernel.
+
+    Block signals: inputs ``v``, ``x1``, ``x2`` (the TD state before the steps); outputs ``x1``,
+    ``x2`` after them. Made by :meth:`TrackingDifferentiator.step_block`.
+
+    Parameters
+    ----------
+    td : TrackingDifferentiator
+        Whose ``r``, ``h``, ``h0`` and ``substeps`` are used.
+    """
+
+    def __init__(self, td: "TrackingDifferentiator"):
+        if not isinstance(td, TrackingDifferentiator):
+            raise TypeError(f"td must be a TrackingDifferentiator, got {type(td).__name__}")
+        self._p = td.kernel().params
+        super().__init__(self._steps, inputs=("v", "x1", "x2"), outputs=("x1", "x2"))
+
+    def _steps(self, t, u):
+        y = np.empty((u.shape[0], 2))
+        td_step_output(t, None, u.T, self._p, y.T)  # the kernel on the batch's columns: one source
+        return y
+
+    def kernel(self):
+        """The compiled engine's kernel, :func:`td_step_output` (also the numpy method).
+
+        Returns
+        -------
+        ctrl_analysis._kernels.BlockKernel
+        """
+        from .._kernels import BlockKernel
+
+        return BlockKernel(output=td_step_output, params=self._p)
 
 
 def softened_setpoint(softener, r, h: float, *, method: str = "zoh") -> np.ndarray:

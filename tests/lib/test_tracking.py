@@ -165,3 +165,21 @@ def test_td_kernel_is_the_numpy_method_and_fhan_compiles_to_the_same_bits(compil
     else:
         scalar = lambda a, b: _fhan(a, b, 300.0, 0.02)  # noqa: E731
     assert np.array_equal([scalar(a, b) for a, b in zip(x1, x2)], _fhan(x1, x2, 300.0, 0.02), equal_nan=True)
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+def test_step_block_is_the_feedthrough_output_run_once(compiled):
+    from ctrl_analysis import _kernels
+    from ctrl_analysis.estimators.tracking import td_step_output
+
+    fn = _kernels._jit(td_step_output) if compiled else td_step_output
+    rng = np.random.default_rng(12)
+    x, v = rng.standard_normal((30, 2)) * [1.0, 20.0], rng.standard_normal((30, 1))
+    td = TrackingDifferentiator(500.0, 0.005, 0.01, substeps=5, feedthrough=True)
+    step = td.step_block()
+    u = np.column_stack([v, x])
+    assert np.array_equal(step.output(0.0, x[:, :0], u), td.output(0.0, x, v))
+    out = np.empty_like(x)
+    for b in range(30):
+        fn(0.0, x[b, :0], u[b], step.kernel().params, out[b])
+    assert np.array_equal(out, td.update(0.0, x, v))
