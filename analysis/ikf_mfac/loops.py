@@ -73,6 +73,11 @@ def noise_draws(ex: Example, seeds, noise_std: float | None = None) -> np.ndarra
     return draw_noise(seeds, ex.n, gaussian_noise(std))[:, :, 0]
 
 
+#: The signals a run keeps (every other one is only stepped): outputs, measurement, input, and the filter's output.
+_STORED = ("y", "y_m", "u")
+_FILTERED = ("td_mfac", "ikf_mfac")
+
+
 @dataclass
 class SchemeRuns:
     """Outputs of one scheme over a batch: ``y``, ``y_m``, ``u`` at ``k = 1..N`` (shape ``(N, B)``)."""
@@ -101,9 +106,10 @@ def run_scheme(ex: Example, scheme: str, v: np.ndarray, engine: str = "auto") ->
     n_steps = n - ks
     plant = loop.placed[0].block
     k_eng = ks + np.arange(n_steps + 1)
+    keep = _STORED + (("y_f",) if scheme in _FILTERED else ())
     res = loop.simulate(n_steps, t0=float(ks), inputs={"v": v[ks - 1:], "y_ref_next": reference_next(ex.reference, k_eng)},
                         x0={"plant": plant_start_state(plant, ex.y_init, ex.u_init, ks)}, bound=BOUND,
-                        store_states=False, engine=engine)
+                        store_states=False, engine=engine, store_signals=keep)
     B = v.shape[1]
     head = np.full((ks - 1, B), ex.y_init)
     y = np.vstack([head, res["y"]])
