@@ -113,7 +113,7 @@ def run(repeat=3, runs=200, float_runs=20, sizes=(1, 100)):
     Per run of one scheme on one example. Returns ``(rows, float-loop seconds per run, None (no
     compiled reference), notes)``.
     """
-    from _common import Row, median_time, round_robin
+    from _common import Row, round_robin
 
     from ctrl_analysis import _kernels
 
@@ -127,13 +127,13 @@ def run(repeat=3, runs=200, float_runs=20, sizes=(1, 100)):
         run_scheme(ex, s, v[:, :1], engine="compiled")
     notes = [f"compiled engine: generating + compiling (or loading from the disk cache) the 4 loop runners took "
              f"{_kernels.compile_seconds() - c0:.2f} s, not counted in the rows",
-             f"float loop timed once on {float_runs} runs a scheme"]
+             f"float loop timed on {float_runs} runs a scheme"]
     fns = {("numpy", runs): lambda: [run_scheme(ex, s, v, engine="numpy") for ex, s, v in work]}
     for B in sorted(set(sizes) | {runs}):
         fns["compiled", B] = lambda B=B: [run_scheme(ex, s, v[:, :B], engine="compiled") for ex, s, v in work]
-    timed = round_robin(fns, repeat)
-    t_flt, ys = median_time(lambda: [[float_run(ex, s, v[:, b].tolist()) for b in range(float_runs)]
-                                     for ex, s, v in work], 1)
+    fns["float"] = lambda: [[float_run(ex, s, v[:, b].tolist()) for b in range(float_runs)] for ex, s, v in work]
+    timed = round_robin(fns, repeat)  # every method once per round: a change in the machine's load hits all alike
+    t_flt, ys = timed.pop("float")
     worst = {}
     for key, (_, res) in timed.items():
         w = 0.0
