@@ -3,7 +3,8 @@
     OPENBLAS_NUM_THREADS=1 python benchmarks/bench_ikf_mfac.py [--runs 200] [--float-runs 200]
 
 The engine runs each scheme's R Monte Carlo runs side by side (`analysis.ikf_mfac.loops.run_scheme`,
-blocks wired by `FeedbackLoop`). The float loop is what a careful engineer writes by hand: one run
+library blocks wired by `Loop`), on the numpy engine and on the compiled one (every block has a kernel:
+one numba function per loop). The float loop is what a careful engineer writes by hand: one run
 at a time, Python floats and `math`, every equation once per step (the TD's steps once per sample,
 not twice as the feedthrough block's output and update do), same noise. Both must agree run by run.
 """
@@ -16,8 +17,8 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import argparse
 import math
-import time
 
+import _common  # noqa: F401  (before numpy: single-threaded BLAS; the repository root on sys.path)
 import numpy as np
 
 from analysis.ikf_mfac.loops import noise_draws, run_scheme
@@ -106,62 +107,67 @@ def float_run(ex, scheme: str, v: list) -> list:
 NAME = "ikf-mfac Table 1 (4 schemes x 2 examples)"
 
 
-def run(repeat=3, runs=200, float_runs=20):
-    """Rows for ``run_all.py``: the float loop and the engine, per run of one scheme on one example.
+def run(repeat=3, runs=200, float_runs=20, sizes=(1, 100)):
+    """Rows for ``run_all.py``: the float loop, and the engine (numpy; compiled at B = 1, 100 and ``runs``).
 
-    Returns ``(rows, float-loop seconds per run, None (no compiled reference), notes)``.
+    Per run of one scheme on one example. Returns ``(rows, float-loop seconds per run, None (no
+    compiled reference), notes)``.
     """
-    from _common import Row, median_time
+    from _common import Row, round_robin
+
+    from ctrl_analysis import _kernels
 
     seeds = run_seeds(0, runs)
     work = []
     for ex in (EX1, EX2):
         v = noise_draws(ex, seeds)
         work += [(ex, s, v) for s in SCHEMES]
-    t_eng, res = median_time(lambda: [run_scheme(ex, s, v) for ex, s, v in work], repeat)
-    t_flt, ys = median_time(lambda: [[float_run(ex, s, v[:, b].tolist()) for b in range(float_runs)]
-                                     for ex, s, v in work], 1)
-    worst = 0.0
-    for (ex, _, _), r, y in zip(work, res, ys):
-        ref = reference(ex.reference, ex.n)
-        ok = ~r.diverged[:float_runs]
-        e_eng, e_flt = rmse(ref[:, None], r.y[:, :float_runs])[ok], rmse(ref[:, None], np.array(y).T)[ok]
-        worst = max(worst, float(np.max(np.abs(e_eng - e_flt) / e_flt)))
+    c0 = _kernels.compile_seconds()
+    for ex, s, v in work:  # compile (or load from the disk cache) each loop structure once, not timed
+        run_scheme(ex, s, v[:, :1], engine="compiled")
+    notes = [f"compiled engine: generating + compiling (or loading from the disk cache) the 4 loop runners took "
+             f"{_kernels.compile_seconds() - c0:.2f} s, not counted in the rows",
+             f"float loop timed on {float_runs} runs a scheme"]
+    fns = {("numpy", runs): lambda: [run_scheme(ex, s, v, engine="numpy") for ex, s, v in work]}
+    for B in sorted(set(sizes) | {runs}):
+        fns["compiled", B] = lambda B=B: [run_scheme(ex, s, v[:, :B], engine="compiled") for ex, s, v in work]
+    fns["float"] = lambda: [[float_run(ex, s, v[:, b].tolist()) for b in range(float_runs)] for ex, s, v in work]
+    timed = round_robin(fns, repeat)  # every method once per round: a change in the machine's load hits all alike
+    t_flt, ys = timed.pop("float")
+    worst = {}
+    for key, (_, res) in timed.items():
+        w = 0.0
+        for (ex, _, _), r, y in zip(work, res, ys):
+            m = min(float_runs, r.y.shape[1])
+            ref = reference(ex.reference, ex.n)
+            ok = ~r.diverged[:m]
+            e_eng, e_flt = rmse(ref[:, None], r.y[:, :m])[ok], rmse(ref[:, None], np.array(y).T[:, :m])[ok]
+            w = max(w, float(np.max(np.abs(e_eng - e_flt) / e_flt, initial=0.0)))
+        worst[key] = w
+    same = all(np.array_equal(a.y, b.y, equal_nan=True)
+               for a, b in zip(timed["numpy", runs][1], timed["compiled", runs][1]))
     n = len(work)
     rows = [Row(NAME, f"float loop (plain Python), {float_runs} runs a scheme", n * float_runs, t_flt,
-                f"RMSE rel. {worst:.1e} (runs 0..{float_runs - 1})"),
-            Row(NAME, f"engine (numpy, batched), B = {runs} a scheme", n * runs, t_eng, "same runs, same noise")]
-    return rows, t_flt / (n * float_runs), None, [f"float loop timed once on {float_runs} runs a scheme"]
+                f"reference (runs 0..{float_runs - 1})")]
+    for (engine, B), (t, _) in timed.items():
+        agree = f"RMSE rel. {worst[engine, B]:.1e} vs float loop"
+        if engine == "compiled" and B == runs:
+            agree += "; = numpy engine bit for bit" if same else "; DIFFERS from the numpy engine"
+        rows.append(Row(NAME, f"engine (`run_scheme`, {engine}), B = {B} a scheme", n * B, t, agree))
+    return rows, t_flt / (n * float_runs), None, notes
 
 
 def main():
+    from _common import table
+
     ap = argparse.ArgumentParser()
-    ap.add_argument("--runs", type=int, default=200)
-    ap.add_argument("--float-runs", type=int, default=200, help="runs per scheme timed in the float loop")
+    ap.add_argument("--runs", type=int, default=200, help="the study's batch (Table 1's runs)")
+    ap.add_argument("--float-runs", type=int, default=20, help="runs per scheme timed in the float loop")
+    ap.add_argument("--repeat", type=int, default=3)
     args = ap.parse_args()
-    seeds = run_seeds(0, args.runs)
-    t_eng = t_flt = 0.0
-    worst = 0.0
-    for ex in (EX1, EX2):
-        v = noise_draws(ex, seeds)
-        ref = reference(ex.reference, ex.n)
-        for s in SCHEMES:
-            t0 = time.perf_counter()
-            res = run_scheme(ex, s, v)
-            t_eng += time.perf_counter() - t0
-            t0 = time.perf_counter()
-            ys = [float_run(ex, s, v[:, b].tolist()) for b in range(args.float_runs)]
-            t_flt += (time.perf_counter() - t0) * args.runs / args.float_runs
-            ok = ~res.diverged[: args.float_runs]
-            e_eng = rmse(ref[:, None], res.y[:, : args.float_runs])[ok]
-            e_flt = rmse(ref[:, None], np.array(ys).T)[ok]
-            worst = max(worst, float(np.max(np.abs(e_eng - e_flt) / e_flt)))
-    print(f"Table 1 Monte Carlo, 4 schemes x 2 examples x {args.runs} runs")
-    print(f"  engine (batched, FeedbackLoop): {t_eng:8.2f} s")
-    print(f"  plain float loop              : {t_flt:8.2f} s"
-          + ("" if args.float_runs == args.runs else f"  (timed on {args.float_runs} runs a scheme, scaled)"))
-    print(f"  float loop / engine           : {t_flt / t_eng:8.1f}x")
-    print(f"  largest relative RMSE difference per run (non-diverged runs): {worst:.2e}")
+    rows, base, comp, notes = run(repeat=args.repeat, runs=args.runs, float_runs=args.float_runs)
+    print(table(rows, {NAME: base}, {NAME: comp}))
+    print("\n".join(f"- {x}" for x in notes))
 
 
 if __name__ == "__main__":

@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
 
-from ctrl_analysis.blocks import StaticBlock
+from ctrl_analysis.blocks import StaticGain
 from ctrl_analysis.controllers.mfac import (
     CFDLLaw,
     DecreasingGainLaw,
@@ -28,9 +29,18 @@ __all__ = ["SchemeRuns", "build_loop", "noise_draws", "run_scheme"]
 BOUND = 1e4
 
 
-def _measurement() -> StaticBlock:
+def _measurement() -> StaticGain:
     # (5) y_m(k) = y(k) + v(k)
-    return StaticBlock(lambda t, u: u[:, :1] + u[:, 1:2], inputs=("y", "v"), outputs=("y_m",))
+    return StaticGain([[1.0, 1.0]], inputs=("y", "v"), outputs=("y_m",))
+
+
+def _per_run(ex: Example, runs: int) -> Example:
+    """``ex`` with the parameters the sweeps vary (ρ, λ, Q, R) as one value per run.
+
+    Every batch then builds the same compiled loop (per-run kernel parameters), whatever varies.
+    """
+    return dataclasses.replace(ex, **{name: np.broadcast_to(np.asarray(getattr(ex, name), dtype=float), (runs,)).copy()
+                                      for name in ("rho", "lam", "Q", "R")})
 
 
 def build_loop(ex: Example, scheme: str) -> Loop:
@@ -63,6 +73,11 @@ def noise_draws(ex: Example, seeds, noise_std: float | None = None) -> np.ndarra
     return draw_noise(seeds, ex.n, gaussian_noise(std))[:, :, 0]
 
 
+#: The signals a run keeps (every other one is only stepped): outputs, measurement, input, and the filter's output.
+_STORED = ("y", "y_m", "u")
+_FILTERED = ("td_mfac", "ikf_mfac")
+
+
 @dataclass
 class SchemeRuns:
     """Outputs of one scheme over a batch: ``y``, ``y_m``, ``u`` at ``k = 1..N`` (shape ``(N, B)``)."""
@@ -77,20 +92,24 @@ class SchemeRuns:
     diverged_step: np.ndarray
 
 
-def run_scheme(ex: Example, scheme: str, v: np.ndarray) -> SchemeRuns:
+def run_scheme(ex: Example, scheme: str, v: np.ndarray, engine: str = "auto") -> SchemeRuns:
     """Run ``scheme`` for every column of the noise ``v`` (shape ``(N, B)``, ``v[k−1] = v(k)``).
+
+    ``engine`` is :meth:`Loop.simulate <ctrl_analysis.loop.Loop.simulate>`'s (``"auto"``: compiled,
+    every block has a kernel; ``"numpy"``: the blocks' batched methods, the same numbers).
 
     The engine starts at ``k = ex.k_start`` with ``y(k_start)`` from the plant; the given
     ``y(1:k_start−1)``, ``u(1:k_start−1)`` are put in front, so every returned row is ``k = 1..N``.
     """
-    loop = build_loop(ex, scheme)
+    loop = build_loop(_per_run(ex, v.shape[1]), scheme)
     ks, n = ex.k_start, ex.n
     n_steps = n - ks
     plant = loop.placed[0].block
     k_eng = ks + np.arange(n_steps + 1)
+    keep = _STORED + (("y_f",) if scheme in _FILTERED else ())
     res = loop.simulate(n_steps, t0=float(ks), inputs={"v": v[ks - 1:], "y_ref_next": reference_next(ex.reference, k_eng)},
                         x0={"plant": plant_start_state(plant, ex.y_init, ex.u_init, ks)}, bound=BOUND,
-                        store_states=False)
+                        store_states=False, engine=engine, store_signals=keep)
     B = v.shape[1]
     head = np.full((ks - 1, B), ex.y_init)
     y = np.vstack([head, res["y"]])

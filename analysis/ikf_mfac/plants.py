@@ -6,9 +6,10 @@ import math
 
 import numpy as np
 
+from ctrl_analysis._kernels import BlockKernel
 from ctrl_analysis.blocks import DiscreteBlock
 
-__all__ = ["SwitchedPlant", "plant_start_state", "reference", "reference_next"]
+__all__ = ["SwitchedPlant", "plant_output", "plant_start_state", "plant_update", "reference", "reference_next"]
 
 
 class SwitchedPlant(DiscreteBlock):
@@ -31,22 +32,64 @@ class SwitchedPlant(DiscreteBlock):
 
     def __init__(self, switch_k: int | None = 500):
         self.switch_k = math.inf if switch_k is None else int(switch_k)
+        self._p = np.array([float(self.switch_k)])
 
     def output(self, t, x, u, params=None) -> np.ndarray:
         return x[:, :1]
 
     def update(self, t, x, u, params=None) -> np.ndarray:
-        y, y1, y2, u1, uk = x[:, 0], x[:, 1], x[:, 2], x[:, 3], u[:, 0]
         x_next = np.empty_like(x)
-        if t <= self.switch_k:
-            x_next[:, 0] = y / (1.0 + y * y) + uk * uk * uk                       # (38)/(40), k <= 500
-        else:
-            r = 1.0 + math.floor(t / 500.0 + 0.5)                                 # r(k) = 1 + round(k/500)
-            x_next[:, 0] = (y * y1 * y2 * u1 * (y2 - 1.0) + r * uk) / (1.0 + y1 * y1 + y2 * y2)  # (38), k > 500
-        x_next[:, 1] = y
-        x_next[:, 2] = y1
-        x_next[:, 3] = uk
+        plant_update(t, x.T, u.T, self._p, x_next.T)  # the kernel on the batch's columns: one source
         return x_next
+
+    def kernel(self) -> BlockKernel:
+        """The compiled engine's kernel: :func:`plant_update` (also the numpy method), output ``y``.
+
+        Returns
+        -------
+        ctrl_analysis._kernels.BlockKernel
+        """
+        return BlockKernel(output=plant_output, params=self._p, update=plant_update)
+
+
+def plant_update(t, x, u, p, x_next):
+    """Eq. (38)/(40) for one run (or, on a batch's transposed arrays, every run); ``p = [switch_k]``.
+
+    Parameters
+    ----------
+    t : float
+        The paper's sample ``k`` of the update ``y(k) -> y(k+1)``.
+    x : numpy.ndarray
+        ``(y(k), y(k−1), y(k−2), u(k−1))``.
+    u : numpy.ndarray
+        ``(u(k),)``.
+    p : numpy.ndarray
+        ``[switch_k]`` (``inf``: one plant for all ``k``).
+    x_next : numpy.ndarray
+        Next state, written in place.
+    """
+    y, y1, y2, u1, uk = x[0], x[1], x[2], x[3], u[0]
+    if t <= p[0]:
+        x_next[0] = y / (1.0 + y * y) + uk * uk * uk                           # (38)/(40), k <= 500
+    else:
+        r = 1.0 + math.floor(t / 500.0 + 0.5)                                 # r(k) = 1 + round(k/500)
+        x_next[0] = (y * y1 * y2 * u1 * (y2 - 1.0) + r * uk) / (1.0 + y1 * y1 + y2 * y2)  # (38), k > 500
+    x_next[1] = y
+    x_next[2] = y1
+    x_next[3] = uk
+
+
+def plant_output(t, x, u, p, y):
+    """The plant's output ``y(k)``, the first state (kernel).
+
+    Parameters
+    ----------
+    t, x, u, p
+        Time, state, input and parameters of one run.
+    y : numpy.ndarray
+        Output, written in place.
+    """
+    y[0] = x[0]
 
 
 def reference_next(kind: str, k) -> np.ndarray:

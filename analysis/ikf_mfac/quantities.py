@@ -112,13 +112,14 @@ def ranking(per_run: dict) -> tuple[list, dict]:
     return order, frac
 
 
-def td_step_scan(ex: Example, seeds, counts, feedthrough_options=(False, True)) -> dict:
+def td_step_scan(ex: Example, seeds, counts, feedthrough_options=(False, True), engine: str = "auto") -> dict:
     """TD-MFAC over TD step counts per sample: {(feedthrough, count): (mean RMSE, std, runs, diverged)}."""
     v = noise_draws(ex, seeds)
     out = {}
     for ft in feedthrough_options:
         for n in counts:
-            e, _ = metrics_of(run_scheme(dataclasses.replace(ex, td_substeps=n, td_feedthrough=ft), "td_mfac", v))
+            e, _ = metrics_of(run_scheme(dataclasses.replace(ex, td_substeps=n, td_feedthrough=ft), "td_mfac", v,
+                                         engine=engine))
             out[(ft, n)] = mean_std(e, np.isfinite(e)) + (int(np.sum(~np.isfinite(e))),)
     return out
 

@@ -24,7 +24,7 @@ import numpy as np
 
 from .._validate import check_finite, check_positive, check_str
 from ..blocks import Block, DiscreteBlock, StaticBlock
-from ..estimators.kalman.ikf import _per_run
+from ..estimators.kalman.ikf import _jitable, _kernel_params, _per_run
 from ..loop import place
 
 __all__ = [
@@ -54,9 +54,94 @@ def _check_weight(name: str, value):
     return value
 
 
+@_jitable
 def _cfdl_increment(phi, e, rho, lam):
     """(8) Δu(k) = ρ φ̂(k) e(k) / (λ + φ̂(k)²), the CFDL-MFAC control increment."""
     return rho * phi * e / (lam + phi * phi)
+
+
+@_jitable
+def _ppd_projection(phi_prev, du, dy, eta, mu):
+    """(6) φ̂(k) = φ̂(k−1) + η Δu(k−1) (Δy_f(k) − φ̂(k−1) Δu(k−1)) / (μ + Δu(k−1)²), before the reset."""
+    return phi_prev + eta * du * (dy - phi_prev * du) / (mu + du * du)
+
+
+# ------------------------------------------------------------------ kernels (one run; see ctrl_analysis._kernels)
+# Written with scalar indexing: the blocks without per-value branches call them on the batch's
+# transposed arrays as their numpy methods; PPDEstimator's reset (7) and DecreasingGainLaw's band
+# (36) branch per run, so their numpy methods stay vectorised (np.where) and tests/lib/test_mfac.py
+# holds each kernel equal to its block's numpy method, bit for bit.
+
+def delay_update(t, x, u, p, x_next):
+    """Kernel update of :class:`UnitDelay` and the numpy method: ``u_prev(k+1) = u(k)``."""
+    x_next[0] = u[0]
+
+
+@_jitable
+def ppd_output(t, x, u, p, y):
+    """Kernel output of :class:`PPDEstimator`: ``φ̂(k)`` by (6) with the reset (7); ``p = [η, μ, ε, φ_reset, sign φ̂(1)]``."""
+    du = u[1] - x[2]                                     # Δu(k−1) = u(k−1) − u(k−2)
+    phi = _ppd_projection(x[0], du, u[0] - x[1], p[0], p[1])
+    sign = 1.0 if phi > 0.0 else (-1.0 if phi < 0.0 else phi)   # numpy's sign (0 and NaN kept)
+    # (7) reset if |φ̂(k)| <= ε or |Δu(k−1)| <= ε or sign φ̂(k) ≠ sign φ̂(1)
+    if abs(phi) <= p[2] or abs(du) <= p[2] or sign != p[4]:
+        phi = p[3]
+    y[0] = phi
+
+
+def ppd_update(t, x, u, p, x_next):
+    """Kernel update of :class:`PPDEstimator`: stores ``(φ̂(k), y_f(k), u(k−1))`` (arguments as :func:`ppd_output`)."""
+    ppd_output(t, x, u, p, x_next)
+    x_next[1] = u[0]
+    x_next[2] = u[1]
+
+
+def cfdl_law_output(t, x, u, p, y):
+    """Kernel of :class:`CFDLLaw` and its numpy method: (8) ``u(k) = u(k−1) + Δu(k)``; ``p = [ρ, λ]``."""
+    y[0] = u[3] + _cfdl_increment(u[0], u[2] - u[1], p[0], p[1])
+
+
+@_jitable
+def _band_step(e, in_before, armed_before, age_before, e_m, rearm):
+    """(36) band state of D-MFAC at sample ``k`` for one run: ``(in_band, armed, age = k − k_m)``."""
+    in_band = abs(e) < e_m
+    entering = in_band and in_before == 0.0
+    start = entering if rearm != 0.0 else (entering and armed_before == 0.0)
+    armed = armed_before != 0.0 or entering
+    age = 0.0 if start else age_before + 1.0
+    return in_band, armed, age
+
+
+def dgain_output(t, x, u, p, y):
+    """Kernel output of :class:`DecreasingGainLaw`: (36); ``p = [ρ, λ, e_m, rearm (0/1)]``."""
+    e = u[2] - u[1]
+    in_band, armed, age = _band_step(e, x[0], x[1], x[2], p[2], p[3])
+    du = _cfdl_increment(u[0], e, p[0], p[1])
+    # (36) Δu(k) / (k − k_m + 1) inside the band
+    y[0] = u[3] + (du / (age + 1.0) if in_band and armed else du)
+
+
+def dgain_update(t, x, u, p, x_next):
+    """Kernel update of :class:`DecreasingGainLaw`: the band state ``(in_band, armed, age)`` of sample ``k``."""
+    in_band, armed, age = _band_step(u[2] - u[1], x[0], x[1], x[2], p[2], p[3])
+    x_next[0] = 1.0 if in_band else 0.0
+    x_next[1] = 1.0 if armed else 0.0
+    x_next[2] = age
+
+
+def predictor_output(t, x, u, p, y):
+    """Kernel of :class:`CFDLPredictor` and its numpy method: (4)/(11) ``δ(k) = φ̂(k−1) (u(k−1) − u(k−2))``."""
+    y[0] = x[0] * (x[1] - x[2])
+
+
+def predictor_update(t, x, u, p, x_next):
+    """Kernel update of :class:`CFDLPredictor` and its numpy method: stores ``(φ̂(k), u(k), u(k−1))``."""
+    x_next[0] = u[0]
+    x_next[1] = u[1]
+    x_next[2] = x[1]
+
+
+_NO_PARAMS = np.zeros(0)
 
 
 class UnitDelay(DiscreteBlock):
@@ -80,7 +165,20 @@ class UnitDelay(DiscreteBlock):
         return np.array([self.u0])
 
     def update(self, t, x, u, params=None) -> np.ndarray:
-        return u.copy()
+        x_next = np.empty_like(x)
+        delay_update(t, x.T, u.T, _NO_PARAMS, x_next.T)
+        return x_next
+
+    def kernel(self):
+        """The compiled engine's kernel (:func:`delay_update`, the output is the state).
+
+        Returns
+        -------
+        ctrl_analysis._kernels.BlockKernel
+        """
+        from .._kernels import BlockKernel, copy_output
+
+        return BlockKernel(output=copy_output, params=_NO_PARAMS, update=delay_update)
 
     def __repr__(self) -> str:
         return f"UnitDelay(u0={self.u0:g})"
@@ -152,11 +250,9 @@ class PPDEstimator(DiscreteBlock):
         return np.array([self.phi0, self.y0, self.u0])
 
     def output(self, t, x, u, params=None) -> np.ndarray:
-        phi_prev = x[:, 0]
         du = u[:, 1] - x[:, 2]                                        # Δu(k−1) = u(k−1) − u(k−2)
-        dy = u[:, 0] - x[:, 1]                                        # Δy_f(k) = y_f(k) − y_f(k−1)
-        # (6) φ̂(k) = φ̂(k−1) + η Δu(k−1) (Δy_f(k) − φ̂(k−1) Δu(k−1)) / (μ + Δu(k−1)²)
-        phi = phi_prev + self.eta * du * (dy - phi_prev * du) / (self.mu + du * du)
+        # (6), Δy_f(k) = y_f(k) − y_f(k−1)
+        phi = _ppd_projection(x[:, 0], du, u[:, 0] - x[:, 1], self.eta, self.mu)
         # (7) reset if |φ̂(k)| <= ε or |Δu(k−1)| <= ε or sign φ̂(k) ≠ sign φ̂(1)
         fire = (np.abs(phi) <= self.epsilon) | (np.abs(du) <= self.epsilon) | (np.sign(phi) != self.sign0)
         return np.where(fire, self.phi_reset, phi)[:, None]
@@ -167,6 +263,18 @@ class PPDEstimator(DiscreteBlock):
         x_next[:, 1] = u[:, 0]
         x_next[:, 2] = u[:, 1]
         return x_next
+
+    def kernel(self):
+        """The compiled engine's kernel (:func:`ppd_output`, :func:`ppd_update`; tested equal to the numpy methods).
+
+        Returns
+        -------
+        ctrl_analysis._kernels.BlockKernel
+        """
+        from .._kernels import BlockKernel
+
+        p = _kernel_params(self.eta, self.mu, self.epsilon, self.phi_reset, self.sign0)
+        return BlockKernel(output=ppd_output, params=p, update=ppd_update)
 
     def __repr__(self) -> str:
         return (f"PPDEstimator(eta={self.eta:g}, mu={self.mu:g}, epsilon={self.epsilon:g}, phi0={self.phi0:g}, "
@@ -200,11 +308,25 @@ class CFDLLaw(StaticBlock):
     def __init__(self, rho: float, lam: float):
         self.rho = _check_step("rho", rho)
         self.lam = _check_weight("lam", lam)
+        self._p = _kernel_params(self.rho, self.lam)
         super().__init__(self._law, inputs=("phi_hat", "y", "y_ref_next", "u_prev"), outputs=("u",))
 
     def _law(self, t, u):
-        # (8) u(k) = u(k−1) + ρ φ̂(k) (y*(k+1) − y_f(k)) / (λ + φ̂(k)²)
-        return (u[:, 3] + _cfdl_increment(u[:, 0], u[:, 2] - u[:, 1], self.rho, self.lam))[:, None]
+        # (8) u(k) = u(k−1) + ρ φ̂(k) (y*(k+1) − y_f(k)) / (λ + φ̂(k)²): the kernel on the batch's columns
+        y = np.empty((u.shape[0], 1))
+        cfdl_law_output(t, None, u.T, self._p.T, y.T)
+        return y
+
+    def kernel(self):
+        """The compiled engine's kernel (:func:`cfdl_law_output`, also the numpy method); per-run ``ρ``, ``λ`` give rows.
+
+        Returns
+        -------
+        ctrl_analysis._kernels.BlockKernel
+        """
+        from .._kernels import BlockKernel
+
+        return BlockKernel(output=cfdl_law_output, params=self._p)
 
     def __repr__(self) -> str:
         return f"CFDLLaw(rho={self.rho}, lam={self.lam})"
@@ -280,6 +402,18 @@ class DecreasingGainLaw(DiscreteBlock):
         in_band, armed, age = self._band(x, u)
         return np.stack((in_band.astype(float), armed.astype(float), age), axis=1)
 
+    def kernel(self):
+        """The compiled engine's kernel (:func:`dgain_output`, :func:`dgain_update`; tested equal to the numpy methods).
+
+        Returns
+        -------
+        ctrl_analysis._kernels.BlockKernel
+        """
+        from .._kernels import BlockKernel
+
+        p = _kernel_params(self.rho, self.lam, self.e_m, 1.0 if self.rearm else 0.0)
+        return BlockKernel(output=dgain_output, params=p, update=dgain_update)
+
     def __repr__(self) -> str:
         return f"DecreasingGainLaw(rho={self.rho}, lam={self.lam}, e_m={self.e_m:g}, rearm={self.rearm})"
 
@@ -317,15 +451,25 @@ class CFDLPredictor(DiscreteBlock):
         return self.x0.copy()
 
     def output(self, t, x, u, params=None) -> np.ndarray:
-        # (4)/(11) δ(k) = φ̂(k−1) (u(k−1) − u(k−2))
-        return (x[:, 0] * (x[:, 1] - x[:, 2]))[:, None]
+        y = np.empty((x.shape[0], 1))
+        predictor_output(t, x.T, u.T, _NO_PARAMS, y.T)  # (4)/(11), the kernel on the batch's columns
+        return y
 
     def update(self, t, x, u, params=None) -> np.ndarray:
         x_next = np.empty_like(x)
-        x_next[:, 0] = u[:, 0]
-        x_next[:, 1] = u[:, 1]
-        x_next[:, 2] = x[:, 1]
+        predictor_update(t, x.T, u.T, _NO_PARAMS, x_next.T)
         return x_next
+
+    def kernel(self):
+        """The compiled engine's kernel (:func:`predictor_output`, :func:`predictor_update`; also the numpy methods).
+
+        Returns
+        -------
+        ctrl_analysis._kernels.BlockKernel
+        """
+        from .._kernels import BlockKernel
+
+        return BlockKernel(output=predictor_output, params=_NO_PARAMS, update=predictor_update)
 
     def __repr__(self) -> str:
         return f"CFDLPredictor(x0={self.x0.tolist()})"
@@ -339,7 +483,8 @@ def mfac_controller(estimator: PPDEstimator, law: Block, output_filter: Block | 
     Signals: the loop must supply ``measured`` (``y_m(k)``) and ``reference`` (``y*(k+1)``);
     the controller produces ``control`` (``u(k)``) and the internal signals ``u_prev``,
     ``phi_hat``, ``y_f`` (what estimator and law see). Block names: ``delay``, ``ppd``, ``law``,
-    and ``filter`` (plus ``model`` for the IKF).
+    and ``filter`` (plus ``model`` for the IKF; a TD with feedthrough is placed as its steps,
+    ``filter``, and two delays ``filter_x1``, ``filter_x2`` holding its state).
 
     Parameters
     ----------
@@ -380,7 +525,15 @@ def mfac_controller(estimator: PPDEstimator, law: Block, output_filter: Block | 
         check_str(name, value)
     y_f = measured
     blocks = [place(UnitDelay(u0), "delay", inputs=[control], outputs=["u_prev"])]
-    if isinstance(output_filter, TrackingDifferentiator):
+    if isinstance(output_filter, TrackingDifferentiator) and output_filter.feedthrough:
+        # the TD's steps once per sample (the block's output and update would run them twice): its
+        # state (x1, x2) in two delays fed by the steps' outputs, the same numbers
+        y_f = "y_f"
+        blocks.append(place(output_filter.step_block(), "filter", inputs=[measured, "td_x1", "td_x2"],
+                            outputs=["y_f", "y_f_rate"]))
+        blocks += [place(UnitDelay(output_filter.x0[i]), f"filter_x{i + 1}", inputs=[s], outputs=[f"td_x{i + 1}"])
+                   for i, s in enumerate(("y_f", "y_f_rate"))]
+    elif isinstance(output_filter, TrackingDifferentiator):
         y_f = "y_f"
         blocks.append(place(output_filter, "filter", inputs=[measured], outputs=["y_f", "y_f_rate"]))
     elif isinstance(output_filter, ImprovedKalmanFilter):

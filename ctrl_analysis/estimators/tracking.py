@@ -20,7 +20,8 @@ import numpy as np
 
 from .lowpass import LowPassFilter
 from .._validate import check_array, check_finite, check_in, check_int, check_positive
-from ..blocks import DiscreteBlock
+from ..blocks import DiscreteBlock, StaticBlock
+from .kalman.ikf import _jitable
 
 __all__ = [
     "fhan",
@@ -81,8 +82,9 @@ def fhan(x1, x2, r, h0):
     return float(out) if out.ndim == 0 else out
 
 
+@_jitable
 def _fhan(x1, x2, r, h0):
-    """Unchecked kernel of :func:`fhan` (arrays in, array out; ``r``, ``h0`` already validated)."""
+    """Unchecked kernel of :func:`fhan` (arrays or, in a compiled kernel, floats; ``r``, ``h0`` validated)."""
     d = r * h0 * h0
     a0 = h0 * x2
     y = x1 + a0
@@ -93,6 +95,78 @@ def _fhan(x1, x2, r, h0):
     sa = (np.sign(a + d) - np.sign(a - d)) * 0.5
     sign_a = np.sign(a)
     return -r * (a / d - sign_a) * sa - r * sign_a
+
+
+@_jitable
+def _td_steps(x1, x2, v, r, h, h0, n):
+    """``n`` TD steps of length ``h`` with ``v`` held: returns ``(x1, x2, fh)``, ``fh`` of the last step."""
+    fh = x1 * 0.0
+    for _ in range(n):
+        fh = _fhan(x1 - v, x2, r, h0)
+        # (37) x1(k+1) = x1(k) + h x2(k),  x2(k+1) = x2(k) + h fh
+        x1, x2 = x1 + h * x2, x2 + h * fh
+    return x1, x2, fh
+
+
+@_jitable
+def td_update(t, x, u, p, x_next):
+    """Kernel update of :class:`TrackingDifferentiator`: ``substeps`` TD steps, ``p = [r, h, h0, substeps, feedthrough]``.
+
+    Scalar indexing only: one run's vectors in the compiled engine, the batch's transposed arrays
+    as the block's numpy method.
+
+    Parameters
+    ----------
+    t : float
+        Time (unused).
+    x : numpy.ndarray
+        State ``(x1, x2)``.
+    u : numpy.ndarray
+        Input ``(v,)``.
+    p : numpy.ndarray
+        ``[r, h, h0, substeps, feedthrough (0/1)]``.
+    x_next : numpy.ndarray
+        Next state, written in place.
+    """
+    x1, x2, _fh = _td_steps(x[0], x[1], u[0], p[0], p[1], p[2], int(p[3]))
+    x_next[0] = x1
+    x_next[1] = x2
+
+
+def td_step_output(t, x, u, p, y):
+    """Kernel of :class:`TDStep` and its numpy method: ``y = (x1, x2)`` after the steps, ``u = (v, x1, x2)``.
+
+    Parameters
+    ----------
+    t, x : float, numpy.ndarray
+        Time and (empty) state, unused.
+    u : numpy.ndarray
+        ``(v, x1, x2)``: the tracked signal and the TD state before the sample's steps.
+    p : numpy.ndarray
+        As :func:`td_update`.
+    y : numpy.ndarray
+        ``(x1, x2)`` after the steps, written in place.
+    """
+    x1, x2, _fh = _td_steps(u[1], u[2], u[0], p[0], p[1], p[2], int(p[3]))
+    y[0] = x1
+    y[1] = x2
+
+
+def td_output(t, x, u, p, y):
+    """Kernel output of :class:`TrackingDifferentiator`: the state, or with feedthrough the state after the steps.
+
+    Parameters
+    ----------
+    t, x, u, p
+        As :func:`td_update`.
+    y : numpy.ndarray
+        Outputs ``(x1, x2)``, written in place.
+    """
+    if p[4] != 0.0:
+        td_update(t, x, u, p, y)
+    else:
+        y[0] = x[0]
+        y[1] = x[1]
 
 
 class TrackingDifferentiator(DiscreteBlock):
@@ -171,25 +245,45 @@ class TrackingDifferentiator(DiscreteBlock):
         self.substeps = check_int("substeps", substeps, minimum=1)
         self.dt = self.h * self.substeps
         self.x0 = np.zeros(2) if x0 is None else check_finite("x0", np.ravel(x0), shape=(2,))
+        self._p = np.array([self.r, self.h, self.h0, float(self.substeps), float(self.feedthrough)])
 
     def initial_state(self) -> np.ndarray:
         return self.x0.copy()
 
-    def _substep(self, x1, x2, v):
-        """One TD step of length ``h``: returns ``(x1, x2, fh)``."""
-        fh = _fhan(x1 - v, x2, self.r, self.h0)
-        # (37) x1(k+1) = x1(k) + h x2(k),  x2(k+1) = x2(k) + h fh
-        return x1 + self.h * x2, x2 + self.h * fh, fh
-
     def update(self, t, x, u, params=None) -> np.ndarray:
-        x1, x2, v = x[:, 0], x[:, 1], u[:, 0]
-        for _ in range(self.substeps):
-            x1, x2, _fh = self._substep(x1, x2, v)
-        return np.stack((x1, x2), axis=1)
+        x_next = np.empty_like(x)
+        td_update(t, x.T, u.T, self._p, x_next.T)  # the kernel on the batch's columns: one source
+        return x_next
 
     def output(self, t, x, u, params=None) -> np.ndarray:
         # feedthrough: the state after this sample's steps (driven by v(k)); else the state itself
-        return self.update(t, x, u, params) if self.feedthrough else x
+        y = np.empty_like(x)
+        td_output(t, x.T, u.T, self._p, y.T)
+        return y
+
+    def kernel(self):
+        """The compiled engine's kernel (:func:`td_output`, :func:`td_update`; the numpy methods call them too).
+
+        Returns
+        -------
+        ctrl_analysis._kernels.BlockKernel
+        """
+        from .._kernels import BlockKernel
+
+        return BlockKernel(output=td_output, params=self._p, update=td_update)
+
+    def step_block(self):
+        """The sample's steps as a static block (inputs ``v``, ``x1``, ``x2``; outputs ``x1``, ``x2`` after them).
+
+        With two :class:`~ctrl_analysis.controllers.mfac.UnitDelay` blocks holding its outputs it is
+        this TD with feedthrough, computing the steps once per sample where the block's output and
+        update compute them twice (same numbers).
+
+        Returns
+        -------
+        TDStep
+        """
+        return TDStep(self)
 
     def acceleration(self, x, u) -> np.ndarray:
         """The acceleration ``fh`` applied in the last sub-step of a sample.
@@ -206,14 +300,46 @@ class TrackingDifferentiator(DiscreteBlock):
         numpy.ndarray, shape (B,)
             ``fhan`` of the last sub-step.
         """
-        x1, x2, v = x[:, 0], x[:, 1], u[:, 0]
-        for _ in range(self.substeps):
-            x1, x2, fh = self._substep(x1, x2, v)
-        return fh
+        return _td_steps(x[:, 0], x[:, 1], u[:, 0], self.r, self.h, self.h0, self.substeps)[2]
 
     def __repr__(self) -> str:
         return (f"TrackingDifferentiator(r={self.r}, h={self.h}, h0={self.h0}, "
                 f"substeps={self.substeps})")
+
+
+class TDStep(StaticBlock):
+    """The steps of one sample of a :class:`TrackingDifferentiator`, a static block with a compiled kernel.
+
+    Block signals: inputs ``v``, ``x1``, ``x2`` (the TD state before the steps); outputs ``x1``,
+    ``x2`` after them. Made by :meth:`TrackingDifferentiator.step_block`.
+
+    Parameters
+    ----------
+    td : TrackingDifferentiator
+        Whose ``r``, ``h``, ``h0`` and ``substeps`` are used.
+    """
+
+    def __init__(self, td: "TrackingDifferentiator"):
+        if not isinstance(td, TrackingDifferentiator):
+            raise TypeError(f"td must be a TrackingDifferentiator, got {type(td).__name__}")
+        self._p = td.kernel().params
+        super().__init__(self._steps, inputs=("v", "x1", "x2"), outputs=("x1", "x2"))
+
+    def _steps(self, t, u):
+        y = np.empty((u.shape[0], 2))
+        td_step_output(t, None, u.T, self._p, y.T)  # the kernel on the batch's columns: one source
+        return y
+
+    def kernel(self):
+        """The compiled engine's kernel, :func:`td_step_output` (also the numpy method).
+
+        Returns
+        -------
+        ctrl_analysis._kernels.BlockKernel
+        """
+        from .._kernels import BlockKernel
+
+        return BlockKernel(output=td_step_output, params=self._p)
 
 
 def softened_setpoint(softener, r, h: float, *, method: str = "zoh") -> np.ndarray:

@@ -80,3 +80,21 @@ def test_nlsys_equals_the_block():
 def test_errors(kw, msg):
     with pytest.raises(ValueError, match=msg):
         ImprovedKalmanFilter(**kw)
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+def test_kernel_is_the_numpy_method_with_per_run_q_and_r(compiled):
+    from ctrl_analysis import _kernels
+    from ctrl_analysis.estimators.kalman.ikf import ikf_output, ikf_update
+
+    jit = _kernels._jit if compiled else (lambda f: f)
+    rng = np.random.default_rng(2)
+    x, u = np.abs(rng.standard_normal((8, 2))), rng.standard_normal((8, 2))
+    f = ImprovedKalmanFilter(rng.uniform(0.0, 1.0, 8), 0.3, y0=1.0, P0=0.5)
+    k = f.kernel()
+    assert k.params.shape == (8, 2) and ImprovedKalmanFilter(0.1, 0.3).kernel().params.shape == (2,)
+    for fn, ref, width in ((jit(ikf_output), f.output(0.0, x, u), 3), (jit(ikf_update), f.update(0.0, x, u), 2)):
+        out = np.empty((8, width))
+        for b in range(8):
+            fn(0.0, x[b], u[b], k.params[b], out[b])
+        assert np.array_equal(out, ref)

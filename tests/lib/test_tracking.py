@@ -136,3 +136,50 @@ def test_softened_setpoint_with_the_td_and_errors():
         softened_setpoint(object(), r, h)
     with pytest.raises(ValueError, match="r must be"):
         softened_setpoint(LowPassFilter(1.0, 2), np.ones((3, 2)), h)
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+def test_td_kernel_is_the_numpy_method_and_fhan_compiles_to_the_same_bits(compiled):
+    from ctrl_analysis import _kernels
+    from ctrl_analysis.estimators.tracking import _fhan, td_output, td_update
+
+    jit = _kernels._jit if compiled else (lambda f: f)
+    rng = np.random.default_rng(11)
+    x, u = rng.standard_normal((40, 2)) * [1.0, 30.0], rng.standard_normal((40, 1))
+    x[:4, 0] = u[:4, 0]      # on the target: fhan's linear layer and a = 0
+    for ft in (False, True):
+        td = TrackingDifferentiator(300.0, 0.01, 0.02, substeps=4, feedthrough=ft)
+        k = td.kernel()
+        for fn, ref in ((jit(td_update), td.update(0.0, x, u)), (jit(td_output), td.output(0.0, x, u))):
+            out = np.empty_like(x)
+            for b in range(x.shape[0]):
+                fn(0.0, x[b], u[b], k.params, out[b])
+            assert np.array_equal(out, ref)
+    # fhan on floats (compiled: numba's sqrt/sign) = fhan on arrays (numpy), NaN and zeros included
+    x1 = np.concatenate([rng.standard_normal(50), [0.0, -0.0, np.nan, 1e-6]])
+    x2 = np.concatenate([rng.standard_normal(50) * 10, [0.0, 0.0, 1.0, 0.0]])
+    if compiled:
+        import numba
+
+        scalar = numba.njit(lambda a, b: _fhan(a, b, 300.0, 0.02))
+    else:
+        scalar = lambda a, b: _fhan(a, b, 300.0, 0.02)  # noqa: E731
+    assert np.array_equal([scalar(a, b) for a, b in zip(x1, x2)], _fhan(x1, x2, 300.0, 0.02), equal_nan=True)
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+def test_step_block_is_the_feedthrough_output_run_once(compiled):
+    from ctrl_analysis import _kernels
+    from ctrl_analysis.estimators.tracking import td_step_output
+
+    fn = _kernels._jit(td_step_output) if compiled else td_step_output
+    rng = np.random.default_rng(12)
+    x, v = rng.standard_normal((30, 2)) * [1.0, 20.0], rng.standard_normal((30, 1))
+    td = TrackingDifferentiator(500.0, 0.005, 0.01, substeps=5, feedthrough=True)
+    step = td.step_block()
+    u = np.column_stack([v, x])
+    assert np.array_equal(step.output(0.0, x[:, :0], u), td.output(0.0, x, v))
+    out = np.empty_like(x)
+    for b in range(30):
+        fn(0.0, x[b, :0], u[b], step.kernel().params, out[b])
+    assert np.array_equal(out, td.update(0.0, x, v))

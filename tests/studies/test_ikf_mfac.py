@@ -50,7 +50,7 @@ def test_table1_consistency_formula():
     assert mfac["diff_db"] == pytest.approx(19.0481 - 18.0757, abs=1e-3)
     # the formula itself holds on simulated data: SNR = 10 lg(mean y*²) - 20 lg RMSE
     v = noise_draws(EX2, [0, 1])
-    e, snr = metrics_of(run_scheme(EX2, "mfac", v))
+    e, snr = metrics_of(run_scheme(EX2, "mfac", v, engine="numpy"))
     p_ref = np.mean(reference("sine", EX2.n) ** 2)
     np.testing.assert_allclose(snr, 10 * np.log10(p_ref) - 20 * np.log10(e), rtol=1e-12)
 
@@ -75,21 +75,38 @@ REGRESSION = {
 
 @pytest.mark.parametrize("key, scheme", sorted(REGRESSION))
 def test_small_seeded_runs(key, scheme):
+    # the numpy engine (no compile on a cold cache); the compiled one is held equal to it below
     ex = {"ex1": EX1, "ex2": EX2}[key]
     v = noise_draws(ex, [0, 1, 2, 3])
-    runs = run_scheme(ex, scheme, v)
+    runs = run_scheme(ex, scheme, v, engine="numpy")
     assert not runs.diverged.any()
     e, _ = metrics_of(runs)
     assert runs.y.shape == (ex.n, 4)
     np.testing.assert_allclose(e.mean(), REGRESSION[(key, scheme)], rtol=1e-9)
     # a batch of 4 equals the runs alone
-    one = run_scheme(ex, scheme, v[:, 2:3])
+    one = run_scheme(ex, scheme, v[:, 2:3], engine="numpy")
     np.testing.assert_array_equal(one.y[:, 0], runs.y[:, 2])
+
+
+def test_plant_kernel_compiled_equals_its_numpy_method():
+    # the compiled loop itself is held equal to the numpy engine in tests/lib/test_mfac.py (one
+    # structure with every MFAC kernel); here the study's own kernel, on both sides of the switch
+    from analysis.ikf_mfac.plants import plant_update
+    from ctrl_analysis._kernels import _jit
+
+    rng = np.random.default_rng(0)
+    x, u = rng.standard_normal((6, 4)), rng.standard_normal((6, 1))
+    plant, fn = SwitchedPlant(500), _jit(plant_update)
+    for k in (499.0, 500.0, 501.0, 750.0):
+        out = np.empty_like(x)
+        for b in range(6):
+            fn(k, x[b], u[b], plant.kernel().params, out[b])
+        assert np.array_equal(out, plant.update(k, x, u))
 
 
 def test_literal_td_mfac_diverges_and_the_loop_is_a_control_interconnect():
     ex = dataclasses.replace(EX1, td_substeps=1, td_feedthrough=False)
-    runs = run_scheme(ex, "td_mfac", noise_draws(ex, [0, 1]))
+    runs = run_scheme(ex, "td_mfac", noise_draws(ex, [0, 1]), engine="numpy")
     assert runs.diverged.all()
     sys = build_loop(EX2, "ikf_mfac").interconnect()
     assert sys.isdtime() and set(sys.input_labels) == {"v", "y_ref_next"}

@@ -21,6 +21,77 @@ def _per_run(name: str, value):
     return arr
 
 
+def _kernel_params(*values) -> np.ndarray:
+    """Kernel parameters ``[v_0, v_1, ...]``: a 1-D vector, or ``(B, n_p)`` rows when any value is per run."""
+    sizes = {np.size(v) for v in values if np.ndim(v) == 1}
+    if not sizes:
+        return np.array(values, dtype=float)
+    if len(sizes) > 1:
+        raise ValueError(f"per-run parameters must all have one length, got lengths {sorted(sizes)}")
+    B = sizes.pop()
+    return np.column_stack([np.broadcast_to(np.asarray(v, dtype=float), (B,)) for v in values])
+
+
+def _jitable(fn):
+    """``fn`` unchanged, also callable from numba-compiled kernels (``numba.extending.register_jitable``).
+
+    A kernel helper written with scalar indexing and ``np`` ufuncs serves numpy arrays (the batch's
+    columns) in Python and one run's scalars in a compiled kernel: one source for both engines.
+    """
+    try:
+        from numba.extending import register_jitable
+    except ImportError:  # pragma: no cover - numba is optional: the numpy engine needs none of this
+        return fn
+    return register_jitable(fn)
+
+
+@_jitable
+def _ikf_step(y_hat, P, y_m, delta, Q, R):
+    """One IKF step, eq. (11)-(15): returns ``(ŷ(k|k), K(k), P(k|k))`` (scalars or arrays alike)."""
+    y_prior = y_hat + delta                          # (11) ŷ(k|k−1) = ŷ(k−1|k−1) + δ(k)
+    P_prior = P + Q                                  # (12) P(k|k−1) = P(k−1|k−1) + Q
+    K = P_prior / (P_prior + R)                      # (13) K(k) = P(k|k−1) / (P(k|k−1) + R)
+    y_post = y_prior + K * (y_m - y_prior)           # (14) ŷ(k|k) = ŷ(k|k−1) + K (y_m(k) − ŷ(k|k−1))
+    return y_post, K, (1.0 - K) * P_prior            # (15) P(k|k) = (1 − K) P(k|k−1)
+
+
+def ikf_output(t, x, u, p, y):
+    """Kernel output of :class:`ImprovedKalmanFilter`: ``y = (ŷ(k|k), K(k), P(k|k))``, ``p = [Q, R]``.
+
+    Scalar indexing only: one run's vectors in the compiled engine, the batch's transposed arrays
+    (``x.T``, ``u.T``, ``p.T``, ``y.T``) as the block's numpy method.
+
+    Parameters
+    ----------
+    t : float
+        Time (unused).
+    x : numpy.ndarray
+        State ``(ŷ(k−1|k−1), P(k−1|k−1))``.
+    u : numpy.ndarray
+        Inputs ``(y_m(k), δ(k))``.
+    p : numpy.ndarray
+        ``[Q, R]``.
+    y : numpy.ndarray
+        Outputs, written in place.
+    """
+    y[0], y[1], y[2] = _ikf_step(x[0], x[1], u[0], u[1], p[0], p[1])
+
+
+def ikf_update(t, x, u, p, x_next):
+    """Kernel update of :class:`ImprovedKalmanFilter`: ``x(k+1) = (ŷ(k|k), P(k|k))`` (arguments as :func:`ikf_output`).
+
+    Parameters
+    ----------
+    t, x, u, p
+        As :func:`ikf_output`.
+    x_next : numpy.ndarray
+        Next state, written in place.
+    """
+    y_post, _K, P_post = _ikf_step(x[0], x[1], u[0], u[1], p[0], p[1])
+    x_next[0] = y_post
+    x_next[1] = P_post
+
+
 class ImprovedKalmanFilter(DiscreteBlock):
     """Scalar Kalman filter of an output ``y`` whose one-step prediction comes from any data model.
 
@@ -91,23 +162,33 @@ class ImprovedKalmanFilter(DiscreteBlock):
         self.y0 = float(check_finite("y0", y0, scalar=True))
         self.P0 = float(check_nonnegative("P0", P0, scalar=True))
         self.steady_gain = random_walk_gain(self.Q, self.R)
+        self._p = _kernel_params(self.Q, self.R)
 
     def initial_state(self) -> np.ndarray:
         return np.array([self.y0, self.P0])
 
     def output(self, t, x, u, params=None) -> np.ndarray:
         out = np.empty((x.shape[0], 3))
-        y_prior = x[:, 0] + u[:, 1]                      # (11) ŷ(k|k−1) = ŷ(k−1|k−1) + δ(k)
-        P_prior = x[:, 1] + self.Q                       # (12) P(k|k−1) = P(k−1|k−1) + Q
-        K = P_prior / (P_prior + self.R)                 # (13) K(k) = P(k|k−1) / (P(k|k−1) + R)
-        out[:, 0] = y_prior + K * (u[:, 0] - y_prior)    # (14) ŷ(k|k) = ŷ(k|k−1) + K (y_m(k) − ŷ(k|k−1))
-        out[:, 1] = K
-        out[:, 2] = (1.0 - K) * P_prior                  # (15) P(k|k) = (1 − K) P(k|k−1)
+        ikf_output(t, x.T, u.T, self._p.T, out.T)  # the kernel on the batch's columns: one source
         return out
 
     def update(self, t, x, u, params=None) -> np.ndarray:
-        out = self.output(t, x, u, params)
-        return out[:, ::2].copy()
+        x_next = np.empty_like(x)
+        ikf_update(t, x.T, u.T, self._p.T, x_next.T)
+        return x_next
+
+    def kernel(self):
+        """The compiled engine's kernel (:func:`ikf_output`, :func:`ikf_update`; the numpy methods call them too).
+
+        ``Q``, ``R`` given per run give per-run parameter rows ``(B, 2)``.
+
+        Returns
+        -------
+        ctrl_analysis._kernels.BlockKernel
+        """
+        from ..._kernels import BlockKernel
+
+        return BlockKernel(output=ikf_output, params=self._p, update=ikf_update)
 
     def __repr__(self) -> str:
         return f"ImprovedKalmanFilter(Q={self.Q}, R={self.R}, y0={self.y0:g}, P0={self.P0:g})"
