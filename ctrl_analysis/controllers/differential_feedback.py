@@ -17,7 +17,7 @@ import numpy as np
 from .._validate import check_array, check_finite
 from ..blocks import StaticBlock, signal_names
 
-__all__ = ["HighOrderDifferentialFeedback", "hurwitz_roots", "gains_from_poles", "feedback_output"]
+__all__ = ["HighOrderDifferentialFeedback", "hurwitz_roots", "gains_from_poles"]
 
 
 def feedback_output(t, x, u, p, y):
