@@ -121,13 +121,13 @@ def simulate(p: Example2, seeds, a_new: float, runs: int) -> dict:
     r = setpoint(p, n)
     theta = softened_setpoint(LowPassFilter(p.omega, 3), r, p.h)
     noise = draw_noise(seeds, n, uniform_noise([-p.xi_bound, -p.eta_bound], [p.xi_bound, p.eta_bound]))
-    noise = np.concatenate([noise, noise], axis=1)  # the two presets share the noise of each row
+    noise = np.tile(noise.transpose(2, 0, 1), 2)  # [ξ, η] as (2, N, 2 per): the two presets share each row's noise
     thetas = {f"theta[{i}]": theta[:, i] for i in range(3)}
 
     def batch(rows, keep):  # rows: a slice or index array of the batch, half of them per preset
         k = len(range(2 * per)[rows]) if isinstance(rows, slice) else len(rows)
         loop = loops.example2_loop(p, (p.a, a_new), (k // 2,) * 2, b=tuple(v[rows] for v in b))
-        inputs = thetas | {"xi": noise[:, rows, 0], "eta": noise[:, rows, 1]}
+        inputs = thetas | {"xi": noise[0][:, rows], "eta": noise[1][:, rows]}
         return loops.simulate_signals(loop, n, keep, inputs=inputs, runs=k, bound=p.bound)
 
     sig, div, step = batch(slice(None), ["x1", "u"])

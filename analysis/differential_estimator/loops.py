@@ -417,9 +417,10 @@ class LinearPath:
         """Outputs ``outputs`` of ``sys`` (a ``control.StateSpace`` whose input 0 is ``y``), each ``(N, B)``."""
         out = []
         for o in outputs:
-            spec = 0.0
+            spec = None
             for method, U in self.spectra.items():
                 g = impulse_response(ct.c2d(sys[o, 0], self.h, method=method), self.n)
-                spec = spec + U * self._fft.rfft(g.astype(np.float32), self.nfft)[:, None]
-            out.append(self._fft.irfft(spec, self.nfft, axis=0)[: self.n])
+                term = U * self._fft.rfft(g.astype(np.float32), self.nfft)[:, None]
+                spec = term if spec is None else np.add(spec, term, out=spec)  # in place: no extra temporaries
+            out.append(self._fft.irfft(spec, self.nfft, axis=0, overwrite_x=True)[: self.n])
         return out
