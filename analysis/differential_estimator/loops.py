@@ -1,8 +1,11 @@
 """The loops of Examples 1 and 2, built from library blocks through :class:`~ctrl_analysis.loop.Loop`.
 
 The plants (19) and (20) are study blocks (they are the paper's); Σ, Han's ESO, the low-pass
-softener and the differential feedback (18) come from the library; sums are static blocks. The
-same loops give the simulations (batch engine, Monte Carlo on the batch axis) and, through
+softener and the differential feedback (18) come from the library; the sensor is a static sum.
+Every block of the simulated loops has a compiled kernel (the plants' kernels are also their numpy
+methods; Example 2's parameter grid and Σ presets are per-run kernel parameters), so each loop runs
+as one numba function, and the study needs three loop structures: Example 1 with RK4 and with
+Euler (always Σ beside :data:`OBSERVERS` observers) and Example 2. The same loops give, through
 :meth:`Loop.interconnect` and :func:`control.linearize`, the linearisation of Example 2.
 """
 
