@@ -133,12 +133,11 @@ def _example2(ctx, result, p, runs):
     ctx.progress(f"Example 2: presets a = {p.a:g} and a = {lin['a_new']:g}, {runs} runs + {n_grid} grid points each")
     d = example2.simulate(p, seeds, lin["a_new"], runs)
     q = example2.quantities(result, p, d, lin)
-    s, t, per, ok = d["sig"], d["t"], d["per"], d["ok"]
-    pick = [int(np.flatnonzero(ok[j * per:j * per + runs])[0]) + j * per if ok[j * per:j * per + runs].any()
-            else j * per for j in (0, 1)]
+    s, t, per = d["sig"], d["t"], d["per"]
+    pick, tr = d["pick"], d["traces"]
     traces = [(f"{name} (Σ n0 = {p.n0}, a = {d['a'][j]:g}; seed {d['seeds'][pick[j] - j * per]})",
-               {"x1": s["x1"][:-1, pick[j]], "xhat1": s["xhat[0]"][:-1, pick[j]], "x2": s["x2"][:-1, pick[j]],
-                "xhat2": s["xhat[1]"][:-1, pick[j]]})
+               {"x1": tr["x1"][:-1, j], "xhat1": tr["xhat[0]"][:-1, j], "x2": tr["x2"][:-1, j],
+                "xhat2": tr["xhat[1]"][:-1, j]})
               for j, name in enumerate(("paper's configuration", "preset fast_estimator"))]
     ctx.save_figure(result, figures.plot_fig5(t[:-1], d["r"], d["theta"][:, 0], traces, "Fig. 5 — Example 2: "
                     "setpoint, output and estimates under controller (18), as printed (a = 5) and preset a = "

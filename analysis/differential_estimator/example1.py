@@ -191,9 +191,7 @@ def _half_step(result: StudyResult, p: Example1, d: dict) -> dict:
     n_win = n_half // 2
     noise_h = np.concatenate([np.repeat(noise[:n_win], 2, axis=0), draw(p, seeds, n_half)], axis=1)
     runs = len(seeds)
-    out, div_h, _ = loops.simulate_signals(loops.example1_loop(ph, []), n_half, ["x1", "x2", "sig[0]", "sig[1]"],
-                                           inputs={"xi": noise_h[:, :, 0], "eta": noise_h[:, :, 1]},
-                                           runs=2 * runs, bound=p.bound)
+    out, div_h, _ = loops.simulate_example1(ph, list(seeds) * 2, noise_h, [])
     e = lambda s, k: np.stack([s["x1"][:k], s["x2"][:k]], 2) - np.stack([s["sig[0]"][:k], s["sig[1]"][:k]], 2)
     err_h = np.mean(np.abs(e(out, n_half)[::2]), axis=0)  # the 1 ms instants of the window
     err_m = np.mean(np.abs(e(sig, n_win)), axis=0)
@@ -213,7 +211,8 @@ def _half_step(result: StudyResult, p: Example1, d: dict) -> dict:
 
 def _errors(x, est_out) -> np.ndarray:
     """Per-run mean |x_i - x̂_i|, i = 1, 2: ``x`` (N, B, 2), ``est_out`` a pair of (N, B)."""
-    return mean_abs_error(x, np.stack(est_out, axis=2))
+    # per component (no (N, B, 2) temporaries); the mean over time sums the same rows in the same order
+    return np.stack([mean_abs_error(x[:, :, i], z) for i, z in enumerate(est_out)], axis=1)
 
 
 def fair_comparison(result: StudyResult, p: Example1, d: dict) -> dict:

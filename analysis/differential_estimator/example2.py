@@ -108,7 +108,12 @@ def oscillation(e: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray]:
 
 
 def simulate(p: Example2, seeds, a_new: float, runs: int) -> dict:
-    """Both presets (Σ a = p.a and a_new), ``runs`` Monte Carlo rows + the (b1, b2, b3) grid each, one batch."""
+    """Both presets (Σ a = p.a and a_new), ``runs`` Monte Carlo rows + the (b1, b2, b3) grid each, one batch.
+
+    The batch keeps ``x1`` and ``u`` of every run; the states and estimates drawn in Fig. 5 are
+    kept for one run per preset (the first Monte Carlo run that did not diverge), re-run alone
+    (a run does not depend on its batch, so it is the same run).
+    """
     G = np.meshgrid(p.sweep_b1, p.sweep_b2, p.sweep_b3, indexing="ij")
     per = runs + G[0].size
     b = tuple(np.tile(np.r_[np.full(runs, nom), g.ravel()], 2) for nom, g in zip((p.b1, p.b2, p.b3), G))
@@ -116,14 +121,23 @@ def simulate(p: Example2, seeds, a_new: float, runs: int) -> dict:
     r = setpoint(p, n)
     theta = softened_setpoint(LowPassFilter(p.omega, 3), r, p.h)
     noise = draw_noise(seeds, n, uniform_noise([-p.xi_bound, -p.eta_bound], [p.xi_bound, p.eta_bound]))
-    noise = np.concatenate([noise, noise], axis=1)  # the two presets share the noise of each row
-    loop = loops.example2_loop(p, (p.a, a_new), (per, per), b=b)
-    inputs = {f"theta[{i}]": theta[:, i] for i in range(3)} | {"xi": noise[:, :, 0], "eta": noise[:, :, 1]}
-    keep = ["x1", "x2", "u", "xhat[0]", "xhat[1]"]
-    sig, div, step = loops.simulate_signals(loop, n, keep, inputs=inputs, runs=2 * per, bound=p.bound,
-                                            seeds=list(seeds) * 2)
-    return {"sig": sig, "ok": ~div, "diverged": div, "step": step, "r": r, "theta": theta, "per": per,
-            "runs": runs, "grid": G, "t": p.h * np.arange(n + 1), "a": (p.a, a_new), "seeds": list(seeds)}
+    noise = np.tile(noise.transpose(2, 0, 1), 2)  # [ξ, η] as (2, N, 2 per): the two presets share each row's noise
+    thetas = {f"theta[{i}]": theta[:, i] for i in range(3)}
+
+    def batch(rows, keep):  # rows: a slice or index array of the batch, half of them per preset
+        k = len(range(2 * per)[rows]) if isinstance(rows, slice) else len(rows)
+        loop = loops.example2_loop(p, (p.a, a_new), (k // 2,) * 2, b=tuple(v[rows] for v in b))
+        inputs = thetas | {"xi": noise[0][:, rows], "eta": noise[1][:, rows]}
+        return loops.simulate_signals(loop, n, keep, inputs=inputs, runs=k, bound=p.bound)
+
+    sig, div, step = batch(slice(None), ["x1", "u"])
+    ok = ~div
+    pick = [int(np.flatnonzero(ok[j * per:j * per + runs])[0]) + j * per if ok[j * per:j * per + runs].any()
+            else j * per for j in (0, 1)]
+    traces, _, _ = batch(np.array(pick), ["x1", "x2", "xhat[0]", "xhat[1]"])
+    return {"sig": sig, "ok": ok, "diverged": div, "step": step, "r": r, "theta": theta, "per": per,
+            "runs": runs, "grid": G, "t": p.h * np.arange(n + 1), "a": (p.a, a_new), "seeds": list(seeds),
+            "pick": pick, "traces": traces}
 
 
 def quantities(result: StudyResult, p: Example2, d: dict, lin: dict) -> dict:

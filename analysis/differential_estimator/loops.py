@@ -1,8 +1,11 @@
 """The loops of Examples 1 and 2, built from library blocks through :class:`~ctrl_analysis.loop.Loop`.
 
 The plants (19) and (20) are study blocks (they are the paper's); Σ, Han's ESO, the low-pass
-softener and the differential feedback (18) come from the library; sums are static blocks. The
-same loops give the simulations (batch engine, Monte Carlo on the batch axis) and, through
+softener and the differential feedback (18) come from the library; the sensor is a static sum.
+Every block of the simulated loops has a compiled kernel (the plants' kernels are also their numpy
+methods; Example 2's parameter grid and Σ presets are per-run kernel parameters), so each loop runs
+as one numba function, and the study needs three loop structures: Example 1 with RK4 and with
+Euler (always Σ beside :data:`OBSERVERS` observers) and Example 2. The same loops give, through
 :meth:`Loop.interconnect` and :func:`control.linearize`, the linearisation of Example 2.
 """
 
@@ -13,8 +16,8 @@ import math
 import control as ct
 import numpy as np
 
-from ctrl_analysis._kernels import BlockKernel, copy_output
-from ctrl_analysis.blocks import ContinuousBlock, RowGroups, StaticBlock, signal_names
+from ctrl_analysis._kernels import BlockKernel, copy_output, sigma_rhs
+from ctrl_analysis.blocks import ContinuousBlock, RowGroups, StaticBlock, StaticGain, signal_names
 from ctrl_analysis.controllers.differential_feedback import (
     HighOrderDifferentialFeedback,
 )
@@ -28,6 +31,7 @@ __all__ = [
     "LinearPath",
     "Plant19",
     "Plant20",
+    "SigmaRows",
     "Sensor",
     "example1_loop",
     "example2_linear",
@@ -36,17 +40,14 @@ __all__ = [
     "impulse_response",
     "max_real_eig",
     "plant19_rhs",
+    "plant20_rhs",
     "sensor",
     "sensor_output",
     "simulate_example1",
+    "pad_observers",
+    "OBSERVERS",
     "simulate_signals",
 ]
-
-
-def _sign_cos(arg: float) -> float:
-    """``sign(cos(arg))`` for a scalar time argument (plain floats: cheaper than numpy per call)."""
-    c = math.cos(arg)
-    return float((c > 0) - (c < 0))
 
 
 def plant19_rhs(t, x, u, p, dx):
@@ -109,11 +110,27 @@ class Sensor(StaticBlock):
         return BlockKernel(output=sensor_output, params=np.zeros(1))
 
 
+def plant20_rhs(t, x, u, p, dx):
+    """Kernel of :class:`Plant20` (one run; on a batch's columns it is the numpy method); ``p = [b1, b2, b3, w_amp, ω_w]``.
+
+    Branch-free (the sign of ``cos`` as a difference of comparisons) so that ``p`` may also hold one
+    row per run, transposed: ``p[k]`` is then a column of the batch.
+    """
+    c = np.cos(p[4] * t)
+    w = 1.0 * (c > 0) - 1.0 * (c < 0)  # w = sign(cos(ω_w t))
+    dx[0] = x[1]  # (20) x1' = x2
+    dx[1] = x[2]  # (20) x2' = x3
+    # (20) x3' = b1 x1 - (b2 - x1²) x2 - b3 x3 |x3| + w_amp w + ξ + u
+    dx[2] = (p[0] * x[0] - (p[1] - x[0] * x[0]) * x[1] - p[2] * x[2] * abs(x[2]) + p[3] * w + u[1] + u[0])
+
+
 class Plant20(ContinuousBlock):
     """Plant (20) of Example 2: ``x''' = b1 x1 - (b2 - x1²) x2 - b3 x3|x3| + w + ξ + u``.
 
     Inputs ``u`` (control), ``xi`` (process noise); states and outputs ``x1, x2, x3``. ``b1``,
-    ``b2``, ``b3`` may be arrays of shape ``(B,)``: a parameter grid on the batch axis.
+    ``b2``, ``b3`` may be arrays of shape ``(B,)``: a parameter grid on the batch axis, given to
+    the compiled engine as per-run kernel parameters. The batched ``rhs`` applies the kernel
+    :func:`plant20_rhs` to the batch's columns (one source for both engines).
 
     Parameters
     ----------
@@ -131,16 +148,59 @@ class Plant20(ContinuousBlock):
         self.b1, self.b2, self.b3 = (np.asarray(v, dtype=float) if np.ndim(v) else float(v) for v in (b1, b2, b3))
         self.w_amp = float(p.w_amp if w_amp is None else w_amp)
         self.w_freq = float(p.w_freq)
+        rows = max([np.size(v) for v in (self.b1, self.b2, self.b3) if np.ndim(v)], default=0)
+        if rows:  # one parameter row per run
+            cols = [np.broadcast_to(v, (rows,)) for v in (self.b1, self.b2, self.b3, self.w_amp, self.w_freq)]
+            self.p = np.ascontiguousarray(np.stack(cols, axis=1))
+        else:
+            self.p = np.array([self.b1, self.b2, self.b3, self.w_amp, self.w_freq])
 
     def rhs(self, t, X, U, params=None):
-        x1, x2, x3 = X[:, 0], X[:, 1], X[:, 2]
         dX = np.empty_like(X)
-        dX[:, 0] = x2  # (20) x1' = x2
-        dX[:, 1] = x3  # (20) x2' = x3
-        # (20) x3' = b1 x1 - (b2 - x1²) x2 - b3 x3 |x3| + w + ξ + u,  w = 0.2 sign(cos(0.5 t))
-        dX[:, 2] = (self.b1 * x1 - (self.b2 - x1 * x1) * x2 - self.b3 * x3 * np.abs(x3)
-                    + self.w_amp * _sign_cos(self.w_freq * t) + U[:, 1] + U[:, 0])
+        plant20_rhs(t, X.T, U.T, self.p.T, dX.T)
         return dX
+
+    def kernel(self) -> BlockKernel:
+        """The per-run kernel: output = state, ``rhs`` = :func:`plant20_rhs`, parameters per run for a grid.
+
+        Returns
+        -------
+        BlockKernel
+        """
+        return BlockKernel(output=copy_output, params=self.p, rhs=plant20_rhs)
+
+
+class SigmaRows(RowGroups):
+    """Σ with a different ``a`` on groups of rows (:class:`RowGroups`), with a compiled kernel.
+
+    The numpy methods are :class:`RowGroups`'; the kernel is Σ's (:func:`ctrl_analysis._kernels.sigma_rhs`)
+    with one row of coefficients ``a_1..a_n0`` per run, so the presets run in one compiled loop.
+
+    Parameters
+    ----------
+    estimators : sequence of DifferentialEstimator
+        Same ``n0``, state reading.
+    rows : sequence of int
+        Consecutive rows per estimator.
+    """
+
+    def __init__(self, estimators, rows):
+        super().__init__(estimators, rows)
+        n_rows = sum(r.stop - r.start if isinstance(r, slice) else r.size for r in self.rows)
+        self.coeffs = np.empty((n_rows, self.blocks[0].n0))
+        for est, r in zip(self.blocks, self.rows):
+            self.coeffs[r] = est.a_coeffs
+
+    def kernel(self) -> BlockKernel | None:
+        """Σ's kernel with per-run coefficients (``None`` for the corrected reading: numpy path).
+
+        Returns
+        -------
+        BlockKernel or None
+        """
+        if any(est.reading != "state" for est in self.blocks):
+            return None
+        return BlockKernel(output=copy_output, params=self.coeffs, rhs=sigma_rhs)
 
 
 def sensor(signal: str = "x1") -> Sensor:
@@ -201,7 +261,7 @@ def example2_loop(p: Example2, a_values=(None,), rows=None, *, b=None, w_amp=Non
     """
     reading = p.reading if sigma_reading is None else sigma_reading
     ests = [DifferentialEstimator(p.n0, p.a if a is None else a, reading=reading) for a in a_values]
-    sigma = ests[0] if len(ests) == 1 else RowGroups(ests, rows)
+    sigma = ests[0] if len(ests) == 1 else SigmaRows(ests, rows)
     ctrl = HighOrderDifferentialFeedback(p.K)
     u_name = "u" if extra_gain == 0.0 else "u18"
     blocks = [place(Plant20(p, b, w_amp), "plant"), place(sensor(), "sensor"),
@@ -209,8 +269,7 @@ def example2_loop(p: Example2, a_values=(None,), rows=None, *, b=None, w_amp=Non
               place(ctrl, "ctrl", inputs=list(signal_names("theta", 3)) + list(signal_names("xhat", 3)),
                     outputs=[u_name])]
     if extra_gain != 0.0:
-        blocks.append(place(StaticBlock(lambda t, u: u[:, :1] - extra_gain * u[:, 1:2], inputs=("u18", "xhat[3]"),
-                                        outputs=("u",)), "eps4"))
+        blocks.append(place(StaticGain([[1.0, -extra_gain]], inputs=("u18", "xhat[3]"), outputs=("u",)), "eps4"))
     return Loop(blocks, p.h)
 
 
@@ -264,17 +323,41 @@ def max_real_eig(M) -> float:
     return float(np.max(np.linalg.eigvals(M).real))
 
 
+#: Every Example 1 loop runs Σ beside this many observers: one loop structure per integrator (compiled once).
+OBSERVERS = 2
+
+
+def pad_observers(esos) -> list:
+    """``esos`` followed by linear ESOs (all poles at -10 rad/s) up to :data:`OBSERVERS` observers.
+
+    The observers do not act on the plant, so an added one changes no other signal (and, linear and
+    slow, it does not diverge); it keeps every Example 1 simulation on the structure of the main one.
+
+    Parameters
+    ----------
+    esos : sequence of ExtendedStateObserver
+
+    Returns
+    -------
+    list of ExtendedStateObserver
+    """
+    esos = list(esos)
+    return esos + [ExtendedStateObserver.from_bandwidth(2, 10.0)] * max(0, OBSERVERS - len(esos))
+
+
 def simulate_example1(p: Example1, seeds, noise, esos=None, *, method: str | None = None, chunk: int = 2000):
     """Example 1 over ``seeds`` (one batch row each) with the held noise ``[ξ, η]`` of shape ``(N, B, 2)``.
+
+    The loop carries :func:`pad_observers` ``(esos)``; only the observers ``esos`` are kept.
 
     Returns ``(signals, diverged, diverged_step)`` of :func:`simulate_signals` with ``x1``, ``x2``,
     Σ's ``sig[0]``, ``sig[1]`` and each ESO's ``eso{j}[0]``, ``eso{j}[1]``.
     """
     esos = [han_eso(p)] if esos is None else list(esos)
-    loop = example1_loop(p, esos, method=method)
+    loop = example1_loop(p, pad_observers(esos), method=method)
     keep = ["x1", "x2", "sig[0]", "sig[1]"] + [f"eso{j}[{i}]" for j in range(len(esos)) for i in (0, 1)]
     n_steps = noise.shape[0]
-    inputs = {"xi": noise[:, :, 0], "eta": noise[:, :, 1]} | ({"u0": 0.0} if esos else {})
+    inputs = {"xi": noise[:, :, 0], "eta": noise[:, :, 1], "u0": 0.0}
     return simulate_signals(loop, n_steps, keep, inputs=inputs, runs=len(seeds), chunk=chunk, bound=p.bound,
                             seeds=seeds)
 
@@ -337,9 +420,10 @@ class LinearPath:
         """Outputs ``outputs`` of ``sys`` (a ``control.StateSpace`` whose input 0 is ``y``), each ``(N, B)``."""
         out = []
         for o in outputs:
-            spec = 0.0
+            spec = None
             for method, U in self.spectra.items():
                 g = impulse_response(ct.c2d(sys[o, 0], self.h, method=method), self.n)
-                spec = spec + U * self._fft.rfft(g.astype(np.float32), self.nfft)[:, None]
-            out.append(self._fft.irfft(spec, self.nfft, axis=0)[: self.n])
+                term = U * self._fft.rfft(g.astype(np.float32), self.nfft)[:, None]
+                spec = term if spec is None else np.add(spec, term, out=spec)  # in place: no extra temporaries
+            out.append(self._fft.irfft(spec, self.nfft, axis=0, overwrite_x=True)[: self.n])
         return out

@@ -20,6 +20,34 @@ from ..blocks import StaticBlock, signal_names
 __all__ = ["HighOrderDifferentialFeedback", "hurwitz_roots", "gains_from_poles"]
 
 
+def feedback_output(t, x, u, p, y):
+    """Eq. (18) ``u = Σ k_i (θ_i - x̂_i)`` for one run, or for a batch's columns; ``p = K = [k_n, ..., k_1]``.
+
+    Written with scalar indexing only: it is the compiled kernel of one run (``u`` of shape ``(2n,)``)
+    and, called on a batch's transposed arrays (``u.T`` of shape ``(2n, B)``, ``y.T``), the block's
+    numpy method, so both engines evaluate the same expression in the same order.
+
+    Parameters
+    ----------
+    t : float
+        Time (unused).
+    x : numpy.ndarray or None
+        State (unused: the block is static).
+    u : numpy.ndarray, shape (2n,) or (2n, B)
+        ``[θ_1..θ_n, x̂_1..x̂_n]``.
+    p : numpy.ndarray, shape (n,)
+        The gains ``K``.
+    y : numpy.ndarray, shape (1,) or (1, B)
+        The control, written in place.
+    """
+    n = p.shape[0]
+    # (18) u = K ε,  ε_i = θ_i - x̂_i,  K = [k_n, ..., k_1], summed left to right
+    acc = p[0] * (u[0] - u[n])
+    for i in range(1, n):
+        acc = acc + p[i] * (u[i] - u[n + i])
+    y[0] = acc
+
+
 def _poly_text(n: int) -> str:
     return "s^n + k_1 s^(n-1) + ... + k_n" if n > 3 else " + ".join(
         ["s^%d" % n] + [f"k_{i} s^{n - i}" if n - i > 1 else (f"k_{i} s" if n - i == 1 else f"k_{i}")
@@ -146,17 +174,24 @@ class HighOrderDifferentialFeedback(StaticBlock):
         self.K = K
         self.n = n
         self.poles = poles
-        self._k = tuple(float(k) for k in K)
         super().__init__(self._law, inputs=signal_names("theta", n) + signal_names("xhat", n), outputs=("u",))
 
     def _law(self, t, u):
-        """Per-step kernel: ``u`` of shape ``(B, 2n)`` = ``[θ, x̂]``; returns ``(B, 1)``."""
-        n, k = self.n, self._k
-        # (18) u = K ε,  ε_i = θ_i - x̂_i,  K = [k_n, ..., k_1] (written out: bit-identical per row)
-        out = k[0] * (u[:, 0] - u[:, n])
-        for i in range(1, n):
-            out = out + k[i] * (u[:, i] - u[:, n + i])
-        return out[:, None]
+        """The numpy method: :func:`feedback_output` on the batch's columns; ``u`` ``(B, 2n)`` -> ``(B, 1)``."""
+        y = np.empty((u.shape[0], 1))
+        feedback_output(t, None, u.T, self.K, y.T)
+        return y
+
+    def kernel(self):
+        """The compiled engine's kernel: :func:`feedback_output` with ``p = K`` (the numpy method calls it too).
+
+        Returns
+        -------
+        ctrl_analysis._kernels.BlockKernel
+        """
+        from .._kernels import BlockKernel
+
+        return BlockKernel(output=feedback_output, params=np.array(self.K, dtype=float))
 
     @property
     def characteristic_polynomial(self) -> np.ndarray:

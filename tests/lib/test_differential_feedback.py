@@ -89,3 +89,20 @@ def test_loop_step_response_equals_the_designed_closed_loop_and_interconnect():
 
 def test_hurwitz_roots_order():
     np.testing.assert_allclose(hurwitz_roots([2.0, 3.0]), [-1.0, -2.0])
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+def test_kernel_is_the_numpy_method_run_by_run(compiled):
+    from ctrl_analysis._kernels import _jit
+    from ctrl_analysis.controllers.differential_feedback import feedback_output
+
+    ctrl = HighOrderDifferentialFeedback([2184.0, 506.0, 39.0])
+    k = ctrl.kernel()
+    assert k.output is feedback_output and k.rhs is None and k.update is None
+    fn = _jit(k.output) if compiled else k.output
+    u = np.random.default_rng(4).normal(scale=3.0, size=(9, 6))
+    y = np.empty((9, 1))
+    for b in range(9):
+        fn(0.0, np.empty(0), u[b], k.params, y[b])
+    assert np.array_equal(y, ctrl.output(0.0, np.zeros((9, 0)), u))  # bit for bit
+    np.testing.assert_allclose(y[:, 0], (u[:, :3] - u[:, 3:]) @ ctrl.K, rtol=1e-12)

@@ -54,11 +54,22 @@ def test_example1_loop_is_batch_invariant_and_matches_interconnect():
         np.testing.assert_array_equal(sig[s][:, 1], alone[s][:, 0])  # chunked, batched == one run alone
     # Σ alone, noise-free: the engine's RK4 equals python-control's interconnect
     loop = loops.example1_loop(p, [])
-    res = loop.simulate(300, inputs={"xi": 0.0, "eta": 0.0})
+    res = loop.simulate(300, inputs={"xi": 0.0, "eta": 0.0}, engine="numpy")  # no loop structure to compile
     sys = loop.interconnect()
     resp = ct.input_output_response(sys, res.t, np.zeros((2, res.t.size)), X0=np.zeros(sys.nstates),
                                     solve_ivp_kwargs={"rtol": 1e-10, "atol": 1e-12})
     np.testing.assert_allclose(res["sig[1]"][:, 0], resp.outputs[list(loop.outlist).index("sig[1]")], atol=1e-8)
+
+
+def test_padding_observers_changes_no_other_signal():
+    p = replace(EX1, T=0.2)
+    seeds = run_seeds(2, 2)
+    noise = example1.draw(p, seeds)
+    one, _, _ = loops.simulate_example1(p, seeds, noise)  # Han's ESO + a linear rider
+    two, _, _ = loops.simulate_example1(p, seeds, noise, [loops.han_eso(p), loops.han_eso(p, 2e-3)])
+    assert len(loops.pad_observers([])) == loops.OBSERVERS and "eso1[0]" not in one
+    for s in ("x1", "x2", "sig[0]", "sig[1]", "eso0[1]"):
+        np.testing.assert_array_equal(one[s], two[s])
 
 
 def test_linear_path_equals_the_engine():
@@ -112,6 +123,56 @@ def test_stable_preset_is_the_smallest_integer_a_with_the_margin():
     assert a_star < a_new
     assert loops.max_real_eig(loops.example2_linear(EX2, a_new)) <= -EX2.stable_margin
     assert loops.max_real_eig(loops.example2_linear(EX2, a_new - 1)) > -EX2.stable_margin
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+def test_example2_kernels_are_the_numpy_methods(compiled):
+    """Plant (20) and Σ on groups of rows: the per-run kernels, run by run, equal the batched numpy methods."""
+    from ctrl_analysis._kernels import _jit
+
+    rng = np.random.default_rng(7)
+    B = 6
+    b = (rng.normal(scale=10, size=B), rng.normal(scale=10, size=B), rng.uniform(0.1, 10, size=B))
+    sigma = loops.SigmaRows([DifferentialEstimator(5, 5.0), DifferentialEstimator(5, 34.0)], [2, 4])
+    for block, n_u in ((loops.Plant20(EX2, b), 2), (loops.Plant20(EX2), 2), (sigma, 1)):
+        k = block.kernel()
+        rhs = _jit(k.rhs) if compiled else k.rhs
+        x, u = rng.normal(size=(B, block.n_states)), rng.normal(size=(B, n_u))
+        for t in (0.5, 3.2, 6.4):  # w = sign(cos(0.5 t)) = +1, 0-crossing side, -1
+            dx = np.empty_like(x)
+            for r in range(B):
+                rhs(t, x[r], u[r], k.params[r] if np.ndim(k.params) == 2 else k.params, dx[r])
+            assert np.array_equal(dx, block.rhs(t, x, u))  # bit for bit
+    # (20) written out, and Σ's rows use their own a
+    plant = loops.Plant20(EX2, b)
+    x, u = rng.normal(size=(B, 3)), rng.normal(size=(B, 2))
+    x3 = b[0] * x[:, 0] - (b[1] - x[:, 0] ** 2) * x[:, 1] - b[2] * x[:, 2] * np.abs(x[:, 2]) + EX2.w_amp + u.sum(1)
+    np.testing.assert_allclose(plant.rhs(0.0, x, u)[:, 2], x3, rtol=1e-12, atol=1e-12)
+    np.testing.assert_array_equal(sigma.kernel().params[3], DifferentialEstimator(5, 34.0).a_coeffs)
+
+
+def test_example2_loop_compiled_equals_numpy_with_a_grid_and_two_presets():
+    p = replace(EX2, T=0.4, sweep_b1=(-10.0, 10.0), sweep_b2=(2.0,), sweep_b3=(1.0,))
+    seeds = run_seeds(3, 4)
+    out = {}
+    for engine in ("numpy", "auto"):
+        os_env = {"numpy": "numpy", "auto": ""}[engine]
+        with pytest.MonkeyPatch.context() as mp:
+            mp.setenv("CTRL_ANALYSIS_ENGINE", os_env)
+            out[engine] = example2.simulate(p, seeds, 34.0, 2)
+    a, b = out["numpy"], out["auto"]
+    assert a["sig"]["x1"].shape == (401, 8) and not a["diverged"].any()
+    for s in ("x1", "u"):
+        np.testing.assert_array_equal(a["sig"][s], b["sig"][s])
+    for s in ("x2", "xhat[0]", "xhat[1]"):
+        np.testing.assert_array_equal(a["traces"][s], b["traces"][s])
+    # the re-run traces are the batch's runs
+    np.testing.assert_array_equal(b["traces"]["x1"], b["sig"]["x1"][:, b["pick"]])
+    from ctrl_analysis._kernels import kernel_of
+
+    loop = loops.example2_loop(p, (5.0, 34.0), (1, 1), b=([1.0, 2.0], [2.0, 2.0], [1.0, 1.0]))
+    assert all(kernel_of(pl.block) is not None for pl in loop.placed)  # "auto" ran the compiled engine
+    assert np.ptp(b["sig"]["u"][:, 0] - b["sig"]["u"][:, 4]) > 0  # the presets differ (Σ a = 5 vs 34)
 
 
 def test_plant_is_never_hurwitz():
