@@ -267,7 +267,8 @@ def _gen_source(blocks, order, stage, discrete, continuous, nc, method, finite_b
             out += call(i, "rhs", tau, xx, dx, ind)
         return out
 
-    add(f"def run(n_steps, t, h, substeps, X0, H, HC, S0, KEEP, store, xs, bound, diverged, div_step, {pargs}):")
+    add(f"def run(n_steps, t, h, substeps, X0, H, HC, HS, HCS, S0, KEEP, store, xs, bound, diverged, div_step, "
+        f"{pargs}):")
     add("    B = X0.shape[0]")
     add("    n = X0.shape[1]")
     for i, b in enumerate(blocks):
@@ -287,6 +288,8 @@ def _gen_source(blocks, order, stage, discrete, continuous, nc, method, finite_b
     add("        for b in range(B):")
     add("            for j in range(HC.shape[0]):")
     add("                SS[b, HC[j]] = H[k, b, j]")
+    add("            for j in range(HCS.shape[0]):")
+    add("                SS[b, HCS[j]] = HS[k, j]")
     ind = " " * 12
     for i in order:
         L.extend(call(i, "out", "tk", "X", None, ind))
@@ -354,7 +357,9 @@ def compiled_runner(loop, kernels: dict, finite_bound: bool):
     Returns
     -------
     run : callable
-        ``run(n_steps, t, h, substeps, X0, H, HC, S0, KEEP, store, xs, bound, diverged, div_step, *P)``.
+        ``run(n_steps, t, h, substeps, X0, H, HC, HS, HCS, S0, KEEP, store, xs, bound, diverged, div_step, *P)``:
+        ``H`` holds the per-run inputs ``(N+1, B, .)`` at signal columns ``HC``, ``HS`` the inputs
+        shared by every run ``(N+1, .)`` at columns ``HCS``.
     consts : dict
         ``IC<i>``/``OC<i>`` index arrays are baked into the runner; ``P`` lists the parameter vectors.
     """
@@ -393,7 +398,8 @@ def compiled_runner(loop, kernels: dict, finite_bound: bool):
         for name, fn in fns.items():
             setattr(module, name, _jit(fn))
         f64, i64 = numba.float64, numba.int64
-        sig = numba.void(i64, f64[::1], f64, i64, f64[:, ::1], f64[:, :, ::1], numba.intp[::1], f64[::1],
+        sig = numba.void(i64, f64[::1], f64, i64, f64[:, ::1], f64[:, :, ::1], numba.intp[::1], f64[:, ::1],
+                         numba.intp[::1], f64[::1],
                          numba.intp[::1], f64[:, :, :], f64[:, :, :], f64, numba.boolean[:], i64[:],
                          *[f64[:, ::1] if b["per_run"] else f64[::1] for b in blocks])
         run = numba.njit(sig, cache=True, error_model="numpy")(module.run)
@@ -530,19 +536,26 @@ def run_compiled(loop, runner, plan, n_steps, t, x, held, bound, keep_cols, stor
     P = [Pi[lo:lo + B] if per_run[p.name] else Pi[0] for Pi, p in zip(P, loop.placed)]
     col = plan["col"]
     S0 = np.zeros(len(plan["names"]))
-    varying = [(s, a) for s, a in held.items() if a.ndim > 0]
     for s, a in held.items():
         if a.ndim == 0:
             S0[col[s]] = a
-    H = np.empty((n_steps + 1, B, max(len(varying), 1)))
-    for j, (s, a) in enumerate(varying):
-        a2 = a if a.ndim == 2 else a[:, None]
-        m = min(a.shape[0], n_steps + 1)
-        H[:m, :, j] = a2[:m]
-        H[m:, :, j] = a2[m - 1]  # row N repeats row N-1 when absent
-    HC = np.array([col[s] for s, _ in varying], dtype=np.intp)
+    # inputs that differ per run, (N+1, B, .), and inputs shared by every run, (N+1, .): a shared
+    # record is not copied B times
+    H, HC = _held_matrix([(s, a) for s, a in held.items() if a.ndim == 2], n_steps, B, col)
+    HS, HCS = _held_matrix([(s, a) for s, a in held.items() if a.ndim == 1], n_steps, None, col)
     xs_arg = np.empty((0, 0, 0)) if xs is None else xs
     X = np.array(x, dtype=float, order="C")  # a copy, stepped in place by the runner
-    run(n_steps, t, loop.dt / loop.substeps, loop.substeps, X, H, HC, S0,
+    run(n_steps, t, loop.dt / loop.substeps, loop.substeps, X, H, HC, HS, HCS, S0,
         keep_cols, store, xs_arg, float(bound), diverged, div_step, *P)
     x[...] = X  # the final state, as the numpy path leaves it (final_states, chunk carry-over)
+
+
+def _held_matrix(items, n_steps, B, col):
+    """Held inputs as one array: ``(N+1, B, k)`` per run (``B`` given) or ``(N+1, k)`` shared; and their columns."""
+    shape = (n_steps + 1, max(len(items), 1)) if B is None else (n_steps + 1, B, max(len(items), 1))
+    H = np.empty(shape)
+    for j, (_, a) in enumerate(items):
+        m = min(a.shape[0], n_steps + 1)
+        H[:m, ..., j] = a[:m]
+        H[m:, ..., j] = a[m - 1]  # row N repeats row N-1 when absent
+    return H, np.array([col[s] for s, _ in items], dtype=np.intp)
