@@ -99,13 +99,6 @@ def _scan_counts(ex, quick: bool) -> tuple:
     return (ex.td_substeps,) if quick else (1, 4, ex.td_substeps - 1, ex.td_substeps)
 
 
-def _save(ctx, result, fig, filename: str, **kw) -> None:
-    """``ctx.save_figure``; with ``--quick`` (a smoke test, 50 dpi) without constrained layout, a quarter of the rendering."""
-    if ctx.quick:
-        fig.set_layout_engine("none")
-    ctx.save_figure(result, fig, filename, **kw)
-
-
 def _figures(ctx, result, all_runs, per_run, sweeps, ratio, seeds) -> None:
     """Fig. 2-6, the Monte Carlo spread and the three sweeps (at a lower resolution with --quick)."""
     dpi = 70 if ctx.quick else 120
@@ -114,7 +107,7 @@ def _figures(ctx, result, all_runs, per_run, sweeps, ratio, seeds) -> None:
     y = run_scheme(dataclasses.replace(EX1, R=fig2_R), "ikf_mfac", v).y
     outs = {R: y[:, i] for i, R in enumerate(fig2_R)}
     k1 = np.arange(1, EX1.n + 1)
-    _save(ctx, result, F.plot_fig2(k1, all_runs["ex1"]["mfac"].y_ref, outs, ratio["ex1"], EX1.Q,
+    ctx.save_figure(result, F.plot_fig2(k1, all_runs["ex1"]["mfac"].y_ref, outs, ratio["ex1"], EX1.Q,
                                     EX1.Q / EX1.R),
                "fig2_ikf_q_over_r.png", dpi=dpi,
                caption="Redraws the paper's Fig. 2: IKF-MFAC's output in Example 1 (one run) for measurement "
@@ -126,32 +119,32 @@ def _figures(ctx, result, all_runs, per_run, sweeps, ratio, seeds) -> None:
         r = all_runs[key]
         ys = {s: r[s].y[:, 0] for s in SCHEMES}
         name = f"Example {key[-1]}, {kind} reference (seed {seeds[0]})"
-        _save(ctx, result, F.plot_outputs(fo, f"{name}: outputs of the four schemes", r["mfac"].k,
+        ctx.save_figure(result, F.plot_outputs(fo, f"{name}: outputs of the four schemes", r["mfac"].k,
                                           r["mfac"].y_ref, ys), f"fig{fo}_{kind}_outputs.png", dpi=dpi,
                    caption=f"Redraws the paper's Fig. {fo}: the reference y* and the true outputs of MFAC, TD-MFAC, "
                            f"D-MFAC and IKF-MFAC in Example {key[-1]} ({kind} reference), one run with the first "
                            "seed; Table 1 averages such runs.")
-        _save(ctx, result, F.plot_errors(fe, f"{name}: absolute tracking error |y*(k) − y(k)|", r["mfac"].k,
+        ctx.save_figure(result, F.plot_errors(fe, f"{name}: absolute tracking error |y*(k) − y(k)|", r["mfac"].k,
                                          r["mfac"].y_ref, ys), f"fig{fe}_{kind}_abs_error.png", dpi=dpi,
                    caption=f"Redraws the paper's Fig. {fe}: absolute tracking error |y* − y| of the four schemes "
                            f"in Example {key[-1]} ({kind} reference), the same run as Fig. {fo}.")
-    _save(ctx, result, F.plot_spread(per_run, len(seeds)), "table1_rmse_spread.png", dpi=dpi,
+    ctx.save_figure(result, F.plot_spread(per_run, len(seeds)), "table1_rmse_spread.png", dpi=dpi,
                caption="Beyond the paper: the spread of the per-run RMSE of each scheme over the Monte Carlo runs "
                        "behind Table 1 (diverged runs excluded; the bar inside each violin is the median), with the "
                        "paper's printed RMSE marked; shows whether a printed value is a typical run or lies in a "
                        "tail (the note of each Table 1 quantity gives the fraction).")
-    _save(ctx, result, F.plot_noise_sweep({k: SWEEPS[k]["noise"] for k in EXAMPLES}, sweeps, {"ex1": EX1.noise_std, "ex2": EX2.noise_std}),
+    ctx.save_figure(result, F.plot_noise_sweep({k: SWEEPS[k]["noise"] for k in EXAMPLES}, sweeps, {"ex1": EX1.noise_std, "ex2": EX2.noise_std}),
                "beyond_rmse_vs_noise.png", dpi=dpi,
                caption="Beyond the paper: mean RMSE of the four schemes against the measurement-noise std in "
                        "both examples (the paper's level marked), every other parameter at the example's value "
                        "(Example 1's IKF Q, R reconstructed); points whose mean excludes diverged runs are "
                        "ringed and the counts given in the panel titles (finding where-ikf-mfac-wins).")
-    _save(ctx, result, F.plot_ratio_sweep(ratio, {k: e.Q / e.R for k, e in EXAMPLES.items()}),
+    ctx.save_figure(result, F.plot_ratio_sweep(ratio, {k: e.Q / e.R for k, e in EXAMPLES.items()}),
                "beyond_rmse_vs_q_over_r.png", dpi=dpi,
                caption="Beyond the paper: IKF-MFAC's mean RMSE against the IKF's q = Q/R in both examples, with "
                        f"the ratio used marked (Example 2: the paper's Q/R = {EX2.Q:g}/{EX2.R:g}; Example 1: "
                        "reconstructed, not printed) and the steady gain K∞(q) on a second axis; Q is varied at the example's R.")
-    _save(ctx, result, F.plot_gain_sweep(_GAINS, sweeps, {"rho": EX1.rho, "lam": EX1.lam}),
+    ctx.save_figure(result, F.plot_gain_sweep(_GAINS, sweeps, {"rho": EX1.rho, "lam": EX1.lam}),
                "beyond_rmse_vs_rho_lambda.png", dpi=dpi,
                caption="Beyond the paper: mean RMSE of the four schemes against MFAC's step factor ρ and weight "
                        "λ (the paper's values marked), showing where IKF-MFAC's advantage depends on the tuning; "
