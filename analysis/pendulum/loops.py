@@ -262,8 +262,11 @@ class ClosedLoopRun:
 
 
 def simulate_case(p, a21: float, seeds, *, filter_kind=None, nonlinear=False, phi0=0.0, noise=True,
-                  lookup=True) -> ClosedLoopRun:
-    """Simulate the §5 step (r = ``p.step``) for the runs ``seeds``; same seeds, same noise in every case."""
+                  lookup=True, engine="auto") -> ClosedLoopRun:
+    """Simulate the §5 step (r = ``p.step``) for the runs ``seeds``; same seeds, same noise in every case.
+
+    ``engine`` as :meth:`~ctrl_analysis.loop.Loop.simulate` (every block has a kernel: ``"auto"`` compiles).
+    """
     loop = build_loop(p, a21, filter_kind=filter_kind, nonlinear=nonlinear, lookup=lookup)
     N = int(round(p.t_end / p.T))
     B = len(seeds)
@@ -273,7 +276,7 @@ def simulate_case(p, a21: float, seeds, *, filter_kind=None, nonlinear=False, ph
     else:
         w = v = np.zeros((N, B))
     x0 = {"plant": np.tile([phi0, 0.0], (B, 1)) if np.ndim(phi0) == 0 else np.stack([phi0, 0 * phi0], 1)}
-    res = loop.simulate(N, inputs={"r": p.step, "w": w, "v": v}, x0=x0, runs=B, bound=p.bound)
+    res = loop.simulate(N, inputs={"r": p.step, "w": w, "v": v}, x0=x0, runs=B, bound=p.bound, engine=engine)
     return ClosedLoopRun(t=res.t, phi=res["phi"], dphi=res["dphi"], y=res["y"], e=res["e"], ec=res["ec"],
                          u=res["u"], diverged=res.diverged, diverged_step=res.diverged_step,
                          phi_hat=res.signals.get("xhat[0]"), dphi_hat=res.signals.get("xhat[1]"))

@@ -134,14 +134,14 @@ class _FuzzyBlock(DiscreteBlock):
         Notes
         -----
         From ``_COMPILED_MIN`` points on, and when numba is available, the block's compiled kernel
-        (:meth:`kernel`) is applied point by point; it equals the numpy method to rounding
+        (:meth:`kernel`) is applied point by point (the Mamdani controller's kernel gives the
+        aggregated set and numpy takes its centroid); bit for bit the numpy method's result
         (``tests/lib/test_fuzzy.py``).
         """
         e = np.asarray(e, dtype=float)
         ec = np.asarray(ec, dtype=float).reshape(-1)
         if e.size >= _COMPILED_MIN and _compiled_ok():  # many points: the compiled twin of output()
-            k = self.kernel()
-            return _apply_kernel(k.output, k.params, e.reshape(-1), ec).reshape(e.shape)
+            return self._evaluate_compiled(e.reshape(-1), ec).reshape(e.shape)
         fc = self._scaling()
         E, EC = fc.quantise(e.reshape(-1), ec)
         return (fc.Ku * self._surface(E, EC)).reshape(e.shape)
@@ -155,6 +155,9 @@ class _FuzzyBlock(DiscreteBlock):
         return x
 
     def kernel_params(self, Ke=None, Kec=None, Ku=None) -> np.ndarray:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def _evaluate_compiled(self, e, ec):  # pragma: no cover - abstract
         raise NotImplementedError
 
     def kernel(self):
@@ -180,17 +183,16 @@ def _compiled_ok() -> bool:
     return available()
 
 
-def _apply_kernel(fn, p, e, ec) -> np.ndarray:
-    """The jitted kernel ``fn`` evaluated at each point ``(e[k], ec[k])``."""
+def _apply_kernel(fn, p, e, ec, n_out=1) -> np.ndarray:
+    """The jitted kernel ``fn`` evaluated at each point ``(e[k], ec[k])``: shape ``(size, n_out)``."""
     from .._kernels import _jit
 
     f = _jit(fn)
-    x, u, y = np.empty(0), np.empty(2), np.empty(1)
-    out = np.empty(e.size)
+    x, u = np.empty(0), np.empty(2)
+    out = np.empty((e.size, n_out))
     for k in range(e.size):
         u[0], u[1] = e[k], ec[k]
-        f(0.0, x, u, p, y)
-        out[k] = y[0]
+        f(0.0, x, u, p, out[k])
     return out
 
 
@@ -214,13 +216,16 @@ def mamdani_output(t, x, u, p, y):
     p : numpy.ndarray
         :meth:`FuzzyController.kernel_params`: ``[Ke, Kec, Ku, X_e, X_ec, n_e, n_ec, n_u, n_grid,
         w_e, w_ec, c_e, c_ec, rules (row-major), z, mu_u (row-major, n_grid × n_u)]``.
-    y : numpy.ndarray, shape (1,)
-        ``u`` of the controller, written in place.
+    y : numpy.ndarray, shape (1,) or (n_grid,)
+        ``u`` of the controller, written in place; given ``n_grid`` entries, the aggregated output
+        set on ``z`` instead (no centroid: numpy's :func:`piecewise_linear_centroid` then gives
+        :meth:`FuzzyController.infer` bit for bit, see :meth:`FuzzyController.control_surface`).
     """
     n_e, n_ec, n_u, n_g = int(p[5]), int(p[6]), int(p[7]), int(p[8])
     E, EC = p[0] * u[0], p[1] * u[1]  # quantised: sat(Ke e, ±X_e), sat(Kec ec, ±X_ec)
     if E != E or EC != EC:
-        y[0] = E + EC
+        for g in range(y.shape[0]):
+            y[g] = E + EC
         return
     E, EC = min(max(E, -p[3]), p[3]), min(max(EC, -p[4]), p[4])
     o_ce = 11
@@ -242,12 +247,15 @@ def mamdani_output(t, x, u, p, y):
         agg = 0.0
         for k in range(n_u):
             agg = max(agg, min(act[k], p[o_mu + g * n_u + k]))
-        if g > 0:
+        if y.shape[0] > 1:
+            y[g] = agg
+        elif g > 0:
             area = 0.5 * (prev + agg)
             num += p[o_z + g - 1] * area + dz * (prev + 2.0 * agg) / 6.0
             den += area
         prev = agg
-    y[0] = p[2] * (num / den)
+    if y.shape[0] == 1:
+        y[0] = p[2] * (num / den)
 
 
 def lookup_output(t, x, u, p, y):
@@ -410,18 +418,31 @@ class FuzzyController(_FuzzyBlock):
         E : ndarray, shape (n_e,)
         EC : ndarray, shape (n_ec,)
         U : ndarray, shape (n_e, n_ec)
-            Output on the output universe (multiply by ``Ku`` for physical units).
+            Output on the output universe (multiply by ``Ku`` for physical units); from
+            ``_COMPILED_MIN`` points on (numba available) the aggregation is compiled
+            (:func:`mamdani_output`), the centroid numpy's: :meth:`infer` bit for bit.
         """
         E = np.linspace(-self.X_e, self.X_e, check_int("n_e", n_e, minimum=2))
         EC = np.linspace(-self.X_ec, self.X_ec, check_int("n_ec", n_ec, minimum=2))
         EE, CC = np.meshgrid(E, EC, indexing="ij")
         if EE.size >= _COMPILED_MIN and _compiled_ok():  # the compiled twin of infer, unit factors
-            U = _apply_kernel(mamdani_output, self.kernel_params(1.0, 1.0, 1.0), EE.ravel(), CC.ravel())
+            U = self._infer_compiled(EE.ravel(), CC.ravel(), 1.0, 1.0)
         else:
             U = self.infer(EE.ravel(), CC.ravel())
         return E, EC, U.reshape(E.size, EC.size)
 
     _kernel_output = staticmethod(mamdani_output)
+
+    def _infer_compiled(self, e, ec, Ke, Kec):
+        """:meth:`infer` of ``quantise(e, ec)`` (factors ``Ke``, ``Kec``): compiled aggregation, numpy centroid."""
+        p, out, n = self.kernel_params(Ke, Kec, 1.0), np.empty(e.size), 64  # in blocks: the sets stay in cache
+        for lo in range(0, e.size, n):
+            agg = _apply_kernel(mamdani_output, p, e[lo:lo + n], ec[lo:lo + n], self.n_grid)
+            out[lo:lo + n] = piecewise_linear_centroid(self.z, agg)  # row by row: the same sums as infer's
+        return out
+
+    def _evaluate_compiled(self, e, ec):
+        return self.Ku * self._infer_compiled(e, ec, self.Ke, self.Kec)
 
     def kernel_params(self, Ke=None, Kec=None, Ku=None) -> np.ndarray:
         """The parameter vector of :func:`mamdani_output` (factors overridable, e.g. 1 for the surface).
@@ -496,6 +517,9 @@ class FuzzyLookupController(_FuzzyBlock):
 
     _surface = lookup
     _kernel_output = staticmethod(lookup_output)
+
+    def _evaluate_compiled(self, e, ec):
+        return _apply_kernel(lookup_output, self.kernel_params(), e, ec)[:, 0]
 
     def kernel_params(self) -> np.ndarray:
         """The parameter vector of :func:`lookup_output`: the factors, the grid and the table.
