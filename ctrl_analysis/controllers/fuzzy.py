@@ -24,8 +24,6 @@ from ..blocks import DiscreteBlock
 __all__ = [
     "FuzzyController",
     "FuzzyLookupController",
-    "lookup_output",
-    "mamdani_output",
     "piecewise_linear_centroid",
     "sum_rule_table",
     "triangular_memberships",
@@ -267,10 +265,8 @@ def lookup_output(t, x, u, p, y):
 
     Parameters
     ----------
-    t, x : float, numpy.ndarray
-        Time and state (unused; the block is stateless).
-    u : numpy.ndarray, shape (2,)
-        ``[e, ec]`` in physical units.
+    t, x, u
+        As :func:`mamdani_output`: ``u = [e, ec]`` (physical units), no state.
     p : numpy.ndarray
         :meth:`FuzzyLookupController.kernel_params`: ``[Ke, Kec, Ku, X_e, X_ec, n_e, n_ec, E0, EC0,
         dE, dEC, U (row-major)]``.

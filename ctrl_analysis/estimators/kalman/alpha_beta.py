@@ -9,7 +9,7 @@ from ...blocks import DiscreteBlock
 from ..._validate import check_bool, check_finite, check_matrix, check_positive
 
 
-__all__ = ["alpha_beta_from_gain", "gain_from_alpha_beta", "tracking_index", "tracking_index_from_gains", "kalata_gains", "alpha_beta_stable", "AlphaBetaFilter", "alpha_beta_output", "alpha_beta_update"]
+__all__ = ["alpha_beta_from_gain", "gain_from_alpha_beta", "tracking_index", "tracking_index_from_gains", "kalata_gains", "alpha_beta_stable", "AlphaBetaFilter"]
 
 
 # --------------------------------------------------------------------------------------------

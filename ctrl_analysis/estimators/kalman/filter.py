@@ -7,7 +7,7 @@ import numpy as np
 from ..._validate import check_finite, check_matrix, check_positive
 from ...blocks import DiscreteBlock, signal_names
 
-__all__ = ["DiscreteKalmanFilter", "kalman_output", "kalman_update"]
+__all__ = ["DiscreteKalmanFilter"]
 
 
 class DiscreteKalmanFilter(DiscreteBlock):
@@ -177,7 +177,8 @@ def kalman_output(t, x, u, p, y):
 
 
 def kalman_update(t, x, u, p, x_next):
-    """Compiled twin of :meth:`DiscreteKalmanFilter.update` for one run: the correction, then
+    """Compiled twin of :meth:`DiscreteKalmanFilter.update` for one run (the correction, then the prediction).
+
     ``x̂(k+1|k) = F x̂(k|k) + b u(k)``, ``P(k+1|k) = F (P − K S Kᵀ) Fᵀ + Qd``.
 
     The gain and the innovation (those of :func:`kalman_output`, which a compiled kernel cannot
