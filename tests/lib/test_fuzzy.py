@@ -227,7 +227,10 @@ def test_compiled_surface_and_evaluate_equal_numpy_inference_bit_for_bit():
 
 
 def test_fuzzy_and_filter_blocks_in_a_loop_compiled_equal_numpy():
-    """One loop (one compiled structure): Kalman and α-β filters, an error gain, the lookup and the Mamdani controller."""
+    """One loop (one compiled structure): Kalman and α-β filters, an error gain and the lookup controller.
+
+    (The Mamdani kernel is held to its numpy method above; a loop of it would only add compile time.)
+    """
     from ctrl_analysis.blocks import StaticGain
     from ctrl_analysis.loop import Loop, place
 
@@ -236,16 +239,12 @@ def test_fuzzy_and_filter_blocks_in_a_loop_compiled_equal_numpy():
     y = np.cumsum(rng.standard_normal((N, B)), axis=0) * 0.1
     kf = DiscreteKalmanFilter([[1.0, 0.1], [0.0, 1.0]], [1.0, 0.0], np.diag([1e-4, 1e-2]), 0.05, b=[0.0, 0.1])
     ab = AlphaBetaFilter(0.5, 0.2, 0.1, b=[0.0, 0.1])
-    fc = _fc(n_grid=61)
     err = StaticGain([[-1.0, 0.0], [0.0, -1.0]], ("xhat[0]", "xhat[1]"), ("e", "ec"))
     # the filters' u is an input (their output has feedthrough from u: fed back it would be an algebraic loop)
     loop = Loop([place(kf, "kf"), place(ab, "ab", outputs=("ab0", "ab1")), place(err, "err"),
-                 place(FuzzyLookupController(fc, 31), "table", outputs=("u_table",)),
-                 place(fc, "mamdani", outputs=("u_mamdani",))], 0.1)
+                 place(FuzzyLookupController(_fc(), 31), "table", outputs=("u_table",))], 0.1)
     res = {eng: loop.simulate(N, inputs={"y": y, "u": np.sin(y)}, runs=B, engine=eng) for eng in ("numpy", "compiled")}
     a, b = res["numpy"], res["compiled"]
     for s in ("xhat[0]", "xhat[1]", "ab0", "ab1", "u_table"):
         assert np.array_equal(a[s], b[s]), s
-    # Mamdani: the kernel's centroid sums run in another order than numpy's
-    np.testing.assert_allclose(b["u_mamdani"], a["u_mamdani"], rtol=0, atol=1e-12 * fc.Ku * fc.Y)
     assert np.ptp(a["u_table"]) > 0.1 and np.ptp(a["ab1"]) > 0.1
