@@ -5,6 +5,13 @@ Signals: the cart–pendulum (continuous, linear or ``sin φ``) driven by the ca
 sample); the fuzzy controller (discrete: sampled at ``T``) fed either by the raw error and its
 backward difference (``nofilter``) or by a filter's estimate (``filter`` and the beyond-the-paper
 cases).
+
+Every block has a compiled kernel (the plant, :class:`BackwardDifference`, the gains, the fuzzy
+controllers, the filters and the two halves of :func:`split_filter`), so
+:meth:`~ctrl_analysis.loop.Loop.simulate` runs these loops on the compiled engine, bit for bit the
+numpy engine's results (``tests/studies/test_pendulum.py``). Three loop structures are compiled:
+without filter (linear and ``sin φ`` plant: a flag parameter), with an α-β filter (every constant
+gain) and with the time-varying Kalman filter.
 """
 
 from __future__ import annotations

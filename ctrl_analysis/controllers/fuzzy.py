@@ -138,6 +138,8 @@ class _FuzzyBlock(DiscreteBlock):
         """
         e = np.asarray(e, dtype=float)
         ec = np.asarray(ec, dtype=float).reshape(-1)
+        if ec.size != e.size:
+            raise ValueError(f"e and ec must have the same number of points, got {e.size} and {ec.size}")
         if e.size >= _COMPILED_MIN and _compiled_ok():  # many points: the compiled twin of output()
             return self._evaluate_compiled(e.reshape(-1), ec).reshape(e.shape)
         fc = self._scaling()
