@@ -5,6 +5,13 @@ Signals: the cart–pendulum (continuous, linear or ``sin φ``) driven by the ca
 sample); the fuzzy controller (discrete: sampled at ``T``) fed either by the raw error and its
 backward difference (``nofilter``) or by a filter's estimate (``filter`` and the beyond-the-paper
 cases).
+
+Every block has a compiled kernel (the plant, :class:`BackwardDifference`, the gains, the fuzzy
+controllers, the filters and the two halves of :func:`split_filter`), so
+:meth:`~ctrl_analysis.loop.Loop.simulate` runs these loops on the compiled engine, bit for bit the
+numpy engine's results (``tests/studies/test_pendulum.py``). Three loop structures are compiled:
+without filter (linear and ``sin φ`` plant: a flag parameter), with an α-β filter (every constant
+gain) and with the time-varying Kalman filter.
 """
 
 from __future__ import annotations
@@ -15,7 +22,8 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 
-from ctrl_analysis.blocks import ContinuousBlock, DiscreteBlock, StaticBlock
+from ctrl_analysis._kernels import BlockKernel, copy_output
+from ctrl_analysis.blocks import ContinuousBlock, DiscreteBlock, StaticBlock, StaticGain
 from ctrl_analysis.controllers.fuzzy import (
     FuzzyController,
     FuzzyLookupController,
@@ -62,14 +70,29 @@ class CartPendulum(ContinuousBlock):
 
     def __init__(self, a21: float, b: float, nonlinear: bool = False):
         self.a21, self.b, self.nonlinear = float(a21), float(b), bool(nonlinear)
+        self._p = np.array([self.a21, self.b, 1.0 if self.nonlinear else 0.0])
 
     def rhs(self, t, x, u, params=None):
-        phi, dphi = x[:, 0], x[:, 1]
-        if self.nonlinear:
-            acc = self.a21 * np.sin(phi) + self.b * np.cos(phi) * u[:, 0] + u[:, 1]
-        else:  # (§3.1) ẋ = A x + B u + Γ w
-            acc = self.a21 * phi + self.b * u[:, 0] + u[:, 1]
-        return np.stack([dphi, acc], axis=1)
+        dx = np.empty_like(x)
+        pendulum_rhs(t, x.T, u.T, self._p, dx.T)  # the kernel on the batch's columns: one source
+        return dx
+
+    def kernel(self):
+        """Compiled kernel: :func:`pendulum_rhs` (also the numpy method), output = state."""
+        return BlockKernel(output=copy_output, params=self._p, rhs=pendulum_rhs)
+
+
+def pendulum_rhs(t, x, u, p, dx):
+    """``φ'' = a21 φ + b u + w`` (§3.1, ``ẋ = A x + B u + Γ w``) or, flag set, ``a21 sin φ + b cos φ · u + w``.
+
+    Scalar-indexed: one run's kernel and, on a batch's columns, :meth:`CartPendulum.rhs`;
+    ``p = [a21, b, nonlinear (0/1)]``, ``u = [u, w]``.
+    """
+    dx[0] = x[1]
+    if p[2] != 0.0:
+        dx[1] = p[0] * np.sin(x[0]) + p[1] * np.cos(x[0]) * u[0] + u[1]
+    else:
+        dx[1] = p[0] * x[0] + p[1] * u[0] + u[1]
 
 
 class BackwardDifference(DiscreteBlock):
@@ -82,12 +105,29 @@ class BackwardDifference(DiscreteBlock):
 
     def __init__(self, T: float):
         self.T = float(T)
+        self._p = np.array([self.T])
 
     def output(self, t, x, u, params=None):
-        return (u - x) / self.T
+        y = np.empty_like(u)
+        difference_output(t, x.T, u.T, self._p, y.T)  # the kernel on the batch's columns
+        return y
 
     def update(self, t, x, u, params=None):
         return u.copy()
+
+    def kernel(self):
+        """Compiled kernel: :func:`difference_output` (also the numpy method), :func:`difference_update`."""
+        return BlockKernel(output=difference_output, params=self._p, update=difference_update)
+
+
+def difference_output(t, x, u, p, y):
+    """``ec(k) = (e(k) − e(k−1)) / T``, ``p = [T]`` (scalar-indexed: one run or a batch's columns)."""
+    y[0] = (u[0] - x[0]) / p[0]
+
+
+def difference_update(t, x, u, p, x_next):
+    """``e_prev(k+1) = e(k)``."""
+    x_next[0] = u[0]
 
 
 class _Predictor(DiscreteBlock):
@@ -106,6 +146,30 @@ class _Predictor(DiscreteBlock):
     def update(self, t, x, u, params=None):
         return self.filt.update(t, x, u, params)
 
+    def kernel(self):
+        """The filter's update kernel; output = state."""
+        k = self.filt.kernel()
+        return BlockKernel(output=copy_output, params=k.params, update=k.update)
+
+
+class _Corrector(StaticBlock):
+    """A filter block's correction half: its :meth:`output` on ``(predictor state, y)``, a static block.
+
+    Its kernel is the filter's output kernel, which reads the state from its inputs when the
+    block has no state (the filters' kernels document this layout).
+    """
+
+    def __init__(self, filt: DiscreteBlock, pred: _Predictor):
+        n = len(filt.states)
+        self.filt = filt
+        super().__init__(lambda t, u: filt.output(t, u[:, :n], u[:, n:]), inputs=pred.outputs + ("y",),
+                         outputs=tuple(filt.outputs))
+
+    def kernel(self):
+        """The filter's output kernel (state read from the inputs)."""
+        k = self.filt.kernel()
+        return BlockKernel(output=k.output, params=k.params)
+
 
 def split_filter(filt: DiscreteBlock, name: str) -> list:
     """Place a filter whose output needs ``y(k)`` but not ``u(k)`` in a loop where ``u(k)`` depends on that output.
@@ -117,9 +181,7 @@ def split_filter(filt: DiscreteBlock, name: str) -> list:
     :meth:`output` evaluated on the predictor's state and ``y``).
     """
     pred = _Predictor(filt, name)
-    n = len(filt.states)
-    corr = StaticBlock(lambda t, u: filt.output(t, u[:, :n], u[:, n:]), inputs=pred.outputs + ("y",),
-                       outputs=tuple(filt.outputs))
+    corr = _Corrector(filt, pred)
     return [place(pred, f"{name}.pred"), place(corr, f"{name}.corr")]
 
 
@@ -176,16 +238,16 @@ def build_filter(kind: str, p, a21: float):
 def build_loop(p, a21: float, *, filter_kind: str | None, nonlinear: bool = False, lookup: bool = True) -> Loop:
     """The §5 loop: plant, measurement, (filter or backward difference), fuzzy controller."""
     blocks = [place(CartPendulum(a21, p.b2, nonlinear), "plant"),
-              place(StaticBlock(lambda t, u: u[:, :1] + u[:, 1:], ("phi", "v"), ("y",)), "sensor"),
+              place(StaticGain([[1.0, 1.0]], ("phi", "v"), ("y",)), "sensor"),
               place(fuzzy_controller(p, lookup), "fuzzy")]
     if filter_kind is None:
-        blocks += [place(StaticBlock(lambda t, u: u[:, :1] - u[:, 1:], ("r", "y"), ("e",)), "error"),
+        blocks += [place(StaticGain([[1.0, -1.0]], ("r", "y"), ("e",)), "error"),
                    place(BackwardDifference(p.T), "diff")]
     else:
         blocks += split_filter(build_filter(filter_kind, p, a21), "filter")
         # e = r − φ̂, ec = ė = −φ̂' (r constant after the step)
-        blocks.append(place(StaticBlock(lambda t, u: np.stack([u[:, 0] - u[:, 1], -u[:, 2]], axis=1),
-                                        ("r", "xhat[0]", "xhat[1]"), ("e", "ec")), "error"))
+        blocks.append(place(StaticGain([[1.0, -1.0, 0.0], [0.0, 0.0, -1.0]], ("r", "xhat[0]", "xhat[1]"),
+                                       ("e", "ec")), "error"))
     return Loop(blocks, p.T, method="rk4", substeps=p.substeps)
 
 
@@ -207,8 +269,11 @@ class ClosedLoopRun:
 
 
 def simulate_case(p, a21: float, seeds, *, filter_kind=None, nonlinear=False, phi0=0.0, noise=True,
-                  lookup=True) -> ClosedLoopRun:
-    """Simulate the §5 step (r = ``p.step``) for the runs ``seeds``; same seeds, same noise in every case."""
+                  lookup=True, engine="auto") -> ClosedLoopRun:
+    """Simulate the §5 step (r = ``p.step``) for the runs ``seeds``; same seeds, same noise in every case.
+
+    ``engine`` as :meth:`~ctrl_analysis.loop.Loop.simulate` (every block has a kernel: ``"auto"`` compiles).
+    """
     loop = build_loop(p, a21, filter_kind=filter_kind, nonlinear=nonlinear, lookup=lookup)
     N = int(round(p.t_end / p.T))
     B = len(seeds)
@@ -218,7 +283,7 @@ def simulate_case(p, a21: float, seeds, *, filter_kind=None, nonlinear=False, ph
     else:
         w = v = np.zeros((N, B))
     x0 = {"plant": np.tile([phi0, 0.0], (B, 1)) if np.ndim(phi0) == 0 else np.stack([phi0, 0 * phi0], 1)}
-    res = loop.simulate(N, inputs={"r": p.step, "w": w, "v": v}, x0=x0, runs=B, bound=p.bound)
+    res = loop.simulate(N, inputs={"r": p.step, "w": w, "v": v}, x0=x0, runs=B, bound=p.bound, engine=engine)
     return ClosedLoopRun(t=res.t, phi=res["phi"], dphi=res["dphi"], y=res["y"], e=res["e"], ec=res["ec"],
                          u=res["u"], diverged=res.diverged, diverged_step=res.diverged_step,
                          phi_hat=res.signals.get("xhat[0]"), dphi_hat=res.signals.get("xhat[1]"))

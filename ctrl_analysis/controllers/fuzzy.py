@@ -14,6 +14,8 @@ surface on a grid (the classical query table) and interpolates it bilinearly.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .._validate import check_finite, check_int, check_positive
@@ -126,10 +128,22 @@ class _FuzzyBlock(DiscreteBlock):
         -------
         ndarray
             ``u``, same shape as ``e``.
+
+        Notes
+        -----
+        From ``_COMPILED_MIN`` points on, and when numba is available, the block's compiled kernel
+        (:meth:`kernel`) is applied point by point (the Mamdani controller's kernel gives the
+        aggregated set and numpy takes its centroid); bit for bit the numpy method's result
+        (``tests/lib/test_fuzzy.py``).
         """
         e = np.asarray(e, dtype=float)
+        ec = np.asarray(ec, dtype=float).reshape(-1)
+        if ec.size != e.size:
+            raise ValueError(f"e and ec must have the same number of points, got {e.size} and {ec.size}")
+        if e.size >= _COMPILED_MIN and _compiled_ok():  # many points: the compiled twin of output()
+            return self._evaluate_compiled(e.reshape(-1), ec).reshape(e.shape)
         fc = self._scaling()
-        E, EC = fc.quantise(e.reshape(-1), np.asarray(ec, dtype=float).reshape(-1))
+        E, EC = fc.quantise(e.reshape(-1), ec)
         return (fc.Ku * self._surface(E, EC)).reshape(e.shape)
 
     def output(self, t, x, u, params=None) -> np.ndarray:
@@ -139,6 +153,140 @@ class _FuzzyBlock(DiscreteBlock):
 
     def update(self, t, x, u, params=None) -> np.ndarray:
         return x
+
+    def kernel_params(self, Ke=None, Kec=None, Ku=None) -> np.ndarray:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def _evaluate_compiled(self, e, ec):  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def kernel(self):
+        """The compiled engine's kernel (the compiled twin of :meth:`output`; stateless, no update).
+
+        Returns
+        -------
+        ctrl_analysis._kernels.BlockKernel
+        """
+        from .._kernels import BlockKernel
+
+        return BlockKernel(output=self._kernel_output, params=self.kernel_params(), update=_no_update)
+
+
+#: From this many points on, :meth:`_FuzzyBlock.evaluate` and :meth:`FuzzyController.control_surface`
+#: use the compiled kernel (compiling it costs more than the numpy path saves on fewer points).
+_COMPILED_MIN = 2000
+
+
+def _compiled_ok() -> bool:
+    from .._kernels import available
+
+    return available()
+
+
+def _apply_kernel(fn, p, e, ec, n_out=1) -> np.ndarray:
+    """The jitted kernel ``fn`` evaluated at each point ``(e[k], ec[k])``: shape ``(size, n_out)``."""
+    from .._kernels import _jit
+
+    f = _jit(fn)
+    x, u = np.empty(0), np.empty(2)
+    out = np.empty((e.size, n_out))
+    for k in range(e.size):
+        u[0], u[1] = e[k], ec[k]
+        f(0.0, x, u, p, out[k])
+    return out
+
+
+def _no_update(t, x, u, p, x_next):
+    """A stateless block's update: nothing to write."""
+
+
+def mamdani_output(t, x, u, p, y):
+    """Compiled twin of :meth:`FuzzyController.output` for one run: ``y[0] = Ku · centroid(...)`` of ``u = [e, ec]``.
+
+    Per-value branches (saturation, the ``min``/``max`` of the inference) make a scalar kernel
+    differ from the branch-free numpy method; ``tests/lib/test_fuzzy.py`` holds the two equal
+    (to rounding: the centroid's sums are taken in a different order).
+
+    Parameters
+    ----------
+    t, x : float, numpy.ndarray
+        Time and state (unused; the block is stateless).
+    u : numpy.ndarray, shape (2,)
+        ``[e, ec]`` in physical units.
+    p : numpy.ndarray
+        :meth:`FuzzyController.kernel_params`: ``[Ke, Kec, Ku, X_e, X_ec, n_e, n_ec, n_u, n_grid,
+        w_e, w_ec, c_e, c_ec, rules (row-major), z, mu_u (row-major, n_grid × n_u)]``.
+    y : numpy.ndarray, shape (1,) or (n_grid,)
+        ``u`` of the controller, written in place; given ``n_grid`` entries, the aggregated output
+        set on ``z`` instead (no centroid: numpy's :func:`piecewise_linear_centroid` then gives
+        :meth:`FuzzyController.infer` bit for bit, see :meth:`FuzzyController.control_surface`).
+    """
+    n_e, n_ec, n_u, n_g = int(p[5]), int(p[6]), int(p[7]), int(p[8])
+    E, EC = p[0] * u[0], p[1] * u[1]  # quantised: sat(Ke e, ±X_e), sat(Kec ec, ±X_ec)
+    if E != E or EC != EC:
+        for g in range(y.shape[0]):
+            y[g] = E + EC
+        return
+    E, EC = min(max(E, -p[3]), p[3]), min(max(EC, -p[4]), p[4])
+    o_ce = 11
+    o_cec, o_r = o_ce + n_e, o_ce + n_e + n_ec
+    o_z = o_r + n_e * n_ec
+    o_mu = o_z + n_g
+    act = np.zeros(n_u)  # per output term: max over its rules of min(μ_Ei(E), μ_ECj(EC))
+    for i in range(n_e):
+        me = max(0.0, 1.0 - abs(E - p[o_ce + i]) / p[9])
+        if me == 0.0:
+            continue
+        for j in range(n_ec):
+            w = min(me, max(0.0, 1.0 - abs(EC - p[o_cec + j]) / p[10]))
+            k = int(p[o_r + i * n_ec + j])
+            act[k] = max(act[k], w)
+    dz = p[o_z + 1] - p[o_z]
+    num, den, prev = 0.0, 0.0, 0.0
+    for g in range(n_g):  # implication min, aggregation max, centroid of the piecewise-linear set
+        agg = 0.0
+        for k in range(n_u):
+            agg = max(agg, min(act[k], p[o_mu + g * n_u + k]))
+        if y.shape[0] > 1:
+            y[g] = agg
+        elif g > 0:
+            area = 0.5 * (prev + agg)
+            num += p[o_z + g - 1] * area + dz * (prev + 2.0 * agg) / 6.0
+            den += area
+        prev = agg
+    if y.shape[0] == 1:
+        y[0] = p[2] * (num / den)
+
+
+def lookup_output(t, x, u, p, y):
+    """Compiled twin of :meth:`FuzzyLookupController.output` for one run: bilinear query table, ``u = [e, ec]``.
+
+    The same arithmetic as :meth:`FuzzyLookupController.lookup` (bit for bit; the cell index is a
+    per-value branch, so the numpy method stays branch-free and ``tests/lib/test_fuzzy.py`` holds
+    the two equal).
+
+    Parameters
+    ----------
+    t, x, u
+        As :func:`mamdani_output`: ``u = [e, ec]`` (physical units), no state.
+    p : numpy.ndarray
+        :meth:`FuzzyLookupController.kernel_params`: ``[Ke, Kec, Ku, X_e, X_ec, n_e, n_ec, E0, EC0,
+        dE, dEC, U (row-major)]``.
+    y : numpy.ndarray, shape (1,)
+        ``u`` of the controller, written in place.
+    """
+    n_e, n_ec = int(p[5]), int(p[6])
+    E, EC = p[0] * u[0], p[1] * u[1]  # quantised: sat(Ke e, ±X_e), sat(Kec ec, ±X_ec) (NaN stays NaN)
+    E = E if E != E else min(max(E, -p[3]), p[3])
+    EC = EC if EC != EC else min(max(EC, -p[4]), p[4])
+    fe = (E - p[7]) / p[9]
+    fc = (EC - p[8]) / p[10]
+    i = min(max(int(math.floor(fe)), 0), n_e - 2) if fe == fe else 0  # a NaN input: any cell, NaN output
+    j = min(max(int(math.floor(fc)), 0), n_ec - 2) if fc == fc else 0
+    a, b = fe - i, fc - j
+    o = 11 + i * n_ec + j
+    y[0] = p[2] * ((1.0 - a) * ((1.0 - b) * p[o] + b * p[o + 1])
+                   + a * ((1.0 - b) * p[o + n_ec] + b * p[o + n_ec + 1]))
 
 
 class FuzzyController(_FuzzyBlock):
@@ -268,12 +416,47 @@ class FuzzyController(_FuzzyBlock):
         E : ndarray, shape (n_e,)
         EC : ndarray, shape (n_ec,)
         U : ndarray, shape (n_e, n_ec)
-            Output on the output universe (multiply by ``Ku`` for physical units).
+            Output on the output universe (multiply by ``Ku`` for physical units); from
+            ``_COMPILED_MIN`` points on (numba available) the aggregation is compiled
+            (:func:`mamdani_output`), the centroid numpy's: :meth:`infer` bit for bit.
         """
         E = np.linspace(-self.X_e, self.X_e, check_int("n_e", n_e, minimum=2))
         EC = np.linspace(-self.X_ec, self.X_ec, check_int("n_ec", n_ec, minimum=2))
         EE, CC = np.meshgrid(E, EC, indexing="ij")
-        return E, EC, self.infer(EE.ravel(), CC.ravel()).reshape(E.size, EC.size)
+        if EE.size >= _COMPILED_MIN and _compiled_ok():  # the compiled twin of infer, unit factors
+            U = self._infer_compiled(EE.ravel(), CC.ravel(), 1.0, 1.0)
+        else:
+            U = self.infer(EE.ravel(), CC.ravel())
+        return E, EC, U.reshape(E.size, EC.size)
+
+    _kernel_output = staticmethod(mamdani_output)
+
+    def _infer_compiled(self, e, ec, Ke, Kec):
+        """:meth:`infer` of ``quantise(e, ec)`` (factors ``Ke``, ``Kec``): compiled aggregation, numpy centroid."""
+        p, out, n = self.kernel_params(Ke, Kec, 1.0), np.empty(e.size), 64  # in blocks: the sets stay in cache
+        for lo in range(0, e.size, n):
+            agg = _apply_kernel(mamdani_output, p, e[lo:lo + n], ec[lo:lo + n], self.n_grid)
+            out[lo:lo + n] = piecewise_linear_centroid(self.z, agg)  # row by row: the same sums as infer's
+        return out
+
+    def _evaluate_compiled(self, e, ec):
+        return self.Ku * self._infer_compiled(e, ec, self.Ke, self.Kec)
+
+    def kernel_params(self, Ke=None, Kec=None, Ku=None) -> np.ndarray:
+        """The parameter vector of :func:`mamdani_output` (factors overridable, e.g. 1 for the surface).
+
+        Parameters
+        ----------
+        Ke, Kec, Ku : float, optional
+            Factors to use instead of the controller's.
+
+        Returns
+        -------
+        numpy.ndarray
+        """
+        f = [self.Ke if Ke is None else Ke, self.Kec if Kec is None else Kec, self.Ku if Ku is None else Ku]
+        head = f + [self.X_e, self.X_ec, *self.rules.shape, self.n_u, self.n_grid, self.w_e, self.w_ec]
+        return np.concatenate([head, self.c_e, self.c_ec, self.rules.ravel(), self.z, self.mu_u.ravel()]).astype(float)
 
     def __repr__(self) -> str:
         return (f"FuzzyController({self.rules.shape[0]}×{self.rules.shape[1]} rules, {self.n_u} output terms, "
@@ -331,6 +514,22 @@ class FuzzyLookupController(_FuzzyBlock):
                 + a * ((1.0 - b) * U[i + 1, j] + b * U[i + 1, j + 1]))
 
     _surface = lookup
+    _kernel_output = staticmethod(lookup_output)
+
+    def _evaluate_compiled(self, e, ec):
+        return _apply_kernel(lookup_output, self.kernel_params(), e, ec)[:, 0]
+
+    def kernel_params(self) -> np.ndarray:
+        """The parameter vector of :func:`lookup_output`: the factors, the grid and the table.
+
+        Returns
+        -------
+        numpy.ndarray
+        """
+        fc = self.controller
+        head = [fc.Ke, fc.Kec, fc.Ku, fc.X_e, fc.X_ec, self.E.size, self.EC.size, self.E[0], self.EC[0],
+                self.dE, self.dEC]
+        return np.concatenate([head, self.U.ravel()]).astype(float)
 
     def _scaling(self):
         return self.controller

@@ -323,3 +323,62 @@ def test_riccati_trajectory_bad_input():
         riccati_trajectory(A, C2, G2, 1.0, 1.0, np.eye(3), t)
     with pytest.raises(ValueError, match="R must be > 0"):
         riccati_trajectory(A, C2, G2, 1.0, -1.0, np.eye(2), t)
+
+
+# ------------------------------------------------------------------ compiled kernels of the filter blocks
+def _rows(fn, p, x, u, n_out):
+    out = np.empty((x.shape[0], n_out))
+    for b in range(x.shape[0]):
+        fn(0.0, x[b], u[b], p, out[b])
+    return out
+
+
+def _kf_state(rng, B, n):
+    A = rng.standard_normal((B, n, n))
+    P = A @ A.transpose(0, 2, 1) + 0.1 * np.eye(n)  # covariances
+    return np.concatenate([rng.standard_normal((B, n)), P.reshape(B, -1)], axis=1)
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+@pytest.mark.parametrize("with_b", [False, True])
+def test_kalman_kernel_equals_the_block_methods_bit_for_bit(compiled, with_b):
+    from ctrl_analysis._kernels import _jit
+    from ctrl_analysis.estimators.kalman.filter import DiscreteKalmanFilter, kalman_output, kalman_update
+
+    rng = np.random.default_rng(11)
+    n, B = 3, 7
+    F = np.eye(n) + 0.1 * rng.standard_normal((n, n))
+    G = rng.standard_normal((n, n))
+    kf = DiscreteKalmanFilter(F, rng.standard_normal(n), G @ G.T, 0.3, b=rng.standard_normal(n) if with_b else None)
+    x, u = _kf_state(rng, B, n), rng.standard_normal((B, len(kf.inputs)))
+    k = kf.kernel()
+    out_fn, upd_fn = (_jit(kalman_output), _jit(kalman_update)) if compiled else (kalman_output, kalman_update)
+    assert np.array_equal(_rows(out_fn, k.params, x, u, n), kf.output(0.0, x, u))
+    assert np.array_equal(_rows(upd_fn, k.params, x, u, n + n * n), kf.update(0.0, x, u))
+    # the corrector layout (no state; inputs = [state, y]) gives the same estimate
+    xu = np.concatenate([x, u[:, :1]], axis=1)
+    assert np.array_equal(_rows(out_fn, k.params, np.empty((B, 0)), xu, n), kf.output(0.0, x, u))
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+def test_alpha_beta_kernel_layouts_and_update(compiled):
+    from ctrl_analysis._kernels import _jit
+    from ctrl_analysis.estimators.kalman.alpha_beta import alpha_beta_output, alpha_beta_update
+
+    rng = np.random.default_rng(12)
+    F = [[1.0, 0.1], [0.2, 0.9]]
+    for b in (None, [0.01, 0.3]):
+        f = AlphaBetaFilter(0.6, 0.3, 0.1, F=F, b=b)
+        x, u = rng.standard_normal((9, 2)), rng.standard_normal((9, len(f.inputs)))
+        out_fn, upd_fn = (_jit(alpha_beta_output), _jit(alpha_beta_update)) if compiled else (alpha_beta_output,
+                                                                                              alpha_beta_update)
+        k = f.kernel()
+        xf = _rows(out_fn, k.params, x, u, 2)
+        assert np.array_equal(xf, f.output(0.0, x, u))  # numpy method = the kernel on columns
+        np.testing.assert_allclose(xf, x + (u[:, :1] - x[:, :1]) * f.K, rtol=0, atol=1e-15)
+        xn = _rows(upd_fn, k.params, x, u, 2)
+        assert np.array_equal(xn, f.update(0.0, x, u))
+        expect = xf @ np.asarray(F).T + (0.0 if b is None else u[:, 1:2] * np.asarray(b))
+        np.testing.assert_allclose(xn, expect, rtol=0, atol=1e-14)
+        xu = np.concatenate([x, u[:, :1]], axis=1)  # the corrector layout
+        assert np.array_equal(_rows(out_fn, k.params, np.empty((9, 0)), xu, 2), xf)

@@ -240,6 +240,9 @@ class AlphaBetaFilter(DiscreteBlock):
                 f"beta={self.beta:g}, spectral radius {np.max(np.abs(self.poles)):.4g}"
             )
         self.x0 = np.zeros(2) if x0 is None else check_finite("x0", np.ravel(x0), shape=(2,))
+        # kernel parameters: [has b, K (2), F (row-major), b]
+        self._p = np.concatenate([[0.0 if self.b is None else 1.0], self.K, self.F.ravel(),
+                                  np.zeros(2) if self.b is None else self.b])
 
     @property
     def poles(self) -> np.ndarray:
@@ -251,22 +254,76 @@ class AlphaBetaFilter(DiscreteBlock):
         return self.x0.copy()
 
     def output(self, t, x, u, params=None) -> np.ndarray:
-        # innovation r(k) = y(k) − H x̂(k|k−1); correction x̂(k|k) = x̂(k|k−1) + [α, β/T] r(k)
-        return x + (u[:, :1] - x[:, :1]) * self.K
+        y = np.empty_like(x)
+        alpha_beta_output(t, x.T, u.T, self._p, y.T)  # the kernel on the batch's columns: one source
+        return y
 
     def update(self, t, x, u, params=None) -> np.ndarray:
-        # prediction x̂(k+1|k) = F x̂(k|k) + b u(k), written out (2×2) so a run is bit-identical
-        # whatever the batch size
-        xf = self.output(t, x, u, params)
-        F = self.F
-        x_next = np.empty_like(xf)
-        x_next[:, 0] = F[0, 0] * xf[:, 0] + F[0, 1] * xf[:, 1]
-        x_next[:, 1] = F[1, 0] * xf[:, 0] + F[1, 1] * xf[:, 1]
-        if self.b is not None:
-            x_next += u[:, 1:2] * self.b
+        x_next = np.empty_like(x)
+        alpha_beta_update(t, x.T, u.T, self._p, x_next.T)
         return x_next
+
+    def kernel(self):
+        """The compiled engine's kernel (:func:`alpha_beta_output`, :func:`alpha_beta_update`; the numpy methods call them too).
+
+        Returns
+        -------
+        ctrl_analysis._kernels.BlockKernel
+        """
+        from ..._kernels import BlockKernel
+
+        return BlockKernel(output=alpha_beta_output, params=self._p, update=alpha_beta_update)
 
     def __repr__(self) -> str:
         return f"AlphaBetaFilter(alpha={self.alpha:g}, beta={self.beta:g}, T={self.T:g})"
 
 
+
+
+def alpha_beta_output(t, x, u, p, y):
+    """α-β correction ``x̂(k|k) = x̂(k|k−1) + [α, β/T] (y(k) − x̂(k|k−1)[0])`` (the output; :class:`AlphaBetaFilter`).
+
+    Scalar-indexed: the kernel of one run and, on a batch's transposed arrays, the block's numpy
+    method. With an empty ``x`` (a static corrector placed after a predictor that holds the
+    state, see ``analysis/pendulum/loops.split_filter``) the prediction is read from ``u[0:2]`` and
+    ``y(k)`` from ``u[2]``.
+
+    Parameters
+    ----------
+    t : float
+        Time (unused).
+    x : numpy.ndarray, shape (2,) or (0,)
+        The prediction ``x̂(k|k−1)``.
+    u : numpy.ndarray
+        ``[y, (u)]``, or ``[x̂(k|k−1), y]`` when ``x`` is empty.
+    p : numpy.ndarray
+        ``[has b, α, β/T, F (row-major), b]``.
+    y : numpy.ndarray, shape (2,)
+        The estimate ``x̂(k|k)``, written in place.
+    """
+    s, o = (x, 0) if x.shape[0] > 0 else (u, 2)
+    r = u[o] - s[0]  # innovation r(k) = y(k) − H x̂(k|k−1)
+    y[0] = s[0] + r * p[1]
+    y[1] = s[1] + r * p[2]
+
+
+def alpha_beta_update(t, x, u, p, x_next):
+    """α-β prediction ``x̂(k+1|k) = F x̂(k|k) + b u(k)`` (the state update; :class:`AlphaBetaFilter`).
+
+    Written out (2×2), so a run is bit-identical whatever the batch size; scalar-indexed like
+    :func:`alpha_beta_output`.
+
+    Parameters
+    ----------
+    t, x, u, p
+        As :func:`alpha_beta_output` (``x`` the prediction, ``u = [y, (u)]``).
+    x_next : numpy.ndarray, shape (2,)
+        The next prediction, written in place.
+    """
+    r = u[0] - x[0]  # the correction of alpha_beta_output, repeated (a compiled kernel cannot call it)
+    xf0, xf1 = x[0] + r * p[1], x[1] + r * p[2]
+    x_next[0] = p[3] * xf0 + p[4] * xf1
+    x_next[1] = p[5] * xf0 + p[6] * xf1
+    if p[0] != 0.0:
+        x_next[0] = x_next[0] + u[1] * p[7]
+        x_next[1] = x_next[1] + u[1] * p[8]

@@ -75,6 +75,9 @@ class DiscreteKalmanFilter(DiscreteBlock):
             raise ValueError(f"P0 must be positive semidefinite (a covariance), got {self.P0.tolist()}")
         self.outputs = signal_names("xhat", n)
         self.states = signal_names("xpred", n) + tuple(f"P[{i},{j}]" for i in range(n) for j in range(n))
+        # kernel parameters: [n, has b, R, h, F (row-major), Qd (row-major), b]
+        self._p = np.concatenate([[n, 0.0 if self.b is None else 1.0, self.R], self.h, self.F.ravel(),
+                                  self.Qd.ravel(), np.zeros(n) if self.b is None else self.b]).astype(float)
 
     def initial_state(self) -> np.ndarray:
         return np.concatenate([self.x0, self.P0.ravel()])
@@ -120,5 +123,104 @@ class DiscreteKalmanFilter(DiscreteBlock):
         x_next[:, n:] = Pn.reshape(-1, n * n)
         return x_next
 
+    def kernel(self):
+        """The compiled engine's kernel: :func:`kalman_output`, :func:`kalman_update` (twins of the numpy methods).
+
+        Returns
+        -------
+        ctrl_analysis._kernels.BlockKernel
+        """
+        from ..._kernels import BlockKernel
+
+        return BlockKernel(output=kalman_output, params=self._p, update=kalman_update)
+
     def __repr__(self) -> str:
         return f"DiscreteKalmanFilter(n={self.n}, R={self.R:g})"
+
+
+def kalman_output(t, x, u, p, y):
+    """Compiled twin of :meth:`DiscreteKalmanFilter.output` for one run: ``x̂(k|k) = x̂(k|k−1) + K(k) (y(k) − h x̂(k|k−1))``.
+
+    The same products and sums in the same order as the numpy method (bit for bit; held equal by
+    ``tests/lib/test_fuzzy.py``). With an empty ``x`` (a static corrector placed after a predictor
+    that holds the state) the state is read from ``u[0 : n + n²]`` and ``y(k)`` from ``u[n + n²]``.
+
+    Parameters
+    ----------
+    t : float
+        Time (unused).
+    x : numpy.ndarray, shape (n + n²,) or (0,)
+        ``[x̂(k|k−1), P(k|k−1) (row-major)]``.
+    u : numpy.ndarray
+        ``[y, (u)]``, or ``[state, y]`` when ``x`` is empty.
+    p : numpy.ndarray
+        ``[n, has b, R, h, F (row-major), Qd (row-major), b]``.
+    y : numpy.ndarray, shape (n,)
+        The estimate ``x̂(k|k)``, written in place.
+    """
+    n = int(p[0])
+    s, o = (x, 0) if x.shape[0] > 0 else (u, n + n * n)
+    S = p[2]  # S(k) = h P hᵀ + R
+    for i in range(n):
+        ph = 0.0
+        for j in range(n):
+            ph = ph + s[n + i * n + j] * p[3 + j]
+        S = S + p[3 + i] * ph
+    r = u[o]  # innovation y(k) − h x̂(k|k−1)
+    for i in range(n):
+        r = r - p[3 + i] * s[i]
+    for i in range(n):
+        ph = 0.0
+        for j in range(n):
+            ph = ph + s[n + i * n + j] * p[3 + j]
+        y[i] = s[i] + (ph / S) * r  # K(k) = P hᵀ / S(k)
+
+
+def kalman_update(t, x, u, p, x_next):
+    """Compiled twin of :meth:`DiscreteKalmanFilter.update` for one run (the correction, then the prediction).
+
+    ``x̂(k+1|k) = F x̂(k|k) + b u(k)``, ``P(k+1|k) = F (P − K S Kᵀ) Fᵀ + Qd``.
+
+    The gain and the innovation (those of :func:`kalman_output`, which a compiled kernel cannot
+    call) are recomputed where needed instead of being stored: no scratch space, the numpy
+    method's operation order (bit for bit).
+
+    Parameters
+    ----------
+    t, x, u, p
+        As :func:`kalman_output` (``x`` the state, ``u = [y, (u)]``).
+    x_next : numpy.ndarray, shape (n + n²,)
+        The next state, written in place.
+    """
+    n = int(p[0])
+    oF, oQ = 3 + n, 3 + n + n * n
+    S = p[2]
+    for i in range(n):
+        ph = 0.0
+        for j in range(n):
+            ph = ph + x[n + i * n + j] * p[3 + j]
+        S = S + p[3 + i] * ph
+    r = u[0]
+    for i in range(n):
+        r = r - p[3 + i] * x[i]
+    for i in range(n):  # x̂(k+1|k) = F x̂(k|k) + b u(k)
+        acc = 0.0
+        for j in range(n):
+            ph = 0.0
+            for m in range(n):
+                ph = ph + x[n + j * n + m] * p[3 + m]
+            acc = acc + p[oF + i * n + j] * (x[j] + (ph / S) * r)
+        x_next[i] = acc + u[1] * p[oQ + n * n + i] if p[1] != 0.0 else acc
+    for i in range(n):  # P(k+1|k) = F P(k|k) Fᵀ + Qd, P(k|k) = P − K S Kᵀ
+        for j in range(n):
+            acc = 0.0 + p[oQ + i * n + j]
+            for k in range(n):
+                fp = 0.0
+                for m in range(n):
+                    km, kk = 0.0, 0.0
+                    for q in range(n):
+                        km = km + x[n + m * n + q] * p[3 + q]
+                        kk = kk + x[n + k * n + q] * p[3 + q]
+                    fp = fp + p[oF + i * n + m] * (x[n + m * n + k] - (km / S) * (kk / S) * S)
+                acc = acc + fp * p[oF + j * n + k]
+            x_next[n + i * n + j] = acc
