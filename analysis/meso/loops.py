@@ -13,7 +13,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ctrl_analysis.blocks import ContinuousBlock, DiscreteBlock, RowGroups, signal_names
+from ctrl_analysis._kernels import BlockKernel, copy_output, eso_rhs, kernel_of
+from ctrl_analysis.blocks import ContinuousBlock, RowGroups, StaticGain, signal_names
 from ctrl_analysis.controllers.pd import PDFeedforward
 from ctrl_analysis.estimators.eso import ExtendedStateObserver
 from ctrl_analysis.estimators.lowpass import LowPassFilter
@@ -21,6 +22,13 @@ from ctrl_analysis.loop import Loop, place
 from ctrl_analysis.simulate import draw_noise, uniform_noise
 
 from .identification import BatchIdentification, exact_report
+
+try:  # meso_rhs calls the library's eso_rhs: numba compiles it into the kernel
+    from numba.extending import register_jitable
+
+    register_jitable(eso_rhs)
+except ImportError:  # pragma: no cover - numba is installed in the project's environment
+    pass
 from .paper import PAPER, Paper, Situation
 
 __all__ = [
@@ -30,7 +38,10 @@ __all__ = [
     "Row",
     "SituationRun",
     "build_loop",
+    "meso_rhs",
     "pick",
+    "plant_output",
+    "plant_rhs",
     "simulate_situation",
     "situation_rows",
     "x3_true",
@@ -67,7 +78,8 @@ class Plant(ContinuousBlock):
     """Plant (27) with the disturbance (31)/(32): ``x1' = x2``, ``x2' = θ1 x1 + θ2 x2 + θ4 + b u``, ``y = x1 + v``.
 
     ``b`` may differ per run (array of shape (B,)). Inputs ``u``, ``level`` (θ4, held), ``v``
-    (measurement noise, held); outputs ``x1``, ``x2``, ``y``.
+    (measurement noise, held); outputs ``x1``, ``x2``, ``y``. The numpy methods are the kernels
+    :func:`plant_rhs` / :func:`plant_output` on the batch's columns.
     """
 
     inputs = ("u", "level", "v")
@@ -78,20 +90,62 @@ class Plant(ContinuousBlock):
     def __init__(self, paper: Paper, b):
         self.theta1, self.theta2 = paper.theta1, paper.theta2
         self.b = np.asarray(b, dtype=float)
+        # kernel parameters, one row per run: [θ1, θ2, b]
+        self._p = np.stack([np.full(self.b.shape, self.theta1), np.full(self.b.shape, self.theta2), self.b], axis=-1)
 
     def rhs(self, t, x, u, params=None):
         dx = np.empty_like(x)
-        dx[:, 0] = x[:, 1]
-        # (27)/(31)/(32): x2' = θ1 x1 + θ2 x2 + θ4 + b u
-        dx[:, 1] = self.theta1 * x[:, 0] + self.theta2 * x[:, 1] + u[:, 1] + self.b * u[:, 0]
+        plant_rhs(t, x.T, u.T, self._p.T, dx.T)
         return dx
 
     def output(self, t, x, u, params=None):
         y = np.empty((x.shape[0], 3))
-        y[:, :2] = x
-        # (27): y = x1 + 0.002 n0
-        np.add(x[:, 0], u[:, 2], out=y[:, 2])
+        plant_output(t, x.T, u.T, self._p.T, y.T)
         return y
+
+    def kernel(self):
+        """The compiled kernel, per-run ``[θ1, θ2, b]`` (:func:`plant_rhs`, :func:`plant_output`).
+
+        Returns
+        -------
+        ctrl_analysis._kernels.BlockKernel
+        """
+        return BlockKernel(output=plant_output, params=self._p, rhs=plant_rhs)
+
+
+def plant_rhs(t, x, u, p, dx):
+    """(27)/(31)/(32) of one run (or a batch's columns): ``x1' = x2``, ``x2' = θ1 x1 + θ2 x2 + θ4 + b u``.
+
+    Parameters
+    ----------
+    t : float
+        Time (unused).
+    x : ndarray
+        ``[x1, x2]``.
+    u : ndarray
+        ``[u, θ4, v]``.
+    p : ndarray
+        ``[θ1, θ2, b]``.
+    dx : ndarray
+        The derivative, written in place.
+    """
+    dx[0] = x[1]
+    dx[1] = p[0] * x[0] + p[1] * x[1] + u[1] + p[2] * u[0]
+
+
+def plant_output(t, x, u, p, y):
+    """Outputs ``[x1, x2, y]`` with (27) ``y = x1 + 0.002 n0`` (the noise ``v`` is an input).
+
+    Parameters
+    ----------
+    t, x, u, p
+        As :func:`plant_rhs`.
+    y : ndarray
+        The outputs, written in place.
+    """
+    y[0] = x[0]
+    y[1] = x[1]
+    y[2] = x[0] + u[2]
 
 
 def _model_term(t, x_hat, u, params=None):
@@ -104,7 +158,8 @@ class ModelledESO(RowGroups):
 
     Wraps :class:`~ctrl_analysis.estimators.eso.ExtendedStateObserver` (its ``rhs`` is called, with
     ``known = XᵀΘ``); Θ = 0 gives the conventional ESO (6). ``epsilons`` may differ per run: the runs
-    are grouped by ε, one observer per group (:class:`~ctrl_analysis.blocks.RowGroups`).
+    are grouped by ε, one observer per group (:class:`~ctrl_analysis.blocks.RowGroups`); the compiled
+    kernel (:func:`meso_rhs`) has the gains L(ε) as per-run parameters.
 
     Inputs ``y``, ``u``, ``theta[0..3]``; states and outputs ``xhat1..3``.
     """
@@ -116,10 +171,51 @@ class ModelledESO(RowGroups):
                           for e in values], [np.flatnonzero(eps == e) for e in values])
         # the observer reads u[:, :2]; the model term reads Θ from the columns after them
         self.inputs = ("y", "u") + signal_names("theta", 4)
+        # kernel parameters per run: the ESO kernel's packing with b0 = 0, then b0 (see meso_rhs)
+        rows = {}
+        for e in values:
+            plain = ExtendedStateObserver.from_epsilon(paper.n, e, paper.beta, b0=0.0)
+            rows[e] = np.concatenate([kernel_of(plain).params, [float(b0)]])
+        self._p = np.array([rows[e] for e in eps])
+
+    def kernel(self):
+        """The compiled kernel: :func:`meso_rhs` with per-run ESO parameters (L from each run's ε).
+
+        Returns
+        -------
+        ctrl_analysis._kernels.BlockKernel
+        """
+        return BlockKernel(output=copy_output, params=self._p, rhs=meso_rhs)
 
 
-class ParameterPath(DiscreteBlock):
-    """Θ_used = W(s)-smoothed LSM result, or the raw LSM result for runs with ``bypass`` (a discrete block).
+def meso_rhs(t, x, u, p, dx):
+    """(29) of one run: the ESO of :func:`ctrl_analysis._kernels.eso_rhs` plus ``b0 u + XᵀΘ`` in row n.
+
+    ``eso_rhs`` is called with ``b0 = 0`` in its parameters (adding ``0 u`` is exact), and the drive
+    ``b0 u + XᵀΘ`` is added afterwards, in the order of the block's numpy method (bit for bit).
+
+    Parameters
+    ----------
+    t : float
+        Time (unused).
+    x : ndarray
+        ``x̂1..x̂3``.
+    u : ndarray
+        ``[y, u, θ1, θ2, θ3, θ4]``.
+    p : ndarray
+        ``eso_rhs``'s parameters (its b0 slot 0), then ``b0``.
+    dx : ndarray
+        The derivative, written in place.
+    """
+    eso_rhs(t, x, u, p, dx)
+    m = x.shape[0]
+    # (29) XᵀΘ with X = [x̂1, x̂2, u, 1]
+    f = u[2] * x[0] + u[3] * x[1] + u[4] * u[1] + u[5]
+    dx[m - 2] = dx[m - 2] + (p[p.shape[0] - 1] * u[1] + f)
+
+
+class ParameterPath(StaticGain):
+    """Θ_used = W(s)-smoothed LSM result, or the raw LSM result for runs with ``bypass`` (a per-run gain).
 
     Parameters
     ----------
@@ -130,18 +226,11 @@ class ParameterPath(DiscreteBlock):
     Block signals: inputs ``c[0..3]`` (LSM result), ``w[0..3]`` (after W(s)); outputs ``theta[0..3]``.
     """
 
-    inputs = signal_names("c", 4) + signal_names("w", 4)
-    outputs = signal_names("theta", 4)
-    feedthrough = True
-
     def __init__(self, bypass):
-        self.bypass = np.asarray(bypass, dtype=bool)[:, None]
-
-    def update(self, t, x, u, params=None):
-        return x
-
-    def output(self, t, x, u, params=None):
-        return np.where(self.bypass, u[:, :4], u[:, 4:])
+        bypass = np.asarray(bypass, dtype=bool)
+        eye, zero = np.eye(4), np.zeros((4, 4))
+        D = np.array([np.hstack([eye, zero]) if b else np.hstack([zero, eye]) for b in bypass]).reshape(-1, 4, 8)
+        super().__init__(D, signal_names("c", 4) + signal_names("w", 4), signal_names("theta", 4))
 
 
 def build_loop(sit: Situation, rows, paper: Paper = PAPER) -> Loop:
@@ -290,6 +379,9 @@ def simulate_situation(sit: Situation, rows, T: float, paper: Paper = PAPER, win
         new = res.diverged & ~out.diverged
         out.diverged_step[new] = k0 + res.diverged_step[new]
         out.diverged |= res.diverged
+        states = res.final_states
+        if n == N:  # a full batch ended at the chunk's last sample: solve it before the next sample
+            _end_batch(out, states, ident, res.diverged, k0 + n, bound)
         sig = {s: res[s][:n] for s in res.signals}
         err, x3 = _chunk_errors(sig, t_all[k0:k0 + n], rows, paper, sit.b0)
         w = in_window[k0:k0 + n]
@@ -301,18 +393,35 @@ def simulate_situation(sit: Situation, rows, T: float, paper: Paper = PAPER, win
         for b in keep:
             for s in _KEPT:
                 out.keep[b][s][k0:k0 + n] = sig[s][:, b]
-        if n == N:  # a full batch ended at the chunk's last sample: its result is the next sample's output
+        if n == N:  # the batch's result is the next sample's output
             tb.append(t_all[k0 + n - 1])
-            thb.append(np.stack([res[f"c[{i}]"][n] for i in range(4)], axis=1))
-            lc.append(res["log10_cond"][n])
-            rk.append(res["rank"][n])
+            thb.append(states["lsm"][:, :4].copy())
+            lc.append(states["lsm"][:, 4].copy())
+            rk.append(states["lsm"][:, 5].copy())
             _record_exact(out, sig, ident, rows, sit, exact)
-        x0 = {name: np.nan_to_num(x, nan=0.0, posinf=0.0, neginf=0.0) for name, x in res.final_states.items()}
+        x0 = {name: np.nan_to_num(x, nan=0.0, posinf=0.0, neginf=0.0) for name, x in states.items()}
         k0 += n
         if progress is not None:
             progress(f"{sit.key}: t = {k0 * h:.0f} / {T:.0f} s")
     _finish(out, tb, thb, lc, rk, B)
     return out
+
+
+def _end_batch(out, states, ident, chunk_diverged, k: int, bound: float) -> None:
+    """The identification's batch-end solve on the final states (in place), with the loop's divergence test.
+
+    A run (not yet diverged in this chunk) whose new LSM result leaves ``|x| <= bound`` is flagged
+    as diverged at step ``k`` and its states set to NaN, as the loop does when a state leaves the
+    bound in an update.
+    """
+    x = states["lsm"]
+    ident.identify(x)
+    bad = ~np.all(np.abs(x) <= bound, axis=1) & ~chunk_diverged
+    new = bad & ~out.diverged
+    out.diverged_step[new] = k
+    out.diverged |= new
+    for name in states:
+        states[name][bad] = np.nan
 
 
 def _finish(out, tb, thb, lc, rk, B: int) -> None:

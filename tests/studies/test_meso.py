@@ -71,13 +71,25 @@ def test_identification_block_identifies_every_N_samples_and_accumulates_the_lit
     block = BatchIdentification(N, h, 3.0, [100.0, 20.0, 1.0], "reduced", ["none", "wellposed", "literal"])
     # Θ_used = [0.3, −0.2, 0, 0.1] gives f; the block's inputs: x̂1..3, u, Θ_used
     useq = np.stack([xh1, xh2, xh3, u, 0.3 + 0 * u, -0.2 + 0 * u, 0 * u, 0.1 + 0 * u], axis=1)
-    y, x = block.run(np.repeat(useq[:, None, :], 3, axis=1), t=h * np.arange(40))
-    c = y[:, :, :4]
-    assert np.all(c[:N] == 0.0)                       # nothing before the first batch end
-    np.testing.assert_array_equal(c[:, 0], 0.0)       # "none": the ESO, Θ ≡ 0
-    np.testing.assert_allclose(x[N, 1, :4], [1.3, -1.6, 0.0, 0.7], atol=2e-3)
-    np.testing.assert_allclose(x[2 * N, 2, :4], 2 * x[N, 2, :4], rtol=0.05)   # literal: Θ̂_1 + Θ̂_2 ≈ 2 Θ̂_1
-    assert x[N, 1, 5] == 3                              # rank of [x̂1 x̂2 1]
+    batch = np.repeat(useq[:, None, :], 3, axis=1)
+    y, x = block.run(batch[:N], t=h * np.arange(N))   # the per-sample update only accumulates the Gram
+    assert np.all(y[:, :, :4] == 0.0)                   # nothing before the first batch end
+    G = x[N, :, 6:].reshape(3, 7, 7)
+    phi = regressors(xh1[:N], xh2[:N], xh3[:N], u[:N], _f[:N], _kbar[:N])
+    phi[:, 6] = 3.0 * u[:N] + 100.0 * xh1[:N] + 20.0 * xh2[:N] + 1.0 * xh3[:N]   # K̄ with k3 = 1 on x̂3
+    phi[:, 4] = 0.3 * xh1[:N] - 0.2 * xh2[:N] + 0.1                               # f from Θ_used
+    np.testing.assert_allclose(G[1], phi.T @ phi / N, rtol=1e-12, atol=1e-14)
+    x1 = x[N].copy()
+    block.identify(x1)                                  # the batch end
+    np.testing.assert_array_equal(x1[:, 6:], 0.0)       # the Gram restarts
+    np.testing.assert_array_equal(x1[0, :6], 0.0)       # "none": the ESO, Θ ≡ 0
+    np.testing.assert_allclose(x1[1, :4], [1.3, -1.6, 0.0, 0.7], atol=2e-3)
+    assert x1[1, 5] == 3                                # rank of [x̂1 x̂2 1]
+    y2, x2 = block.run(batch[N:], x0=x1, t=h * np.arange(N, 2 * N))
+    np.testing.assert_array_equal(y2[:, 2, :4], np.repeat(x1[None, 2, :4], N, axis=0))   # held over the batch
+    x2 = x2[N].copy()
+    block.identify(x2)
+    np.testing.assert_allclose(x2[2, :4], 2 * x1[2, :4], rtol=0.05)   # literal: Θ̂_1 + Θ̂_2 ≈ 2 Θ̂_1
     with pytest.raises(ValueError, match="variants"):
         BatchIdentification(N, h, 3.0, [100.0, 20.0, 1.0], "reduced", ["bogus"])
 
