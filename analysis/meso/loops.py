@@ -19,6 +19,7 @@ from ctrl_analysis.controllers.pd import PDFeedforward
 from ctrl_analysis.estimators.eso import ExtendedStateObserver
 from ctrl_analysis.estimators.lowpass import LowPassFilter
 from ctrl_analysis.loop import Loop, place
+from ctrl_analysis.parallel import chunk_slices, map_chunks
 from ctrl_analysis.simulate import draw_noise, uniform_noise
 
 from .identification import BatchIdentification, exact_report
@@ -323,11 +324,17 @@ def _chunk_errors(sig, t, rows, paper, b0):
 
 
 _KEPT = ("x1", "x2", "xhat1", "xhat2", "xhat3", "u", "theta[0]", "theta[1]", "theta[2]", "theta[3]")
+#: the signals the chunk post-processing reads (errors, x3, kept runs, exact identifiability)
+_STORED = _KEPT + ("level",)
 
 
 def simulate_situation(sit: Situation, rows, T: float, paper: Paper = PAPER, window=(5.0, 10.0),
-                       keep=(), exact=(), bound: float = 1e6, progress=None) -> SituationRun:
+                       keep=(), exact=(), bound: float = 1e6, progress=None, jobs: int = 1) -> SituationRun:
     """Simulate every row of situation ``sit`` over ``T`` seconds, one identification batch per chunk.
+
+    With ``jobs > 1`` the rows are split into ``jobs`` consecutive parts simulated in parallel
+    processes (:func:`ctrl_analysis.parallel.map_chunks`) and joined; runs are independent, so the
+    result equals ``jobs=1`` bit for bit.
 
     Parameters
     ----------
@@ -346,12 +353,23 @@ def simulate_situation(sit: Situation, rows, T: float, paper: Paper = PAPER, win
         A run whose state (plant, observer, the identification's Gram entries) leaves ``|x| <= bound``
         is flagged as diverged.
     progress : callable, optional
-        ``progress(message)`` after each chunk.
+        ``progress(message)`` after each chunk (with ``jobs > 1``: after each part).
+    jobs : int
+        Processes the rows are split over.
 
     Returns
     -------
     SituationRun
     """
+    rows = list(rows)
+    if jobs > 1 and len(rows) > 1:
+        parts = chunk_slices(len(rows), chunks=jobs)
+        tasks = [(sit, rows[sl], T, paper, window, [b - sl.start for b in keep if sl.start <= b < sl.stop],
+                  [b - sl.start for b in exact if sl.start <= b < sl.stop], bound) for sl in parts]
+        outs = map_chunks(_simulate_part, tasks, jobs=jobs, desc=f"{sit.key} runs")
+        if progress is not None:
+            progress(f"{sit.key}: t = {T:.0f} / {T:.0f} s")
+        return _join(outs, parts, rows)
     h, N, B = paper.h, sit.N, len(rows)
     K = round(T / h)
     t_all = h * np.arange(K + 1)
@@ -375,7 +393,8 @@ def simulate_situation(sit: Situation, rows, T: float, paper: Paper = PAPER, win
         sl = slice(k0, k0 + n + 1)
         inputs = {"level": level[sl], "v": noise[sl], "r[0]": np.sin(t_all[sl]), "r[1]": np.cos(t_all[sl]),
                   "r[2]": -np.sin(t_all[sl])}
-        res = loop.simulate(n, inputs=inputs, x0=x0, runs=B, t0=t_all[k0], bound=bound, store_states=False)
+        res = loop.simulate(n, inputs=inputs, x0=x0, runs=B, t0=t_all[k0], bound=bound, store_states=False,
+                            store_signals=_STORED)
         new = res.diverged & ~out.diverged
         out.diverged_step[new] = k0 + res.diverged_step[new]
         out.diverged |= res.diverged
@@ -422,6 +441,31 @@ def _end_batch(out, states, ident, chunk_diverged, k: int, bound: float) -> None
     out.diverged |= new
     for name in states:
         states[name][bad] = np.nan
+
+
+def _simulate_part(task) -> SituationRun:
+    """:func:`simulate_situation` of one part of the rows (a worker's task)."""
+    sit, rows, T, paper, window, keep, exact, bound = task
+    return simulate_situation(sit, rows, T, paper, window=window, keep=keep, exact=exact, bound=bound)
+
+
+def _join(outs, parts, rows) -> SituationRun:
+    """The parts' :class:`SituationRun` as one, runs in the order of ``rows``."""
+    first = outs[0]
+
+    def cat(name, axis=0):
+        return np.concatenate([getattr(o, name) for o in outs], axis=axis)
+
+    def renumber(name):
+        return {b + sl.start: v for o, sl in zip(outs, parts) for b, v in getattr(o, name).items()}
+
+    return SituationRun(
+        rows=rows, t=first.t, n_window=first.n_window, t_batch=first.t_batch, b0=first.b0,
+        sums={m: np.concatenate([o.sums[m] for o in outs]) for m in first.sums},
+        window_sums={m: np.concatenate([o.window_sums[m] for o in outs]) for m in first.window_sums},
+        sup_dx3=cat("sup_dx3"), theta_batch=cat("theta_batch", 1), log10_cond=cat("log10_cond", 1),
+        rank=cat("rank", 1), exact_cond=renumber("exact_cond"), exact_rank=renumber("exact_rank"),
+        keep=renumber("keep"), diverged=cat("diverged"), diverged_step=cat("diverged_step"))
 
 
 def _finish(out, tb, thb, lc, rk, B: int) -> None:

@@ -152,3 +152,54 @@ def test_short_run_writes_every_quantity_with_unit_and_tolerance(tmp_path):
     n = meso.findings.noise_free_counts(result)
     assert f"{n['off']}/10 agree" in found["tables-are-noise-free"]
     assert len(data["reconstructions"]) >= 8
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+def test_kernels_are_the_numpy_methods(compiled):
+    """Plant, (M)ESO and Gram update: each kernel run by run (plain or jitted) = the block's batched method."""
+    from ctrl_analysis._kernels import _jit
+    from analysis.meso.loops import ModelledESO, Plant
+
+    rng = np.random.default_rng(7)
+    B = 6
+    rows = [Row("meso", "wellposed", None, epsilon=e, b_plant=b)
+            for e, b in zip((0.05, 0.1, 0.05, 0.025, 0.1, 0.05), (3.95, 4.9, 3.0, 3.95, 3.95, 4.2))]
+    ident = BatchIdentification(20, 0.003, 3.0, [100.0, 20.0, 1.0], "full", ["wellposed"] * B)
+    blocks = [(Plant(PAPER, [r.b_plant for r in rows]), "rhs"), (ModelledESO(PAPER, 3.0, [r.epsilon for r in rows]), "rhs"),
+              (ident, "update")]
+    for block, kind in blocks:
+        k = block.kernel()
+        fn = getattr(k, kind)
+        out_fn = _jit(k.output) if compiled else k.output
+        fn = _jit(fn) if compiled else fn
+        x = rng.normal(size=(B, len(block.states)))
+        u = rng.normal(size=(B, len(block.inputs)))
+        got, y = np.empty_like(x), np.empty((B, len(block.outputs)))
+        for b in range(B):
+            p = k.params[b] if np.ndim(k.params) == 2 else k.params
+            fn(0.1, x[b], u[b], p, got[b])
+            out_fn(0.1, x[b], u[b], p, y[b])
+        assert np.array_equal(got, getattr(block, kind)(0.1, x, u)), type(block).__name__
+        assert np.array_equal(y, block.output(0.1, x, u)), type(block).__name__
+    # the Gram update adds φφᵀ/N of the block's own regressors
+    phi = ident.phi(u)
+    np.testing.assert_allclose(got[:, 6:] - x[:, 6:], (phi[:, :, None] * phi[:, None, :]).reshape(B, -1) / 20,
+                               rtol=1e-12, atol=1e-12)
+
+
+def test_compiled_engine_equals_numpy_engine(monkeypatch):
+    """Both situations' loops, with per-run ε, b, bypass and variants: compiled = numpy engine bit for bit."""
+    rows1 = [Row("eso", "none", 3), Row("meso", "wellposed", None, epsilon=0.1),
+             Row("meso", "literal", None, bypass_w=True), Row("eso", "none", None, b_plant=4.9)]
+    rows2 = [Row("meso", "wellposed", 3, threshold=1000.0), Row("meso", "direct", None), Row("meso", "literal", 3)]
+    for key, rows, T in (("s1", rows1, 6.0), ("s2", rows2, 12.0)):
+        sims = []
+        for engine in ("numpy", "auto"):
+            monkeypatch.setenv("CTRL_ANALYSIS_ENGINE", engine)
+            sims.append(simulate_situation(SITUATIONS[key], rows, T, keep=[0, 1], exact=[1]))
+        a, b = sims
+        for m in a.sums:
+            assert np.array_equal(a.sums[m], b.sums[m]), (key, m)
+        for f in ("theta_batch", "log10_cond", "rank", "sup_dx3", "diverged_step"):
+            assert np.array_equal(getattr(a, f), getattr(b, f), equal_nan=True), (key, f)
+        assert np.array_equal(a.keep[1]["u"], b.keep[1]["u"]) and np.any(a.theta_batch[-1, 1] != 0.0)
