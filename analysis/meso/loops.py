@@ -370,6 +370,11 @@ def simulate_situation(sit: Situation, rows, T: float, paper: Paper = PAPER, win
         if progress is not None:
             progress(f"{sit.key}: t = {T:.0f} / {T:.0f} s")
         return _join(outs, parts, rows)
+    return _simulate_rows(sit, rows, T, paper, window, keep, exact, bound, progress)
+
+
+def _simulate_rows(sit, rows, T, paper, window, keep, exact, bound, progress) -> SituationRun:
+    """:func:`simulate_situation` in this process: the loop stepped one identification batch per chunk."""
     h, N, B = paper.h, sit.N, len(rows)
     K = round(T / h)
     t_all = h * np.arange(K + 1)
@@ -445,8 +450,7 @@ def _end_batch(out, states, ident, chunk_diverged, k: int, bound: float) -> None
 
 def _simulate_part(task) -> SituationRun:
     """:func:`simulate_situation` of one part of the rows (a worker's task)."""
-    sit, rows, T, paper, window, keep, exact, bound = task
-    return simulate_situation(sit, rows, T, paper, window=window, keep=keep, exact=exact, bound=bound)
+    return _simulate_rows(*task, None)
 
 
 def _join(outs, parts, rows) -> SituationRun:

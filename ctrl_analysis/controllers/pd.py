@@ -23,7 +23,7 @@ from .._validate import check_array, check_finite, check_hurwitz, check_int, che
 from ..blocks import DiscreteBlock, signal_names
 from ..polynomials import repeated_pole_coefficients
 
-__all__ = ["PDFeedforward", "bandwidth_gains", "pd_step"]
+__all__ = ["PDFeedforward", "bandwidth_gains"]
 
 
 def bandwidth_gains(n: int, omega_c: float) -> np.ndarray:
