@@ -377,10 +377,13 @@ def gram_update(t, x, u, p, x_next):
     for i in range(6):
         x_next[i] = x[i]
     regressor_vector(u, p, x_next[6:13])
-    for i in range(_NPHI - 1, -1, -1):  # row i of G overwrites the scratch only after φ_i.. are read
+    # rows last to first: row 0 (the scratch) is written last, each φ_j read before its entry is written
+    for i in range(_NPHI - 1, -1, -1):
         pi = x_next[6 + i]
-        for j in range(_NPHI - 1, -1, -1):
-            x_next[6 + i * _NPHI + j] = x[6 + i * _NPHI + j] + pi * x_next[6 + j] / p[0]
+        for j in range(_NPHI - 1, i - 1, -1):
+            inc = pi * x_next[6 + j] / p[0]  # φ_i φ_j / N = φ_j φ_i / N exactly: computed once per pair
+            x_next[6 + j * _NPHI + i] = x[6 + j * _NPHI + i] + inc
+            x_next[6 + i * _NPHI + j] = x[6 + i * _NPHI + j] + inc
 
 
 def _held_outputs(t, x, u, p, y):

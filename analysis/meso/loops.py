@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ctrl_analysis._kernels import BlockKernel, copy_output, eso_rhs, kernel_of
-from ctrl_analysis.blocks import ContinuousBlock, RowGroups, StaticGain, signal_names
+from ctrl_analysis.blocks import ContinuousBlock, DiscreteBlock, RowGroups, signal_names
 from ctrl_analysis.controllers.pd import PDFeedforward
 from ctrl_analysis.estimators.eso import ExtendedStateObserver
 from ctrl_analysis.estimators.lowpass import LowPassFilter
@@ -40,6 +40,7 @@ __all__ = [
     "SituationRun",
     "build_loop",
     "meso_rhs",
+    "path_output",
     "pick",
     "plant_output",
     "plant_rhs",
@@ -215,8 +216,11 @@ def meso_rhs(t, x, u, p, dx):
     dx[m - 2] = dx[m - 2] + (p[p.shape[0] - 1] * u[1] + f)
 
 
-class ParameterPath(StaticGain):
-    """Θ_used = W(s)-smoothed LSM result, or the raw LSM result for runs with ``bypass`` (a per-run gain).
+class ParameterPath(DiscreteBlock):
+    """Θ_used = W(s)-smoothed LSM result, or the raw LSM result for runs with ``bypass`` (a discrete block).
+
+    Discrete (its inputs change only at the samples), so the compiled engine evaluates it once per
+    sample, not at every RK4 stage; kernel :func:`path_output` with the per-run flag.
 
     Parameters
     ----------
@@ -227,11 +231,46 @@ class ParameterPath(StaticGain):
     Block signals: inputs ``c[0..3]`` (LSM result), ``w[0..3]`` (after W(s)); outputs ``theta[0..3]``.
     """
 
+    inputs = signal_names("c", 4) + signal_names("w", 4)
+    outputs = signal_names("theta", 4)
+    feedthrough = True
+
     def __init__(self, bypass):
-        bypass = np.asarray(bypass, dtype=bool)
-        eye, zero = np.eye(4), np.zeros((4, 4))
-        D = np.array([np.hstack([eye, zero]) if b else np.hstack([zero, eye]) for b in bypass]).reshape(-1, 4, 8)
-        super().__init__(D, signal_names("c", 4) + signal_names("w", 4), signal_names("theta", 4))
+        self.bypass = np.asarray(bypass, dtype=bool)[:, None]
+
+    def update(self, t, x, u, params=None):
+        return x
+
+    def output(self, t, x, u, params=None):
+        return np.where(self.bypass, u[:, :4], u[:, 4:])
+
+    def kernel(self):
+        """The compiled kernel: :func:`path_output`, per-run ``[bypass]`` (no state).
+
+        Returns
+        -------
+        ctrl_analysis._kernels.BlockKernel
+        """
+        return BlockKernel(output=path_output, params=self.bypass.astype(float), update=copy_output)
+
+
+def path_output(t, x, u, p, y):
+    """Θ_used of one run: the LSM result ``c`` if ``p[0]`` (bypass), else its W(s)-smoothed ``w``.
+
+    Parameters
+    ----------
+    t, x : float, ndarray
+        Time and (empty) state, unused.
+    u : ndarray
+        ``[c0..c3, w0..w3]``.
+    p : ndarray
+        ``[bypass (0/1)]``.
+    y : ndarray
+        Θ_used, written in place.
+    """
+    off = 0 if p[0] != 0.0 else 4
+    for i in range(4):
+        y[i] = u[off + i]
 
 
 def build_loop(sit: Situation, rows, paper: Paper = PAPER) -> Loop:

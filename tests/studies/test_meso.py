@@ -158,7 +158,7 @@ def test_short_run_writes_every_quantity_with_unit_and_tolerance(tmp_path):
 def test_kernels_are_the_numpy_methods(compiled):
     """Plant, (M)ESO and Gram update: each kernel run by run (plain or jitted) = the block's batched method."""
     from ctrl_analysis._kernels import _jit
-    from analysis.meso.loops import ModelledESO, Plant
+    from analysis.meso.loops import ModelledESO, ParameterPath, Plant
 
     rng = np.random.default_rng(7)
     B = 6
@@ -181,6 +181,13 @@ def test_kernels_are_the_numpy_methods(compiled):
             out_fn(0.1, x[b], u[b], p, y[b])
         assert np.array_equal(got, getattr(block, kind)(0.1, x, u)), type(block).__name__
         assert np.array_equal(y, block.output(0.1, x, u)), type(block).__name__
+    path = ParameterPath([True, False, False, True, False, True])
+    k, up = path.kernel(), rng.normal(size=(B, 8))
+    fn = _jit(k.output) if compiled else k.output
+    y = np.empty((B, 4))
+    for b in range(B):
+        fn(0.1, np.empty(0), up[b], k.params[b], y[b])
+    assert np.array_equal(y, path.output(0.1, np.empty((B, 0)), up)) and np.array_equal(y[1], up[1, 4:])
     # the Gram update adds φφᵀ/N of the block's own regressors
     phi = ident.phi(u)
     np.testing.assert_allclose(got[:, 6:] - x[:, 6:], (phi[:, :, None] * phi[:, None, :]).reshape(B, -1) / 20,
