@@ -363,6 +363,8 @@ def _chunk_errors(sig, t, rows, paper, b0):
 
 
 _KEPT = ("x1", "x2", "xhat1", "xhat2", "xhat3", "u", "theta[0]", "theta[1]", "theta[2]", "theta[3]")
+#: below this many run-steps (runs × samples) a situation is simulated in one process (~1 s of work)
+_PARALLEL_RUN_STEPS = 1e6
 #: the signals the chunk post-processing reads (errors, x3, kept runs, exact identifiability)
 _STORED = _KEPT + ("level",)
 
@@ -371,9 +373,10 @@ def simulate_situation(sit: Situation, rows, T: float, paper: Paper = PAPER, win
                        keep=(), exact=(), bound: float = 1e6, progress=None, jobs: int = 1) -> SituationRun:
     """Simulate every row of situation ``sit`` over ``T`` seconds, one identification batch per chunk.
 
-    With ``jobs > 1`` the rows are split into ``jobs`` consecutive parts simulated in parallel
-    processes (:func:`ctrl_analysis.parallel.map_chunks`) and joined; runs are independent, so the
-    result equals ``jobs=1`` bit for bit.
+    With ``jobs > 1`` (and at least :data:`_PARALLEL_RUN_STEPS` run-steps, below which starting
+    processes costs more than it saves) the rows are split into ``jobs`` consecutive parts simulated
+    in parallel processes (:func:`ctrl_analysis.parallel.map_chunks`) and joined; runs are
+    independent, so the result equals ``jobs=1`` bit for bit.
 
     Parameters
     ----------
@@ -401,7 +404,7 @@ def simulate_situation(sit: Situation, rows, T: float, paper: Paper = PAPER, win
     SituationRun
     """
     rows = list(rows)
-    if jobs > 1 and len(rows) > 1:
+    if jobs > 1 and len(rows) > 1 and len(rows) * T / paper.h >= _PARALLEL_RUN_STEPS:
         parts = chunk_slices(len(rows), chunks=jobs)
         tasks = [(sit, rows[sl], T, paper, window, [b - sl.start for b in keep if sl.start <= b < sl.stop],
                   [b - sl.start for b in exact if sl.start <= b < sl.stop], bound) for sl in parts]

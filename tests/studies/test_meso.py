@@ -210,3 +210,22 @@ def test_compiled_engine_equals_numpy_engine(monkeypatch):
         for f in ("theta_batch", "log10_cond", "rank", "sup_dx3", "diverged_step"):
             assert np.array_equal(getattr(a, f), getattr(b, f), equal_nan=True), (key, f)
         assert np.array_equal(a.keep[1]["u"], b.keep[1]["u"]) and np.any(a.theta_batch[-1, 1] != 0.0)
+
+
+def test_rows_split_over_processes_join_bit_for_bit(monkeypatch):
+    """simulate_situation(jobs=2): the parts' runs, kept trajectories and exact records renumbered in order."""
+    from analysis.meso import loops
+
+    monkeypatch.setattr(loops, "_PARALLEL_RUN_STEPS", 0)
+    rows = [Row("meso", "wellposed", None), Row("eso", "none", 5), Row("meso", "literal", None),
+            Row("meso", "wellposed", 5, epsilon=0.1), Row("meso", "no_const", None)]
+    kw = dict(keep=[0, 3], exact=[0, 2, 4])
+    a = simulate_situation(SITUATIONS["s1"], rows, 6.0, **kw)
+    b = simulate_situation(SITUATIONS["s1"], rows, 6.0, jobs=2, **kw)
+    assert b.rows == rows and sorted(b.keep) == [0, 3] and sorted(b.exact_cond) == [0, 2, 4]
+    for m in a.sums:
+        assert np.array_equal(a.sums[m], b.sums[m]) and np.array_equal(a.window_sums[m], b.window_sums[m])
+    for f in ("theta_batch", "log10_cond", "rank", "sup_dx3", "diverged", "t_batch"):
+        assert np.array_equal(getattr(a, f), getattr(b, f), equal_nan=True), f
+    assert all(np.array_equal(a.keep[k]["xhat3"], b.keep[k]["xhat3"]) for k in a.keep)
+    assert all(np.array_equal(a.exact_cond[k], b.exact_cond[k], equal_nan=True) for k in a.exact_cond)
