@@ -2,9 +2,10 @@
 
 Every sample the block appends the MESO's own data to its batch, kept as the Gram matrix of the
 regressor vector ``φ = [x̂1, x̂2, 1, x̂3, f, u, K̄]`` (``f = XᵀΘ_used`` the model term fed to the
-observer, ``K̄ = b0 u + Σ k_l x̂_l`` of (14)); every ``N`` samples it solves the batch regression of
-its variant with :func:`ctrl_analysis.identification.batch_least_squares` and outputs the new Θ,
-which W(s) smooths before the observer and the controller use it.
+observer, ``K̄ = b0 u + Σ k_l x̂_l`` of (14)); at the end of every ``N``-sample batch
+(:meth:`BatchIdentification.identify`, applied by the caller between batches) it solves the batch
+regression of its variant with :func:`ctrl_analysis.identification.batch_least_squares` and
+outputs the new Θ, which W(s) smooths before the observer and the controller use it.
 
 Variants (one per run, on the batch axis):
 
@@ -236,7 +237,7 @@ class BatchIdentification(DiscreteBlock):
     N : int
         Batch size in samples (>= 4).
     h : float
-        Sample period (s).
+        Sample period (s; recorded, the caller marks the batch ends).
     b0 : float
         Nominal input gain (for K̄ and X_Θ).
     k_gains : array_like, shape (3,)

@@ -3,8 +3,14 @@
 One :class:`~ctrl_analysis.loop.Loop` per situation carries every configuration on the batch axis
 (ESO / MESO, identification variant, noise seed, ε, plant gain, identifiability threshold, W(s)
 bypassed or not). It is stepped one identification batch (N samples) at a time, so memory stays
-bounded over 210 s; after each chunk the table sums, the batch-end identification records and the
-trajectories of a few runs kept for the figures are taken from the named signals.
+bounded over 210 s; after each chunk the identification's batch-end solve is applied to the final
+states (:meth:`~.identification.BatchIdentification.identify`), and the table sums, the batch-end
+identification records and the trajectories of a few runs kept for the figures are taken from the
+named signals.
+
+Every block has a compiled kernel (per-run parameters: the plant gain b, the observer gains L(ε),
+the W(s) bypass flag), so :meth:`Loop.simulate <ctrl_analysis.loop.Loop.simulate>` runs the whole
+loop as one numba function; ``CTRL_ANALYSIS_ENGINE=numpy`` gives the same results bit for bit.
 """
 
 from __future__ import annotations
