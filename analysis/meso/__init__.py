@@ -66,7 +66,7 @@ def run(ctx: StudyContext, analysis=None) -> StudyResult:
             sims[key] = simulate_situation(sit, rows, horizons[key], PAPER, window=an.eps_window,
                                            keep=_kept(rows), exact=[i for i, r in enumerate(rows)
                                                                     if r.observer == "meso" and r.seed is None],
-                                           bound=an.bound, progress=ctx.progress)
+                                           bound=an.bound, progress=ctx.progress, jobs=ctx.jobs)
 
     sc = quantities.eps_scaling(sims["s1"], an)
     quantities.linear_quantities(result, lin, sc)

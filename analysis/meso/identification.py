@@ -2,9 +2,10 @@
 
 Every sample the block appends the MESO's own data to its batch, kept as the Gram matrix of the
 regressor vector ``φ = [x̂1, x̂2, 1, x̂3, f, u, K̄]`` (``f = XᵀΘ_used`` the model term fed to the
-observer, ``K̄ = b0 u + Σ k_l x̂_l`` of (14)); every ``N`` samples it solves the batch regression of
-its variant with :func:`ctrl_analysis.identification.batch_least_squares` and outputs the new Θ,
-which W(s) smooths before the observer and the controller use it.
+observer, ``K̄ = b0 u + Σ k_l x̂_l`` of (14)); at the end of every ``N``-sample batch
+(:meth:`BatchIdentification.identify`, applied by the caller between batches) it solves the batch
+regression of its variant with :func:`ctrl_analysis.identification.batch_least_squares` and
+outputs the new Θ, which W(s) smooths before the observer and the controller use it.
 
 Variants (one per run, on the batch axis):
 
@@ -26,6 +27,12 @@ from ctrl_analysis._validate import check_in, check_int, check_positive
 from ctrl_analysis.blocks import DiscreteBlock, signal_names
 from ctrl_analysis.identification import batch_least_squares, identifiability
 
+try:  # the kernels call regressor_vector; numba compiles it into them
+    from numba.extending import register_jitable
+except ImportError:  # pragma: no cover - numba is installed in the project's environment
+    def register_jitable(**options):
+        return lambda fn: fn
+
 __all__ = [
     "PHI",
     "VARIANTS",
@@ -33,6 +40,8 @@ __all__ = [
     "design",
     "equivalent_theta",
     "exact_report",
+    "gram_update",
+    "regressor_vector",
     "regressors",
     "solve_batch",
     "theta_from_lambda",
@@ -216,12 +225,19 @@ def exact_report(variant, regression, Phi, threshold=100.0):
 class BatchIdentification(DiscreteBlock):
     """Batch least squares every ``N`` samples on the MESO's estimates, one variant per run (a discrete block).
 
+    The block's per-sample update only accumulates the batch's Gram matrix of φ
+    (:func:`gram_update`, the compiled engine's kernel and, on the batch's columns, the numpy
+    method). The batch-end solve (:meth:`identify`: SVD-based least squares, once per ``N``
+    samples) is applied to the block's state by the caller between batches: the loop is stepped
+    one batch per :meth:`~ctrl_analysis.loop.Loop.simulate` call and :meth:`identify` is applied to
+    the final state before the next call (see :func:`analysis.meso.loops.simulate_situation`).
+
     Parameters
     ----------
     N : int
         Batch size in samples (>= 4).
     h : float
-        Sample period (s); the block counts samples as ``round(t / h)``.
+        Sample period (s; recorded, the caller marks the batch ends).
     b0 : float
         Nominal input gain (for K̄ and X_Θ).
     k_gains : array_like, shape (3,)
@@ -258,26 +274,39 @@ class BatchIdentification(DiscreteBlock):
         self.outputs = signal_names("c", 4) + ("log10_cond", "rank")
         self.states = self.outputs + tuple(f"G[{i}][{j}]" for i in range(_NPHI) for j in range(_NPHI))
         self._active = [b for b, v in enumerate(self.variants) if v != "none"]
+        # kernel parameters: [N, b0, k1, k2, k3]
+        self._p = np.concatenate([[float(self.N), self.b0], self.k[:3]])
 
     def phi(self, u) -> np.ndarray:
-        """φ of this sample from the block's inputs, shape (B, 7)."""
-        xh1, xh2, xh3, uc = u[:, 0], u[:, 1], u[:, 2], u[:, 3]
-        # f = XᵀΘ_used with X = [x̂1, x̂2, u, 1] (the term the observer receives, (29))
-        f = u[:, 4] * xh1 + u[:, 5] * xh2 + u[:, 6] * uc + u[:, 7]
-        # (14) K̄ = b0 u + Σ_l k_l x̂_l
-        kbar = self.b0 * uc + self.k[0] * xh1 + self.k[1] * xh2 + self.k[2] * xh3
-        return regressors(xh1, xh2, xh3, uc, f, kbar)
+        """φ of this sample from the block's inputs.
+
+        Parameters
+        ----------
+        u : ndarray, shape (B, 8)
+            The block's inputs.
+
+        Returns
+        -------
+        ndarray, shape (B, 7)
+        """
+        phi = np.empty((u.shape[0], _NPHI))
+        regressor_vector(u.T, self._p, phi.T)
+        return phi
 
     def update(self, t, x, u, params=None) -> np.ndarray:
-        phi = self.phi(u)
-        x_next = x.copy()
-        x_next[:, 6:] += (phi[:, :, None] * phi[:, None, :]).reshape(len(x), -1) / self.N
-        if (round(t / self.h) + 1) % self.N == 0:
-            self._identify(x_next)
+        x_next = np.empty_like(x)
+        gram_update(t, x.T, u.T, self._p, x_next.T)  # the kernel on the batch's columns: one source
         return x_next
 
-    def _identify(self, x) -> None:
-        """Batch end: solve every active run's regression, reset the Gram (in place)."""
+    def identify(self, x) -> None:
+        """Batch end: solve every active run's regression from its Gram matrix, reset the Gram (in place).
+
+        Parameters
+        ----------
+        x : ndarray, shape (B, 55)
+            The block's states after the batch's last sample; runs whose Gram matrix is not finite
+            (diverged) keep their outputs.
+        """
         for b in self._active:
             G = x[b, 6:].reshape(_NPHI, _NPHI)
             if not np.all(np.isfinite(G)):
@@ -291,3 +320,74 @@ class BatchIdentification(DiscreteBlock):
 
     def output(self, t, x, u, params=None) -> np.ndarray:
         return x[:, :6]
+
+    def kernel(self):
+        """The compiled engine's kernel (:func:`gram_update`; the numpy update calls it too).
+
+        Returns
+        -------
+        ctrl_analysis._kernels.BlockKernel
+        """
+        from ctrl_analysis._kernels import BlockKernel
+
+        return BlockKernel(output=_held_outputs, params=self._p, update=gram_update)
+
+
+@register_jitable(inline="always")
+def regressor_vector(u, p, phi):
+    """``φ = [x̂1, x̂2, 1, x̂3, f, u, K̄]`` of one sample from the block's inputs (scalar-indexed).
+
+    Parameters
+    ----------
+    u : ndarray
+        The inputs ``[x̂1, x̂2, x̂3, u, θ1..θ4]`` (one run's vector, or a batch's columns).
+    p : ndarray
+        ``[N, b0, k1, k2, k3]``.
+    phi : ndarray
+        φ, written in place (7 entries).
+    """
+    xh1, xh2, xh3, uc = u[0], u[1], u[2], u[3]
+    phi[0] = xh1
+    phi[1] = xh2
+    phi[2] = 1.0
+    phi[3] = xh3
+    # f = XᵀΘ_used with X = [x̂1, x̂2, u, 1] (the term the observer receives, (29))
+    phi[4] = u[4] * xh1 + u[5] * xh2 + u[6] * uc + u[7]
+    phi[5] = uc
+    # (14) K̄ = b0 u + Σ_l k_l x̂_l
+    phi[6] = p[1] * uc + p[2] * xh1 + p[3] * xh2 + p[4] * xh3
+
+
+def gram_update(t, x, u, p, x_next):
+    """One sample of the batch: ``G += φ φᵀ / N`` (Table 1's batch, as a Gram matrix); the outputs held.
+
+    Parameters
+    ----------
+    t : float
+        Time (unused).
+    x : ndarray
+        ``[c0..c3, log10_cond, rank, G (49, row-major)]`` (one run's vector, or a batch's columns).
+    u : ndarray
+        The inputs ``[x̂1, x̂2, x̂3, u, θ1..θ4]``.
+    p : ndarray
+        ``[N, b0, k1, k2, k3]``.
+    x_next : ndarray
+        The next state, written in place; its entries 6..12 serve as φ's scratch before the Gram
+        is written.
+    """
+    for i in range(6):
+        x_next[i] = x[i]
+    regressor_vector(u, p, x_next[6:13])
+    # rows last to first: row 0 (the scratch) is written last, each φ_j read before its entry is written
+    for i in range(_NPHI - 1, -1, -1):
+        pi = x_next[6 + i]
+        for j in range(_NPHI - 1, i - 1, -1):
+            inc = pi * x_next[6 + j] / p[0]  # φ_i φ_j / N = φ_j φ_i / N exactly: computed once per pair
+            x_next[6 + j * _NPHI + i] = x[6 + j * _NPHI + i] + inc
+            x_next[6 + i * _NPHI + j] = x[6 + i * _NPHI + j] + inc
+
+
+def _held_outputs(t, x, u, p, y):
+    """Outputs: the latest LSM result, log10 cond and rank (the state's first 6 entries)."""
+    for i in range(y.shape[0]):
+        y[i] = x[i]

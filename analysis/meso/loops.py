@@ -3,8 +3,14 @@
 One :class:`~ctrl_analysis.loop.Loop` per situation carries every configuration on the batch axis
 (ESO / MESO, identification variant, noise seed, ε, plant gain, identifiability threshold, W(s)
 bypassed or not). It is stepped one identification batch (N samples) at a time, so memory stays
-bounded over 210 s; after each chunk the table sums, the batch-end identification records and the
-trajectories of a few runs kept for the figures are taken from the named signals.
+bounded over 210 s; after each chunk the identification's batch-end solve is applied to the final
+states (:meth:`~.identification.BatchIdentification.identify`), and the table sums, the batch-end
+identification records and the trajectories of a few runs kept for the figures are taken from the
+named signals.
+
+Every block has a compiled kernel (per-run parameters: the plant gain b, the observer gains L(ε),
+the W(s) bypass flag), so :meth:`Loop.simulate <ctrl_analysis.loop.Loop.simulate>` runs the whole
+loop as one numba function; ``CTRL_ANALYSIS_ENGINE=numpy`` gives the same results bit for bit.
 """
 
 from __future__ import annotations
@@ -13,14 +19,23 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ctrl_analysis._kernels import BlockKernel, copy_output, eso_rhs, kernel_of
 from ctrl_analysis.blocks import ContinuousBlock, DiscreteBlock, RowGroups, signal_names
 from ctrl_analysis.controllers.pd import PDFeedforward
 from ctrl_analysis.estimators.eso import ExtendedStateObserver
 from ctrl_analysis.estimators.lowpass import LowPassFilter
 from ctrl_analysis.loop import Loop, place
+from ctrl_analysis.parallel import chunk_slices, map_chunks
 from ctrl_analysis.simulate import draw_noise, uniform_noise
 
 from .identification import BatchIdentification, exact_report
+
+try:  # meso_rhs calls the library's eso_rhs: numba compiles it into the kernel (inlined: ~6x faster)
+    from numba.extending import register_jitable
+
+    register_jitable(inline="always")(eso_rhs)
+except ImportError:  # pragma: no cover - numba is installed in the project's environment
+    pass
 from .paper import PAPER, Paper, Situation
 
 __all__ = [
@@ -30,7 +45,11 @@ __all__ = [
     "Row",
     "SituationRun",
     "build_loop",
+    "meso_rhs",
+    "path_output",
     "pick",
+    "plant_output",
+    "plant_rhs",
     "simulate_situation",
     "situation_rows",
     "x3_true",
@@ -67,7 +86,8 @@ class Plant(ContinuousBlock):
     """Plant (27) with the disturbance (31)/(32): ``x1' = x2``, ``x2' = θ1 x1 + θ2 x2 + θ4 + b u``, ``y = x1 + v``.
 
     ``b`` may differ per run (array of shape (B,)). Inputs ``u``, ``level`` (θ4, held), ``v``
-    (measurement noise, held); outputs ``x1``, ``x2``, ``y``.
+    (measurement noise, held); outputs ``x1``, ``x2``, ``y``. The numpy methods are the kernels
+    :func:`plant_rhs` / :func:`plant_output` on the batch's columns.
     """
 
     inputs = ("u", "level", "v")
@@ -78,20 +98,62 @@ class Plant(ContinuousBlock):
     def __init__(self, paper: Paper, b):
         self.theta1, self.theta2 = paper.theta1, paper.theta2
         self.b = np.asarray(b, dtype=float)
+        # kernel parameters, one row per run: [θ1, θ2, b]
+        self._p = np.stack([np.full(self.b.shape, self.theta1), np.full(self.b.shape, self.theta2), self.b], axis=-1)
 
     def rhs(self, t, x, u, params=None):
         dx = np.empty_like(x)
-        dx[:, 0] = x[:, 1]
-        # (27)/(31)/(32): x2' = θ1 x1 + θ2 x2 + θ4 + b u
-        dx[:, 1] = self.theta1 * x[:, 0] + self.theta2 * x[:, 1] + u[:, 1] + self.b * u[:, 0]
+        plant_rhs(t, x.T, u.T, self._p.T, dx.T)
         return dx
 
     def output(self, t, x, u, params=None):
         y = np.empty((x.shape[0], 3))
-        y[:, :2] = x
-        # (27): y = x1 + 0.002 n0
-        np.add(x[:, 0], u[:, 2], out=y[:, 2])
+        plant_output(t, x.T, u.T, self._p.T, y.T)
         return y
+
+    def kernel(self):
+        """The compiled kernel, per-run ``[θ1, θ2, b]`` (:func:`plant_rhs`, :func:`plant_output`).
+
+        Returns
+        -------
+        ctrl_analysis._kernels.BlockKernel
+        """
+        return BlockKernel(output=plant_output, params=self._p, rhs=plant_rhs)
+
+
+def plant_rhs(t, x, u, p, dx):
+    """(27)/(31)/(32) of one run (or a batch's columns): ``x1' = x2``, ``x2' = θ1 x1 + θ2 x2 + θ4 + b u``.
+
+    Parameters
+    ----------
+    t : float
+        Time (unused).
+    x : ndarray
+        ``[x1, x2]``.
+    u : ndarray
+        ``[u, θ4, v]``.
+    p : ndarray
+        ``[θ1, θ2, b]``.
+    dx : ndarray
+        The derivative, written in place.
+    """
+    dx[0] = x[1]
+    dx[1] = p[0] * x[0] + p[1] * x[1] + u[1] + p[2] * u[0]
+
+
+def plant_output(t, x, u, p, y):
+    """Outputs ``[x1, x2, y]`` with (27) ``y = x1 + 0.002 n0`` (the noise ``v`` is an input).
+
+    Parameters
+    ----------
+    t, x, u, p
+        As :func:`plant_rhs`.
+    y : ndarray
+        The outputs, written in place.
+    """
+    y[0] = x[0]
+    y[1] = x[1]
+    y[2] = x[0] + u[2]
 
 
 def _model_term(t, x_hat, u, params=None):
@@ -104,7 +166,8 @@ class ModelledESO(RowGroups):
 
     Wraps :class:`~ctrl_analysis.estimators.eso.ExtendedStateObserver` (its ``rhs`` is called, with
     ``known = XᵀΘ``); Θ = 0 gives the conventional ESO (6). ``epsilons`` may differ per run: the runs
-    are grouped by ε, one observer per group (:class:`~ctrl_analysis.blocks.RowGroups`).
+    are grouped by ε, one observer per group (:class:`~ctrl_analysis.blocks.RowGroups`); the compiled
+    kernel (:func:`meso_rhs`) has the gains L(ε) as per-run parameters.
 
     Inputs ``y``, ``u``, ``theta[0..3]``; states and outputs ``xhat1..3``.
     """
@@ -116,10 +179,54 @@ class ModelledESO(RowGroups):
                           for e in values], [np.flatnonzero(eps == e) for e in values])
         # the observer reads u[:, :2]; the model term reads Θ from the columns after them
         self.inputs = ("y", "u") + signal_names("theta", 4)
+        # kernel parameters per run: the ESO kernel's packing with b0 = 0, then b0 (see meso_rhs)
+        rows = {}
+        for e in values:
+            plain = ExtendedStateObserver.from_epsilon(paper.n, e, paper.beta, b0=0.0)
+            rows[e] = np.concatenate([kernel_of(plain).params, [float(b0)]])
+        self._p = np.array([rows[e] for e in eps])
+
+    def kernel(self):
+        """The compiled kernel: :func:`meso_rhs` with per-run ESO parameters (L from each run's ε).
+
+        Returns
+        -------
+        ctrl_analysis._kernels.BlockKernel
+        """
+        return BlockKernel(output=copy_output, params=self._p, rhs=meso_rhs)
+
+
+def meso_rhs(t, x, u, p, dx):
+    """(29) of one run: the ESO of :func:`ctrl_analysis._kernels.eso_rhs` plus ``b0 u + XᵀΘ`` in row n.
+
+    ``eso_rhs`` is called with ``b0 = 0`` in its parameters (adding ``0 u`` is exact), and the drive
+    ``b0 u + XᵀΘ`` is added afterwards, in the order of the block's numpy method (bit for bit).
+
+    Parameters
+    ----------
+    t : float
+        Time (unused).
+    x : ndarray
+        ``x̂1..x̂3``.
+    u : ndarray
+        ``[y, u, θ1, θ2, θ3, θ4]``.
+    p : ndarray
+        ``eso_rhs``'s parameters (its b0 slot 0), then ``b0``.
+    dx : ndarray
+        The derivative, written in place.
+    """
+    eso_rhs(t, x, u, p, dx)
+    m = x.shape[0]
+    # (29) XᵀΘ with X = [x̂1, x̂2, u, 1]
+    f = u[2] * x[0] + u[3] * x[1] + u[4] * u[1] + u[5]
+    dx[m - 2] = dx[m - 2] + (p[p.shape[0] - 1] * u[1] + f)
 
 
 class ParameterPath(DiscreteBlock):
     """Θ_used = W(s)-smoothed LSM result, or the raw LSM result for runs with ``bypass`` (a discrete block).
+
+    Discrete (its inputs change only at the samples), so the compiled engine evaluates it once per
+    sample, not at every RK4 stage; kernel :func:`path_output` with the per-run flag.
 
     Parameters
     ----------
@@ -142,6 +249,34 @@ class ParameterPath(DiscreteBlock):
 
     def output(self, t, x, u, params=None):
         return np.where(self.bypass, u[:, :4], u[:, 4:])
+
+    def kernel(self):
+        """The compiled kernel: :func:`path_output`, per-run ``[bypass]`` (no state).
+
+        Returns
+        -------
+        ctrl_analysis._kernels.BlockKernel
+        """
+        return BlockKernel(output=path_output, params=self.bypass.astype(float), update=copy_output)
+
+
+def path_output(t, x, u, p, y):
+    """Θ_used of one run: the LSM result ``c`` if ``p[0]`` (bypass), else its W(s)-smoothed ``w``.
+
+    Parameters
+    ----------
+    t, x : float, ndarray
+        Time and (empty) state, unused.
+    u : ndarray
+        ``[c0..c3, w0..w3]``.
+    p : ndarray
+        ``[bypass (0/1)]``.
+    y : ndarray
+        Θ_used, written in place.
+    """
+    off = 0 if p[0] != 0.0 else 4
+    for i in range(4):
+        y[i] = u[off + i]
 
 
 def build_loop(sit: Situation, rows, paper: Paper = PAPER) -> Loop:
@@ -234,11 +369,20 @@ def _chunk_errors(sig, t, rows, paper, b0):
 
 
 _KEPT = ("x1", "x2", "xhat1", "xhat2", "xhat3", "u", "theta[0]", "theta[1]", "theta[2]", "theta[3]")
+#: below this many run-steps (runs × samples) a situation is simulated in one process (~1 s of work)
+_PARALLEL_RUN_STEPS = 1e6
+#: the signals the chunk post-processing reads (errors, x3, kept runs, exact identifiability)
+_STORED = _KEPT + ("level",)
 
 
 def simulate_situation(sit: Situation, rows, T: float, paper: Paper = PAPER, window=(5.0, 10.0),
-                       keep=(), exact=(), bound: float = 1e6, progress=None) -> SituationRun:
+                       keep=(), exact=(), bound: float = 1e6, progress=None, jobs: int = 1) -> SituationRun:
     """Simulate every row of situation ``sit`` over ``T`` seconds, one identification batch per chunk.
+
+    With ``jobs > 1`` (and at least :data:`_PARALLEL_RUN_STEPS` run-steps, below which starting
+    processes costs more than it saves) the rows are split into ``jobs`` consecutive parts simulated
+    in parallel processes (:func:`ctrl_analysis.parallel.map_chunks`) and joined; runs are
+    independent, so the result equals ``jobs=1`` bit for bit.
 
     Parameters
     ----------
@@ -257,12 +401,28 @@ def simulate_situation(sit: Situation, rows, T: float, paper: Paper = PAPER, win
         A run whose state (plant, observer, the identification's Gram entries) leaves ``|x| <= bound``
         is flagged as diverged.
     progress : callable, optional
-        ``progress(message)`` after each chunk.
+        ``progress(message)`` after each chunk (with ``jobs > 1``: after each part).
+    jobs : int
+        Processes the rows are split over.
 
     Returns
     -------
     SituationRun
     """
+    rows = list(rows)
+    if jobs > 1 and len(rows) > 1 and len(rows) * T / paper.h >= _PARALLEL_RUN_STEPS:
+        parts = chunk_slices(len(rows), chunks=jobs)
+        tasks = [(sit, rows[sl], T, paper, window, [b - sl.start for b in keep if sl.start <= b < sl.stop],
+                  [b - sl.start for b in exact if sl.start <= b < sl.stop], bound) for sl in parts]
+        outs = map_chunks(_simulate_part, tasks, jobs=jobs, desc=f"{sit.key} runs")
+        if progress is not None:
+            progress(f"{sit.key}: t = {T:.0f} / {T:.0f} s")
+        return _join(outs, parts, rows)
+    return _simulate_rows(sit, rows, T, paper, window, keep, exact, bound, progress)
+
+
+def _simulate_rows(sit, rows, T, paper, window, keep, exact, bound, progress) -> SituationRun:
+    """:func:`simulate_situation` in this process: the loop stepped one identification batch per chunk."""
     h, N, B = paper.h, sit.N, len(rows)
     K = round(T / h)
     t_all = h * np.arange(K + 1)
@@ -286,10 +446,14 @@ def simulate_situation(sit: Situation, rows, T: float, paper: Paper = PAPER, win
         sl = slice(k0, k0 + n + 1)
         inputs = {"level": level[sl], "v": noise[sl], "r[0]": np.sin(t_all[sl]), "r[1]": np.cos(t_all[sl]),
                   "r[2]": -np.sin(t_all[sl])}
-        res = loop.simulate(n, inputs=inputs, x0=x0, runs=B, t0=t_all[k0], bound=bound, store_states=False)
+        res = loop.simulate(n, inputs=inputs, x0=x0, runs=B, t0=t_all[k0], bound=bound, store_states=False,
+                            store_signals=_STORED)
         new = res.diverged & ~out.diverged
         out.diverged_step[new] = k0 + res.diverged_step[new]
         out.diverged |= res.diverged
+        states = res.final_states
+        if n == N:  # a full batch ended at the chunk's last sample: solve it before the next sample
+            _end_batch(out, states, ident, res.diverged, k0 + n, bound)
         sig = {s: res[s][:n] for s in res.signals}
         err, x3 = _chunk_errors(sig, t_all[k0:k0 + n], rows, paper, sit.b0)
         w = in_window[k0:k0 + n]
@@ -301,18 +465,59 @@ def simulate_situation(sit: Situation, rows, T: float, paper: Paper = PAPER, win
         for b in keep:
             for s in _KEPT:
                 out.keep[b][s][k0:k0 + n] = sig[s][:, b]
-        if n == N:  # a full batch ended at the chunk's last sample: its result is the next sample's output
+        if n == N:  # the batch's result is the next sample's output
             tb.append(t_all[k0 + n - 1])
-            thb.append(np.stack([res[f"c[{i}]"][n] for i in range(4)], axis=1))
-            lc.append(res["log10_cond"][n])
-            rk.append(res["rank"][n])
+            thb.append(states["lsm"][:, :4].copy())
+            lc.append(states["lsm"][:, 4].copy())
+            rk.append(states["lsm"][:, 5].copy())
             _record_exact(out, sig, ident, rows, sit, exact)
-        x0 = {name: np.nan_to_num(x, nan=0.0, posinf=0.0, neginf=0.0) for name, x in res.final_states.items()}
+        x0 = {name: np.nan_to_num(x, nan=0.0, posinf=0.0, neginf=0.0) for name, x in states.items()}
         k0 += n
         if progress is not None:
             progress(f"{sit.key}: t = {k0 * h:.0f} / {T:.0f} s")
     _finish(out, tb, thb, lc, rk, B)
     return out
+
+
+def _end_batch(out, states, ident, chunk_diverged, k: int, bound: float) -> None:
+    """The identification's batch-end solve on the final states (in place), with the loop's divergence test.
+
+    A run (not yet diverged in this chunk) whose new LSM result leaves ``|x| <= bound`` is flagged
+    as diverged at step ``k`` and its states set to NaN, as the loop does when a state leaves the
+    bound in an update.
+    """
+    x = states["lsm"]
+    ident.identify(x)
+    bad = ~np.all(np.abs(x) <= bound, axis=1) & ~chunk_diverged
+    new = bad & ~out.diverged
+    out.diverged_step[new] = k
+    out.diverged |= new
+    for name in states:
+        states[name][bad] = np.nan
+
+
+def _simulate_part(task) -> SituationRun:
+    """:func:`simulate_situation` of one part of the rows (a worker's task)."""
+    return _simulate_rows(*task, None)
+
+
+def _join(outs, parts, rows) -> SituationRun:
+    """The parts' :class:`SituationRun` as one, runs in the order of ``rows``."""
+    first = outs[0]
+
+    def cat(name, axis=0):
+        return np.concatenate([getattr(o, name) for o in outs], axis=axis)
+
+    def renumber(name):
+        return {b + sl.start: v for o, sl in zip(outs, parts) for b, v in getattr(o, name).items()}
+
+    return SituationRun(
+        rows=rows, t=first.t, n_window=first.n_window, t_batch=first.t_batch, b0=first.b0,
+        sums={m: np.concatenate([o.sums[m] for o in outs]) for m in first.sums},
+        window_sums={m: np.concatenate([o.window_sums[m] for o in outs]) for m in first.window_sums},
+        sup_dx3=cat("sup_dx3"), theta_batch=cat("theta_batch", 1), log10_cond=cat("log10_cond", 1),
+        rank=cat("rank", 1), exact_cond=renumber("exact_cond"), exact_rank=renumber("exact_rank"),
+        keep=renumber("keep"), diverged=cat("diverged"), diverged_step=cat("diverged_step"))
 
 
 def _finish(out, tb, thb, lc, rk, B: int) -> None:

@@ -148,6 +148,8 @@ class PDFeedforward(DiscreteBlock):
                        + (signal_names("theta", n + 2) if self.model else ()))
         self.outputs = ("u",)
         self.states = signal_names("xhat_prev", n) + ("u_prev",) if self.model else ()
+        # kernel parameters: [n, b0, model, k_1 .. k_{n+1}]
+        self._p = np.concatenate([[float(n), self.b0, 1.0 if self.model else 0.0], self.k])
 
     def tracking_poly(self) -> np.ndarray:
         """Coefficients of the tracking-error polynomial ``s^n + k_n s^(n-1) + ... + k_1``.
@@ -205,35 +207,72 @@ class PDFeedforward(DiscreteBlock):
         # (30) u = (Σ k_i (ξ^(i-1) - x̂_i) - XᵀΘ) / b0
         return (np.sum(self.k * (ref - x_hat), axis=-1) - f_hat) / self.b0
 
-    def _u(self, x, u) -> np.ndarray:
-        """(30)/(12) on the block's inputs ``u`` and state ``x``; shape (B,)."""
-        n, k = self.n, self.k
-        # Σ_{i=1}^{n+1} k_i (ξ^(i-1) - x̂_i), summed left to right
-        acc = k[0] * (u[:, 0] - u[:, n + 1])
-        for i in range(1, n + 1):
-            acc = acc + k[i] * (u[:, i] - u[:, n + 1 + i])
-        if not self.model:
-            return acc / self.b0
-        th = 2 * n + 2  # first column of Θ in u
-        # (12) XᵀΘ with the previous sample: Σ_l θ_l x̂_l(k-1) + θ_{n+1} u(k-1) + θ_{n+2}
-        f = u[:, th] * x[:, 0]
-        for i in range(1, n + 1):
-            f = f + u[:, th + i] * x[:, i]
-        f = f + u[:, th + n + 1]
-        return (acc - f) / self.b0
-
     def output(self, t, x, u, params=None) -> np.ndarray:
-        return self._u(x, u)[:, None]
+        y = np.empty((x.shape[0], 1))
+        pd_step(t, x.T, u.T, self._p, y.T)  # the kernel on the batch's columns: one source
+        return y
 
     def update(self, t, x, u, params=None) -> np.ndarray:
-        if not self.model:
-            return x
-        n = self.n
         x_next = np.empty_like(x)
-        # the state holds this sample's x̂_1..x̂_n and u for the next sample's model term (12)
-        x_next[:, :n] = u[:, n + 1:2 * n + 1]
-        x_next[:, n] = self._u(x, u)
+        pd_step(t, x.T, u.T, self._p, x_next.T)
         return x_next
+
+    def kernel(self):
+        """The compiled engine's kernel: :func:`pd_step` as output and update (the numpy methods call it too).
+
+        Returns
+        -------
+        ctrl_analysis._kernels.BlockKernel
+        """
+        from .._kernels import BlockKernel
+
+        return BlockKernel(output=pd_step, params=self._p, update=pd_step)
 
     def __repr__(self) -> str:
         return f"PDFeedforward(b0={self.b0}, k={self.k.tolist()}, model={self.model})"
+
+
+def pd_step(t, x, u, p, out):
+    """The law (30)/(12) of one sample, written into the last entry of ``out`` (output or next state).
+
+    ``u = (Σ_{i=1}^{n+1} k_i (ξ^(i-1) − x̂_i) − f̂) / b0`` with, when ``model``, ``f̂ = Σ_l θ_l
+    x̂_l(k−1) + θ_{n+1} u(k−1) + θ_{n+2}`` from the state ``x = [x̂_1(k−1) .. x̂_n(k−1), u(k−1)]``.
+    Called with the block's output (one entry) it writes ``u``; with the next state (``n + 1``
+    entries, ``model`` only) it also stores this sample's ``x̂_1..x̂_n`` before ``u``; with an empty
+    next state (no model) it writes nothing. Scalar indexing only: it is the compiled kernel of one
+    run and, on a batch's transposed arrays, :class:`PDFeedforward`'s numpy method.
+
+    Parameters
+    ----------
+    t : float
+        Time (unused).
+    x : numpy.ndarray
+        The block's state (empty without ``model``).
+    u : numpy.ndarray
+        Inputs ``[ξ .. ξ^(n), x̂_1 .. x̂_{n+1}, θ_1 .. θ_{n+2} (model)]``.
+    p : numpy.ndarray
+        ``[n, b0, model (0/1), k_1 .. k_{n+1}]``.
+    out : numpy.ndarray
+        The output (1 entry) or the next state (``n + 1`` or 0 entries), written in place.
+    """
+    last = out.shape[0] - 1
+    if last < 0:
+        return
+    n = int(p[0])
+    # Σ_{i=1}^{n+1} k_i (ξ^(i-1) - x̂_i), summed left to right
+    acc = p[3] * (u[0] - u[n + 1])
+    for i in range(1, n + 1):
+        acc = acc + p[3 + i] * (u[i] - u[n + 1 + i])
+    if p[2] != 0.0:
+        th = 2 * n + 2  # first column of Θ in u
+        # (12) XᵀΘ with the previous sample: Σ_l θ_l x̂_l(k-1) + θ_{n+1} u(k-1) + θ_{n+2}
+        f = u[th] * x[0]
+        for i in range(1, n + 1):
+            f = f + u[th + i] * x[i]
+        f = f + u[th + n + 1]
+        acc = acc - f
+    for i in range(last):
+        # the next state holds this sample's x̂_1..x̂_n for the next sample's model term (12)
+        out[i] = u[n + 1 + i]
+    # (30) u = (Σ k_i (ξ^(i-1) - x̂_i) - XᵀΘ) / b0
+    out[last] = acc / p[1]

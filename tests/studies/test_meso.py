@@ -71,13 +71,25 @@ def test_identification_block_identifies_every_N_samples_and_accumulates_the_lit
     block = BatchIdentification(N, h, 3.0, [100.0, 20.0, 1.0], "reduced", ["none", "wellposed", "literal"])
     # Θ_used = [0.3, −0.2, 0, 0.1] gives f; the block's inputs: x̂1..3, u, Θ_used
     useq = np.stack([xh1, xh2, xh3, u, 0.3 + 0 * u, -0.2 + 0 * u, 0 * u, 0.1 + 0 * u], axis=1)
-    y, x = block.run(np.repeat(useq[:, None, :], 3, axis=1), t=h * np.arange(40))
-    c = y[:, :, :4]
-    assert np.all(c[:N] == 0.0)                       # nothing before the first batch end
-    np.testing.assert_array_equal(c[:, 0], 0.0)       # "none": the ESO, Θ ≡ 0
-    np.testing.assert_allclose(x[N, 1, :4], [1.3, -1.6, 0.0, 0.7], atol=2e-3)
-    np.testing.assert_allclose(x[2 * N, 2, :4], 2 * x[N, 2, :4], rtol=0.05)   # literal: Θ̂_1 + Θ̂_2 ≈ 2 Θ̂_1
-    assert x[N, 1, 5] == 3                              # rank of [x̂1 x̂2 1]
+    batch = np.repeat(useq[:, None, :], 3, axis=1)
+    y, x = block.run(batch[:N], t=h * np.arange(N))   # the per-sample update only accumulates the Gram
+    assert np.all(y[:, :, :4] == 0.0)                   # nothing before the first batch end
+    G = x[N, :, 6:].reshape(3, 7, 7)
+    phi = regressors(xh1[:N], xh2[:N], xh3[:N], u[:N], _f[:N], _kbar[:N])
+    phi[:, 6] = 3.0 * u[:N] + 100.0 * xh1[:N] + 20.0 * xh2[:N] + 1.0 * xh3[:N]   # K̄ with k3 = 1 on x̂3
+    phi[:, 4] = 0.3 * xh1[:N] - 0.2 * xh2[:N] + 0.1                               # f from Θ_used
+    np.testing.assert_allclose(G[1], phi.T @ phi / N, rtol=1e-12, atol=1e-14)
+    x1 = x[N].copy()
+    block.identify(x1)                                  # the batch end
+    np.testing.assert_array_equal(x1[:, 6:], 0.0)       # the Gram restarts
+    np.testing.assert_array_equal(x1[0, :6], 0.0)       # "none": the ESO, Θ ≡ 0
+    np.testing.assert_allclose(x1[1, :4], [1.3, -1.6, 0.0, 0.7], atol=2e-3)
+    assert x1[1, 5] == 3                                # rank of [x̂1 x̂2 1]
+    y2, x2 = block.run(batch[N:], x0=x1, t=h * np.arange(N, 2 * N))
+    np.testing.assert_array_equal(y2[:, 2, :4], np.repeat(x1[None, 2, :4], N, axis=0))   # held over the batch
+    x2 = x2[N].copy()
+    block.identify(x2)
+    np.testing.assert_allclose(x2[2, :4], 2 * x1[2, :4], rtol=0.05)   # literal: Θ̂_1 + Θ̂_2 ≈ 2 Θ̂_1
     with pytest.raises(ValueError, match="variants"):
         BatchIdentification(N, h, 3.0, [100.0, 20.0, 1.0], "reduced", ["bogus"])
 
@@ -140,3 +152,80 @@ def test_short_run_writes_every_quantity_with_unit_and_tolerance(tmp_path):
     n = meso.findings.noise_free_counts(result)
     assert f"{n['off']}/10 agree" in found["tables-are-noise-free"]
     assert len(data["reconstructions"]) >= 8
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+def test_kernels_are_the_numpy_methods(compiled):
+    """Plant, (M)ESO and Gram update: each kernel run by run (plain or jitted) = the block's batched method."""
+    from ctrl_analysis._kernels import _jit
+    from analysis.meso.loops import ModelledESO, ParameterPath, Plant
+
+    rng = np.random.default_rng(7)
+    B = 6
+    rows = [Row("meso", "wellposed", None, epsilon=e, b_plant=b)
+            for e, b in zip((0.05, 0.1, 0.05, 0.025, 0.1, 0.05), (3.95, 4.9, 3.0, 3.95, 3.95, 4.2))]
+    ident = BatchIdentification(20, 0.003, 3.0, [100.0, 20.0, 1.0], "full", ["wellposed"] * B)
+    blocks = [(Plant(PAPER, [r.b_plant for r in rows]), "rhs"), (ModelledESO(PAPER, 3.0, [r.epsilon for r in rows]), "rhs"),
+              (ident, "update")]
+    for block, kind in blocks:
+        k = block.kernel()
+        fn = getattr(k, kind)
+        out_fn = _jit(k.output) if compiled else k.output
+        fn = _jit(fn) if compiled else fn
+        x = rng.normal(size=(B, len(block.states)))
+        u = rng.normal(size=(B, len(block.inputs)))
+        got, y = np.empty_like(x), np.empty((B, len(block.outputs)))
+        for b in range(B):
+            p = k.params[b] if np.ndim(k.params) == 2 else k.params
+            fn(0.1, x[b], u[b], p, got[b])
+            out_fn(0.1, x[b], u[b], p, y[b])
+        assert np.array_equal(got, getattr(block, kind)(0.1, x, u)), type(block).__name__
+        assert np.array_equal(y, block.output(0.1, x, u)), type(block).__name__
+    path = ParameterPath([True, False, False, True, False, True])
+    k, up = path.kernel(), rng.normal(size=(B, 8))
+    fn = _jit(k.output) if compiled else k.output
+    y = np.empty((B, 4))
+    for b in range(B):
+        fn(0.1, np.empty(0), up[b], k.params[b], y[b])
+    assert np.array_equal(y, path.output(0.1, np.empty((B, 0)), up)) and np.array_equal(y[1], up[1, 4:])
+    # the Gram update adds φφᵀ/N of the block's own regressors
+    phi = ident.phi(u)
+    np.testing.assert_allclose(got[:, 6:] - x[:, 6:], (phi[:, :, None] * phi[:, None, :]).reshape(B, -1) / 20,
+                               rtol=1e-12, atol=1e-12)
+
+
+def test_compiled_engine_equals_numpy_engine(monkeypatch):
+    """Both situations' loops, with per-run ε, b, bypass and variants: compiled = numpy engine bit for bit."""
+    rows1 = [Row("eso", "none", 3), Row("meso", "wellposed", None, epsilon=0.1),
+             Row("meso", "literal", None, bypass_w=True), Row("eso", "none", None, b_plant=4.9)]
+    rows2 = [Row("meso", "wellposed", 3, threshold=1000.0), Row("meso", "direct", None), Row("meso", "literal", 3)]
+    for key, rows, T in (("s1", rows1, 6.0), ("s2", rows2, 12.0)):
+        sims = []
+        for engine in ("numpy", "auto"):
+            monkeypatch.setenv("CTRL_ANALYSIS_ENGINE", engine)
+            sims.append(simulate_situation(SITUATIONS[key], rows, T, keep=[0, 1], exact=[1]))
+        a, b = sims
+        for m in a.sums:
+            assert np.array_equal(a.sums[m], b.sums[m]), (key, m)
+        for f in ("theta_batch", "log10_cond", "rank", "sup_dx3", "diverged_step"):
+            assert np.array_equal(getattr(a, f), getattr(b, f), equal_nan=True), (key, f)
+        assert np.array_equal(a.keep[1]["u"], b.keep[1]["u"]) and np.any(a.theta_batch[-1, 1] != 0.0)
+
+
+def test_rows_split_over_processes_join_bit_for_bit(monkeypatch):
+    """simulate_situation(jobs=2): the parts' runs, kept trajectories and exact records renumbered in order."""
+    from analysis.meso import loops
+
+    monkeypatch.setattr(loops, "_PARALLEL_RUN_STEPS", 0)
+    rows = [Row("meso", "wellposed", None), Row("eso", "none", 5), Row("meso", "literal", None),
+            Row("meso", "wellposed", 5, epsilon=0.1), Row("meso", "no_const", None)]
+    kw = dict(keep=[0, 3], exact=[0, 2, 4])
+    a = simulate_situation(SITUATIONS["s1"], rows, 6.0, **kw)
+    b = simulate_situation(SITUATIONS["s1"], rows, 6.0, jobs=2, **kw)
+    assert b.rows == rows and sorted(b.keep) == [0, 3] and sorted(b.exact_cond) == [0, 2, 4]
+    for m in a.sums:
+        assert np.array_equal(a.sums[m], b.sums[m]) and np.array_equal(a.window_sums[m], b.window_sums[m])
+    for f in ("theta_batch", "log10_cond", "rank", "sup_dx3", "diverged", "t_batch"):
+        assert np.array_equal(getattr(a, f), getattr(b, f), equal_nan=True), f
+    assert all(np.array_equal(a.keep[k]["xhat3"], b.keep[k]["xhat3"]) for k in a.keep)
+    assert all(np.array_equal(a.exact_cond[k], b.exact_cond[k], equal_nan=True) for k in a.exact_cond)
