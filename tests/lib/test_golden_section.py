@@ -67,3 +67,37 @@ def test_golden_section_loop_runs_in_control_interconnect():
     assert sys.isdtime()
     resp = ct.input_output_response(sys, res.t, np.stack([ext[s] for s in loop.external]), X0=res.x[0, 0])
     np.testing.assert_allclose(res.to_timeresponse(0).outputs, resp.outputs, rtol=1e-10, atol=1e-10)
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+def test_golden_kernel_equals_the_numpy_methods_bit_for_bit(compiled):
+    from test_kalman_ckf import kernel_runs
+
+    from ctrl_analysis import _kernels
+
+    ctrl = GoldenSectionController(k_I=0.02, c2=0.9, mu=0.5)
+    k = ctrl.kernel()
+    rng = np.random.default_rng(5)
+    x = rng.normal(size=(60, 4))
+    x[:, 3] = rng.integers(0, 2, 60)  # started or not: both branches of e(k−1), r(k−1)
+    u = rng.normal(size=(60, 5))
+    u[:, 4] = 0.05 + np.abs(u[:, 4])
+    out = _kernels._jit(k.output) if compiled else k.output
+    upd = _kernels._jit(k.update) if compiled else k.update
+    assert np.array_equal(kernel_runs(out, k.params, x, u, 1), ctrl.output(0.0, x, u))
+    nxt = kernel_runs(upd, k.params, x, u, 4)
+    assert np.array_equal(nxt, ctrl.update(0.0, x, u))
+    grow = (u[:, 0] - u[:, 1]) * ((u[:, 0] - u[:, 1]) - np.where(x[:, 3] > 0, x[:, 0], u[:, 0] - u[:, 1])) > 0
+    assert grow.any() and (~grow).any()  # both factors c1 and c2 of the logic integral were used
+
+
+def test_golden_loop_compiled_equals_numpy_engine():
+    plant = DiscreteLTI(ct.tf([G0, 0.0], [1.0, -F1, -F2], True), 0.01)
+    loop = Loop([place(plant, "plant", inputs=["u"], outputs=["y"]),
+                 place(GoldenSectionController(k_I=0.02, c2=0.9, mu=0.5), "ctrl",
+                       inputs=["y", "r", "f1", "f2", "g0"], outputs=["u"])], 0.01)
+    r = np.where(np.arange(801) < 400, 3.0, -1.0)
+    ext = {"r": r, "f1": F1, "f2": F2, "g0": G0}
+    a, b = loop.simulate(800, inputs=ext, engine="numpy"), loop.simulate(800, inputs=ext, engine="compiled")
+    assert np.array_equal(a.x, b.x) and np.array_equal(a["u"], b["u"])
+    assert abs(a["y"][-1, 0] + 1.0) < 1e-3
