@@ -22,7 +22,7 @@ import numpy as np
 
 from ._validate import check_bool, check_finite, check_int, check_positive, check_vector
 from .blocks import DiscreteBlock, signal_names
-from .identification_kernels import arx_output, arx_update, rls_output, rls_update
+from .identification_kernels import arx_output, arx_update, rls_hold_output, rls_output, rls_update
 
 __all__ = [
     "ArxRegressor",
@@ -361,8 +361,7 @@ class RecursiveLeastSquares(DiscreteBlock):
         self.outputs = signal_names("theta", p)
         self.states = self.outputs + tuple(f"P[{i}][{j}]" for i in range(p) for j in range(p))
         # kernel parameters (ctrl_analysis.identification_kernels)
-        self._p = np.concatenate([[p, forgetting, self.max_trace or 0.0, float(self.projected)], lower, upper,
-                                  [float(self.feedthrough)]])
+        self._p = np.concatenate([[p, forgetting, self.max_trace or 0.0, float(self.projected)], lower, upper])
         self.reset()
 
     # ------------------------------------------------------------------ block protocol
@@ -410,7 +409,7 @@ class RecursiveLeastSquares(DiscreteBlock):
         """The compiled engine's kernel: the twins of the numpy step in :mod:`ctrl_analysis.identification_kernels`.
 
         :func:`~ctrl_analysis.identification_kernels.rls_update` and
-        :func:`~ctrl_analysis.identification_kernels.rls_output`.
+        :func:`~ctrl_analysis.identification_kernels.rls_output` (``rls_hold_output`` without feedthrough).
 
         Returns
         -------
@@ -418,7 +417,8 @@ class RecursiveLeastSquares(DiscreteBlock):
         """
         from ._kernels import BlockKernel
 
-        return BlockKernel(output=rls_output, params=self._p, update=rls_update)
+        output = rls_output if self.feedthrough else rls_hold_output
+        return BlockKernel(output=output, params=self._p, update=rls_update)
 
     # ------------------------------------------------------------------ stateful interface
     def reset(self) -> None:

@@ -3,12 +3,12 @@
 * :func:`arx_update` / :func:`arx_output`: the tapped delay lines of
   :class:`~ctrl_analysis.identification.ArxRegressor`, written with scalar indexing only, so they
   are both its compiled kernel and, called on a batch's transposed arrays, its numpy methods.
-* :func:`rls_update` / :func:`rls_output`: the compiled twins of
+* :func:`rls_update` / :func:`rls_output` (:func:`rls_hold_output` without feedthrough): the compiled twins of
   :class:`~ctrl_analysis.identification.RecursiveLeastSquares`' numpy step (its projection and
   trace cap branch per value); ``tests/lib/test_identification.py`` holds the two equal bit for bit.
 
-Parameters ``p`` of the RLS kernels: ``[n, λ, max_trace (0: none), projected (0/1), lower (n), upper (n),
-feedthrough (0/1)]``; state ``[θ (n), R row by row (n·n)]``; input ``[z, h (n)]``.
+Parameters ``p`` of the RLS kernels: ``[n, λ, max_trace (0: none), projected (0/1), lower (n), upper (n)]``
+(infinite bounds where there are none: the projection is then the identity); state ``[θ (n), R row by row (n·n)]``; input ``[z, h (n)]``.
 """
 
 from __future__ import annotations
@@ -35,14 +35,10 @@ def arx_update(t, x, u, p, x_next):
         Written in place.
     """
     ns, nu = int(p[0]) + int(p[2]), int(p[1]) + int(p[2])
-    if ns > 0:
-        x_next[0] = u[0]
-        for i in range(1, ns):
-            x_next[i] = x[i - 1]
-    if nu > 0:
-        x_next[ns] = u[1]
-        for i in range(1, nu):
-            x_next[ns + i] = x[ns + i - 1]
+    for i in range(ns):
+        x_next[i] = u[0] if i == 0 else x[i - 1]
+    for i in range(nu):
+        x_next[ns + i] = u[1] if i == 0 else x[ns + i - 1]
 
 
 def arx_output(t, x, u, p, y):
@@ -57,7 +53,9 @@ def arx_output(t, x, u, p, y):
     """
     na, nb, d = int(p[0]), int(p[1]), int(p[2])
     ns = na + d
-    y[0] = u[0] if d == 0 else x[d - 1]
+    y[0] = u[0]
+    for _ in range(min(d, 1)):  # z = s(k−d): the stored s(k−d) when d >= 1 (a loop, not a branch: leaner in numba)
+        y[0] = x[d - 1]
     for i in range(na):
         y[1 + i] = x[d + i]
     for j in range(nb):
@@ -87,12 +85,9 @@ def _rls_theta(x, p, out, den, innov):
     n = int(p[0])
     for i in range(n):
         v = x[i] + out[i] / den * innov
-        if p[3] != 0.0:  # projection onto the box lower <= θ <= upper (NaN stays NaN, as np.clip)
-            if v < p[4 + i]:
-                v = p[4 + i]
-            if v > p[4 + n + i]:
-                v = p[4 + n + i]
-        out[i] = v
+        # projection onto the box lower <= θ <= upper (NaN stays NaN, as np.clip; infinite bounds: identity)
+        v = p[4 + i] if v < p[4 + i] else v
+        out[i] = p[4 + n + i] if v > p[4 + n + i] else v
 
 
 def rls_update(t, x, u, p, x_next):
@@ -114,37 +109,51 @@ def rls_update(t, x, u, p, x_next):
     n = int(p[0])
     lam = p[1]
     den, innov = _rls_gain(x, u, p, x_next)  # R h in x_next[:n] until θ(k) overwrites it
-    # R(k) = (R − D (R h)ᵀ) / λ, symmetrised; D = R h / den
+    # R(k) = (R − D (R h)ᵀ) / λ with D = R h / den, then symmetrised: 0.5 (R(k) + R(k)ᵀ)
     for i in range(n):
+        d = x_next[i] / den
         for j in range(n):
-            a = (x[n + i * n + j] - x_next[i] / den * x_next[j]) / lam
-            b = (x[n + j * n + i] - x_next[j] / den * x_next[i]) / lam
-            x_next[n + i * n + j] = 0.5 * (a + b)
-    if p[2] > 0.0:  # anti-windup: trace R(k) <= max_trace
-        tr = 0.0
-        for i in range(n):
-            tr = tr + x_next[n + i * n + i]
-        s = p[2] / tr
-        if not s >= 1.0:  # np.minimum(1, s): NaN propagates
-            for i in range(n * n):
-                x_next[n + i] = x_next[n + i] * s
+            x_next[n + i * n + j] = (x[n + i * n + j] - d * x_next[j]) / lam
+    for i in range(n):
+        for j in range(i, n):
+            v = 0.5 * (x_next[n + i * n + j] + x_next[n + j * n + i])
+            x_next[n + i * n + j] = v
+            x_next[n + j * n + i] = v
+    # anti-windup: trace R(k) <= max_trace, R(k) scaled by min(1, max_trace / trace) (NaN propagates, as
+    # np.minimum); a scale of 1 (no cap) is exact. Conditional expressions, not if statements, keep numba lean.
+    tr = 0.0
+    for i in range(n):
+        tr = tr + x_next[n + i * n + i]
+    s = p[2] / tr if p[2] > 0.0 else 1.0
+    s = 1.0 if s >= 1.0 else s
+    for i in range(n * n):
+        x_next[n + i] = x_next[n + i] * s
     _rls_theta(x, p, x_next, den, innov)
 
 
 def rls_output(t, x, u, p, y):
-    """``θ(k)`` after the update (feedthrough) or the stored ``θ(k−1)``; arguments as :func:`rls_update`.
+    """``θ(k)``, the estimate after the update with this sample (feedthrough); arguments as :func:`rls_update`.
 
     Parameters
     ----------
     t, x, u, p
         As :func:`rls_update`.
     y : numpy.ndarray
-        ``θ``, written in place.
+        ``θ(k)``, written in place.
     """
-    n = int(p[0])
-    if p[4 + 2 * n] == 0.0:
-        for i in range(n):
-            y[i] = x[i]
-        return
     den, innov = _rls_gain(x, u, p, y)
     _rls_theta(x, p, y, den, innov)
+
+
+def rls_hold_output(t, x, u, p, y):
+    """The stored ``θ(k−1)`` (``feedthrough=False``); arguments as :func:`rls_update`.
+
+    Parameters
+    ----------
+    t, x, u, p
+        As :func:`rls_update`.
+    y : numpy.ndarray
+        ``θ(k−1)``, written in place.
+    """
+    for i in range(y.shape[0]):
+        y[i] = x[i]

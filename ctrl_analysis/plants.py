@@ -153,6 +153,5 @@ def lti_output(t, x, u, p, y):
     acc = 0.0
     for j in range(n):
         acc = acc + x[j] * p[2 + n * n + n + j]
-    if p[1] != 0.0:
-        acc = acc + p[1] * u[0]
-    y[0] = acc
+    # a conditional expression, not an if statement: numba then prunes the arrays' reference counting
+    y[0] = acc + p[1] * u[0] if p[1] != 0.0 else acc
