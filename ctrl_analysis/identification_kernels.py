@@ -7,8 +7,9 @@
   :class:`~ctrl_analysis.identification.RecursiveLeastSquares`' numpy step (its projection and
   trace cap branch per value); ``tests/lib/test_identification.py`` holds the two equal bit for bit.
 
-Parameters ``p`` of the RLS kernels: ``[n, λ, max_trace (0: none), projected (0/1), lower (n), upper (n)]``
-(infinite bounds where there are none: the projection is then the identity); state ``[θ (n), R row by row (n·n)]``; input ``[z, h (n)]``.
+Parameters ``p`` of the RLS kernels: ``[n, λ, max_trace (0: none), projected (0/1, informative: the kernels
+clip to the bounds always, and infinite bounds make the projection the identity), lower (n), upper (n)]``;
+state ``[θ (n), R row by row (n·n)]``; input ``[z, h (n)]``.
 """
 
 from __future__ import annotations
