@@ -22,6 +22,7 @@ import numpy as np
 
 from ._validate import check_bool, check_finite, check_int, check_positive, check_vector
 from .blocks import DiscreteBlock, signal_names
+from .identification_kernels import arx_output, arx_update, rls_hold_output, rls_output, rls_update
 
 __all__ = [
     "ArxRegressor",
@@ -359,6 +360,8 @@ class RecursiveLeastSquares(DiscreteBlock):
         self.inputs = ("z",) + signal_names("h", p)
         self.outputs = signal_names("theta", p)
         self.states = self.outputs + tuple(f"P[{i}][{j}]" for i in range(p) for j in range(p))
+        # kernel parameters (ctrl_analysis.identification_kernels)
+        self._p = np.concatenate([[p, forgetting, self.max_trace or 0.0, float(self.projected)], lower, upper])
         self.reset()
 
     # ------------------------------------------------------------------ block protocol
@@ -401,6 +404,21 @@ class RecursiveLeastSquares(DiscreteBlock):
         if not self.feedthrough:
             return x[:, :self.n_params]
         return self._kernel(x, u)[0]
+
+    def kernel(self):
+        """The compiled engine's kernel: the twins of the numpy step in :mod:`ctrl_analysis.identification_kernels`.
+
+        :func:`~ctrl_analysis.identification_kernels.rls_update` and
+        :func:`~ctrl_analysis.identification_kernels.rls_output` (``rls_hold_output`` without feedthrough).
+
+        Returns
+        -------
+        ctrl_analysis._kernels.BlockKernel
+        """
+        from ._kernels import BlockKernel
+
+        output = rls_output if self.feedthrough else rls_hold_output
+        return BlockKernel(output=output, params=self._p, update=rls_update)
 
     # ------------------------------------------------------------------ stateful interface
     def reset(self) -> None:
@@ -538,24 +556,28 @@ class ArxRegressor(DiscreteBlock):
                        + tuple(f"u[{i}]" for i in range(1, self.nu + 1)))
         self.outputs = ("z",) + signal_names("h", self.na + self.nb)
         self.feedthrough = self.lag == 0
+        self._p = np.array([self.na, self.nb, self.lag], dtype=float)
 
     def update(self, t, x, u, params=None) -> np.ndarray:
-        # shift both delay lines: s(k−1) <- s(k), s(k−i) <- s(k−i+1); same for u
         x_next = np.empty_like(x)
-        ns = self.ns
-        if ns:
-            x_next[:, 0] = u[:, 0]
-            x_next[:, 1:ns] = x[:, :ns - 1]
-        if self.nu:
-            x_next[:, ns] = u[:, 1]
-            x_next[:, ns + 1:] = x[:, ns:-1]
+        arx_update(t, x.T, u.T, self._p, x_next.T)  # the kernel on the batch's columns: one source
         return x_next
 
     def output(self, t, x, u, params=None) -> np.ndarray:
-        d, ns = self.lag, self.ns
-        out = np.empty((x.shape[0], 1 + self.na + self.nb))
-        # z = s(k−d); h = [s(k−d−1), ..., s(k−d−na), u(k−d−1), ..., u(k−d−nb)]
-        out[:, 0] = u[:, 0] if d == 0 else x[:, d - 1]
-        out[:, 1:1 + self.na] = x[:, d:d + self.na]
-        out[:, 1 + self.na:] = x[:, ns + d:ns + d + self.nb]
-        return out
+        y = np.empty((x.shape[0], 1 + self.na + self.nb))
+        arx_output(t, x.T, u.T, self._p, y.T)
+        return y
+
+    def kernel(self):
+        """The compiled engine's kernel, which the numpy methods call too (one source).
+
+        :func:`~ctrl_analysis.identification_kernels.arx_update`,
+        :func:`~ctrl_analysis.identification_kernels.arx_output`.
+
+        Returns
+        -------
+        ctrl_analysis._kernels.BlockKernel
+        """
+        from ._kernels import BlockKernel
+
+        return BlockKernel(output=arx_output, params=self._p, update=arx_update)

@@ -81,18 +81,77 @@ class DiscreteLTI(DiscreteBlock):
         self.states = signal_names("x", n)
         self.feedthrough = self.D != 0.0
         self._x0 = np.zeros(n) if x0 is None else check_vector("x0", x0, n, broadcast=False)
+        # kernel parameters: [n, D, A (row-major), B, C]
+        self._p = np.concatenate([[float(n), self.D], self.A.reshape(-1), self.B, self.C])
 
     def initial_state(self) -> np.ndarray:
         return self._x0.copy()
 
     def update(self, t, x, u, params=None) -> np.ndarray:
-        # x(k+1) = A x(k) + B u(k): per run, row sums of n products (same order whatever the batch size)
-        return (x[:, None, :] * self.A).sum(axis=2) + u[:, :1] * self.B
+        x_next = np.empty_like(x)
+        lti_update(t, x.T, u.T, self._p, x_next.T)  # the kernel on the batch's columns: one source
+        return x_next
 
     def output(self, t, x, u, params=None) -> np.ndarray:
-        # y(k) = C x(k) + D u(k)
-        y = (x * self.C).sum(axis=1, keepdims=True)
-        return y + self.D * u[:, :1] if self.feedthrough else y
+        y = np.empty((x.shape[0], 1))
+        lti_output(t, x.T, u.T, self._p, y.T)
+        return y
+
+    def kernel(self):
+        """The compiled engine's kernel (:func:`lti_update`, :func:`lti_output`; the numpy methods call them too).
+
+        Returns
+        -------
+        ctrl_analysis._kernels.BlockKernel
+        """
+        from ._kernels import BlockKernel
+
+        return BlockKernel(output=lti_output, params=self._p, update=lti_update)
 
     def __repr__(self) -> str:
         return f"DiscreteLTI(n={self.A.shape[0]}, dt={self.dt})"
+
+
+def lti_update(t, x, u, p, x_next):
+    """``x(k+1) = A x(k) + B u(k)`` with ``p = [n, D, A (n·n, row-major), B (n), C (n)]``.
+
+    Written with scalar indexing only, so it is both the compiled kernel of one run (``x`` of shape
+    ``(n,)``) and, called on a batch's transposed arrays, :class:`DiscreteLTI`'s numpy method.
+
+    Parameters
+    ----------
+    t : float
+        Time (unused).
+    x : numpy.ndarray
+        The state ``x(k)``.
+    u : numpy.ndarray
+        The input ``[u(k)]``.
+    p : numpy.ndarray
+        Packed ``[n, D, A, B, C]``.
+    x_next : numpy.ndarray
+        ``x(k+1)``, written in place (each row summed left to right, then ``+ B u``).
+    """
+    n = int(p[0])
+    for i in range(n):
+        acc = 0.0
+        for j in range(n):
+            acc = acc + p[2 + i * n + j] * x[j]
+        x_next[i] = acc + u[0] * p[2 + n * n + i]
+
+
+def lti_output(t, x, u, p, y):
+    """``y(k) = C x(k) + D u(k)`` (the ``D u`` term only when ``D != 0``); ``p`` as :func:`lti_update`.
+
+    Parameters
+    ----------
+    t, x, u, p
+        As :func:`lti_update`.
+    y : numpy.ndarray
+        ``[y(k)]``, written in place.
+    """
+    n = int(p[0])
+    acc = 0.0
+    for j in range(n):
+        acc = acc + x[j] * p[2 + n * n + n + j]
+    # a conditional expression, not an if statement: numba then prunes the arrays' reference counting
+    y[0] = acc + p[1] * u[0] if p[1] != 0.0 else acc

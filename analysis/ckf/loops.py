@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ctrl_analysis.blocks import StaticBlock
+from ctrl_analysis.blocks import StaticGain
 from ctrl_analysis.controllers.golden_section import GoldenSectionController
 from ctrl_analysis.estimators.kalman import CharacteristicKalmanFilter
 from ctrl_analysis.estimators.lowpass import LowPassFilter
@@ -20,7 +20,7 @@ from ctrl_analysis.loop import Loop, place
 from ctrl_analysis.plants import DiscreteLTI
 from ctrl_analysis.simulate import draw_noise, gaussian_noise, run_seeds
 
-__all__ = ["CASES", "ID_OPTIONS", "SIGNALS", "build_loop", "plant_tf", "simulate_cases", "split_cases"]
+__all__ = ["CASES", "ID_OPTIONS", "SIGNALS", "FeedbackSwitch", "build_loop", "gated_gain_output", "plant_tf", "simulate_cases", "split_cases"]
 
 #: Feedback cases: (selector of the LPF signal, selector of the CKF signal).
 CASES = {"nofilter": (0.0, 0.0), "lpf": (1.0, 0.0), "ckf": (0.0, 1.0)}
@@ -47,40 +47,95 @@ def plant_tf(name: str):
     raise ValueError(f"plant must be 'interlaced' or 'resonant-delay', got {name!r}")
 
 
-def build_loop(p, plant=None) -> Loop:
+def gated_gain_output(t, x, u, p, y):
+    """``y = u[0]`` before ``t_on = p[0]``, then ``y = Σ_j D_j u_j`` with ``D = p[1:]`` (summed left to right).
+
+    Kernel of :class:`FeedbackSwitch` (the compiled twin of its numpy output, ``StaticGain``'s sum after ``t_on``).
+
+    Parameters
+    ----------
+    t : float
+        Time.
+    x : numpy.ndarray
+        No state.
+    u : numpy.ndarray
+        The candidate signals, the raw one first.
+    p : numpy.ndarray
+        ``[t_on, D_0 .. D_(m-1)]``.
+    y : numpy.ndarray
+        The selected signal, written in place.
+    """
+    acc = 0.0
+    for j in range(u.shape[0]):
+        acc += p[1 + j] * u[j]
+    y[0] = u[0] if t < p[0] - 1e-9 else acc  # an expression, not an if statement: numba compiles it leaner
+
+
+class FeedbackSwitch(StaticGain):
+    """The fed-back signal: the raw measurement (first input) before ``t_on``, then ``D u`` per run.
+
+    Parameters
+    ----------
+    D : numpy.ndarray, shape (B, 1, m)
+        One selection row per run (e.g. ``[0, 1, 0]``: the LPF output).
+    t_on : float
+        When the selected signal replaces the raw one (the paper's 2 s).
+    inputs, outputs : sequence of str
+        ``m`` inputs (the raw signal first), one output.
+    """
+
+    def __init__(self, D, t_on, inputs, outputs):
+        super().__init__(D, inputs, outputs)
+        self.t_on = float(t_on)
+
+    def _apply(self, t, u):
+        return u[:, :1].copy() if t < self.t_on - 1e-9 else super()._apply(t, u)
+
+    def kernel(self):
+        """:func:`gated_gain_output` with per-run parameters ``[t_on, D_b]``.
+
+        Returns
+        -------
+        ctrl_analysis._kernels.BlockKernel
+        """
+        from ctrl_analysis._kernels import BlockKernel
+
+        P = np.column_stack([np.full(self.D.shape[0], self.t_on), self.D.reshape(self.D.shape[0], -1)])
+        return BlockKernel(output=gated_gain_output, params=P)
+
+
+def build_loop(p, sel, plant=None) -> Loop:
     """Plant, measurement, LPF, CKF, identification and golden-section control wired by signal names.
 
     Parameters
     ----------
     p : CKFStudy
+    sel : numpy.ndarray, shape (4, B)
+        Per-run selectors: LPF / CKF fed back, LPF / fed-back signal identified (:data:`CASES`,
+        :data:`ID_OPTIONS`); they become per-run gains, so the loop runs in the compiled engine.
     plant : control.TransferFunction or StateSpace, optional
         Default ``plant_tf(p.plant)``.
+
+    Returns
+    -------
+    Loop
     """
     import control as ct
 
     sys = plant_tf(p.plant) if plant is None else plant
     lo, hi = (p.lower, p.upper) if p.project else (None, None)
-    t_f = p.t_filter
-
-    def select(t, u):  # fed-back signal: raw before t_filter, then raw / LPF / CKF per run
-        y_m = u[:, 0]
-        if t < t_f - 1e-9:
-            return y_m[:, None]
-        return (y_m + u[:, 3] * (u[:, 1] - y_m) + u[:, 4] * (u[:, 2] - y_m))[:, None]
-
-    def select_id(t, u):  # signal of the identification: raw, LPF or fed-back per run
-        y_m = u[:, 0]
-        return (y_m + u[:, 3] * (u[:, 1] - y_m) + u[:, 4] * (u[:, 2] - y_m))[:, None]
-
+    # rows [raw, LPF, CKF] (fed back) and [raw, LPF, fed back] (identified): 1 − s1 − s2, s1, s2 per run
+    D_fb = np.stack([1.0 - sel[0] - sel[1], sel[0], sel[1]], axis=1)[:, None, :]
+    D_id = np.stack([1.0 - sel[2] - sel[3], sel[2], sel[3]], axis=1)[:, None, :]
     blocks = [
         place(DiscreteLTI(sys, p.Ts), "plant", inputs=["u"], outputs=["y"]),
-        place(StaticBlock(lambda t, u: u[:, :1] + u[:, 1:2], ("y", "v"), ("y_m",)), "meas"),
+        place(StaticGain([[1.0, 1.0]], ("y", "v"), ("y_m",)), "meas"),
         place(LowPassFilter(p.lpf_omega, p.lpf_order).digital(p.Ts), "lpf", inputs=["y_m"], outputs=["y_lpf"]),
         place(DiscreteLTI(ct.tf([1.0], [1.0, 0.0], True), p.Ts), "delay", inputs=["u"], outputs=["u_prev"]),
         place(CharacteristicKalmanFilter(Q=np.array(p.Q), R=p.R, P0=p.P0_ckf), "ckf",
               inputs=["y_m", "u_prev", "f1", "f2", "g0"], outputs=["y_ckf", "y_ckf_prev"]),
-        place(StaticBlock(select, ("y_m", "y_lpf", "y_ckf", "sel_lpf", "sel_ckf"), ("y_fb",)), "select"),
-        place(StaticBlock(select_id, ("y_m", "y_lpf", "y_fb", "sel_id_lpf", "sel_id_fb"), ("s_id",)), "idsignal"),
+        place(FeedbackSwitch(D_fb, p.t_filter, ("y_m", "y_lpf", "y_ckf"), ("y_fb",)), "select"),
+        place(StaticGain(D_id, ("y_m", "y_lpf", "y_fb"), ("s_id",)), "idsignal"),
         place(ArxRegressor(2, 1, lag=0), "regressor", inputs=["s_id", "u"], outputs=["z", "h0", "h1", "h2"]),
         place(RecursiveLeastSquares(3, p.forgetting, p.P0_rls, p.theta0, lower=lo, upper=hi,
                                     max_trace=p.max_trace, feedthrough=False), "rls",
@@ -91,8 +146,23 @@ def build_loop(p, plant=None) -> Loop:
     return Loop(blocks, p.Ts)
 
 
-def simulate_cases(p, runs: int, seed: int, *, options=None, plant=None, noise_std=None):
+def simulate_cases(p, runs: int, seed: int, *, options=None, plant=None, noise_std=None, engine="auto"):
     """Run every case x identification option over ``runs`` Monte Carlo runs in one batch.
+
+    Parameters
+    ----------
+    p : CKFStudy
+    runs : int
+        Monte Carlo runs per case and option.
+    seed : int
+        Base seed of the measurement noise (the same noise in every case and option).
+    options : sequence of str, optional
+        Identification options (default ``(p.id_signal,)``).
+    plant : control.TransferFunction or StateSpace, optional
+    noise_std : float, optional
+        Default ``p.noise_std``.
+    engine : {"auto", "compiled", "numpy"}
+        Passed to :meth:`Loop.simulate`.
 
     Returns
     -------
@@ -114,11 +184,9 @@ def simulate_cases(p, runs: int, seed: int, *, options=None, plant=None, noise_s
         sl = slice(i * runs, (i + 1) * runs)
         index[(o, c)] = sl
         sel[:, sl] = np.array(CASES[c] + ID_OPTIONS[o])[:, None]
-    loop = build_loop(p, plant)
-    res = loop.simulate(n, inputs={"v": np.tile(v, (1, len(combos))), "r": p.reference,
-                                   "sel_lpf": lambda t: sel[0], "sel_ckf": lambda t: sel[1],
-                                   "sel_id_lpf": lambda t: sel[2], "sel_id_fb": lambda t: sel[3]},
-                        runs=B, store_states=False, seeds=seeds * len(combos))
+    loop = build_loop(p, sel, plant)
+    res = loop.simulate(n, inputs={"v": np.tile(v, (1, len(combos))), "r": p.reference},
+                        runs=B, store_states=False, store_signals=SIGNALS, seeds=seeds * len(combos), engine=engine)
     return res, index
 
 

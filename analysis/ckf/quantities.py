@@ -9,6 +9,7 @@ from ctrl_analysis.estimators.kalman import (
     LinearKalmanFilter,
 )
 from ctrl_analysis.identification import batch_least_squares
+from ctrl_analysis.loop import Loop, place
 from ctrl_analysis.metrics import mean_std
 from ctrl_analysis.plants import DiscreteLTI
 
@@ -19,6 +20,7 @@ __all__ = [
     "identification_bias",
     "missing",
     "noise_free_fit",
+    "open_loop",
     "q_sweep",
     "record",
     "table1",
@@ -141,25 +143,48 @@ def identification_bias(result, data_opts, p):
     return out
 
 
+def open_loop(block, signals, output):
+    """Drive a discrete ``block`` with recorded inputs through a one-block :class:`Loop` (compiled engine).
+
+    Parameters
+    ----------
+    block : DiscreteBlock
+    signals : dict of str -> numpy.ndarray, shape (N, B)
+        The block's inputs in order, one record per input.
+    output : str
+        The output kept (the block's first output).
+
+    Returns
+    -------
+    numpy.ndarray, shape (N, B)
+        ``output(k)`` for ``k = 0 .. N-1``, as ``block.run`` gives it.
+    """
+    outs = (output,) + tuple(f"_{o}" for o in block.outputs[1:])
+    loop = Loop([place(block, "b", inputs=list(signals), outputs=list(outs))], dt=1.0)
+    N, B = next(iter(signals.values())).shape
+    res = loop.simulate(N - 1, inputs=signals, runs=B, store_states=False, store_signals=[output], bound=np.inf)
+    return res[output]
+
+
 def full_order_errors(d, p, plant):
     """A full-order Kalman filter that knows the plant, run on the CKF case's records: RMS errors per run."""
     sys = DiscreteLTI(plant, p.Ts)
     kf = LinearKalmanFilter(sys.A, sys.B, sys.C, p.kf_Q * np.outer(sys.B, sys.B), p.R, p.kf_P0)
-    yhat, _ = kf.run(np.stack([d["y_m"], d["u_prev"]], axis=2))
-    err = yhat[:, :, 0] - d["y"]
+    yhat = open_loop(kf, {"y_m": d["y_m"], "u_prev": d["u_prev"]}, "yhat")
+    err = yhat - d["y"]
     t = d["t"]
     return {q: np.sqrt(np.mean(err[window(t, a, b)] ** 2, axis=0))
-            for q, (a, b) in {"transient": (0.0, 10.0), "steady": (p.t_steady, np.inf)}.items()}, yhat[:, 0, 0]
+            for q, (a, b) in {"transient": (0.0, 10.0), "steady": (p.t_steady, np.inf)}.items()}, yhat[:, 0]
 
 
 def q_sweep(d, p, qs, runs=10):
     """The CKF alone (open loop) on the LPF case's records for each ``Q = q I``: RMS errors, transient and steady."""
     t = d["t"][:-1]
-    inp = np.stack([d[s][:-1, :runs] for s in ("y_m", "u_prev", "f1", "f2", "g0")], axis=2)
+    inp = {s: d[s][:-1, :runs] for s in ("y_m", "u_prev", "f1", "f2", "g0")}
     out = {"transient": [], "steady": []}
     for q in qs:
-        y, _ = CharacteristicKalmanFilter(Q=q, R=p.R, P0=p.P0_ckf).run(inp)
-        err = y[:, :, 0] - d["y"][:-1, :runs]
+        y = open_loop(CharacteristicKalmanFilter(Q=q, R=p.R, P0=p.P0_ckf), inp, "y_ckf")
+        err = y - d["y"][:-1, :runs]
         out["transient"].append(float(np.sqrt(np.mean(err[window(t, 0.0, 10.0)] ** 2))))
         out["steady"].append(float(np.sqrt(np.mean(err[window(t, p.t_steady)] ** 2))))
     return {k: np.array(v) for k, v in out.items()}

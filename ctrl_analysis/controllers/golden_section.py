@@ -6,6 +6,7 @@ import numpy as np
 
 from .._validate import check_finite, check_nonnegative, check_positive
 from ..blocks import DiscreteBlock
+from ..estimators.kalman.ckf import register_jitable
 
 __all__ = ["GOLDEN_L1", "GOLDEN_L2", "GoldenSectionController"]
 
@@ -83,6 +84,8 @@ class GoldenSectionController(DiscreteBlock):
         self.mu = float(check_nonnegative("mu", mu, scalar=True))
         self.l1 = float(check_positive("l1", l1, scalar=True))
         self.l2 = float(check_positive("l2", l2, scalar=True))
+        # kernel parameters
+        self._p = np.array([self.k_I, self.c1, self.c2, self.mu, self.l1, self.l2])
 
     def initial_state(self) -> np.ndarray:
         return np.zeros(4)
@@ -112,5 +115,66 @@ class GoldenSectionController(DiscreteBlock):
     def output(self, t, x, u, params=None) -> np.ndarray:
         return self._kernel(x, u)[0][:, None]
 
+    def kernel(self):
+        """The compiled engine's kernel: :func:`golden_update`, :func:`golden_output` (twins of the numpy methods).
+
+        Returns
+        -------
+        ctrl_analysis._kernels.BlockKernel
+        """
+        from .._kernels import BlockKernel
+
+        return BlockKernel(output=golden_output, params=self._p, update=golden_update)
+
     def __repr__(self) -> str:
         return f"GoldenSectionController(k_I={self.k_I:g}, c2={self.c2:g}, mu={self.mu:g})"
+
+
+@register_jitable
+def _golden_step(x, u, p):
+    """One run of :meth:`GoldenSectionController._kernel` with scalar branches: ``(u(k), e(k), u_i(k))``."""
+    y, r, f1, f2, g0 = u[0], u[1], u[2], u[3], u[4]
+    e = y - r
+    e_prev, r_prev = (x[0], x[1]) if x[3] > 0.0 else (e, r)
+    # (17) golden section, (18) maintaining tracking with r(k+1) := r(k)
+    ul = -(p[4] * f1 * e + p[5] * f2 * e_prev) * (1.0 / (g0 + p[3]))
+    u0 = (r - f1 * r - f2 * r_prev) / g0
+    # (19) logic integral: c = c1 if e (e − e(k−1)) > 0 else c2
+    ui = (p[1] if e * (e - e_prev) > 0.0 else p[2]) * x[2] - p[0] * e
+    return u0 + ul + ui, e, ui  # (20)
+
+
+def golden_output(t, x, u, p, y):
+    """Compiled twin of :meth:`GoldenSectionController.output`: ``y = [u(k)]``, eq. (17)-(20).
+
+    Parameters
+    ----------
+    t : float
+        Time (unused).
+    x : numpy.ndarray
+        ``[e(k−1), r(k−1), u_i(k−1), started]`` of one run.
+    u : numpy.ndarray
+        ``[y, r, f1, f2, g0]``.
+    p : numpy.ndarray
+        ``[k_I, c1, c2, mu, l1, l2]``.
+    y : numpy.ndarray
+        Written in place.
+    """
+    y[0] = _golden_step(x, u, p)[0]
+
+
+def golden_update(t, x, u, p, x_next):
+    """Compiled twin of :meth:`GoldenSectionController.update`: ``[e(k), r(k), u_i(k), 1]``.
+
+    Parameters
+    ----------
+    t, x, u, p
+        As :func:`golden_output`.
+    x_next : numpy.ndarray
+        Written in place.
+    """
+    _, e, ui = _golden_step(x, u, p)
+    x_next[0] = e
+    x_next[1] = u[1]
+    x_next[2] = ui
+    x_next[3] = 1.0

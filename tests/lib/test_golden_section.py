@@ -62,8 +62,63 @@ def test_golden_section_loop_runs_in_control_interconnect():
                  place(GoldenSectionController(k_I=0.02, c2=0.9, mu=0.1), "ctrl")], 0.01)
     r = 2.0 + np.sign(np.sin(0.05 * np.arange(200)))
     ext = {"r": r, "f1": np.full(200, F1), "f2": np.full(200, F2), "g0": np.full(200, G0)}
-    res = loop.simulate(199, inputs=ext)
+    res = loop.simulate(199, inputs=ext, engine="numpy")
     sys = loop.interconnect()
     assert sys.isdtime()
     resp = ct.input_output_response(sys, res.t, np.stack([ext[s] for s in loop.external]), X0=res.x[0, 0])
     np.testing.assert_allclose(res.to_timeresponse(0).outputs, resp.outputs, rtol=1e-10, atol=1e-10)
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+def test_golden_kernel_equals_the_numpy_methods_bit_for_bit(compiled):
+    from test_kalman_ckf import kernel_runs
+
+    from ctrl_analysis import _kernels
+
+    ctrl = GoldenSectionController(k_I=0.02, c2=0.9, mu=0.5)
+    k = ctrl.kernel()
+    rng = np.random.default_rng(5)
+    x = rng.normal(size=(60, 4))
+    x[:, 3] = rng.integers(0, 2, 60)  # started or not: both branches of e(k−1), r(k−1)
+    u = rng.normal(size=(60, 5))
+    u[:, 4] = 0.05 + np.abs(u[:, 4])
+    out = _kernels._jit(k.output) if compiled else k.output
+    upd = _kernels._jit(k.update) if compiled else k.update
+    assert np.array_equal(kernel_runs(out, k.params, x, u, 1), ctrl.output(0.0, x, u))
+    nxt = kernel_runs(upd, k.params, x, u, 4)
+    assert np.array_equal(nxt, ctrl.update(0.0, x, u))
+    grow = (u[:, 0] - u[:, 1]) * ((u[:, 0] - u[:, 1]) - np.where(x[:, 3] > 0, x[:, 0], u[:, 0] - u[:, 1])) > 0
+    assert grow.any() and (~grow).any()  # both factors c1 and c2 of the logic integral were used
+
+
+def test_adaptive_loop_compiled_equals_numpy_engine_bit_for_bit():
+    """Plant, delay, measurement, CKF, ARX regressor, RLS (projection, trace cap) and golden-section control.
+
+    One loop structure holds every kernel of these library blocks against its numpy method inside the
+    engine (one compile on a cold cache, not one per block).
+    """
+    from ctrl_analysis.blocks import StaticGain
+    from ctrl_analysis.estimators.kalman import CharacteristicKalmanFilter
+    from ctrl_analysis.identification import ArxRegressor, RecursiveLeastSquares
+
+    dt = 0.01
+    loop = Loop([
+        place(DiscreteLTI(ct.tf([G0, 0.0], [1.0, -F1, -F2], True), dt), "plant", inputs=["u"], outputs=["y"]),
+        place(DiscreteLTI(ct.tf([1.0], [1.0, 0.0], True), dt), "delay", inputs=["u"], outputs=["u_prev"]),
+        place(StaticGain([[1.0, 1.0]], ("y", "v"), ("y_m",)), "meas"),
+        place(CharacteristicKalmanFilter(Q=1e-4, R=0.01), "ckf", inputs=["y_m", "u_prev", "f1", "f2", "g0"],
+              outputs=["y_f", "y_f1"]),
+        place(ArxRegressor(2, 1), "reg", inputs=["y_f", "u"], outputs=["z", "h0", "h1", "h2"]),
+        place(RecursiveLeastSquares(3, 0.995, 1e-3, (1.7, -0.75, 0.05), lower=(1.0, -1.0, 0.01),
+                                    upper=(2.0, -0.5, 1.0), max_trace=3e-3, feedthrough=False), "rls",
+              inputs=["z", "h0", "h1", "h2"], outputs=["f1", "f2", "g0"]),
+        place(GoldenSectionController(k_I=0.01, c2=0.95, mu=0.5), "ctrl", inputs=["y_f", "r", "f1", "f2", "g0"],
+              outputs=["u"])], dt)
+    v = 0.1 * np.random.default_rng(12).normal(size=(1001, 3))
+    ext = {"v": v, "r": np.where(np.arange(1001) < 500, 3.0, 1.0)}
+    a, b = loop.simulate(1000, inputs=ext, engine="numpy"), loop.simulate(1000, inputs=ext, engine="compiled")
+    assert np.array_equal(a.x, b.x)
+    for s in a.signals:
+        assert np.array_equal(a[s], b[s]), s
+    assert np.all(np.abs(a["y"][-100:] - 1.0) < 0.3)  # the adaptive loop tracks the second reference
+    assert np.ptp(a["f1"]) > 0 and np.ptp(a["g0"]) > 0  # the identification is active

@@ -136,7 +136,7 @@ def arx_loop(rls, dt=0.1):
 
 def test_rls_block_recovers_second_order_arx():
     u = np.random.default_rng(5).standard_normal((400, 3))
-    res = arx_loop(RecursiveLeastSquares(3, forgetting=1.0, P0=1e4)).simulate(399, inputs={"u": u})
+    res = arx_loop(RecursiveLeastSquares(3, forgetting=1.0, P0=1e4)).simulate(399, inputs={"u": u}, engine="numpy")
     theta = np.stack([res["a1"][-1], res["a2"][-1], res["b1"][-1]], axis=1)
     # exact data: only the prior P0 = 1e4 I biases the estimate, by ~ 1 / (P0 Σ h²) ≪ 1e-4
     np.testing.assert_allclose(theta, np.tile(ARX, (3, 1)), atol=1e-4)
@@ -199,8 +199,40 @@ def test_arx_regressor_lags_and_bad_input():
 def test_rls_loop_runs_in_control_interconnect():
     loop = arx_loop(RecursiveLeastSquares(3, forgetting=0.99, P0=100.0, lower=[-2, -2, 0], upper=[2, 2, 1]))
     u = np.random.default_rng(8).standard_normal(60)
-    res = loop.simulate(59, inputs={"u": u})
+    res = loop.simulate(59, inputs={"u": u}, engine="numpy")  # compiled = numpy: test_golden_section's adaptive loop
     sys = loop.interconnect()
     assert sys.isdtime()
     resp = ct.input_output_response(sys, res.t, u[None, :], X0=res.x[0, 0])
     np.testing.assert_allclose(res.to_timeresponse(0).outputs, resp.outputs, rtol=1e-10, atol=1e-12)
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+def test_rls_and_arx_kernels_equal_the_numpy_methods_bit_for_bit(compiled):
+    from test_kalman_ckf import kernel_runs
+
+    from ctrl_analysis import _kernels
+
+    jit = _kernels._jit if compiled else (lambda f: f)
+    rng = np.random.default_rng(9)
+    B = 50
+    theta = rng.uniform(-1.0, 1.0, (B, 3))
+    M = rng.normal(size=(B, 3, 3))
+    P = M @ M.transpose(0, 2, 1) + 0.1 * np.eye(3)
+    x = np.concatenate([theta, P.reshape(B, 9)], axis=1)
+    u = rng.normal(size=(B, 4)) * [3.0, 1.0, 1.0, 1.0]
+    for rls in (RecursiveLeastSquares(3, 0.98, lower=[-1, -1, -1], upper=[1, 1, 1], max_trace=4.0),
+                RecursiveLeastSquares(3, 1.0, feedthrough=False)):
+        k = rls.kernel()
+        nxt = kernel_runs(jit(k.update), k.params, x, u, 12)
+        assert np.array_equal(nxt, rls.update(0.0, x, u))
+        assert np.array_equal(kernel_runs(jit(k.output), k.params, x, u, 3), rls.output(0.0, x, u))
+    tr = nxt[:, [3, 7, 11]].sum(axis=1)
+    first = RecursiveLeastSquares(3, 0.98, lower=[-1, -1, -1], upper=[1, 1, 1], max_trace=4.0).update(0.0, x, u)
+    assert np.any(np.abs(first[:, :3]) == 1.0) and np.isclose(first[:, [3, 7, 11]].sum(axis=1), 4.0).any()
+    assert np.any(tr > 4.0)  # without the cap the trace exceeds it: the cap branch was exercised above
+    for reg in (ArxRegressor(2, 1), ArxRegressor(1, 2, lag=2)):
+        xs, us = rng.normal(size=(20, reg.n_states)), rng.normal(size=(20, 2))
+        k = reg.kernel()
+        assert np.array_equal(kernel_runs(jit(k.update), k.params, xs, us, reg.n_states), reg.update(0.0, xs, us))
+        assert np.array_equal(kernel_runs(jit(k.output), k.params, xs, us, 4), reg.output(0.0, xs, us))
+

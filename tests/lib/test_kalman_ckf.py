@@ -98,21 +98,76 @@ def test_discrete_lti_matches_control_c2d_and_checks_siso():
         DiscreteLTI([1.0, 2.0], 0.1)
 
 
-def test_ckf_and_plant_run_in_control_interconnect():
+def ckf_loop():
+    """Plant, delay, a static sensor (0 states) and the CKF: every block has a kernel."""
     from ctrl_analysis.loop import Loop, place
 
     plant = DiscreteLTI(ct.tf([G0, 0.0], [1.0, -F1, -F2], True), 0.1)
     delay = DiscreteLTI(ct.tf([1.0], [1.0, 0.0], True), 0.1)
     meas = DiscreteLTI(ct.tf([1.0], [1.0], True), 0.1)  # a static pass-through (0 states, feedthrough)
-    loop = Loop([place(plant, "plant", inputs=["u"], outputs=["y"]),
+    return Loop([place(plant, "plant", inputs=["u"], outputs=["y"]),
                  place(delay, "delay", inputs=["u"], outputs=["u_prev"]),
                  place(meas, "sensor", inputs=["y_v"], outputs=["y_m"]),
                  place(CharacteristicKalmanFilter(Q=Q, R=R), "ckf", inputs=["y_m", "u_prev", "f1", "f2", "g0"])],
                 0.1, outputs=["y", "xhat[0]", "xhat[1]"])
+
+
+def test_ckf_and_plant_run_in_control_interconnect():
+    loop = ckf_loop()
     rng = np.random.default_rng(3)
     ext = {"u": rng.normal(size=120), "y_v": rng.normal(size=120), "f1": np.full(120, F1),
            "f2": np.full(120, F2), "g0": np.full(120, G0)}
-    res = loop.simulate(119, inputs=ext)
+    res = loop.simulate(119, inputs=ext, engine="numpy")  # compiled = numpy: test_golden_section's adaptive loop
     resp = ct.input_output_response(loop.interconnect(), res.t, np.stack([ext[s] for s in loop.external]),
                                     X0=res.x[0, 0])
     np.testing.assert_allclose(res.to_timeresponse(0).outputs, resp.outputs, rtol=1e-10, atol=1e-12)
+
+
+# ------------------------------------------------------------------ compiled kernels
+def kernel_runs(fn, p, x, u, width):
+    """Apply a block kernel ``fn(t, x, u, p, out)`` run by run (plain Python or jitted) -> ``(B, width)``."""
+    out = np.empty((x.shape[0], width))
+    for b in range(x.shape[0]):
+        fn(0.3, x[b], u[b], p, out[b])
+    return out
+
+
+def random_ckf_inputs(rng, B=40):
+    """CKF states (a random SPD covariance) and inputs [y, u(k−1), f1, f2, g0]."""
+    x = rng.normal(size=(B, 5))
+    x[:, 2], x[:, 4] = 1.0 + x[:, 2] ** 2, 1.0 + x[:, 4] ** 2
+    x[:, 3] = 0.3 * x[:, 3]
+    u = rng.normal(size=(B, 5))
+    u[:, 2:] = [F1, F2, G0] + 0.1 * u[:, 2:]
+    return x, u
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+def test_ckf_lti_and_full_kf_kernels_equal_the_numpy_methods(compiled):
+    from ctrl_analysis import _kernels
+
+    jit = _kernels._jit if compiled else (lambda f: f)
+    rng = np.random.default_rng(11)
+    ckf = CharacteristicKalmanFilter(Q=Q, R=R)
+    x, u = random_ckf_inputs(rng)
+    k = ckf.kernel()
+    assert np.array_equal(kernel_runs(jit(k.update), k.params, x, u, 5), ckf.update(0.3, x, u))
+    assert np.array_equal(kernel_runs(jit(k.output), k.params, x, u, 2), ckf.output(0.3, x, u))
+    for plant in (DiscreteLTI(ct.tf([2.0, 4.0], [1.0, 3.0, 2.0, 0.5]), 0.05), DiscreteLTI(ct.tf([1.0, 0.5], [1.0, 2.0]), 0.1)):
+        xp, up = rng.normal(size=(30, plant.n_states)), rng.normal(size=(30, 1))
+        k = plant.kernel()
+        assert np.array_equal(kernel_runs(jit(k.update), k.params, xp, up, plant.n_states), plant.update(0.3, xp, up))
+        assert np.array_equal(kernel_runs(jit(k.output), k.params, xp, up, 1), plant.output(0.3, xp, up))
+    assert DiscreteLTI(ct.tf([1.0, 0.5], [1.0, 2.0]), 0.1).feedthrough  # the D u branch was exercised
+    # the full-order KF's kernel sums in another order than einsum: equal to rounding
+    sysd = DiscreteLTI(ct.zpk([], [-1.0, -2.0, -3.0], 6.0), 0.05)
+    kf = LinearKalmanFilter(sysd.A, sysd.B, sysd.C, 0.01 * np.outer(sysd.B, sysd.B) + 1e-4 * np.eye(3), R, 1.0)
+    M = rng.normal(size=(25, 3, 3))
+    xk = np.concatenate([rng.normal(size=(25, 3)), (M @ M.transpose(0, 2, 1) + np.eye(3)).reshape(25, 9)], axis=1)
+    uk = rng.normal(size=(25, 2))
+    k = kf.kernel()
+    np.testing.assert_allclose(kernel_runs(jit(k.update), k.params, xk, uk, 12), kf.update(0.3, xk, uk),
+                               rtol=1e-13, atol=1e-14)
+    np.testing.assert_allclose(kernel_runs(jit(k.output), k.params, xk, uk, 1), kf.output(0.3, xk, uk),
+                               rtol=1e-13, atol=1e-14)
+

@@ -6,7 +6,7 @@ import json
 import numpy as np
 
 from analysis import ckf
-from analysis.ckf.loops import CASES, simulate_cases
+from analysis.ckf.loops import CASES, ID_OPTIONS, SIGNALS, simulate_cases
 from analysis.ckf.paper import PAPER
 from ctrl_analysis.report import StudyContext, write_results_json
 
@@ -41,3 +41,17 @@ def test_batch_run_equals_single_run():
         a = res2["y_fb"][:, idx2[(p.id_signal, case)]][:, 0]
         b = res1["y_fb"][:, idx1[(p.id_signal, case)]][:, 0]
         np.testing.assert_array_equal(a, b)
+
+
+def test_compiled_engine_equals_numpy_engine_and_switches_at_t_filter():
+    p = dataclasses.replace(PAPER, t_end=3.0)
+    a, idx = simulate_cases(p, 2, seed=5, options=tuple(ID_OPTIONS), engine="numpy")
+    b, _ = simulate_cases(p, 2, seed=5, options=tuple(ID_OPTIONS), engine="compiled")
+    for s in SIGNALS:
+        assert np.array_equal(a[s], b[s]), s
+    before = a.t < p.t_filter - 1e-9
+    for case, fed in (("nofilter", "y_m"), ("lpf", "y_lpf"), ("ckf", "y_ckf")):
+        sl = idx[("feedback", case)]
+        assert np.array_equal(a["y_fb"][before, sl], a["y_m"][before, sl])  # raw before t_filter
+        assert np.array_equal(a["y_fb"][~before, sl], a[fed][~before, sl])  # then the case's signal
+        assert not np.array_equal(a["y_fb"][:, sl], a[fed][:, sl]) or case == "nofilter"

@@ -7,6 +7,12 @@ import numpy as np
 from ..._validate import check_finite, check_matrix, check_positive
 from ...blocks import DiscreteBlock, signal_names
 
+try:  # a helper callable from compiled kernels and, unchanged, from Python (on a batch's columns)
+    from numba.extending import register_jitable
+except ImportError:  # pragma: no cover - numba is optional: the helper stays a plain function
+    def register_jitable(fn):
+        return fn
+
 __all__ = ["CharacteristicKalmanFilter", "LinearKalmanFilter"]
 
 
@@ -91,47 +97,110 @@ class CharacteristicKalmanFilter(DiscreteBlock):
         self.R = float(check_positive("R", R, scalar=True))
         self.P0 = _check_covariance("P0", P0, 2, definite=True)
         self.x0 = np.zeros(2) if x0 is None else check_finite("x0", np.ravel(x0), shape=(2,))
+        # kernel parameters: [Q00, Q01, Q11, R]
+        self._p = np.array([self.Q[0, 0], self.Q[0, 1], self.Q[1, 1], self.R])
 
     def initial_state(self) -> np.ndarray:
         return np.array([self.x0[0], self.x0[1], self.P0[0, 0], self.P0[0, 1], self.P0[1, 1]])
 
-    def _kernel(self, x, u):
-        """One filter step: returns ``X̂(k)`` (two columns) and ``P(k)`` (three columns)."""
-        y, u_prev, f1, f2, g0 = u[:, 0], u[:, 1], u[:, 2], u[:, 3], u[:, 4]
-        P00, P01, P11 = x[:, 2], x[:, 3], x[:, 4]
-        Q, R = self.Q, self.R
-        # (11) X̂(k|k−1) = Φ X̂(k−1) + Γ u(k−1)
-        xp0 = f1 * x[:, 0] + f2 * x[:, 1] + g0 * u_prev
-        xp1 = x[:, 0]
-        # (11) P(k|k−1) = Φ P Φᵀ + Q, Φ = [[f1, f2], [1, 0]]
-        a0 = f1 * P00 + f2 * P01
-        a1 = f1 * P01 + f2 * P11
-        Pp00 = a0 * f1 + a1 * f2 + Q[0, 0]
-        Pp01 = a0 + Q[0, 1]
-        Pp11 = P00 + Q[1, 1]
-        # (11) K = P(k|k−1) Cᵀ (C P(k|k−1) Cᵀ + R)⁻¹
-        S = Pp00 + R
-        K0, K1 = Pp00 / S, Pp01 / S
-        # (11) X̂(k) = X̂(k|k−1) + K (y(k) − C X̂(k|k−1))
-        r = y - xp0
-        xf0, xf1 = xp0 + K0 * r, xp1 + K1 * r
-        # (11) P(k) = (I − K C) P(k|k−1) (I − K C)ᵀ + K R Kᵀ, I − K C = [[1 − K0, 0], [−K1, 1]]
-        m0 = 1.0 - K0
-        b10 = Pp01 - K1 * Pp00
-        n00 = m0 * m0 * Pp00 + K0 * K0 * R
-        n01 = m0 * b10 + K0 * K1 * R
-        n11 = b10 * (-K1) + (Pp11 - K1 * Pp01) + K1 * K1 * R
-        return xf0, xf1, n00, n01, n11
-
     def update(self, t, x, u, params=None) -> np.ndarray:
-        return np.stack(self._kernel(x, u), axis=1)
+        x_next = np.empty_like(x)
+        ckf_update(t, x.T, u.T, self._p, x_next.T)  # the kernel on the batch's columns: one source
+        return x_next
 
     def output(self, t, x, u, params=None) -> np.ndarray:
-        xf0, xf1, *_ = self._kernel(x, u)
-        return np.stack([xf0, xf1], axis=1)
+        y = np.empty((x.shape[0], 2))
+        ckf_output(t, x.T, u.T, self._p, y.T)
+        return y
+
+    def kernel(self):
+        """The compiled engine's kernel (:func:`ckf_update`, :func:`ckf_output`; the numpy methods call them too).
+
+        Returns
+        -------
+        ctrl_analysis._kernels.BlockKernel
+        """
+        from ..._kernels import BlockKernel
+
+        return BlockKernel(output=ckf_output, params=self._p, update=ckf_update)
 
     def __repr__(self) -> str:
         return f"CharacteristicKalmanFilter(R={self.R:g})"
+
+
+@register_jitable
+def _ckf_step(x, u, p):
+    """One CKF step, eq. (6), (10), (11): ``(X̂(k)[0], X̂(k)[1], P(k)[0][0], P(k)[0][1], P(k)[1][1])``.
+
+    ``x = [X̂(k−1), P00, P01, P11]``, ``u = [y(k), u(k−1), f1, f2, g0]``, ``p = [Q00, Q01, Q11, R]``;
+    scalar indexing only, so ``x``, ``u`` may be one run's vectors or a batch's columns.
+    """
+    y, u_prev, f1, f2, g0 = u[0], u[1], u[2], u[3], u[4]
+    P00, P01, P11 = x[2], x[3], x[4]
+    R = p[3]
+    # (11) X̂(k|k−1) = Φ X̂(k−1) + Γ u(k−1)
+    xp0 = f1 * x[0] + f2 * x[1] + g0 * u_prev
+    xp1 = x[0]
+    # (11) P(k|k−1) = Φ P Φᵀ + Q, Φ = [[f1, f2], [1, 0]]
+    a0 = f1 * P00 + f2 * P01
+    a1 = f1 * P01 + f2 * P11
+    Pp00 = a0 * f1 + a1 * f2 + p[0]
+    Pp01 = a0 + p[1]
+    Pp11 = P00 + p[2]
+    # (11) K = P(k|k−1) Cᵀ (C P(k|k−1) Cᵀ + R)⁻¹
+    S = Pp00 + R
+    K0, K1 = Pp00 / S, Pp01 / S
+    # (11) X̂(k) = X̂(k|k−1) + K (y(k) − C X̂(k|k−1))
+    r = y - xp0
+    xf0, xf1 = xp0 + K0 * r, xp1 + K1 * r
+    # (11) P(k) = (I − K C) P(k|k−1) (I − K C)ᵀ + K R Kᵀ, I − K C = [[1 − K0, 0], [−K1, 1]]
+    m0 = 1.0 - K0
+    b10 = Pp01 - K1 * Pp00
+    n00 = m0 * m0 * Pp00 + K0 * K0 * R
+    n01 = m0 * b10 + K0 * K1 * R
+    n11 = b10 * (-K1) + (Pp11 - K1 * Pp01) + K1 * K1 * R
+    return xf0, xf1, n00, n01, n11
+
+
+def ckf_update(t, x, u, p, x_next):
+    """The CKF's next state ``[X̂(k), P(k)]``: the kernel of :class:`CharacteristicKalmanFilter`.
+
+    Scalar indexing only: the compiled kernel of one run and, on a batch's columns, the numpy method.
+
+    Parameters
+    ----------
+    t : float
+        Time (unused).
+    x : numpy.ndarray
+        ``[X̂(k−1)[0], X̂(k−1)[1], P00, P01, P11]``.
+    u : numpy.ndarray
+        ``[y(k), u(k−1), f1, f2, g0]``.
+    p : numpy.ndarray
+        ``[Q00, Q01, Q11, R]``.
+    x_next : numpy.ndarray
+        Written in place.
+    """
+    xf0, xf1, n00, n01, n11 = _ckf_step(x, u, p)
+    x_next[0] = xf0
+    x_next[1] = xf1
+    x_next[2] = n00
+    x_next[3] = n01
+    x_next[4] = n11
+
+
+def ckf_output(t, x, u, p, y):
+    """The filtered estimate ``X̂(k)`` after this sample (direct feedthrough); arguments as :func:`ckf_update`.
+
+    Parameters
+    ----------
+    t, x, u, p
+        As :func:`ckf_update`.
+    y : numpy.ndarray
+        ``[X̂(k)[0], X̂(k)[1]]``, written in place.
+    """
+    xf0, xf1, _, _, _ = _ckf_step(x, u, p)
+    y[0] = xf0
+    y[1] = xf1
 
 
 class LinearKalmanFilter(DiscreteBlock):
@@ -187,6 +256,8 @@ class LinearKalmanFilter(DiscreteBlock):
         self.P0 = _check_covariance("P0", P0, n, definite=True)
         self.x0 = np.zeros(n) if x0 is None else check_finite("x0", np.ravel(x0), shape=(n,))
         self.n = n
+        # kernel parameters: [n, R, F (row-major), G, H, Q (row-major)]
+        self._p = np.concatenate([[float(n), self.R], self.F.reshape(-1), self.G, self.H, self.Q.reshape(-1)])
         self.states = signal_names("xhat", n) + tuple(f"P[{i}][{j}]" for i in range(n) for j in range(n))
 
     def initial_state(self) -> np.ndarray:
@@ -219,5 +290,115 @@ class LinearKalmanFilter(DiscreteBlock):
         xf, _ = self._kernel(x, u)
         return np.einsum("bi,i->b", xf, self.H, optimize=False)[:, None]
 
+    def kernel(self):
+        """The compiled engine's kernel: :func:`lkf_update`, :func:`lkf_output` (twins of the numpy methods).
+
+        Returns
+        -------
+        ctrl_analysis._kernels.BlockKernel
+        """
+        from ..._kernels import BlockKernel
+
+        return BlockKernel(output=lkf_output, params=self._p, update=lkf_update)
+
     def __repr__(self) -> str:
         return f"LinearKalmanFilter(n={self.n}, R={self.R:g})"
+
+
+@register_jitable
+def _lkf_filter(x, u, p, W):
+    """Prediction, gain and correction of :class:`LinearKalmanFilter` for one run, into the scratch ``W``.
+
+    ``W = [FP or (I − K H) P(k|k−1) (n·n), P(k|k−1) (n·n), K (n), x̂(k) (n)]``; returns nothing.
+    """
+    n = int(p[0])
+    F, G, H, Q = 2, 2 + n * n, 2 + n * n + n, 2 + n * n + 2 * n  # offsets in p
+    Pp, K, xf = n * n, 2 * n * n, 2 * n * n + n  # offsets in W
+    # x̂(k|k−1) = F x̂(k−1) + G u(k−1)
+    for i in range(n):
+        acc = 0.0
+        for j in range(n):
+            acc += p[F + i * n + j] * x[j]
+        W[xf + i] = acc + u[1] * p[G + i]
+    # P(k|k−1) = F P Fᵀ + Q
+    for i in range(n):
+        for k in range(n):
+            acc = 0.0
+            for j in range(n):
+                acc += p[F + i * n + j] * x[n + j * n + k]
+            W[i * n + k] = acc
+    for i in range(n):
+        for m in range(n):
+            acc = 0.0
+            for k in range(n):
+                acc += W[i * n + k] * p[F + m * n + k]
+            W[Pp + i * n + m] = acc + p[Q + i * n + m]
+    # K = P(k|k−1) Hᵀ / (H P(k|k−1) Hᵀ + R);  x̂(k) = x̂(k|k−1) + K (y − H x̂(k|k−1))
+    S = 0.0
+    yp = 0.0
+    for i in range(n):
+        acc = 0.0
+        for j in range(n):
+            acc += W[Pp + i * n + j] * p[H + j]
+        W[K + i] = acc
+        S += acc * p[H + i]
+        yp += W[xf + i] * p[H + i]
+    for i in range(n):
+        W[K + i] = W[K + i] / (S + p[1])
+        W[xf + i] = W[xf + i] + W[K + i] * (u[0] - yp)
+
+
+def lkf_update(t, x, u, p, x_next):
+    """Compiled twin of :meth:`LinearKalmanFilter.update`: ``[x̂(k), P(k)]``, P(k) in Joseph form.
+
+    Parameters
+    ----------
+    t : float
+        Time (unused).
+    x : numpy.ndarray
+        ``[x̂(k−1), P(k−1) row by row]`` of one run.
+    u : numpy.ndarray
+        ``[y(k), u(k−1)]``.
+    p : numpy.ndarray
+        ``[n, R, F, G, H, Q]`` (matrices row-major).
+    x_next : numpy.ndarray
+        Written in place.
+    """
+    n = int(p[0])
+    H = 2 + n * n + n
+    Pp, K, xf = n * n, 2 * n * n, 2 * n * n + n
+    W = np.empty(2 * n * n + 2 * n)
+    _lkf_filter(x, u, p, W)
+    # P(k) = (I − K H) P(k|k−1) (I − K H)ᵀ + K R Kᵀ
+    for i in range(n):
+        x_next[i] = W[xf + i]
+        for k in range(n):
+            acc = 0.0
+            for j in range(n):
+                acc += ((1.0 if i == j else 0.0) - W[K + i] * p[H + j]) * W[Pp + j * n + k]
+            W[i * n + k] = acc
+    for i in range(n):
+        for m in range(n):
+            acc = 0.0
+            for k in range(n):
+                acc += W[i * n + k] * ((1.0 if m == k else 0.0) - W[K + m] * p[H + k])
+            x_next[n + i * n + m] = acc + p[1] * W[K + i] * W[K + m]
+
+
+def lkf_output(t, x, u, p, y):
+    """Compiled twin of :meth:`LinearKalmanFilter.output`: ``ŷ = H x̂(k)``; arguments as :func:`lkf_update`.
+
+    Parameters
+    ----------
+    t, x, u, p
+        As :func:`lkf_update`.
+    y : numpy.ndarray
+        ``[ŷ]``, written in place.
+    """
+    n = int(p[0])
+    W = np.empty(2 * n * n + 2 * n)
+    _lkf_filter(x, u, p, W)
+    acc = 0.0
+    for i in range(n):
+        acc += W[2 * n * n + n + i] * p[2 + n * n + n + i]
+    y[0] = acc

@@ -1,0 +1,160 @@
+"""Per-run kernels of the identification blocks (:mod:`ctrl_analysis.identification`).
+
+* :func:`arx_update` / :func:`arx_output`: the tapped delay lines of
+  :class:`~ctrl_analysis.identification.ArxRegressor`, written with scalar indexing only, so they
+  are both its compiled kernel and, called on a batch's transposed arrays, its numpy methods.
+* :func:`rls_update` / :func:`rls_output` (:func:`rls_hold_output` without feedthrough): the compiled twins of
+  :class:`~ctrl_analysis.identification.RecursiveLeastSquares`' numpy step (its projection and
+  trace cap branch per value); ``tests/lib/test_identification.py`` holds the two equal bit for bit.
+
+Parameters ``p`` of the RLS kernels: ``[n, λ, max_trace (0: none), projected (0/1, informative: the kernels
+clip to the bounds always, and infinite bounds make the projection the identity), lower (n), upper (n)]``;
+state ``[θ (n), R row by row (n·n)]``; input ``[z, h (n)]``.
+"""
+
+from __future__ import annotations
+
+from .estimators.kalman.ckf import register_jitable
+
+__all__: list = []  # kernels: reached through the blocks' kernel() methods
+
+
+def arx_update(t, x, u, p, x_next):
+    """Shift both delay lines: ``s(k−1) <- s(k)``, ``s(k−i) <- s(k−i+1)``, the same for ``u``.
+
+    Parameters
+    ----------
+    t : float
+        Time (unused).
+    x : numpy.ndarray
+        ``[s(k−1) .. s(k−na−d), u(k−1) .. u(k−nb−d)]``.
+    u : numpy.ndarray
+        ``[s(k), u(k)]``.
+    p : numpy.ndarray
+        ``[na, nb, d]``.
+    x_next : numpy.ndarray
+        Written in place.
+    """
+    ns, nu = int(p[0]) + int(p[2]), int(p[1]) + int(p[2])
+    for i in range(ns):
+        x_next[i] = u[0] if i == 0 else x[i - 1]
+    for i in range(nu):
+        x_next[ns + i] = u[1] if i == 0 else x[ns + i - 1]
+
+
+def arx_output(t, x, u, p, y):
+    """``z = s(k−d)``; ``h = [s(k−d−1) .. s(k−d−na), u(k−d−1) .. u(k−d−nb)]``.
+
+    Parameters
+    ----------
+    t, x, u, p
+        As :func:`arx_update`.
+    y : numpy.ndarray
+        ``[z, h]``, written in place.
+    """
+    na, nb, d = int(p[0]), int(p[1]), int(p[2])
+    ns = na + d
+    y[0] = u[0]
+    for _ in range(min(d, 1)):  # z = s(k−d): the stored s(k−d) when d >= 1 (a loop, not a branch: leaner in numba)
+        y[0] = x[d - 1]
+    for i in range(na):
+        y[1 + i] = x[d + i]
+    for j in range(nb):
+        y[1 + na + j] = x[ns + d + j]
+
+
+@register_jitable
+def _rls_gain(x, u, p, out):
+    """``R(k−1) h(k)`` into ``out[:n]``; returns ``hᵀ R h + λ`` and the innovation ``z − hᵀ θ(k−1)``."""
+    n = int(p[0])
+    for i in range(n):
+        acc = 0.0
+        for j in range(n):
+            acc = acc + x[n + i * n + j] * u[1 + j]
+        out[i] = acc
+    hPh = 0.0
+    hth = 0.0
+    for i in range(n):
+        hPh = hPh + u[1 + i] * out[i]
+        hth = hth + u[1 + i] * x[i]
+    return p[1] + hPh, u[0] - hth
+
+
+@register_jitable
+def _rls_theta(x, p, out, den, innov):
+    """``θ(k) = Π[θ(k−1) + D(k) (z − hᵀ θ(k−1))]``, ``D = R h / den``, from ``R h`` in ``out[:n]`` (overwritten)."""
+    n = int(p[0])
+    for i in range(n):
+        v = x[i] + out[i] / den * innov
+        # projection onto the box lower <= θ <= upper (NaN stays NaN, as np.clip; infinite bounds: identity)
+        v = p[4 + i] if v < p[4 + i] else v
+        out[i] = p[4 + n + i] if v > p[4 + n + i] else v
+
+
+def rls_update(t, x, u, p, x_next):
+    """One RLS step, eq. (9): ``[θ(k), R(k)]``, compiled twin of ``RecursiveLeastSquares.update``.
+
+    Parameters
+    ----------
+    t : float
+        Time (unused).
+    x : numpy.ndarray
+        ``[θ(k−1), R(k−1)]`` of one run.
+    u : numpy.ndarray
+        ``[z(k), h(k)]``.
+    p : numpy.ndarray
+        Packed parameters (module docstring).
+    x_next : numpy.ndarray
+        Written in place.
+    """
+    n = int(p[0])
+    lam = p[1]
+    den, innov = _rls_gain(x, u, p, x_next)  # R h in x_next[:n] until θ(k) overwrites it
+    # R(k) = (R − D (R h)ᵀ) / λ with D = R h / den, then symmetrised: 0.5 (R(k) + R(k)ᵀ)
+    for i in range(n):
+        d = x_next[i] / den
+        for j in range(n):
+            x_next[n + i * n + j] = (x[n + i * n + j] - d * x_next[j]) / lam
+    for i in range(n):
+        for j in range(i, n):
+            v = 0.5 * (x_next[n + i * n + j] + x_next[n + j * n + i])
+            x_next[n + i * n + j] = v
+            x_next[n + j * n + i] = v
+    # anti-windup: trace R(k) <= max_trace, R(k) scaled by min(1, max_trace / trace) (NaN propagates, as
+    # np.minimum); a scale of 1 (no cap) is exact. Conditional expressions, not if statements, keep numba lean.
+    tr = 0.0
+    for i in range(n):
+        tr = tr + x_next[n + i * n + i]
+    s = p[2] / tr if p[2] > 0.0 else 1.0
+    s = 1.0 if s >= 1.0 else s
+    for i in range(n * n):
+        x_next[n + i] = x_next[n + i] * s
+    _rls_theta(x, p, x_next, den, innov)
+
+
+def rls_output(t, x, u, p, y):
+    """``θ(k)``, the estimate after the update with this sample (feedthrough); arguments as :func:`rls_update`.
+
+    Parameters
+    ----------
+    t, x, u, p
+        As :func:`rls_update`.
+    y : numpy.ndarray
+        ``θ(k)``, written in place.
+    """
+    den, innov = _rls_gain(x, u, p, y)
+    _rls_theta(x, p, y, den, innov)
+
+
+def rls_hold_output(t, x, u, p, y):
+    """The stored ``θ(k−1)`` (``feedthrough=False``); arguments as :func:`rls_update`.
+
+    Parameters
+    ----------
+    t, x, u, p
+        As :func:`rls_update`.
+    y : numpy.ndarray
+        ``θ(k−1)``, written in place.
+    """
+    for i in range(y.shape[0]):
+        y[i] = x[i]
