@@ -50,6 +50,7 @@ __all__ = [
     "copy_output",
     "eso_rhs",
     "gain_output",
+    "jitable",
     "kernel_of",
     "sigma_rhs",
 ]
@@ -79,6 +80,35 @@ def available() -> bool:
     except ImportError:  # pragma: no cover - numba is installed in the project's environment
         return False
     return True
+
+
+def jitable(fn=None, **options):
+    """Decorator: ``fn`` unchanged in Python, and callable from numba-compiled kernels.
+
+    ``numba.extending.register_jitable`` (a no-op without numba). A helper written with scalar
+    indexing and ``np`` ufuncs then serves the batch's columns in Python and one run's scalars in a
+    compiled kernel: one source for both engines. Use as ``@jitable`` or ``@jitable(inline="always")``.
+
+    Parameters
+    ----------
+    fn : callable, optional
+        The function (when used without options).
+    **options
+        Passed to ``register_jitable`` (e.g. ``inline="always"``).
+
+    Returns
+    -------
+    callable
+        ``fn`` itself, or a decorator when ``fn`` is omitted.
+    """
+    def wrap(f):
+        try:
+            from numba.extending import register_jitable
+        except ImportError:  # pragma: no cover - numba is optional: the numpy engine needs none of this
+            return f
+        return register_jitable(**options)(f) if options else register_jitable(f)
+
+    return wrap if fn is None else wrap(fn)
 
 
 # ------------------------------------------------------------------ kernels of library blocks
@@ -131,6 +161,7 @@ def sigma_rhs(t, z, u, p, dz):
     dz[n - 1] = p[n - 1] * e
 
 
+@jitable(inline="always")  # also called inside other kernels (meso's ESO with a model term)
 def eso_rhs(t, x, u, p, dx):
     """(Nonlinear) ESO: ``x̂_i' = L_i g_i(e) + x̂_(i+1)``, ``+ b0 u`` in row n, ``e = y - x̂_1``.
 

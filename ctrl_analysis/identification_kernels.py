@@ -14,7 +14,7 @@ state ``[θ (n), R row by row (n·n)]``; input ``[z, h (n)]``.
 
 from __future__ import annotations
 
-from .estimators.kalman.ckf import register_jitable
+from ._kernels import jitable
 
 __all__: list = []  # kernels: reached through the blocks' kernel() methods
 
@@ -63,7 +63,7 @@ def arx_output(t, x, u, p, y):
         y[1 + na + j] = x[ns + d + j]
 
 
-@register_jitable
+@jitable
 def _rls_gain(x, u, p, out):
     """``R(k−1) h(k)`` into ``out[:n]``; returns ``hᵀ R h + λ`` and the innovation ``z − hᵀ θ(k−1)``."""
     n = int(p[0])
@@ -80,7 +80,7 @@ def _rls_gain(x, u, p, out):
     return p[1] + hPh, u[0] - hth
 
 
-@register_jitable
+@jitable
 def _rls_theta(x, p, out, den, innov):
     """``θ(k) = Π[θ(k−1) + D(k) (z − hᵀ θ(k−1))]``, ``D = R h / den``, from ``R h`` in ``out[:n]`` (overwritten)."""
     n = int(p[0])

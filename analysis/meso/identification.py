@@ -23,15 +23,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from ctrl_analysis._kernels import jitable
 from ctrl_analysis._validate import check_in, check_int, check_positive
 from ctrl_analysis.blocks import DiscreteBlock, signal_names
 from ctrl_analysis.identification import batch_least_squares, identifiability
 
-try:  # the kernels call regressor_vector; numba compiles it into them
-    from numba.extending import register_jitable
-except ImportError:  # pragma: no cover - numba is installed in the project's environment
-    def register_jitable(**options):
-        return lambda fn: fn
 
 __all__ = [
     "PHI",
@@ -333,7 +329,7 @@ class BatchIdentification(DiscreteBlock):
         return BlockKernel(output=_held_outputs, params=self._p, update=gram_update)
 
 
-@register_jitable(inline="always")
+@jitable(inline="always")  # the kernels call it; numba compiles it into them
 def regressor_vector(u, p, phi):
     """``φ = [x̂1, x̂2, 1, x̂3, f, u, K̄]`` of one sample from the block's inputs (scalar-indexed).
 

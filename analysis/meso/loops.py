@@ -30,12 +30,6 @@ from ctrl_analysis.simulate import draw_noise, uniform_noise
 
 from .identification import BatchIdentification, exact_report
 
-try:  # meso_rhs calls the library's eso_rhs: numba compiles it into the kernel (inlined: ~6x faster)
-    from numba.extending import register_jitable
-
-    register_jitable(inline="always")(eso_rhs)
-except ImportError:  # pragma: no cover - numba is installed in the project's environment
-    pass
 from .paper import PAPER, Paper, Situation
 
 __all__ = [

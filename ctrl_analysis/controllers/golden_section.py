@@ -6,7 +6,7 @@ import numpy as np
 
 from .._validate import check_finite, check_nonnegative, check_positive
 from ..blocks import DiscreteBlock
-from ..estimators.kalman.ckf import register_jitable
+from .._kernels import jitable
 
 __all__ = ["GOLDEN_L1", "GOLDEN_L2", "GoldenSectionController"]
 
@@ -130,7 +130,7 @@ class GoldenSectionController(DiscreteBlock):
         return f"GoldenSectionController(k_I={self.k_I:g}, c2={self.c2:g}, mu={self.mu:g})"
 
 
-@register_jitable
+@jitable
 def _golden_step(x, u, p):
     """One run of :meth:`GoldenSectionController._kernel` with scalar branches: ``(u(k), e(k), u_i(k))``."""
     y, r, f1, f2, g0 = u[0], u[1], u[2], u[3], u[4]

@@ -24,7 +24,8 @@ import numpy as np
 
 from .._validate import check_finite, check_positive, check_str
 from ..blocks import Block, DiscreteBlock, StaticBlock
-from ..estimators.kalman.ikf import _jitable, _kernel_params, _per_run
+from .._kernels import jitable
+from ..estimators.kalman.ikf import _kernel_params, _per_run
 from ..loop import place
 
 __all__ = [
@@ -54,13 +55,13 @@ def _check_weight(name: str, value):
     return value
 
 
-@_jitable
+@jitable
 def _cfdl_increment(phi, e, rho, lam):
     """(8) Δu(k) = ρ φ̂(k) e(k) / (λ + φ̂(k)²), the CFDL-MFAC control increment."""
     return rho * phi * e / (lam + phi * phi)
 
 
-@_jitable
+@jitable
 def _ppd_projection(phi_prev, du, dy, eta, mu):
     """(6) φ̂(k) = φ̂(k−1) + η Δu(k−1) (Δy_f(k) − φ̂(k−1) Δu(k−1)) / (μ + Δu(k−1)²), before the reset."""
     return phi_prev + eta * du * (dy - phi_prev * du) / (mu + du * du)
@@ -77,7 +78,7 @@ def delay_update(t, x, u, p, x_next):
     x_next[0] = u[0]
 
 
-@_jitable
+@jitable
 def ppd_output(t, x, u, p, y):
     """Kernel output of :class:`PPDEstimator`: ``φ̂(k)`` by (6) with the reset (7); ``p = [η, μ, ε, φ_reset, sign φ̂(1)]``."""
     du = u[1] - x[2]                                     # Δu(k−1) = u(k−1) − u(k−2)
@@ -101,7 +102,7 @@ def cfdl_law_output(t, x, u, p, y):
     y[0] = u[3] + _cfdl_increment(u[0], u[2] - u[1], p[0], p[1])
 
 
-@_jitable
+@jitable
 def _band_step(e, in_before, armed_before, age_before, e_m, rearm):
     """(36) band state of D-MFAC at sample ``k`` for one run: ``(in_band, armed, age = k − k_m)``."""
     in_band = abs(e) < e_m

@@ -21,7 +21,7 @@ import numpy as np
 from .lowpass import LowPassFilter
 from .._validate import check_array, check_finite, check_in, check_int, check_positive
 from ..blocks import DiscreteBlock, StaticBlock
-from .kalman.ikf import _jitable
+from .._kernels import jitable
 
 __all__ = [
     "fhan",
@@ -82,7 +82,7 @@ def fhan(x1, x2, r, h0):
     return float(out) if out.ndim == 0 else out
 
 
-@_jitable
+@jitable
 def _fhan(x1, x2, r, h0):
     """Unchecked kernel of :func:`fhan` (arrays or, in a compiled kernel, floats; ``r``, ``h0`` validated)."""
     d = r * h0 * h0
@@ -97,7 +97,7 @@ def _fhan(x1, x2, r, h0):
     return -r * (a / d - sign_a) * sa - r * sign_a
 
 
-@_jitable
+@jitable
 def _td_steps(x1, x2, v, r, h, h0, n):
     """``n`` TD steps of length ``h`` with ``v`` held: returns ``(x1, x2, fh)``, ``fh`` of the last step."""
     fh = x1 * 0.0
@@ -108,7 +108,7 @@ def _td_steps(x1, x2, v, r, h, h0, n):
     return x1, x2, fh
 
 
-@_jitable
+@jitable
 def td_update(t, x, u, p, x_next):
     """Kernel update of :class:`TrackingDifferentiator`: ``substeps`` TD steps, ``p = [r, h, h0, substeps, feedthrough]``.
 

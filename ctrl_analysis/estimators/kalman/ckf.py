@@ -7,11 +7,7 @@ import numpy as np
 from ..._validate import check_finite, check_matrix, check_positive
 from ...blocks import DiscreteBlock, signal_names
 
-try:  # a helper callable from compiled kernels and, unchanged, from Python (on a batch's columns)
-    from numba.extending import register_jitable
-except ImportError:  # pragma: no cover - numba is optional: the helper stays a plain function
-    def register_jitable(fn):
-        return fn
+from ..._kernels import jitable
 
 __all__ = ["CharacteristicKalmanFilter", "LinearKalmanFilter"]
 
@@ -128,7 +124,7 @@ class CharacteristicKalmanFilter(DiscreteBlock):
         return f"CharacteristicKalmanFilter(R={self.R:g})"
 
 
-@register_jitable
+@jitable
 def _ckf_step(x, u, p):
     """One CKF step, eq. (6), (10), (11): ``(X̂(k)[0], X̂(k)[1], P(k)[0][0], P(k)[0][1], P(k)[1][1])``.
 
@@ -305,7 +301,7 @@ class LinearKalmanFilter(DiscreteBlock):
         return f"LinearKalmanFilter(n={self.n}, R={self.R:g})"
 
 
-@register_jitable
+@jitable
 def _lkf_filter(x, u, p, W):
     """Prediction, gain and correction of :class:`LinearKalmanFilter` for one run, into the scratch ``W``.
 

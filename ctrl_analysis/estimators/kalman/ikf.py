@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..._validate import check_finite, check_nonnegative, check_positive
+from ..._kernels import jitable
 from ...blocks import DiscreteBlock
 from .scalar import random_walk_gain
 
@@ -32,20 +33,7 @@ def _kernel_params(*values) -> np.ndarray:
     return np.column_stack([np.broadcast_to(np.asarray(v, dtype=float), (B,)) for v in values])
 
 
-def _jitable(fn):
-    """``fn`` unchanged, also callable from numba-compiled kernels (``numba.extending.register_jitable``).
-
-    A kernel helper written with scalar indexing and ``np`` ufuncs serves numpy arrays (the batch's
-    columns) in Python and one run's scalars in a compiled kernel: one source for both engines.
-    """
-    try:
-        from numba.extending import register_jitable
-    except ImportError:  # pragma: no cover - numba is optional: the numpy engine needs none of this
-        return fn
-    return register_jitable(fn)
-
-
-@_jitable
+@jitable
 def _ikf_step(y_hat, P, y_m, delta, Q, R):
     """One IKF step, eq. (11)-(15): returns ``(ŷ(k|k), K(k), P(k|k))`` (scalars or arrays alike)."""
     y_prior = y_hat + delta                          # (11) ŷ(k|k−1) = ŷ(k−1|k−1) + δ(k)
