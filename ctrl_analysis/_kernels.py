@@ -306,7 +306,7 @@ def _gen_source(blocks, order, stage, discrete, continuous, nc, method, finite_b
         lo, hi = b["sl"]
         add(f"    XB{i} = np.empty({hi - lo}); UB{i} = np.empty({len(b['ic'])}); YB{i} = np.empty({b['np']}); "
             f"DB{i} = np.empty({hi - lo})")
-    add(f"    k1 = np.empty({nc}); k2 = np.empty({nc}); k3 = np.empty({nc}); k4 = np.empty({nc})")
+    add(f"    k1 = np.empty({nc}); KS = np.empty((4, {nc}))")
     add(f"    xt = np.empty({nc}); xc = np.empty({nc})")
     add("    xn = np.empty(n)")
     add("    X = X0  # stepped in place: the caller reads the final state from it")
@@ -342,16 +342,20 @@ def _gen_source(blocks, order, stage, discrete, continuous, nc, method, finite_b
         add("            for _ in range(substeps):")
         ind2 = " " * 16
         if method == "rk4":
-            # the arithmetic of ctrl_analysis.simulate.rk4_step, element by element
-            L.extend(stage_lines("tau", "xc", "k1", ind2))
-            L.extend(f"                xt[{j}] = xc[{j}] + 0.5 * h * k1[{j}]" for j in range(nc))
-            L.extend(stage_lines("tau + 0.5 * h", "xt", "k2", ind2))
-            L.extend(f"                xt[{j}] = xc[{j}] + 0.5 * h * k2[{j}]" for j in range(nc))
-            L.extend(stage_lines("tau + 0.5 * h", "xt", "k3", ind2))
-            L.extend(f"                xt[{j}] = xc[{j}] + h * k3[{j}]" for j in range(nc))
-            L.extend(stage_lines("tau + h", "xt", "k4", ind2))
-            L.extend(f"                xc[{j}] = xc[{j}] + (h / 6.0) * (k1[{j}] + 2.0 * k2[{j}] + 2.0 * k3[{j}] + k4[{j}])"
-                     for j in range(nc))
+            # the arithmetic of ctrl_analysis.simulate.rk4_step, element by element; the four stages
+            # are one loop (xt = xc + a_s h k_(s-1), tau + c_s h: exact for a, c in {0, 1/2, 1}), so
+            # the kernels are inlined once rather than four times (numba's compile time)
+            add("                for s in range(4):")
+            add("                    if s == 0:")
+            L.extend(f"                        xt[{j}] = xc[{j}]" for j in range(nc))
+            add("                        ts = tau")
+            add("                    else:")
+            add("                        a = h if s == 3 else 0.5 * h")
+            L.extend(f"                        xt[{j}] = xc[{j}] + a * KS[s - 1, {j}]" for j in range(nc))
+            add("                        ts = tau + a")
+            L.extend(stage_lines("ts", "xt", "KS[s]", " " * 20))
+            L.extend(f"                xc[{j}] = xc[{j}] + (h / 6.0) * (KS[0, {j}] + 2.0 * KS[1, {j}] + 2.0 * KS[2, {j}]"
+                     f" + KS[3, {j}])" for j in range(nc))
         else:
             # ctrl_analysis.simulate.euler_step
             L.extend(stage_lines("tau", "xc", "k1", ind2))
