@@ -280,11 +280,11 @@ def _gen_source(blocks, order, stage, discrete, continuous, nc, method, finite_b
         # the state and the derivative / next state are passed as views (inlined kernels: pointer
         # arithmetic); the inputs are gathered from the signal row with literal indices
         xv = f"X[b, {lo}:{hi}]" if xx == "X" else f"{xx}[{lo}:{hi}]"
-        lines = [f"UB{i}[{j}] = SS[b, {c}]" for j, c in enumerate(b["ic"])]
+        lines = [f"UB{i}[{j}] = S[{c}]" for j, c in enumerate(b["ic"])]
         pr = f"P{i}[b]" if b["per_run"] else f"P{i}"
         if kind == "out":
             lines.append(f"K{i}_out({t}, {xv}, UB{i}, {pr}, YB{i})")
-            lines += [f"SS[b, {c}] = YB{i}[{j}]" for j, c in enumerate(b["oc"])]
+            lines += [f"S[{c}] = YB{i}[{j}]" for j, c in enumerate(b["oc"])]
         else:
             fn = "rhs" if kind == "rhs" else "upd"
             lines.append(f"K{i}_{fn}({t}, {xv}, UB{i}, {pr}, {out}[{lo}:{hi}])")
@@ -310,22 +310,21 @@ def _gen_source(blocks, order, stage, discrete, continuous, nc, method, finite_b
     add(f"    xt = np.empty({nc}); xc = np.empty({nc})")
     add("    xn = np.empty(n)")
     add("    X = X0  # stepped in place: the caller reads the final state from it")
-    add("    SS = np.empty((B, S0.shape[0]))")
-    add("    for b in range(B):")
-    add("        for j in range(S0.shape[0]):")
-    add("            SS[b, j] = S0[j]")
+    # one signal vector serves every run: each sample writes the held inputs and every block's
+    # output before anything reads them, and the constant inputs (S0) are never written
+    add("    S = S0.copy()")
     add("    for k in range(n_steps + 1):")
     add("        tk = t[k]")
     add("        for b in range(B):")
     add("            for j in range(HC.shape[0]):")
-    add("                SS[b, HC[j]] = H[k, b, j]")
+    add("                S[HC[j]] = H[j, k, b]")
     add("            for j in range(HCS.shape[0]):")
-    add("                SS[b, HCS[j]] = HS[k, j]")
+    add("                S[HCS[j]] = HS[k, j]")
     ind = " " * 12
     for i in order:
         L.extend(call(i, "out", "tk", "X", None, ind))
     add("            for j in range(KEEP.shape[0]):")
-    add("                store[k, b, j] = SS[b, KEEP[j]]")
+    add("                store[k, b, j] = S[KEEP[j]]")
     add("            if xs.shape[0] > 0:")
     add("                for j in range(n):")
     add("                    xs[k, b, j] = X[b, j]")
@@ -366,15 +365,15 @@ def _gen_source(blocks, order, stage, discrete, continuous, nc, method, finite_b
     # divergence: the test of ctrl_analysis.simulate._check_bad, per run
     add("            bad = False")
     add("            for j in range(n):")
-    add("                if not (abs(xn[j]) <= bound):" if finite_bound else "                if not np.isfinite(xn[j]):")
+    add("                v = xn[j]")
+    add("                if not (abs(v) <= bound):" if finite_bound else "                if not np.isfinite(v):")
     add("                    bad = True")
+    add("                X[b, j] = v")
     add("            if bad and not diverged[b]:")
     add("                diverged[b] = True")
     add("                div_step[b] = k + 1")
     add("                for j in range(n):")
-    add("                    xn[j] = np.nan")
-    add("            for j in range(n):")
-    add("                X[b, j] = xn[j]")
+    add("                    X[b, j] = np.nan")
     return "\n".join(L) + "\n"
 
 
@@ -393,7 +392,7 @@ def compiled_runner(loop, kernels: dict, finite_bound: bool):
     -------
     run : callable
         ``run(n_steps, t, h, substeps, X0, H, HC, HS, HCS, S0, KEEP, store, xs, bound, diverged, div_step, *P)``:
-        ``H`` holds the per-run inputs ``(N+1, B, .)`` at signal columns ``HC``, ``HS`` the inputs
+        ``H`` holds the per-run inputs ``(., N+1, B)`` at signal columns ``HC``, ``HS`` the inputs
         shared by every run ``(N+1, .)`` at columns ``HCS``.
     consts : dict
         ``IC<i>``/``OC<i>`` index arrays are baked into the runner; ``P`` lists the parameter vectors.
@@ -574,8 +573,8 @@ def run_compiled(loop, runner, plan, n_steps, t, x, held, bound, keep_cols, stor
     for s, a in held.items():
         if a.ndim == 0:
             S0[col[s]] = a
-    # inputs that differ per run, (N+1, B, .), and inputs shared by every run, (N+1, .): a shared
-    # record is not copied B times
+    # inputs that differ per run, (., N+1, B) (each a block copy of its (N, B) record), and inputs
+    # shared by every run, (N+1, .): a shared record is not copied B times
     H, HC = _held_matrix([(s, a) for s, a in held.items() if a.ndim == 2], n_steps, B, col)
     HS, HCS = _held_matrix([(s, a) for s, a in held.items() if a.ndim == 1], n_steps, None, col)
     xs_arg = np.empty((0, 0, 0)) if xs is None else xs
@@ -586,11 +585,12 @@ def run_compiled(loop, runner, plan, n_steps, t, x, held, bound, keep_cols, stor
 
 
 def _held_matrix(items, n_steps, B, col):
-    """Held inputs as one array: ``(N+1, B, k)`` per run (``B`` given) or ``(N+1, k)`` shared; and their columns."""
-    shape = (n_steps + 1, max(len(items), 1)) if B is None else (n_steps + 1, B, max(len(items), 1))
-    H = np.empty(shape)
+    """Held inputs as one array: ``(k, N+1, B)`` per run (``B`` given) or ``(N+1, k)`` shared; and their columns."""
+    k = max(len(items), 1)
+    H = np.empty((n_steps + 1, k) if B is None else (k, n_steps + 1, B))
     for j, (_, a) in enumerate(items):
         m = min(a.shape[0], n_steps + 1)
-        H[:m, ..., j] = a[:m]
-        H[m:, ..., j] = a[m - 1]  # row N repeats row N-1 when absent
+        dst = H[:, j] if B is None else H[j]
+        dst[:m] = a[:m]
+        dst[m:] = a[m - 1]  # row N repeats row N-1 when absent
     return H, np.array([col[s] for s, _ in items], dtype=np.intp)
