@@ -167,6 +167,7 @@ def eso_rhs(t, x, u, p, dx):
 
     ``p = [linear, b0, delta, L_1..L_m, alpha_1..alpha_m, delta^(1-alpha_1)..]`` (``m = n + 1``);
     ``g_i(e) = e`` (linear) or Han's ``fal(e, alpha_i, delta)``.
+
     Parameters
     ----------
     t, x, u, p
