@@ -21,8 +21,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from ._validate import check_bool, check_finite, check_int, check_positive, check_vector
-from .blocks import DiscreteBlock, signal_names
-from .identification_kernels import arx_output, arx_update, rls_hold_output, rls_output, rls_update
+from .blocks import ColumnKernels, DiscreteBlock, signal_names
+from .identification_kernels import (  # noqa: F401 - arx_* are named in ArxRegressor.column_kernels
+    arx_output, arx_update, rls_hold_output, rls_output, rls_update,
+)
 
 __all__ = [
     "ArxRegressor",
@@ -510,7 +512,7 @@ class RecursiveLeastSquares(DiscreteBlock):
         return f"RecursiveLeastSquares(n_params={self.n_params}, forgetting={self.forgetting})"
 
 
-class ArxRegressor(DiscreteBlock):
+class ArxRegressor(ColumnKernels, DiscreteBlock):
     """Tapped delay lines forming the ARX regression ``z = s(k−d)``, ``h = [s(k−d−1..k−d−na), u(k−d−1..k−d−nb)]``.
 
     Feeds :class:`RecursiveLeastSquares` with the model
@@ -558,26 +560,4 @@ class ArxRegressor(DiscreteBlock):
         self.feedthrough = self.lag == 0
         self._p = np.array([self.na, self.nb, self.lag], dtype=float)
 
-    def update(self, t, x, u, params=None) -> np.ndarray:
-        x_next = np.empty_like(x)
-        arx_update(t, x.T, u.T, self._p, x_next.T)  # the kernel on the batch's columns: one source
-        return x_next
-
-    def output(self, t, x, u, params=None) -> np.ndarray:
-        y = np.empty((x.shape[0], 1 + self.na + self.nb))
-        arx_output(t, x.T, u.T, self._p, y.T)
-        return y
-
-    def kernel(self):
-        """The compiled engine's kernel, which the numpy methods call too (one source).
-
-        :func:`~ctrl_analysis.identification_kernels.arx_update`,
-        :func:`~ctrl_analysis.identification_kernels.arx_output`.
-
-        Returns
-        -------
-        ctrl_analysis._kernels.BlockKernel
-        """
-        from ._kernels import BlockKernel
-
-        return BlockKernel(output=arx_output, params=self._p, update=arx_update)
+    column_kernels = {"output": "arx_output", "update": "arx_update"}  # numpy methods + compiled kernel

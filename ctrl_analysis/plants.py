@@ -5,12 +5,12 @@ from __future__ import annotations
 import numpy as np
 
 from ._validate import check_positive, check_vector
-from .blocks import DiscreteBlock, signal_names
+from .blocks import ColumnKernels, DiscreteBlock, signal_names
 
 __all__ = ["DiscreteLTI"]
 
 
-class DiscreteLTI(DiscreteBlock):
+class DiscreteLTI(ColumnKernels, DiscreteBlock):
     """A SISO linear system ``x(k+1) = A x(k) + B u(k)``, ``y(k) = C x(k) + D u(k)`` as a discrete block.
 
     A continuous-time ``control.TransferFunction`` or ``control.StateSpace`` is discretised with
@@ -87,26 +87,7 @@ class DiscreteLTI(DiscreteBlock):
     def initial_state(self) -> np.ndarray:
         return self._x0.copy()
 
-    def update(self, t, x, u, params=None) -> np.ndarray:
-        x_next = np.empty_like(x)
-        lti_update(t, x.T, u.T, self._p, x_next.T)  # the kernel on the batch's columns: one source
-        return x_next
-
-    def output(self, t, x, u, params=None) -> np.ndarray:
-        y = np.empty((x.shape[0], 1))
-        lti_output(t, x.T, u.T, self._p, y.T)
-        return y
-
-    def kernel(self):
-        """The compiled engine's kernel (:func:`lti_update`, :func:`lti_output`; the numpy methods call them too).
-
-        Returns
-        -------
-        ctrl_analysis._kernels.BlockKernel
-        """
-        from ._kernels import BlockKernel
-
-        return BlockKernel(output=lti_output, params=self._p, update=lti_update)
+    column_kernels = {"output": "lti_output", "update": "lti_update"}  # numpy methods + compiled kernel
 
     def __repr__(self) -> str:
         return f"DiscreteLTI(n={self.A.shape[0]}, dt={self.dt})"

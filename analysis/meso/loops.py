@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ctrl_analysis._kernels import BlockKernel, copy_output, eso_rhs, kernel_of
-from ctrl_analysis.blocks import ContinuousBlock, DiscreteBlock, RowGroups, signal_names
+from ctrl_analysis.blocks import ColumnKernels, ContinuousBlock, DiscreteBlock, RowGroups, signal_names
 from ctrl_analysis.controllers.pd import PDFeedforward
 from ctrl_analysis.estimators.eso import ExtendedStateObserver
 from ctrl_analysis.estimators.lowpass import LowPassFilter
@@ -76,7 +76,7 @@ class Row:
         return f"{self.observer}{v}/" + ("no-noise" if self.seed is None else f"seed{self.seed}") + extra
 
 
-class Plant(ContinuousBlock):
+class Plant(ColumnKernels, ContinuousBlock):
     """Plant (27) with the disturbance (31)/(32): ``x1' = x2``, ``x2' = θ1 x1 + θ2 x2 + θ4 + b u``, ``y = x1 + v``.
 
     ``b`` may differ per run (array of shape (B,)). Inputs ``u``, ``level`` (θ4, held), ``v``
@@ -95,25 +95,7 @@ class Plant(ContinuousBlock):
         # kernel parameters, one row per run: [θ1, θ2, b]
         self._p = np.stack([np.full(self.b.shape, self.theta1), np.full(self.b.shape, self.theta2), self.b], axis=-1)
 
-    def rhs(self, t, x, u, params=None):
-        dx = np.empty_like(x)
-        plant_rhs(t, x.T, u.T, self._p.T, dx.T)
-        return dx
-
-    def output(self, t, x, u, params=None):
-        y = np.empty((x.shape[0], 3))
-        plant_output(t, x.T, u.T, self._p.T, y.T)
-        return y
-
-    def kernel(self):
-        """The compiled kernel, per-run ``[θ1, θ2, b]`` (:func:`plant_rhs`, :func:`plant_output`).
-
-        Returns
-        -------
-        ctrl_analysis._kernels.BlockKernel
-        """
-        return BlockKernel(output=plant_output, params=self._p, rhs=plant_rhs)
-
+    column_kernels = {"output": "plant_output", "rhs": "plant_rhs"}  # numpy methods + compiled kernel
 
 def plant_rhs(t, x, u, p, dx):
     """(27)/(31)/(32) of one run (or a batch's columns): ``x1' = x2``, ``x2' = θ1 x1 + θ2 x2 + θ4 + b u``.

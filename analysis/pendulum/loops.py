@@ -23,7 +23,7 @@ import numpy as np
 import scipy.linalg
 
 from ctrl_analysis._kernels import BlockKernel, copy_output
-from ctrl_analysis.blocks import ContinuousBlock, DiscreteBlock, StaticBlock, StaticGain
+from ctrl_analysis.blocks import ColumnKernels, ContinuousBlock, DiscreteBlock, StaticBlock, StaticGain
 from ctrl_analysis.controllers.fuzzy import (
     FuzzyController,
     FuzzyLookupController,
@@ -55,7 +55,7 @@ __all__ = [
 ]
 
 
-class CartPendulum(ContinuousBlock):
+class CartPendulum(ColumnKernels, ContinuousBlock):
     """Pendulum on a cart driven by the cart acceleration (§3.1): ``φ'' = a21 φ + b u + w``.
 
     With ``nonlinear=True``: ``φ'' = a21 sin φ + b cos φ · u + w`` (the model before linearisation,
@@ -72,15 +72,7 @@ class CartPendulum(ContinuousBlock):
         self.a21, self.b, self.nonlinear = float(a21), float(b), bool(nonlinear)
         self._p = np.array([self.a21, self.b, 1.0 if self.nonlinear else 0.0])
 
-    def rhs(self, t, x, u, params=None):
-        dx = np.empty_like(x)
-        pendulum_rhs(t, x.T, u.T, self._p, dx.T)  # the kernel on the batch's columns: one source
-        return dx
-
-    def kernel(self):
-        """Compiled kernel: :func:`pendulum_rhs` (also the numpy method), output = state."""
-        return BlockKernel(output=copy_output, params=self._p, rhs=pendulum_rhs)
-
+    column_kernels = {"output": "copy_output", "rhs": "pendulum_rhs"}  # numpy methods + compiled kernel
 
 def pendulum_rhs(t, x, u, p, dx):
     """``φ'' = a21 φ + b u + w`` (§3.1, ``ẋ = A x + B u + Γ w``) or, flag set, ``a21 sin φ + b cos φ · u + w``.
@@ -95,7 +87,7 @@ def pendulum_rhs(t, x, u, p, dx):
         dx[1] = p[0] * x[0] + p[1] * u[0] + u[1]
 
 
-class BackwardDifference(DiscreteBlock):
+class BackwardDifference(ColumnKernels, DiscreteBlock):
     """``ec(k) = (e(k) − e(k−1)) / T``: the rate the fuzzy controller gets without a filter (state ``e(k−1)``)."""
 
     inputs = ("e",)
@@ -107,18 +99,7 @@ class BackwardDifference(DiscreteBlock):
         self.T = float(T)
         self._p = np.array([self.T])
 
-    def output(self, t, x, u, params=None):
-        y = np.empty_like(u)
-        difference_output(t, x.T, u.T, self._p, y.T)  # the kernel on the batch's columns
-        return y
-
-    def update(self, t, x, u, params=None):
-        return u.copy()
-
-    def kernel(self):
-        """Compiled kernel: :func:`difference_output` (also the numpy method), :func:`difference_update`."""
-        return BlockKernel(output=difference_output, params=self._p, update=difference_update)
-
+    column_kernels = {"output": "difference_output", "update": "difference_update"}  # numpy methods + compiled kernel
 
 def difference_output(t, x, u, p, y):
     """``ec(k) = (e(k) − e(k−1)) / T``, ``p = [T]`` (scalar-indexed: one run or a batch's columns)."""

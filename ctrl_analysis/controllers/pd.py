@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._validate import check_array, check_finite, check_hurwitz, check_int, check_positive
-from ..blocks import DiscreteBlock, signal_names
+from ..blocks import ColumnKernels, DiscreteBlock, signal_names
 from ..polynomials import repeated_pole_coefficients
 
 __all__ = ["PDFeedforward", "bandwidth_gains"]
@@ -54,7 +54,7 @@ def bandwidth_gains(n: int, omega_c: float) -> np.ndarray:
     return repeated_pole_coefficients(n, omega_c)[::-1].copy()
 
 
-class PDFeedforward(DiscreteBlock):
+class PDFeedforward(ColumnKernels, DiscreteBlock):
     """PD (state-feedback) law with feed-forward and model compensation: a discrete block, batched.
 
     ``u(k) = ( Σ_{i=1}^{n+1} k_i (ξ^(i-1)(t_k) − x̂_i(k)) − f̂(k) ) / b0``, held over the sample.
@@ -207,26 +207,7 @@ class PDFeedforward(DiscreteBlock):
         # (30) u = (Σ k_i (ξ^(i-1) - x̂_i) - XᵀΘ) / b0
         return (np.sum(self.k * (ref - x_hat), axis=-1) - f_hat) / self.b0
 
-    def output(self, t, x, u, params=None) -> np.ndarray:
-        y = np.empty((x.shape[0], 1))
-        pd_step(t, x.T, u.T, self._p, y.T)  # the kernel on the batch's columns: one source
-        return y
-
-    def update(self, t, x, u, params=None) -> np.ndarray:
-        x_next = np.empty_like(x)
-        pd_step(t, x.T, u.T, self._p, x_next.T)
-        return x_next
-
-    def kernel(self):
-        """The compiled engine's kernel: :func:`pd_step` as output and update (the numpy methods call it too).
-
-        Returns
-        -------
-        ctrl_analysis._kernels.BlockKernel
-        """
-        from .._kernels import BlockKernel
-
-        return BlockKernel(output=pd_step, params=self._p, update=pd_step)
+    column_kernels = {"output": "pd_step", "update": "pd_step"}  # numpy methods + compiled kernel
 
     def __repr__(self) -> str:
         return f"PDFeedforward(b0={self.b0}, k={self.k.tolist()}, model={self.model})"

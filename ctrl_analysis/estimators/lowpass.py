@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._validate import check_array, check_int, check_positive, check_vector
-from ..blocks import ContinuousBlock, DiscreteBlock, signal_names
+from ..blocks import ColumnKernels, ContinuousBlock, DiscreteBlock, signal_names
 from ..polynomials import repeated_pole_coefficients
 
 __all__ = ["LowPassFilter", "DiscreteLowPass"]
@@ -191,7 +191,7 @@ class LowPassFilter(ContinuousBlock):
         return f"LowPassFilter(omega={self.omega}, order={self.order})"
 
 
-class DiscreteLowPass(DiscreteBlock):
+class DiscreteLowPass(ColumnKernels, DiscreteBlock):
     """Digital form of a :class:`LowPassFilter` (exact for inputs held over each sample), a discrete block.
 
     Filters ``channels`` signals independently (e.g. a ``p``-parameter vector). The block's state
@@ -247,26 +247,7 @@ class DiscreteLowPass(DiscreteBlock):
     def initial_state(self) -> np.ndarray:
         return self._x0.reshape(-1).copy()
 
-    def update(self, t, x, u, params=None) -> np.ndarray:
-        x_next = np.empty_like(x)
-        lowpass_update(t, x.T, u.T, self._p, x_next.T)  # the kernel on the batch's columns: one source
-        return x_next
-
-    def output(self, t, x, u, params=None) -> np.ndarray:
-        y = np.empty((x.shape[0], self.channels))
-        lowpass_output(t, x.T, u.T, self._p, y.T)
-        return y
-
-    def kernel(self):
-        """The compiled engine's kernel (:func:`lowpass_update`, :func:`lowpass_output`; the numpy methods call them too).
-
-        Returns
-        -------
-        ctrl_analysis._kernels.BlockKernel
-        """
-        from .._kernels import BlockKernel
-
-        return BlockKernel(output=lowpass_output, params=self._p, update=lowpass_update)
+    column_kernels = {"output": "lowpass_output", "update": "lowpass_update"}  # numpy methods + compiled kernel
 
     def filter(self, u) -> np.ndarray:
         """Filter a whole record ``u`` of shape ``(N,)``, ``(N, channels)`` or ``(N, B, channels)``.

@@ -20,7 +20,7 @@ import numpy as np
 
 from .lowpass import LowPassFilter
 from .._validate import check_array, check_finite, check_in, check_int, check_positive
-from ..blocks import DiscreteBlock, StaticBlock
+from ..blocks import ColumnKernels, DiscreteBlock, StaticBlock
 from .._kernels import jitable
 
 __all__ = [
@@ -169,7 +169,7 @@ def td_output(t, x, u, p, y):
         y[1] = x[1]
 
 
-class TrackingDifferentiator(DiscreteBlock):
+class TrackingDifferentiator(ColumnKernels, DiscreteBlock):
     """Han's discrete tracking differentiator as a discrete block: ``x1`` tracks ``v``, ``x2`` its derivative.
 
     One sample runs ``substeps`` steps of the discrete TD with integration step ``h``, the input
@@ -250,27 +250,7 @@ class TrackingDifferentiator(DiscreteBlock):
     def initial_state(self) -> np.ndarray:
         return self.x0.copy()
 
-    def update(self, t, x, u, params=None) -> np.ndarray:
-        x_next = np.empty_like(x)
-        td_update(t, x.T, u.T, self._p, x_next.T)  # the kernel on the batch's columns: one source
-        return x_next
-
-    def output(self, t, x, u, params=None) -> np.ndarray:
-        # feedthrough: the state after this sample's steps (driven by v(k)); else the state itself
-        y = np.empty_like(x)
-        td_output(t, x.T, u.T, self._p, y.T)
-        return y
-
-    def kernel(self):
-        """The compiled engine's kernel (:func:`td_output`, :func:`td_update`; the numpy methods call them too).
-
-        Returns
-        -------
-        ctrl_analysis._kernels.BlockKernel
-        """
-        from .._kernels import BlockKernel
-
-        return BlockKernel(output=td_output, params=self._p, update=td_update)
+    column_kernels = {"output": "td_output", "update": "td_update"}  # numpy methods + compiled kernel
 
     def step_block(self):
         """The sample's steps as a static block (inputs ``v``, ``x1``, ``x2``; outputs ``x1``, ``x2`` after them).

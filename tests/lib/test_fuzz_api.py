@@ -579,6 +579,7 @@ NOT_FUZZED = {
     blocks.Block: "abstract base class without constructor arguments",
     blocks.ContinuousBlock: "abstract base class without constructor arguments",
     blocks.DiscreteBlock: "abstract base class without constructor arguments (run/nlsys are fuzzed above)",
+    blocks.ColumnKernels: "mixin without constructor arguments (the blocks using it are fuzzed)",
     loop_mod.Placed: "record built by place(), which is fuzzed",
     loop_mod.LoopResponse: "result record built by Loop.simulate",
     simulate.SimResult: "result record built by the simulators",

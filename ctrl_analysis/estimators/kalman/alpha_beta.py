@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...blocks import DiscreteBlock
+from ...blocks import ColumnKernels, DiscreteBlock
 from ..._validate import check_bool, check_finite, check_matrix, check_positive
 
 
@@ -170,7 +170,7 @@ def alpha_beta_stable(alpha, beta) -> bool:
     return bool(0 < alpha < 2 and 0 < beta < 4 - 2 * alpha)
 
 
-class AlphaBetaFilter(DiscreteBlock):
+class AlphaBetaFilter(ColumnKernels, DiscreteBlock):
     """Constant-gain (steady-state) discrete α-β filter, a discrete block batched over runs.
 
     The block's state is the prediction ``x̂(k|k−1)``; at each sample it corrects with the
@@ -253,26 +253,7 @@ class AlphaBetaFilter(DiscreteBlock):
     def initial_state(self) -> np.ndarray:
         return self.x0.copy()
 
-    def output(self, t, x, u, params=None) -> np.ndarray:
-        y = np.empty_like(x)
-        alpha_beta_output(t, x.T, u.T, self._p, y.T)  # the kernel on the batch's columns: one source
-        return y
-
-    def update(self, t, x, u, params=None) -> np.ndarray:
-        x_next = np.empty_like(x)
-        alpha_beta_update(t, x.T, u.T, self._p, x_next.T)
-        return x_next
-
-    def kernel(self):
-        """The compiled engine's kernel (:func:`alpha_beta_output`, :func:`alpha_beta_update`; the numpy methods call them too).
-
-        Returns
-        -------
-        ctrl_analysis._kernels.BlockKernel
-        """
-        from ..._kernels import BlockKernel
-
-        return BlockKernel(output=alpha_beta_output, params=self._p, update=alpha_beta_update)
+    column_kernels = {"output": "alpha_beta_output", "update": "alpha_beta_update"}  # numpy methods + compiled kernel
 
     def __repr__(self) -> str:
         return f"AlphaBetaFilter(alpha={self.alpha:g}, beta={self.beta:g}, T={self.T:g})"

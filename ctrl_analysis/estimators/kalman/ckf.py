@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..._validate import check_finite, check_matrix, check_positive
-from ...blocks import DiscreteBlock, signal_names
+from ...blocks import ColumnKernels, DiscreteBlock, signal_names
 
 from ..._kernels import jitable
 
@@ -24,7 +24,7 @@ def _check_covariance(name: str, value, n: int, *, definite: bool) -> np.ndarray
     return 0.5 * (M + M.T)
 
 
-class CharacteristicKalmanFilter(DiscreteBlock):
+class CharacteristicKalmanFilter(ColumnKernels, DiscreteBlock):
     """Kalman filter on the 2nd-order characteristic model, its transition built from identified parameters.
 
     Model (characteristic model in state-space form)::
@@ -99,26 +99,7 @@ class CharacteristicKalmanFilter(DiscreteBlock):
     def initial_state(self) -> np.ndarray:
         return np.array([self.x0[0], self.x0[1], self.P0[0, 0], self.P0[0, 1], self.P0[1, 1]])
 
-    def update(self, t, x, u, params=None) -> np.ndarray:
-        x_next = np.empty_like(x)
-        ckf_update(t, x.T, u.T, self._p, x_next.T)  # the kernel on the batch's columns: one source
-        return x_next
-
-    def output(self, t, x, u, params=None) -> np.ndarray:
-        y = np.empty((x.shape[0], 2))
-        ckf_output(t, x.T, u.T, self._p, y.T)
-        return y
-
-    def kernel(self):
-        """The compiled engine's kernel (:func:`ckf_update`, :func:`ckf_output`; the numpy methods call them too).
-
-        Returns
-        -------
-        ctrl_analysis._kernels.BlockKernel
-        """
-        from ..._kernels import BlockKernel
-
-        return BlockKernel(output=ckf_output, params=self._p, update=ckf_update)
+    column_kernels = {"output": "ckf_output", "update": "ckf_update"}  # numpy methods + compiled kernel
 
     def __repr__(self) -> str:
         return f"CharacteristicKalmanFilter(R={self.R:g})"

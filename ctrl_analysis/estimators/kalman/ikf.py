@@ -6,7 +6,7 @@ import numpy as np
 
 from ..._validate import check_finite, check_nonnegative, check_positive
 from ..._kernels import jitable
-from ...blocks import DiscreteBlock
+from ...blocks import ColumnKernels, DiscreteBlock
 from .scalar import random_walk_gain
 
 __all__ = ["ImprovedKalmanFilter"]
@@ -80,7 +80,7 @@ def ikf_update(t, x, u, p, x_next):
     x_next[1] = P_post
 
 
-class ImprovedKalmanFilter(DiscreteBlock):
+class ImprovedKalmanFilter(ColumnKernels, DiscreteBlock):
     """Scalar Kalman filter of an output ``y`` whose one-step prediction comes from any data model.
 
     The model says ``y(k) = y(k−1) + δ(k) + w(k−1)``, ``y_m(k) = y(k) + v(k)``, with ``δ(k)`` a
@@ -155,28 +155,7 @@ class ImprovedKalmanFilter(DiscreteBlock):
     def initial_state(self) -> np.ndarray:
         return np.array([self.y0, self.P0])
 
-    def output(self, t, x, u, params=None) -> np.ndarray:
-        out = np.empty((x.shape[0], 3))
-        ikf_output(t, x.T, u.T, self._p.T, out.T)  # the kernel on the batch's columns: one source
-        return out
-
-    def update(self, t, x, u, params=None) -> np.ndarray:
-        x_next = np.empty_like(x)
-        ikf_update(t, x.T, u.T, self._p.T, x_next.T)
-        return x_next
-
-    def kernel(self):
-        """The compiled engine's kernel (:func:`ikf_output`, :func:`ikf_update`; the numpy methods call them too).
-
-        ``Q``, ``R`` given per run give per-run parameter rows ``(B, 2)``.
-
-        Returns
-        -------
-        ctrl_analysis._kernels.BlockKernel
-        """
-        from ..._kernels import BlockKernel
-
-        return BlockKernel(output=ikf_output, params=self._p, update=ikf_update)
+    column_kernels = {"output": "ikf_output", "update": "ikf_update"}  # numpy methods + compiled kernel
 
     def __repr__(self) -> str:
         return f"ImprovedKalmanFilter(Q={self.Q}, R={self.R}, y0={self.y0:g}, P0={self.P0:g})"
