@@ -283,7 +283,7 @@ def build_cases(tmp):
          dict(blocks=[None, 3, [], [3.0], [loop_mod.place(PLANT, "p"), loop_mod.place(PLANT, "p")]])),
         ("Loop.simulate", _loop_simulate,
          dict(n_steps=3, inputs={"u": 1.0}, x0=None, runs=2, t0=0.0, bound=1e8, store_states=True, seeds=None,
-              store_signals=None, chunk_runs=None, max_bytes=None, progress=None, engine="auto", jobs=1),
+              store_signals=None, chunk_runs=None, max_bytes=None, progress=None, engine="numpy", jobs=1),
          dict(n_steps=INT + [0], inputs=[3, {"nonsense": 1.0}, {"u": "abc"}, {"u": np.ones(7)}, {"u": NAN}],
               x0=[3, {"nonsense": [0.0]}, {"plant": [NAN]}, {"plant": [1.0, 2.0, 3.0]}],
               runs=opt(INT) + [0], t0=REAL, bound=["abc", None, NAN, -INF, 0.0, [1.0]], store_states=BOOL,

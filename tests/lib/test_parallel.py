@@ -171,24 +171,26 @@ def test_long_simulation_shows_its_own_labelled_bar_and_counts_every_run_sample(
     from ctrl_analysis.estimators.lowpass import LowPassFilter
     from ctrl_analysis.loop import AUTO_BAR_WORK
 
-    loop = Loop([place(LowPassFilter(5.0, order=2).digital(0.01), "W")], dt=0.01)
+    # the loop of test_speed_kernels' low-pass test (one compiled structure for both tests)
+    loop = Loop([place(LowPassFilter(5.0, order=2).digital(0.01, channels=3), "W")], dt=0.01)
     B, n = 1000, AUTO_BAR_WORK // 1000
     u = np.linspace(0.0, 1.0, B)[None, :] * np.ones((n, 1))
+    ins = {"u[1]": 0.0, "u[2]": 1.0}
     for engine, m in (("numpy", 200), ("compiled", n)):
         counted = []
-        ref = loop.simulate(m, inputs={"u[0]": u[:m]}, engine=engine, progress=False, store_states=False)
-        got = loop.simulate(m, inputs={"u[0]": u[:m]}, engine=engine, progress=counted.append, chunk_runs=300,
-                            store_states=False)
+        ref = loop.simulate(m, inputs={"u[0]": u[:m], **ins}, engine=engine, progress=False, store_states=False)
+        got = loop.simulate(m, inputs={"u[0]": u[:m], **ins}, engine=engine, progress=counted.append,
+                            chunk_runs=300, store_states=False)
         assert sum(counted) == B * m and len(counted) > 4, engine  # several updates, all the work
         assert np.array_equal(ref["w[0]"], got["w[0]"]), engine  # progress never changes the numbers
     monkeypatch.setenv("CTRL_ANALYSIS_PROGRESS", "1")
     progress.set_context("mystudy", None)
     try:
         capsys.readouterr()
-        loop.simulate(n, inputs={"u[0]": u}, store_states=False, store_signals=[])  # progress=None: own bar
+        loop.simulate(n, inputs={"u[0]": u, **ins}, store_states=False, store_signals=[])  # progress=None: own bar
         err = capsys.readouterr().err
         assert f"mystudy: {B} runs x {n} samples" in err
-        loop.simulate(n - 1, inputs={"u[0]": u[:-1, :10]}, store_states=False)  # short: no bar
+        loop.simulate(n - 1, inputs={"u[0]": u[:-1, :10], **ins}, store_states=False)  # short: no bar
         assert "runs x" not in capsys.readouterr().err
     finally:
         progress.set_context()
