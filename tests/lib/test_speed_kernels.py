@@ -115,8 +115,9 @@ def test_eso_kernel_equals_the_block_rhs(compiled):
     assert kernel_of(ExtendedStateObserver([3.0, 2.0], known=lambda t, x, u, p: 0.0)) is None
 
 
-def sigma_loop():
-    return Loop([place(KOsc(), "plant"), place(DifferentialEstimator(3, 4.0), "sigma"),
+def sigma_loop(plant=None):
+    """Plant, Σ and an accumulator: one loop structure (one compile) shared by several tests."""
+    return Loop([place(KOsc() if plant is None else plant, "plant"), place(DifferentialEstimator(3, 4.0), "sigma"),
                  place(KAcc(0.01), "acc", inputs=["xhat[0]"])], dt=0.01)
 
 
@@ -155,7 +156,7 @@ def test_compiled_loop_with_han_eso_agrees_and_is_batch_independent():
 
 
 def test_compiled_loop_flags_divergence_like_the_numpy_loop():
-    loop = Loop([place(KOsc(k=-400.0, c=0.0), "plant")], dt=0.01)
+    loop = sigma_loop(KOsc(k=-400.0, c=0.0))  # unstable plant; Σ follows it
     w = np.zeros((200, 2))
     w[:, 1] = 1e-300  # run 1 starts the same; the bound decides
     x0 = {"plant": np.array([[1e-6, 0.0], [1.0, 0.0]])}
@@ -205,7 +206,7 @@ def test_auto_engine_falls_back_to_numpy_with_a_warning_when_a_kernel_does_not_c
 
 
 def test_environment_can_make_auto_mean_numpy(monkeypatch):
-    loop = Loop([place(DifferentialEstimator(3, 4.0), "sigma")], dt=0.01)
+    loop = sigma_loop()
     monkeypatch.setenv("CTRL_ANALYSIS_ENGINE", "numpy")
     assert loop._compiled("auto", {}, None, True) is None
     assert loop._compiled("compiled", {}, None, True) is not None  # an explicit request still compiles
