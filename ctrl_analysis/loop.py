@@ -288,7 +288,8 @@ class Loop:
     def simulate(self, n_steps: int, *, inputs=None, x0=None, runs: int | None = None, t0: float = 0.0,
                  params=None, bound: float = 1e8, store_states: bool = True, seeds=None,
                  store_signals=None, chunk_runs: int | None = None, max_bytes: float | None = None,
-                 progress=None, engine: str = "auto", jobs: int = 1, run_offset: int = 0) -> LoopResponse:
+                 progress=None, engine: str = "auto", jobs: int = 1, run_offset: int = 0,
+                 batch_runs: int | None = None) -> LoopResponse:
         """Step the loop ``n_steps`` samples over a batch of runs.
 
         Parameters
@@ -339,7 +340,10 @@ class Loop:
         run_offset : int
             Index of this batch's first run among the rows of per-run kernel parameters (see
             :class:`~ctrl_analysis._kernels.BlockKernel`); set by the engine when it splits a batch over
-            processes. Per-run parameters must cover runs ``run_offset .. run_offset + B - 1``.
+            processes.
+        batch_runs : int, optional
+            Runs of the whole batch this call is a part of (set by the engine with ``run_offset``;
+            default ``run_offset + B``). Per-run kernel parameters must have exactly this many rows.
 
         Returns
         -------
@@ -398,17 +402,15 @@ class Loop:
         if jobs > 1 and B > 1 and not funcs and self._picklable():
             opts = {"t0": t0, "params": params, "bound": bound, "store_states": store_states, "store_signals": keep,
                     "chunk_runs": chunk_runs, "max_bytes": max_bytes, "engine": engine,
-                    "run_offset": check_int("run_offset", run_offset, minimum=0)}
+                    "run_offset": check_int("run_offset", run_offset, minimum=0),
+                    "batch_runs": check_int("batch_runs", batch_runs, minimum=1) if batch_runs else None}
             return self._simulate_parallel(jobs, n_steps, held, x, opts, seeds)
         run_offset = check_int("run_offset", run_offset, minimum=0)
         runner = self._compiled(engine, funcs, params, np.isfinite(bound))
         if runner is not None:
-            from ._kernels import per_run_rows
+            from ._compiled import check_per_run_rows
 
-            rows = per_run_rows(self, runner)
-            if rows is not None and rows < run_offset + B:
-                raise ValueError(f"the loop's per-run block parameters describe {rows} runs, but runs "
-                                 f"{run_offset}..{run_offset + B - 1} were asked for (runs/inputs/x0 set B = {B})")
+            check_per_run_rows(self, runner, run_offset, B, batch_runs)
         t = t0 + self.dt * np.arange(n_steps + 1)
         store = np.empty((n_steps + 1, B, len(keep)))
         xs = np.empty((n_steps + 1, B, self.n_states)) if store_states else None
@@ -466,14 +468,14 @@ class Loop:
 
     def _compiled(self, engine, funcs, params, finite_bound):
         """The compiled runner and the kernels' parameters, or ``None`` for the numpy path."""
-        from ._kernels import compiled_for
+        from ._compiled import compiled_for
 
         return compiled_for(self, engine, funcs, params, finite_bound)
 
     def _run_compiled(self, runner, plan, n_steps, t, x, held, bound, keep_cols, store, xs, diverged, div_step,
                       first_run=0):
         """One chunk through the compiled runner, writing into the result slices."""
-        from ._kernels import run_compiled
+        from ._compiled import run_compiled
 
         run_compiled(self, runner, plan, n_steps, t, x, held, bound, keep_cols, store, xs, diverged, div_step,
                      rows=(first_run, None))
