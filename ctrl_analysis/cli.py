@@ -169,7 +169,7 @@ def _reproduce(args) -> int:
     if side_by_side > 1:  # import the studies (numpy, scipy, control, matplotlib) once, before the workers fork
         for name in todo:
             load_study(name)
-    records = {r["name"]: r for r in map_chunks(_run_study, tasks, jobs=side_by_side, desc="studies")}
+    records = {r["name"]: r for r in map_chunks(_run_study, tasks, jobs=side_by_side, desc="studies", unit="study")}
     this_run: dict = {}
     failed: dict = {}
     for record in (records[name] for name in todo):

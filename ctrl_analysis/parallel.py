@@ -107,7 +107,8 @@ def _client(scheduler, jobs):
     return Client(scheduler), True
 
 
-def map_chunks(fn: Callable, args: Sequence, *, jobs: int = 1, scheduler=None, desc: str = "") -> list:
+def map_chunks(fn: Callable, args: Sequence, *, jobs: int = 1, scheduler=None, desc: str = "",
+               unit: str = "chunk") -> list:
     """``[fn(a) for a in args]``, computed serially, in local processes or on Dask; results in order.
 
     Parameters
@@ -122,6 +123,8 @@ def map_chunks(fn: Callable, args: Sequence, *, jobs: int = 1, scheduler=None, d
         See the module docstring.
     desc : str
         Label of the progress bar (one unit per finished call).
+    unit : str
+        What one call is, for the bar (``"chunk"``, ``"study"``).
 
     Returns
     -------
@@ -134,8 +137,9 @@ def map_chunks(fn: Callable, args: Sequence, *, jobs: int = 1, scheduler=None, d
         raise TypeError(f"fn must be callable, got {type(fn).__name__}")
     scheduler = _check_scheduler(scheduler)
     check_str("desc", desc, empty=True)
+    check_str("unit", unit)
     out = [None] * len(args)
-    with bar(len(args), desc=desc, unit="chunk") as pb:
+    with bar(len(args), desc=desc, unit=unit) as pb:
         if scheduler is not None:
             from distributed import as_completed
 

@@ -154,7 +154,7 @@ def bar(total: int | None = None, desc: str = "", unit: str = "it", stream=None)
     label = _CONTEXT["label"]
     desc = f"{label}: {desc}" if label and desc else (label or desc)
     return tqdm(total=total, desc=desc, unit=unit, file=stream, leave=False, dynamic_ncols=True,
-                position=_CONTEXT["position"], unit_scale=True)
+                position=_CONTEXT["position"], unit_scale=total is not None and total >= 10_000)  # 3.79M, not 3790000
 
 
 def updater(progress, total: int, desc: str = "", unit: str = "it"):
