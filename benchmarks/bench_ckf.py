@@ -70,7 +70,11 @@ def bench_filters(n_steps=500):
 
 
 def float_loop(p, v, n):
-    """The CKF case of the study in plain Python floats (one run, identification from the LPF output)."""
+    """The CKF case of the study in plain Python floats (one run, identification from the LPF output).
+
+    The noise record is converted to a Python list once (inside the timing): no step reads a numpy scalar.
+    """
+    v = v.tolist()
     sysd = DiscreteLTI(plant_tf(p.plant), p.Ts)
     A, Bv, C = sysd.A.tolist(), sysd.B.tolist(), sysd.C.tolist()
     nx = len(Bv)

@@ -6,13 +6,12 @@ import math
 
 import numpy as np
 
-from ctrl_analysis._kernels import BlockKernel
-from ctrl_analysis.blocks import DiscreteBlock
+from ctrl_analysis.blocks import ColumnKernels, DiscreteBlock
 
 __all__ = ["SwitchedPlant", "plant_output", "plant_start_state", "plant_update", "reference", "reference_next"]
 
 
-class SwitchedPlant(DiscreteBlock):
+class SwitchedPlant(ColumnKernels, DiscreteBlock):
     """Eq. (38) (and (40) with ``switch_k=None``): a SISO plant whose structure changes at ``switch_k``.
 
     ``y(k+1) = y(k)/(1 + y(k)²) + u(k)³`` for ``k <= switch_k``, and for ``k > switch_k``::
@@ -34,23 +33,7 @@ class SwitchedPlant(DiscreteBlock):
         self.switch_k = math.inf if switch_k is None else int(switch_k)
         self._p = np.array([float(self.switch_k)])
 
-    def output(self, t, x, u, params=None) -> np.ndarray:
-        return x[:, :1]
-
-    def update(self, t, x, u, params=None) -> np.ndarray:
-        x_next = np.empty_like(x)
-        plant_update(t, x.T, u.T, self._p, x_next.T)  # the kernel on the batch's columns: one source
-        return x_next
-
-    def kernel(self) -> BlockKernel:
-        """The compiled engine's kernel: :func:`plant_update` (also the numpy method), output ``y``.
-
-        Returns
-        -------
-        ctrl_analysis._kernels.BlockKernel
-        """
-        return BlockKernel(output=plant_output, params=self._p, update=plant_update)
-
+    column_kernels = {"output": "plant_output", "update": "plant_update"}  # numpy methods + compiled kernel
 
 def plant_update(t, x, u, p, x_next):
     """Eq. (38)/(40) for one run (or, on a batch's transposed arrays, every run); ``p = [switch_k]``.

@@ -23,8 +23,8 @@ from __future__ import annotations
 import numpy as np
 
 from .._validate import check_finite, check_positive, check_str
-from ..blocks import Block, DiscreteBlock, StaticBlock
-from .._kernels import jitable
+from ..blocks import Block, ColumnKernels, DiscreteBlock, StaticBlock
+from .._kernels import copy_output, jitable  # noqa: F401 - copy_output is named in UnitDelay.column_kernels
 from ..estimators.kalman.ikf import _kernel_params, _per_run
 from ..loop import place
 
@@ -145,7 +145,7 @@ def predictor_update(t, x, u, p, x_next):
 _NO_PARAMS = np.zeros(0)
 
 
-class UnitDelay(DiscreteBlock):
+class UnitDelay(ColumnKernels, DiscreteBlock):
     """One-sample delay ``u_prev(k) = u(k−1)``: input ``u``, state and output ``u_prev``.
 
     Parameters
@@ -165,21 +165,8 @@ class UnitDelay(DiscreteBlock):
     def initial_state(self) -> np.ndarray:
         return np.array([self.u0])
 
-    def update(self, t, x, u, params=None) -> np.ndarray:
-        x_next = np.empty_like(x)
-        delay_update(t, x.T, u.T, _NO_PARAMS, x_next.T)
-        return x_next
-
-    def kernel(self):
-        """The compiled engine's kernel (:func:`delay_update`, the output is the state).
-
-        Returns
-        -------
-        ctrl_analysis._kernels.BlockKernel
-        """
-        from .._kernels import BlockKernel, copy_output
-
-        return BlockKernel(output=copy_output, params=_NO_PARAMS, update=delay_update)
+    column_kernels = {"output": "copy_output", "update": "delay_update"}  # numpy methods + compiled kernel
+    _p = _NO_PARAMS
 
     def __repr__(self) -> str:
         return f"UnitDelay(u0={self.u0:g})"
@@ -419,7 +406,7 @@ class DecreasingGainLaw(DiscreteBlock):
         return f"DecreasingGainLaw(rho={self.rho}, lam={self.lam}, e_m={self.e_m:g}, rearm={self.rearm})"
 
 
-class CFDLPredictor(DiscreteBlock):
+class CFDLPredictor(ColumnKernels, DiscreteBlock):
     """The CFDL data model (4) as a one-step predictor: output ``δ(k) = φ̂(k−1) Δu(k−1)``.
 
     ``y(k) ≈ y(k−1) + φ̂(k−1) Δu(k−1)``; the block stores ``(φ̂(k−1), u(k−1), u(k−2))`` and has
@@ -451,26 +438,8 @@ class CFDLPredictor(DiscreteBlock):
     def initial_state(self) -> np.ndarray:
         return self.x0.copy()
 
-    def output(self, t, x, u, params=None) -> np.ndarray:
-        y = np.empty((x.shape[0], 1))
-        predictor_output(t, x.T, u.T, _NO_PARAMS, y.T)  # (4)/(11), the kernel on the batch's columns
-        return y
-
-    def update(self, t, x, u, params=None) -> np.ndarray:
-        x_next = np.empty_like(x)
-        predictor_update(t, x.T, u.T, _NO_PARAMS, x_next.T)
-        return x_next
-
-    def kernel(self):
-        """The compiled engine's kernel (:func:`predictor_output`, :func:`predictor_update`; also the numpy methods).
-
-        Returns
-        -------
-        ctrl_analysis._kernels.BlockKernel
-        """
-        from .._kernels import BlockKernel
-
-        return BlockKernel(output=predictor_output, params=_NO_PARAMS, update=predictor_update)
+    column_kernels = {"output": "predictor_output", "update": "predictor_update"}  # numpy methods + compiled kernel
+    _p = _NO_PARAMS
 
     def __repr__(self) -> str:
         return f"CFDLPredictor(x0={self.x0.tolist()})"
