@@ -267,6 +267,8 @@ def plot_sensitivity(result: StudyResult, top: int = 12):
     from .report import new_figure
 
     top = check_int("top", top, minimum=1)
+    if not isinstance(result, StudyResult):
+        raise TypeError(f"result must be a StudyResult, got {type(result).__name__}")
     if not result.sensitivity:
         raise ValueError("result has no sensitivity sweep: call apply(result, sweep(...)) first")
     rows = _influence(result)[:top]

@@ -549,7 +549,71 @@ def build_cases(tmp):
          dict(results=[None, 3, [None], ["x"]], this_run=[None, 3, "x"])),
         ("write_report_md", report_md.write_report_md, dict(results=[results], out_dir=tmp / "report"),
          dict(results=[None, 3, [None], ["x"]], out_dir=[None, 3, ""], this_run=[3, "x"], failed=[3, "x"])),
+        *_claim_cases(results),
     ]
+
+
+def _claim_cases(results):
+    """Claims, plausible ranges, the verdict policy and the sensitivity sweep."""
+    from ctrl_analysis import report_claims, sensitivity, verdicts
+    from ctrl_analysis.glossary import glossary_lines
+    from ctrl_analysis.report_format import summarise
+
+    claim = study.Claim("c", "§1", "a claim")
+    return [
+        ("Claim", study.Claim, dict(id="c", section="§1", statement="s"),
+         dict(id=STR + [""], section=STR + [""], statement=STR + [""])),
+        ("span", study.span, dict(low=1.0, high=2.0, why="w"),
+         dict(low=[NAN, INF, 3.0], high=[NAN, INF, 0.5], why=STR + [""], scale=["cubic", 3], points=INT + [1])),
+        ("Plausible", study.Plausible, dict(why="w", options=(1, 2)),
+         dict(why=STR + [""], options=[(), [1, 2], "ab"], points=INT + [1])),
+        ("choices", study.choices, dict(options=(1, 2), why="w"), dict(options=[()], why=STR + [""])),
+        ("fixed", study.fixed, dict(why="w"), dict(why=STR + [""])),
+        ("missing_plausible", study.missing_plausible, dict(params=report.StudyContext(".")),
+         dict(params=[None, 3, report.StudyContext])),
+        ("central_interval", verdicts.central_interval, dict(samples=[1.0, 2.0, 3.0]),
+         dict(samples=[[], [1.0, NAN], None], share=[0.0, 1.0, NAN])),
+        ("digits_tolerance", verdicts.digits_tolerance, dict(paper=0.95, decimals=2),
+         dict(paper=[0.0, NAN, INF], decimals=INT + [-1])),
+        ("ClaimResult", verdicts.ClaimResult, dict(claim=claim, holds=True, evidence=("x",)),
+         dict(claim=[None, "c"], holds=[3, "yes"], evidence=[(3,), ("",)], note=[3])),
+        ("sweep", sensitivity.sweep, dict(evaluate=_toy_evaluate, params={"p": _ToyParams()}),
+         dict(evaluate=[None, 3], params=[None, {}, {"p": 3}], jobs=INT + [0], names=[["p.nope"]])),
+        ("apply", sensitivity.apply, dict(result=_toy_evaluate({"p": _ToyParams()}),
+                                          sens=sensitivity.sweep(_toy_evaluate, {"p": _ToyParams()})),
+         dict(result=[None, 3], sens=[None, 3])),
+        ("plot_sensitivity", sensitivity.plot_sensitivity, dict(result=_swept(), top=3),
+         dict(result=[None, 3, _toy_evaluate({"p": _ToyParams()})], top=INT + [0])),
+        ("Sensitivity", sensitivity.Sensitivity, dict(baseline={}, rows=[], ranges={}), {}),
+        ("scorecard", report_claims.scorecard, dict(results=results), dict(results=[None, 3])),
+        ("claim_counts", report_claims.claim_counts, dict(results=results), dict(results=[None, 3])),
+        ("checks_and_errata", report_claims.checks_and_errata, dict(results=results, fmt=str), dict(results=[None, 3])),
+        ("sensitivity_lines", report_claims.sensitivity_lines, dict(results=results), dict(results=[None, 3])),
+        ("plausible_text", report_claims.plausible_text, dict(p={"low": 1.0, "high": 2.0}), dict(p=[3, "x"])),
+        ("not_reproduced", report_md.not_reproduced, dict(results=results), dict(results=[None, 3])),
+        ("glossary_lines", glossary_lines, dict(text="RMSE"), dict(text=[None, 3])),
+        ("summarise", summarise, dict(value=[1, 2]), {}),
+    ]
+
+
+@dataclasses.dataclass(frozen=True)
+class _ToyParams:
+    k: float = study.reconstructed(1.0, "toy", plausible=study.span(0.5, 3.0, "toy range", points=3))
+
+
+def _toy_evaluate(params):
+    res = report.StudyResult(report.StudyInfo("toy", "", "", ""))
+    res.quantity("gain", "gain", params["p"].k, paper=1.0, tolerance=0.1, unit="")
+    res.claim(study.Claim("small", "§1", "the gain is below 2"), params["p"].k < 2, evidence=["gain"])
+    return res
+
+
+def _swept():
+    from ctrl_analysis import sensitivity
+
+    res = _toy_evaluate({"p": _ToyParams()})
+    sensitivity.apply(res, sensitivity.sweep(_toy_evaluate, {"p": _ToyParams()}))
+    return res
 
 
 def _new_figure_object():
