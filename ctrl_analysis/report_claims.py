@@ -151,7 +151,7 @@ def sensitivity_lines(results: dict) -> list[str]:
     claim_flips: dict = {}
     for c in results.get("claims") or []:
         for d in c.get("depends_on") or []:
-            claim_flips.setdefault(d["reconstruction"], []).append(c["id"])
+            claim_flips.setdefault(d["reconstruction"], []).append(f"“{c['statement']}”")
     cell_flips: dict = {}
     for q in results["quantities"]:
         for name, s in ((q.get("sensitivity") or {}).get("by") or {}).items():
@@ -164,8 +164,8 @@ def sensitivity_lines(results: dict) -> list[str]:
         if name in claim_flips or name in cell_flips:
             what = []
             if name in claim_flips:
-                what.append(f"flips claim{'s' if len(claim_flips[name]) > 1 else ''} "
-                            + ", ".join(claim_flips[name]))
+                what.append(f"flips the claim{'s' if len(claim_flips[name]) > 1 else ''} "
+                            + "; ".join(claim_flips[name]))
             if name in cell_flips:
                 n = len(cell_flips[name])
                 what.append(f"flips the verdict of {n} paper cell{'s' if n > 1 else ''}"
