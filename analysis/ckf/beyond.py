@@ -9,7 +9,7 @@ import numpy as np
 
 from . import quantities as qty
 from .loops import ID_OPTIONS, plant_tf
-from .paper import CLAIMS
+from .paper import CLAIMS, frozen
 
 __all__ = ["Q_SWEEP", "ablation", "beyond", "claims_table", "paper_number"]
 
@@ -50,8 +50,7 @@ def ablation(result, p, data, data_f):
         f"steady stage {live['pred_steady']:.3g} (ablation {fro['pred_steady']:.3g}; lower bound, the noise-free fit: "
         f"{result.get('fit.pred_rmse_steady').value:.3g}). Excitation: in the steady stage the regression is nearly "
         f"collinear (column-scaled condition number of the noise-free fit up to {cond:.3g}); the estimates keep "
-        f"drifting slowly along f1 + f2 ≈ const, which the trace cap bounds (a cap three times larger lets them burst, "
-        f"sensitivity sweep).",
+        f"drifting slowly along f1 + f2 ≈ const (Fig. 10) at a rate the trace cap bounds.",
         evidence={"live": live, "frozen": fro, "fit": fit.mean(0).tolist(), "on_bound": on_bound})
 
 
@@ -151,23 +150,25 @@ def _second_plant(ctx, result, p):
     home = qty.offset_terms(simulate_study(p, ctx.runs_or(20, 3), ctx.seed + 20_000)[p.id_signal]["ckf"], p)
     leak = dataclasses.replace(p2, c2=1.0)
     no_leak = qty.offset_terms(simulate_study(leak, ctx.runs_or(20, 3), ctx.seed + 20_000)[p.id_signal]["ckf"], leak)
+    fro = qty.offset_terms(simulate_study(frozen(p2), ctx.runs_or(20, 3), ctx.seed + 20_000)[p.id_signal]["ckf"], p2)
     t = terms["ckf"]
     eff = p.k_I / (t["c2_share"] * (1 - p.c2))
     result.finding(
-        "plant2-offset", f"On the second plant the CKF loop settles at {t['y']:.3g} instead of {p.reference:g} "
-        f"because the identified static gain ĝ0 / (1 − f̂1 − f̂2) = {t['gain']:.3g} overestimates the plant's 1, and "
+        "plant2-offset", f"On the second plant the CKF loop's output averages {t['y']:.3g} over the steady stage instead "
+        f"of {p.reference:g}, still rising at the end ({t['y_end']:.3g} over the last tenth of the run; frozen-Φ "
+        f"ablation: {fro['y']:.3g}, identified gain {fro['gain']:.3g}), because the identified static gain ĝ0 / (1 − f̂1 − f̂2) = {t['gain']:.3g} overestimates the plant's 1, and "
         f"the leaky logic integral cannot make up the difference: in the steady stage the maintaining-tracking term "
         f"gives u0 = {t['u0']:.3g} (≈ {p.reference:g} / {t['gain']:.3g}), the golden-section term {t['ul']:.3g} and the "
         f"integral {t['ui']:.3g} (u = {t['u']:.3g}). The integral leaks (c = c2 = {p.c2:g}) in {t['c2_share']:.0%} of "
         f"the steps, so it settles at about −k_I e / ({t['c2_share']:.2f} (1 − c2)) = {eff:.3g} · (−e): a finite gain "
-        f"on the offset of the fed-back signal e = {t['e']:.3g}. With c2 = 1 (no leak) the same loop settles at "
-        f"{no_leak['y']:.4g}: the integral then zeroes the mean of the fed-back CKF output, which itself sits "
-        f"{no_leak['bias']:+.3g} from the true output (with the leak: {t['bias']:+.3g}), the CKF's model having the "
-        f"wrong static gain. No filter "
+        f"on the offset of the fed-back signal e = {t['e']:.3g}. The fed-back CKF output itself sits {t['bias']:+.3g} "
+        f"above the true output (its model has the wrong static gain), so even without the leak (c2 = 1) the loop "
+        f"settles at {no_leak['y']:.4g}, its fed-back signal at {no_leak['y'] + no_leak['bias']:.4g} (bias "
+        f"{no_leak['bias']:+.3g}): most of the remaining offset is the CKF's bias. No filter "
         f"and LPF settle at {terms['nofilter']['y']:.3g} and {terms['lpf']['y']:.3g} (identified gains "
         f"{terms['nofilter']['gain']:.3g}, {terms['lpf']['gain']:.3g}); on the paper plant the CKF loop's identified "
         f"gain is {home['gain']:.3g} and it settles at {home['y']:.4g}.",
-        evidence={"terms": terms, "paper_plant": home, "no_leak": no_leak})
+        evidence={"terms": terms, "paper_plant": home, "no_leak": no_leak, "frozen": fro})
     return data2
 
 

@@ -41,6 +41,7 @@ TABLE1_ROWS = {"nofilter": "no filter", "lpf": "LPF", "ckf": "CKF"}
 TABLE1_COLUMNS = {"y_mean": "output mean", "y_var": "output variance", "u_mean": "control mean",
                   "u_var": "control variance"}
 PARAMS = ("f1", "f2", "g0")
+HAT = {"f1": "f̂1", "f2": "f̂2", "g0": "ĝ0"}
 
 
 def window(t, t0, t1=np.inf):
@@ -204,11 +205,11 @@ def identification(result, d, p, prefix="", tag=""):
     out = {}
     for i, n in enumerate(("f1", "f2")):
         travel = np.abs(d[n] - p.theta0[i]).max(axis=0)
-        record(result, f"{prefix}ident.{n}_travel", f"{tag}largest |{n}̂ − θ0| over the run (CKF case)", travel, ok,
+        record(result, f"{prefix}ident.{n}_travel", f"{tag}largest |{HAT[n]} − θ0| over the run (CKF case)", travel, ok,
                note=f"θ0 = {p.theta0}")
         out[f"{n}_travel"] = (float(np.mean(travel[ok])), float(np.max(travel[ok])))
     for n in PARAMS:
-        record(result, f"{prefix}ident.{n}_final", f"{tag}identified {n}̂ at {p.t_end:g} s (CKF case)", d[n][-1], ok)
+        record(result, f"{prefix}ident.{n}_final", f"{tag}identified {HAT[n]} at {p.t_end:g} s (CKF case)", d[n][-1], ok)
         out[f"{n}_final"] = float(np.mean(d[n][-1][ok]))
     for span, (a, b) in {"transient": (p.t_filter, 10.0), "steady": (p.t_steady, np.inf)}.items():
         v = prediction_error(d, a, b)
@@ -233,8 +234,8 @@ def record_fit(result, d, p):
 def offset_terms(d, p):
     """Steady-stage means of the control law's terms in one case: why the output settles where it does.
 
-    Returns ``{"y", "u", "bias", "u0", "ul", "ui", "gain", "c2_share", "e"}``: output and control means, the
-    steady bias of the fed-back signal (fed back minus true output), the maintaining-
+    Returns ``{"y_end", "y", "u", "bias", "u0", "ul", "ui", "gain", "c2_share", "e"}``: output and control means, the
+    steady bias of the fed-back signal (``y_end``: the output mean over the last tenth of the run) (fed back minus true output), the maintaining-
     tracking, golden-section and logic-integral terms (eq. 17-19, recomputed from the records), the identified
     static gain ĝ0 / (1 − f̂1 − f̂2) and the share of steps in which the integral leaks (c = c2).
     """
@@ -249,7 +250,8 @@ def offset_terms(d, p):
     ui = d["u"][:, ok] - u0 - ul
     leak = e * (e - e_prev) <= 0.0
     mean = lambda v: float(np.mean(v[m]))
-    return {"y": mean(d["y"][:, ok]), "u": mean(d["u"][:, ok]), "bias": mean(d["y_fb"][:, ok] - d["y"][:, ok]), "u0": mean(u0), "ul": mean(ul), "ui": mean(ui),
+    end = window(d["t"], 0.9 * d["t"][-1])
+    return {"y_end": float(np.mean(d["y"][end][:, ok])), "y": mean(d["y"][:, ok]), "u": mean(d["u"][:, ok]), "bias": mean(d["y_fb"][:, ok] - d["y"][:, ok]), "u0": mean(u0), "ul": mean(ul), "ui": mean(ui),
             "gain": float(np.mean(g0[m]) / (1.0 - np.mean(f1[m]) - np.mean(f2[m]))), "c2_share": mean(leak),
             "e": mean(e)}
 
@@ -320,21 +322,6 @@ def q_sweep(d, p, qs, runs=10):
         out["transient"].append(float(np.sqrt(np.mean(err[window(t, 0.0, 10.0)] ** 2))))
         out["steady"].append(float(np.sqrt(np.mean(err[window(t, p.t_steady)] ** 2))))
     return {k: np.array(v) for k, v in out.items()}
-
-
-def _compare(result, a, b):
-    """Whether ``a < b``, whether the difference exceeds 2 standard errors, and the numbers."""
-    qa, qb = result.get(a), result.get(b)
-    if qa.value is None or qb.value is None:
-        return None, None, f"{a} or {b} has no value (all runs diverged)"
-    diff = qa.value - qb.value
-    na, nb = (max(q.runs - (q.runs_diverged or 0), 1) for q in (qa, qb))  # the runs the means are over
-    se = float(np.sqrt(qa.std**2 / na + qb.std**2 / nb))
-    significant = bool(abs(diff) > 2 * se)
-    sig = "significant" if significant else "NOT significant"
-    return qa.value < qb.value, significant, (f"{a} = {qa.value:.4g} ± {qa.std:.2g} vs {b} = {qb.value:.4g} ± "
-                                              f"{qb.std:.2g} (difference {diff:+.3g}, standard error {se:.2g}: "
-                                              f"{sig} at 2 SE)")
 
 
 #: Comparisons behind the claims: claim id -> (quantity, case the CKF is compared with).
