@@ -169,9 +169,11 @@ def _jsonable_value(v):
 def apply(result: StudyResult, sens: Sensitivity) -> None:
     """Write a sweep into ``result``: claims that flip become ``depends``; cells get their spread.
 
-    A claim flips when its judgement at a tried value differs from the sweep's baseline (evaluated with
-    the same settings, so Monte Carlo noise does not pass for a flip). Where the baseline itself differs
-    from the main run's judgement the claim's note says so.
+    A claim flips when its judgement at a tried value is the opposite definite verdict of the sweep's
+    baseline (evaluated with the same settings, so Monte Carlo noise does not pass for a flip); a value
+    where the claim cannot be judged (``None``, e.g. the method breaks down there) is recorded as
+    ``untestable_at``, not as a flip. Where the baseline itself differs from the main run's judgement
+    the claim's note says so.
 
     Parameters
     ----------
@@ -195,16 +197,21 @@ def apply(result: StudyResult, sens: Sensitivity) -> None:
         for name, rows in by_name.items():
             if c.claim.id not in rows[0]["claims"]:
                 continue
-            flips = [r for r in rows if r["claims"].get(c.claim.id) != base]
-            if flips:
+            # a flip is the opposite definite verdict; a value where the claim cannot be judged (None) is no flip
+            flips = [r for r in rows if r["claims"].get(c.claim.id) is not None and r["claims"][c.claim.id] != base]
+            blind = [_jsonable_value(r["value"]) for r in rows
+                     if r["claims"].get(c.claim.id) is None and base is not None]
+            if flips and base is not None:
                 c.depends_on.append({
                     "reconstruction": name, "chosen": _jsonable_value(rows[0]["chosen"]),
                     "flips_at": [_jsonable_value(r["value"]) for r in flips],
-                    "verdict_there": ["untestable" if r["claims"].get(c.claim.id) is None
-                                      else ("holds" if r["claims"][c.claim.id] else "fails") for r in flips],
-                    "tried": [_jsonable_value(r["value"]) for r in rows]})
+                    "verdict_there": ["holds" if r["claims"][c.claim.id] else "fails" for r in flips],
+                    "untestable_at": blind, "tried": [_jsonable_value(r["value"]) for r in rows]})
             else:
                 c.robust_to.append(name)
+                if blind:
+                    c.note = (c.note + " " if c.note else "") + (
+                        f"Untestable at {name} = {', '.join(str(v) for v in blind)} (no flip).")
     for q in result.quantities:
         if q.id not in sens.baseline["cells"]:
             continue

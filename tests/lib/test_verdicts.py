@@ -176,3 +176,20 @@ def test_every_reconstruction_states_a_plausible_range():
     assert missing_plausible(Bare()) == ["k"]
     with pytest.raises(ValueError, match="low"):
         span(2.0, 1.0, "reversed")
+
+
+def _evaluate_breaking(params):
+    """The claim holds below k = 2 and cannot be judged at k >= 2 (the method breaks down there)."""
+    p = params["toy"]
+    r = StudyResult(INFO)
+    r.quantity("gain", "the gain", p.k, unit="")
+    r.claim(CLAIM, None if p.k >= 2 else True, evidence=["gain"])
+    return r
+
+
+def test_a_value_where_the_claim_cannot_be_judged_is_not_a_flip():
+    result = _evaluate_breaking({"toy": Toy()})
+    sensitivity.apply(result, sensitivity.sweep(_evaluate_breaking, {"toy": Toy()}))
+    c = result.get_claim("below-two")
+    assert c.verdict == "holds" and c.depends_on == [] and "toy.k" in c.robust_to
+    assert "Untestable at toy.k = 2.0, 2.5, 3.0" in c.note
