@@ -8,8 +8,6 @@ figures in :mod:`.figures`.
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 
 from ctrl_analysis import sensitivity
@@ -159,7 +157,8 @@ def _figures(ctx, result, all_runs, per_run, sweeps, ratio, seeds, fig2_first, t
                caption="Beyond the paper: the spread of the per-run RMSE of each scheme over the Monte Carlo runs "
                        "behind Table 1 (diverged runs excluded; the bar inside each violin is the median), with the "
                        "paper's printed RMSE marked; shows whether a printed value is a typical run or lies in a "
-                       "tail (the note of each Table 1 quantity gives the fraction).")
+                       "tail (each Table 1 RMSE cell agrees when the printed value lies within the central 95 % of "
+                       "these runs; its percentile is recorded).")
     ctx.save_figure(result, F.plot_td_scan(td_scan, {k: e.td_substeps for k, e in EXAMPLES.items()},
                                            {k: result.get(f"{k}.mfac.rmse").value for k in EXAMPLES}),
                     "td_substeps_scan.png", dpi=dpi,

@@ -6,6 +6,8 @@ The same functions record the main run and every evaluation of the sensitivity s
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 
 from .paper import CLAIMS, SCHEME_LABELS, SCHEMES, TABLE1
@@ -119,13 +121,14 @@ def record_noise_margin(result, key: str, levels, rows: dict) -> None:
     half its runs diverged at a level is no competitor there (and IKF-MFAC diverging is a ratio of inf).
     """
     ratio, best, notes = [], [], []
+    def mean(row):
+        m, _, ok, bad = row
+        return float(m) if ok and 2 * bad < ok + bad and np.isfinite(m) else float("inf")
+
     for i, lv in enumerate(levels):
-        def mean(s):
-            m, _, ok, bad = rows[s][i]
-            return float(m) if ok and 2 * bad < ok + bad and np.isfinite(m) else float("inf")
-        others = {s: mean(s) for s in SCHEMES if s != "ikf_mfac"}
+        others = {s: mean(rows[s][i]) for s in SCHEMES if s != "ikf_mfac"}
         b = min(others, key=others.get)
-        ratio.append(mean("ikf_mfac") / others[b])
+        ratio.append(mean(rows["ikf_mfac"][i]) / others[b])
         best.append(b)
         div = [f"{L[s]} {rows[s][i][3]}/{rows[s][i][2] + rows[s][i][3]}" for s in SCHEMES if rows[s][i][3]]
         if div:
@@ -168,8 +171,8 @@ def _fig2(result) -> None:
     healthy = [i for i, d in enumerate(div.value) if 2 * d < runs and np.isfinite(fl[i])]
     lost = [f"{R[i]:g} ({d} of {runs})" for i, d in enumerate(div.value) if 2 * d >= runs]
     f, r = [fl[i] for i in healthy], [rs[i] for i in healthy]
-    stronger = len(f) >= 2 and all(b < a for a, b in zip(f, f[1:]))
-    slower = len(r) >= 2 and all(b >= a for a, b in zip(r, r[1:])) and r[-1] > r[0]
+    stronger = len(f) >= 2 and all(b < a for a, b in itertools.pairwise(f))
+    slower = len(r) >= 2 and all(b >= a for a, b in itertools.pairwise(r)) and r[-1] > r[0]
     holds = stronger and slower and not lost
     pts = "; ".join(f"R = {R[i]:g}: RMS {fl[i]:.4f}, rise {rs[i]:.1f}" + (f", {div.value[i]} diverged"
                                                                             if div.value[i] else "")
