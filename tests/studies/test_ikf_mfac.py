@@ -5,6 +5,7 @@ import dataclasses
 import numpy as np
 import pytest
 
+from analysis.ikf_mfac.claims import judge_claims, record_fig2, table1_cell
 from analysis.ikf_mfac.loops import build_loop, noise_draws, run_scheme
 from analysis.ikf_mfac.paper import CLAIMS, EX1, EX2, FIG2, SCHEMES, TABLE1
 from analysis.ikf_mfac.plants import (
@@ -13,7 +14,6 @@ from analysis.ikf_mfac.plants import (
     reference,
     reference_next,
 )
-from analysis.ikf_mfac.claims import judge_claims, record_fig2, table1_cell
 from analysis.ikf_mfac.quantities import metrics_of, table1_consistency
 from ctrl_analysis.report import StudyInfo, StudyResult
 from ctrl_analysis.simulate import run_seeds
@@ -202,7 +202,7 @@ def test_sweep_figures_never_draw_a_mean_of_few_runs_as_an_ordinary_point():
     from analysis.ikf_mfac.figures import _plot_runs
     from ctrl_analysis.report import new_figure
 
-    fig, ax = new_figure()
+    _, ax = new_figure()
     rows = [(1.0, 0.1, 50, 0), (2.0, 0.1, 35, 15), (3.0, 0.1, 10, 40)]   # 100 %, 70 %, 20 % healthy
     note = _plot_runs(ax, [1, 2, 3], rows, "k", "TD-MFAC")
     line, hollow = ax.lines[0], ax.lines[1]
