@@ -2,8 +2,9 @@
 
 The paper's values and reconstructions are in :mod:`.paper`, the plants in :mod:`.plants`, the
 closed loops (library blocks wired by :class:`~ctrl_analysis.loop.Loop`) in :mod:`.loops`, the
-Monte Carlo quantities and sweeps in :mod:`.quantities`, the findings in :mod:`.findings` and the
-figures in :mod:`.figures`.
+Monte Carlo quantities and sweeps in :mod:`.quantities`, Table 1's cells and the paper's claims judged
+in :mod:`.claims`, the study as a function of its parameters for the sensitivity sweep in
+:mod:`.evaluate`, the findings in :mod:`.findings` and the figures in :mod:`.figures`.
 """
 
 from __future__ import annotations
