@@ -26,7 +26,7 @@ def record_consistency(result, n1: int, n2: int) -> list[dict]:
         key, s = ("ex1" if "constant" in r["cell"] else "ex2"), next(k for k, v in SCHEME_LABELS.items()
                                                                      if r["cell"].endswith("/ " + v))
         result.check(f"check.{key}.{s}.snr_from_rmse", f"{r['cell']}: SNR implied by the printed RMSE {r['rmse']}",
-                     float(r["snr_implied"]), paper=r["snr_printed"], unit="dB",
+                     float(r["snr_implied"]), paper=r["snr_printed"], unit="dB", cell=f"{r['cell']} against its RMSE",
                      tolerance=r["rounding_db"] / abs(r["snr_printed"]),
                      note="SNR = 10 lg(mean y*²) − 20 lg RMSE; tolerance: the 4-decimal rounding of both printed values")
     bad = [r for r in rows if abs(r["diff_db"]) > r["rounding_db"]]
