@@ -150,7 +150,9 @@ def _figures(ctx, result, sims) -> None:
                                 "columns show the steady behaviour (1.2 × the 99.9th percentile of |e| outside the start-up "
                                 "and the 4 s after the θ4 step at 30 s); the peaks they clip are written in each panel and "
                                 "drawn at full scale, noise off, in the right column (its time axis is broken between the "
-                                "start-up and the step). x1 itself is not drawn: it lies on the reference to within the "
+                                "start-up and the step; the two observers are identical until the first identification batch ends, so only "
+                                "one trace shows there). The ESO is drawn wide and faint beneath the MESO, whose control "
+                                "input nearly coincides with it. x1 itself is not drawn: it lies on the reference to within the "
                                 "tracking error of the second row. Compare the size of the MESO's and the ESO's errors with "
                                 f"Table {2 if key == 's1' else 3}; long traces are thinned.")
         runs = [(pick(rows, "meso", "wellposed", True)[0], "MESO well-posed (noise on)", c["meso"]),

@@ -122,9 +122,13 @@ def test_rows_select_each_configuration_once():
 
 def test_short_run_writes_every_quantity_with_unit_and_policy(tmp_path):
     analysis = replace(QUICK, horizons=(("s1", 3.0), ("s2", 6.0)), eps_window=(1.0, 3.0))
-    ctx = StudyContext(out_dir=tmp_path, runs=2, seed=3, quick=True)
+    msgs = []
+    ctx = StudyContext(out_dir=tmp_path, runs=2, seed=3, quick=True, progress=msgs.append)
     result = meso.run(ctx, analysis=analysis)
     data = json.loads(write_results_json(result, tmp_path).read_text())
+    # progress counts the runs asked for (issue 20), then what sits on the batch axis
+    line = next(m for m in msgs if m.startswith("s1: "))
+    assert "2 Monte Carlo runs × 3 observers" in line and "simulations on the batch axis" in line
     ids = {q["id"] for q in data["quantities"]}
     required = {"leso.omega_o", "s1.theta_final", "s2.theta_final", "s2.gate_passes", "s1.M_sup", "s1.N_sup",
                 "s1.no_const.track_x1", "leso.eps_slope.x1", "leso.eps_slope.x2", "leso.eps_slope.x3",
@@ -199,14 +203,6 @@ def test_claim_verdicts_of_a_small_run_and_the_sweep_flips(tmp_path):
     assert got == EXPECTED_CLAIMS, got
     assert result.get_claim("s1-meso-better").evidence[0] == "s1.meso.est_x1"
     assert "s2.theta_rel_error.end" in result.get_claim("s2-theta-converges").evidence
-
-
-def test_progress_counts_the_runs_asked_for(tmp_path):
-    msgs = []
-    ctx = StudyContext(out_dir=tmp_path, runs=2, seed=3, quick=True, progress=msgs.append)
-    meso.run(ctx, analysis=replace(QUICK, horizons=(("s1", 3.0), ("s2", 6.0)), eps_window=(1.0, 3.0)))
-    line = next(m for m in msgs if m.startswith("s1: "))
-    assert "2 Monte Carlo runs × 3 observers" in line and "simulations on the batch axis" in line
 
 
 @pytest.mark.parametrize("compiled", [False, True])
