@@ -165,18 +165,7 @@ def plot_situation(sim: SituationRun, series: dict, title: str, max_points: int 
                 if c == 0:
                     for w in windows:
                         ax[r, 2].plot(xt[w], y[w], color=color, lw=0.8)
-        for r in range(5):
-            lim = 1.2 * lims[r]
-            if lim > 0:
-                if r == 0:  # u is not centred on zero: its steady range
-                    pad = 0.1 * (urange[1] - urange[0])
-                    ax[r, c].set_ylim(urange[0] - pad, urange[1] + pad)
-                else:
-                    ax[r, c].set_ylim(-lim, lim)
-                if peaks[r] > lim:
-                    ax[r, c].text(0.99, 0.03, f"off scale: start-up / θ4-step peak |·| = {peaks[r]:.3g}",
-                                  transform=ax[r, c].transAxes, ha="right", va="bottom", fontsize=7.5,
-                                  bbox={"facecolor": "white", "alpha": 0.8, "lw": 0})
+        _steady_limits(ax[:, c], lims, peaks, urange)
         ax[0, c].set_title(col, fontsize=10.5)
         ax[4, c].set_xlabel("time t (s)")
     ax[0, 2].set_title("noise off: the start-up and the θ4 step\nat full scale", fontsize=10.5)
@@ -193,6 +182,22 @@ def plot_situation(sim: SituationRun, series: dict, title: str, max_points: int 
     handles, labs = ax[0, 0].get_legend_handles_labels()
     fig.legend(handles, labs, loc="outside lower center", ncol=3, fontsize=9)
     return fig
+
+
+def _steady_limits(axes, lims, peaks, urange) -> None:
+    """y-ranges of one column from the steady behaviour; the clipped transient peak written in each panel."""
+    for r, a in enumerate(axes):
+        lim = 1.2 * lims[r]
+        if lim <= 0:
+            continue
+        if r == 0:  # u is not centred on zero: its steady range
+            pad = 0.1 * (urange[1] - urange[0])
+            a.set_ylim(urange[0] - pad, urange[1] + pad)
+        else:
+            a.set_ylim(-lim, lim)
+        if peaks[r] > lim:
+            a.text(0.99, 0.03, f"off scale: start-up / θ4-step peak |·| = {peaks[r]:.3g}", transform=a.transAxes,
+                   ha="right", va="bottom", fontsize=7.5, bbox={"facecolor": "white", "alpha": 0.8, "lw": 0})
 
 
 def _moving_average(y, n):
