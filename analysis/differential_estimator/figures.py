@@ -159,7 +159,7 @@ def plot_tradeoff(trade: dict, sigma_point, title: str):
     bws, curves, fal = trade["bws"], trade["curves"], trade["fal"]
     bw_s = trade["fal_bw"]["equal_bw"]
     fig, (ax, az) = new_figure(1, 2, title=title, size=(13.0, 5.8), width_ratios=[1.25, 1.0])
-    near = bws <= 2.5 * bw_s
+    near = (bws >= bw_s / 2) & (bws <= 2.5 * bw_s)
     pts = np.vstack([curves["sigma"][near], curves["leso"][near], fal["equal_bw"][None], np.asarray(sigma_point)[None]])
     lo, hi = pts.min(axis=0) / 1.12, pts.max(axis=0) * 1.15
     fal_style = {"textbook": ("^", "Han's fal ESO, step-size gains for h' = 1 ms (the paper's tuning as reconstructed)"),
@@ -182,19 +182,24 @@ def plot_tradeoff(trade: dict, sigma_point, title: str):
                               fontsize=8, color="C0", bbox=box, zorder=6)
         axis.set_xlabel("mean |x1 − x̂1|  [–]")
         axis.set_ylabel("mean |x2 − x̂2|  [1/s]")
-        axis.xaxis.set_minor_locator(LogLocator(base=10.0, subs=(2.0, 5.0)))
         fmt = FuncFormatter(lambda v, _: f"{v:.1e}".replace("e-0", "e-"))
+        subs = (1.2, 1.4, 1.6, 1.8, 2.0) if zoom else (2.0, 5.0)
+        axis.xaxis.set_minor_locator(LogLocator(base=10.0, subs=subs))
         axis.xaxis.set_minor_formatter(fmt)
         axis.xaxis.set_major_formatter(fmt)
-        axis.yaxis.set_minor_formatter(NullFormatter() if not zoom else fmt)
+        if zoom:
+            axis.yaxis.set_minor_locator(LogLocator(base=10.0, subs=(5.0, 6.0, 8.0, 10.0, 12.0, 15.0)))
+            axis.yaxis.set_minor_formatter(fmt)
+        else:
+            axis.yaxis.set_minor_formatter(NullFormatter())
     ax.add_patch(Rectangle((lo[0], lo[1]), hi[0] - lo[0], hi[1] - lo[1], fill=False, ec="0.4", ls=":", lw=1.0,
                            zorder=1))
-    ax.set_title(f"all bandwidths (labels: −3 dB bandwidth, rad/s; dotted box: zoom)", fontsize=9)
+    ax.set_title("all bandwidths (labels: −3 dB bandwidth, rad/s; dotted box: zoom, right)", fontsize=9)
     az.set_xlim(lo[0], hi[0])
     az.set_ylim(lo[1], hi[1])
-    az.set_title(f"zoom: bandwidths up to {2.5 * bw_s:.0f} rad/s", fontsize=9)
-    for e, text, off in ((fal["equal_bw"], "fal ESO at Σ's bandwidth", (30, -28)),
-                         (sigma_point, "Σ as in the paper", (40, 12))):
+    az.set_title(f"zoom: bandwidths {bw_s / 2:.0f}-{2.5 * bw_s:.0f} rad/s around Σ's {bw_s:.0f} rad/s", fontsize=9)
+    for e, text, off in ((fal["equal_bw"], "fal ESO at Σ's bandwidth", (40, 16)),
+                         (sigma_point, "Σ as in the paper (a = 7)", (36, -26))):
         az.annotate(text, (e[0], e[1]), textcoords="offset points", xytext=off, fontsize=8, color="0.15",
                     arrowprops=dict(arrowstyle="->", color="0.3", lw=0.8), bbox=dict(boxstyle="round,pad=0.2",
                                                                                     fc="w", ec="0.6"), zorder=7)
