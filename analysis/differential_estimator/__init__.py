@@ -105,13 +105,13 @@ def _linear(ctx, result):
     ctx.save_figure(result, fig, "fig1_root_locus.png",
                     caption=f"Redraws the paper's Fig. 1: root locus of Σ's loop G(s) = K(s+a)^(n0−1)/s^n0 for n0 = {n0}, "
                             f"a = {a:g}, with the closed-loop poles at the design gain (the breakaway point s = −n0 a); "
-                            "quantities eq9.*, finding eq9-exponent.")
+                            "see the check 'breakaway point' and the erratum on eq. (9)'s exponent.")
     est2 = DifferentialEstimator(LINEAR.fig2_n0, LINEAR.fig2_a)
     ctx.save_figure(result, figures.plot_bode(est2, title=f"Fig. 2  Bode plot of Φ(s), y → z₁ (n0 = {est2.n0}, "
                                                           f"a = {est2.a:g}, K = {est2.K:.4g})"), "fig2_bode.png",
                     caption="Redraws the paper's Fig. 2: Bode plot of Σ's transfer function Φ(s) from the measurement y "
-                            "to the estimate z1; a low-pass with unit DC gain (quantities fig2.bandwidth_3db, "
-                            "fig2.resonance_peak_db).")
+                            "to the estimate z1; a low-pass with unit DC gain (its −3 dB bandwidth and resonance peak are "
+                            "quantities 'Fig. 2: -3 dB bandwidth of Φ' and 'Fig. 2: resonance peak of |Φ|'; claim lowpass).")
     ctx.save_figure(result, figures.plot_normalised_magnitude(LINEAR.table_n0, title="Beyond the paper: |Φ(jω)| of Σ "
                     "at the design gain, against ω/a, n0 = 2..8"), "extra_phi_magnitude_vs_n0.png",
                     caption="Beyond the paper: |Φ(jω)| of Σ at the design gain against the normalised frequency ω/a "

@@ -108,7 +108,8 @@ def eq9_checks(result: StudyResult, L: Linear) -> dict:
     p_pr = {m: DifferentialEstimator(n0, a, k, allow_unstable=True).poles for m, k in k_printed.items()}
     result.finding(
         "eq9-exponent",
-        f"Eq. (9) is printed K = n0^n a/(n0-1)^(n0-1). Solving dK/ds = 0 on K(s) = -s^n0/(s+a)^(n0-1) "
+        f"Eq. (9)'s exponent n must read n0: only K = n0^n0 a/(n0-1)^(n0-1) puts a double pole at the breakaway "
+        f"point s = -n0 a (sympy, for general n0 and a). Eq. (9) is printed K = n0^n a/(n0-1)^(n0-1). Solving dK/ds = 0 on K(s) = -s^n0/(s+a)^(n0-1) "
         f"with sympy for general n0, a gives dK/ds · (s + a)^n0/s^(n0-1) = {sp.sstr(d.dK_ds_reduced)}, so "
         f"besides s = 0 (K = 0) the only critical point, the breakaway (strictly a break-in: K has a minimum "
         f"there, d2K/ds2 = {sp.sstr(d.second_derivative)} > 0) is s = {sp.sstr(d.breakaway)} as the paper says, "
@@ -144,6 +145,8 @@ def eq5_checks(result: StudyResult, L: Linear) -> None:
     ratios = sorted({r["an0_ratio"] for r in rows.values()})
     result.finding(
         "eq5-sign",
+        f"Eq. (5) has the wrong sign on its last coefficient, and with the printed sign Σ is unstable for every K "
+        f"(largest pole real part {p_flip.real.max():+.3g} for n0 = 5, a = 2). "
         f"Eq. (5) prints a_1 = K, a_2 = -K Σz_i, a_n0 = (-1)^n0 K ∏z_i. Expanding K ∏(s - z_i) with sympy "
         f"for n0 = {L.table_n0[0]}..{L.table_n0[-1]} and symbolic zeros: a_1 and a_2 are right "
         f"({'all match' if a2_ok else 'MISMATCH'}), but derived/printed a_n0 = {', '.join(ratios)} for every n0: "
@@ -182,6 +185,8 @@ def lowpass_checks(result: StudyResult, L: Linear) -> list:
         for n0, rows in by_n0.items())
     result.finding(
         "lowpass-claim",
+        f"Σ is a first-order low-pass with a {row2['resonance_peak_db']:.2g} dB resonance bump, not a sharp filter: "
+        f"beyond its bandwidth Φ(s) rolls off at only -20 dB/decade (n0 = 5, a = 5). "
         f"The paper calls Σ a good low-pass filter (Fig. 2). Measured on Φ(s) for n0 = 5, a = 5 (K = "
         f"{est2.K:.4g}): DC gain {dc:.6g}, -3 dB bandwidth {row2['bandwidth_3db_rad_s']:.4g} rad/s, resonance "
         f"peak +{row2['resonance_peak_db']:.3g} dB at {row2['resonance_freq_rad_s']:.4g} rad/s, "
@@ -197,6 +202,7 @@ def lowpass_checks(result: StudyResult, L: Linear) -> list:
             "bandwidth_3db_rad_s", "resonance_peak_db", "resonance_freq_rad_s", "gain_db_at_10x_bandwidth")}})
     result.finding(
         "eq12-limit",
+        f"Eq. (12) takes the limit at the wrong end: tracking needs Φ(0) = 1 (s → 0), while Φ(s) → 0 as s → ∞. "
         f"Eq. (12) prints lim_(s→∞) Φ(s) = 1; the limit that gives tracking is s → 0: Φ(0) = {dc:.6g} "
         f"(control.dcgain), while |Φ(j·10^6)| = {hf:.3g} → 0 (Φ is strictly proper).", kind="erratum")
     return table
