@@ -216,7 +216,7 @@ def controller_poles(result: StudyResult, L: Linear) -> None:
                                          "polynomial": [1.0, *K[::-1]]}
     result.check(
         "ex2.controller_poles", "Example 2: roots of s^3 + 39 s^2 + 506 s + 2184 (controller (18))",
-        roots.real, paper=list(L.ex2_poles), tolerance=1e-6, unit="1/s",
+        roots.real, paper=list(L.ex2_poles), tolerance=1e-6, unit="1/s", cell="§4 Example 2: roots -12, -13, -14",
         note=f"A check of the paper's arithmetic (not a reproduced cell); the printed roots are integers, 1e-6 covers "
              f"numpy.roots' rounding; max |Im| = {np.abs(roots.imag).max():.1e}. Read as polynomial coefficients, the printed "
              f"K = [2184, 506, 39, 1] runs from s^0 to s^3 (the trailing 1 is the coefficient of s^3); the study "
