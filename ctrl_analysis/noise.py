@@ -13,7 +13,11 @@ import numpy as np
 
 from ._validate import check_finite, check_int
 
-__all__ = ["run_seeds", "draw_noise", "uniform_noise", "gaussian_noise"]
+__all__ = ["MAX_RUNS", "run_seeds", "draw_noise", "uniform_noise", "gaussian_noise"]
+
+#: Most runs :func:`run_seeds` makes at once (a list of Python integers; beyond it the list alone
+#: takes gigabytes): split larger studies into batches of seeds from different base seeds.
+MAX_RUNS = 10**7
 
 
 # ----------------------------------------------------------------------------------------------
@@ -34,12 +38,17 @@ def run_seeds(base_seed: int, runs: int) -> list[int]:
     base_seed : int
         The study's base seed (``--seed``), >= 0.
     runs : int
-        Number of Monte Carlo runs, >= 1.
+        Number of Monte Carlo runs, from 1 to :data:`MAX_RUNS`.
 
     Returns
     -------
     list of int
         One seed per run.
+
+    Raises
+    ------
+    ValueError
+        If ``base_seed`` < 0, or ``runs`` is < 1 or > :data:`MAX_RUNS`.
 
     Examples
     --------
@@ -49,6 +58,9 @@ def run_seeds(base_seed: int, runs: int) -> list[int]:
     """
     base_seed = check_int("base_seed", base_seed, minimum=0)
     runs = check_int("runs", runs, minimum=1)
+    if runs > MAX_RUNS:
+        raise ValueError(f"runs must be <= {MAX_RUNS} (MAX_RUNS: the seeds alone would take "
+                         f"{runs * 36 / 2**30:.3g} GiB), got {runs}")
     return [int(child.generate_state(1)[0]) for child in np.random.SeedSequence(base_seed).spawn(runs)]
 
 

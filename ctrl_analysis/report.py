@@ -86,6 +86,7 @@ class StudyContext:
         if self.runs is not None:
             self.runs = check_int("runs", self.runs, minimum=1)
         self.seed = check_int("seed", self.seed, minimum=0)
+        self.jobs = check_int("jobs", self.jobs, minimum=1)
         check_callable("progress", self.progress, "progress(message)")
 
     def runs_or(self, default: int, quick_default: int | None = None) -> int:
