@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ._validate import check_array, check_bool, check_int, check_str
+from ._validate import check_array, check_bool, check_int, check_nonnegative, check_str
 from .study import Claim, Plausible
 from .verdicts import (CENTRAL, CLAIM_VERDICTS, DEFAULT_TOLERANCE, KINDS, VERDICT_POLICY, VERDICTS,
                        ClaimResult, _check_tolerance, central_interval, compute_verdict, digits_tolerance,
@@ -133,6 +133,14 @@ class Quantity:
         self.diverged = check_bool("diverged", self.diverged)
         if self.runs is not None:
             self.runs = check_int("runs", self.runs, minimum=0)
+        if self.runs_diverged is not None and self.runs is None:
+            raise ValueError(f"quantity {self.id!r}: runs_diverged={self.runs_diverged!r} needs runs (the total it "
+                             "counts from)")
+        if self.runs == 0 and self.value is not None:
+            raise ValueError(f"quantity {self.id!r}: runs is 0 (no run contributed), so value must be None, "
+                             f"got {self.value!r}")
+        if self.std is not None and self.value is not None:
+            check_nonnegative("std", self.std)
         if self.runs_diverged is not None:
             self.runs_diverged = check_int("runs_diverged", self.runs_diverged, minimum=0,
                                            maximum=self.runs)

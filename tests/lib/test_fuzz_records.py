@@ -1,10 +1,6 @@
-"""Bad arguments that :class:`ctrl_analysis.results.Quantity` still accepts (issue 20, item 5).
+"""Bad arguments that :class:`ctrl_analysis.results.Quantity` must refuse (issue 20, item 5).
 
-``results.py`` is being rewritten on another branch (issue 18), so these checks are not made here:
-each test states the rule the record must enforce and is an expected failure until then (strict:
-once the rewrite rejects the value the test passes, and the marker must be removed).
-
-What ``Quantity.__post_init__`` needs (each error naming the argument, the value and the rule):
+What ``Quantity.__post_init__`` enforces (each error naming the argument, the value and the rule):
 
 * ``std``: ``None``, or a finite number or array with every entry ``>= 0``
   (``check_nonnegative("std", std)``): a negative, NaN, infinite or non-numeric spread is nonsense;
@@ -20,7 +16,6 @@ import pytest
 
 from ctrl_analysis.results import Quantity
 
-XFAIL = pytest.mark.xfail(strict=True, reason="results.py owned by issue-18 rewrite")
 VALID = dict(id="q", label="q", value=1.0, paper=1.0, tolerance=0.1, runs=3, unit="rad")
 
 
@@ -29,20 +24,17 @@ def test_valid_quantity_is_accepted():
     assert (q.runs, q.std, q.verdict) == (3, 0.5, "agrees")
 
 
-@XFAIL
 @pytest.mark.parametrize("std", [-1.0, math.nan, math.inf, "abc", [0.1, -0.1]])
 def test_std_must_be_finite_and_nonnegative(std):
     with pytest.raises((ValueError, TypeError), match="std"):
         Quantity(**VALID, std=std)
 
 
-@XFAIL
 def test_zero_runs_cannot_carry_a_value():
     with pytest.raises(ValueError, match="runs"):
         Quantity(**dict(VALID, runs=0))
 
 
-@XFAIL
 def test_runs_diverged_needs_runs():
     with pytest.raises(ValueError, match="runs_diverged"):
         Quantity(**dict(VALID, runs=None), runs_diverged=2)
