@@ -325,7 +325,6 @@ td_update = td_update
 # ---------------------------------------------------------------------------------------- running
 def _build(fam: Family, P: np.ndarray, dt: float):
     """``(block, input names, output names)`` for the family with per-run parameter rows ``P``."""
-    B = P.shape[0]
     if fam.name == "sigma":
         # a_i = K C(n0-1, i-1) a^(i-1) with K ∝ a: a_i(a) = a_i(1) a^i
         gains = _sigma_unit_gains(3) * P[:, :1] ** np.arange(1, 4)
