@@ -225,10 +225,38 @@ class _PerRunTD(TrackingDifferentiator):
     column_kernels = {"update": "td_update", "output": "_copy"}
 
 
-class _PerRunAlphaBeta(ColumnKernels, DiscreteBlock):
-    """α-β filter with per-run gains ``[α, β/T]``: the library's kernels, shared entries as scalars."""
+class _SharedColumns(ColumnKernels, DiscreteBlock):
+    """A library discrete kernel run on the batch's columns with per-run parameter rows ``self._p``.
+
+    The entries listed in ``_shared`` are the same for every run and are passed as scalars (the
+    library kernels branch on them: the α-β "has b" flag, the low-pass order).
+    """
+
+    _shared: tuple = ()
+
+    def _columns(self):
+        cols = list(self._p.T)
+        for i in self._shared:
+            cols[i] = float(self._p[0, i])
+        return cols
+
+    def output(self, t, x, u, params=None):
+        y = np.empty((x.shape[0], len(self.outputs)))
+        self._column_fns()["output"](t, x.T, u.T, self._columns(), y.T)
+        return y
+
+    def update(self, t, x, u, params=None):
+        xn = np.empty_like(x)
+        self._column_fns()["update"](t, x.T, u.T, self._columns(), xn.T)
+        return xn
+
+
+class _PerRunAlphaBeta(_SharedColumns):
+    """α-β filter with per-run gains ``[α, β/T]``: the library's kernels (``alpha_beta_output``/``_update``)."""
 
     inputs, states, outputs, feedthrough = ("y",), ("xpred[0]", "xpred[1]"), ("xhat[0]", "xhat[1]"), True
+    _shared = (0, 3, 4, 5, 6, 7, 8)  # has-b flag, F, b
+    column_kernels = {"output": "alpha_beta_output", "update": "alpha_beta_update"}
 
     def __init__(self, K, T):
         B = K.shape[0]
@@ -238,31 +266,13 @@ class _PerRunAlphaBeta(ColumnKernels, DiscreteBlock):
     def initial_state(self):
         return np.zeros(2)
 
-    def _columns(self):
-        # the kernels on the batch's columns, with the entries shared by every run as scalars
-        # (the kernels branch on p[0], the "has b" flag)
-        cols = list(self._p.T)
-        for i in (0, 3, 4, 5, 6, 7, 8):
-            cols[i] = float(self._p[0, i])
-        return cols
 
-    def output(self, t, x, u, params=None):
-        y = np.empty((x.shape[0], 2))
-        alpha_beta_output(t, x.T, u.T, self._columns(), y.T)
-        return y
-
-    def update(self, t, x, u, params=None):
-        xn = np.empty_like(x)
-        alpha_beta_update(t, x.T, u.T, self._columns(), xn.T)
-        return xn
-
-    column_kernels = {"output": "alpha_beta_output", "update": "alpha_beta_update"}
-
-
-class _PerRunLowPass(ColumnKernels, DiscreteBlock):
+class _PerRunLowPass(_SharedColumns):
     """:class:`~ctrl_analysis.estimators.lowpass.DiscreteLowPass` of order 2 on two channels, one corner frequency per run."""
 
     feedthrough = True
+    _shared = (0,)  # the order m
+    column_kernels = {"output": "lowpass_output", "update": "lowpass_update"}
 
     def __init__(self, omegas, dt, order=2):
         self._p = np.ascontiguousarray(np.array([_lowpass_params(float(w), dt, order) for w in omegas]))
@@ -272,23 +282,6 @@ class _PerRunLowPass(ColumnKernels, DiscreteBlock):
 
     def initial_state(self):
         return np.zeros(2 * self.order)
-
-    def _columns(self):
-        cols = list(self._p.T)
-        cols[0] = float(self.order)
-        return cols
-
-    def output(self, t, x, u, params=None):
-        y = np.empty((x.shape[0], 2))
-        lowpass_output(t, x.T, u.T, self._columns(), y.T)
-        return y
-
-    def update(self, t, x, u, params=None):
-        xn = np.empty_like(x)
-        lowpass_update(t, x.T, u.T, self._columns(), xn.T)
-        return xn
-
-    column_kernels = {"output": "lowpass_output", "update": "lowpass_update"}
 
 
 @functools.lru_cache(maxsize=4096)
@@ -318,8 +311,8 @@ def _copy(t, x, u, p, y):
     y[1] = x[1]
 
 
-# keep the library kernels importable by name from this module (ColumnKernels looks them up here)
-td_update = td_update
+# the library kernels the adapters name in column_kernels (ColumnKernels looks them up in this module)
+_KERNELS = (td_update, alpha_beta_output, alpha_beta_update, lowpass_output, lowpass_update)
 
 
 # ---------------------------------------------------------------------------------------- running
