@@ -39,7 +39,7 @@ def _heat(cases, table):
     fams = list(table)
     M = np.array([[table[n][c.key]["ratio"] for c in cases] for n in fams])
     A = np.array([[table[n][c.key]["adv_ratio"] for c in cases] for n in fams])
-    fig, axes = new_figure(2, 1, title="Tuned worst-case error of f̂' / 2√(εL)", size=(max(8, 0.28 * len(cases) + 3), 7.5))
+    fig, axes = new_figure(2, 1, title="Tuned worst-case error of f̂' / 2√(εL)", size=(max(8, len(cases) / 3.5 + 3), 7.5))
     axes = np.array(axes).reshape(2, 1)
     for ax, data, what in ((axes[0, 0], M, "random classes"), (axes[1, 0], A, "adversarial pair")):
         im = ax.imshow(np.log10(data), aspect="auto", cmap="viridis")
