@@ -55,6 +55,9 @@ def _build_parser() -> argparse.ArgumentParser:
                      help="processes: studies run side by side, Monte Carlo chunks split (default: all cores)")
     rep.add_argument("--scheduler", default=None, metavar="ADDRESS",
                      help="Dask scheduler for sweeps and large Monte Carlo ('local', or tcp://host:8786)")
+    from .arena.cli import add_parser as add_arena  # the arena's subcommand lives in its package
+
+    add_arena(sub)
     return parser
 
 
@@ -231,6 +234,10 @@ def main(argv: list[str] | None = None) -> int:
                 info = load_study(name).INFO
                 print(f"{name:24s} {info.reproduces}")
             return 0
+        if args.command == "arena":
+            from .arena.cli import main as arena_main
+
+            return arena_main(args)
         return _reproduce(args)
     except _UsageError as exc:
         sys.stderr.write(f"ctrl-analysis: error: {exc}\n")
