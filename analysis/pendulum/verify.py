@@ -9,6 +9,7 @@ covariance, and the stability of the printed filter. Data only: quantities and f
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 from dataclasses import dataclass
@@ -42,6 +43,7 @@ __all__ = [
     "best_over_sampling_period",
     "compute_verify",
     "fmt_vec",
+    "gain_cells_data",
     "gain_interpretations",
     "pendulum_matrices",
     "verify_printed_P",
@@ -321,6 +323,20 @@ def compute_verify(P: Verify = VERIFY) -> VerifyData:
     return VerifyData(P=P, a21=a21, **s, t=t, traj=traj, end_err=end_err, Pcheck=Pcheck, rows=rows,
                       sweep_best=sweep_best, poles_printed=poles, abf=abf, discrete=_discrete_alpha_beta(P, a21),
                       bode_filters=bode, omega=omega)
+
+
+@functools.lru_cache(maxsize=8)
+def gain_cells_data(P: Verify = VERIFY):
+    """What the §4 gain cell needs, cheaply (the sensitivity sweep): the continuous gain and the closest interpretation.
+
+    Returns
+    -------
+    (K_cont, closest) : (list, GainInterpretation)
+    """
+    A, _B, G, C = pendulum_matrices(P.a21, P.B2)
+    cont = continuous_steady_state(A, C, G, P.Q, P.R, require="observable")
+    rows = gain_interpretations((P.a21, P.a21_printed), P.Q, P.R, P.T_grid, P.K_printed)
+    return cont.K.ravel().tolist(), rows[0]
 
 
 def fmt_vec(v, digits=4):
