@@ -238,7 +238,7 @@ def plot_fig4_output(regimes: dict, step: float, run: int = 0):
     for ax in axes[-1]:
         ax.set_xlabel("t (s)")
     handles, labels = axes[0, 0].get_legend_handles_labels()
-    fig.legend(handles, labels, loc="lower center", ncol=5, fontsize=8, bbox_to_anchor=(0.5, -0.01))
+    fig.legend(handles, labels, loc="upper center", ncol=5, fontsize=8, bbox_to_anchor=(0.5, 0.0))
     return fig
 
 
@@ -324,10 +324,13 @@ def plot_beyond(est_cases: dict, angles, final: dict, T: float, run: int = 0):
                            title="Beyond the paper: angle estimation error φ − φ̂ of each filter in the loop "
                                  f"(run {run}) and largest recoverable initial angle")
     ax = axes[0]
+    styles = ("-", (0, (4, 2)), "-", "-")  # the time-varying KF dashed: after its transient it equals the steady gain
     for k, (name, r) in enumerate(est_cases.items()):
         err = r.phi[:, run] - r.phi_hat[:, run]
         stop = r.diverged_step[run] if r.diverged[run] else err.size
-        ax.plot(r.t[:stop], err[:stop], color=f"C{k}", lw=0.8, label=name + (" (diverged)" if r.diverged[run] else ""))
+        ax.plot(r.t[:stop], err[:stop], color=f"C{k}", lw=1.4 if k == 1 else 0.8, ls=styles[k % len(styles)],
+                zorder=3 if k == 1 else 2,
+                label=name + (f" (diverged/fell at t = {r.t[stop]:.2g} s)" if r.diverged[run] else ""))
     ax.set_yscale("symlog", linthresh=1e-3)
     ax.set_xlabel("t (s)")
     ax.set_ylabel("φ − φ̂  (rad, symlog)")

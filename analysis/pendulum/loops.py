@@ -282,8 +282,14 @@ def simulate_case(p, a21: float, seeds, *, filter_kind=None, nonlinear=False, ph
         B += 1
     x0 = {"plant": np.tile([phi0, 0.0], (B, 1)) if np.ndim(phi0) == 0 else np.stack([phi0, 0 * phi0], 1)}
     res = loop.simulate(N, inputs={"r": p.step, "w": w, "v": v}, x0=x0, runs=B, bound=p.bound, engine=engine)
+    # a pendulum past |φ| = π/2 has fallen: counted as diverged from that step on (the linear model would not stop)
+    fell = np.abs(res["phi"]) >= np.pi / 2
+    first_fall = np.where(fell.any(axis=0), np.argmax(fell, axis=0), np.iinfo(np.int64).max)
+    diverged = res.diverged | fell.any(axis=0)
+    diverged_step = np.where(res.diverged, np.minimum(res.diverged_step, first_fall), first_fall)
+    diverged_step = np.where(diverged, diverged_step, res.diverged_step)
     return ClosedLoopRun(t=res.t, phi=res["phi"], dphi=res["dphi"], y=res["y"], e=res["e"], ec=res["ec"],
-                         u=res["u"], diverged=res.diverged, diverged_step=res.diverged_step,
+                         u=res["u"], diverged=diverged, diverged_step=diverged_step,
                          phi_hat=res.signals.get("xhat[0]"), dphi_hat=res.signals.get("xhat[1]"))
 
 
