@@ -25,13 +25,13 @@ from ctrl_analysis.verdicts import digits_tolerance
 from . import paper as _paper
 from .verify import NOISE_MODELS, VerifyData, fmt_vec
 
-#: The paper cells the compared quantities score: §4's printed gain (``ss.gain_continuous``, the stated
-#: problem's gain, is its primary reading; α/β of the closest interpretation are secondary) and §5's step.
+#: The paper cell the compared quantities score: §4's printed gain (``ss.gain_continuous``, the stated
+#: problem's gain, is its primary reading; α/β of the closest interpretation are secondary). §5's 5.7325° for
+#: 0.1 rad is a check of the paper's arithmetic (``sec5.step_deg``), not a cell.
 CELL_GAIN = "§4 / K = PCᵀR⁻¹ = [0.950, 0.863]"
-CELL_STEP = "§5 / 0.1 rad = 5.7325°"
 
 
-__all__ = ["CELL_GAIN", "CELL_STEP", "case_metrics", "case_stats", "qid", "record_claims", "record_gain_cells",
+__all__ = ["CELL_GAIN", "case_metrics", "case_stats", "qid", "record_claims", "record_gain_cells",
            "record_loop", "record_regime", "record_verify", "regime_label"]
 
 
@@ -277,15 +277,15 @@ def _record_discrete(result: StudyResult, d: VerifyData) -> None:
 
 #: quantity -> (label, unit); per-run metrics are mean ± std over the healthy runs, the others single values
 METRICS = {
-    "overshoot": ("step overshoot of the mean response over the runs (peak of the run-averaged φ in the transient "
-                  "window t < t_tr above its own final value, the mean over t ≥ t_ss; the zero-mean noise averages "
-                  "out up to its noise floor)", "%"),
-    "overshoot_noise_floor": ("noise floor of the mean-response overshoot: the same peak statistic of the run-averaged "
-                              "φ over an equally long steady window from t_ss (no step there)", "%"),
+    "overshoot": (("step overshoot of the mean response over the runs (peak of the run-averaged φ in the transient "
+                   "window t < t_tr above its own final value, the mean over t ≥ t_ss; the zero-mean noise averages "
+                   "out up to its noise floor)"), "%"),
+    "overshoot_noise_floor": (("noise floor of the mean-response overshoot: the same peak statistic of the "
+                               "run-averaged φ over an equally long steady window from t_ss (no step there)"), "%"),
     "overshoot_noise_free": ("step overshoot of the noise-free response (peak for t < t_tr above its final value)", "%"),
     "steady_offset": ("steady-state offset: mean of φ − r over the steady-state window", "rad"),
-    "peak_excursion": ("largest excursion of φ above the step in the transient window t < t_tr, per run (noise "
-                       "excursions included: what one noisy run shows)", "%"),
+    "peak_excursion": (("largest excursion of φ above the step in the transient window t < t_tr, per run (noise "
+                        "excursions included: what one noisy run shows)"), "%"),
     "settling_time": ("settling time of φ into the band, per run (runs that settle and stay)", "s"),
     "settled_share": ("fraction of the runs that settle into the band and stay there", ""),
     "settling_time_mean": ("settling time of the mean response over the runs into the band", "s"),
@@ -294,10 +294,10 @@ METRICS = {
     "accel_rms": ("RMS of the cart acceleration u over the steady-state window", "m/s²"),
     "sat_e": ("fraction of steady-state samples in which the angle-error input e is saturated (|Ke·e| ≥ 6)", ""),
     "sat_ec": ("fraction of steady-state samples in which the rate input ec is saturated (|Kec·ec| ≥ 6)", ""),
-    "angle_input_error": ("RMS error of the angle the controller receives (y, or φ̂) against the true φ, "
-                          "steady-state window", "rad"),
-    "rate_input_error": ("RMS error of the rate the controller receives (backward difference of y, or φ̂') against "
-                         "the true φ', steady-state window", "rad/s"),
+    "angle_input_error": (("RMS error of the angle the controller receives (y, or φ̂) against the true φ, "
+                           "steady-state window"), "rad"),
+    "rate_input_error": (("RMS error of the rate the controller receives (backward difference of y, or φ̂') "
+                          "against the true φ', steady-state window"), "rad/s"),
 }
 #: metrics computed once from the mean response or the noise-free run (no spread over runs)
 SINGLE = ("overshoot", "overshoot_noise_floor", "overshoot_noise_free", "settled_share", "settling_time_mean", "settling_time_noise_free")
@@ -433,7 +433,7 @@ def _record_step_and_noise(result: StudyResult, p, lit, verify: VerifyData) -> N
     deg = math.degrees(verify.P.step)
     result.check("sec5.step_deg", "§5 step of 0.1 rad in degrees (the paper's own arithmetic)", deg,
                  paper=verify.P.step_deg_printed, tolerance=digits_tolerance(verify.P.step_deg_printed, 4), unit="deg",
-                 note="0.1·180/π; tolerance half a unit of the fourth printed decimal", cell=CELL_STEP)
+                 note="0.1·180/π; tolerance half a unit of the fourth printed decimal (a check, not a reproduced cell)")
     result.finding(
         "step-degrees",
         f"§5 converts the 0.1 rad step to {verify.P.step_deg_printed}°, but 0.1·180/π = {deg:.4f}° "

@@ -33,7 +33,7 @@ from ctrl_analysis.estimators.kalman import (
 from ctrl_analysis.report import relative_error
 from ctrl_analysis.symbolic.riccati import derive_second_order_gain
 
-from .paper import VERIFY, Verify
+from .paper import VERIFY, Verify, physical_a21
 
 __all__ = [
     "NOISE_DESCRIPTION",
@@ -325,17 +325,24 @@ def compute_verify(P: Verify = VERIFY) -> VerifyData:
                       bode_filters=bode, omega=omega)
 
 
-@functools.lru_cache(maxsize=8)
 def gain_cells_data(P: Verify = VERIFY):
     """What the §4 gain cell needs, cheaply (the sensitivity sweep): the continuous gain and the closest interpretation.
+
+    Cached on the values they depend on (not on tolerances or other settings of ``P``).
 
     Returns
     -------
     (K_cont, closest) : (list, GainInterpretation)
     """
-    A, _B, G, C = pendulum_matrices(P.a21, P.B2)
-    cont = continuous_steady_state(A, C, G, P.Q, P.R, require="observable")
-    rows = gain_interpretations((P.a21, P.a21_printed), P.Q, P.R, P.T_grid, P.K_printed)
+    return _gain_cells(P.B2, P.g, P.a21_printed, P.Q, P.R, tuple(P.T_grid), tuple(P.K_printed))
+
+
+@functools.lru_cache(maxsize=8)
+def _gain_cells(B2, g, a21_printed, Q, R, T_grid, K_printed):
+    a21 = physical_a21(B2, g)[1]
+    A, _B, G, C = pendulum_matrices(a21, B2)
+    cont = continuous_steady_state(A, C, G, Q, R, require="observable")
+    rows = gain_interpretations((a21, a21_printed), Q, R, T_grid, K_printed)
     return cont.K.ravel().tolist(), rows[0]
 
 

@@ -113,7 +113,7 @@ def test_run_smoke(small_run):
     assert result.get("sec5.step_deg").kind == "check"
     assert {f["id"]: f.get("kind") for f in result.findings}["step-degrees"] == "erratum"
     # "Not reproduced" names the differing §4 cell first
-    assert "K = [0.950, 0.863] is not reproduced" in result.missing[0]
+    assert "K = [0.95, 0.863] is not reproduced (differs)" in result.missing[0]
     assert result.get("ss.gain_continuous").paper == [0.950, 0.863]
     assert result.get("ss.printed_filter_stable").value == 0
     assert result.get("cl.rule_sign_ok").value == 1
