@@ -27,11 +27,12 @@ from .verify import NOISE_MODELS, VerifyData, fmt_vec
 
 #: The paper cell the compared quantities score: §4's printed gain (``ss.gain_continuous``, the stated
 #: problem's gain, is its primary reading; α/β of the closest interpretation are secondary). §5's 5.7325° for
-#: 0.1 rad is a check of the paper's arithmetic (``sec5.step_deg``), not a cell.
+#: 0.1 rad is a check of the paper's arithmetic (``sec5.step_deg``, kind "check": named by its cell, never counted).
+CELL_STEP = "§5 / 0.1 rad = 5.7325°"
 CELL_GAIN = "§4 / K = PCᵀR⁻¹ = [0.950, 0.863]"
 
 
-__all__ = ["CELL_GAIN", "case_metrics", "case_stats", "qid", "record_claims", "record_gain_cells",
+__all__ = ["CELL_GAIN", "CELL_STEP", "case_metrics", "case_stats", "qid", "record_claims", "record_gain_cells",
            "record_loop", "record_regime", "record_verify", "regime_label"]
 
 
@@ -433,7 +434,8 @@ def _record_step_and_noise(result: StudyResult, p, lit, verify: VerifyData) -> N
     deg = math.degrees(verify.P.step)
     result.check("sec5.step_deg", "§5 step of 0.1 rad in degrees (the paper's own arithmetic)", deg,
                  paper=verify.P.step_deg_printed, tolerance=digits_tolerance(verify.P.step_deg_printed, 4), unit="deg",
-                 note="0.1·180/π; tolerance half a unit of the fourth printed decimal (a check, not a reproduced cell)")
+                 note="0.1·180/π; tolerance half a unit of the fourth printed decimal (a check, not a reproduced cell)",
+                 cell=CELL_STEP)
     result.finding(
         "step-degrees",
         f"§5 converts the 0.1 rad step to {verify.P.step_deg_printed}°, but 0.1·180/π = {deg:.4f}° "
