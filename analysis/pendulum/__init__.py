@@ -6,8 +6,12 @@ Model (§3.1): ``ẋ = A x + B u + Γ w``, ``y = C x + v``, ``x = [φ, φ']`` (r
 * :mod:`.paper` — the printed values and every reconstruction (frozen objects);
 * :mod:`.verify` — §2/§4: the steady-state gain, the Riccati ODE, the printed P and K under every
   interpretation, the stability of the printed filter;
-* :mod:`.loops` — §3.2/§5: the fuzzy closed loop (with and without the filter, and beyond the paper);
-* :mod:`.quantities` — quantities and findings; :mod:`.figures` — the figures.
+* :mod:`.loops` — §3.2/§5: the fuzzy closed loop (with and without the filter, and beyond the paper) in two noise
+  regimes: the *main* one (T = 2 ms, σ_v = 0.5 mrad, σ_w = 0.5 rad/s² chosen independently: noise alone does not
+  saturate the fuzzy inputs, no noise-free limit cycle) and the *literal* one of the previous report (T = 5 ms,
+  σ_v = 5 mrad, σ_w = √(Q/R)·σ_v);
+* :mod:`.quantities` — quantities, findings and the claims (:func:`.quantities.record_claims`, also used by
+  :func:`evaluate`, the sensitivity sweep's evaluation); :mod:`.figures` — the figures.
 """
 
 from __future__ import annotations
