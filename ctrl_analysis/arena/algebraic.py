@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validate import check_int, check_positive
+from .._validate import check_finite, check_int, check_positive
 
 __all__ = ["algebraic_weights", "algebraic_derivative"]
 
@@ -86,6 +86,12 @@ def algebraic_derivative(y, windows, degrees, dt: float) -> np.ndarray:
     numpy.ndarray, shape (N, B, 3)
         ``f̂, f̂', f̂''`` at every sample.
 
+    Raises
+    ------
+    TypeError, ValueError
+        If ``y`` is not a finite (N, B) array, ``windows``/``degrees`` are not integers (``>= 1``;
+        degrees 1 or 2) of one value or ``B`` values, or ``dt <= 0``.
+
     Examples
     --------
     >>> t = 0.1 * np.arange(10)
@@ -93,12 +99,13 @@ def algebraic_derivative(y, windows, degrees, dt: float) -> np.ndarray:
     >>> round(float(est[-1, 0, 1]), 9), round(float(est[-1, 0, 2]), 9)   # 2 t and 2 at t = 0.9
     (1.8, 2.0)
     """
-    y = np.asarray(y, dtype=float)
+    y = np.asarray(check_finite("y", y))
     if y.ndim != 2:
         raise ValueError(f"y must have shape (N, B), got {y.shape}")
     N, B = y.shape
-    windows = np.broadcast_to(np.asarray(windows, dtype=int), (B,))
-    degrees = np.broadcast_to(np.asarray(degrees, dtype=int), (B,))
+    dt = float(check_positive("dt", dt, scalar=True))
+    windows = _integers("windows", windows, B, minimum=1)
+    degrees = _integers("degrees", degrees, B, minimum=1, maximum=2)
     windows = np.maximum(windows, degrees + 1)
     out = np.empty((N, B, 3))
     for W, d in {(int(a), int(b)) for a, b in zip(windows, degrees)}:
@@ -109,3 +116,16 @@ def algebraic_derivative(y, windows, degrees, dt: float) -> np.ndarray:
         view = np.lib.stride_tricks.sliding_window_view(padded, W, axis=0)
         out[:, cols, :] = np.einsum("kbj,rj->kbr", view, w[:, ::-1])
     return out
+
+
+def _integers(name: str, value, size: int, *, minimum: int, maximum: int | None = None) -> np.ndarray:
+    """``value`` (one integer or ``size`` of them) as an int array of shape ``(size,)``; errors name ``name``."""
+    arr = np.asarray(check_finite(name, value))
+    if arr.ndim > 1 or (arr.ndim == 1 and arr.shape != (size,)):
+        raise ValueError(f"{name} must be one integer or {size} of them (one per run), got shape {arr.shape}")
+    if np.any(arr != np.round(arr)):
+        raise ValueError(f"{name} must be integers, got {value!r}")
+    if np.any(arr < minimum) or (maximum is not None and np.any(arr > maximum)):
+        rule = f">= {minimum}" if maximum is None else f"in [{minimum}, {maximum}]"
+        raise ValueError(f"{name} must be {rule}, got {value!r}")
+    return np.broadcast_to(arr.astype(int), (size,))

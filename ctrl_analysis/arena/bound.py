@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validate import check_positive
+from .._validate import check_array, check_finite, check_int, check_positive
 
 __all__ = ["lower_bound", "adversarial_pair", "adversarial_error"]
 
@@ -81,8 +81,9 @@ def adversarial_pair(eps: float, L: float, dt: float, n_samples: int, k_star: in
 
     Raises
     ------
-    ValueError
-        If ``t*`` is too early or outside the record.
+    TypeError, ValueError
+        If ``eps``, ``L`` or ``dt`` is not a number > 0, ``n_samples`` (>= 1) or ``k_star`` (>= 0)
+        not an integer, ``slope`` not finite, or ``t*`` is too early or outside the record.
 
     Examples
     --------
@@ -93,8 +94,11 @@ def adversarial_pair(eps: float, L: float, dt: float, n_samples: int, k_star: in
     eps = float(check_positive("eps", eps, scalar=True))
     L = float(check_positive("L", L, scalar=True))
     dt = float(check_positive("dt", dt, scalar=True))
+    n_samples = check_int("n_samples", n_samples, minimum=1)
+    k_star = check_int("k_star", k_star, minimum=0)
+    slope = float(check_finite("slope", slope, scalar=True))
     tau = 2.0 * np.sqrt(eps / L)
-    t = dt * np.arange(int(n_samples))
+    t = dt * np.arange(n_samples)
     if not (0 <= k_star < t.size) or t[k_star] < tau:
         raise ValueError(f"k_star must be a sample with t* = k_star dt >= 2 sqrt(eps/L) = {tau:.4g} s and "
                          f"k_star < n_samples = {n_samples}, got k_star = {k_star}")
@@ -139,11 +143,23 @@ def adversarial_error(est_d1, pair: dict, k_from: int = 0) -> float:
     -------
     float or numpy.ndarray
         ``max_{±, k >= k_from} |f̂'± - f±'|`` (one per estimator).
+
+    Raises
+    ------
+    TypeError, ValueError
+        If ``pair`` is not :func:`adversarial_pair`'s dict, ``est_d1`` not a real array of its shape,
+        or ``k_from`` not an integer in ``[0, k_star]``.
     """
-    est = np.asarray(est_d1, dtype=float)
-    if not 0 <= k_from <= pair["k_star"]:
+    if not isinstance(pair, dict) or not {"f1", "k_star"} <= pair.keys():
+        raise TypeError(f"pair must be the dict returned by adversarial_pair, got {pair!r:.80}")
+    truth = np.asarray(pair["f1"]).T  # (N, 2)
+    est = check_array("est_d1", est_d1)  # NaN/inf pass: a diverged estimator's error is not finite
+    if est.ndim not in (2, 3) or est.shape[:2] != truth.shape:
+        raise ValueError(f"est_d1 must have shape {truth.shape} or {truth.shape + ('B',)} (the pair's samples "
+                         f"and its two signals), got {est.shape}")
+    k_from = check_int("k_from", k_from, minimum=0)
+    if k_from > pair["k_star"]:
         raise ValueError(f"k_from must be in [0, k_star = {pair['k_star']}], got {k_from}")
-    truth = pair["f1"].T  # (N, 2)
     if est.ndim == 3:
         truth = truth[:, :, None]
     err = np.abs(est - truth)[k_from:]

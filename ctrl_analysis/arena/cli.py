@@ -9,6 +9,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .._validate import check_path
+
 __all__ = ["add_parser", "main", "read_record"]
 
 
@@ -52,35 +54,40 @@ def read_record(path) -> tuple:
 
     Raises
     ------
+    TypeError
+        If ``path`` is not a path.
     ValueError
-        Unreadable file, fewer than two columns, fewer than 20 rows, a non-numeric or NaN value,
-        time not strictly increasing or not uniformly sampled (within 1 %).
+        An empty path, an unreadable or non-UTF-8 file, fewer than two columns, fewer than 20 rows, a
+        non-numeric or NaN value, time not strictly increasing or not uniformly sampled (within 1 %).
     """
-    path = Path(path)
+    path = check_path("--signal path", path)
+    where = f"--signal path {str(path)!r}"  # names the option and the argument
     try:
         text = path.read_text(encoding="utf-8")
     except OSError as exc:
-        raise ValueError(f"--signal {str(path)!r} cannot be read ({exc.strerror or exc})") from None
+        raise ValueError(f"{where} cannot be read ({exc.strerror or exc})") from None
+    except UnicodeDecodeError:
+        raise ValueError(f"{where} is not a UTF-8 text (CSV) file") from None
     rows = [r for r in (line.strip() for line in text.splitlines()) if r]
     if rows and not _numeric(rows[0].split(",")[0]):
         rows = rows[1:]  # header
     try:
         data = [[float(v) for v in r.split(",")] for r in rows]
     except ValueError:
-        raise ValueError(f"--signal {str(path)!r}: every value must be a number") from None
+        raise ValueError(f"{where}: every value must be a number") from None
     widths = {len(r) for r in data}
     if not data or min(widths) < 2 or len(widths) != 1:
-        raise ValueError(f"--signal {str(path)!r} must have the columns time, measurement[, derivative] on every row")
+        raise ValueError(f"{where} must have the columns time, measurement[, derivative] on every row")
     a = np.array(data)
     if a.shape[0] < 20:
-        raise ValueError(f"--signal {str(path)!r} must have at least 20 samples, got {a.shape[0]}")
+        raise ValueError(f"{where} must have at least 20 samples, got {a.shape[0]}")
     if not np.all(np.isfinite(a)):
-        raise ValueError(f"--signal {str(path)!r} contains NaN or infinite values")
+        raise ValueError(f"{where} contains NaN or infinite values")
     dt = np.diff(a[:, 0])
     if np.any(dt <= 0):
-        raise ValueError(f"--signal {str(path)!r}: time must be strictly increasing (row {int(np.argmax(dt <= 0)) + 2})")
+        raise ValueError(f"{where}: time must be strictly increasing (row {int(np.argmax(dt <= 0)) + 2})")
     if np.max(np.abs(dt - np.median(dt))) > 0.01 * np.median(dt):
-        raise ValueError(f"--signal {str(path)!r}: time must be uniformly sampled (steps within 1 %)")
+        raise ValueError(f"{where}: time must be uniformly sampled (steps within 1 %)")
     return a[:, 0], a[:, 1], (a[:, 2] if a.shape[1] > 2 else None)
 
 

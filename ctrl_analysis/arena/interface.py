@@ -24,7 +24,7 @@ import numpy as np
 import scipy.linalg
 
 from .._kernels import BlockKernel, copy_output, eso_rhs, sigma_rhs
-from .._validate import check_in, check_positive
+from .._validate import check_finite, check_in, check_positive
 from ..blocks import ColumnKernels, DiscreteBlock
 from ..estimators.differential import DifferentialEstimator
 from ..estimators.eso import ExtendedStateObserver
@@ -138,7 +138,7 @@ def family(name: str) -> Family:
         For an unknown name (the message lists the names).
     """
     names = [f.name for f in FAMILIES]
-    check_in("family", name, names)
+    check_in("family name", name, names)
     return FAMILIES[names.index(name)]
 
 
@@ -342,6 +342,19 @@ def _build(fam: Family, P: np.ndarray, dt: float):
     raise ValueError(f"family {fam.name!r} has no loop")  # pragma: no cover
 
 
+def _check_params(fam: Family, P: np.ndarray) -> None:
+    """Every tuning parameter > 0; integer parameters integral; a degree (reference ``"one"``) within its range."""
+    for j, p in enumerate(fam.params):
+        col = P[:, j]
+        if np.any(col <= 0):
+            raise ValueError(f"P column {j} ({fam.name} parameter {p.name}) must be > 0, got {col.tolist()!r:.80}")
+        if p.integer and np.any(col != np.round(col)):
+            raise ValueError(f"P column {j} ({fam.name} parameter {p.name}) must be integers, got {col.tolist()!r:.80}")
+        if p.ref == "one" and np.any((col < p.lo) | (col > p.hi)):
+            raise ValueError(f"P column {j} ({fam.name} parameter {p.name}) must be in [{p.lo:g}, {p.hi:g}], "
+                             f"got {col.tolist()!r:.80}")
+
+
 def estimate(fam, P, y, dt: float, *, engine: str = "auto") -> np.ndarray:
     """Estimates of ``f``, ``f'`` (and ``f''`` where the family gives it) from the records ``y``, one run per column.
 
@@ -366,8 +379,10 @@ def estimate(fam, P, y, dt: float, *, engine: str = "auto") -> np.ndarray:
 
     Raises
     ------
-    ValueError
-        If the shapes of ``P`` and ``y`` disagree or a value is not finite.
+    TypeError, ValueError
+        If ``fam`` is not a family, the shapes of ``P`` and ``y`` disagree, a value is not finite, a
+        parameter is not > 0 (an integer parameter not an integer, a degree not 1 or 2), ``dt <= 0`` or
+        ``engine`` is unknown.
 
     Examples
     --------
@@ -377,15 +392,18 @@ def estimate(fam, P, y, dt: float, *, engine: str = "auto") -> np.ndarray:
     >>> round(float(est[-1, 0, 1]), 2)   # a ramp of slope 2 (the input is held over each sample)
     1.99
     """
-    fam = family(fam) if isinstance(fam, str) else fam
+    if isinstance(fam, str):
+        fam = family(check_in("fam (family name)", fam, [f.name for f in FAMILIES]))
+    elif not isinstance(fam, Family):
+        raise TypeError(f"fam must be a Family or a family name, got {fam!r:.80}")
     dt = float(check_positive("dt", dt, scalar=True))
-    P = np.atleast_2d(np.asarray(P, dtype=float))
-    y = np.asarray(y, dtype=float)
+    check_in("engine", engine, ("auto", "numpy", "compiled"))
+    P = np.atleast_2d(check_finite("P", P))
+    y = np.asarray(check_finite("y", y))
     if y.ndim != 2 or P.ndim != 2 or P.shape != (y.shape[1], len(fam.params)):
         raise ValueError(f"P must have shape (B, {len(fam.params)}) and y shape (N, B) with the same B, "
                          f"got P {P.shape} and y {y.shape}")
-    if not (np.all(np.isfinite(P)) and np.all(np.isfinite(y))):
-        raise ValueError("P and y must be finite")
+    _check_params(fam, P)
     N, B = y.shape
     k = 3 if fam.second else 2
     if fam.name == "algebraic":

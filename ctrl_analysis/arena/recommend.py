@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._validate import check_in, check_int, check_positive
 from ..noise import run_seeds
 from ..report import StudyContext
 from ..results import StudyInfo, StudyResult
@@ -59,6 +60,24 @@ class ArenaSettings:
     rounds: int = 3
     families: tuple = tuple(f.name for f in FAMILIES)
 
+    def __post_init__(self):
+        for name, allowed in (("signals", SIGNAL_CLASSES), ("noises", NOISE_CLASSES),
+                              ("families", [f.name for f in FAMILIES])):
+            value = getattr(self, name)
+            if not isinstance(value, tuple) or not value:
+                raise TypeError(f"{name} must be a non-empty tuple of names, got {value!r:.80}")
+            for item in value:
+                check_in(name, item, list(allowed))
+        if not isinstance(self.eps, tuple) or not self.eps:
+            raise TypeError(f"eps must be a non-empty tuple of noise bounds, got {self.eps!r:.80}")
+        for e in self.eps:
+            check_positive("eps", e, scalar=True)
+        check_positive("L", self.L, scalar=True)
+        check_int("records", self.records, minimum=1)
+        if not isinstance(self.setup, Setup):
+            raise TypeError(f"setup must be a Setup, got {self.setup!r:.80}")
+        check_int("rounds", self.rounds, minimum=0)
+
 
 DEFAULT = ArenaSettings()
 QUICK = ArenaSettings(signals=("sines", "steps"), noises=("uniform",), eps=(0.01,), records=1,
@@ -97,6 +116,10 @@ def run_arena(ctx: StudyContext, settings: ArenaSettings | None = None) -> tuple
     """
     from . import figures
 
+    if not isinstance(ctx, StudyContext):
+        raise TypeError(f"ctx must be a StudyContext, got {ctx!r:.80}")
+    if settings is not None and not isinstance(settings, ArenaSettings):
+        raise TypeError(f"settings must be an ArenaSettings or None, got {settings!r:.80}")
     s = settings or (QUICK if ctx.quick else DEFAULT)
     t0 = time.perf_counter()
     cases = _cases(s, ctx.seed)
@@ -199,6 +222,14 @@ def arena_report_lines(results: dict) -> list:
     -------
     list of str
     """
+    if not isinstance(results, dict):
+        raise TypeError(f"results must be the arena's results.json dict, got {results!r:.80}")
+    for key, kind, needs in (("quantities", dict, ("id", "value")), ("findings", dict, ("text",)),
+                             ("figures", str, ())):
+        items = results.get(key, [])
+        if not isinstance(items, list) or not all(isinstance(x, kind) and all(k in x for k in needs) for x in items):
+            raise ValueError(f"results[{key!r}] must be a list of {kind.__name__}"
+                             + (f" with keys {needs}" if needs else "") + f", got {items!r:.80}")
     lines = ["## Estimator arena", ""]
     q = {x["id"]: x for x in results.get("quantities", [])}
     if "tunings" in q:

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validate import check_in, check_positive
+from .._validate import check_finite, check_in, check_int, check_positive
 from ..noise import gaussian_noise, uniform_noise
 
 __all__ = ["SIGNAL_CLASSES", "NOISE_CLASSES", "make_signal", "add_noise"]
@@ -67,6 +67,14 @@ def _chirp(rng, t):
     return np.sin(phi), np.cos(phi) * dphi, -np.sin(phi) * dphi**2 + np.cos(phi) * k
 
 
+def _samples(name: str, value) -> np.ndarray:
+    """A finite, non-empty 1-D float array (errors name ``name``)."""
+    arr = np.asarray(check_finite(name, value))
+    if arr.ndim != 1 or arr.size == 0:
+        raise ValueError(f"{name} must be a non-empty 1-D array of samples, got shape {arr.shape}")
+    return arr
+
+
 def _scaled(parts, L):
     f, f1, f2 = parts
     s = L / max(np.max(np.abs(f2)), 1e-300)
@@ -101,8 +109,8 @@ def make_signal(kind: str, seed: int, t, L: float) -> np.ndarray:
     """
     check_in("kind", kind, tuple(SIGNAL_CLASSES))
     L = float(check_positive("L", L, scalar=True))
-    t = np.asarray(t, dtype=float)
-    rng = np.random.default_rng(seed)
+    t = _samples("t", t)
+    rng = np.random.default_rng(check_int("seed", seed, minimum=0))
     if kind == "sines":
         parts = _sines(rng, t)
     elif kind == "steps":
@@ -143,8 +151,8 @@ def add_noise(kind: str, f, eps: float, seed: int) -> np.ndarray:
     """
     check_in("kind", kind, tuple(NOISE_CLASSES))
     eps = float(check_positive("eps", eps, scalar=True))
-    f = np.asarray(f, dtype=float)
-    rng = np.random.default_rng(seed)
+    f = _samples("f", f)
+    rng = np.random.default_rng(check_int("seed", seed, minimum=0))
     if kind == "uniform":
         return f + uniform_noise(-eps, eps)(rng, f.size)[:, 0]
     if kind == "gaussian":

@@ -25,9 +25,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._validate import check_int
+from .._validate import (
+    check_array,
+    check_finite,
+    check_in,
+    check_int,
+    check_nonnegative,
+    check_positive,
+    check_str,
+)
 from ..parallel import map_chunks
-from .interface import OMEGA_DT_MAX, Family, estimate, family, scales
+from .interface import FAMILIES, OMEGA_DT_MAX, Family, estimate, family, scales
 from .signals import add_noise, make_signal
 
 __all__ = ["Setup", "Case", "case_records", "param_values", "evaluate", "tune_family", "pareto_front"]
@@ -58,6 +66,14 @@ class Setup:
     n: int = 4000
     transient: float = 2.0
 
+    def __post_init__(self):
+        check_positive("dt", self.dt, scalar=True)
+        check_int("n", self.n, minimum=2)
+        check_nonnegative("transient", self.transient, scalar=True)
+        if self.k_from >= self.n:
+            raise ValueError(f"transient must end before the record does (n dt = {self.n * self.dt:g} s), "
+                             f"got transient = {self.transient!r}")
+
     @property
     def k_from(self) -> int:
         """First counted sample."""
@@ -86,6 +102,16 @@ class Case:
     L: float
     seeds: tuple
 
+    def __post_init__(self):
+        check_str("signal", self.signal)
+        check_str("noise", self.noise)
+        check_positive("eps", self.eps, scalar=True)
+        check_positive("L", self.L, scalar=True)
+        if not isinstance(self.seeds, tuple) or not self.seeds:
+            raise TypeError(f"seeds must be a non-empty tuple of seeds, got {self.seeds!r:.80}")
+        for seed in self.seeds:
+            check_int("seeds", seed, minimum=0)
+
     @property
     def key(self) -> str:
         """``signal/noise/ε``."""
@@ -104,12 +130,20 @@ def case_records(case: Case, setup: Setup) -> tuple:
     -------
     tuple of numpy.ndarray
     """
+    _check_case_setup(case, setup)
     if case in _USER_RECORDS:
         return _USER_RECORDS[case]
     t = setup.dt * np.arange(setup.n)
     sig = np.array([make_signal(case.signal, s, t, case.L) for s in case.seeds])  # (S, 3, N)
     y = np.array([add_noise(case.noise, sig[i, 0], case.eps, s + 1) for i, s in enumerate(case.seeds)])
     return sig[:, 1].T, y.T, sig[:, 0].T
+
+
+def _check_case_setup(case, setup) -> None:
+    if not isinstance(case, Case):
+        raise TypeError(f"case must be a Case, got {case!r:.80}")
+    if not isinstance(setup, Setup):
+        raise TypeError(f"setup must be a Setup, got {setup!r:.80}")
 
 
 def param_values(fam: Family, z, case: Case, setup: Setup) -> np.ndarray:
@@ -127,7 +161,13 @@ def param_values(fam: Family, z, case: Case, setup: Setup) -> np.ndarray:
     -------
     numpy.ndarray, shape (C, n_params)
     """
-    z = np.atleast_2d(np.asarray(z, dtype=float))
+    if not isinstance(fam, Family):
+        raise TypeError(f"fam must be a Family, got {fam!r:.80}")
+    _check_case_setup(case, setup)
+    z = np.atleast_2d(check_finite("z", z))
+    if z.ndim != 2 or z.shape[1] != len(fam.params):
+        raise ValueError(f"z must have shape (C, {len(fam.params)}) (one column per {fam.name} parameter), "
+                         f"got {z.shape}")
     sc = scales(case.eps, case.L, setup.dt)
     out = np.empty_like(z)
     for j, p in enumerate(fam.params):
@@ -176,7 +216,7 @@ def evaluate(task) -> np.ndarray:
     numpy.ndarray, shape (len(configs), 4)
         Columns :data:`METRICS`: worst, rms, lag, noise.
     """
-    name, setup, cases, configs, engine = task
+    name, setup, cases, configs, engine = _check_task(task)
     fam = family(name)
     records = {}
     out = np.empty((len(configs), len(METRICS)))
@@ -203,6 +243,31 @@ def evaluate(task) -> np.ndarray:
             out[lo + i] = (np.max(np.abs(e)), np.sqrt(np.mean(e**2)), np.max(np.abs(clean - truth)),
                            np.sqrt(np.mean((noisy - clean) ** 2)))
     return np.where(np.isfinite(out), out, np.inf)
+
+
+def _check_task(task) -> tuple:
+    """:func:`evaluate`'s task, each part checked (errors name ``task`` and the part)."""
+    if not isinstance(task, (tuple, list)) or len(task) != 5:
+        raise TypeError(f"task must be a tuple (family, setup, cases, configs, engine), got {task!r:.80}")
+    name, setup, cases, configs, engine = task
+    fam = family(check_in("task family", name, [f.name for f in FAMILIES]))
+    if not isinstance(setup, Setup):
+        raise TypeError(f"task setup must be a Setup, got {setup!r:.80}")
+    if not isinstance(cases, (tuple, list)) or not cases or not all(isinstance(c, Case) for c in cases):
+        raise TypeError(f"task cases must be a non-empty sequence of Case, got {cases!r:.80}")
+    if len({len(c.seeds) for c in cases}) != 1:
+        raise ValueError("task cases must all have the same number of seeds")
+    if not isinstance(configs, (tuple, list)):
+        raise TypeError(f"task configs must be a list of (case index, parameter row), got {configs!r:.80}")
+    for item in configs:
+        if not isinstance(item, (tuple, list)) or len(item) != 2:
+            raise TypeError(f"task configs must hold (case index, parameter row) pairs, got {item!r:.80}")
+        check_int("task configs case index", item[0], minimum=0, maximum=len(cases) - 1)
+        row = np.asarray(check_finite("task configs parameter row", item[1]))
+        if row.shape != (len(fam.params),):
+            raise ValueError(f"task configs parameter row must have {len(fam.params)} entries, got shape {row.shape}")
+    check_in("task engine", engine, ("auto", "numpy", "compiled"))
+    return name, setup, cases, configs, engine
 
 
 def _run(name, setup, cases, configs, engine, jobs, scheduler, desc):
@@ -243,7 +308,17 @@ def tune_family(name: str, cases, setup: Setup, *, rounds: int = 3, engine: str 
     """
     fam = family(name)
     rounds = check_int("rounds", rounds, minimum=0)
+    if isinstance(cases, (str, bytes)) or not hasattr(cases, "__iter__"):
+        raise TypeError(f"cases must be a sequence of Case, got {cases!r:.80}")
     cases = list(cases)
+    if not cases or not all(isinstance(c, Case) for c in cases):
+        raise TypeError(f"cases must be a non-empty sequence of Case, got {cases!r:.80}")
+    if len({len(c.seeds) for c in cases}) != 1:
+        raise ValueError("cases must all have the same number of seeds (they are run as one batch)")
+    if not isinstance(setup, Setup):
+        raise TypeError(f"setup must be a Setup, got {setup!r:.80}")
+    check_in("engine", engine, ("auto", "numpy", "compiled"))
+    check_int("jobs", jobs, minimum=1)
     grid, steps = _grid(fam)
     evaluated = [[] for _ in cases]
 
@@ -315,7 +390,11 @@ def pareto_front(points) -> np.ndarray:
     >>> pareto_front([[1, 5], [2, 2], [3, 3], [4, 1]]).tolist()
     [0, 1, 3]
     """
-    p = np.asarray(points, dtype=float)
+    p = check_array("points", points)
+    if p.ndim != 2 or p.shape[1] != 2:
+        raise ValueError(f"points must have shape (n, 2), got {p.shape}")
+    if np.any(np.isnan(p)):
+        raise ValueError("points must not contain NaN (inf is a valid, dominated coordinate)")
     order = np.lexsort((p[:, 1], p[:, 0]))
     keep, best = [], np.inf
     for i in order:

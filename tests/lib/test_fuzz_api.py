@@ -31,6 +31,10 @@ from ctrl_analysis import _kernels, _perrun, _stepcheck, _validate, blocks, cli,
 from ctrl_analysis import identification as ident
 from ctrl_analysis import loop as loop_mod
 from ctrl_analysis import metrics, report_md, simulate, study
+from ctrl_analysis.arena import cli as arena_cli
+from ctrl_analysis.arena import figures as arena_figures
+from ctrl_analysis.arena import interface as arena_interface
+from ctrl_analysis.arena import recommend as arena_recommend
 from ctrl_analysis.controllers import differential_feedback as hodf
 from ctrl_analysis.controllers import fuzzy, golden_section, mfac, pd
 from ctrl_analysis.estimators import differential as de
@@ -560,6 +564,7 @@ def build_cases(tmp):
         ("write_report_md", report_md.write_report_md, dict(results=[results], out_dir=tmp / "report"),
          dict(results=[None, 3, [None], ["x"]], out_dir=[None, 3, ""], this_run=[3, "x"], failed=[3, "x"])),
         *_claim_cases(results),
+        *_arena_cases(tmp),
     ]
 
 
@@ -603,6 +608,93 @@ def _claim_cases(results):
         ("not_reproduced", report_md.not_reproduced, dict(results=results), dict(results=[None, 3])),
         ("glossary_lines", glossary_lines, dict(text="RMSE"), dict(text=[None, 3])),
         ("summarise", summarise, dict(value=[1, 2]), {}),
+    ]
+
+
+def _arena_csv(path, rows, header="time,y"):
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(header + "\n" + "\n".join(",".join(f"{v}" for v in r) for r in rows) + "\n", encoding="utf-8")
+    return path
+
+
+def _arena_cases(tmp):
+    """The estimator arena: bound, signals, the algebraic differentiator, the interface and the tuning."""
+    from ctrl_analysis.arena import algebraic, bound, signals, tuning
+
+    interface, recommend = arena_interface, arena_recommend
+
+    setup = tuning.Setup(dt=0.01, n=100, transient=0.2)
+    case = tuning.Case("sines", "uniform", 0.01, 2.0, (1,))
+    pair = bound.adversarial_pair(0.01, 1.0, 0.01, 100, 50)
+    y = np.zeros((50, 1))
+    csv = tmp / "arena"
+    ok = _arena_csv(csv / "ok.csv", [[0.01 * k, math.sin(0.01 * k)] for k in range(30)])
+    bad_csv = [csv / "missing.csv", csv, _arena_csv(csv / "one_column.csv", [[0.01 * k] for k in range(30)], "time"),
+               _arena_csv(csv / "short.csv", [[0.01 * k, 0.0] for k in range(5)]),
+               _arena_csv(csv / "text.csv", [[0.01 * k, "abc"] for k in range(30)]),
+               _arena_csv(csv / "nan.csv", [[0.01 * k, NAN] for k in range(30)]),
+               _arena_csv(csv / "backwards.csv", [[0.01 * (k % 20), 0.0] for k in range(30)]),
+               _arena_csv(csv / "uneven.csv", [[0.01 * k * k, 0.0] for k in range(30)])]
+    (csv / "binary.csv").write_bytes(b"\xff\xfe\x00bad")
+    bad_csv.append(csv / "binary.csv")
+    ints = ["3", None, 2.5, NAN, [2], True]
+    settings = dict(signals=("sines",), noises=("uniform",), eps=(0.01,), L=2.0, records=1, setup=setup, rounds=0,
+                    families=("algebraic",))
+    task = ("algebraic", setup, (case,), [(0, np.array([4.0, 2.0]))], "numpy")
+    results = {"quantities": [{"id": "tunings", "value": 3.0}, {"id": "tuning_seconds", "value": 1.0}],
+               "findings": [{"text": "a finding"}], "figures": ["a.png"], "captions": {"a.png": "c"}}
+    return [
+        ("lower_bound", bound.lower_bound, dict(eps=0.01, L=1.0), dict(eps=VPOS, L=VPOS)),
+        ("adversarial_pair", bound.adversarial_pair, dict(eps=0.01, L=1.0, dt=0.01, n_samples=100, k_star=50, slope=1.0),
+         dict(eps=POS, L=POS, dt=POS, n_samples=ints + [0, -1], k_star=ints + [-1, 100, 5], slope=REAL)),
+        ("adversarial_error", bound.adversarial_error, dict(est_d1=np.zeros((100, 2)), pair=pair, k_from=10),
+         dict(est_d1=["abc", None, np.zeros((99, 2)), np.zeros((100, 3)), np.zeros(100), np.zeros((100, 2, 1, 1))],
+              pair=[None, 3, {}, {"f1": 1.0}], k_from=ints + [-1, 51])),
+        ("algebraic_weights", algebraic.algebraic_weights, dict(window=5, degree=2, dt=0.1),
+         dict(window=ints + [0, 2], degree=ints + [0, 3], dt=POS)),
+        ("algebraic_derivative", algebraic.algebraic_derivative, dict(y=np.zeros((20, 2)), windows=[4, 5], degrees=2, dt=0.1),
+         dict(y=ARR + [np.zeros(20), np.zeros((20, 2, 1)), _nan_like(np.zeros((20, 2)))],
+              windows=["3", None, [4.5, 5], [NAN, 5], [4, 5, 6], [[4, 5]], [0, 5]],
+              degrees=["3", None, 1.5, NAN, [1, 2, 2], 0, 3], dt=POS)),
+        ("make_signal", signals.make_signal, dict(kind="chirp", seed=1, t=np.linspace(0.0, 1.0, 20), L=2.0),
+         dict(kind=CHOICE + [None, ["chirp"]], seed=ints + [-1], t=ARR + [[], np.ones((2, 3)), [0.0, NAN]], L=POS)),
+        ("add_noise", signals.add_noise, dict(kind="uniform", f=np.zeros(20), eps=0.1, seed=3),
+         dict(kind=CHOICE + [None], f=ARR + [[], np.ones((2, 3)), [0.0, INF]], eps=POS, seed=ints + [-1])),
+        ("family", interface.family, dict(name="leso2"), dict(name=CHOICE + [None, ["leso2"]])),
+        ("scales", interface.scales, dict(eps=0.01, L=4.0, dt=0.002), dict(eps=POS, L=POS, dt=POS)),
+        ("estimate", interface.estimate, dict(fam="leso2", P=[[20.0]], y=y, dt=0.01, engine="numpy"),
+         dict(fam=CHOICE + [None], P=ARR + [[[20.0, 1.0]], [[NAN]], [[0.0]], [[-20.0]]],
+              y=ARR + [np.zeros(50), np.zeros((50, 2)), _nan_like(y)], dt=POS, engine=CHOICE + [None])),
+        ("estimate(algebraic)", interface.estimate, dict(fam="algebraic", P=[[4.0, 2.0]], y=y, dt=0.01),
+         dict(P=[[[4.5, 2.0]], [[4.0, 3.0]], [[4.0, 1.5]], [[4.0, 0.0]]])),
+        ("Setup", tuning.Setup, dict(dt=0.01, n=100, transient=0.2),
+         dict(dt=POS, n=INT + [1, 0], transient=NONNEG + [1.0, 5.0])),
+        ("Case", tuning.Case, dict(signal="sines", noise="uniform", eps=0.01, L=2.0, seeds=(1, 2)),
+         dict(signal=STR + [""], noise=STR + [""], eps=POS, L=POS, seeds=[None, 3, (), [1, 2], (1.5,), (-1,), ("a",)])),
+        ("case_records", tuning.case_records, dict(case=case, setup=setup),
+         dict(case=[None, 3, "sines"], setup=[None, 3, recommend.QUICK])),
+        ("param_values", tuning.param_values, dict(fam=interface.family("td"), z=[[0.0, 0.5]], case=case, setup=setup),
+         dict(fam=[None, "td", 3], z=ARR + [[[0.0]], [[0.0, 0.5, 1.0]], [[NAN, 0.0]], [[INF, 0.0]], np.zeros((1, 2, 1))],
+              case=[None, 3], setup=[None, 3])),
+        ("evaluate", tuning.evaluate, dict(task=task),
+         dict(task=[None, 3, task[:4], ("nonsense",) + task[1:], task[:1] + (None,) + task[2:],
+                    task[:2] + ((),) + task[3:], task[:2] + ((case, tuning.Case("sines", "uniform", 0.01, 2.0, (1, 2))),)
+                    + task[3:], task[:3] + (None,) + task[4:], task[:3] + ([(3, [4.0, 2.0])],) + task[4:],
+                    task[:3] + ([(0, [4.0])],) + task[4:], task[:3] + ([(0, [NAN, 2.0])],) + task[4:],
+                    task[:3] + ([3],) + task[4:], task[:4] + ("nonsense",)])),
+        ("tune_family", tuning.tune_family,
+         dict(name="algebraic", cases=[case], setup=setup, rounds=0, engine="numpy", jobs=1, scheduler=None),
+         dict(name=CHOICE + [None], cases=[None, 3, "sines", [], [3]], setup=[None, 3], rounds=INT + [-1],
+              engine=CHOICE, jobs=INT + [0], scheduler=[3, "nonsense"])),
+        ("pareto_front", tuning.pareto_front, dict(points=[[1.0, 5.0], [2.0, 2.0], [INF, 1.0]]),
+         dict(points=ARR + [[1.0, 2.0], [[1.0, 2.0, 3.0]], [[NAN, 1.0]], np.ones((2, 2, 2))])),
+        ("ArenaSettings", recommend.ArenaSettings, settings,
+         dict(signals=[None, "sines", (), ("nonsense",)], noises=[None, (), ("nonsense",)], eps=[None, 0.01, (), (NAN,), (-0.01,), ("abc",)],
+              L=POS, records=INT + [0], setup=[None, 3], rounds=INT + [-1], families=[None, (), ("nonsense",)])),
+        ("arena_report_lines", recommend.arena_report_lines, dict(results=results),
+         dict(results=[None, 3, "x", [], {"quantities": 3}, {"findings": [3]}, {"figures": [None]},
+                       {"quantities": [{"id": "q"}]}])),
+        ("read_record", arena_cli.read_record, dict(path=ok), dict(path=[None, 3, ""] + bad_csv)),
     ]
 
 
@@ -685,6 +777,17 @@ NOT_FUZZED = {
     fuzzy.triangular_memberships: "per-step arithmetic of FuzzyController.output, unchecked by design",
     fuzzy.piecewise_linear_centroid: "per-step arithmetic of FuzzyController.output, unchecked by design",
     cli.main: "command line, fuzzed in test_cli.py and test_cli_reliability.py",
+    arena_interface.Param: "record of the fixed FAMILIES table (a family's runner is coded per name); users pick a "
+                           "family by name through family() and estimate(fam=...), both fuzzed",
+    arena_interface.Family: "record of the fixed FAMILIES table (a family's runner is coded per name); users pick a "
+                            "family by name through family() and estimate(fam=...), both fuzzed",
+    arena_recommend.run_arena: "runs every family's tuning and draws three figures (seconds even on the smallest "
+                               "settings); its settings are validated by ArenaSettings (fuzzed), its ctx and "
+                               "settings types on entry; run end to end in test_arena_cli.py",
+    arena_figures.save_all: "figure writer fed the tables run_arena built; run by test_arena_cli.py",
+    arena_cli.add_parser: "registers the arena subcommand on the CLI's parser (test_arena_cli.py)",
+    arena_cli.main: "command line, fuzzed in test_arena_cli.py (malformed CSV, missing bounds: one line, exit 2); "
+                    "its CSV reader read_record is fuzzed here",
     **{getattr(_validate, name): "the shared validators themselves (test_validate.py)" for name in _validate.__all__},
     **{getattr(_kernels, name): "compiled per-step kernels and the engine's internals (test_speed_kernels.py)"
        for name in _kernels.__all__},
