@@ -375,7 +375,9 @@ def _seed_summary(seeds) -> str:
 def not_reproduced(results: dict) -> list[str]:
     """Everything the study does not reproduce: each printed cell that differs or diverged, then ``missing``.
 
-    The list's length is the count the report states, so the two always add up.
+    The list's length is the count the report states, so the two always add up. The cells are generated
+    here (with the percentile where the percentile policy decides); a study's ``missing`` lists only the
+    parts of the paper that are not cells (figures, experiments, lost equations).
 
     Parameters
     ----------
@@ -393,6 +395,11 @@ def not_reproduced(results: dict) -> list[str]:
             continue
         what = "diverged" + _runs(q) if q["verdict"] == "diverged" else (
             f"{_fmt(q['value'], digits=_digits(q))} vs {_fmt(q['paper'], digits=_digits(q))}")
+        if q["verdict"] == "differs" and q.get("policy") == "percentile" and q.get("interval"):
+            what += (f"; the paper's value at percentile {q['percentile']:.3g} % of the runs, outside their central "
+                     f"95 % [{_fmt(q['interval'][0])}, {_fmt(q['interval'][1])}]")
+        elif q["verdict"] == "differs" and q.get("policy") == "derived":
+            what += f"; takes the verdict of `{q.get('derived_from')}`"
         bad.append(f"{cell} ({what})")
     return bad + [str(m) for m in results.get("missing") or []]
 

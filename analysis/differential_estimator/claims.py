@@ -162,7 +162,7 @@ def _nonminimum_phase(result, p):
     result.claim(_BY_ID["nonminimum-phase"], unstable and nz > 0, ids,
                  note=f"Linearised at the origin u → x1 is 1/(s^3 + b2 s - b1): for b1 > 0 it is "
                       f"{'unstable' if unstable else 'not always unstable'} (max Re of the poles "
-                      + ", ".join(f"{v:+.3g}" for v in poles[b1s > 0]) + f" at b1 = "
+                      + ", ".join(f"{v:+.3g}" for v in poles[b1s > 0]) + " at b1 = "
                       + ", ".join(f"{v:g}" for v in b1s[b1s > 0]) + f"), but it has {nz} zeros in the closed right "
                       "half-plane (no finite zeros at all): unstable, not non-minimum phase.")
 

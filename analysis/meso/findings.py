@@ -8,7 +8,7 @@ from ctrl_analysis.report import StudyResult
 
 from .identification import equivalent_theta
 from .loops import SituationRun, pick
-from .paper import METRICS, PAPER, SITUATIONS
+from .paper import METRICS, PAPER
 from .quantities import first_divergence, theta_truth
 
 __all__ = ["add_findings", "missing"]
@@ -240,7 +240,6 @@ def _conclusion3_and_mn(result, sims, out) -> None:
 def _summary_findings(result, sims) -> None:
     better = {k: [m for m in METRICS if (result.get(f"{k}.nonoise.meso.{m}").value or np.inf)
                   < (result.get(f"{k}.nonoise.eso.{m}").value or 0)] for k in ("s1", "s2")}
-    n_b = len(better["s1"]) + len(better["s2"])
     result.finding(
         "meso-better-than-eso",
         f"Without measurement noise the MESO (well-posed identification) beats the ESO at equal ε in "
@@ -299,12 +298,10 @@ def differing_cells(result: StudyResult) -> list:
 
 
 def missing(result: StudyResult) -> list:
-    """What the reproduction does not reach (results.json ``missing``): every differing cell, then the figures.
+    """What the reproduction does not reach beyond the differing cells: the paper's figures and rules (not cells).
 
-    The table items name each primary cell whose verdict is not ``agrees`` (so they add up to the report's
-    count of differing cells, as each item says), with the cell's percentile among the runs and what the
-    noise-free run gives; the last items are the paper's figures and rules that are not reproduced (not
-    cells).
+    The report lists every differing cell itself, from its verdict and percentile (so the list adds up to
+    its count); the noise-free twin of each cell is in the findings.
 
     Parameters
     ----------
@@ -315,25 +312,6 @@ def missing(result: StudyResult) -> list:
     list of str
     """
     out = []
-    bad = differing_cells(result)
-    for key in ("s1", "s2"):
-        for o in ("meso", "eso"):
-            row = [q for q in bad if q.id.startswith(f"{key}.{o}.")]
-            if not row:
-                continue
-            parts = []
-            for q in row:
-                m = q.id.split(".")[-1]
-                off = result.get(f"{key}.nonoise.{o}.{m}")
-                where = ("all runs diverged" if q.value is None else
-                         f"{q.value:.3g} vs {q.paper:.4g}" + (f", percentile {q.percentile:.0f} of {q.runs} runs"
-                                                              if q.percentile is not None else ""))
-                parts.append(f"{m} {where} (noise-free run {_fmt(off.value)}: {off.verdict})")
-            out.append(f"{SITUATIONS[key].table} {o.upper()} row, {len(row)} cell{'s' * (len(row) > 1)} differ: "
-                       + "; ".join(parts))
-    n = sum(1 for q in result.quantities if q.primary and q.paper is not None and q.kind == "reproduction")
-    out.append(f"Tables 2-3: {len(bad)} of {n} printed cells differ in all (the rows above); the items below are "
-               "figures and rules, not cells.")
     out.append("Fig. 6 (not a cell): convergence of θ3 to 0.95 in situation 2 — not identifiable in closed loop "
                "(situation2-not-identifiable)")
     out.append("Table 1's literal accumulation with W(s) (not a cell): does not converge in situation 1 and diverges in "

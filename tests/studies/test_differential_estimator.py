@@ -274,7 +274,10 @@ def test_quick_run_smoke(tmp_path):
     assert result.get_claim("sigma-beats-eso").evidence[-2:] == ("ex1.eso_over_sigma_x1", "ex1.eso_over_sigma_x2")
     assert result.sensitivity["evaluations"] > 1
     data = json.loads(write_results_json(result, tmp_path).read_text())
-    # "Not reproduced" names every printed cell that does not agree, then the rest
+    # "Not reproduced" (the report's list) names every printed cell that does not agree, then the study's 2 other items
+    from ctrl_analysis.report_md import not_reproduced
+
     bad = [q for q in data["quantities"] if q.get("primary") and q["verdict"] in ("differs", "diverged")]
-    assert [m.split(":")[0] for m in data["missing"][:len(bad)]] == [q["cell"] for q in bad]
-    assert len(data["missing"]) == len(bad) + 2
+    items = not_reproduced(data)
+    assert all(m.startswith(q["cell"] + " (") for m, q in zip(items, bad))
+    assert len(items) == len(bad) + 2 and len(data["missing"]) == 2

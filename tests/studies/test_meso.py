@@ -168,12 +168,15 @@ def test_short_run_writes_every_quantity_with_unit_and_policy(tmp_path):
     for c in data["claims"]:
         assert c["evidence"] and set(c["evidence"]) <= ids, c["id"]
     assert data["sensitivity"]["evaluations"] > 10
-    # "Not reproduced" names exactly the primary cells that differ (the report's count), each row its count
+    # "Not reproduced" (the report's list) names exactly the primary cells that differ, then the study's
+    # non-cell items; the study's own list holds no cell
+    from ctrl_analysis.report_md import not_reproduced
+
     bad = meso.findings.differing_cells(result)
-    named = sum(int(item.split(", ")[1].split(" cell")[0]) for item in data["missing"] if " row, " in item)
-    primary_bad = sum(q["verdict"] in ("differs", "diverged") for q in data["quantities"]
-                      if q.get("primary") and q["paper"] is not None)
-    assert named == len(bad) == primary_bad > 0
+    items = not_reproduced(data)
+    assert len(items) == len(bad) + len(data["missing"]) and len(bad) > 0
+    assert all(i.startswith(q.cell + " (") for i, q in zip(items, bad))
+    assert all("(not a cell)" in m for m in data["missing"])
 
 
 def test_every_reconstruction_has_a_plausible_range():

@@ -112,8 +112,11 @@ def test_run_smoke(small_run):
     # the paper's 5.7325° for 0.1 rad is a check of its own arithmetic (an erratum), not a reproduction cell
     assert result.get("sec5.step_deg").kind == "check"
     assert {f["id"]: f.get("kind") for f in result.findings}["step-degrees"] == "erratum"
-    # "Not reproduced" names the differing §4 cell first
-    assert "K = [0.95, 0.863] is not reproduced (differs)" in result.missing[0]
+    # "Not reproduced" (the report's list) names the differing §4 cell first, then the study's non-cell items
+    from ctrl_analysis.report_md import not_reproduced
+
+    items = not_reproduced(result.to_dict())
+    assert items[0].startswith("§4 / K = PCᵀR⁻¹ = [0.950, 0.863]") and items[1:] == result.missing
     assert result.get("ss.gain_continuous").paper == [0.950, 0.863]
     assert result.get("ss.printed_filter_stable").value == 0
     assert result.get("cl.rule_sign_ok").value == 1
