@@ -30,8 +30,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._validate import (check_bool, check_callable, check_finite, check_in, check_int, check_names, check_positive,
-                        check_real, check_str)
+from ._validate import (
+    check_bool,
+    check_callable,
+    check_finite,
+    check_in,
+    check_int,
+    check_names,
+    check_positive,
+    check_real,
+    check_str,
+)
 from .blocks import Block, ContinuousBlock, DiscreteBlock
 from .response import LoopResponse
 from .simulate import (
@@ -337,6 +346,9 @@ class Loop:
             Processes the batch is split over (:func:`ctrl_analysis.parallel.map_chunks`); the
             result equals ``jobs=1`` bit for bit. Needs a picklable loop and no callable input
             (otherwise the batch runs in this process, with a warning for an unpicklable loop).
+            While a process-wide Dask cluster is active (:func:`ctrl_analysis.parallel.use_cluster`,
+            the CLI's ``--scheduler``) a batch of two runs or more is split over its workers whatever
+            ``jobs`` says, with the same numbers.
         run_offset : int
             Index of this batch's first run among the rows of per-run kernel parameters (see
             :class:`~ctrl_analysis._kernels.BlockKernel`); set by the engine when it splits a batch over
@@ -399,7 +411,11 @@ class Loop:
         size = max(1, min(size, int(limit // work))) if chunk_runs is None else size
         check_in("engine", engine, ("auto", "numpy", "compiled"))
         jobs = check_int("jobs", jobs, minimum=1)
-        if jobs > 1 and B > 1 and not funcs and self._picklable():
+        from .parallel import active_cluster
+
+        # split over processes (jobs > 1) or, while a process-wide Dask cluster is active (the CLI's
+        # --scheduler), over its workers
+        if B > 1 and not funcs and (jobs > 1 or active_cluster() is not None) and self._picklable():
             opts = {"t0": t0, "params": params, "bound": bound, "store_states": store_states, "store_signals": keep,
                     "chunk_runs": chunk_runs, "max_bytes": max_bytes, "engine": engine,
                     "run_offset": check_int("run_offset", run_offset, minimum=0),
