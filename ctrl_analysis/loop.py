@@ -347,8 +347,8 @@ class Loop:
             result equals ``jobs=1`` bit for bit. Needs a picklable loop and no callable input
             (otherwise the batch runs in this process, with a warning for an unpicklable loop).
             While a process-wide Dask cluster is active (:func:`ctrl_analysis.parallel.use_cluster`,
-            the CLI's ``--scheduler``) a batch of two runs or more is split over its workers whatever
-            ``jobs`` says, with the same numbers.
+            the CLI's ``--scheduler``) a batch of two runs or more on the compiled engine is split
+            over its workers (with ``jobs=1``), with the same numbers.
         run_offset : int
             Index of this batch's first run among the rows of per-run kernel parameters (see
             :class:`~ctrl_analysis._kernels.BlockKernel`); set by the engine when it splits a batch over
@@ -414,8 +414,11 @@ class Loop:
         from .parallel import active_cluster
 
         # split over processes (jobs > 1) or, while a process-wide Dask cluster is active (the CLI's
-        # --scheduler), over its workers
-        if B > 1 and not funcs and (jobs > 1 or active_cluster() is not None) and self._picklable():
+        # --scheduler), over its workers: there only batches of the compiled engine, whose per-run
+        # parameters follow their chunk (run_offset)
+        on_cluster = jobs == 1 and B > 1 and not funcs and active_cluster() is not None \
+            and self._compiled(engine, funcs, params, np.isfinite(bound)) is not None
+        if B > 1 and not funcs and (jobs > 1 or on_cluster) and self._picklable():
             opts = {"t0": t0, "params": params, "bound": bound, "store_states": store_states, "store_signals": keep,
                     "chunk_runs": chunk_runs, "max_bytes": max_bytes, "engine": engine,
                     "run_offset": check_int("run_offset", run_offset, minimum=0),
