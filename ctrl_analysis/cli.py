@@ -396,6 +396,9 @@ def _reproduce(args) -> int:
                 continue
             print(record["text"])
         run.finish()
+        for name, why in run.failed.items():
+            if name not in todo and name != "REPORT.md":  # another study's results.json, left out of the report
+                sys.stderr.write(f"ctrl-analysis: error: REPORT.md leaves out {name}: {why}\n")
         if run.report_path is not None:
             print(f"\nreport: {run.report_path}")
         if dask:

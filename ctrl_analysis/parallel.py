@@ -267,13 +267,14 @@ def _worker_init(parent: int) -> None:
 
 def _stop_workers(ex) -> None:
     """Cancel what has not started and kill the pool's workers (after an exception or Ctrl-C in the parent)."""
-    ex.shutdown(wait=False, cancel_futures=True)
-    for proc in list((getattr(ex, "_processes", None) or {}).values()):
+    procs = list((getattr(ex, "_processes", None) or {}).values())  # shutdown() forgets them
+    for proc in procs:
         with contextlib.suppress(OSError, AttributeError, ValueError):
             proc.kill()
-    for proc in list((getattr(ex, "_processes", None) or {}).values()):
+    for proc in procs:
         with contextlib.suppress(OSError, AttributeError, ValueError, AssertionError):
             proc.join(5)
+    ex.shutdown(wait=True, cancel_futures=True)
 
 
 def map_chunks(fn: Callable, args: Sequence, *, jobs: int = 1, scheduler=None, desc: str = "",
