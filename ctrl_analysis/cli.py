@@ -58,11 +58,25 @@ _positive_int = _int_at_least(1, "positive")
 _seed = _int_at_least(0, "non-negative")
 
 
+#: What ``--help`` says about the command (plain text: it is printed on a terminal, not rendered).
+DESCRIPTION = "List the reproduced papers, and reproduce them into figures, results.json and REPORT.md."
+EPILOG = """exit status: 0 done; 1 a study failed (the others still ran, the failures are listed at the end);
+2 the command cannot run, checked before any work (an unknown study, a bad --out, --runs beyond this
+machine's memory, a bad or unreachable --scheduler, another run writing into the same --out);
+130 interrupted with Ctrl-C (the previous output is left intact)."""
+
+
 def _build_parser() -> argparse.ArgumentParser:
-    parser = _Parser(prog="ctrl-analysis", description=__doc__)
+    parser = _Parser(prog="ctrl-analysis", description=DESCRIPTION, epilog=EPILOG,
+                     formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
-    sub.add_parser("list", help="studies and what each reproduces")
-    rep = sub.add_parser("reproduce", help="figures + results.json (+ REPORT.md for all)")
+    sub.add_parser("list", help="studies and what each reproduces", description="List the studies and what each "
+                   "reproduces.")
+    rep = sub.add_parser("reproduce", help="figures + results.json (+ REPORT.md for all)", epilog=EPILOG,
+                         formatter_class=argparse.RawDescriptionHelpFormatter,
+                         description="Reproduce studies into --out: each study's figures and results.json; "
+                                     "'all' also writes REPORT.md, which is rebuilt from the results.json files "
+                                     "on disk after every study.")
     rep.add_argument("studies", nargs="+", metavar="STUDY", help="study names, or 'all'")
     rep.add_argument("--out", default="figures", help="output directory (default: figures)")
     rep.add_argument("--runs", type=_positive_int, default=None, help="Monte Carlo runs where noise is random")
@@ -71,7 +85,9 @@ def _build_parser() -> argparse.ArgumentParser:
     rep.add_argument("--jobs", type=_positive_int, default=None,
                      help="processes: studies run side by side, Monte Carlo chunks split (default: all cores)")
     rep.add_argument("--scheduler", default=None, metavar="ADDRESS",
-                     help="Dask scheduler for sweeps and large Monte Carlo ('local', or tcp://host:8786)")
+                     help="run every Monte Carlo batch and sweep on a Dask cluster: 'local' starts one on this "
+                          "machine, or the address of a running scheduler, tcp://host:8786 (same numbers as a "
+                          "local run)")
     return parser
 
 

@@ -28,9 +28,21 @@ def test_list_names_all_five_studies(capsys):
     ],
 )
 def test_bad_input_is_one_line_and_exit_2(argv, fragment):
-    proc = subprocess.run([sys.executable, "-m", "ctrl_analysis.cli", *argv], capture_output=True, text=True)
+    proc = subprocess.run([sys.executable, "-m", "ctrl_analysis.cli", *argv], capture_output=True, text=True,
+                          check=False)
     assert proc.returncode == 2
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and fragment in lines[0] and "Traceback" not in proc.stderr
 
 
+
+
+@pytest.mark.parametrize("argv", [["--help"], ["reproduce", "--help"], ["list", "--help"]])
+def test_help_is_plain_text(argv, capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(argv)
+    assert exc.value.code == 0
+    text = capsys.readouterr().out
+    assert text.startswith("usage: ctrl-analysis")
+    for markup in ("``", ":func:", ":class:", ":mod:", ":meth:", ".. "):
+        assert markup not in text, markup
