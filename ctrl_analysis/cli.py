@@ -308,30 +308,39 @@ def _check_targets(out: Path, names: list[str]) -> None:
                               f"ctrl-analysis did not write it; it is not replaced: move it away or choose another --out")
 
 
+#: Resident memory of a process that has imported every study (numpy, scipy, control, matplotlib, numba):
+#: 223 MiB, measured with ru_maxrss after ``load_study`` of the five studies.
+_PROCESS_BYTES = 223 * 2**20
+
+
 def _check_memory(names: list[str], runs: int | None, quick: bool, side_by_side: int) -> None:
     """Refuse (one line) a ``--runs`` whose Monte Carlo statistics would not fit in this machine's memory.
 
-    The estimate is the registry's measured footprint (``analysis.MEMORY``: base bytes and bytes per
-    run of each study); the studies running side by side add up.
+    The estimate is the registry's measured footprint (``analysis.MEMORY[study]["quick" | "full"]``:
+    base bytes and bytes per run, from ``benchmarks/memory_per_run.py``) plus the process itself; the
+    studies running side by side add up.
     """
     import analysis
 
     table = getattr(analysis, "MEMORY", {})
-    if runs is None or not table:
+    if runs is None:
         return
-    need = {n: table[n][0] + table[n][1] * runs for n in names if n in table}
-    if not need:
+    mode = "quick" if quick else "full"
+    cost = {n: table[n][mode] for n in names if n in table and mode in table[n]}
+    if not cost:
         return
+    need = {n: _PROCESS_BYTES + base + per_run * runs for n, (base, per_run) in cost.items()}
     worst = sorted(need, key=need.get, reverse=True)[:side_by_side]
     total = sum(need[n] for n in worst)
     avail = _available_memory()
     if avail is not None and total > avail:
-        per_run = max(table[n][1] for n in worst)
-        fits = max(0, int((avail - sum(table[n][0] for n in worst)) / sum(table[n][1] for n in worst)))
+        per_run = max(cost[n][1] for n in worst)
+        fixed = sum(_PROCESS_BYTES + cost[n][0] for n in worst)
+        fits = max(0, int((avail - fixed) / max(1, sum(cost[n][1] for n in worst))))
         who = worst[0] if len(worst) == 1 else " + ".join(worst) + " side by side"
         raise _UsageError(f"--runs {runs} would need about {total / 2**30:.1f} GiB of memory ({who}; up to "
                           f"{per_run / 1e3:.0f} kB per run, measured), more than the {avail / 2**30:.1f} GiB "
-                          f"available; use --runs {fits} or fewer" + (" and --jobs 1" if side_by_side > 1 else ""))
+                          f"available; use --runs {fits} or fewer" + (" or --jobs 1" if side_by_side > 1 else ""))
 
 
 def _available_memory() -> float | None:
