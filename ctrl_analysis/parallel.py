@@ -520,7 +520,7 @@ def picklable(obj) -> bool:
     except (pickle.PicklingError, AttributeError, TypeError) as exc:
         warnings.warn(f"running a batch in parallel (jobs > 1 or a cluster) needs a picklable loop ({exc}); "
                       f"running the batch in this process",
-                      RuntimeWarning, stacklevel=4)
+                      RuntimeWarning, stacklevel=3)
         return False
     return True
 
