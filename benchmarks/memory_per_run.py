@@ -1,7 +1,8 @@
 """Measure each study's memory per Monte Carlo run, for the CLI's up-front ``--runs`` check (``analysis.MEMORY``).
 
-Each study runs in a fresh process under ``tracemalloc`` (which counts numpy's arrays too) at two run
-counts, quick and full; the peak traced bytes give a base and a slope per run:
+Each study runs in a fresh process at two run counts, quick and full, far enough apart that the
+difference dominates the noise of the resident size; the peak resident size (``ru_maxrss``) minus
+that of the process before the study ran gives a base and a slope per run:
 ``base + per_run * runs``. Prints the table to paste into ``analysis/__init__.py``.
 
     OPENBLAS_NUM_THREADS=1 python benchmarks/memory_per_run.py [study ...]
@@ -15,19 +16,19 @@ import sys
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
-POINTS = {"quick": (10, 60), "full": (4, 24)}
+POINTS = {"quick": (10, 210), "full": (5, 105)}
 
 CHILD = """
-import json, sys, tempfile, tracemalloc, warnings
+import json, resource, sys, tempfile, warnings
 from pathlib import Path
 from analysis import load_study
 from ctrl_analysis.report import StudyContext
 name, runs, quick = sys.argv[1], int(sys.argv[2]), sys.argv[3] == "quick"
 study = load_study(name)
 warnings.simplefilter("ignore")
-tracemalloc.start()
+before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
 study.run(StudyContext(out_dir=Path(tempfile.mkdtemp()), runs=runs, quick=quick))
-print(json.dumps(tracemalloc.get_traced_memory()[1]))
+print(json.dumps(1024 * (resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before)))
 """
 
 

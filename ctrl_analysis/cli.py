@@ -436,10 +436,10 @@ def _reproduce(args) -> int:
     print(f"ctrl-analysis: {len(todo) - n_failed} of {len(todo)} studies OK, {n_failed} failed, "
           f"{time.perf_counter() - t_start:.1f} s; {where}")
     if run.failed:
-        order = {name: i for i, name in enumerate([*todo, *STUDIES])}
-        failed = sorted(run.failed, key=lambda name: order.get(name, len(order)))
-        n_studies = sum(name != "REPORT.md" for name in failed)
-        sys.stderr.write(f"ctrl-analysis: {n_studies} of {len(todo)} studies failed: {', '.join(failed)}\n")
+        order = {name: i for i, name in enumerate([*todo, "REPORT.md", *STUDIES])}
+        failed = [name if name in todo or name == "REPORT.md" else f"{name}'s results.json"
+                  for name in sorted(run.failed, key=lambda name: order.get(name, len(order)))]
+        sys.stderr.write(f"ctrl-analysis: {n_failed} of {len(todo)} studies failed: {', '.join(failed)}\n")
         return 1
     return 0
 

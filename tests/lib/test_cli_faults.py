@@ -258,7 +258,8 @@ def test_a_results_json_that_is_not_a_results_record_is_one_line(tmp_path, monke
     assert main(["reproduce", names[0], "--out", str(tmp_path), "--seed", "4"]) == 1
     err = capsys.readouterr().err.strip().splitlines()
     assert err[0].startswith(f"ctrl-analysis: error: REPORT.md leaves out {names[1]}: ")
-    assert f"is not a results record of {names[1]}" in err[0] and len(err) == 2
+    assert f"is not a results record of {names[1]}" in err[0]
+    assert err[1:] == [f"ctrl-analysis: 0 of 1 studies failed: {names[1]}'s results.json"]
     report = (tmp_path / "REPORT.md").read_text()
     assert f"| {names[0]} | yes | 4 |" in report and f"## {names[1]}" not in report
 
