@@ -379,7 +379,6 @@ def _reproduce(args) -> int:
 
     t_start = time.perf_counter()
     todo = _resolve_names(args.studies, STUDIES)
-    out = _check_out(args.out)
 
     from .parallel import check_scheduler_address, default_jobs, map_chunks, use_cluster
 
@@ -392,6 +391,7 @@ def _reproduce(args) -> int:
     # studies side by side in processes (each with its share of the cores), or one by one on a scheduler
     side_by_side = 1 if args.scheduler is not None else min(jobs, len(todo))
     _check_memory(todo, args.runs, args.quick, side_by_side)
+    out = _check_out(args.out)  # created here, after every check that needs no folder
     try:
         lock = exclusive_lock(out / ".ctrl-analysis.lock", what=f"--out {str(out)!r}")
         lock.__enter__()
