@@ -36,7 +36,7 @@ def timed(label: str, argv: list[str], env: dict) -> float:
     proc = subprocess.run(argv, cwd=REPO, env=env, capture_output=True, text=True, check=False)
     dt = time.perf_counter() - t0
     if proc.returncode != 0:
-        sys.exit(f"{label}: exit {proc.returncode}\n{proc.stderr[-2000:]}")
+        sys.exit(f"{label}: exit {proc.returncode}\n{proc.stdout[-2000:]}\n{proc.stderr[-2000:]}")
     print(f"{label:44s} {dt:7.1f} s", flush=True)
     return dt
 
@@ -52,8 +52,10 @@ def main(argv=None) -> None:
           f"python {sys.version.split()[0]}")
     with tempfile.TemporaryDirectory(prefix="ctrl-analysis-speed-") as tmp:
         tmp = Path(tmp)
-        env = {**os.environ, "PYTHONPATH": str(REPO), "OPENBLAS_NUM_THREADS": "1", "CTRL_ANALYSIS_PROGRESS": "0",
+        # output is captured (not a terminal), so no progress bars are drawn
+        env = {**os.environ, "PYTHONPATH": str(REPO), "OPENBLAS_NUM_THREADS": "1",
                "NUMBA_CACHE_DIR": str(tmp / "numba"), "CTRL_ANALYSIS_CACHE": str(tmp / "runners")}
+        env.pop("CTRL_ANALYSIS_PROGRESS", None)
         cli = [sys.executable, "-m", "ctrl_analysis.cli", "reproduce", "all"]
         if not args.skip_full:
             timed("reproduce all, cold (empty caches)", [*cli, "--out", str(tmp / "cold")], env)
@@ -63,7 +65,7 @@ def main(argv=None) -> None:
             timed("reproduce all --quick, cold (empty caches)", [*cli, "--quick", "--out", str(tmp / "quick0")], env)
             timed("reproduce all --quick, warm", [*cli, "--quick", "--out", str(tmp / "quick")], env)
         if not args.skip_tests:
-            timed(f"python -m pytest -q -n {n}, warm", [sys.executable, "-m", "pytest", "-q", "-n", str(n),
+            timed(f"python -m pytest -q -n {n} (caches of the runs above)", [sys.executable, "-m", "pytest", "-q", "-n", str(n),
                                                         "-p", "no:cacheprovider"], env)
 
 
