@@ -185,8 +185,12 @@ def remove_tree(path: Path) -> bool:
         Whether it is gone.
     """
     path = check_path("path", path)
+    import sys
+
+    hook = {"onexc": lambda func, p, exc: _writable_and_retry(func, p, None)} if sys.version_info >= (3, 12) \
+        else {"onerror": _writable_and_retry}
     with contextlib.suppress(OSError):
-        shutil.rmtree(path, onerror=_writable_and_retry)
+        shutil.rmtree(path, **hook)
     return not os.path.lexists(path)
 
 
