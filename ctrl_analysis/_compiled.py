@@ -34,6 +34,9 @@ def compiled_for(loop, engine, funcs, params, finite_bound):
         if engine == "compiled":
             raise ValueError(f"engine='compiled' is not possible for this loop: {why}")
         return None
+    if getattr(loop, "_kernels_checked", None) is not loop.placed:
+        check_kernel_reads(loop, kernels)
+        loop._kernels_checked = loop.placed  # once per loop: its blocks (and their parameters) are fixed
     try:
         run = compiled_runner(loop, kernels, finite_bound)
     except Exception as exc:  # a kernel numba cannot compile: say so, and use the numpy path under "auto"
@@ -48,6 +51,54 @@ def compiled_for(loop, engine, funcs, params, finite_bound):
     return run, P, {p.name: np.ndim(kernels[p.name].params) == 2 for p in loop.placed}
 
 
+def check_kernel_reads(loop, kernels: dict) -> None:
+    """Call every kernel once in Python on vectors of the engine's sizes: an out-of-range index is an error.
+
+    Compiled code does not check bounds, so a kernel reading a parameter slot its block did not
+    fill (or a state, input or output beyond the block's) would return garbage; the same function
+    run by Python raises ``IndexError``. Each kernel is tried at the block's initial state with
+    inputs 0, 1 and -1, with the first and last row of per-run parameters (other exceptions, e.g. a
+    division by zero at those values, are not this check's concern).
+
+    Parameters
+    ----------
+    loop : Loop
+    kernels : dict of block name -> BlockKernel
+
+    Raises
+    ------
+    ValueError
+        Naming the block, the kernel function, the sizes it was given and the index it read.
+    """
+    import warnings
+
+    for p in loop.placed:
+        k = kernels[p.name]
+        params = np.asarray(k.params, dtype=float)
+        rows = [params] if params.ndim != 2 else [params[0], params[-1]]
+        x0 = np.asarray(p.block.initial_state(), dtype=float).reshape(-1)
+        sizes = {"output": len(p.outputs), "update": x0.size, "rhs": x0.size}
+        for kind in ("output", "update", "rhs"):
+            fn = getattr(k, kind)
+            if fn is None:
+                continue
+            for row in rows:
+                for level in (0.0, 1.0, -1.0):
+                    args = (0.0, x0 + level, np.full(len(p.inputs), level), row.copy(), np.zeros(sizes[kind]))
+                    try:
+                        with np.errstate(all="ignore"), warnings.catch_warnings():
+                            warnings.simplefilter("ignore")
+                            fn(*args)
+                    except IndexError as exc:
+                        raise ValueError(
+                            f"block {p.name!r} ({type(p.block).__name__}): its kernel {kind} "
+                            f"{getattr(fn, '__name__', fn)!r} reads or writes outside its vectors (state {x0.size}, "
+                            f"inputs {len(p.inputs)}, parameters {row.size}, result {sizes[kind]}): {exc}; the "
+                            f"compiled engine would return garbage") from None
+                    except Exception:  # noqa: BLE001, S112 - only out-of-range indices are checked here
+                        continue
+
+
 def _params_2d(name, params):
     """A kernel's parameters as a C-contiguous ``(1, n_p)`` (shared) or ``(B, n_p)`` (per run) array."""
     a = np.asarray(params, dtype=float)
@@ -55,38 +106,6 @@ def _params_2d(name, params):
         raise ValueError(f"block {name!r}: kernel params must be 1-D (shared) or 2-D (one row per run), "
                          f"got shape {a.shape}")
     return np.ascontiguousarray(a[None, :] if a.ndim == 1 else a)
-
-
-def check_per_run_rows(loop, runner, run_offset: int, B: int, batch_runs: int | None) -> None:
-    """Check that the blocks' per-run kernel parameters have one row per run of the batch.
-
-    Parameters
-    ----------
-    loop : Loop
-    runner : tuple
-        What :func:`compiled_for` returned.
-    run_offset, B : int
-        The first run of this call within the batch, and the runs of this call.
-    batch_runs : int or None
-        Runs of the whole batch (default ``run_offset + B``).
-
-    Raises
-    ------
-    ValueError
-        If two blocks' per-run parameters disagree on the number of runs, or it is not the batch's.
-    """
-    from ._validate import check_int
-
-    _, P, per_run = runner
-    rows = {Pi.shape[0] for Pi, p in zip(P, loop.placed) if per_run[p.name]}
-    if len(rows) > 1:
-        raise ValueError(f"per-run kernel parameters of the blocks have different numbers of rows: {sorted(rows)}")
-    total = run_offset + B if batch_runs is None else check_int("batch_runs", batch_runs, minimum=1)
-    if run_offset + B > total:
-        raise ValueError(f"batch_runs must cover run_offset + B = {run_offset + B}, got {total}")
-    if rows and rows != {total}:
-        raise ValueError(f"the loop's per-run block parameters describe {rows.pop()} runs, but the batch has "
-                         f"{total} (runs/inputs/x0 set B = {B}): build the blocks for the runs simulated")
 
 
 def run_compiled(loop, runner, plan, n_steps, t, x, held, bound, keep_cols, store, xs, diverged, div_step,

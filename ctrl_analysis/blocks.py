@@ -20,23 +20,37 @@ with ``dt``) for :func:`control.interconnect` and :func:`control.input_output_re
 
 from __future__ import annotations
 
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
 
-from ._validate import check_finite, check_in, check_int, check_names, check_positive, check_str
+from ._columns import ColumnKernels
+from ._stepcheck import checked, partition_rows, unchecked, wrap_step_methods
+from ._validate import (
+    check_finite,
+    check_in,
+    check_int,
+    check_names,
+    check_positive,
+    check_str,
+)
 
 __all__ = [
+    "MAX_SIGNALS",
     "Block",
+    "ColumnKernels",
     "ContinuousBlock",
     "DiscreteBlock",
+    "RowGroups",
+    "SampledBlock",
     "StaticBlock",
     "StaticGain",
-    "SampledBlock",
-    "ColumnKernels",
-    "RowGroups",
     "signal_names",
 ]
+
+
+#: Most names :func:`signal_names` makes (a vector signal wider than this is a mistake, not a plant).
+MAX_SIGNALS = 10**6
 
 
 def signal_names(base: str, n: int) -> tuple[str, ...]:
@@ -47,14 +61,17 @@ def signal_names(base: str, n: int) -> tuple[str, ...]:
     base : str
         Name of the vector signal.
     n : int
-        Its length (>= 0).
+        Its length, from 0 to :data:`MAX_SIGNALS`.
 
     Returns
     -------
     tuple of str
     """
     base = check_str("base", base)
-    return tuple(f"{base}[{i}]" for i in range(check_int("n", n, minimum=0)))
+    n = check_int("n", n, minimum=0)
+    if n > MAX_SIGNALS:
+        raise ValueError(f"n must be <= {MAX_SIGNALS} (MAX_SIGNALS: names of one vector signal), got {n}")
+    return tuple(f"{base}[{i}]" for i in range(n))
 
 
 class Block:
@@ -72,6 +89,12 @@ class Block:
     states: tuple = ()
     #: Whether :meth:`output` depends on ``u`` (direct feedthrough).
     feedthrough: bool = False
+
+    def __init_subclass__(cls, **kwargs):
+        # a direct call of output/update/rhs checks the widths of x and u; the engine calls the
+        # unwrapped methods (ctrl_analysis._stepcheck), so the hot loop checks nothing
+        super().__init_subclass__(**kwargs)
+        wrap_step_methods(cls)
 
     @property
     def n_states(self) -> int:
@@ -120,6 +143,7 @@ class Block:
     def _lifted(self, fn: Callable) -> Callable:
         """``fn`` batched ``(B, n)``/``(B, m)`` -> a python-control callback on 1-D ``x``, ``u``."""
         n, m = self.n_states, len(self.inputs)
+        fn = getattr(fn, "unchecked", None) and fn.unchecked.__get__(self) or fn  # shapes made here
 
         def call(t, x, u, params=None):
             xb = np.asarray(x, dtype=float).reshape(1, n)
@@ -127,6 +151,9 @@ class Block:
             return np.asarray(fn(t, xb, ub, params or None), dtype=float).reshape(-1)
 
         return call
+
+
+Block.output = checked(Block.output)
 
 
 class ContinuousBlock(Block):
@@ -250,12 +277,13 @@ class DiscreteBlock(Block):
         xs = np.empty((N + 1, B, self.n_states))
         ys = None
         xs[0] = x
+        output, update = unchecked(self, "output"), unchecked(self, "update")
         for k in range(N):
-            yk = self.output(t[k], x, u[k], params)
+            yk = output(t[k], x, u[k], params)
             if ys is None:
                 ys = np.empty((N, B, yk.shape[1]))
             ys[k] = yk
-            x = self.update(t[k], x, u[k], params)
+            x = update(t[k], x, u[k], params)
             xs[k + 1] = x
         return ys, xs
 
@@ -389,100 +417,6 @@ class StaticGain(StaticBlock):
         return f"StaticGain(D shape {self.D.shape}, inputs={self.inputs}, outputs={self.outputs})"
 
 
-class ColumnKernels:
-    """Mixin: a block whose numpy methods are its compiled kernel applied to the batch's columns.
-
-    One source per equation: the block's equations are written once, as plain scalar-indexed
-    module-level functions ``output(t, x, u, p, y)`` and ``update(t, x, u, p, x_next)`` (discrete)
-    or ``rhs(t, x, u, p, dx)`` (continuous) with ``x[i]``-style indexing and no per-value branches.
-    Called on one run's vectors they are the compiled engine's kernel
-    (:class:`~ctrl_analysis._kernels.BlockKernel`); called on the transposed batch arrays
-    (``x.T``, ``u.T``, ``p.T``, ``out.T``) they are the block's numpy methods. A block using the
-    mixin lists its functions' names in ``column_kernels`` (keys ``"output"`` and ``"update"`` or
-    ``"rhs"``; names looked up in the block's module) and sets ``self._p``: its parameter vector
-    (shared by every run) or a ``(B, n_p)`` array (one row per run).
-
-    Put the mixin first among the bases (``class F(ColumnKernels, DiscreteBlock)``).
-    """
-
-    column_kernels: dict = {}
-
-    def _column_fns(self) -> dict:
-        cls = type(self)
-        fns = cls.__dict__.get("_column_fns_cache")
-        if fns is None:
-            import sys
-
-            module = sys.modules[cls.__module__]
-            fns = {kind: getattr(module, name) for kind, name in cls.column_kernels.items()}
-            cls._column_fns_cache = fns
-        return fns
-
-    def _on_columns(self, kind, t, x, u, width):
-        out = np.empty((x.shape[0], width))
-        self._column_fns()[kind](t, x.T, u.T, self._p.T, out.T)
-        return out
-
-    def output(self, t, x, u, params=None) -> np.ndarray:
-        """The output, the ``"output"`` kernel on the batch's columns.
-
-        Parameters
-        ----------
-        t : float
-        x : numpy.ndarray, shape (B, n)
-        u : numpy.ndarray, shape (B, m)
-        params : ignored
-
-        Returns
-        -------
-        numpy.ndarray, shape (B, len(outputs))
-        """
-        return self._on_columns("output", t, x, u, len(self.outputs))
-
-    def update(self, t, x, u, params=None) -> np.ndarray:
-        """The next state, the ``"update"`` kernel on the batch's columns (discrete blocks).
-
-        Parameters
-        ----------
-        t : float
-        x : numpy.ndarray, shape (B, n)
-        u : numpy.ndarray, shape (B, m)
-        params : ignored
-
-        Returns
-        -------
-        numpy.ndarray, shape (B, n)
-        """
-        return self._on_columns("update", t, x, u, x.shape[1])
-
-    def rhs(self, t, x, u, params=None) -> np.ndarray:
-        """The state derivative, the ``"rhs"`` kernel on the batch's columns (continuous blocks).
-
-        Parameters
-        ----------
-        t : float
-        x : numpy.ndarray, shape (B, n)
-        u : numpy.ndarray, shape (B, m)
-        params : ignored
-
-        Returns
-        -------
-        numpy.ndarray, shape (B, n)
-        """
-        return self._on_columns("rhs", t, x, u, x.shape[1])
-
-    def kernel(self):
-        """The compiled engine's kernel: the functions named in ``column_kernels`` and ``self._p``.
-
-        Returns
-        -------
-        ctrl_analysis._kernels.BlockKernel
-        """
-        from ._kernels import BlockKernel
-
-        return BlockKernel(params=self._p, **self._column_fns())
-
-
 class SampledBlock(DiscreteBlock):
     """A continuous block integrated over one sample with a fixed step, its input held: a discrete block.
 
@@ -498,18 +432,18 @@ class SampledBlock(DiscreteBlock):
         Sampling period (> 0).
     method : {"rk4", "euler"}
     substeps : int
-        Integration steps per sample (>= 1).
+        Integration steps per sample (1 to :data:`~ctrl_analysis.simulate.MAX_SUBSTEPS`).
     """
 
     def __init__(self, block: ContinuousBlock, dt: float, method: str = "rk4", substeps: int = 1):
-        from .simulate import STEPPERS
+        from .simulate import MAX_SUBSTEPS, STEPPERS
 
         if not isinstance(block, ContinuousBlock):
             raise TypeError(f"block must be a ContinuousBlock, got {type(block).__name__}")
         self.block = block
         self.dt = check_positive("dt", dt, scalar=True)
         self.method = check_in("method", method, STEPPERS)
-        self.substeps = check_int("substeps", substeps, minimum=1)
+        self.substeps = check_int("substeps", substeps, minimum=1, maximum=MAX_SUBSTEPS)
         self._step = STEPPERS[method]
         self.inputs, self.outputs, self.states = block.inputs, block.outputs, block.states
         self.feedthrough = block.feedthrough
@@ -518,13 +452,13 @@ class SampledBlock(DiscreteBlock):
         return self.block.initial_state()
 
     def update(self, t, x, u, params=None) -> np.ndarray:
-        h = self.dt / self.substeps
+        h, rhs = self.dt / self.substeps, unchecked(self.block, "rhs")
         for i in range(self.substeps):
-            x = self._step(self.block.rhs, t + i * h, x, u, h, params)
+            x = self._step(rhs, t + i * h, x, u, h, params)
         return x
 
     def output(self, t, x, u, params=None) -> np.ndarray:
-        return self.block.output(t, x, u, params)
+        return unchecked(self.block, "output")(t, x, u, params)
 
     def __repr__(self) -> str:
         return f"SampledBlock({self.block!r}, dt={self.dt}, method={self.method!r}, substeps={self.substeps})"
@@ -541,12 +475,14 @@ class RowGroups(ContinuousBlock):
     blocks : sequence of ContinuousBlock
         Equal ``inputs``, ``outputs``, ``states`` and ``feedthrough``.
     rows : sequence of int or of index arrays
-        Per block either a count (consecutive groups, in order) or the batch rows it runs.
+        Per block either a count (consecutive groups, in order) or the batch rows it runs; the
+        groups partition the runs ``0 .. run_rows - 1`` (the batch must have ``run_rows`` runs).
 
     Raises
     ------
     ValueError
-        If the blocks' signals differ, or ``rows`` does not give one group per block.
+        If the blocks' signals differ, ``rows`` does not give one group per block, or the groups
+        do not partition the runs (an index out of range, in two groups, or in none).
 
     Examples
     --------
@@ -569,12 +505,7 @@ class RowGroups(ContinuousBlock):
                 raise ValueError("blocks must have equal inputs, outputs, states and feedthrough")
         if not isinstance(rows, (list, tuple)) or len(rows) != len(blocks):
             raise ValueError(f"rows must give one group per block ({len(blocks)}), got {rows!r:.80}")
-        if all(np.ndim(r) == 0 for r in rows):
-            counts = [check_int("rows", r, minimum=1) for r in rows]
-            edges = np.concatenate(([0], np.cumsum(counts)))
-            rows = [slice(int(a), int(b)) for a, b in zip(edges[:-1], edges[1:])]
-        else:
-            rows = [np.asarray(r, dtype=np.intp).ravel() for r in rows]
+        rows, self.run_rows = partition_rows(rows)
         self.blocks, self.rows = blocks, tuple(rows)
         self.inputs, self.outputs, self.states, self.feedthrough = b0.inputs, b0.outputs, b0.states, b0.feedthrough
 
@@ -583,10 +514,10 @@ class RowGroups(ContinuousBlock):
 
     def _each(self, fn, t, x, u, params):
         if len(self.blocks) == 1:
-            return getattr(self.blocks[0], fn)(t, x, u, params)
+            return unchecked(self.blocks[0], fn)(t, x, u, params)
         out = None
         for block, idx in zip(self.blocks, self.rows):
-            y = getattr(block, fn)(t, x[idx], u[idx], params)
+            y = unchecked(block, fn)(t, x[idx], u[idx], params)
             if out is None:
                 out = np.empty((x.shape[0],) + y.shape[1:])
             out[idx] = y

@@ -88,6 +88,10 @@ def _build_parser() -> argparse.ArgumentParser:
                      help="run every Monte Carlo batch and sweep on a Dask cluster: 'local' starts one on this "
                           "machine, or the address of a running scheduler, tcp://host:8786 (same numbers as a "
                           "local run)")
+    # the arena's subcommand lives in its package
+    from .arena.cli import add_parser as add_arena
+
+    add_arena(sub)
     return parser
 
 
@@ -507,6 +511,10 @@ def main(argv: list[str] | None = None) -> int:
                 info = load_study(name).INFO
                 print(f"{name:24s} {info.reproduces}")
             return 0
+        if args.command == "arena":
+            from .arena.cli import main as arena_main
+
+            return arena_main(args)
         return _reproduce(args)
     except _UsageError as exc:
         sys.stderr.write(f"ctrl-analysis: error: {exc}\n")

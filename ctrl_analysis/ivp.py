@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
 
 from ._validate import check_callable, check_finite, check_in, check_positive
-from .simulate import SimResult, _check_bound, _prepare
+from .simresult import SimResult, _check_bound, _prepare
 
 __all__ = ["simulate_ivp"]
 
@@ -31,7 +31,10 @@ def simulate_ivp(
     The batch is flattened into one ODE of size ``B*n`` (``rhs`` is vectorised over runs), so one
     adaptive solve serves the whole batch. ``u(t) -> (B, m)`` is an optional smooth input.
 
-    A run leaving ``bound`` is frozen there (zero derivative) and flagged; the others go on. When the
+    A run leaving ``bound`` is frozen there (zero derivative) and flagged; the others go on. A run
+    whose derivative becomes NaN or inf is frozen too, flagged as diverged from the first output
+    instant at or after that time, and its states are NaN from there (the solver's step size would
+    otherwise become NaN and never end). When the
     batch solve fails (e.g. a run's derivative becomes non-finite), every run is solved on its own
     (``rhs`` still receives the whole batch, the other rows held at ``x0``), so one diverging run
     neither stops nor flags the healthy ones; ``info["per_run"]`` says whether that fallback ran.
@@ -89,6 +92,12 @@ def simulate_ivp(
             with np.errstate(all="ignore"):
                 dx = np.asarray(rhs(t, full, None if u is None else u(t), params), dtype=float).reshape(B, n)[rows]
                 dx[np.any(np.abs(full[rows]) > bound, axis=1)] = 0.0
+                # a non-finite derivative would make the solver's step size NaN and its loop never
+                # end: the run is frozen (zero derivative) and flagged from the first time it happened
+                bad = ~np.all(np.isfinite(dx), axis=1)
+                if bad.any():
+                    nonfinite[rows[bad]] = np.minimum(nonfinite[rows[bad]], t)
+                    dx[bad] = 0.0
             return dx.reshape(-1)
 
         return solve_ivp(f, (t_eval[0], t_eval[-1]), x[rows].reshape(-1), t_eval=t_eval, method=method,
@@ -100,6 +109,7 @@ def simulate_ivp(
         xs[:m, rows] = sol.y.T.reshape(m, rows.size, n)
 
     xs = np.full((t_eval.size, B, n), np.nan)
+    nonfinite = np.full(B, np.inf)  # per run: the first time rhs returned NaN or inf
     sol = solve(np.arange(B))
     if B > 1 and sol.status != 0:
         statuses = []
@@ -112,6 +122,8 @@ def simulate_ivp(
     else:
         fill(sol, np.arange(B))
         info = {"status": sol.status, "message": sol.message, "nfev": sol.nfev, "per_run": False}
+    for b in np.flatnonzero(np.isfinite(nonfinite)):
+        xs[np.searchsorted(t_eval, nonfinite[b]):, b] = np.nan  # NaN from the first instant at or after it
     with np.errstate(invalid="ignore"):
         bad_k = ~np.all(np.isfinite(xs), axis=2) | np.any(np.abs(xs) > bound, axis=2)
     diverged = bad_k.any(axis=0)

@@ -30,6 +30,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ._compiled import compiled_for, run_compiled
+from ._perrun import check_rows, chunk_functions, per_run_rows
 from ._validate import (
     check_bool,
     check_callable,
@@ -45,6 +47,7 @@ from .blocks import Block, ContinuousBlock, DiscreteBlock
 from .response import LoopResponse
 from .simulate import (
     CHUNK_BYTES,
+    MAX_SUBSTEPS,
     RESULT_BYTES,
     STEPPERS,
     _flag_divergence,
@@ -119,7 +122,7 @@ class Loop:
     method : {"rk4", "euler"}
         Fixed-step integrator of the continuous blocks.
     substeps : int
-        Integration steps per sample.
+        Integration steps per sample (1 to :data:`~ctrl_analysis.simulate.MAX_SUBSTEPS`).
     outputs : sequence of str, optional
         Signals reported by :meth:`LoopResponse.to_timeresponse` (default: all block outputs).
 
@@ -147,7 +150,7 @@ class Loop:
     def __init__(self, blocks, dt: float, *, method: str = "rk4", substeps: int = 1, outputs=None):
         self.dt = check_positive("dt", dt, scalar=True)
         self.method = check_in("method", method, STEPPERS)
-        self.substeps = check_int("substeps", substeps, minimum=1)
+        self.substeps = check_int("substeps", substeps, minimum=1, maximum=MAX_SUBSTEPS)
         if not isinstance(blocks, (list, tuple)):
             raise TypeError(f"blocks must be a list of blocks (or place(...) results), got {blocks!r:.80}")
         placed = [b if isinstance(b, Placed) else place(b, f"b{i}") for i, b in enumerate(blocks)]
@@ -422,11 +425,10 @@ class Loop:
                     "batch_runs": check_int("batch_runs", batch_runs, minimum=1) if batch_runs else None}
             return simulate_chunks(self, jobs, n_steps, held, x, opts, seeds)
         run_offset = check_int("run_offset", run_offset, minimum=0)
-        runner = self._compiled(engine, funcs, params, np.isfinite(bound))
-        if runner is not None:
-            from ._compiled import check_per_run_rows
-
-            check_per_run_rows(self, runner, run_offset, B, batch_runs)
+        runner = compiled_for(self, engine, funcs, params, np.isfinite(bound))  # None: the numpy path
+        rows = {p.name: r for p in self.placed if (r := per_run_rows(p.block)) is not None}
+        check_rows(rows, run_offset, B, batch_runs)  # both engines: the same batch, the same answer
+        rows = {id(p.block): rows[p.name] for p in self.placed if p.name in rows}
         t = t0 + self.dt * np.arange(n_steps + 1)
         store = np.empty((n_steps + 1, B, len(keep)))
         xs = np.empty((n_steps + 1, B, self.n_states)) if store_states else None
@@ -440,7 +442,7 @@ class Loop:
         with updater(progress if callable(progress) else auto, B * n_steps,
                      f"{B} runs x {n_steps} samples", "run-sample") as pbar:
             self._run_chunks(plan, runner, n_steps, t, x, held, funcs, per_run_funcs, params, bound, keep_cols,
-                             store, xs, diverged, div_step, chunk_bounds(B, size), run_offset, pbar)
+                             store, xs, diverged, div_step, chunk_bounds(B, size), (run_offset, rows), pbar)
         sig_store = {s: store[:, :, j] for j, s in enumerate(keep)}
         state_names = [f"{p.name}.{s}" for p in self.continuous + self.discrete for s in p.block.states]
         return LoopResponse(t=t, x=xs, u=None, y=None, diverged=diverged, diverged_step=div_step,
@@ -449,14 +451,15 @@ class Loop:
                             state_names=state_names, x_final=x if xs is None else xs[-1].copy())
 
     def _run_chunks(self, plan, runner, n_steps, t, x, held, funcs, per_run_funcs, params, bound, keep_cols,
-                    store, xs, diverged, div_step, bounds, run_offset, progress):
+                    store, xs, diverged, div_step, bounds, offset_rows, progress):
         """Step every chunk ``(lo, hi)`` of the batch (compiled or numpy), reporting run-samples to ``progress``."""
+        run_offset, rows = offset_rows
         for lo, hi in bounds:
             f_c = {s: (f if s not in per_run_funcs else (lambda tt, f=f, lo=lo, hi=hi: np.asarray(f(tt))[lo:hi]))
                    for s, f in funcs.items()}
             h_c = {s: (a[:, lo:hi] if a.ndim == 2 else a) for s, a in held.items()}
             if runner is None:
-                self._run_chunk(plan, n_steps, t, x[lo:hi], h_c, f_c, params, bound, keep_cols,
+                self._run_chunk(plan | chunk_functions(plan, rows, run_offset + lo, hi - lo), n_steps, t, x[lo:hi], h_c, f_c, params, bound, keep_cols,
                                 store[:, lo:hi], None if xs is None else xs[:, lo:hi],
                                 diverged[lo:hi], div_step[lo:hi], progress)
                 continue
@@ -465,25 +468,14 @@ class Loop:
             parts = [(lo, hi)] if progress is None else chunk_bounds(hi - lo, max(1, -(-(hi - lo) // 20)))
             for a, b in parts if progress is None else [(lo + a, lo + b) for a, b in parts]:
                 h_p = {s: (v[:, a:b] if v.ndim == 2 else v) for s, v in held.items()}
-                self._run_compiled(runner, plan, n_steps, t, x[a:b], h_p, bound, keep_cols, store[:, a:b],
-                                   None if xs is None else xs[:, a:b], diverged[a:b], div_step[a:b],
-                                   run_offset + a)
+                run_compiled(self, runner, plan, n_steps, t, x[a:b], h_p, bound, keep_cols, store[:, a:b],
+                             None if xs is None else xs[:, a:b], diverged[a:b], div_step[a:b], rows=(run_offset + a, None))
                 if progress is not None:
                     progress((b - a) * n_steps)
 
     def _compiled(self, engine, funcs, params, finite_bound):
         """The compiled runner and the kernels' parameters, or ``None`` for the numpy path."""
-        from ._compiled import compiled_for
-
         return compiled_for(self, engine, funcs, params, finite_bound)
-
-    def _run_compiled(self, runner, plan, n_steps, t, x, held, bound, keep_cols, store, xs, diverged, div_step,
-                      first_run=0):
-        """One chunk through the compiled runner, writing into the result slices."""
-        from ._compiled import run_compiled
-
-        run_compiled(self, runner, plan, n_steps, t, x, held, bound, keep_cols, store, xs, diverged, div_step,
-                     rows=(first_run, None))
 
     def _run_chunk(self, plan, n_steps, t, x, held, funcs, params, bound, keep_cols, store, xs,
                    diverged, div_step, progress):
@@ -509,17 +501,17 @@ class Loop:
         nc = self.n_continuous
         tick = max(1, n_steps // 100)
 
-        def evaluate(blocks, tau, xx):
-            for block, ic, oc, sl in blocks:
-                S[:, oc] = block.output(tau, xx[:, sl], S[:, ic], params)
+        def evaluate(blocks, tau, xx):  # the plan's unchecked (and per-run windowed) block functions
+            for output, ic, oc, sl in blocks:
+                S[:, oc] = output(tau, xx[:, sl], S[:, ic], params)
 
         def stage_rhs(tau, xc, _u, p):
             for j, f in fcols:
                 S[:, j] = f(tau)
             evaluate(stage, tau, xc)  # continuous blocks come first in x: xc holds their states
             dx = np.empty_like(xc)
-            for block, ic, _, sl in continuous:
-                dx[:, sl] = block.rhs(tau, xc[:, sl], S[:, ic], p)
+            for rhs, ic, _, sl in continuous:
+                dx[:, sl] = rhs(tau, xc[:, sl], S[:, ic], p)
             return dx
 
         with np.errstate(all="ignore"):
@@ -537,8 +529,8 @@ class Loop:
                     break
                 if discrete:
                     x_next = x.copy()
-                    for block, ic, _, sl in discrete:
-                        x_next[:, sl] = block.update(tk, x[:, sl], S[:, ic], params)
+                    for update, ic, _, sl in discrete:
+                        x_next[:, sl] = update(tk, x[:, sl], S[:, ic], params)
                 else:
                     x_next = x
                 if nc:

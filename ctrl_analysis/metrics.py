@@ -157,7 +157,9 @@ def settling_time(t, y, final, initial=0.0, band=0.02, axis=0):
     Returns
     -------
     float or numpy.ndarray
-        The settling time per run; ``nan`` for a run that never settles within the record.
+        The settling time per run; ``nan`` for a run that never settles within the record. A NaN
+        sample of ``y`` (a diverged run) counts as outside the band: a run that is NaN at its last
+        sample has no settling time.
 
     Raises
     ------
@@ -179,7 +181,8 @@ def settling_time(t, y, final, initial=0.0, band=0.02, axis=0):
     step = abs(final - initial)
     if step == 0:
         raise ValueError("final must differ from initial for a settling time")
-    outside = np.abs(y - final) > band * step
+    with np.errstate(invalid="ignore"):
+        outside = ~(np.abs(y - final) <= band * step)  # a NaN sample is outside the band, never settled
     # index of the last sample outside the band; settled from the next one on
     any_out = outside.any(axis=0)
     last = outside.shape[0] - 1 - np.argmax(outside[::-1], axis=0)

@@ -13,7 +13,11 @@ import numpy as np
 
 from ._validate import check_finite, check_int
 
-__all__ = ["draw_noise", "gaussian_noise", "run_seeds", "uniform_noise"]
+__all__ = ["MAX_RUNS", "draw_noise", "gaussian_noise", "run_seeds", "uniform_noise"]
+
+#: Most runs :func:`run_seeds` makes at once (a list of Python integers; beyond it the list alone
+#: takes gigabytes): split larger studies into batches of seeds from different base seeds.
+MAX_RUNS = 10**7
 
 
 # ----------------------------------------------------------------------------------------------
@@ -34,12 +38,17 @@ def run_seeds(base_seed: int, runs: int) -> list[int]:
     base_seed : int
         The study's base seed (``--seed``), >= 0.
     runs : int
-        Number of Monte Carlo runs, >= 1.
+        Number of Monte Carlo runs, from 1 to :data:`MAX_RUNS`.
 
     Returns
     -------
     list of int
         One seed per run.
+
+    Raises
+    ------
+    ValueError
+        If ``base_seed`` < 0, or ``runs`` is < 1 or > :data:`MAX_RUNS`.
 
     Examples
     --------
@@ -49,6 +58,9 @@ def run_seeds(base_seed: int, runs: int) -> list[int]:
     """
     base_seed = check_int("base_seed", base_seed, minimum=0)
     runs = check_int("runs", runs, minimum=1)
+    if runs > MAX_RUNS:
+        raise ValueError(f"runs must be <= {MAX_RUNS} (MAX_RUNS: the seeds alone would take "
+                         f"{runs * 36 / 2**30:.3g} GiB), got {runs}")
     return _spawned_states(base_seed, runs).tolist()
 
 
@@ -97,10 +109,7 @@ def _spawned_states(base_seed: int, runs: int) -> np.ndarray:
     for w in words[_POOL:]:
         for i_dst in range(_POOL):
             pool[i_dst] = mix(pool[i_dst], hashmix(w))
-    # the spawn key (i,): one word per child while i < 2**32 (two words above; not vectorised here)
-    if runs > 2**32:
-        return np.array([int(c.generate_state(1)[0]) for c in np.random.SeedSequence(base_seed).spawn(runs)],
-                        dtype=np.uint64)
+    # the spawn key (i,) is one 32-bit word per child: runs <= MAX_RUNS < 2**32
     u64, m32 = np.uint64, np.uint64(_M32)
     value = (np.arange(runs, dtype=u64) ^ u64(hash_const)) & m32  # hashmix(i): only pool word 0 is needed,
     value = (value * u64((hash_const * _MULT_A) & _M32)) & m32  # and it is mixed first

@@ -48,8 +48,8 @@ import numpy as np
 from ._validate import check_int, check_str
 from .progress import bar
 
-__all__ = ["active_cluster", "check_scheduler_address", "chunk_slices", "default_jobs", "gather", "grid_points",
-           "map_chunks", "monte_carlo", "picklable", "simulate_chunks", "sweep", "use_cluster"]
+__all__ = ["MAX_CHUNKS", "active_cluster", "check_scheduler_address", "chunk_slices", "default_jobs", "gather",
+           "grid_points", "map_chunks", "monte_carlo", "picklable", "simulate_chunks", "sweep", "use_cluster"]
 
 #: The process-wide cluster of :func:`use_cluster`: its client, address, and the chunks it ran.
 _CLUSTER: dict = {"client": None, "address": None, "chunks": 0}
@@ -86,6 +86,11 @@ def chunk_slices(n: int, *, chunks: int | None = None, chunk_size: int | None = 
     Returns
     -------
     list of slice
+
+    Raises
+    ------
+    ValueError
+        If an argument is out of range, or more than :data:`MAX_CHUNKS` pieces would be made.
     """
     n = check_int("n", n, minimum=1)
     if chunk_size is not None:
@@ -93,7 +98,21 @@ def chunk_slices(n: int, *, chunks: int | None = None, chunk_size: int | None = 
     else:
         k = check_int("chunks", 1 if chunks is None else chunks, minimum=1)
         size = math.ceil(n / min(k, n))
+    _check_pieces(n, size, "chunk_size" if chunk_size is not None else "chunks")
     return [slice(lo, min(lo + size, n)) for lo in range(0, n, size)]
+
+
+#: Most pieces :func:`chunk_slices` makes (each is a task: more is a mistake, and a list that large
+#: would take gigabytes).
+MAX_CHUNKS = 10**6
+
+
+def _check_pieces(n: int, size: int, name: str) -> None:
+    """Raise unless splitting ``n`` items into pieces of ``size`` makes at most :data:`MAX_CHUNKS` pieces."""
+    pieces = -(-n // size)
+    if pieces > MAX_CHUNKS:
+        raise ValueError(f"{name} would split n = {n} into {pieces} pieces, more than MAX_CHUNKS = {MAX_CHUNKS}: "
+                         f"use larger pieces")
 
 
 def _sequence(name: str, value) -> list:

@@ -15,8 +15,8 @@ from typing import Callable
 import numpy as np
 
 from .atomic import staged_directory, write_text_atomic  # noqa: F401 (public API)
-from .results import (DEFAULT_TOLERANCE, RESULTS_SCHEMA, VERDICTS, Quantity, StudyInfo,  # noqa: F401 (public API)
-                      StudyResult, compute_verdict, relative_error, versions)
+from .results import (CLAIM_VERDICTS, DEFAULT_TOLERANCE, KINDS, RESULTS_SCHEMA, VERDICTS,  # noqa: F401 (public API)
+                      Quantity, StudyInfo, StudyResult, compute_verdict, relative_error, versions)
 from ._validate import (check_callable, check_int, check_path,
                         check_positive, check_str)
 
@@ -86,6 +86,7 @@ class StudyContext:
         if self.runs is not None:
             self.runs = check_int("runs", self.runs, minimum=1)
         self.seed = check_int("seed", self.seed, minimum=0)
+        self.jobs = check_int("jobs", self.jobs, minimum=1)
         check_callable("progress", self.progress, "progress(message)")
 
     def runs_or(self, default: int, quick_default: int | None = None) -> int:
@@ -185,6 +186,7 @@ def write_results_json(result: StudyResult, out_dir: Path) -> Path:
 
 
 _QUANTITY_KEYS = ("id", "label", "paper", "value", "std", "runs", "unit", "tolerance", "verdict", "note")
+_CLAIM_KEYS = ("id", "section", "statement", "verdict", "base_verdict", "evidence", "depends_on")
 _RESULTS_KEYS = ("study", "seed_file", "settings", "reconstructions", "quantities", "findings", "figures",
                  "runtime_s", "versions")
 
@@ -197,7 +199,10 @@ def validate_results(data: dict) -> dict:
     (a number >= 0 whenever ``paper`` is given), ``verdict`` in :data:`VERDICTS` and equal to the
     verdict recomputed from the record, ``paper`` None for ``new``, ``value`` None for ``diverged``;
     ids are unique and a paper cell has at most one primary quantity; ``captions``, when present, map
-    figures of the study to non-empty strings.
+    figures of the study to non-empty strings; ``claims``, when present, have a verdict in
+    :data:`CLAIM_VERDICTS` that follows from their base verdict and ``depends_on``, and cite recorded
+    quantities. Verdicts are recomputed under the stated policy (``percentile`` from ``interval``,
+    ``derived`` from the quantity named by ``derived_from``, else ``tolerance``).
 
     Parameters
     ----------
@@ -223,6 +228,7 @@ def validate_results(data: dict) -> dict:
     if not isinstance(data["quantities"], list):
         raise ValueError(f"{study}: quantities must be a list")
     seen, primaries = set(), {}
+    by_id = {q.get("id"): q for q in data["quantities"] if isinstance(q, dict)}
     for i, q in enumerate(data["quantities"]):
         where = f"{study}: quantity {q.get('id', i)!r}" if isinstance(q, dict) else f"{study}: quantity #{i}"
         if not isinstance(q, dict):
@@ -235,6 +241,8 @@ def validate_results(data: dict) -> dict:
         seen.add(q["id"])
         if not isinstance(q["unit"], str):
             raise ValueError(f"{where}: unit must be a string ('' = dimensionless), got {q['unit']!r}")
+        if q.get("kind", "reproduction") not in KINDS:
+            raise ValueError(f"{where}: kind must be one of {list(KINDS)}, got {q.get('kind')!r}")
         verdict = q["verdict"]
         if verdict not in VERDICTS:
             raise ValueError(f"{where}: verdict must be one of {list(VERDICTS)}, got {verdict!r}")
@@ -244,12 +252,19 @@ def validate_results(data: dict) -> dict:
             raise ValueError(f"{where}: tolerance must be a number >= 0 when paper is given, got {tol!r}")
         if verdict == "new" and q["paper"] is not None:
             raise ValueError(f"{where}: verdict 'new' needs paper None, got {q['paper']!r}")
-        if verdict == "diverged" and q["value"] is not None:
-            raise ValueError(f"{where}: verdict 'diverged' needs value None, got {q['value']!r}")
-        recomputed = compute_verdict(q["value"], q["paper"], tol, diverged=verdict == "diverged")
+        runs, bad = q.get("runs"), q.get("runs_diverged")
+        if runs and bad == runs and q["value"] is not None:
+            raise ValueError(f"{where}: every run diverged, so verdict 'diverged' needs value None, got {q['value']!r}")
+        diverged = bool(runs and bad and 2 * bad >= runs) or (verdict == "diverged" and q["value"] is None)
+        if q.get("policy") == "derived" and verdict not in ("new", "diverged"):
+            src = by_id.get(q.get("derived_from"))
+            recomputed = src["verdict"] if isinstance(src, dict) else None
+        else:
+            recomputed = compute_verdict(q["value"], q["paper"], tol, diverged=diverged,
+                                         interval=q.get("interval") if q.get("policy") == "percentile" else None)
         if recomputed != verdict:
-            raise ValueError(f"{where}: verdict {verdict!r} does not follow from value, paper and tolerance "
-                             f"({recomputed!r})")
+            raise ValueError(f"{where}: verdict {verdict!r} does not follow from value, paper and the "
+                             f"{q.get('policy') or 'tolerance'} policy ({recomputed!r})")
         if q.get("cell") is not None:
             if not isinstance(q["cell"], str):
                 raise ValueError(f"{where}: cell must be a string, got {q['cell']!r}")
@@ -257,6 +272,7 @@ def validate_results(data: dict) -> dict:
                 if q["cell"] in primaries:
                     raise ValueError(f"{where}: cell {q['cell']!r} already has primary {primaries[q['cell']]!r}")
                 primaries[q["cell"]] = q["id"]
+    _validate_claims(study, data.get("claims", []), seen)
     captions = data.get("captions", {})
     if not isinstance(captions, dict) or not all(isinstance(v, str) and v.strip() for v in captions.values()):
         raise ValueError(f"{study}: captions must map figure names to non-empty strings, got {captions!r}")
@@ -266,11 +282,35 @@ def validate_results(data: dict) -> dict:
     return data
 
 
+def _validate_claims(study: str, claims, ids: set) -> None:
+    """The ``claims`` list: keys, verdicts that follow from base verdict and ``depends_on``, cited ids recorded."""
+    if not isinstance(claims, list):
+        raise ValueError(f"{study}: claims must be a list")
+    seen = set()
+    for c in claims:
+        if not isinstance(c, dict) or any(k not in c for k in _CLAIM_KEYS):
+            raise ValueError(f"{study}: a claim lacks keys {[k for k in _CLAIM_KEYS if k not in (c or {})]}")
+        where = f"{study}: claim {c['id']!r}"
+        if c["id"] in seen:
+            raise ValueError(f"{where} is judged twice")
+        seen.add(c["id"])
+        if c["verdict"] not in CLAIM_VERDICTS or c["base_verdict"] not in ("holds", "fails", "untestable"):
+            raise ValueError(f"{where}: verdict must be one of {list(CLAIM_VERDICTS)}, got {c['verdict']!r}")
+        expected = "depends" if c["depends_on"] and c["base_verdict"] != "untestable" else c["base_verdict"]
+        if c["verdict"] != expected:
+            raise ValueError(f"{where}: verdict {c['verdict']!r} does not follow from base verdict "
+                             f"{c['base_verdict']!r} and depends_on ({expected!r})")
+        unknown = [e for e in c["evidence"] if e not in ids]
+        if unknown:
+            raise ValueError(f"{where} cites quantities that are not recorded: {unknown}")
+
+
 def count_verdicts(results: dict) -> dict:
     """Headline counts of one results.json dict: ``{verdict: n}`` over paper cells, each scored once.
 
     Quantities sharing a ``cell`` count once, with the verdict of the one marked ``primary`` (default:
-    the first in that cell); quantities without a cell count individually.
+    the first in that cell); quantities without a cell count individually; checks (``kind="check"``)
+    are not counted.
 
     Parameters
     ----------
@@ -292,6 +332,8 @@ def count_verdicts(results: dict) -> dict:
     counts = dict.fromkeys(VERDICTS, 0)
     by_cell: dict = {}
     for q in results["quantities"]:
+        if q.get("kind", "reproduction") == "check":
+            continue
         cell = q.get("cell")
         if cell is None:
             counts[q["verdict"]] += 1

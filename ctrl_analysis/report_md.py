@@ -1,9 +1,11 @@
 """REPORT.md: the reproduction report of several studies, written from their results.json dicts.
 
-The report reads on its own for someone holding only the papers: an overview of the verdict counts,
-then per study a summary generated from its verdicts and findings, one side-by-side table per paper
-table (printed beside reproduced), the full quantity list, reconstructions, findings with their
-evidence summarised, captioned figures, and a glossary of the terms used.
+The report reads on its own for someone holding only the papers: the verdict policy and an overview
+of the claim and cell counts, then per study the scorecard of the paper's claims (what each verdict
+rests on), a summary generated from its verdicts and findings, one side-by-side table per paper table
+(printed beside reproduced), checks and errata, the sensitivity to the reconstructions,
+reconstructions with their plausible ranges, findings with their evidence summarised and captioned
+figures; an appendix lists every quantity of every study, and a glossary the terms used.
 """
 
 from __future__ import annotations
@@ -14,93 +16,18 @@ from pathlib import Path
 import numpy as np
 
 from ._validate import check_path
+from .report_format import MAX_LIST, cell as _cell, fmt as _fmt, shorten_lists as _shorten_lists, summarise  # noqa: F401
+from .glossary import GLOSSARY, glossary_lines  # noqa: F401 (GLOSSARY: public API)
 from .report import relative_error, write_text_atomic
+from .report_claims import checks_and_errata, claim_counts, plausible_text, scorecard, sensitivity_lines
+from .verdicts import VERDICT_POLICY
 
-__all__ = ["GLOSSARY", "overview_table", "summary_table", "tally", "write_report_md"]
+__all__ = ["GLOSSARY", "MAX_LIST", "not_reproduced", "overview_table", "summary_table", "tally", "write_report_md"]
 
-#: Longest list quoted as is; longer numeric lists are summarised as min / median / max.
-MAX_LIST = 8
 #: Longest evidence text before it is cut (the full evidence stays in results.json).
 MAX_EVIDENCE = 700
 #: Marks of the verdicts in the side-by-side tables.
 MARK = {"agrees": "✓", "differs": "✗", "diverged": "diverged", "new": ""}
-
-#: Terms the report uses; a term is listed when it occurs in the report.
-GLOSSARY = {
-    "agrees / differs": "the reproduced value is within / outside the relative tolerance shown beside it "
-                        "(|value − paper| / |paper|, element-wise maximum for vectors).",
-    "new": "a quantity the paper does not print (a check, a sweep, a claim put into numbers).",
-    "diverged": "every run of that quantity diverged (a state left the divergence bound): no value.",
-    "paper cell": "one number printed in the paper (a table entry or a value in the text). A cell may be "
-                  "reproduced under several readings; the headline counts score it once, by its primary reading.",
-    "primary reading": "the reading of an ambiguous method the study considers the paper's intent; the other "
-                       "readings of the same cell are listed but not counted.",
-    "reconstruction": "a value or choice the paper does not print (or prints wrongly), chosen by the study "
-                      "and justified.",
-    "state reading": "reading an estimator's output as its state vector (x̂ = z) rather than the corrected "
-                     "output formula the paper prints.",
-    "literal": "the method run exactly as printed, even where that is ill-posed or diverges.",
-    "well-posed": "the smallest change to the printed method that makes it solvable (e.g. a regression "
-                  "whose columns are identifiable), used as the primary reading when the literal one fails.",
-    "predictor form": "a Kalman filter written with the one-step prediction x̂(k+1|k) as its state.",
-    "DWNA": "discrete white-noise acceleration: the process-noise model of an α-β tracker, Q = σ² G Gᵀ "
-            "with G = [T²/2, T]ᵀ.",
-    "Kalata index": "the tracking index Λ = σ_w T² / σ_v of an α-β filter, which fixes its steady-state "
-                    "gains (α, β).",
-    "PPD": "pseudo-partial derivative φ(k) of MFAC's compact-form dynamic linearisation, "
-           "Δy(k+1) = φ(k) Δu(k), estimated on line.",
-    "CFDL": "compact-form dynamic linearisation, the data model behind MFAC.",
-    "MFAC": "model-free adaptive control (Hou): a controller built on the CFDL data model and its "
-            "estimated PPD.",
-    "TD": "tracking differentiator (Han): a nonlinear filter giving a smoothed signal and its derivative.",
-    "IKF": "the improved Kalman filter of the ikf-mfac paper, a scalar random-walk Kalman filter on the "
-           "measured output.",
-    "CKF": "characteristic-model-based Kalman filter: a Kalman filter on the second-order characteristic "
-           "model x(k) = f1 x(k−1) + f2 x(k−2) + g0 u(k−1) whose coefficients are identified on line.",
-    "LPF": "low-pass filter.",
-    "RLS": "recursive least squares (with forgetting factor λ).",
-    "ESO": "extended state observer (Han): an observer whose extra state estimates the total disturbance.",
-    "LESO": "linear ESO with gains in bandwidth form, poles at −ω_o.",
-    "MESO": "modified ESO (meso paper): an ESO with a model term XᵀΘ whose parameters Θ are identified by "
-            "least squares (LSM) on batches of data, so its extended state only carries what the model misses.",
-    "ARE / DARE": "algebraic / discrete algebraic Riccati equation, whose solution gives a Kalman filter's "
-                  "steady-state gain.",
-    "α-β filter": "a two-state (position, rate) tracking filter with constant gains α and β.",
-    "RK4": "the classical fourth-order Runge-Kutta integrator (fixed step).",
-    "ZOH": "zero-order hold: a sampled signal held constant over each sampling period.",
-    "LSM": "least-squares method (batch identification).",
-    "fal": "Han's nonlinear gain function fal(e, α, δ): |e|^α sign(e) outside |e| < δ, linear inside.",
-    "Σ": "the differential state estimator of the differential-estimator paper, a chain of integrators "
-         "with poles designed at the root-locus breakaway point.",
-    "est_xi / track_xi": "the meso tables' columns: mean |estimation error| of x_i, and mean |tracking error| of "
-                         "x_i, over the run.",
-    "RMSE": "root-mean-square error.",
-    "SNR": "signal-to-noise ratio, 10 lg(Σ y*² / Σ e²) in dB.",
-    "mean ± std": "mean and standard deviation over the Monte Carlo runs that did not diverge.",
-}
-
-
-def _fmt(value, std=None, digits: int = 4) -> str:
-    if value is None:
-        return "—"
-    if isinstance(value, (list, tuple, np.ndarray)):
-        flat = list(np.ravel(np.asarray(value, dtype=object)))
-        if len(flat) > MAX_LIST and _numeric(flat):
-            return _array_summary(flat)
-        return "[" + ", ".join(_fmt(v, digits=digits) for v in flat) + "]"
-    if isinstance(value, bool):
-        return str(int(value))
-    if isinstance(value, (int, np.integer)):
-        return str(value)
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        return str(value)
-    text = f"{v:.{digits}g}"
-    if std is not None:
-        text += f" ± {_fmt(std)}"
-    return text
-
 
 def _digits(q: dict) -> int:
     """Significant digits that show a difference the tolerance can resolve (4, or 6 for tight tolerances)."""
@@ -108,67 +35,20 @@ def _digits(q: dict) -> int:
     return 6 if tol is not None and tol < 1e-3 else 4
 
 
-def _numeric(items) -> bool:
-    return all(isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool) or v is None
-               for v in items)
-
-
-def _array_summary(items) -> str:
-    vals = np.array([np.nan if v is None else v for v in items], dtype=float)
-    fin = vals[np.isfinite(vals)]
-    if fin.size == 0:
-        return f"[{len(items)} values, none finite]"
-    return (f"[{len(items)} values: min {np.min(fin):.4g} / median {np.median(fin):.4g} / max {np.max(fin):.4g}"
-            + (f"; {len(items) - fin.size} not finite" if fin.size < len(items) else "") + "]")
-
-
-def summarise(value, depth: int = 0) -> str:
-    """Evidence as short text: long numeric arrays as min / median / max, nested dicts and lists compact.
-
-    Parameters
-    ----------
-    value : object
-        A JSON-like value (dict, list, number, string, None).
-    depth : int
-        Nesting depth (deeper levels are abbreviated).
-
-    Returns
-    -------
-    str
-    """
-    if isinstance(value, dict):
-        if depth >= 3:
-            return f"{{{len(value)} entries}}"
-        return "{" + "; ".join(f"{k}: {summarise(v, depth + 1)}" for k, v in value.items()) + "}"
-    if isinstance(value, (list, tuple, np.ndarray)):
-        items = list(value) if not isinstance(value, np.ndarray) else value.tolist()
-        if _numeric(items):
-            return _fmt(items)
-        if len(items) > MAX_LIST or depth >= 3:
-            return f"[{len(items)} records]"
-        return "[" + ", ".join(summarise(v, depth + 1) for v in items) + "]"
-    if isinstance(value, str):
-        return value
-    return _fmt(value)
-
-
-_NUM = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
-_LONG_LIST = re.compile(rf"\[\s*{_NUM}(?:\s*,\s*{_NUM}){{{MAX_LIST},}}\s*\]")
-
-
-def _shorten_lists(text: str) -> str:
-    """Replace numeric lists longer than :data:`MAX_LIST` inside a text by their min / median / max."""
-    return _LONG_LIST.sub(lambda m: _array_summary([float(x) for x in re.findall(_NUM, m.group(0))]), text)
-
-
-def _cell(text) -> str:
-    """Text safe inside a Markdown table cell (pipes escaped, one line)."""
-    return str(text or "").replace("|", "\\|").replace("\n", " ")
-
-
 def _fmt_tolerance(q: dict) -> str:
     tol = q.get("tolerance")
     return "—" if tol is None else f"{100 * tol:.3g} %"
+
+
+def _rule(q: dict) -> str:
+    """The verdict rule of a quantity: its tolerance, the central 95 % (with the percentile) or derived."""
+    if q.get("paper") is None:
+        return "—"
+    if q.get("policy") == "percentile":
+        return f"central 95 % (p = {q['percentile']:.3g} %)" if q.get("percentile") is not None else "central 95 %"
+    if q.get("policy") == "derived":
+        return f"as `{q.get('derived_from')}`"
+    return _fmt_tolerance(q)
 
 
 def _runs(q: dict) -> str:
@@ -195,7 +75,7 @@ def summary_table(results: dict) -> str:
     """
     if not isinstance(results, dict) or not isinstance(results.get("quantities"), list):
         raise TypeError(f"results must be a results.json dict with a 'quantities' list, got {results!r:.80}")
-    rows = ["| id | quantity | paper cell | paper | reproduced | unit | tolerance | verdict | note |",
+    rows = ["| id | quantity | paper cell | paper | reproduced | unit | verdict rule | verdict | note |",
             "|---|---|---|---|---|---|---|---|---|"]
     for q in results["quantities"]:
         note = _cell(_shorten_lists(q.get("note") or ""))
@@ -205,7 +85,8 @@ def summary_table(results: dict) -> str:
             cell += " (primary)"
         rows.append(
             f"| `{q['id']}` | {_cell(q['label'])} | {cell} | {_fmt(q['paper'])} | {_fmt(q['value'], std)}{_runs(q)} "
-            f"| {_cell(q.get('unit')) or '—'} | {_fmt_tolerance(q)} | {q['verdict']} | {note} |"
+            f"| {_cell(q.get('unit')) or '—'} | {_rule(q)} | {q['verdict']}{' (check)' if q.get('kind') == 'check' else ''} "
+            f"| {note} |"
         )
     return "\n".join(rows)
 
@@ -218,6 +99,8 @@ def _scored(results: dict, uncelled: bool = False) -> dict:
     """
     by_cell: dict = {}
     for q in results["quantities"]:
+        if q.get("kind") == "check":
+            continue
         cell = q.get("cell")
         if cell is None and uncelled and q["paper"] is not None:
             cell = q["label"]
@@ -254,7 +137,8 @@ def tally(results: dict) -> dict:
     Returns
     -------
     dict
-        ``agrees``, ``differs``, ``diverged``, ``printed``, ``lost``, ``new``, ``new_diverged``.
+        ``agrees``, ``differs``, ``diverged``, ``printed``, ``lost``, ``new``, ``new_diverged``, ``checks``
+        (checks are never counted as cells or new quantities).
 
     Raises
     ------
@@ -264,10 +148,12 @@ def tally(results: dict) -> dict:
     _check_results("results", results)
     scored = _scored(results, uncelled=True)
     printed = [q for q in scored.values() if q["paper"] is not None]
-    new = [q for q in results["quantities"] if q.get("cell") is None and q["paper"] is None]
+    new = [q for q in results["quantities"] if q.get("cell") is None and q["paper"] is None
+           and q.get("kind") != "check"]
     out = {v: sum(q["verdict"] == v for q in printed) for v in ("agrees", "differs", "diverged")}
     out.update(printed=len(printed), lost=len(scored) - len(printed), new=len(new),
-               new_diverged=sum(q["verdict"] == "diverged" for q in new))
+               new_diverged=sum(q["verdict"] == "diverged" for q in new),
+               checks=sum(q.get("kind") == "check" for q in results["quantities"]))
     return out
 
 
@@ -279,8 +165,12 @@ def _reproduced(q: dict) -> str:
     mark = MARK[q["verdict"]]
     if q["paper"] is not None and q["value"] is not None:
         err = _signed_error(q["value"], q["paper"])
-        if np.isfinite(err) and err != 0:
+        if q.get("policy") == "percentile" and q.get("percentile") is not None:
+            text += f" (p = {q['percentile']:.3g} %)"
+        elif np.isfinite(err) and err != 0:
             text += f" ({100 * err:+.0f} %)" if abs(err) >= 0.01 else f" ({100 * err:+.2g} %)"
+    if q.get("runs_diverged") and q["verdict"] != "diverged":
+        text += f" [{q['runs_diverged']} of {q['runs']} runs diverged]"
     return f"{text} {mark}".strip()
 
 
@@ -316,7 +206,8 @@ def paper_tables(results: dict) -> list[str]:
     lines = []
     for name, g in grids.items():
         cols = list(g["cols"])
-        lines += [f"**{name}** (paper | reproduced; ✓ within tolerance, ✗ outside, percentage = relative error):", "",
+        lines += [f"**{name}** (paper | reproduced; ✓ agrees, ✗ differs under the verdict policy; p = the paper "
+                  "value's percentile among the Monte Carlo runs, else the relative error):", "",
                   "| | " + " | ".join(f"{_cell(c)} (paper) | {_cell(c)} (here)" for c in cols) + " |",
                   "|---|" + "---|---|" * len(cols)]
         for row, entries in g["rows"].items():
@@ -327,8 +218,13 @@ def paper_tables(results: dict) -> list[str]:
             lines.append(f"| {_cell(row)} | " + " | ".join(cells) + " |")
         units = {q.get("unit") or "—" for e in g["rows"].values() for q in e.values()}
         tols = {_fmt_tolerance(q) for e in g["rows"].values() for q in e.values()}
-        lines += ["", (f"Units: {', '.join(sorted(units))} (per column in the quantity list); tolerance "
-                       f"{', '.join(sorted(tols))}. Printed values lost in the extracted text show as —."), ""]
+        pol = {q.get("policy") for e in g["rows"].values() for q in e.values()}
+        rule = ("central 95 % of the runs" if pol == {"percentile"} else
+                f"tolerance {', '.join(sorted(tols))}" + (" or the central 95 % of the runs" if "percentile" in pol
+                                                          else ""))
+        lines += ["", (f"Units: {', '.join(sorted(units))} (per column in the appendix); verdict rule: {rule}"
+                       f"{'; SNR cells take the verdict of their RMSE' if 'derived' in pol else ''}. "
+                       "Printed values lost in the extracted paper text show as —."), ""]
     if text_cells:
         lines += ["**Values printed in the text:**", "", "| paper cell | paper | reproduced | unit | tolerance |",
                   "|---|---|---|---|---|"]
@@ -342,7 +238,7 @@ def paper_tables(results: dict) -> list[str]:
 _ABBREVIATIONS = {"eq", "eqs", "fig", "figs", "ref", "refs", "sec", "no", "vs", "e.g", "i.e", "cf", "approx"}
 
 
-def _first_sentence(text: str, limit: int = 180) -> str:
+def _first_sentence(text: str) -> str:
     text = _shorten_lists(" ".join(str(text).split()))
     first = text
     for m in re.finditer(r"(?<=[.!?])\s+(?=[A-Z(\[*])", text):
@@ -352,7 +248,7 @@ def _first_sentence(text: str, limit: int = 180) -> str:
             continue
         first = text[:m.start()]
         break
-    return first if len(first) <= limit else first[:limit - 1].rstrip(" ,;") + "…"
+    return first
 
 
 def study_summary(results: dict, n_findings: int = 3) -> list[str]:
@@ -378,7 +274,7 @@ def study_summary(results: dict, n_findings: int = 3) -> list[str]:
              for t, qs in by_table.items() if any(q["paper"] is not None for q in qs)]
     t = tally(results)
     lost, n_printed, n_agree = t["lost"], t["printed"], t["agrees"]
-    line1 = (f"**Agrees:** {n_agree} of {n_printed} printed paper cells within tolerance"
+    line1 = (f"**Agrees:** {n_agree} of {n_printed} printed paper cells under the verdict policy"
              + (f" ({'; '.join(agree)})" if agree else "")
              + (f"; {lost} cells whose printed values were lost in extraction are reproduced without verdict"
                 if lost else "") + ".")
@@ -395,14 +291,17 @@ def study_summary(results: dict, n_findings: int = 3) -> list[str]:
         parts.append(f"and {len(bad) - 6} more")
     line2 = "**Does not agree:** " + ("; ".join(parts) if parts else "no printed cell differs") + "."
     findings = results.get("findings") or []
-    quoted = "; ".join(f"*{f['id']}*: {_first_sentence(f['text']).rstrip('.')}" for f in findings[:n_findings])
+    findings = [f for f in findings if f.get("kind") != "erratum"]
+    quoted = " ".join(_first_sentence(f["text"]).rstrip(".") + "." for f in findings[:n_findings])
     line3 = (f"**Findings ({len(findings)}):** " + (quoted if quoted else "none")
              + (" …" if len(findings) > n_findings else ""))
     return [f"- {line1}", f"- {line2}", f"- {line3}"]
 
 
 def overview_table(results: list[dict], this_run: dict) -> list[str]:
-    """The opening table: per study the cell verdict counts, new quantities, findings, runtime, provenance.
+    """The opening table: per study the claim and cell verdict counts, checks, new quantities, findings, figures.
+
+    No runtimes: the table is also the README's, and a rerun would make them stale.
 
     Parameters
     ----------
@@ -427,16 +326,19 @@ def overview_table(results: list[dict], this_run: dict) -> list[str]:
         _check_results("results", r)
     if not isinstance(this_run, dict):
         raise TypeError(f"this_run must be a dict of study -> run settings, got {type(this_run).__name__}")
-    rows = [("| study | paper | from this run | cells agree | cells differ | cells diverged | cells not printed "
-             "| new quantities | findings | figures | runtime |"), "|---|---|---|---|---|---|---|---|---|---|---|"]
+    rows = [("| study | paper | from this run | claims hold | claims fail | claims depend | claims untestable "
+             "| cells agree | cells differ | cells diverged | cells lost in extraction | checks | new quantities "
+             "| findings | figures |"), "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in results:
         c = tally(r)
+        k = claim_counts(r)
         run = this_run.get(r["study"])
         fresh = "no (stale)" if run is None else ("yes (quick)" if run.get("quick") else "yes")
         new = f"{c['new']}" + (f" ({c['new_diverged']} diverged)" if c["new_diverged"] else "")
-        rows.append(f"| [{r['study']}](#{_anchor(r['study'])}) | {_cell(r['paper'])} | {fresh} | {c['agrees']} "
-                    f"| {c['differs']} | {c['diverged']} | {c['lost']} | {new} | {len(r.get('findings') or [])} "
-                    f"| {len(r.get('figures') or [])} | {r['runtime_s']:.0f} s |")
+        rows.append(f"| [{r['study']}](#{_anchor(r['study'])}) | {_cell(r['paper'])} | {fresh} | {k['holds']} "
+                    f"| {k['fails']} | {k['depends']} | {k['untestable']} | {c['agrees']} | {c['differs']} "
+                    f"| {c['diverged']} | {c['lost']} | {c['checks']} | {new} | {len(r.get('findings') or [])} "
+                    f"| {len(r.get('figures') or [])} |")
     return rows
 
 
@@ -470,36 +372,75 @@ def _seed_summary(seeds) -> str:
     return f"[{seeds[0]}, {seeds[1]}, …, {seeds[-1]}] ({len(seeds)} seeds)"
 
 
+def not_reproduced(results: dict) -> list[str]:
+    """Everything the study does not reproduce: each printed cell that differs or diverged, then ``missing``.
+
+    The list's length is the count the report states, so the two always add up.
+
+    Parameters
+    ----------
+    results : dict
+        One results.json dict.
+
+    Returns
+    -------
+    list of str
+    """
+    _check_results("results", results)
+    bad = []
+    for cell, q in _scored(results, uncelled=True).items():
+        if q["paper"] is None or q["verdict"] not in ("differs", "diverged"):
+            continue
+        what = "diverged" + _runs(q) if q["verdict"] == "diverged" else (
+            f"{_fmt(q['value'], digits=_digits(q))} vs {_fmt(q['paper'], digits=_digits(q))}")
+        bad.append(f"{cell} ({what})")
+    return bad + [str(m) for m in results.get("missing") or []]
+
+
 def _study_section(r: dict, this_run: dict, failed: dict) -> list[str]:
     c = tally(r)
     lines = [f"## {r['study']}", ""]
     if r["study"] not in this_run:
         why = f" This run failed: {_cell(failed[r['study']])}." if r["study"] in failed else ""
         lines += [f"> **Stale:** these results are not from this run; they were written by an earlier run.{why}", ""]
-    lines += [f"*{r['paper']}* — seed `{r['seed_file']}`. Paper cells: {c['agrees']} agree, {c['differs']} differ, "
-              f"{c['diverged']} diverged"
-              + (f", {c['lost']} without a printed value (lost in extraction)" if c["lost"] else "")
+    lines += [f"*{r['paper']}* — paper text `{r['seed_file']}`.", ""]
+    lines += scorecard(r)
+    lines += [f"Paper cells: {c['agrees']} agree, {c['differs']} differ, {c['diverged']} diverged"
+              + (f", {c['lost']} lost in extraction" if c["lost"] else "")
+              + (f"; {c['checks']} checks and errata apart" if c["checks"] else "")
               + f"; {c['new']} new quantities" + (f" ({c['new_diverged']} diverged)" if c["new_diverged"] else "")
               + f"; runtime {r['runtime_s']:.1f} s.", ""]
     if r["quantities"]:
         lines += study_summary(r) + [""]
-    if r.get("missing"):
-        lines += ["**Not reproduced:** " + "; ".join(r["missing"]), ""]
+    missing = not_reproduced(r)
+    if missing:
+        n_cells = len(missing) - len(r.get("missing") or [])
+        lines += [f"**Not reproduced ({len(missing)}: {n_cells} printed cell{'s' if n_cells != 1 else ''} outside the "
+                  f"verdict policy, {len(missing) - n_cells} part{'s' if len(missing) - n_cells != 1 else ''} of the "
+                  "paper):**", ""]
+        lines += [f"{i}. {_cell(_shorten_lists(m))}" for i, m in enumerate(missing, 1)] + [""]
     tables = paper_tables(r)
     if tables:
         lines += ["### The paper's tables, printed beside reproduced", "", *tables]
-    if r["quantities"]:
-        lines += ["### All quantities", "", summary_table(r), ""]
+    lines += checks_and_errata(r, _fmt)
+    lines += sensitivity_lines(r)
     if r["reconstructions"]:
-        lines += ["### Reconstructions", "", "Values the paper does not print (or prints wrongly), and why they were chosen:",
+        lines += ["### Reconstructions", "",
+                  "Values the paper does not print (or prints wrongly), why they were chosen, and their plausible range:",
                   ""]
-        lines += [f"- **{c['name']}** = `{_cell(_fmt(c['value']))}` — {_shorten_lists(c['why'])}"
+        lines += [f"- **{c['name']}** = `{_cell(_fmt(c['value']))}` — {_shorten_lists(c['why'])} *Plausible:* "
+                  f"{plausible_text(c.get('plausible'))}"
+                  + (f" — {_shorten_lists(c['plausible']['why'])}" if c.get("plausible") else "")
                   for c in r["reconstructions"]]
         lines.append("")
-    if r["findings"]:
+    findings = [f for f in r["findings"] if f.get("kind") != "erratum"]
+    if findings:
         lines += ["### Findings", ""]
-        for f in r["findings"]:
-            lines.append(f"- **{f['id']}**: {_shorten_lists(f['text'])}")
+        for f in findings:
+            text = _shorten_lists(f["text"])
+            first = _first_sentence(f["text"])
+            rest = text[len(first):].strip() if text.startswith(first) else text
+            lines.append(f"- **{first}** {rest}".rstrip())
             if f.get("evidence") is not None:
                 ev = summarise(f["evidence"])
                 if len(ev) > MAX_EVIDENCE:
@@ -512,26 +453,18 @@ def _study_section(r: dict, this_run: dict, failed: dict) -> list[str]:
         for name in r["figures"]:
             lines += [f"![{name}]({r['study']}/{name})", "",
                       f"*{name}* — {captions.get(name, '(no caption recorded)')}", ""]
+    if r["quantities"]:
+        lines += [f"Every quantity of this study: [appendix](#appendix-{_anchor(r['study'])}).", ""]
     return lines
 
 
-#: Patterns of glossary terms whose name is not the text they stand for.
-_GLOSSARY_PATTERNS = {"est_xi / track_xi": r"(?:est|track)_x\d", "Kalata index": r"Kalata"}
-
-
-def _glossary(text: str) -> list[str]:
-    def used_in(term):
-        if term in _GLOSSARY_PATTERNS:
-            return re.search(_GLOSSARY_PATTERNS[term], text)
-        return any(re.search(rf"(?<![A-Za-z]){re.escape(t.strip())}(?![A-Za-z])", text) for t in term.split("/"))
-
-    used = [(term, what) for term, what in GLOSSARY.items() if used_in(term)]
-    # terms the listed definitions themselves use (e.g. MFAC's CFDL and PPD)
-    text = text + " " + " ".join(what for _, what in used)
-    used = [(term, what) for term, what in GLOSSARY.items() if used_in(term)]
-    if not used:
-        return []
-    return ["## Glossary", "", *[f"- **{term}**: {what}" for term, what in used], ""]
+def _appendix(results: list[dict]) -> list[str]:
+    """Every quantity of every study, one table per study, at the end of the report."""
+    lines = ["## Appendix: every quantity", ""]
+    for r in results:
+        if r["quantities"]:
+            lines += [f"### Appendix: {r['study']}", "", summary_table(r), ""]
+    return lines
 
 
 def write_report_md(results: list[dict], out_dir: Path, *, this_run: dict | None = None,
@@ -572,10 +505,12 @@ def write_report_md(results: list[dict], out_dir: Path, *, this_run: dict | None
         "# ctrl-analysis: reproduction report",
         "",
         ("Generated by `ctrl-analysis reproduce all` from the `results.json` of each study. Every reproduced value "
-        "was computed by the code; every verdict is computed from the relative tolerance shown beside the value "
-        "(unit — = dimensionless). The counts score each printed paper cell once, by its primary reading "
-        "(cells whose printed value was lost in the extracted text are counted apart); quantities the paper does "
-        "not print are counted as new. The glossary at the end explains the terms."),
+        "was computed by the code and every verdict is computed, never typed (unit — = dimensionless). The counts "
+        "score each printed paper cell once, by its primary reading (cells whose printed value was lost in the "
+        "extracted paper text are counted apart); checks of the paper's algebra and arithmetic are listed apart; "
+        "quantities the paper does not print are counted as new. The glossary at the end explains the terms."),
+        "",
+        f"**Verdict policy.** {VERDICT_POLICY}",
         "",
         "## Overview",
         "",
@@ -590,6 +525,7 @@ def write_report_md(results: list[dict], out_dir: Path, *, this_run: dict | None
         lines += ["**Failed in this run:** " + "; ".join(f"{k}: {_cell(v)}" for k, v in failed.items()), ""]
     for r in results:
         lines += _study_section(r, this_run, failed)
+    lines += _appendix(results)
     text = "\n".join(lines)
-    lines += _glossary(text)
+    lines += glossary_lines(text)
     return write_text_atomic(Path(out_dir) / "REPORT.md", "\n".join(lines) + "\n")

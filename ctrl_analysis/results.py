@@ -15,15 +15,20 @@ from pathlib import Path
 import numpy as np
 
 from ._validate import check_array, check_bool, check_int, check_nonnegative, check_str
+from .study import Claim, Plausible
+from .verdicts import (CENTRAL, CLAIM_VERDICTS, DEFAULT_TOLERANCE, KINDS, VERDICT_POLICY, VERDICTS,
+                       ClaimResult, _check_tolerance, central_interval, compute_verdict, digits_tolerance,
+                       relative_error)
 
-__all__ = ["VERDICTS", "RESULTS_SCHEMA", "DEFAULT_TOLERANCE", "Quantity", "StudyInfo", "StudyResult",
-           "compute_verdict", "relative_error", "versions"]
+__all__ = ["VERDICTS", "CLAIM_VERDICTS", "KINDS", "RESULTS_SCHEMA", "DEFAULT_TOLERANCE", "CENTRAL",
+           "VERDICT_POLICY", "ClaimResult", "Quantity", "StudyInfo", "StudyResult", "compute_verdict",
+           "central_interval", "digits_tolerance", "relative_error", "versions"]
 
-VERDICTS = ("agrees", "differs", "new", "diverged")
 #: Version of the results.json layout: 2 adds ``unit`` and ``tolerance`` on every quantity, the
-#: ``diverged`` verdict, paper ``cell`` / ``primary`` and ``settings["cli"]``.
-RESULTS_SCHEMA = 2
-DEFAULT_TOLERANCE = 0.1
+#: ``diverged`` verdict, paper ``cell`` / ``primary`` and ``settings["cli"]``; 3 adds ``claims``,
+#: ``sensitivity``, the verdict ``policy`` of each quantity (``percentile`` with ``interval``,
+#: ``tolerance`` or ``derived`` with ``derived_from``), ``kind`` and plausible ranges of reconstructions.
+RESULTS_SCHEMA = 3
 
 
 def _to_jsonable(value):
@@ -48,71 +53,25 @@ def _to_jsonable(value):
     return value
 
 
-def relative_error(value, paper) -> float:
-    """Largest element-wise relative error ``|value - paper| / |paper|`` (absolute where ``paper == 0``).
-
-    Parameters
-    ----------
-    value, paper : float or array_like
-        Reproduced and printed values (vectors of the same length).
-
-    Returns
-    -------
-    float
-        The error; ``inf`` for a length mismatch or a non-finite value.
-    """
-    v = np.atleast_1d(check_array("value", value))
-    p = np.atleast_1d(check_array("paper", paper))
-    if v.shape != p.shape or not np.all(np.isfinite(v)):
-        return math.inf
-    scale = np.where(p == 0, 1.0, np.abs(p))
-    return float(np.max(np.abs(v - p) / scale))
-
-
-def _check_tolerance(tolerance) -> float:
-    return float(check_nonnegative("tolerance", tolerance, scalar=True))
-
-
-def compute_verdict(value, paper, tolerance: float | None, *, diverged: bool = False) -> str:
-    """The verdict of a reproduced value beside the paper's.
-
-    Parameters
-    ----------
-    value : float, array_like or None
-        Reproduced value.
-    paper : float, array_like or None
-        Printed value (``None``: the paper does not print it).
-    tolerance : float or None
-        Relative tolerance (default :data:`DEFAULT_TOLERANCE`).
-    diverged : bool
-        Every run diverged.
-
-    Returns
-    -------
-    str
-        ``diverged``; ``new`` without a paper value; else ``agrees`` within the tolerance, or ``differs``.
-    """
-    if check_bool("diverged", diverged):
-        return "diverged"
-    if paper is None:
-        return "new"
-    tol = DEFAULT_TOLERANCE if tolerance is None else _check_tolerance(tolerance)
-    if value is None:
-        return "differs"
-    return "agrees" if relative_error(value, paper) <= tol else "differs"
-
-
 @dataclass
 class Quantity:
     """One reproduced number (or vector) beside the paper's.
 
-    ``verdict`` is computed from ``value``, ``paper``, ``tolerance`` (relative) and ``diverged``; it is
-    never set by hand. ``unit`` is always written ("" = dimensionless); ``tolerance`` is written
-    whenever ``paper`` is (default :data:`DEFAULT_TOLERANCE`). ``cell`` names the paper cell the
-    quantity scores (e.g. ``"Table 2 / x1 ESO"``); quantities sharing a cell are counted once, by the
-    one with ``primary=True`` (default: the first recorded). ``diverged=True`` (or ``runs_diverged``
-    equal to ``runs``, or ``runs=0`` healthy runs with ``value=None``) means every run diverged: no
-    value, verdict ``diverged``.
+    ``verdict`` is computed, never set by hand, by the verdict policy (:data:`VERDICT_POLICY`):
+
+    - ``samples`` (one value per healthy Monte Carlo run) with a scalar ``paper``: the *percentile*
+      policy, the paper's value agrees when it lies within the central 95 % of the runs
+      (:func:`central_interval`); its percentile among the runs is recorded;
+    - ``derived_from`` (the id of another quantity): the *derived* policy, the verdict of that quantity
+      (an SNR computed from an RMSE); resolved by :meth:`StudyResult.to_dict`;
+    - otherwise the *tolerance* policy, a relative ``tolerance`` (default :data:`DEFAULT_TOLERANCE`).
+
+    A quantity is ``diverged`` when ``diverged=True`` (every run diverged, ``value`` None) or when at
+    least half of its ``runs`` diverged (``runs_diverged``); the value of the healthy runs is kept.
+    ``unit`` is always written ("" = dimensionless). ``cell`` names the paper cell the quantity scores
+    (e.g. ``"Table 2 / x1 ESO"``); quantities sharing a cell are counted once, by the one with
+    ``primary=True`` (default: the first recorded). ``kind="check"`` marks an algebraic identity or a
+    check of the paper's own arithmetic: listed under checks and errata, never counted as a reproduction.
 
     Parameters
     ----------
@@ -121,15 +80,21 @@ class Quantity:
     value, paper, std : float, array_like or None
         Reproduced value, printed value (only what the paper prints) and the Monte Carlo std.
     runs, runs_diverged : int, optional
-        Runs in the value and how many of them diverged.
+        Runs asked for and how many of them diverged.
     tolerance : float, optional
-        Relative tolerance of the verdict.
+        Relative tolerance of the tolerance policy.
     note, unit : str
         Free note; unit ("" = dimensionless).
     cell : str, optional
         The paper cell the quantity scores.
     primary, diverged : bool
         The cell's primary reading; every run diverged.
+    samples : array_like, optional
+        One value per healthy run (percentile policy); not written whole to results.json.
+    derived_from : str, optional
+        Id of the quantity whose verdict this one takes.
+    kind : {"reproduction", "check"}
+        A reproduced cell, or a check / erratum.
     """
 
     id: str
@@ -145,6 +110,12 @@ class Quantity:
     primary: bool = False
     diverged: bool = False
     runs_diverged: int | None = None
+    samples: object = None
+    derived_from: str | None = None
+    kind: str = "reproduction"
+    #: set by a sensitivity sweep (:mod:`ctrl_analysis.sensitivity`): the cell's values and verdicts across
+    #: each reconstruction's plausible range
+    sensitivity: dict | None = None
 
     def __post_init__(self):
         for name in ("id", "label"):
@@ -154,12 +125,22 @@ class Quantity:
             raise TypeError(f"unit must be a string ('' for dimensionless), got {self.unit!r}")
         if self.cell is not None and (not isinstance(self.cell, str) or not self.cell.strip()):
             raise ValueError(f"cell must be a non-empty string naming the paper cell, got {self.cell!r}")
+        if self.kind not in KINDS:
+            raise ValueError(f"kind must be one of {KINDS}, got {self.kind!r}")
         if self.tolerance is not None:
             self.tolerance = _check_tolerance(self.tolerance)
         self.primary = check_bool("primary", self.primary)
         self.diverged = check_bool("diverged", self.diverged)
         if self.runs is not None:
             self.runs = check_int("runs", self.runs, minimum=0)
+        if self.runs_diverged is not None and self.runs is None:
+            raise ValueError(f"quantity {self.id!r}: runs_diverged={self.runs_diverged!r} needs runs (the total it "
+                             "counts from)")
+        if self.runs == 0 and self.value is not None:
+            raise ValueError(f"quantity {self.id!r}: runs is 0 (no run contributed), so value must be None, "
+                             f"got {self.value!r}")
+        if self.std is not None and self.value is not None:
+            check_nonnegative("std", self.std)
         if self.runs_diverged is not None:
             self.runs_diverged = check_int("runs_diverged", self.runs_diverged, minimum=0,
                                            maximum=self.runs)
@@ -170,24 +151,83 @@ class Quantity:
         if self.diverged and self.value is not None:
             raise ValueError(f"quantity {self.id!r}: a diverged quantity has no value (value must be None), "
                              f"got {self.value!r}")
+        if self.derived_from is not None:
+            check_str("derived_from", self.derived_from)
+            if self.samples is not None:
+                raise ValueError(f"quantity {self.id!r}: give samples or derived_from, not both")
+        self._interval = self._percentile = None
+        if self.samples is not None:
+            v = np.asarray(check_array("samples", self.samples), dtype=float).ravel()
+            v = v[np.isfinite(v)]
+            self.samples = v
+            if self.paper is not None and v.size:
+                if np.size(self.paper) != 1:
+                    raise ValueError(f"quantity {self.id!r}: the percentile policy (samples) needs a scalar paper "
+                                     f"value, got {self.paper!r}")
+                p = float(np.asarray(self.paper, dtype=float).ravel()[0])
+                self._interval = central_interval(v)
+                self._percentile = float(100.0 * (np.mean(v < p) + 0.5 * np.mean(v == p)))
 
     @property
-    def verdict(self) -> str:
-        """The computed verdict (:func:`compute_verdict`), one of :data:`VERDICTS`.
+    def policy(self) -> str:
+        """``percentile``, ``derived`` or ``tolerance`` (which rule decides the verdict).
 
         Returns
         -------
         str
         """
-        return compute_verdict(self.value, self.paper, self.tolerance, diverged=self.diverged)
+        if self.derived_from is not None:
+            return "derived"
+        return "percentile" if self._interval is not None else "tolerance"
 
-    def to_dict(self) -> dict:
+    @property
+    def percentile(self) -> float | None:
+        """Percentage of the healthy runs below the paper's value (percentile policy), else None.
+
+        Returns
+        -------
+        float or None
+        """
+        return self._percentile
+
+    @property
+    def is_diverged(self) -> bool:
+        """Every run, or at least half of the runs, diverged.
+
+        Returns
+        -------
+        bool
+        """
+        return self.diverged or bool(self.runs and self.runs_diverged and 2 * self.runs_diverged >= self.runs)
+
+    @property
+    def verdict(self) -> str:
+        """The computed verdict (:func:`compute_verdict`); for a derived quantity, see :meth:`StudyResult.to_dict`.
+
+        Returns
+        -------
+        str
+        """
+        return compute_verdict(self.value, self.paper, self.tolerance, diverged=self.is_diverged,
+                               interval=self._interval)
+
+    def to_dict(self, derived_verdict: str | None = None) -> dict:
         """The quantity as results.json writes it (numpy converted, non-finite numbers as null).
+
+        Parameters
+        ----------
+        derived_verdict : str, optional
+            The verdict of the quantity named by ``derived_from`` (derived policy).
 
         Returns
         -------
         dict
         """
+        verdict = self.verdict
+        if self.derived_from is not None and verdict not in ("new", "diverged"):
+            if derived_verdict not in VERDICTS:
+                raise ValueError(f"quantity {self.id!r} derives from {self.derived_from!r}, whose verdict is unknown")
+            verdict = derived_verdict
         d = {
             "id": self.id,
             "label": self.label,
@@ -200,14 +240,23 @@ class Quantity:
             "tolerance": (DEFAULT_TOLERANCE if self.tolerance is None else self.tolerance)
             if self.paper is not None
             else None,
-            "verdict": self.verdict,
+            "verdict": verdict,
+            "policy": self.policy if self.paper is not None else None,
+            "kind": self.kind,
             "note": self.note,
         }
+        if self._interval is not None:
+            d["interval"] = list(self._interval)
+            d["percentile"] = round(self._percentile, 2)
+        if self.derived_from is not None:
+            d["derived_from"] = self.derived_from
         if self.cell is not None:
             d["cell"] = self.cell
             d["primary"] = bool(self.primary)
         if self.runs_diverged is not None:
             d["runs_diverged"] = self.runs_diverged
+        if self.sensitivity is not None:
+            d["sensitivity"] = self.sensitivity
         if self.value is not None and not np.all(np.isfinite(np.asarray(self.value, dtype=float))):
             d["note"] = (self.note + " " if self.note else "") + "value is not finite (diverged run?)"
         return _to_jsonable(d)
@@ -263,6 +312,10 @@ class StudyResult:
     missing: list = field(default_factory=list)
     seeds: dict = field(default_factory=dict)
     runtime_s: float = 0.0
+    #: the paper's claims, judged (:meth:`claim`)
+    claims: list = field(default_factory=list)
+    #: what a sensitivity sweep tried (:func:`ctrl_analysis.sensitivity.sweep`), written to results.json
+    sensitivity: dict = field(default_factory=dict)
 
     def __post_init__(self):
         if not isinstance(self.info, StudyInfo):
@@ -303,19 +356,92 @@ class StudyResult:
         self.quantities.append(q)
         return q
 
-    def reconstruction(self, name: str, value, why: str) -> None:
-        """Record a value the paper does not print (or prints wrongly) and the reason for the choice.
+    def check(self, id: str, label: str, value, paper=None, **kw) -> Quantity:
+        """Add a check: an algebraic identity, or a check of the paper's own arithmetic (an erratum).
+
+        Checks are listed under "checks and errata" and never counted as reproduced cells. Keywords as
+        :meth:`quantity`.
+
+        Parameters
+        ----------
+        id, label : str
+        value, paper : object
+        **kw
+            The other fields of :class:`Quantity`.
+
+        Returns
+        -------
+        Quantity
+        """
+        return self.quantity(id, label, value, paper, kind="check", **kw)
+
+    def claim(self, claim: Claim, holds, evidence=(), note: str = "") -> ClaimResult:
+        """Judge one of the paper's claims on computed quantities (a claim may be judged once).
+
+        Parameters
+        ----------
+        claim : ctrl_analysis.study.Claim
+            As declared in the study's ``paper.py``.
+        holds : bool or None
+            The judgement at the chosen reconstructions; None when nothing computed decides it.
+        evidence : sequence of str
+            Ids of the quantities that decide it (each must be recorded by the time results.json is written).
+        note : str
+            How it was judged, generated from the numbers.
+
+        Returns
+        -------
+        ClaimResult
+        """
+        if any(c.claim.id == getattr(claim, "id", None) for c in self.claims):
+            raise ValueError(f"claim {claim.id!r} is already judged in study {self.info.name!r}")
+        c = ClaimResult(claim, None if holds is None else bool(holds), tuple(evidence), note)
+        self.claims.append(c)
+        return c
+
+    def get_claim(self, id: str) -> ClaimResult:
+        """The judged claim ``id``.
+
+        Parameters
+        ----------
+        id : str
+
+        Returns
+        -------
+        ClaimResult
+
+        Raises
+        ------
+        KeyError
+            If no claim has that id.
+        """
+        for c in self.claims:
+            if c.claim.id == id:
+                return c
+        raise KeyError(id)
+
+    def reconstruction(self, name: str, value, why: str, plausible: Plausible | None = None) -> None:
+        """Record a value the paper does not print (or prints wrongly), the reason, and its plausible range.
 
         Parameters
         ----------
         name : str
         value : object
         why : str
+        plausible : ctrl_analysis.study.Plausible, optional
+            What else a reader could have chosen (:func:`ctrl_analysis.study.span`, ``choices``, ``fixed``).
         """
-        self.reconstructions.append({"name": check_str("name", name), "value": value, "why": check_str("why", why)})
+        item = {"name": check_str("name", name), "value": value, "why": check_str("why", why)}
+        if plausible is not None:
+            if not isinstance(plausible, Plausible):
+                raise TypeError(f"plausible must be a Plausible, got {plausible!r}")
+            item["plausible"] = plausible.to_dict()
+        self.reconstructions.append(item)
 
-    def finding(self, id: str, text: str, evidence=None) -> None:
-        """Record an erratum, an inconsistency, an irreproducible claim or an instability.
+    def finding(self, id: str, text: str, evidence=None, *, kind: str = "finding") -> None:
+        """Record an inconsistency, an irreproducible claim, an instability, or (``kind="erratum"``) an erratum.
+
+        Errata (the paper's own slips: a typo, an arithmetic error) are listed with the checks.
 
         Parameters
         ----------
@@ -323,10 +449,15 @@ class StudyResult:
             Stable id and the finding, generated from computed numbers.
         evidence : object, optional
             The numbers behind it (kept whole in results.json, summarised in REPORT.md).
+        kind : {"finding", "erratum"}
         """
+        if kind not in ("finding", "erratum"):
+            raise ValueError(f"kind must be 'finding' or 'erratum', got {kind!r}")
         item = {"id": check_str("id", id), "text": check_str("text", text)}
         if evidence is not None:
             item["evidence"] = evidence
+        if kind != "finding":
+            item["kind"] = kind
         self.findings.append(item)
 
     def get(self, id: str) -> Quantity:
@@ -368,6 +499,11 @@ class StudyResult:
                 if q.cell in cells:
                     raise ValueError(f"cell {q.cell!r} has two primary quantities: {cells[q.cell]!r} and {q.id!r}")
                 cells[q.cell] = q.id
+        ids = {q.id for q in self.quantities}
+        for c in self.claims:
+            unknown = [e for e in c.evidence if e not in ids]
+            if unknown:
+                raise ValueError(f"claim {c.claim.id!r} cites quantities that are not recorded: {unknown}")
         return _to_jsonable(
             {
                 "schema": RESULTS_SCHEMA,
@@ -376,16 +512,46 @@ class StudyResult:
                 "paper": self.info.paper,
                 "settings": self.settings,
                 "reconstructions": self.reconstructions,
-                "quantities": [q.to_dict() for q in self.quantities],
+                "claims": [c.to_dict() for c in self.claims],
+                "quantities": self._quantity_dicts(),
                 "findings": self.findings,
                 "figures": self.figures,
                 "captions": {name: self.captions[name] for name in self.figures if name in self.captions},
                 "missing": self.missing,
                 "seeds": self.seeds,
+                "sensitivity": self.sensitivity,
                 "runtime_s": round(self.runtime_s, 3),
                 "versions": versions(),
             }
         )
+
+
+    def _quantity_dicts(self) -> list:
+        """Every quantity as a dict, derived verdicts resolved (a chain of derivations is followed)."""
+        by_id = {q.id: q for q in self.quantities}
+        verdicts: dict = {}
+
+        def verdict(q, seen=()):
+            if q.id in verdicts:
+                return verdicts[q.id]
+            if q.derived_from is None:
+                v = q.verdict
+            else:
+                src = by_id.get(q.derived_from)
+                if src is None or q.derived_from in seen:
+                    raise ValueError(f"quantity {q.id!r} derives from {q.derived_from!r}, which is not recorded "
+                                     "(or the derivations form a circle)")
+                v = q.to_dict(verdict(src, seen + (q.id,)))["verdict"]
+            verdicts[q.id] = v
+            return v
+
+        out = []
+        for q in self.quantities:
+            src = by_id.get(q.derived_from) if q.derived_from else None
+            out.append(q.to_dict(verdict(src) if src is not None else None) if q.derived_from else q.to_dict())
+            if q.derived_from and src is None:
+                raise ValueError(f"quantity {q.id!r} derives from {q.derived_from!r}, which is not recorded")
+        return out
 
 
 def versions() -> dict:

@@ -20,31 +20,39 @@ Conventions
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass, field
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
 
-from ._validate import (check_array, check_callable, check_finite, check_in, check_int, check_nonnegative,
-                        check_positive, check_real)
+from ._validate import (
+    check_callable,
+    check_finite,
+    check_in,
+    check_int,
+    check_nonnegative,
+    check_positive,
+)
+from .ivp import simulate_ivp
 from .noise import _check_seeds, draw_noise, gaussian_noise, run_seeds, uniform_noise  # noqa: F401 (public API)
+from .simresult import SimResult, _check_bound, _prepare
 
 __all__ = [
-    "SimResult",
-    "run_seeds",
-    "draw_noise",
-    "uniform_noise",
-    "gaussian_noise",
-    "euler_step",
-    "STEPPERS",
-    "rk4_step",
-    "simulate_sampled",
-    "chunk_bounds",
-    "check_result_memory",
     "CHUNK_BYTES",
+    "MAX_SUBSTEPS",
+    "STEPPERS",
+    "SimResult",
+    "check_result_memory",
+    "chunk_bounds",
+    "continuous_nlsys",
+    "draw_noise",
+    "euler_step",
+    "gaussian_noise",
+    "rk4_step",
+    "run_seeds",
     "simulate_discrete",
     "simulate_ivp",
-    "continuous_nlsys",
+    "simulate_sampled",
+    "uniform_noise",
 ]
 
 
@@ -97,83 +105,9 @@ def rk4_step(rhs: Callable, t: float, x: np.ndarray, u, h: float, params=None) -
 #: Fixed-step integrators by name.
 STEPPERS = {"euler": euler_step, "rk4": rk4_step}
 
-
-# ----------------------------------------------------------------------------------------------
-# Results
-# ----------------------------------------------------------------------------------------------
-
-@dataclass
-class SimResult:
-    """Trajectories of a batch of runs.
-
-    Attributes
-    ----------
-    t : ndarray, shape (N+1,)
-        Sample instants.
-    x : ndarray, shape (N+1, B, n) or None
-        States at the sample instants (``None`` when not stored).
-    u : ndarray, shape (N, B, m) or None
-        Inputs held over each step (controller output, or the noise when there is no controller).
-    y : ndarray, shape (N+1, B, p) or None
-        What ``observe`` returned at each sample instant.
-    diverged : ndarray of bool, shape (B,)
-    diverged_step : ndarray of int, shape (B,)
-        First step index at which the run left the bound (``-1`` if never).
-    seeds : list or None
-        Per-run seeds, as recorded.
-    """
-
-    t: np.ndarray
-    x: np.ndarray | None
-    u: np.ndarray | None
-    y: np.ndarray | None
-    diverged: np.ndarray
-    diverged_step: np.ndarray
-    seeds: list | None = None
-    bound: float = np.inf
-    info: dict = field(default_factory=dict)
-
-    @property
-    def ok(self) -> np.ndarray:
-        """Mask of runs that stayed finite and bounded."""
-        return ~self.diverged
-
-    @property
-    def runs(self) -> int:
-        """Number of runs in the batch.
-
-        Returns
-        -------
-        int
-        """
-        return int(self.diverged.size)
-
-    def divergences(self) -> list[dict]:
-        """One record per diverged run.
-
-        Returns
-        -------
-        list of dict
-            ``run`` (index), ``step``, ``t`` and ``seed`` of each diverged run.
-        """
-        out = []
-        for b in np.flatnonzero(self.diverged):
-            k = int(self.diverged_step[b])
-            out.append({
-                "run": int(b),
-                "step": k,
-                "t": float(self.t[min(k, len(self.t) - 1)]),
-                "seed": None if self.seeds is None else self.seeds[b],
-            })
-        return out
-
-
-def _check_bound(bound) -> float:
-    """``bound`` of the divergence test: a number > 0 (``inf`` turns the test off, NaN or -inf are errors)."""
-    bound = check_real("bound", bound)
-    if not bound > 0:
-        raise ValueError(f"bound must be > 0 (inf disables the check), got {bound!r}")
-    return bound
+#: Most integration steps per sample (``substeps``) a runner or a block accepts: beyond it one
+#: sample would take minutes; use a smaller sampling period instead.
+MAX_SUBSTEPS = 100_000
 
 
 def _check_bad(x_new: np.ndarray, bound: float) -> np.ndarray:
@@ -272,29 +206,6 @@ def _store(buf, k, value, n_rows, B):
     return buf
 
 
-def _prepare(x0, noise, seeds):
-    x0 = check_array("x0", x0)
-    if seeds is not None:
-        seeds = _check_seeds(seeds)
-    if x0.ndim not in (1, 2):
-        raise ValueError(f"x0 must have shape (n,) or (B, n), got {x0.shape}")
-    if not np.all(np.isfinite(x0)):
-        raise ValueError("x0 must be finite (no NaN or inf)")
-    B = x0.shape[0] if x0.ndim == 2 else 1
-    if noise is not None:
-        noise = np.asarray(noise, dtype=float)
-        if noise.ndim != 3:
-            raise ValueError(f"noise must have shape (n_steps, B, m), got {noise.shape}")
-        if x0.ndim == 1:
-            B = noise.shape[1]
-        elif noise.shape[1] != B:
-            raise ValueError(f"noise has {noise.shape[1]} runs but x0 has {B}")
-    if seeds is not None and len(seeds) != B:
-        raise ValueError(f"seeds must have one entry per run ({B}), got {len(seeds)}")
-    x = np.array(np.broadcast_to(x0, (B, x0.shape[-1])), dtype=float)
-    return x, noise, B
-
-
 # ----------------------------------------------------------------------------------------------
 # Runners
 # ----------------------------------------------------------------------------------------------
@@ -369,7 +280,7 @@ def simulate_sampled(
     check_callable("observe", observe, "observe(k, t, x, u)", optional=True)
     h = check_positive("h", h, scalar=True)
     n_steps = check_int("n_steps", n_steps, minimum=1)
-    substeps = check_int("substeps", substeps, minimum=1)
+    substeps = check_int("substeps", substeps, minimum=1, maximum=MAX_SUBSTEPS)
     check_in("method", method, STEPPERS)
     bound = _check_bound(bound)
     t0 = check_finite("t0", t0, scalar=True)
@@ -538,6 +449,3 @@ def continuous_nlsys(rhs: Callable, *, states, inputs, outputs=None, output: Cal
         outputs = states
     return ct.nlsys(updfcn, outfcn, states=states, inputs=inputs, outputs=outputs, name=name)
 
-
-# the adaptive path lives in its own module; re-exported here for the public API
-from .ivp import simulate_ivp  # noqa: E402,F401

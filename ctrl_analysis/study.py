@@ -25,9 +25,209 @@ Examples
 from __future__ import annotations
 
 import dataclasses
-from ._validate import check_str
+import math
+from dataclasses import dataclass
 
-__all__ = ["printed", "reconstructed", "record_parameters", "reconstructions_of"]
+import numpy as np
+
+from ._validate import check_int, check_str
+
+__all__ = ["Claim", "Plausible", "choices", "fixed", "missing_plausible", "printed", "reconstructed",
+           "record_parameters", "reconstructions_of", "span"]
+
+_SCALES = ("linear", "log", "int")
+
+
+@dataclass(frozen=True)
+class Claim:
+    """A claim the paper makes, declared in the study's ``paper.py`` next to its printed values.
+
+    The study judges it from computed quantities (:meth:`ctrl_analysis.results.StudyResult.claim`);
+    the verdict is ``holds``, ``fails``, ``untestable`` or, when it flips inside the plausible range of
+    a reconstruction, ``depends``.
+
+    Parameters
+    ----------
+    id : str
+        Stable id (``"transient-ckf-beats-lpf"``).
+    section : str
+        Where the paper makes it (``"§4, Fig. 6-7"``).
+    statement : str
+        The claim in one sentence, as the paper makes it (English).
+
+    Examples
+    --------
+    >>> Claim("fig2-r", "§4, Fig. 2", "A larger R rejects disturbances more strongly").section
+    '§4, Fig. 2'
+    """
+
+    id: str
+    section: str
+    statement: str
+
+    def __post_init__(self):
+        for name in ("id", "section", "statement"):
+            check_str(name, getattr(self, name))
+
+
+@dataclass(frozen=True)
+class Plausible:
+    """The plausible range of a reconstructed value and why: what a reader of the paper could have chosen.
+
+    Build one with :func:`span` (a numeric interval), :func:`choices` (a few alternatives) or
+    :func:`fixed` (not varied, with the reason no alternative is plausible or matters).
+
+    Parameters
+    ----------
+    why : str
+        Why this range (non-empty).
+    low, high : float, optional
+        Ends of a numeric interval.
+    options : tuple, optional
+        Discrete alternatives (the chosen value need not be among them).
+    scale : {"linear", "log", "int"}
+        Spacing of the interior points of an interval.
+    points : int
+        Values tried across an interval, ends included (>= 2).
+    """
+
+    why: str
+    low: float | None = None
+    high: float | None = None
+    options: tuple | None = None
+    scale: str = "linear"
+    points: int = 5
+
+    def __post_init__(self):
+        check_str("why", self.why)
+        if self.scale not in _SCALES:
+            raise ValueError(f"scale must be one of {_SCALES}, got {self.scale!r}")
+        check_int("points", self.points, minimum=2, maximum=50)
+        if (self.low is None) != (self.high is None):
+            raise ValueError("low and high must be given together")
+        if self.low is not None:
+            if self.options is not None:
+                raise ValueError("give either low/high or options, not both")
+            lo, hi = float(self.low), float(self.high)
+            if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+                raise ValueError(f"low must be finite and below high, got low={self.low!r}, high={self.high!r}")
+            if self.scale == "log" and lo <= 0:
+                raise ValueError(f"a log-scale range needs low > 0, got {self.low!r}")
+        if self.options is not None and (not isinstance(self.options, tuple) or not self.options):
+            raise ValueError(f"options must be a non-empty tuple, got {self.options!r}")
+
+    @property
+    def varied(self) -> bool:
+        """Whether the sensitivity sweep tries other values (False for :func:`fixed`).
+
+        Returns
+        -------
+        bool
+        """
+        return self.low is not None or self.options is not None
+
+    def values(self) -> tuple:
+        """The values a sensitivity sweep tries: the interval's ends and interior points, or the options.
+
+        Returns
+        -------
+        tuple
+            Empty for :func:`fixed`.
+        """
+        if self.options is not None:
+            return self.options
+        if self.low is None:
+            return ()
+        lo, hi = float(self.low), float(self.high)
+        if self.scale == "log":
+            v = np.geomspace(lo, hi, self.points)
+        else:
+            v = np.linspace(lo, hi, self.points)
+        if self.scale == "int":
+            return tuple(dict.fromkeys(int(round(x)) for x in v))
+        return tuple(float(f"{x:.6g}") for x in v)
+
+    def to_dict(self) -> dict:
+        """The range as results.json records it.
+
+        Returns
+        -------
+        dict
+        """
+        if self.options is not None:
+            return {"options": list(self.options), "why": self.why}
+        if self.low is None:
+            return {"fixed": True, "why": self.why}
+        return {"low": float(self.low), "high": float(self.high), "scale": self.scale,
+                "values": list(self.values()), "why": self.why}
+
+
+def span(low, high, why: str, *, scale: str = "linear", points: int = 5) -> Plausible:
+    """A numeric plausible interval ``[low, high]``; the sweep tries ``points`` values, ends included.
+
+    Parameters
+    ----------
+    low, high : float
+        Ends (``low < high``; ``low > 0`` on a log scale).
+    why : str
+        Why a reader of the paper could choose any value in it.
+    scale : {"linear", "log", "int"}
+        Spacing of the tried values ("int" rounds them to distinct integers).
+    points : int
+        Values tried, ends included.
+
+    Returns
+    -------
+    Plausible
+
+    Examples
+    --------
+    >>> span(1, 100, "a decade either side", scale="log", points=3).values()
+    (1.0, 10.0, 100.0)
+    """
+    return Plausible(why=why, low=low, high=high, scale=scale, points=points)
+
+
+def choices(options, why: str) -> Plausible:
+    """A few plausible alternatives to a reconstructed value (e.g. other readings of an equation).
+
+    Parameters
+    ----------
+    options : sequence
+        The alternatives (immutable values).
+    why : str
+        Why each is a plausible reading.
+
+    Returns
+    -------
+    Plausible
+
+    Examples
+    --------
+    >>> choices(("raw", "filtered"), "the paper does not say which signal").values()
+    ('raw', 'filtered')
+    """
+    return Plausible(why=why, options=tuple(options))
+
+
+def fixed(why: str) -> Plausible:
+    """A reconstruction that the sensitivity sweep does not vary, and why (e.g. a plotting grid or a horizon).
+
+    Parameters
+    ----------
+    why : str
+        Why no plausible alternative would change a verdict, or why none exists.
+
+    Returns
+    -------
+    Plausible
+
+    Examples
+    --------
+    >>> fixed("a plotting grid; evidence only").varied
+    False
+    """
+    return Plausible(why=why)
 
 
 def printed(value, where: str):
@@ -48,7 +248,7 @@ def printed(value, where: str):
     return _field(value, {"printed": check_str("where", where)})
 
 
-def reconstructed(value, why: str):
+def reconstructed(value, why: str, plausible: Plausible | None = None):
     """A dataclass field holding a value the paper does not print (or prints wrongly); ``why`` says why this one.
 
     Parameters
@@ -57,6 +257,10 @@ def reconstructed(value, why: str):
         The chosen value (immutable).
     why : str
         Why this value (non-empty): what the paper says or does not say, and how it was chosen.
+    plausible : Plausible, optional
+        What else a reader of the paper could reasonably have chosen (:func:`span`, :func:`choices`) or
+        :func:`fixed` with the reason it is not varied. Every reconstruction of a study should have one
+        (:func:`missing_plausible` lists those without).
 
     Returns
     -------
@@ -71,7 +275,9 @@ def reconstructed(value, why: str):
     if not isinstance(why, str) or not why.strip():
         raise (TypeError if not isinstance(why, str) else ValueError)(
             f"why must be a non-empty string saying why the value was chosen, got {why!r}")
-    return _field(value, {"reconstruction": why})
+    if plausible is not None and not isinstance(plausible, Plausible):
+        raise TypeError(f"plausible must be a Plausible (span, choices or fixed), got {plausible!r}")
+    return _field(value, {"reconstruction": why, "plausible": plausible})
 
 
 def _field(value, metadata):
@@ -95,8 +301,30 @@ def reconstructions_of(params) -> list[dict]:
     """
     if not dataclasses.is_dataclass(params) or isinstance(params, type):
         raise TypeError(f"params must be a dataclass instance, got {params!r}")
-    return [{"name": f.name, "value": getattr(params, f.name), "why": f.metadata["reconstruction"]}
-            for f in dataclasses.fields(params) if "reconstruction" in f.metadata]
+    out = []
+    for f in dataclasses.fields(params):
+        if "reconstruction" in f.metadata:
+            rec = {"name": f.name, "value": getattr(params, f.name), "why": f.metadata["reconstruction"]}
+            if f.metadata.get("plausible") is not None:
+                rec["plausible"] = f.metadata["plausible"]
+            out.append(rec)
+    return out
+
+
+def missing_plausible(params) -> list[str]:
+    """Names of the reconstructed fields of ``params`` declared without a plausible range.
+
+    Parameters
+    ----------
+    params : dataclass instance
+        A study's parameter object.
+
+    Returns
+    -------
+    list of str
+        Empty when every reconstruction says what else was plausible.
+    """
+    return [rec["name"] for rec in reconstructions_of(params) if "plausible" not in rec]
 
 
 def record_parameters(result, params, prefix: str = "") -> None:
@@ -119,4 +347,4 @@ def record_parameters(result, params, prefix: str = "") -> None:
     for f in dataclasses.fields(params):
         result.settings[name(f.name)] = getattr(params, f.name)
     for rec in reconstructions_of(params):
-        result.reconstruction(name(rec["name"]), rec["value"], rec["why"])
+        result.reconstruction(name(rec["name"]), rec["value"], rec["why"], plausible=rec.get("plausible"))

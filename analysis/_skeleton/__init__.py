@@ -1,12 +1,14 @@
 """Study skeleton (not registered in the CLI): copy this package to start a new study.
 
 A first-order lag driven by a unit step, measured in white noise and smoothed by a digital
-low-pass: one printed value per quantity (textbook closed forms), two reconstructions, one figure.
-See CONTRIBUTING.md, "Add a study".
+low-pass: one printed value per quantity (textbook closed forms), three reconstructions with their
+plausible ranges, two claims judged on the quantities, a sensitivity sweep that re-judges them across
+the ranges, two figures. See CONTRIBUTING.md, "Add a study".
 """
 
 from __future__ import annotations
 
+from ctrl_analysis import sensitivity
 from ctrl_analysis.report import StudyContext, StudyInfo, StudyResult
 from ctrl_analysis.simulate import run_seeds
 from ctrl_analysis.study import record_parameters
@@ -14,7 +16,7 @@ from ctrl_analysis.study import record_parameters
 from . import figures, loops, quantities
 from .paper import EXAMPLE, QUICK
 
-__all__ = ["INFO", "run"]
+__all__ = ["INFO", "evaluate", "run"]
 
 INFO = StudyInfo(
     name="skeleton",
@@ -47,10 +49,40 @@ def run(ctx: StudyContext, params=None) -> StudyResult:
     res = loops.simulate(p, seeds)
     for record in res.divergences():
         result.finding(f"diverged-run-{record['run']}", f"run diverged: {record}")
-    quantities.record_step(result, p, res)
-    quantities.record_noise(result, p, res)
+    _record(result, p, res)
     fig = figures.plot_step(res.t, res["y"][:, 0], res["y_meas"][:, 0], res["y_hat"][:, 0], tau=p.tau)
     ctx.save_figure(result, fig, "fig1_step_response.png")
+    ctx.progress("sensitivity: each reconstruction across its plausible range")
+    sens = sensitivity.sweep(evaluate, {"ex": p}, jobs=ctx.jobs, note="20 runs per evaluation, same seeds")
+    sensitivity.apply(result, sens)
+    ctx.save_figure(result, sensitivity.plot_sensitivity(result), "sensitivity.png",
+                    caption="How far each reconstruction moves the paper cells, and which claims flip, across its "
+                            "plausible range (one reconstruction at a time).")
+    return result
+
+
+def _record(result: StudyResult, p, res) -> None:
+    """The quantities and the claims: one code path for the main run and for every sensitivity evaluation."""
+    quantities.record_step(result, p, res)
+    quantities.record_noise(result, p, res)
+    quantities.judge_claims(result, p)
+
+
+def evaluate(params: dict) -> StudyResult:
+    """The quantities and claims at ``params["ex"]`` on 20 runs (the sensitivity sweep's evaluation).
+
+    Parameters
+    ----------
+    params : dict
+        ``{"ex": Example}``.
+
+    Returns
+    -------
+    StudyResult
+    """
+    p = params["ex"]
+    result = StudyResult(INFO)
+    _record(result, p, loops.simulate(p, run_seeds(0, 20)))
     return result
 
 

@@ -8,14 +8,15 @@
 
 The plant is a first-order lag, which the library already has as the order-1
 :class:`~ctrl_analysis.estimators.lowpass.LowPassFilter` (``ω/(s + ω)`` with ``ω = 1/τ``): reuse,
-do not re-code. The sum is a :class:`~ctrl_analysis.blocks.StaticBlock`.
+do not re-code. The sum is a :class:`~ctrl_analysis.blocks.StaticGain` (so the loop can compile and go to
+worker processes; a lambda can do neither).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from ctrl_analysis.blocks import StaticBlock
+from ctrl_analysis.blocks import StaticGain
 from ctrl_analysis.estimators.lowpass import LowPassFilter
 from ctrl_analysis.loop import Loop, LoopResponse, place
 from ctrl_analysis.simulate import draw_noise, gaussian_noise
@@ -39,7 +40,7 @@ def build_loop(p: Example) -> Loop:
         External inputs ``u`` (plant input) and ``v`` (measurement noise).
     """
     plant = LowPassFilter(1.0 / p.tau, order=1)
-    sensor = StaticBlock(lambda t, u: u[:, :1] + u[:, 1:], inputs=("y", "v"), outputs=("y_meas",))
+    sensor = StaticGain([[1.0, 1.0]], inputs=("y", "v"), outputs=("y_meas",))  # y_meas = y + v
     lpf = LowPassFilter(p.omega_f, order=1).digital(p.h)
     return Loop([
         place(plant, "plant", inputs=["u"], outputs=["y"]),

@@ -11,9 +11,18 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from ctrl_analysis.study import printed, reconstructed
+from ctrl_analysis.study import Claim, fixed, printed, reconstructed, span
 
-__all__ = ["EXAMPLE", "QUICK", "Example"]
+__all__ = ["CLAIMS", "EXAMPLE", "QUICK", "Example"]
+
+#: What the "paper" claims, judged by :mod:`.quantities` (a real study lists its paper's comparisons,
+#: rankings and properties here, with the section).
+CLAIMS = (
+    Claim("filter-reduces-noise", "textbook, §2",
+          "The digital low-pass reduces the measurement noise std at least threefold"),
+    Claim("step-unaffected", "textbook, §1",
+          "The plant reaches 63 % of a unit step at t = τ whatever the measurement noise"),
+)
 
 
 @dataclass(frozen=True)
@@ -41,10 +50,16 @@ class Example:
     tau: float = printed(1.0, "textbook: plant 1/(τ s + 1), τ = 1 s")
     sigma_v: float = printed(0.1, "textbook: measurement noise std 0.1")
     h: float = printed(0.01, "textbook: sampling period 10 ms")
-    t_end: float = reconstructed(10.0, "horizon not given; 10 τ so that the window after t_settle holds 500 samples")
-    omega_f: float = reconstructed(10.0, "filter bandwidth not given; 10× the plant bandwidth 1/τ")
+    t_end: float = reconstructed(10.0, "horizon not given; 10 τ so that the window after t_settle holds 500 samples",
+                                 plausible=fixed("only sets how many steady samples are averaged; no verdict reads "
+                                                 "the horizon itself"))
+    omega_f: float = reconstructed(10.0, "filter bandwidth not given; 10× the plant bandwidth 1/τ",
+                                   plausible=span(3.0, 30.0, "a corner between 3× and 30× the plant bandwidth is "
+                                                  "what a textbook design would pick", scale="log", points=5))
     t_settle: float = reconstructed(5.0, "steady state not defined; from 5 τ the filter's lag error "
-                                         "ẏ/ω_f < 7e-4 is negligible beside the filtered noise")
+                                         "ẏ/ω_f < 7e-4 is negligible beside the filtered noise",
+                                    plausible=span(3.0, 5.0, "3 τ to 5 τ (95 % to 99.3 % of the step) are the usual 'steady state' choices",
+                                                   points=3))
     y_at_tau: float = printed(0.6321, "textbook: unit-step response at t = τ, 1 − e^−1 ≈ 0.6321")
 
     @property

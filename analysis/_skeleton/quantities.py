@@ -10,9 +10,9 @@ from ctrl_analysis.metrics import mean_std, rmse
 from ctrl_analysis.report import StudyResult
 
 from .loops import steady_window
-from .paper import Example
+from .paper import CLAIMS, Example
 
-__all__ = ["record_noise", "record_step"]
+__all__ = ["judge_claims", "record_noise", "record_step"]
 
 
 def record_step(result: StudyResult, p: Example, res) -> None:
@@ -54,3 +54,22 @@ def record_noise(result: StudyResult, p: Example, res) -> None:
                    f"the digital low-pass (ω_f = {p.omega_f:g} rad/s, h = {p.h:g} s) reduces the measurement "
                    f"noise std from {p.sigma_v:g} to {mean:.4g} ± {std:.2g} over {n_ok} runs, "
                    f"{mean / paper - 1:+.1%} from the closed form {paper:.4g}")
+
+
+def judge_claims(result: StudyResult, p: Example) -> None:
+    """Judge :data:`~.paper.CLAIMS` on the recorded quantities (the same code for the run and the sweep).
+
+    Parameters
+    ----------
+    result : StudyResult
+        With ``filter.noise_std`` and ``step.y_at_tau`` recorded.
+    p : Example
+    """
+    claims = {c.id: c for c in CLAIMS}
+    noise = result.get("filter.noise_std")
+    ratio = p.sigma_v / noise.value
+    result.claim(claims["filter-reduces-noise"], ratio >= 3.0, evidence=[noise.id],
+                 note=f"the filter divides the noise std by {ratio:.3g} at ω_f = {p.omega_f:g} rad/s")
+    step = result.get("step.y_at_tau")
+    result.claim(claims["step-unaffected"], step.verdict == "agrees", evidence=[step.id],
+                 note=f"y(τ) = {step.value:.4f}")

@@ -132,7 +132,7 @@ def build_loop(p, sel, plant=None) -> Loop:
         place(StaticGain([[1.0, 1.0]], ("y", "v"), ("y_m",)), "meas"),
         place(LowPassFilter(p.lpf_omega, p.lpf_order).digital(p.Ts), "lpf", inputs=["y_m"], outputs=["y_lpf"]),
         place(DiscreteLTI(ct.tf([1.0], [1.0, 0.0], True), p.Ts), "delay", inputs=["u"], outputs=["u_prev"]),
-        place(CharacteristicKalmanFilter(Q=np.array(p.Q), R=p.R, P0=p.P0_ckf), "ckf",
+        place(CharacteristicKalmanFilter(Q=p.Q, R=p.R, P0=p.P0_ckf), "ckf",
               inputs=["y_m", "u_prev", "f1", "f2", "g0"], outputs=["y_ckf", "y_ckf_prev"]),
         place(FeedbackSwitch(D_fb, p.t_filter, ("y_m", "y_lpf", "y_ckf"), ("y_fb",)), "select"),
         place(StaticGain(D_id, ("y_m", "y_lpf", "y_fb"), ("s_id",)), "idsignal"),

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from dataclasses import replace
 
+import control as ct
 import numpy as np
 
 from ctrl_analysis.estimators.differential import DifferentialEstimator
@@ -22,7 +23,7 @@ from . import loops
 from .example1 import quantity_ms
 from .paper import Example2, setpoint
 
-__all__ = ["stable_estimator_a", "controller_scale_threshold", "linear_analysis", "simulate", "quantities",
+__all__ = ["stable_estimator_a", "controller_scale_threshold", "literal_eigenvalues", "linear_analysis", "simulate", "quantities",
            "nonminimum_phase", "oscillation"]
 
 
@@ -55,17 +56,23 @@ def controller_scale_threshold(p: Example2, scales=None) -> dict:
             "largest_stable_scale": float(stable.max()) if stable.size else None}
 
 
+def literal_eigenvalues(result: StudyResult, p: Example2) -> np.ndarray:
+    """Eigenvalues of the printed loop linearised at the origin (sorted, largest real part first); quantity ``ex2.literal.max_real_eig``."""
+    eig = np.linalg.eigvals(loops.example2_linear(p))
+    eig = eig[np.lexsort((eig.imag, -eig.real))]
+    result.quantity("ex2.literal.max_real_eig", f"Example 2 as printed (Σ a = {p.a:g}, K = [2184, 506, 39]): max Re of "
+                    "the linearised loop's eigenvalues", float(eig.real.max()), unit="1/s",
+                    note=f"control.linearize of the loop's control.interconnect at the origin (w = 0, no noise), "
+                         f"b1 = {p.b1:g}, b2 = {p.b2:g}, {p.reading} reading")
+    return eig
+
+
 def linear_analysis(result: StudyResult, p: Example2) -> dict:
     """Eigenvalues of the printed loop and of the stable preset; findings ``ex2-literal-*``, ``ex2-stable-preset``."""
-    A = loops.example2_linear(p)
-    eig = np.linalg.eigvals(A)
-    eig = eig[np.lexsort((eig.imag, -eig.real))]
+    eig = literal_eigenvalues(result, p)
     max_re = float(eig.real.max())
     re_corr = loops.max_real_eig(loops.example2_linear(p, reading="corrected"))
     re_eps4 = loops.max_real_eig(loops.example2_linear(p, extra_gain=1.0))
-    result.quantity("ex2.literal.max_real_eig", "Example 2 as printed (Σ a = 5, K = [2184, 506, 39]): max Re of the "
-                    "linearised loop's eigenvalues", max_re, unit="1/s",
-                    note="control.linearize of the loop's control.interconnect at the origin (w = 0, no noise)")
     a_new, a_star = stable_estimator_a(p)
     cs = controller_scale_threshold(p)
     eig_new = np.linalg.eigvals(loops.example2_linear(p, a_new))
@@ -78,7 +85,10 @@ def linear_analysis(result: StudyResult, p: Example2) -> dict:
                                      "stable_eigenvalues": np.sort_complex(eig_new), "controller_scaling": cs}
     result.finding(
         "ex2-literal-unstable" if max_re > 0 else "ex2-literal-stable",
-        f"Linearised about the origin (w = 0, no noise), plant (20) with b = ({p.b1:g}, {p.b2:g}, {p.b3:g}) + Σ "
+        (f"The printed Example 2 loop is unstable: linearised about the origin its largest eigenvalue real part, "
+         f"{max_re:+.2f} 1/s, is positive. " if max_re > 0 else
+         f"The printed Example 2 loop is stable: its largest eigenvalue real part, {max_re:+.2f} 1/s, is negative. ")
+        + f"Linearised about the origin (w = 0, no noise), plant (20) with b = ({p.b1:g}, {p.b2:g}, {p.b3:g}) + Σ "
         f"(n0 = 5, a = 5) + controller (18) has eigenvalues " + ", ".join(f"{z.real:.2f}{z.imag:+.2f}j" for z in eig)
         + f": max Re = {max_re:+.2f} 1/s, so the printed configuration is " + ("UNSTABLE. " if max_re > 0 else
                                                                               "stable. ")
@@ -89,6 +99,8 @@ def linear_analysis(result: StudyResult, p: Example2) -> dict:
           f"{re_eps4:+.2f}. b3 drops out of the linearisation (x3|x3| has zero slope at 0).")
     result.finding(
         "ex2-stable-preset",
+        f"Raising Σ's a from {p.a:g} to {a_new:g} (K kept) gives Example 2 a decay margin of {p.stable_margin:g} 1/s; "
+        f"slowing the controller instead never reaches it. "
         f"Stable preset 'fast_estimator', found from the eigenvalues: keep K, raise Σ's a. The linearised loop becomes "
         f"stable at a = {a_star:.2f} and has every eigenvalue at Re <= -{p.stable_margin:g} 1/s from a = {a_new:g} "
         f"(max Re = {eig_new.real.max():+.2f}; Σ's slowest pole moves from {slow.real:.2f} to "
@@ -140,8 +152,8 @@ def simulate(p: Example2, seeds, a_new: float, runs: int) -> dict:
             "pick": pick, "traces": traces}
 
 
-def quantities(result: StudyResult, p: Example2, d: dict, lin: dict) -> dict:
-    """Per-preset quantities ``ex2.<preset>.*`` and ``ex2.sweep.*``; returns the stability maps."""
+def quantities(result: StudyResult, p: Example2, d: dict, lin: dict | None) -> dict:
+    """Per-preset quantities ``ex2.<preset>.*`` and ``ex2.sweep.*`` (findings too unless ``lin`` is None); returns the stability maps."""
     sig, ok, per, runs = d["sig"], d["ok"], d["per"], d["runs"]
     n = sig["x1"].shape[0] - 1
     v = d["theta"][:, 0]
@@ -150,6 +162,8 @@ def quantities(result: StudyResult, p: Example2, d: dict, lin: dict) -> dict:
     err = mean_abs_error(sig["x1"][:-1], v[:, None])
     amp, freq = oscillation(e[tail], p.h)
     stable = ok & (amp < p.ripple_tol)
+    # outcome per run: 0 settles, 1 oscillates (bounded, ripple above the tolerance), 2 diverges
+    outcome = np.where(~ok, 2, np.where(stable, 0, 1))
     maps = {}
     for j, name in enumerate(("literal", "fast_estimator")):
         mc, grid = slice(j * per, j * per + runs), slice(j * per + runs, (j + 1) * per)
@@ -168,13 +182,19 @@ def quantities(result: StudyResult, p: Example2, d: dict, lin: dict) -> dict:
                         float(np.mean(stable[grid])), runs=per - runs, unit="",
                         note=f"b1 ∈ {list(p.sweep_b1)}, b2 ∈ {list(p.sweep_b2)}, b3 ∈ {list(p.sweep_b3)}; one seed "
                              "per point")
+        for k, what in ((1, "oscillates"), (2, "diverges")):
+            result.quantity(f"{sid.removesuffix('fraction_stable')}fraction_{what}", f"Example 2, {label}: fraction of "
+                            f"the {per - runs}-point (b1, b2, b3) grid that {what}", float(np.mean(outcome[grid] == k)),
+                            runs=per - runs, unit="", note="the three outcomes add up to 1")
         lin_map = np.array([[loops.max_real_eig(loops.example2_linear(p, d["a"][j], b1, b2)) for b2 in p.sweep_b2]
                             for b1 in p.sweep_b1])
         maps[name] = {"stable": stable[grid].reshape(d["grid"][0].shape), "lin": lin_map,
+                      "outcome": outcome[grid].reshape(d["grid"][0].shape),
                       "amp": amp[grid].reshape(d["grid"][0].shape), "offset": np.mean(e[tail], axis=0)[grid]}
     for k in ("diverged", "step"):
         result.settings[f"ex2.sim.{k}"] = d[k]
-    _findings(result, p, d, lin, maps, err, amp, freq)
+    if lin is not None:
+        _findings(result, p, d, lin, maps, err, amp, freq)
     return {"maps": maps, "amp": amp, "freq": freq}
 
 
@@ -185,6 +205,8 @@ def _findings(result, p, d, lin, maps, err, amp, freq) -> None:
     amp_lit = maps["literal"]["amp"]
     result.finding(
         "ex2-literal-simulation",
+        f"Simulated as printed, x1 settles into a limit cycle around v (half peak-to-peak "
+        f"{np.mean(amp[:runs][ok_l]):.3g} at {np.mean(freq[:runs][ok_l]):.2f} Hz) instead of tracking it. "
         f"Simulated as printed, {int((~ok_l).sum())} of {runs} runs diverge (bound {p.bound:g}): the linear instability "
         f"is caught by the nonlinear damping -b3 x3|x3| and x1 settles into a limit cycle around v with half "
         f"peak-to-peak amplitude {np.mean(amp[:runs][ok_l]):.3g} at {np.mean(freq[:runs][ok_l]):.2f} Hz (the "
@@ -198,7 +220,10 @@ def _findings(result, p, d, lin, maps, err, amp, freq) -> None:
     b1s = np.asarray(p.sweep_b1)
     result.finding(
         "ex2-robustness",
-        f"'Strong robustness to parameter changes': with the fast_estimator preset {np.mean(fast['stable']) * 100:.0f} % "
+        f"The robustness claim holds for the stable preset, not for the printed loop: "
+        f"{np.mean(fast['stable']) * 100:.0f} % against {np.mean(lit['stable']) * 100:.0f} % of the {per - runs} "
+        f"(b1, b2, b3) grid points settle. "
+        f"The paper claims 'strong robustness to parameter changes': with the fast_estimator preset {np.mean(fast['stable']) * 100:.0f} % "
         f"of the {per - runs} grid points settle (b1 > 0: {np.mean(fast['stable'][b1s > 0]) * 100:.0f} %); the "
         f"linearisation at the origin is stable on {np.mean(fast['lin'] < 0) * 100:.0f} % of the (b1, b2) grid (max Re "
         f"from {fast['lin'].min():.2f} to {fast['lin'].max():.2f}). As printed (a = 5) the linearisation is stable at "
@@ -210,6 +235,12 @@ def _findings(result, p, d, lin, maps, err, amp, freq) -> None:
         f"largest tail offset is {np.abs(fast['offset']).max():.3g}.")
 
 
+def _plant_abcd(b1: float, b2: float):
+    """State-space matrices of plant (20) linearised at the origin (b3 drops out), input u, output x1."""
+    A = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [b1, -b2, 0.0]])
+    return A, np.array([[0.0], [0.0], [1.0]]), np.array([[1.0, 0.0, 0.0]]), np.zeros((1, 1))
+
+
 def nonminimum_phase(result: StudyResult, p: Example2) -> None:
     """The paper's "non-minimum phase for b1 > 0": poles and zeros of the linearised plant u -> x1 = 1/(s³ + b2 s - b1)."""
     rows = {}
@@ -219,8 +250,17 @@ def nonminimum_phase(result: StudyResult, p: Example2) -> None:
     result.quantity("ex2.plant.max_real_pole", f"Example 2: max Re of the poles of the linearised plant "
                     f"1/(s^3 + b2 s - b1), b2 = {p.b2:g}, per b1 ∈ {list(p.sweep_b1)}", list(rows.values()), unit="1/s",
                     note="no finite zeros for any b1")
+    zeros = [np.asarray(ct.ss(*_plant_abcd(p.b1 if b1 is None else b1, p.b2)).zeros())
+             for b1 in (None, *p.sweep_b1)]
+    result.quantity("ex2.plant.rhp_zeros", f"Example 2: zeros of the linearised plant u → x1 in the closed right "
+                    f"half-plane, b2 = {p.b2:g}, b1 = {p.b1:g} and b1 ∈ {list(p.sweep_b1)} (count, all b1)",
+                    int(sum(np.sum(z.real >= 0) for z in zeros)), unit="",
+                    note=f"control.StateSpace.zeros() (invariant zeros): {sum(z.size for z in zeros)} finite zeros in all; the plant "
+                         "is minimum phase for every b1 (an unstable pole is not a right-half-plane zero)")
     result.finding(
         "ex2-nonminimum-phase",
+        f"For b1 > 0 the plant of Example 2 is unstable but not non-minimum phase: linearised, u -> x1 = "
+        f"1/(s^3 + b2 s - b1) has no zeros at all. "
         f"The paper calls the plant 'unstable, i.e. non-minimum phase' for b1 > 0. Linearised at the origin, u -> x1 "
         f"is 1/(s^3 + b2 s - b1): it has no zeros at all, so it is minimum phase in the usual sense for every b1; an "
         f"unstable pole is not a right-half-plane zero. The characteristic polynomial has no s^2 term (x3 enters "

@@ -81,11 +81,24 @@ def eq9_checks(result: StudyResult, L: Linear) -> dict:
     k_printed = {m: float(printed_eq9_gain(n0, a, m)) for m in (2, 3, 4, n0)}
     cl_poles = ct.feedback(est.open_loop_tf, 1).poles()
     near = np.sort(np.abs(cl_poles - s_b))[:2]
-    result.quantity(
-        "eq9.breakaway_point", "Breakaway point of the root locus of G, n0 = 5, a = 2 (derived: -n0 a)",
-        s_b, paper=L.breakaway, tolerance=1e-6, unit="1/s", cell="§3, text above eq. (8): s = -n0 a", primary=True,
-        note=f"sympy: dK/ds = 0 <=> {sp.sstr(d.dK_ds_reduced)} = 0 (besides s = 0); python-control: the two "
-             f"closed-loop poles of feedback(G, 1) nearest to {s_b:g} lie within {near.max():.1e} of it.")
+    printed_formula = -sym.N0 * sym.A
+    same = sp.simplify(d.breakaway - printed_formula) == 0
+    result.check(
+        "eq9.breakaway_point", "Breakaway point of the root locus of G, n0 = 5, a = 2 (derived with sympy)",
+        s_b, unit="1/s",
+        note=f"The paper prints the formula s = {L.breakaway} (text above eq. (8)), no number; sympy gives dK/ds = 0 "
+             f"<=> {sp.sstr(d.dK_ds_reduced)} = 0 besides s = 0, i.e. s = {sp.sstr(d.breakaway)}, "
+             f"{'the printed formula' if same else 'NOT the printed formula'}; for n0 = {n0}, a = {a:g} the printed "
+             f"formula gives {float(printed_formula.subs({sym.N0: n0, sym.A: a})):g}. An algebraic identity: a "
+             "check, not a reproduced cell.")
+    result.check(
+        "eq9.double_pole_gap", f"Distance between the two closed-loop poles of Σ nearest to the breakaway point at the "
+        f"derived gain, n0 = {n0}, a = {a:g} (python-control)", float(near.max()), unit="1/s",
+        note=f"feedback(G, 1) at K = {k_b:.6g}: a double real pole at {s_b:g} shows as a gap of ~0 (numerical "
+             f"root splitting of a double root is ~sqrt(machine epsilon)); largest pole real part "
+             f"{float(cl_poles.real.max()):+.4g}.")
+    result.check("eq9.design_max_real_pole", f"Largest real part of Σ's poles at the derived gain, n0 = {n0}, "
+                 f"a = {a:g}", float(cl_poles.real.max()), unit="1/s", note="negative: Σ is stable at the design gain")
     result.quantity(
         "eq9.gain_K", "Gain K at the breakaway point, n0 = 5, a = 2 (derived)", k_b, unit="1/s",
         note=f"derived K = n0^n0 a/(n0-1)^(n0-1) = {k_b:.6g}. The paper prints no number, only the formula "
@@ -95,7 +108,8 @@ def eq9_checks(result: StudyResult, L: Linear) -> dict:
     p_pr = {m: DifferentialEstimator(n0, a, k, allow_unstable=True).poles for m, k in k_printed.items()}
     result.finding(
         "eq9-exponent",
-        f"Eq. (9) is printed K = n0^n a/(n0-1)^(n0-1). Solving dK/ds = 0 on K(s) = -s^n0/(s+a)^(n0-1) "
+        f"Eq. (9)'s exponent n must read n0: only K = n0^n0 a/(n0-1)^(n0-1) puts a double pole at the breakaway "
+        f"point s = -n0 a (sympy, for general n0 and a). Eq. (9) is printed K = n0^n a/(n0-1)^(n0-1). Solving dK/ds = 0 on K(s) = -s^n0/(s+a)^(n0-1) "
         f"with sympy for general n0, a gives dK/ds · (s + a)^n0/s^(n0-1) = {sp.sstr(d.dK_ds_reduced)}, so "
         f"besides s = 0 (K = 0) the only critical point, the breakaway (strictly a break-in: K has a minimum "
         f"there, d2K/ds2 = {sp.sstr(d.second_derivative)} > 0) is s = {sp.sstr(d.breakaway)} as the paper says, "
@@ -109,7 +123,7 @@ def eq9_checks(result: StudyResult, L: Linear) -> dict:
         f"a typo (or lost subscript) for n0.",
         evidence={"derived_gain": sp.sstr(d.gain), "derived_over_printed": sp.sstr(ratio), "K_derived": k_b,
                   "K_printed_by_n": k_printed,
-                  "max_real_pole_by_n": {m: float(p.real.max()) for m, p in p_pr.items()}})
+                  "max_real_pole_by_n": {m: float(p.real.max()) for m, p in p_pr.items()}}, kind="erratum")
     return {"K_printed_by_n": k_printed}
 
 
@@ -131,6 +145,8 @@ def eq5_checks(result: StudyResult, L: Linear) -> None:
     ratios = sorted({r["an0_ratio"] for r in rows.values()})
     result.finding(
         "eq5-sign",
+        f"Eq. (5) has the wrong sign on its last coefficient, and with the printed sign Σ is unstable for every K "
+        f"(largest pole real part {p_flip.real.max():+.3g} for n0 = 5, a = 2). "
         f"Eq. (5) prints a_1 = K, a_2 = -K Σz_i, a_n0 = (-1)^n0 K ∏z_i. Expanding K ∏(s - z_i) with sympy "
         f"for n0 = {L.table_n0[0]}..{L.table_n0[-1]} and symbolic zeros: a_1 and a_2 are right "
         f"({'all match' if a2_ok else 'MISMATCH'}), but derived/printed a_n0 = {', '.join(ratios)} for every n0: "
@@ -140,7 +156,7 @@ def eq5_checks(result: StudyResult, L: Linear) -> None:
         f"part is {p_flip.real.max():+.4f} (derived signs: {est.poles.real.max():+.4f}). Eq. (6) also says "
         f"z_i = -a for i = 1..n0, but (4) has only n0 - 1 zeros. The toolkit uses the derived signs, "
         f"a_i = K C(n0-1, i-1) a^(i-1).",
-        evidence={"per_n0": rows, "max_real_pole_printed_sign": float(p_flip.real.max())})
+        evidence={"per_n0": rows, "max_real_pole_printed_sign": float(p_flip.real.max())}, kind="erratum")
 
 
 def lowpass_checks(result: StudyResult, L: Linear) -> list:
@@ -153,6 +169,10 @@ def lowpass_checks(result: StudyResult, L: Linear) -> list:
     result.quantity("fig2.resonance_peak_db", "Fig. 2: resonance peak of |Φ|, n0 = 5, a = 5",
                     row2["resonance_peak_db"], unit="dB",
                     note=f"at {row2['resonance_freq_rad_s']:.4g} rad/s (ctrl_analysis.metrics.resonance_peak)")
+    result.quantity("fig2.dc_gain", "Fig. 2: DC gain of Φ, n0 = 5, a = 5", dc, unit="", note="control.dcgain")
+    result.quantity("fig2.gain_db_at_10x_bandwidth", "Fig. 2: |Φ| a decade above the −3 dB bandwidth, n0 = 5, a = 5",
+                    row2["gain_db_at_10x_bandwidth"], unit="dB",
+                    note="a first-order low-pass has −20 dB there")
     table = [design_row(n0, a) for n0 in L.table_n0 for a in L.table_a]
     result.settings["design_table"] = table
     by_n0 = {n0: [r for r in table if r["n0"] == n0] for n0 in L.table_n0}
@@ -165,6 +185,8 @@ def lowpass_checks(result: StudyResult, L: Linear) -> list:
         for n0, rows in by_n0.items())
     result.finding(
         "lowpass-claim",
+        f"Σ is a first-order low-pass with a {row2['resonance_peak_db']:.2g} dB resonance bump, not a sharp filter: "
+        f"beyond its bandwidth Φ(s) rolls off at only -20 dB/decade (n0 = 5, a = 5). "
         f"The paper calls Σ a good low-pass filter (Fig. 2). Measured on Φ(s) for n0 = 5, a = 5 (K = "
         f"{est2.K:.4g}): DC gain {dc:.6g}, -3 dB bandwidth {row2['bandwidth_3db_rad_s']:.4g} rad/s, resonance "
         f"peak +{row2['resonance_peak_db']:.3g} dB at {row2['resonance_freq_rad_s']:.4g} rad/s, "
@@ -180,8 +202,9 @@ def lowpass_checks(result: StudyResult, L: Linear) -> list:
             "bandwidth_3db_rad_s", "resonance_peak_db", "resonance_freq_rad_s", "gain_db_at_10x_bandwidth")}})
     result.finding(
         "eq12-limit",
+        f"Eq. (12) takes the limit at the wrong end: tracking needs Φ(0) = 1 (s → 0), while Φ(s) → 0 as s → ∞. "
         f"Eq. (12) prints lim_(s→∞) Φ(s) = 1; the limit that gives tracking is s → 0: Φ(0) = {dc:.6g} "
-        f"(control.dcgain), while |Φ(j·10^6)| = {hf:.3g} → 0 (Φ is strictly proper).")
+        f"(control.dcgain), while |Φ(j·10^6)| = {hf:.3g} → 0 (Φ is strictly proper).", kind="erratum")
     return table
 
 
@@ -191,10 +214,10 @@ def controller_poles(result: StudyResult, L: Linear) -> None:
     roots = hurwitz_roots(K)
     result.settings["ex2_controller"] = {"K_printed": list(L.ex2_K), "K_applied": list(K),
                                          "polynomial": [1.0, *K[::-1]]}
-    result.quantity(
+    result.check(
         "ex2.controller_poles", "Example 2: roots of s^3 + 39 s^2 + 506 s + 2184 (controller (18))",
         roots.real, paper=list(L.ex2_poles), tolerance=1e-6, unit="1/s", cell="§4 Example 2: roots -12, -13, -14",
-        primary=True,
-        note=f"numpy.roots; max |Im| = {np.abs(roots.imag).max():.1e}. Read as polynomial coefficients, the printed "
+        note=f"A check of the paper's arithmetic (not a reproduced cell); the printed roots are integers, 1e-6 covers "
+             f"numpy.roots' rounding; max |Im| = {np.abs(roots.imag).max():.1e}. Read as polynomial coefficients, the printed "
              f"K = [2184, 506, 39, 1] runs from s^0 to s^3 (the trailing 1 is the coefficient of s^3); the study "
              f"applies K = [2184, 506, 39] (reconstruction ex2.K).")

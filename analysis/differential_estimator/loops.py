@@ -209,13 +209,17 @@ def sensor(signal: str = "x1") -> Sensor:
 
 
 def han_eso(p: Example1, tuning_h: float | None = None) -> ExtendedStateObserver:
-    """Han's third-order nonlinear ESO with the step-size gains for ``tuning_h`` (default ``p.eso_tuning_h``).
+    """Han's third-order nonlinear ESO with the step-size gains for ``tuning_h`` (default ``p.eso_tuning_h``, else ``p.h``).
 
-    ``δ = tuning_h`` when a ``tuning_h`` is given, else ``p.eso_delta``. Han's form with
-    ``e = z1 - y`` and minus signs equals the library's ``e = y - z1`` with plus signs (fal is odd).
+    ``δ = tuning_h`` when a ``tuning_h`` is given, else ``p.eso_delta`` (``None``: the design step).
+    Han's form with ``e = z1 - y`` and minus signs equals the library's ``e = y - z1`` with plus signs
+    (fal is odd).
     """
-    h_t = p.eso_tuning_h if tuning_h is None else tuning_h
-    delta = p.eso_delta if tuning_h is None else tuning_h
+    if tuning_h is None:
+        h_t = p.h if p.eso_tuning_h is None else p.eso_tuning_h
+        delta = h_t if p.eso_delta is None else p.eso_delta
+    else:
+        h_t = delta = tuning_h
     return ExtendedStateObserver(han_eso_gains(h_t), b0=0.0, alpha=list(p.eso_alpha), delta=delta)
 
 
@@ -260,14 +264,21 @@ def example2_loop(p: Example2, a_values=(None,), rows=None, *, b=None, w_amp=Non
         trailing 1 multiplies ε4 = θ4 - x̂4 with θ4 = v''' = 0 (a sensitivity of the linear analysis).
     """
     reading = p.reading if sigma_reading is None else sigma_reading
-    ests = [DifferentialEstimator(p.n0, p.a if a is None else a, reading=reading) for a in a_values]
+    ests = [DifferentialEstimator(p.n0, p.a if a is None else a, reading="state") for a in a_values]
     sigma = ests[0] if len(ests) == 1 else SigmaRows(ests, rows)
     ctrl = HighOrderDifferentialFeedback(p.K)
     u_name = "u" if extra_gain == 0.0 else "u18"
-    blocks = [place(Plant20(p, b, w_amp), "plant"), place(sensor(), "sensor"),
-              place(sigma, "sigma"),
-              place(ctrl, "ctrl", inputs=list(signal_names("theta", 3)) + list(signal_names("xhat", 3)),
-                    outputs=[u_name])]
+    blocks = [place(Plant20(p, b, w_amp), "plant"), place(sensor(), "sensor")]
+    if reading == "state":
+        blocks.append(place(sigma, "sigma"))
+    else:  # eq. (11): x̂ = C z + D y, a static gain after Σ's states (per run for several a), so Σ keeps its kernel
+        blocks.append(place(sigma, "sigma", outputs=signal_names("z", p.n0)))
+        mats = [np.hstack(est.estimate_matrices(reading)) for est in ests]
+        D = mats[0] if len(ests) == 1 else np.concatenate([np.repeat(m[None], r, axis=0) for m, r in zip(mats, rows)])
+        blocks.append(place(StaticGain(D, inputs=(*signal_names("z", p.n0), "y"),
+                                       outputs=signal_names("xhat", p.n0)), "reading"))
+    blocks.append(place(ctrl, "ctrl", inputs=list(signal_names("theta", 3)) + list(signal_names("xhat", 3)),
+                        outputs=[u_name]))
     if extra_gain != 0.0:
         blocks.append(place(StaticGain([[1.0, -extra_gain]], inputs=("u18", "xhat[3]"), outputs=("u",)), "eps4"))
     return Loop(blocks, p.h)

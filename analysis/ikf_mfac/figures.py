@@ -16,63 +16,96 @@ __all__ = [
     "plot_outputs",
     "plot_ratio_sweep",
     "plot_spread",
+    "plot_td_scan",
 ]
 
 COLORS = {"mfac": "tab:gray", "td_mfac": "tab:orange", "d_mfac": "tab:green", "ikf_mfac": "tab:blue"}
+#: Marker and size per scheme: drawn in this order, larger first, so equal values show as nested markers.
+MARKERS = {"mfac": {"marker": "s", "ms": 9}, "td_mfac": {"marker": "o", "ms": 7}, "d_mfac": {"marker": "^", "ms": 6},
+           "ikf_mfac": {"marker": "D", "ms": 4}}
 
 
 def _legend(ax):
     ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize=8)
 
 
-def _mark_diverged(ax, x, rows, color, label: str) -> str:
-    """Ring each sweep point whose mean excludes diverged runs; return '<label> n/N at x, ...' ('' if none)."""
-    parts = []
-    for xi, row in zip(x, rows):
-        mean, _, ok, bad = row
-        if not bad:
-            continue
-        parts.append(f"{bad}/{ok + bad} at {xi:g}" + ("" if ok and np.isfinite(mean) else " (no mean)"))
-        if ok and np.isfinite(mean):
-            ax.plot([xi], [mean], "o", ms=12, mfc="none", mec=color, mew=1.2)
-    return f"{label} {', '.join(parts)}" if parts else ""
+#: A mean over fewer than this share of the runs is never drawn as an ordinary point.
+HEALTHY = 0.8
+
+
+def _plot_runs(ax, x, rows, color, label: str, short: str | None = None, **kw) -> str:
+    """Mean per point: filled and joined where at least 80 % of the runs are healthy, hollow and annotated where
+    fewer (but at least half), left out where at least half diverged; returns '<label> k/N at x, ...' ('' if none).
+
+    ``rows`` holds ``(mean, std, healthy runs, diverged runs)`` per point.
+    """
+    x = np.asarray(x, dtype=float)
+    mean = np.array([r[0] for r in rows], dtype=float)
+    n_ok = np.array([r[2] for r in rows], dtype=float)
+    bad = np.array([r[3] for r in rows], dtype=float)
+    frac = np.where(n_ok + bad > 0, n_ok / np.maximum(n_ok + bad, 1), 0.0)
+    ordinary = (frac >= HEALTHY) & np.isfinite(mean)
+    hollow = (frac >= 0.5) & ~ordinary & np.isfinite(mean)
+    kw = {"marker": "o", **kw}
+    ax.plot(x, np.where(ordinary, mean, np.nan), color=color, label=label, **kw)
+    if hollow.any():
+        ax.plot(x[hollow], mean[hollow], kw["marker"], mfc="white", mec=color, mew=1.5, ms=kw.get("ms", 8) + 2,
+                ls="none")
+        for xi, mi, b, n in zip(x[hollow], mean[hollow], bad[hollow], (n_ok + bad)[hollow]):
+            ax.annotate(f"{int(b)}/{int(n)} div.", (xi, mi), textcoords="offset points", xytext=(5, 4), fontsize=7,
+                        color=color)
+    parts = [f"{int(b)}/{int(n_ok[i] + b)} at {x[i]:g}" + ("" if ordinary[i] or hollow[i] else " (left out)")
+             for i, b in enumerate(bad) if b]
+    return f"{short or label} {', '.join(parts)}" if parts else ""
 
 
 def _title_with_diverged(ax, title: str, notes: list) -> None:
     notes = [n for n in notes if n]
-    ax.set_title(title + ("\ndiverged runs (ringed, excluded): " + "; ".join(notes) if notes else ""),
-                 fontsize=10 if notes else None)
+    ax.set_title(title + ("\ndiverged runs: " + "; ".join(notes) if notes else ""), fontsize=9 if notes else None)
 
 
-def plot_fig2(k, y_ref, outputs: dict, sweep: dict, Q: float, q_used: float):
-    """Fig. 2: IKF-MFAC outputs for increasing R at fixed Q (one run), and mean RMSE and K∞ against Q/R."""
-    fig, (a1, a2) = new_figure(1, 2, size=(12.0, 4.5),
-                               title=f"Fig. 2 — Example 1: IKF-MFAC output for R increasing at Q = {Q:g}, "
-                                     "and mean RMSE against Q/R")
+_RULE = "filled: ≥ 80 % of runs healthy; hollow: 50-80 %; ≥ 50 % diverged: left out"
+
+
+def plot_fig2(k, y_ref, outputs: dict, R, runs: int, diverged, rejection, rise, Q: float, rise_level: float,
+              steady: tuple):
+    """Fig. 2: IKF-MFAC outputs for increasing R at fixed Q (one run), and the claim's measures against R."""
+    fig, (a1, a2) = new_figure(1, 2, size=(13.0, 4.8),
+                               title=f"Fig. 2 — Example 1: IKF-MFAC for R increasing at a fixed Q = {Q:g}")
     a1.plot(k, y_ref, "k--", lw=1, label="y*")
     lim = 2.5
-    for R, y in outputs.items():
+    for Ri, y in outputs.items():
         peak = np.max(np.abs(y)) if np.all(np.isfinite(y)) else np.inf
         gone = ", diverges" if peak > 10.0 else (f", leaves the axes (max |y| = {peak:.2g})" if peak > lim else "")
-        a1.plot(k, y, lw=0.9, label=f"R = {R:g} (Q/R = {Q / R:.3g})" + gone)
-    a1.set(xlabel="sample k", ylabel="output y(k)", ylim=(-lim, lim))
+        a1.plot(k, np.where(np.abs(y) <= 10 * lim, y, np.nan), lw=0.9, label=f"R = {Ri:g} (Q/R = {Q / Ri:.3g})" + gone)
+    a1.set(xlabel="sample k", ylabel="output y(k)", ylim=(-lim, lim), title="one run (first seed)")
     a1.legend(loc="lower left", fontsize=8)
-    _ratio_axes(a2, sweep, "Example 1")
-    a2.axvline(q_used, color="k", ls=":", lw=1)
-    a2.set_title(f"Beyond the paper: mean RMSE against Q/R at the study's R (dotted: Q/R used, {q_used:.3g})",
-                 fontsize=10)
+    R = np.asarray(R, dtype=float)
+    div = np.asarray(diverged)
+    rows_f = [(f, 0.0, runs - d, d) for f, d in zip(rejection, div)]
+    rows_r = [(r, 0.0, runs - d, d) for r, d in zip(rise, div)]
+    notes = [_plot_runs(a2, R, rows_f, "tab:blue", f"rejection: steady RMS of y − y* (k = {steady[0]}..{steady[1]}), left axis",
+                        short="per R")]
+    a2.set(xscale="log", xlabel="R (measurement-noise variance of the IKF)", ylabel="steady RMS of y − y*")
+    tw = a2.twinx()
+    _plot_runs(tw, R, rows_r, "tab:red", f"response: start-up rise to y = {rise_level:g} (samples from k = 3), right axis",
+               ls="--")
+    tw.set_ylabel("start-up rise (samples)")
+    for Ri, d in zip(R, div):
+        if 2 * d >= runs:
+            a2.axvspan(Ri / 1.3, Ri * 1.3, color="0.85")
+            a2.text(Ri, 0.5, f"{d} of {runs}\nruns diverged", transform=a2.get_xaxis_transform(), ha="center",
+                    fontsize=8)
+    h1, l1 = a2.get_legend_handles_labels()
+    h2, l2 = tw.get_legend_handles_labels()
+    a2.legend(h1 + h2, l1 + l2, loc="upper left", fontsize=7)
+    _title_with_diverged(a2, f"the claim's measures over {runs} runs per R (mean of the healthy runs)", notes)
     return fig
 
 
 def _ratio_axes(ax, sweep: dict, label: str):
     q = np.asarray(sweep["q"])
-    m = np.array([r[0] for r in sweep["rmse"]])
-    s = np.array([r[1] for r in sweep["rmse"]])
-    ax.errorbar(q, m, yerr=s, marker="o", capsize=3, color="tab:blue", label=f"{label}: mean RMSE ± std")
-    for qi, mi, row in zip(q, m, sweep["rmse"]):
-        if row[3]:
-            ax.annotate(f"{row[3]} of {row[2] + row[3]} runs diverged", (qi, mi), textcoords="offset points",
-                        xytext=(8, 0), fontsize=8)
+    note = _plot_runs(ax, q, sweep["rmse"], "tab:blue", f"{label}: mean RMSE", short="IKF-MFAC")
     ax.set(xscale="log", xlabel="Q/R", ylabel="RMSE")
     tw = ax.twinx()
     tw.plot(q, sweep["k_inf"], "r:", marker=".", label="K∞(Q/R) (right axis)")
@@ -80,16 +113,19 @@ def _ratio_axes(ax, sweep: dict, label: str):
     h1, l1 = ax.get_legend_handles_labels()
     h2, l2 = tw.get_legend_handles_labels()
     ax.legend(h1 + h2, l1 + l2, loc="upper center", fontsize=8)
+    return note
 
 
 def plot_outputs(fig_no: int, title: str, k, y_ref, ys: dict):
-    """Fig. 3 / 5: reference and the true output of each scheme for one run."""
-    fig, ax = new_figure(size=(10.0, 4.5), title=f"Fig. {fig_no} — {title}")
-    ax.plot(k, y_ref, "k--", lw=1.2, label="y*(k)")
-    for s in SCHEMES:
-        ax.plot(k, ys[s], lw=0.8, color=COLORS[s], label=SCHEME_LABELS[s])
-    ax.set(xlabel="sample k", ylabel="output y(k)")
-    _legend(ax)
+    """Fig. 3 / 5: reference and the true output of each scheme for one run, one panel per scheme (same axes)."""
+    fig, axes = new_figure(len(SCHEMES), 1, size=(10.0, 8.0), sharex=True, sharey=True,
+                           title=f"Fig. {fig_no} — {title}")
+    for ax, s in zip(axes, SCHEMES):
+        ax.plot(k, y_ref, "k--", lw=1.0, label="y*(k)")
+        ax.plot(k, ys[s], lw=0.8, color=COLORS[s], label=f"{SCHEME_LABELS[s]} y(k)")
+        ax.set_ylabel("y(k)")
+        _legend(ax)
+    axes[-1].set_xlabel("sample k")
     return fig
 
 
@@ -122,14 +158,11 @@ def plot_spread(per_run: dict, runs: int):
 
 def plot_noise_sweep(levels, sweeps: dict, paper_levels: dict):
     """RMSE per scheme against the measurement-noise std (beyond the paper), one panel per example."""
-    fig, axes = new_figure(1, 2, size=(12.0, 4.5), title="RMSE of the four schemes against the noise std σ_v "
-                                                           "(mean over the non-diverged seeded runs)")
+    fig, axes = new_figure(1, 2, size=(12.0, 4.8), title="RMSE of the four schemes against the noise std σ_v "
+                                                           f"(mean of the healthy seeded runs; {_RULE})")
     for ax, key in zip(axes, ("ex1", "ex2")):
-        notes = []
-        for s in SCHEMES:
-            m = [row[0] for row in sweeps[key][s]["noise"]]
-            ax.plot(levels[key], m, marker="o", color=COLORS[s], label=SCHEME_LABELS[s])
-            notes.append(_mark_diverged(ax, levels[key], sweeps[key][s]["noise"], COLORS[s], SCHEME_LABELS[s]))
+        notes = [_plot_runs(ax, levels[key], sweeps[key][s]["noise"], COLORS[s], SCHEME_LABELS[s], **MARKERS[s])
+                 for s in SCHEMES]
         ax.axvline(paper_levels[key], color="k", ls=":", lw=1, label="paper's σ_v")
         ax.set(xlabel="measurement-noise std σ_v", ylabel="RMSE (log scale)", yscale="log")
         _title_with_diverged(ax, "Example 1" if key == "ex1" else "Example 2", notes)
@@ -139,28 +172,59 @@ def plot_noise_sweep(levels, sweeps: dict, paper_levels: dict):
 
 def plot_ratio_sweep(sweeps: dict, paper_q: dict):
     """IKF-MFAC RMSE and K∞ against Q/R (beyond the paper), one panel per example."""
-    fig, axes = new_figure(1, 2, size=(12.0, 4.5), title="IKF-MFAC: mean RMSE and steady gain K∞ against Q/R")
+    fig, axes = new_figure(1, 2, size=(12.0, 4.8), title=f"IKF-MFAC: mean RMSE and steady gain K∞ against Q/R ({_RULE})")
     for ax, key in zip(axes, ("ex1", "ex2")):
-        _ratio_axes(ax, sweeps[key], "Example 1" if key == "ex1" else "Example 2")
+        name = "Example 1" if key == "ex1" else "Example 2"
+        note = _ratio_axes(ax, sweeps[key], name)
         ax.axvline(paper_q[key], color="k", ls=":", lw=1)
-        ax.set_title(("Example 1" if key == "ex1" else "Example 2") + f" (dotted: Q/R used, {paper_q[key]:.3g})")
+        _title_with_diverged(ax, name + f" (dotted: Q/R used, {paper_q[key]:.3g})", [note])
     return fig
 
 
 def plot_gain_sweep(values: dict, sweeps: dict, used: dict):
     """RMSE per scheme against ρ and λ (beyond the paper): rows examples, columns parameters."""
-    fig, axes = new_figure(2, 2, size=(12.0, 7.5), title="RMSE of the four schemes against the step size ρ "
-                                                           "and the weight λ (mean over the non-diverged seeded runs)")
+    fig, axes = new_figure(2, 2, size=(12.0, 8.0), title="RMSE of the four schemes against the step size ρ and the "
+                                                           f"weight λ (mean of the healthy seeded runs;\n{_RULE})")
     for i, key in enumerate(("ex1", "ex2")):
         for j, (name, sym) in enumerate((("rho", "ρ"), ("lam", "λ"))):
             ax = axes[i, j]
-            notes = []
-            for s in SCHEMES:
-                ax.plot(values[name], [row[0] for row in sweeps[key][s][name]], marker="o", color=COLORS[s],
-                        label=SCHEME_LABELS[s])
-                notes.append(_mark_diverged(ax, values[name], sweeps[key][s][name], COLORS[s], SCHEME_LABELS[s]))
-            ax.axvline(used[name], color="k", ls=":", lw=1, label="paper's value")
+            notes = [_plot_runs(ax, values[name], sweeps[key][s][name], COLORS[s], SCHEME_LABELS[s], **MARKERS[s])
+                     for s in SCHEMES]
+            ax.axvline(used[name], color="k", ls=":", lw=1, label="Example 1's value")
             ax.set(xlabel=sym, ylabel="RMSE")
             _title_with_diverged(ax, ("Example 1" if key == "ex1" else "Example 2") + f", RMSE vs {sym}", notes)
     _legend(axes[0, 1])
+    return fig
+
+
+def plot_td_scan(scan: dict, chosen: dict, mfac: dict):
+    """TD-MFAC's mean RMSE and diverged runs against the TD step count per sample, one panel per example."""
+    fig, axes = new_figure(1, 2, size=(12.5, 5.4), title="TD-MFAC against the TD steps per control sample (not printed)"
+                                                           f" on Table 1's seeds\n({_RULE}; a mean off the top is "
+                                                           "printed at the edge)")
+    for ax, key in zip(axes, ("ex1", "ex2")):
+        d = scan[key]
+        n, runs = np.asarray(d["counts"]), d["runs"]
+        rows = [(m, 0.0, runs - b, b) for m, b in zip(d["rmse"], d["diverged"])]
+        _plot_runs(ax, n, rows, "tab:orange", "TD-MFAC mean RMSE (left axis)")
+        ax.axhline(mfac[key], color="tab:gray", ls="-", lw=1, label=f"plain MFAC {mfac[key]:.4f}")
+        ax.axhline(TABLE1[key]["rmse"]["td_mfac"], color="tab:red", ls=":", lw=1.2,
+                   label=f"Table 1 TD-MFAC {TABLE1[key]['rmse']['td_mfac']}")
+        ax.axvline(chosen[key], color="k", ls="--", lw=1, label=f"count used: {chosen[key]}")
+        ok = np.isfinite(d["rmse"]) & (np.asarray(d["diverged"]) < 0.5 * runs)
+        top = max(1.5 * mfac[key], TABLE1[key]["rmse"]["td_mfac"])
+        ax.set(xscale="log", xlabel="TD steps per sample (log scale)", ylabel="mean RMSE",
+               ylim=(0.9 * min(np.nanmin(np.asarray(d["rmse"])[ok]) if ok.any() else mfac[key],
+                               TABLE1[key]["rmse"]["td_mfac"]), top))
+        for ni, m in zip(n[ok], np.asarray(d["rmse"])[ok]):
+            if m > top:
+                ax.annotate(f"{m:.3g} ↑", (ni, top), textcoords="offset points", xytext=(0, -12), ha="center",
+                            fontsize=7, color="tab:orange")
+        tw = ax.twinx()
+        tw.bar(n, d["diverged"], width=n * 0.08, color="tab:purple", alpha=0.35, label="diverged runs (right axis)")
+        tw.set(ylabel=f"diverged runs of {runs}", ylim=(0, runs * 1.05))
+        h1, l1 = ax.get_legend_handles_labels()
+        h2, l2 = tw.get_legend_handles_labels()
+        ax.legend(h1 + h2, l1 + l2, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=3, fontsize=7)
+        ax.set_title("Example 1" if key == "ex1" else "Example 2")
     return fig

@@ -9,17 +9,16 @@ import numpy as np
 from ctrl_analysis.estimators.kalman import random_walk_gain
 from ctrl_analysis.metrics import mean_std, rmse, snr_db
 
+from .claims import table1_cell
 from .loops import noise_draws, run_scheme
-from .paper import SCHEME_LABELS, SCHEMES, TABLE1, Example
+from .paper import SCHEMES, TABLE1, Example
 from .plants import reference
 
 __all__ = [
-    "table1_cell",
     "d_mfac_rearm_variant",
     "metrics_of",
     "ranking",
     "ratio_rows",
-    "record_table1",
     "run_with_sweeps",
     "sweep_table",
     "table1_consistency",
@@ -28,46 +27,12 @@ __all__ = [
 
 
 
-def table1_cell(key: str, scheme: str, metric: str) -> str:
-    """The paper cell a Table 1 quantity scores: ``"Table 1 / constant|varying / RMSE|SNR / <scheme>"``."""
-    return f"Table 1 / {'constant' if key == 'ex1' else 'varying'} / {metric.upper()} / {SCHEME_LABELS[scheme]}"
-
-#: Relative tolerances of the verdicts: the Monte Carlo mean is known to < 1 % (std/sqrt(200)),
-#: single runs spread by 2-8 % (RMSE); 10 % of RMSE, and 5 % of SNR. SNR is in dB, so 5 % is about
-#: 1 dB in Example 1 (SNR 19-21 dB, like ±12 % of RMSE) but only 0.4-0.7 dB in Example 2 (SNR 8-15 dB,
-#: like ±5-8 % of RMSE): an SNR and an RMSE verdict of the same run need not agree.
-TOLERANCE = {"rmse": 0.10, "snr": 0.05}
-
-
 def metrics_of(runs) -> tuple[np.ndarray, np.ndarray]:
     """Per-run RMSE and SNR (dB) over k = 1..N on the true output (NaN for diverged runs)."""
     ref = runs.y_ref[:, None]
     with np.errstate(all="ignore"):
         e, s = rmse(ref, runs.y), snr_db(ref, runs.y)
     return np.where(runs.diverged, np.nan, e), np.where(runs.diverged, np.nan, s)
-
-
-def record_table1(result, key: str, all_runs: dict) -> dict:
-    """Quantities ``<key>.<scheme>.rmse|snr`` (mean ± std over the non-diverged runs); returns the per-run metrics."""
-    per_run = {}
-    for s in SCHEMES:
-        r = all_runs[s]
-        e, snr = metrics_of(r)
-        per_run[s] = (e, snr)
-        ok = ~r.diverged
-        bad = [f"run {b} at k = {k}" for b, k in zip(np.flatnonzero(r.diverged), r.diverged_step[r.diverged])]
-        note = f"{len(bad)} of {ok.size} runs diverged and are excluded ({'; '.join(bad[:5])})" if bad else ""
-        for m, vals, unit in (("rmse", e, ""), ("snr", snr, "dB")):
-            mean, std, n = mean_std(vals, ok)
-            below = float(np.mean(vals[ok] < TABLE1[key][m][s])) if n else float("nan")
-            where = f"the paper's value lies above {100 * below:.1f} % of the runs"
-            cell = table1_cell(key, s, m)
-            # runs = all runs, runs_diverged = the excluded ones; the mean is over the others
-            result.quantity(f"{key}.{s}.{m}", cell, None if n == 0 else float(mean), paper=TABLE1[key][m][s],
-                            std=None if n == 0 else float(std), runs=int(ok.size), runs_diverged=len(bad),
-                            tolerance=TOLERANCE[m], unit=unit, cell=cell, primary=True,
-                            note="; ".join(x for x in (note, "all runs diverged" if n == 0 else where) if x))
-    return per_run
 
 
 def table1_consistency(n1: int, n2: int) -> list[dict]:
@@ -93,10 +58,8 @@ def table1_consistency(n1: int, n2: int) -> list[dict]:
 
 
 def d_mfac_rearm_variant(ex: Example, seeds) -> tuple:
-    """D-MFAC with the other k_m rule (``rearm`` flipped): (mean RMSE, std, runs, diverged) and (SNR ...)."""
-    r = run_scheme(dataclasses.replace(ex, rearm=not ex.rearm), "d_mfac", noise_draws(ex, seeds))
-    e, snr = metrics_of(r)
-    return mean_std(e, ~r.diverged) + (int(r.diverged.sum()),), mean_std(snr, ~r.diverged)
+    """D-MFAC with the other k_m rule (``rearm`` flipped): per-run (RMSE, SNR), NaN where a run diverged."""
+    return metrics_of(run_scheme(dataclasses.replace(ex, rearm=not ex.rearm), "d_mfac", noise_draws(ex, seeds)))
 
 
 def ranking(per_run: dict) -> tuple[list, dict]:
@@ -113,15 +76,11 @@ def ranking(per_run: dict) -> tuple[list, dict]:
 
 
 def td_step_scan(ex: Example, seeds, counts, feedthrough_options=(False, True), engine: str = "auto") -> dict:
-    """TD-MFAC over TD step counts per sample: {(feedthrough, count): (mean RMSE, std, runs, diverged)}."""
+    """TD-MFAC over TD step counts per sample: {(feedthrough, count): per-run RMSE (NaN where a run diverged)}."""
     v = noise_draws(ex, seeds)
-    out = {}
-    for ft in feedthrough_options:
-        for n in counts:
-            e, _ = metrics_of(run_scheme(dataclasses.replace(ex, td_substeps=n, td_feedthrough=ft), "td_mfac", v,
-                                         engine=engine))
-            out[(ft, n)] = mean_std(e, np.isfinite(e)) + (int(np.sum(~np.isfinite(e))),)
-    return out
+    return {(ft, n): metrics_of(run_scheme(dataclasses.replace(ex, td_substeps=n, td_feedthrough=ft), "td_mfac", v,
+                                           engine=engine))[0]
+            for ft in feedthrough_options for n in counts}
 
 
 def _segments(ex: Example, scheme: str, seeds, sweep_seeds, sweeps: dict) -> list:

@@ -14,13 +14,14 @@ from __future__ import annotations
 import warnings
 from dataclasses import asdict
 
+from ctrl_analysis import sensitivity
 from ctrl_analysis.report import StudyContext, StudyInfo, StudyResult
 from ctrl_analysis.simulate import run_seeds
 from ctrl_analysis.study import record_parameters
 
-from . import figures, findings, linear, quantities
+from . import claims, figures, findings, linear, quantities
 from .loops import pick, simulate_situation, situation_rows
-from .paper import ANALYSIS, PAPER, QUICK, SITUATIONS
+from .paper import ANALYSIS, PAPER, QUICK, READINGS, SITUATIONS
 
 __all__ = ["INFO", "run"]
 
@@ -41,9 +42,11 @@ def run(ctx: StudyContext, analysis=None) -> StudyResult:
     result = StudyResult(INFO)
     an = analysis or (QUICK if ctx.quick else ANALYSIS)
     seeds = run_seeds(ctx.seed, ctx.runs_or(an.runs, an.quick_runs))
+    sweep_seeds = tuple(seeds[:an.quick_runs if ctx.quick else an.sweep_runs])
     horizons = {k: an.horizon(k) for k in SITUATIONS}
     result.seeds = {"noise": seeds}
     record_parameters(result, PAPER)
+    record_parameters(result, READINGS, prefix="claims")
     for key, sit in SITUATIONS.items():
         record_parameters(result, sit, prefix=key)
     result.settings.update({"analysis": asdict(an), "runs": len(seeds), "quick": ctx.quick,
@@ -60,29 +63,58 @@ def run(ctx: StudyContext, analysis=None) -> StudyResult:
     sims = {}
     for key, sit in SITUATIONS.items():
         rows = situation_rows(key, seeds)
-        ctx.progress(f"{key}: {horizons[key]:g} s, {len(rows)} runs on the batch axis")
+        main = set(rows)
+        extra = [r for r in claims.sweep_rows(key, sweep_seeds, an.eps_grid) if r not in main]
+        ctx.progress(f"{key}: {horizons[key]:g} s, {len(seeds)} Monte Carlo runs × 3 observers (ESO, MESO, "
+                     f"MESO Table-1 literal) + noise-free and claim runs + {len(extra)} runs of the sensitivity "
+                     f"sweep ({len(rows) + len(extra)} simulations on the batch axis)")
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", RuntimeWarning)
+            rows = rows + extra
             sims[key] = simulate_situation(sit, rows, horizons[key], PAPER, window=an.eps_window,
                                            keep=_kept(rows), exact=[i for i, r in enumerate(rows)
-                                                                    if r.observer == "meso" and r.seed is None],
+                                                                    if r.observer == "meso" and r.seed is None
+                                                                    and r in main],
                                            bound=an.bound, progress=ctx.progress, jobs=ctx.jobs)
 
     sc = quantities.eps_scaling(sims["s1"], an)
-    quantities.linear_quantities(result, lin, sc)
     ctx.save_figure(result, figures.plot_eps_scaling(sc, lin), "leso_eps_scaling.png",
                     caption="Beyond the paper: mean |e_i| of the ESO in situation 1 against ε on log-log axes, noise-free "
                             "loop (left) and the steady noise std per ε (right), with reference lines of the slopes law "
                             "(4)/(7) predicts; checks §5's claim that a larger ε lowers the noise sensitivity "
                             "(quantities leso.eps_slope.*, leso.noise_std.*).")
-    for key, sim in sims.items():
-        quantities.table_quantities(result, key, sim, an)
-        quantities.theta_final(result, key, sim, horizons[key])
-    claims = quantities.claim_quantities(result, sims, lin, horizons)
+    out = claims.record(result, sims, lin, sc, horizons, an)
+    _sensitivity(ctx, result, sims, an, sweep_seeds, horizons)
     _figures(ctx, result, sims)
-    findings.add_findings(result, sims, lin, sc, claims, horizons, an.tolerance)
+    findings.add_findings(result, sims, lin, sc, out, horizons, an.tolerance)
     result.missing = findings.missing(result)
     return result
+
+
+def _sensitivity(ctx, result, sims, an, sweep_seeds, horizons) -> None:
+    """Every reconstruction's plausible values, one at a time, on the sweep's runs (most read from ``sims``)."""
+    ctx.progress(f"sensitivity sweep: {len(sweep_seeds)} noise runs per evaluation")
+    claims.remember(sims)
+    params = {"": PAPER, "claims": READINGS,
+              "sweep": claims.SweepSettings(sweep_seeds, tuple(horizons.items()), an)}
+    names = None if not ctx.quick else [n for n in _varied() if n != "integrator"]
+    sens = sensitivity.sweep(claims.evaluate, params, names=names, note=(
+        f"{len(sweep_seeds)} noise runs per evaluation (the main run's first seeds, common random numbers) and the "
+        "noise-free runs; each reconstruction varied alone" + (" (quick: the Euler integrator not tried)" if names
+                                                               else "")))
+    sensitivity.apply(result, sens)
+    ctx.save_figure(result, sensitivity.plot_sensitivity(result), "sensitivity.png",
+                    caption="Sensitivity of the verdicts to each reconstruction, varied alone across its plausible "
+                            "range (results.json `reconstructions[*].plausible`): left, the largest change of a "
+                            "Table 2/3 cell (primary reading, noise on, the sweep's runs) and how many cells' "
+                            "verdicts flip; right, which claims keep (green) or flip (orange) their verdict.")
+
+
+def _varied() -> list:
+    from ctrl_analysis.study import reconstructions_of
+
+    return [("claims." if p is READINGS else "") + r["name"] for p in (PAPER, READINGS)
+            for r in reconstructions_of(p) if r.get("plausible") is not None and r["plausible"].varied]
 
 
 def _kept(rows) -> list:
@@ -106,17 +138,23 @@ def _figures(ctx, result, sims) -> None:
                       (pick(rows, "eso", "none", True)[0], "ESO", c["eso"]),
                       (pick(rows, "meso", "wellposed", True)[0], "MESO (well-posed LSM)", c["meso"])]}
         title = (f"Fig. {fig_no[0]} (situation {key[1]}, b0 = {sit.b0:g}, b = {PAPER.b:g}): PD control with ESO "
-                 f"and MESO — x1, tracking and estimation errors (x3 = x2' − b0 u − XᵀΘ_used)")
+                 f"and MESO at ε = {PAPER.epsilon:g} — control input, tracking and estimation errors "
+                 f"(x3 = x2' − b0 u − XᵀΘ_used)")
         noisy = list(series)[1]
         ctx.save_figure(result, figures.plot_situation(sim, series, title, smooth={noisy: 1.0}), sit.figs[0],
-                        caption=f"Redraws the paper's Fig. {fig_no[0]} (situation {key[1]}): x1 against the reference, the "
-                                "tracking errors and the estimation errors e1-e3 of the ESO and the well-posed MESO, with "
-                                "the measurement noise off (left) and on (right, one run; there the estimation errors are drawn "
-                                "faint with their 1-s centred moving average in bold, since the noise band of one observer "
-                                "would hide the other's error). Compare the size of the MESO's and the ESO's errors with "
-                                f"Table {2 if key == 's1' else 3}. The error panels' y-ranges show the steady behaviour "
-                                "(1.2 × the 99.9th percentile after the first tenth of the run) and clip the start-up "
-                                "transient and the peak at the θ4 step at 30 s; long traces are thinned.")
+                        caption=f"Redraws the paper's Fig. {fig_no[0]} (situation {key[1]}): the control input u, the "
+                                "tracking error and the estimation errors e1-e3 of the ESO and the well-posed MESO at equal "
+                                "ε and PD gains, with the measurement noise off (left) and on (middle, one run; there the "
+                                "estimation errors are drawn faint with their 1-s centred moving average in bold, since the "
+                                "noise band of one observer would hide the other's error). The y-ranges of these two "
+                                "columns show the steady behaviour (1.2 × the 99.9th percentile of |e| outside the start-up "
+                                "and the 4 s after the θ4 step at 30 s); the peaks they clip are written in each panel and "
+                                "drawn at full scale, noise off, in the right column (its time axis is broken between the "
+                                "start-up and the step; the two observers are identical until the first identification batch ends, so only "
+                                "one trace shows there). The ESO is drawn wide and faint beneath the MESO, whose control "
+                                "input nearly coincides with it. x1 itself is not drawn: it lies on the reference to within the "
+                                "tracking error of the second row. Compare the size of the MESO's and the ESO's errors with "
+                                f"Table {2 if key == 's1' else 3}; long traces are thinned.")
         runs = [(pick(rows, "meso", "wellposed", True)[0], "MESO well-posed (noise on)", c["meso"]),
                 (pick(rows, "meso", "literal", True)[0], "MESO Table-1 literal (noise on)", c["literal"]),
                 (pick(rows, "meso", "literal", False, bypass_w=True)[0], "Table-1 literal without W(s) (noise off)",

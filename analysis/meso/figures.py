@@ -86,20 +86,39 @@ def plot_eps_scaling(sc: dict, lin):
     return fig
 
 
-def _window(t, T):
-    """A 15-s window around the θ4 step (or the end of a short run) where sin t is readable."""
-    lo = PAPER.t_step - 5.0 if T > PAPER.t_step + 10 else max(0.0, T - 15.0)
-    return (t >= lo) & (t <= lo + 15.0)
+#: the transient column: the start-up and the θ4 step, each this long (s), drawn side by side
+_TRANSIENT = 2.0
+
+
+def _transient_x(t):
+    """x-coordinates of the transient column: [0, 2) s as is, [t_step − 0.2, t_step + 1.8) s shifted next to it."""
+    first = t < _TRANSIENT
+    second = (t >= PAPER.t_step - 0.2) & (t < PAPER.t_step - 0.2 + _TRANSIENT)
+    x = np.full(t.shape, np.nan)
+    x[first] = t[first]
+    x[second] = t[second] - (PAPER.t_step - 0.2) + _TRANSIENT + 0.3
+    return x
+
+
+def _steady(t):
+    """Samples that set the steady y-range: after the start-up (first tenth, at least 5 s) and not within 4 s
+    after the θ4 step."""
+    return (t >= max(5.0, 0.1 * t[-1])) & ~((t >= PAPER.t_step) & (t < PAPER.t_step + 4.0))
 
 
 def plot_situation(sim: SituationRun, series: dict, title: str, max_points: int = 4000, smooth: dict | None = None):
-    """Fig. 3 / Fig. 5: x1 in a window, tracking and estimation errors; noise off (left) and on (right).
+    """Fig. 3 / Fig. 5: control input, tracking and estimation errors; noise off, noise on, and the transients.
+
+    Columns: noise off and noise on over the whole run, their y-ranges set by the steady behaviour (the
+    start-up and θ4-step peaks are off scale, their size written in the panel); the third column shows
+    those two transients at full scale (noise off).
 
     Parameters
     ----------
     sim : SituationRun
     series : dict
-        Column title -> ``[(run, label, color), ...]`` (runs kept in ``sim.keep``).
+        Column title -> ``[(run, label, color), ...]`` (runs kept in ``sim.keep``); the first column's runs
+        are also drawn in the transient column.
     title : str
     max_points : int
         Decimation of the full-horizon panels.
@@ -114,37 +133,71 @@ def plot_situation(sim: SituationRun, series: dict, title: str, max_points: int 
     """
     t = sim.t
     dec = max(1, len(t) // max_points)
-    x3_of = {}
-    fig, ax = new_figure(5, 2, size=(13, 13), sharex="row", title=title)
-    win = _window(t, t[-1])
-    for c, (col, runs) in enumerate(series.items()):
-        ax[0, c].plot(t[win], np.sin(t[win]), "k--", lw=1.2, label="reference ξ = sin t")
+    fig, ax = new_figure(5, 3, size=(16, 13), title=title, gridspec_kw={"width_ratios": [1.0, 1.0, 0.55]})
+    steady = _steady(t)
+    xt = _transient_x(t)
+    windows = [(t < _TRANSIENT), np.isfinite(xt) & (t >= _TRANSIENT)]   # drawn apart: the axis is broken between
+    cols = list(series.items())
+    for c, (col, runs) in enumerate(cols):
+        peaks = {r: 0.0 for r in range(5)}
+        lims = {r: 0.0 for r in range(5)}
+        urange = [np.inf, -np.inf]
         for b, name, color in runs:
             k = sim.keep[b]
-            ax[0, c].plot(t[win], k["x1"][win], color=color, lw=1.0, label=name)
-            x3_of[b] = _x3(sim, b)
-            for r, y in ((1, np.sin(t) - k["x1"]), (2, k["x1"] - k["xhat1"]), (3, k["x2"] - k["xhat2"]),
-                         (4, x3_of[b] - k["xhat3"])):
+            x3 = _x3(sim, b)
+            for r, y in enumerate((k["u"], np.sin(t) - k["x1"], k["x1"] - k["xhat1"], k["x2"] - k["xhat2"],
+                                   x3 - k["xhat3"])):
+                a = ax[r, c]
                 if r >= 2 and col in (smooth or {}):
-                    ax[r, c].plot(t[::dec], y[::dec], color=color, lw=0.4, alpha=0.3)
-                    ax[r, c].plot(t, _moving_average(y, max(1, int(round(smooth[col] / (t[1] - t[0]))))),
-                                  color=color, lw=1.2, label=name)
-                else:
-                    ax[r, c].plot(t[::dec], y[::dec], color=color, lw=0.6, label=name)
-        ax[0, c].set_title(col, fontsize=11)
-    labels = ["$x_1$ (window around the θ4 step)", "tracking error ξ − $x_1$", "estimation error $x_1 − \\hat x_1$",
+                    a.plot(t[::dec], y[::dec], color=color, lw=0.4, alpha=0.3)
+                    a.plot(t[::dec], _moving_average(y, max(1, int(round(smooth[col] / (t[1] - t[0])))))[::dec],
+                           color=color, lw=1.2, label=name)
+                else:  # the first run (ESO) wide and faint beneath: the control inputs nearly coincide
+                    first = b == runs[0][0]
+                    a.plot(t[::dec], y[::dec], color=color, lw=2.0 if first else 0.6, alpha=0.5 if first else 1.0,
+                           label=name)
+                fin = np.isfinite(y)
+                if r == 0 and np.any(steady & fin):
+                    lo, hi = np.min(y[steady & fin]), np.max(y[steady & fin])
+                    urange = [min(urange[0], lo), max(urange[1], hi)]
+                lims[r] = max(lims[r], float(np.percentile(np.abs(y[steady & fin]), 99.9)) if np.any(steady & fin) else 0)
+                peaks[r] = max(peaks[r], float(np.max(np.abs(y[~steady & fin]), initial=0.0)))
+                if c == 0:
+                    for w in windows:
+                        ax[r, 2].plot(xt[w], y[w], color=color, lw=0.8)
+        _steady_limits(ax[:, c], lims, peaks, urange)
+        ax[0, c].set_title(col, fontsize=10.5)
+        ax[4, c].set_xlabel("time t (s)")
+    ax[0, 2].set_title("noise off: the start-up and the θ4 step\nat full scale", fontsize=10.5)
+    shift = _TRANSIENT + 0.3 + 0.2   # x of t = t_step
+    for r in range(5):
+        a = ax[r, 2]
+        a.axvline(_TRANSIENT + 0.15, color="k", lw=0.8, ls=":")
+        a.set_xticks([0, 1, shift, shift + 1], ["0", "1", f"{PAPER.t_step:g}", f"{PAPER.t_step + 1:g}"])
+    ax[4, 2].set_xlabel("time t (s); axis broken at the dotted line")
+    labels = ["control input u", "tracking error ξ − $x_1$ (ξ = sin t)", "estimation error $x_1 − \\hat x_1$",
               "estimation error $x_2 − \\hat x_2$ (1/s)", "estimation error $x_3 − \\hat x_3$ (1/s²)"]
     for r, lab in enumerate(labels):
         ax[r, 0].set_ylabel(lab, fontsize=9)
-        if r:
-            for c in range(2):
-                _robust_ylim(ax[r, c], len(t[::dec]))
-    for c in range(2):
-        ax[0, c].set_xlabel("time t (s)")
-        ax[4, c].set_xlabel("time t (s)")
     handles, labs = ax[0, 0].get_legend_handles_labels()
     fig.legend(handles, labs, loc="outside lower center", ncol=3, fontsize=9)
     return fig
+
+
+def _steady_limits(axes, lims, peaks, urange) -> None:
+    """y-ranges of one column from the steady behaviour; the clipped transient peak written in each panel."""
+    for r, a in enumerate(axes):
+        lim = 1.2 * lims[r]
+        if lim <= 0:
+            continue
+        if r == 0:  # u is not centred on zero: its steady range
+            pad = 0.1 * (urange[1] - urange[0])
+            a.set_ylim(urange[0] - pad, urange[1] + pad)
+        else:
+            a.set_ylim(-lim, lim)
+        if peaks[r] > lim:
+            a.text(0.99, 0.03, f"off scale: start-up / θ4-step peak |·| = {peaks[r]:.3g}", transform=a.transAxes,
+                   ha="right", va="bottom", fontsize=7.5, bbox={"facecolor": "white", "alpha": 0.8, "lw": 0})
 
 
 def _moving_average(y, n):
@@ -163,16 +216,6 @@ def _x3(sim, b):
            "xhat1": k["xhat1"][:, None], "xhat2": k["xhat2"][:, None]}
     sig.update({f"theta[{i}]": k[f"theta[{i}]"][:, None] for i in range(4)})
     return x3_true(sig, [sim.rows[b]], PAPER, sim.b0)[:, 0]
-
-
-def _robust_ylim(a0, n):
-    """Limits that show the steady behaviour (99.9th percentile after the first tenth), not the start-up peak."""
-    ys = [np.abs(line.get_ydata()[n // 10:]) for line in a0.get_lines()]
-    y = np.concatenate(ys) if ys else np.zeros(1)
-    y = y[np.isfinite(y)]
-    lim = 1.2 * np.percentile(y, 99.9) if y.size else 1.0
-    if lim > 0:
-        a0.set_ylim(-lim, lim)
 
 
 def plot_theta(sim: SituationRun, key: str, runs: list, title: str, max_points: int = 3000):

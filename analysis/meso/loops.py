@@ -66,13 +66,17 @@ class Row:
     epsilon: float = PAPER.epsilon
     bypass_w: bool = False
     threshold: float = PAPER.cond_threshold
+    x0: tuple = PAPER.x0
+    xhat0: tuple = PAPER.x_hat0
 
     @property
     def label(self) -> str:
         v = "" if self.observer == "eso" else f"-{self.variant}" + ("-noW" if self.bypass_w else "")
         extra = "".join([f"/eps={self.epsilon:g}" if self.epsilon != PAPER.epsilon else "",
                          f"/b={self.b_plant:g}" if self.b_plant != PAPER.b else "",
-                         f"/gate={self.threshold:g}" if self.threshold != PAPER.cond_threshold else ""])
+                         f"/gate={self.threshold:g}" if self.threshold != PAPER.cond_threshold else "",
+                         f"/x0={self.x0}" if self.x0 != PAPER.x0 else "",
+                         f"/xhat0={self.xhat0}" if self.xhat0 != PAPER.x_hat0 else ""])
         return f"{self.observer}{v}/" + ("no-noise" if self.seed is None else f"seed{self.seed}") + extra
 
 
@@ -283,7 +287,7 @@ def build_loop(sit: Situation, rows, paper: Paper = PAPER) -> Loop:
         place(ident, "lsm"),
         place(lpf, "W", inputs=signal_names("c", 4), outputs=signal_names("w", 4)),
         place(ParameterPath([r.bypass_w for r in rows]), "path"),
-    ], paper.h)
+    ], paper.h, method=paper.integrator)
 
 
 @dataclass
@@ -416,7 +420,9 @@ def _simulate_rows(sit, rows, T, paper, window, keep, exact, bound, progress) ->
                        diverged=np.zeros(B, dtype=bool), diverged_step=np.full(B, -1), b0=sit.b0)
     out.exact_cond = {b: [] for b in exact}
     out.exact_rank = {b: [] for b in exact}
-    x0, k0, x3_last, tb, thb, lc, rk = None, 0, None, [], [], [], []
+    # per-run initial states of plant and observer (Row.x0, Row.xhat0); the other blocks start at their defaults
+    x0 = {"plant": np.array([r.x0 for r in rows], dtype=float), "observer": np.array([r.xhat0 for r in rows], dtype=float)}
+    k0, x3_last, tb, thb, lc, rk = 0, None, [], [], [], []
     while k0 < K:
         n = min(N, K - k0)
         sl = slice(k0, k0 + n + 1)
@@ -578,7 +584,8 @@ def situation_rows(key: str, seeds, paper: Paper = PAPER) -> list:
 
 def pick(rows, observer, variant, noise: bool, **extra) -> list:
     """Indices of the rows with these settings (``extra`` fields default to the paper's values)."""
-    base = {"b_plant": PAPER.b, "epsilon": PAPER.epsilon, "bypass_w": False, "threshold": PAPER.cond_threshold}
+    base = {"b_plant": PAPER.b, "epsilon": PAPER.epsilon, "bypass_w": False, "threshold": PAPER.cond_threshold,
+            "x0": PAPER.x0, "xhat0": PAPER.x_hat0}
     base.update(extra)
     return [i for i, r in enumerate(rows) if r.observer == observer and r.variant == variant
             and (r.seed is not None) == noise and all(getattr(r, k) == v for k, v in base.items())]

@@ -9,9 +9,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ctrl_analysis.study import printed, reconstructed
+from ctrl_analysis.study import Claim, choices, fixed, printed, reconstructed, span
 
-__all__ = ["ANALYSIS", "METRICS", "PAPER", "SITUATIONS", "TABLES", "TABLE_UNITS", "Analysis", "Paper", "Situation"]
+__all__ = ["ANALYSIS", "CLAIMS", "READINGS", "Readings", "METRICS", "PAPER", "SITUATIONS", "TABLES", "TABLE_UNITS", "Analysis", "Paper", "Situation"]
 
 
 @dataclass(frozen=True)
@@ -30,56 +30,130 @@ class Paper:
     theta2: float = printed(-1.6, "(31)/(32): d(t) coefficient of x2")
     step: float = printed(1.8, "(31)/(32): non-model-class term added after 30 s")
     t_step: float = printed(30.0, "(31)/(32): switching time of the non-model-class term")
-    x0: tuple = reconstructed((0.0, 0.0), "the paper prints no initial conditions; the plant starts at rest")
-    x_hat0: tuple = reconstructed((0.0, 0.0, 0.0), "the paper prints no observer initial state; at rest")
+    x0: tuple = reconstructed(
+        (0.0, 0.0), "the paper prints no initial conditions; the plant starts at rest",
+        plausible=choices(((0.0, 1.0),), "the other natural start: on the reference, x(0) = (ξ(0), ξ'(0)) = (0, 1)"))
+    x_hat0: tuple = reconstructed(
+        (0.0, 0.0, 0.0), "the paper prints no observer initial state; at rest",
+        plausible=choices(((0.0, 1.0, 0.0),), "the observer started on the reference, x̂(0) = (ξ(0), ξ'(0), 0)"))
     integrator: str = reconstructed(
         "rk4", "the paper gives only the 3 ms step; plant and observer are integrated jointly by RK4, one "
         "step per sample, u / noise / θ4 held over the step (the observer sees y = x1 + 0.002 n0_k, n0_k "
-        "drawn per step)")
+        "drawn per step)",
+        plausible=choices(("euler",), "a fixed-step simulation at 3 ms may as well use forward Euler (Simulink's "
+                                      "ode1); with ω_o = 20 rad/s, h ω_o = 0.06, both are stable"))
     control_sampling: str = reconstructed(
         "u_k from the estimates at t_k, held (ZOH)",
-        "(30) is continuous; u must be sampled to use the previous sample inside XᵀΘ as eq. (12) requires")
+        "(30) is continuous; u must be sampled to use the previous sample inside XᵀΘ as eq. (12) requires",
+        plausible=fixed("a sampled law is forced by eq. (12) (the previous sample inside XᵀΘ); a law re-evaluated at every RK4 stage would differ by O(h ω_c) = 3 % of a step's change, far below the MESO/ESO gaps the claims rest on"))
     eq12_previous_sample: str = reconstructed(
         "controller: Θ_used(t_k)ᵀ [x̂1(t_{k-1}), x̂2(t_{k-1}), u_{k-1}, 1]; observer: Θ_used(t_k)ᵀ [x̂1(t), "
         "x̂2(t), u_k, 1]",
         "X contains u itself; eq. (12) breaks the algebraic loop with the previous sample in the control "
-        "law; inside the observer the held u_k is already known, so no delay is needed there")
+        "law; inside the observer the held u_k is already known, so no delay is needed there",
+        plausible=fixed("eq. (12) prescribes the previous sample in the control law; inside the observer the held u_k is known exactly, so there is no other reading that keeps the loop causal"))
     kbar_reference_index: str = reconstructed(
         "K̄_j = b0 u_j + Σ_l k_l x̂_jl (ξ at t_j, the smoothed Θ actually used in u_j)",
         "eq. (12)/(14) write x*_{j+1} and Σ_m Θ_m (unsmoothed); with W(s) in the loop the identity "
-        "b0 u_j = K̄_j − Σ k_l x̂_jl only holds with the Θ used in u_j and ξ at t_j")
+        "b0 u_j = K̄_j − Σ k_l x̂_jl only holds with the Θ used in u_j and ξ at t_j",
+        plausible=fixed("the only indexing for which b0 u_j = K̄_j − Σ k_l x̂_jl holds exactly; any other makes the regression (16) inconsistent by construction, not a plausible reading"))
     lowpass_discretisation: str = reconstructed(
         "exact ZOH of W(s), input = latest LSM result, held",
-        "the LSM result changes only at batch ends, so the exact discretisation equals the continuous filter")
+        "the LSM result changes only at batch ends, so the exact discretisation equals the continuous filter",
+        plausible=fixed("the exact discretisation equals the continuous W(s) for a held input: no alternative differs"))
     disturbance_step: str = reconstructed(
         "θ4 = 1.8 from the sample at t = 30 s on",
-        "(31)/(32) switch at t = 30 s; 30 s is a sample instant and a batch boundary in both situations")
+        "(31)/(32) switch at t = 30 s; 30 s is a sample instant and a batch boundary in both situations",
+        plausible=fixed("30 s is a sample instant of the 3-ms grid and a batch boundary; there is no other reading of (31)/(32)"))
     situation2_plant: str = reconstructed(
-        "x2' = 1.3 x1 − 1.6 x2 (+1.8) + 3.95 u with b0 = 3, i.e. 0.95 u = (b − b0) u",
-        "3.95 − 3 = 0.95 exactly; the paper keeps b = 3.95 and only lowers b0. The alternative (0.95 u as an "
-        "extra term, total gain 4.9) is simulated for the ESO and reported in the findings")
+        "b - b0",
+        "situation 2's plant is x2' = 1.3 x1 − 1.6 x2 (+1.8) + 3.95 u with b0 = 3, i.e. the printed 0.95 u is the "
+        "(b − b0) u part of the extended state: 3.95 − 3 = 0.95 exactly and the paper keeps b = 3.95, only lowering b0",
+        plausible=choices(("extra term",), "0.95 u read as a term on top of b u (total input gain 4.9), which (32) "
+                                           "also allows as printed"))
     true_x3: str = reconstructed(
-        "x3 = x2' − b0 u − XᵀΘ_used (the extended state of eq. (2) for the observer used)",
-        "the paper does not define the reference for the x3 error; ESO: the total disturbance d + (b − b0)u; "
-        "MESO: the part not covered by the identified model. Also reported without (b − b0)u (`*.est_x3_no_bu`)")
+        "with (b - b0)u",
+        "the paper does not define the reference for the x3 error; taken as the extended state of eq. (2) for the "
+        "observer used, x3 = x2' − b0 u − XᵀΘ_used (ESO: the total disturbance d + (b − b0)u; MESO: the part not "
+        "covered by the identified model). The other reading is recorded as `*.est_x3_no_bu`",
+        plausible=choices(("without (b - b0)u",), "the printed d(t) of (32) without 0.95 u, i.e. 1.3x1 − 1.6x2 + θ4 "
+                                                  "minus XᵀΘ_used, the disturbance as the paper writes it"))
     table_identification_variant: str = reconstructed(
-        "well-posed: re-identify the total disturbance x̂3 + XᵀΘ_used each batch",
-        "the literal Table-1 accumulation does not converge (findings); the MESO rows of Tables 2/3 use the "
-        "well-posed form, the literal values are reported as s*.literal.meso.*")
+        "wellposed",
+        "well-posed identification: re-identify the total disturbance x̂3 + XᵀΘ_used each batch; the literal "
+        "Table-1 accumulation does not converge (findings), its values are reported as s*.literal.meso.*",
+        plausible=choices(("literal",), "Table 1 as printed: Θ = Θ̂_1 + Θ̂_2 + …, each batch fitted to the MESO's "
+                                        "residual x̂3"))
     cond_threshold: float = reconstructed(
         100.0, "Theorem 1 used as the paper suggests (check identifiability from the MESO's own data): "
         "situation 2 solves the full regression (16)-(20) only when its column-scaled condition number is "
         "<= this threshold, else (22) with θ3 held; the threshold is a choice (start-up batches ~10², later "
-        ">= 5·10²); the finding `identifiability-threshold` shows the sensitivity")
+        ">= 5·10²); the finding `identifiability-threshold` shows the sensitivity",
+        plausible=span(30.0, 1000.0, "common rules of thumb call a regression ill-conditioned somewhere between a "
+                                     "condition number of 10^1.5 and 10^3", scale="log", points=4))
+    noise_model: str = reconstructed(
+        "n0 drawn per 3-ms step, held",
+        "(27) says n0(t) is white noise uniform on ±1; the simulation step is the only clock the paper gives",
+        plausible=fixed("a white sequence needs a sample time, and 3 ms is the only one printed; a slower noise "
+                        "clock would be a different noise model, not a reading of (27)"))
     gram_accumulation: str = reconstructed(
         "each batch's regression is accumulated sample by sample as the Gram matrix of [X | z] / N",
         "the identification is a discrete block whose state must stay small; the least-squares solution is "
         "the same (to ~1e-12 at the condition numbers ~1e2-1e3 that decide the gate), but a Gram matrix does not "
         "resolve condition numbers above ~1e7, so the report's condition numbers of the noise-free runs are "
-        "computed exactly from the raw batch (SVD of the stored signals)")
+        "computed exactly from the raw batch (SVD of the stored signals)",
+        plausible=fixed("numerically the same least-squares solution (to ~1e-12); not a modelling choice"))
 
 
 PAPER = Paper()
+
+
+@dataclass(frozen=True)
+class Readings:
+    """How the study reads the paper's qualitative words when it judges the claims (none is printed)."""
+
+    theta_accuracy: float = reconstructed(
+        0.10, "Fig. 4 / Fig. 6 say the LSM identifies the parameters 'accurately' (准确地) / 'approaches the true "
+        "values'; read as a relative error |Θ − Θ_true| / |Θ_true| of the last batch of at most 10 %",
+        plausible=span(0.02, 0.25, "'accurate' for a parameter estimate read anywhere from 2 % to 25 %", scale="log",
+                       points=4))
+    larger_eps: float = reconstructed(
+        0.1, "§5 says the MESO may use a 'larger' ε than the ESO at the same accuracy without saying how much; "
+        "tested at twice the paper's ε (half the observer bandwidth, ω_o = 10 rad/s)",
+        plausible=span(0.06, 0.1, "any ε noticeably above the paper's 0.05, from +20 % to ×2", points=3))
+    exponent_tolerance: float = reconstructed(
+        0.1, "law (4)/(7) is an order statement (ε^(n+2−i)); a fitted log-log slope is read as confirming it when "
+        "within 10 % of the exponent",
+        plausible=span(0.05, 0.2, "an order-of-magnitude law can be read strictly (5 %) or loosely (20 %)", points=3))
+
+
+READINGS = Readings()
+
+#: The paper's claims, judged in :mod:`.claims`.
+CLAIMS = (
+    Claim("s1-meso-better", "§4, Table 2",
+          "In situation 1 (b0 = b), at equal observer bandwidth (ε = 0.05 for both) and equal PD gains, the MESO loop "
+          "has smaller mean estimation errors of x1, x2, x3 and smaller tracking errors of x1, x2 than the ESO loop"),
+    Claim("s2-meso-better", "§4, Table 3",
+          "In situation 2 (b0 = 3 ≠ b), at equal observer bandwidth and PD gains, the MESO loop has smaller mean "
+          "estimation and tracking errors than the ESO loop"),
+    Claim("s1-theta-identified", "§4, Fig. 4",
+          "In situation 1 the LSM identifies the model-class parameters accurately, before and after the "
+          "non-model-class term appears at 30 s"),
+    Claim("s2-theta-converges", "§4, Fig. 6, conclusion 2",
+          "In situation 2 the identified parameters, θ3 = b − b0 included, approach their true values"),
+    Claim("theta4-needed", "§4, conclusion 3",
+          "Without the non-model-class term θ4 the other parameters do not converge to their true values and the "
+          "closed loop tracks worse"),
+    Claim("larger-eps", "§5",
+          "At the same estimation and control accuracy the MESO can use a larger ε (lower observer bandwidth) than "
+          "the ESO, which lowers the loop's sensitivity to measurement noise"),
+    Claim("m-le-n", "§2, (5) and (8)",
+          "The MESO's extended state varies no faster than the ESO's (M <= N), so its steady error bound (4) is "
+          "below the ESO's (7)"),
+    Claim("eps-law", "§2, (4) and (7)",
+          "The steady estimation error of x̂_i is of order ε^(n+2−i) (ε³, ε², ε for n = 2)"),
+)
 
 
 @dataclass(frozen=True)
@@ -125,6 +199,8 @@ class Analysis:
     horizons: tuple = (("s1", 60.0), ("s2", 210.0))
     runs: int = 100
     quick_runs: int = 3
+    #: noise runs of each sensitivity-sweep evaluation (the main run's first seeds)
+    sweep_runs: int = 10
     bound: float = 1e6
     threshold_grid: tuple = (50.0, 100.0, 104.0, 108.0, 120.0, 200.0, 1000.0)
 

@@ -14,7 +14,8 @@ from ctrl_analysis.report import StudyResult
 
 from .identification import equivalent_theta
 from .loops import SituationRun, pick
-from .paper import METRICS, PAPER, SITUATIONS, TABLE_UNITS, TABLES, Analysis, Paper
+from .linear import noise_std
+from .paper import METRICS, PAPER, READINGS, SITUATIONS, TABLE_UNITS, TABLES, Analysis, Paper, Readings
 
 __all__ = [
     "table_cell",
@@ -24,7 +25,9 @@ __all__ = [
     "gate_passes",
     "linear_quantities",
     "table_quantities",
+    "theta_errors",
     "theta_final",
+    "theta_rel_error",
     "theta_truth",
 ]
 
@@ -115,36 +118,50 @@ def first_divergence(sim: SituationRun, idx) -> float | None:
     return float(sim.t[min(sim.diverged_step[i] for i in bad) - 1] + (sim.t[1] - sim.t[0]))
 
 
-def _table_cell(result, key, sim, idx, metric, qid, what, noise, analysis):
-    """One Table 2/3 cell (or its noise-off / literal twin) as a quantity."""
+def _table_cell(result, key, sim, idx, metric, qid, what, noise, analysis, paper=PAPER):
+    """One Table 2/3 cell (or its noise-off / literal twin) as a quantity.
+
+    Noise on: the percentile policy (the paper's value from one noisy run against the central 95 % of the
+    healthy runs, ``samples``). Noise off: one deterministic run, judged with ``analysis.tolerance``.
+    """
     sit = SITUATIONS[key]
     K = len(sim.t)
     ok = ~sim.diverged[idx]
-    mean, std, n_ok = mean_std(sim.sums[metric][idx] / K, ok)
+    # the primary x3 column follows the reconstruction true_x3 (both readings are always summed)
+    source = "est_x3_no_bu" if metric == "est_x3" and paper.true_x3 == "without (b - b0)u" else metric
+    per_run = sim.sums[source][idx] / K
+    mean, std, n_ok = mean_std(per_run, ok)
     o = "eso" if what == "ESO" else "meso"
     paper_v = TABLES[key][o][METRICS.index("est_x3" if metric == "est_x3_no_bu" else metric)]
     note = f"noise {'on' if noise else 'off'}; {what}"
-    if metric == "est_x3":
+    if source == "est_x3":
         note += "; true x3 = x2' − b0 u − XᵀΘ_used (with the (b − b0)u part)"
-    if metric == "est_x3_no_bu":
+    if source == "est_x3_no_bu":
         note += "; true x3 taken as the printed d(t) minus 0.95u (i.e. 1.3x1 − 1.6x2 + θ4) minus XᵀΘ_used"
+    if not noise:
+        note += (f"; one deterministic run judged within {analysis.tolerance:.0%}: not a digits tolerance (the 2-5 "
+                 "printed digits would allow 0.001-2 %) but the study's allowance for the unprinted integrator, "
+                 "control sampling and initial states (their spread is in the sensitivity sweep)")
     t_div = first_divergence(sim, idx)
     if t_div is not None:
         note += f"; {len(idx) - n_ok}/{len(idx)} runs diverged (first at t = {t_div:.2f} s)"
     if n_ok == 0:
         note += "; all runs diverged: no value"
     label_m = "est_x3 against x3 without (b − b0)u" if metric == "est_x3_no_bu" else metric
-    # each cell is scored once, by its primary reading: noise on, well-posed identification, x3 with (b − b0)u
+    # each cell is scored once, by its primary reading: noise on, the chosen identification, the chosen x3
     primary = qid == f"{key}.{o}.{metric}" and metric != "est_x3_no_bu"
+    samples = per_run[ok] if noise and len(idx) > 1 and n_ok > 1 else None
     result.quantity(qid, f"{sit.table}, {what}, mean |e| {label_m}, noise {'on' if noise else 'off'}",
                     None if n_ok == 0 else float(mean), paper=paper_v,
                     std=None if n_ok == 0 else float(std), runs=len(idx), runs_diverged=len(idx) - int(n_ok),
-                    diverged=n_ok == 0, tolerance=analysis.tolerance, unit=TABLE_UNITS[metric], note=note,
+                    diverged=n_ok == 0, tolerance=None if samples is not None else analysis.tolerance,
+                    unit=TABLE_UNITS[metric], note=note, samples=samples,
                     cell=table_cell(key, o, metric), primary=primary)
 
 
-def table_quantities(result: StudyResult, key: str, sim: SituationRun, analysis: Analysis) -> None:
-    """Tables 2/3: ESO and MESO (well-posed) with noise on and off, the literal rule with noise on.
+def table_quantities(result: StudyResult, key: str, sim: SituationRun, analysis: Analysis, paper: Paper = PAPER,
+                     literal: bool = True) -> None:
+    """Tables 2/3: ESO and MESO (the chosen identification) with noise on and off, the literal rule with noise on.
 
     Parameters
     ----------
@@ -152,24 +169,28 @@ def table_quantities(result: StudyResult, key: str, sim: SituationRun, analysis:
     key : {"s1", "s2"}
     sim : SituationRun
     analysis : Analysis
-        Its ``tolerance`` is the relative tolerance of every cell.
+        Its ``tolerance`` is the relative tolerance of the noise-free cells.
+    paper : Paper
+        Its ``true_x3`` chooses the primary reading of the x3 column.
+    literal : bool
+        Also record the Table-1 literal rule's cells (``s*.literal.meso.*``).
     """
     rows = sim.rows
     for noise in (True, False):
         tag = f"{key}." if noise else f"{key}.nonoise."
         for name, o, v in (("meso", "meso", "wellposed"), ("eso", "eso", "none"), ("literal", "meso", "literal")):
-            if name == "literal" and not noise:
+            if name == "literal" and (not noise or not literal):
                 continue
             what = {"meso": "MESO (well-posed identification)", "eso": "ESO",
                     "literal": "MESO, Table-1 literal accumulation"}[name]
             idx = pick(rows, o, v, noise)
             for m in METRICS:
                 qid = f"{key}.literal.meso.{m}" if name == "literal" else f"{tag}{o}.{m}"
-                _table_cell(result, key, sim, idx, m, qid, what, noise, analysis)
+                _table_cell(result, key, sim, idx, m, qid, what, noise, analysis, paper)
         if key == "s2":
             for o, v, what in (("eso", "none", "ESO"), ("meso", "wellposed", "MESO (well-posed identification)")):
                 _table_cell(result, key, sim, pick(rows, o, v, noise), "est_x3_no_bu", f"{tag}{o}.est_x3_no_bu",
-                            what, noise, analysis)
+                            what, noise, analysis, paper)
 
 
 def theta_truth(key: str, t, paper: Paper = PAPER) -> np.ndarray:
@@ -216,11 +237,65 @@ def theta_final(result: StudyResult, key: str, sim: SituationRun, horizon: float
                     unit="[1/s², 1/s, 1, 1/s²]", note=note)
 
 
+def theta_rel_error(theta, truth, cols=(0, 1, 2, 3)) -> np.ndarray:
+    """Relative error |Θ − Θ_true| / |Θ_true| over the parameters ``cols`` (per run for a (B, 4) ``theta``).
+
+    Parameters
+    ----------
+    theta : array_like, shape (4,) or (B, 4)
+    truth : array_like, shape (4,)
+    cols : sequence of int
+
+    Returns
+    -------
+    float or ndarray
+    """
+    c = list(cols)
+    th, tr = np.asarray(theta, dtype=float)[..., c], np.asarray(truth, dtype=float)[c]
+    return np.linalg.norm(th - tr, axis=-1) / np.linalg.norm(tr)
+
+
+def theta_errors(result: StudyResult, key: str, sim: SituationRun) -> None:
+    """Relative Θ error of the well-posed MESO (noise on) at the last batch before the θ4 step and at the end.
+
+    The claims of Fig. 4 / Fig. 6 are judged on these (``{key}.theta_rel_error.before_step`` / ``.end``).
+
+    Parameters
+    ----------
+    result : StudyResult
+    key : {"s1", "s2"}
+    sim : SituationRun
+    """
+    idx = pick(sim.rows, "meso", "wellposed", True)
+    ok = ~sim.diverged[idx]
+    before = np.flatnonzero(sim.t_batch < PAPER.t_step - 0.5 * PAPER.h)
+    cols = (0, 1, 3) if SITUATIONS[key].regression == "reduced" else (0, 1, 2, 3)
+    names = "θ1, θ2, θ4" if len(cols) == 3 else "θ1..θ4"
+    for tag, k, when in (("before_step", before[-1] if before.size else 0, "last batch before the θ4 step"),
+                         ("end", len(sim.t_batch) - 1, "last batch")):
+        truth = theta_truth(key, [sim.t_batch[k]])[0]
+        per_run = theta_rel_error(sim.theta_batch[k, idx], truth, cols)
+        mean, std, n_ok = mean_std(per_run, ok & np.isfinite(per_run))
+        note = (f"{when}, ending at t = {sim.t_batch[k] + PAPER.h:.0f} s; relative error over {names} against the "
+                f"truth {truth[list(cols)].tolist()}")
+        if key == "s2":
+            eq = equivalent_theta(truth, PAPER.b)
+            e_eq = theta_rel_error(sim.theta_batch[k, idx], eq, cols)
+            e_eq = e_eq[np.isfinite(e_eq)]
+            note += (f"; against the trajectory-equivalent Θ_eq = {eq.round(4).tolist()}: "
+                     + (f"{float(np.mean(e_eq)):.3g}" if e_eq.size else "no healthy run"))
+        result.quantity(f"{key}.theta_rel_error.{tag}", f"situation {key[1]}: relative error of the identified Θ, "
+                        f"{when} (well-posed, noise on)", None if n_ok == 0 else float(mean),
+                        std=None if n_ok == 0 else float(std), runs=len(idx), runs_diverged=len(idx) - int(n_ok),
+                        unit="", note=note)
+
+
 def _one(sim, i, metric):
     return float(sim.sums[metric][i] / len(sim.t))
 
 
-def claim_quantities(result: StudyResult, sims: dict, lin, horizons: dict) -> dict:
+def claim_quantities(result: StudyResult, sims: dict, lin, horizons: dict, readings: Readings = READINGS,
+                     extras: bool = True) -> dict:
     """Quantities of the claims the tables do not show (Conclusion 3, (5)/(8) M <= N, §5 ε, W(s), gate).
 
     Parameters
@@ -229,6 +304,10 @@ def claim_quantities(result: StudyResult, sims: dict, lin, horizons: dict) -> di
     sims : dict of str -> SituationRun
     lin : LinearAnalysis
     horizons : dict of str -> float
+    readings : Readings
+        Its ``larger_eps`` is the ε at which the MESO is compared with the ESO (§5).
+    extras : bool
+        Also the quantities only the findings use (literal rule without W(s), the gate's sensitivity).
 
     Returns
     -------
@@ -243,6 +322,13 @@ def claim_quantities(result: StudyResult, sims: dict, lin, horizons: dict) -> di
         result.quantity(f"s1.no_const.{m}", f"Situation 1, MESO without θ4 (Conclusion 3), mean |e| {m}, noise off",
                         _one(s1, i_nc, m), unit=TABLE_UNITS[m],
                         note=f"with θ4 (well-posed, noise off): {_one(s1, i_wp, m):.4g}")
+    t_end = [s1.t_batch[-1]]
+    for qid, i, what in (("s1.no_const.theta_rel_error", i_nc, "without θ4"),
+                         ("s1.nonoise.theta_rel_error", i_wp, "with θ4")):
+        result.quantity(qid, f"Situation 1, MESO {what}: relative error of θ1, θ2 after the last batch, noise off",
+                        float(theta_rel_error(s1.theta_batch[-1, i], theta_truth("s1", t_end)[0], (0, 1))), unit="",
+                        note="the model-class parameters (conclusion 3's 'other parameters'); θ3 is not identified "
+                             "in situation 1")
     result.quantity("s1.no_const.theta_final", "Situation 1, MESO without θ4: Θ after the last batch, noise off",
                     s1.theta_batch[-1, i_nc], unit="[1/s², 1/s, 1, 1/s²]",
                     note=f"truth {theta_truth('s1', [horizons['s1']])[0].tolist()}; with θ4: "
@@ -259,11 +345,19 @@ def claim_quantities(result: StudyResult, sims: dict, lin, horizons: dict) -> di
         result.quantity(f"{key}.N_sup", f"situation {key[1]}: N of (8), sup |dx3/dt| of the ESO's extended state "
                         "(noise off)", float(sim.sup_dx3[i_e]), unit="1/s³", note="see M_sup")
     # §5: the MESO at a larger ε
-    i_m01 = pick(s1.rows, "meso", "wellposed", False, epsilon=0.1)[0]
+    e = readings.larger_eps
+    i_m01 = pick(s1.rows, "meso", "wellposed", False, epsilon=e)[0]
     for m in METRICS:
-        result.quantity(f"s1.nonoise.meso_eps0.1.{m}", f"Situation 1, MESO (well-posed) with ε = 0.1, mean |e| {m}, "
-                        "noise off", _one(s1, i_m01, m), unit=TABLE_UNITS[m],
-                        note=f"ESO with the paper's ε = 0.05: {_one(s1, pick(s1.rows, 'eso', 'none', False)[0], m):.4g}")
+        result.quantity(f"s1.nonoise.meso_eps_larger.{m}", f"Situation 1, MESO (well-posed) with the larger ε = {e:g}, "
+                        f"mean |e| {m}, noise off", _one(s1, i_m01, m), unit=TABLE_UNITS[m],
+                        note=f"ESO with the paper's ε = {PAPER.epsilon:g}: "
+                             f"{_one(s1, pick(s1.rows, 'eso', 'none', False)[0], m):.4g}")
+    ratio = noise_std(PAPER, e) / noise_std(PAPER, PAPER.epsilon)
+    result.quantity("s1.meso_eps_larger.noise_std_ratio", f"steady noise std of e1, e2, e3 at ε = {e:g} relative to "
+                    f"ε = {PAPER.epsilon:g}", ratio, unit="",
+                    note="linear error dynamics driven by the measurement noise (control.dlyap), the same for ESO and MESO")
+    if not extras:
+        return out
     # the literal rule without W(s)
     for key, sim in sims.items():
         i = pick(sim.rows, "meso", "literal", False, bypass_w=True)[0]

@@ -13,7 +13,9 @@ __all__ = [
     "plot_fig4_output",
     "plot_filter_bode",
     "plot_gain_interpretations",
+    "plot_qr_sweep",
     "plot_riccati_convergence",
+    "plot_saturation",
 ]
 
 
@@ -161,57 +163,157 @@ def plot_control_surface(E, EC, U, Ku: float, Ke: float, Kec: float):
     return fig
 
 
-def plot_fig3_states(cases: dict, T: float, run: int = 0):
-    """Fig. 3: states before filtering (measured y and its backward difference) and after, with the true states.
+def plot_fig3_states(cases: dict, run: int = 0):
+    """Fig. 3: states before filtering (measured y, its backward difference) and after (the estimate), with the true
+    states, and the errors before and after in separate panels (so neither hides the other).
 
-    ``cases`` maps a title to a :class:`~.loops.ClosedLoopRun` with a filter (``phi_hat``).
+    ``cases`` maps a column title to a :class:`~.loops.ClosedLoopRun` with a filter (``phi_hat``).
     """
-    fig, axes = new_figure(2, len(cases), size=(6.0 * len(cases), 7.5), sharex=True)
-    axes = np.asarray(axes).reshape(2, len(cases))
-    fig.suptitle(f"Fig. 3: pendulum states before and after filtering (closed loop, 0.1 rad step, run {run})")
+    n = len(cases)
+    fig, axes = new_figure(6, n, size=(5.6 * n, 13.5), sharex=True,
+                           gridspec_kw={"height_ratios": [1.4, 1, 1, 1.4, 1, 1]})
+    axes = np.asarray(axes).reshape(6, n)
+    fig.suptitle(f"Fig. 3: pendulum states before and after filtering (closed loop, 0.1 rad step, run {run}); "
+                 "before = measured y and its backward difference, after = filter estimate", fontsize=11)
     for c, (title, r) in enumerate(cases.items()):
-        t = r.t
-        dy = np.concatenate([[0.0], np.diff(r.y[:, run]) / T])
-        rows = ((r.y[:, run], r.phi_hat[:, run], r.phi[:, run], "φ  (rad)", "measured y = φ + v"),
-                (dy, r.dphi_hat[:, run], r.dphi[:, run], "φ'  (rad/s)", "backward difference of y"))
-        for k, (raw, est, true, ylabel, rawlabel) in enumerate(rows):
-            ax = axes[k, c]
-            # the estimate under the raw signal, so that a raw trace equal to the estimate stays visible
-            ax.plot(t, est, color="C0", lw=1.4, label="after: filter estimate", zorder=2)
-            ax.plot(t, raw, color="0.35", lw=0.5, alpha=0.8, label=f"before: {rawlabel}", zorder=3)
-            ax.plot(t, true, color="k", lw=1.0, ls="--", label="true state", zorder=4)
-            ax.set_ylabel(ylabel)
-            if k == 0:
-                ax.set_title(title, fontsize=10)
-            if k == 1:  # one legend per column, below the data
-                ax.legend(handles=ax.get_lines()[:3],
-                          labels=["after: filter estimate",
-                                  "before: measured y = φ + v (top), its backward difference (bottom)",
-                                  "true state"],
-                          fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=2)
-        axes[1, c].set_xlabel("t (s)")
-        lim = max(float(np.nanmax(np.abs(x))) for x in rows[1][:3])  # whole range: nothing clipped
-        axes[1, c].set_ylim(-1.05 * lim, 1.05 * lim)
+        t, T = r.t, r.t[1] - r.t[0]
+        dy = np.concatenate([[np.nan], np.diff(r.y[:, run]) / T])
+        rows = ((r.y[:, run], r.phi_hat[:, run], r.phi[:, run], "φ", "rad", "measured y"),
+                (dy, r.dphi_hat[:, run], r.dphi[:, run], "φ'", "rad/s", "backward difference Δy/T"))
+        for k, (raw, est, true, sym, unit, rawlabel) in enumerate(rows):
+            ax, eb, ea = axes[3 * k, c], axes[3 * k + 1, c], axes[3 * k + 2, c]
+            ax.plot(t, est, color="C0", lw=1.1, label="after: filter estimate (line)", zorder=2)
+            ax.plot(t, raw, ".", color="0.3", ms=1.6, label=f"before: {rawlabel} (dots)", zorder=3)
+            ax.plot(t, true, color="k", lw=1.0, ls="--", label="true state (dashed)")
+            ax.set_ylabel(f"{sym}  ({unit})")
+            lo, hi = np.nanpercentile(np.concatenate([raw, est, true]), [0.5, 99.5])
+            ax.set_ylim(lo - 0.1 * (hi - lo), hi + 0.1 * (hi - lo))
+            before, after = raw - true, est - true
+            lim = 1.1 * np.nanmax(np.abs(np.concatenate([before, after])))
+            eb.plot(t, before, color="0.45", lw=0.6)
+            ea.plot(t, after, color="C0", lw=0.6)
+            for a, err, name in ((eb, before, "before"), (ea, after, "after")):
+                a.set_ylim(-lim, lim)
+                a.set_ylabel(f"{name}: error\n({unit})", fontsize=8)
+                a.text(0.99, 0.95, f"{name}: RMS {np.sqrt(np.nanmean(err ** 2)):.3g} {unit}", transform=a.transAxes,
+                       ha="right", va="top", fontsize=8, bbox={"fc": "white", "ec": "none", "alpha": 0.8})
+            if c == 0:
+                ax.legend(fontsize=7, loc="lower right", markerscale=4)
+        axes[0, c].set_title(title, fontsize=9)
+        axes[-1, c].set_xlabel("t (s)")
     return fig
 
 
-def plot_fig4_output(cases: dict, step: float, run: int = 0):
-    """Fig. 4: the closed-loop angle without and with filtering: one run and the mean ± std band over runs."""
-    fig, axes = new_figure(1, len(cases), size=(5.0 * len(cases), 4.8), sharey=True)
-    axes = np.asarray(axes).reshape(1, len(cases))
-    fig.suptitle("Fig. 4: pendulum angle φ(t) before (no filter) and after filtering, 0.1 rad step")
-    for c, (title, r) in enumerate(cases.items()):
-        ax = axes[0, c]
-        ok = ~r.diverged
-        mean, std = np.mean(r.phi[:, ok], axis=1), np.std(r.phi[:, ok], axis=1)
-        ax.plot(r.t, r.phi[:, run], color="C1", lw=0.7, label=f"run {run}")
-        ax.plot(r.t, mean, color="C0", lw=1.4, label=f"mean over {int(ok.sum())} runs")
-        ax.fill_between(r.t, mean - std, mean + std, color="C0", alpha=0.25, label="± 1 std")
-        ax.axhline(step, color="k", ls="--", lw=0.8, label="reference r = 0.1 rad")
-        ax.set_title(title, fontsize=10)
+def plot_fig4_output(regimes: dict, step: float, run: int = 0):
+    """Fig. 4: the closed-loop angle per case and regime: one run, the mean ± std band over runs, and noise-free.
+
+    ``regimes`` maps a row title to ``{column title: CaseRuns}``; each regime gets a full-scale row and a zoom
+    around the reference (where the noise and the filters' differences are visible).
+    """
+    nr, nc = 2 * len(regimes), max(len(v) for v in regimes.values())
+    fig, axes = new_figure(nr, nc, size=(5.0 * nc, 3.0 * nr + 1.0), sharex=True)
+    axes = np.asarray(axes).reshape(nr, nc)
+    fig.suptitle("Fig. 4: pendulum angle φ(t) without and with filtering after the 0.1 rad step, per noise regime "
+                 "(each regime: full scale, then zoomed around r)")
+    for i, (row, cases) in enumerate(regimes.items()):
+        dev = 0.0
+        for c, (title, cr) in enumerate(cases.items()):
+            r = cr.noisy
+            ok = ~r.diverged
+            mean, std = np.mean(r.phi[:, ok], axis=1), np.std(r.phi[:, ok], axis=1)
+            late = r.t >= 0.5
+            dev = max(dev, float(np.max(np.abs(r.phi[late, run] - step))))
+            for ax in axes[2 * i:2 * i + 2, c]:
+                ax.fill_between(r.t, mean - std, mean + std, color="C0", alpha=0.25, label="± 1 std over runs")
+                ax.plot(r.t, r.phi[:, run], color="C1", lw=0.6, label=f"run {run}")
+                ax.plot(r.t, mean, color="C0", lw=1.6, label=f"mean over {int(ok.sum())} runs")
+                ax.plot(cr.quiet.t, cr.quiet.phi[:, 0], color="k", lw=1.0, ls="--", label="noise-free")
+                ax.axhline(step, color="0.3", ls=":", lw=0.8, label="reference r = 0.1 rad")
+            if i == 0:
+                axes[0, c].set_title(title, fontsize=10)
+        for ax in axes[2 * i + 1]:
+            ax.set_ylim(step - 1.15 * dev, step + 1.15 * dev)
+        axes[2 * i, 0].set_ylabel(f"{row}\nφ  (rad)", fontsize=8)
+        axes[2 * i + 1, 0].set_ylabel("zoom around r\nφ  (rad)", fontsize=8)
+    for ax in axes[-1]:
         ax.set_xlabel("t (s)")
-        ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=2)
-    axes[0, 0].set_ylabel("φ  (rad)")
+    handles, labels = axes[0, 0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="upper center", ncol=5, fontsize=8, bbox_to_anchor=(0.5, 0.0))
+    return fig
+
+
+def plot_saturation(stats: dict, labels: dict):
+    """Beyond the paper: per case and regime, the fraction of steady samples with each fuzzy input saturated, and the
+    acceleration RMS. ``stats`` = ``{regime title: {case: {metric: (value, std, n)}}}``."""
+    fig, axes = new_figure(1, 3, size=(16.0, 5.2), gridspec_kw={"wspace": 0.35},
+                           title="Fuzzy inputs saturated by noise (steady-state window) and cart acceleration RMS, "
+                                 "per case and noise regime")
+    for k, (reg, st) in enumerate(stats.items()):
+        ax = axes[k]
+        names = list(st)
+        y = np.arange(len(names))
+        for j, (m, col, lab) in enumerate((("sat_e", "C2", "e (angle error) saturated"),
+                                           ("sat_ec", "C3", "ec (rate) saturated"))):
+            v = [np.nan if st[n][m][0] is None else 100 * st[n][m][0] for n in names]
+            ax.barh(y + (0.2 if j == 0 else -0.2), v, height=0.38, color=col, label=lab)
+            for yi, vi in zip(y, v):
+                ax.text(0 if np.isnan(vi) else vi, yi + (0.2 if j == 0 else -0.2),
+                        " diverged" if np.isnan(vi) else f" {vi:.2g} %", va="center", fontsize=7)
+        ax.set_yticks(y, [labels.get(n, n) for n in names], fontsize=8)
+        ax.invert_yaxis()
+        ax.set_xlim(0, 100)
+        ax.set_xlabel("steady-state samples saturated (%)")
+        ax.set_title(reg, fontsize=9)
+        ax.legend(fontsize=7, loc="lower right")
+    ax = axes[2]
+    regs = list(stats)
+    names = list(dict.fromkeys(n for st in stats.values() for n in st))
+    y = np.arange(len(names))
+    for j, reg in enumerate(regs):
+        v = [stats[reg].get(n, {}).get("accel_rms", (None,))[0] for n in names]
+        v = [np.nan if x is None else x for x in v]
+        ax.barh(y + (0.2 if j == 0 else -0.2), v, height=0.38, color=f"C{j}", label=reg.split(" (")[0])
+    ax.set_xscale("log")
+    ax.set_yticks(y, [labels.get(n, n) for n in names], fontsize=8)
+    ax.invert_yaxis()
+    ax.set_xlabel("steady-state RMS of the cart acceleration u (m/s², log)")
+    ax.set_title("acceleration RMS (missing bar: not simulated or diverged)", fontsize=9)
+    ax.legend(fontsize=7, loc="lower right")
+    _drop_log_minor_ticks(fig)
+    return fig
+
+
+def plot_qr_sweep(qr: dict, paper_ratio: float, main_ratio: float, alpha_paper: float):
+    """Beyond the paper: angle-estimate error and closed-loop angle RMS against σ_w/σ_v, and the optimal α."""
+    few = any(np.any(np.asarray(v) < 0.8) for v in qr["healthy"].values())
+    fig, axes = new_figure(1, 3, size=(16.0, 5.0), gridspec_kw={"wspace": 0.3},
+                           title="σ_w/σ_v swept independently (main σ_v and T): where the paper's K is, and is not, "
+                                 "the best constant gain" + ("\n(hollow marker: mean over < 80 % of the runs; no "
+                                                             "marker: every run fell)" if few else ""))
+    r = qr["ratios"]
+    names = {"nofilter": ("no filter", "C7", "s"), "filter": ("paper's K", "C3", "o"),
+             "kf_ss": ("optimal steady-state gain for the ratio", "C0", "^")}
+    for ax, key, ylabel in ((axes[0], "est", "steady RMS of φ_in − φ  (rad, log)"),
+                            (axes[1], "angle", "steady RMS of φ − r  (rad, log)")):
+        for n, (lab, col, mk) in names.items():
+            few = np.asarray(qr["healthy"][n]) < 0.8  # a mean over < 80 % of the runs: hollow marker
+            ax.loglog(r, qr[key][n], color=col, label=lab, lw=1.2)
+            ax.plot(r[~few], np.asarray(qr[key][n])[~few], mk, color=col)
+            if few.any():
+                ax.plot(r[few], np.asarray(qr[key][n])[few], mk, mfc="none", color=col, ms=8)
+        ax.set_ylabel(ylabel)
+    axes[0].set_title("error of the angle the controller receives", fontsize=9)
+    axes[1].set_title("closed-loop angle error", fontsize=9)
+    axes[2].semilogx(r, qr["alpha_opt"], "o-", color="C0", label="optimal steady-state α")
+    axes[2].axhline(alpha_paper, color="C3", ls="--", label=f"paper's α = {alpha_paper}")
+    axes[2].set_ylabel("α  (–)")
+    axes[2].set_title("optimal α against the paper's", fontsize=9)
+    for ax in axes:
+        ax.axvline(paper_ratio, color="k", ls=":", lw=1, label=f"paper's √(Q/R) = {paper_ratio:.3g}")
+        ax.axvline(main_ratio, color="C2", ls="-.", lw=1, label=f"main regime {main_ratio:.3g}")
+        ax.set_xlabel("σ_w/σ_v  (s⁻², log)")
+        ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2)
+    _drop_log_minor_ticks(fig)
     return fig
 
 
@@ -221,10 +323,14 @@ def plot_beyond(est_cases: dict, angles, final: dict, T: float, run: int = 0):
                            title="Beyond the paper: angle estimation error φ − φ̂ of each filter in the loop "
                                  f"(run {run}) and largest recoverable initial angle")
     ax = axes[0]
+    styles = ("-", (0, (4, 2)), "-", "-")  # the time-varying KF dashed: after its transient it equals the steady gain
     for k, (name, r) in enumerate(est_cases.items()):
         err = r.phi[:, run] - r.phi_hat[:, run]
         stop = r.diverged_step[run] if r.diverged[run] else err.size
-        ax.plot(r.t[:stop], err[:stop], color=f"C{k}", lw=0.8, label=name + (" (diverged)" if r.diverged[run] else ""))
+        # the steady-state gain (k = 2) wide and pale, the time-varying KF (k = 1) dashed on top of it
+        ax.plot(r.t[:stop], err[:stop], color=f"C{k}", lw={1: 0.9, 2: 2.6}.get(k, 0.8), ls=styles[k % len(styles)],
+                alpha=0.55 if k == 2 else 1.0, zorder=3 if k == 1 else 2,
+                label=name + (f" (diverged/fell at t = {r.t[stop]:.2g} s)" if r.diverged[run] else ""))
     ax.set_yscale("symlog", linthresh=1e-3)
     ax.set_xlabel("t (s)")
     ax.set_ylabel("φ − φ̂  (rad, symlog)")

@@ -23,7 +23,13 @@ import numpy as np
 import scipy.linalg
 
 from ctrl_analysis._kernels import BlockKernel, copy_output
-from ctrl_analysis.blocks import ColumnKernels, ContinuousBlock, DiscreteBlock, StaticBlock, StaticGain
+from ctrl_analysis.blocks import (
+    ColumnKernels,
+    ContinuousBlock,
+    DiscreteBlock,
+    StaticBlock,
+    StaticGain,
+)
 from ctrl_analysis.controllers.fuzzy import (
     FuzzyController,
     FuzzyLookupController,
@@ -39,14 +45,18 @@ from ctrl_analysis.simulate import draw_noise, gaussian_noise, run_seeds
 
 __all__ = [
     "CASES",
+    "LITERAL_CASES",
     "BackwardDifference",
     "CartPendulum",
+    "CaseRuns",
     "ClosedLoopRun",
     "LoopData",
     "build_filter",
     "build_loop",
     "compute_loops",
+    "compute_regime",
     "fuzzy_controller",
+    "qr_sweep",
     "recovery_sweep",
     "sampled_model",
     "seeds_for",
@@ -196,14 +206,17 @@ def sampled_model(a21: float, b2: float, T: float, sigma_w: float, sigma_v: floa
 
 def build_filter(kind: str, p, a21: float):
     """The filter of one case: ``alpha-beta`` (the paper's printed K as a discrete α-β filter), ``kf`` (time-varying),
-    ``kf-ss`` (the correct steady-state gain), ``continuous-printed`` (the printed continuous filter, Euler-sampled)."""
+    ``kf-ss`` (the correct steady-state gain for the simulated noise), ``kf-ss-qr`` (the steady-state gain of the
+    paper's Q/R, σ_w/σ_v = √(Q/R)), ``continuous-printed`` (the printed continuous filter, Euler-sampled)."""
     F, g, Qd, Rd = sampled_model(a21, p.b2, p.T, p.sigma_w, p.sigma_v)
     b = g * p.b2
     if kind == "alpha-beta":
         return AlphaBetaFilter(p.K_printed[0], p.K_printed[1], p.T, F=F, b=b)
     if kind == "kf":
         return DiscreteKalmanFilter(F, [1.0, 0.0], Qd, Rd, b=b, P0=np.diag(p.P0_kf))
-    if kind == "kf-ss":
+    if kind in ("kf-ss", "kf-ss-qr"):
+        if kind == "kf-ss-qr":
+            Qd = p.qr_paper * p.sigma_v**2 * np.outer(g, g)
         ss = discrete_steady_state(F, np.array([[1.0, 0.0]]), np.eye(2), Qd, Rd)
         alpha, beta = ss.K_filter[0, 0], p.T * ss.K_filter[1, 0]
         return AlphaBetaFilter(alpha, beta, p.T, F=F, b=b)
@@ -213,7 +226,7 @@ def build_filter(kind: str, p, a21: float):
         Fe = np.eye(2) + p.T * np.array([[0.0, 1.0], [a21, 0.0]])
         Kf = np.linalg.solve(Fe, p.T * np.asarray(p.K_printed))
         return AlphaBetaFilter(Kf[0], p.T * Kf[1], p.T, F=Fe, b=[0.0, p.T * p.b2], require_stable=False)
-    raise ValueError(f"kind must be one of 'alpha-beta', 'kf', 'kf-ss', 'continuous-printed', got {kind!r}")
+    raise ValueError(f"kind must be one of 'alpha-beta', 'kf', 'kf-ss', 'kf-ss-qr', 'continuous-printed', got {kind!r}")
 
 
 def build_loop(p, a21: float, *, filter_kind: str | None, nonlinear: bool = False, lookup: bool = True) -> Loop:
@@ -250,10 +263,11 @@ class ClosedLoopRun:
 
 
 def simulate_case(p, a21: float, seeds, *, filter_kind=None, nonlinear=False, phi0=0.0, noise=True,
-                  lookup=True, engine="auto") -> ClosedLoopRun:
+                  lookup=True, engine="auto", noise_free_extra=False) -> ClosedLoopRun:
     """Simulate the §5 step (r = ``p.step``) for the runs ``seeds``; same seeds, same noise in every case.
 
     ``engine`` as :meth:`~ctrl_analysis.loop.Loop.simulate` (every block has a kernel: ``"auto"`` compiles).
+    ``noise_free_extra`` appends one run without noise after the noisy ones.
     """
     loop = build_loop(p, a21, filter_kind=filter_kind, nonlinear=nonlinear, lookup=lookup)
     N = int(round(p.t_end / p.T))
@@ -263,10 +277,19 @@ def simulate_case(p, a21: float, seeds, *, filter_kind=None, nonlinear=False, ph
         w, v = nz[:, :, 0], nz[:, :, 1]
     else:
         w = v = np.zeros((N, B))
+    if noise_free_extra:
+        w, v = (np.concatenate([x, np.zeros((N, 1))], axis=1) for x in (w, v))
+        B += 1
     x0 = {"plant": np.tile([phi0, 0.0], (B, 1)) if np.ndim(phi0) == 0 else np.stack([phi0, 0 * phi0], 1)}
     res = loop.simulate(N, inputs={"r": p.step, "w": w, "v": v}, x0=x0, runs=B, bound=p.bound, engine=engine)
+    # a pendulum past |φ| = π/2 has fallen: counted as diverged from that step on (the linear model would not stop)
+    fell = np.abs(res["phi"]) >= np.pi / 2
+    first_fall = np.where(fell.any(axis=0), np.argmax(fell, axis=0), np.iinfo(np.int64).max)
+    diverged = res.diverged | fell.any(axis=0)
+    diverged_step = np.where(res.diverged, np.minimum(res.diverged_step, first_fall), first_fall)
+    diverged_step = np.where(diverged, diverged_step, res.diverged_step)
     return ClosedLoopRun(t=res.t, phi=res["phi"], dphi=res["dphi"], y=res["y"], e=res["e"], ec=res["ec"],
-                         u=res["u"], diverged=res.diverged, diverged_step=res.diverged_step,
+                         u=res["u"], diverged=diverged, diverged_step=diverged_step,
                          phi_hat=res.signals.get("xhat[0]"), dphi_hat=res.signals.get("xhat[1]"))
 
 
@@ -295,46 +318,115 @@ CASES = {
     "filter": ("alpha-beta", False),
     "kf": ("kf", False),
     "kf_ss": ("kf-ss", False),
+    "kf_ss_qr": ("kf-ss-qr", False),
     "paper_continuous": ("continuous-printed", False),
     "nonlinear.nofilter": (None, True),
     "nonlinear.filter": ("alpha-beta", True),
 }
+#: the cases simulated in the literal regime (there kf_ss_qr is kf_ss; the others as in the main regime)
+LITERAL_CASES = ("nofilter", "filter", "kf", "kf_ss")
+
+
+@dataclass
+class CaseRuns:
+    """One case of one regime: the Monte Carlo runs and the noise-free run (the step transient)."""
+
+    noisy: ClosedLoopRun
+    quiet: ClosedLoopRun
+
+
+def compute_regime(p, a21: float, seeds, cases=tuple(CASES)) -> dict:
+    """``{case: CaseRuns}``: each case over ``seeds`` (same noise in every case) and noise-free.
+
+    The noise-free run rides in the same batch as one more run with zero noise (runs are independent and
+    bit-identical to single runs, so this is the separate noise-free simulation at half the calls).
+    """
+    out = {}
+    for name in cases:
+        kind, nonlinear = CASES[name]
+        both = simulate_case(p, a21, seeds, filter_kind=kind, nonlinear=nonlinear, noise_free_extra=True)
+        B = len(seeds)
+        out[name] = CaseRuns(_take(both, slice(0, B)), _take(both, slice(B, B + 1)))
+    return out
+
+
+def _take(run: ClosedLoopRun, idx) -> ClosedLoopRun:
+    """The runs ``idx`` (a slice) of a :class:`ClosedLoopRun`."""
+    return ClosedLoopRun(**{f: (v if f == "t" or v is None else v[..., idx])
+                            for f, v in run.__dict__.items()})
+
+
+def qr_sweep(p, a21: float, seeds) -> dict:
+    """Beyond the paper: σ_w/σ_v swept at the main σ_v and T; per ratio, the steady angle-estimate error RMS and the
+    steady angle RMS of no filter, the paper's K and the steady-state gain optimal for that ratio, and its α; the share of
+    healthy (not diverged) runs each mean is taken over."""
+    ratios = np.geomspace(p.qr_sweep[0], p.qr_sweep[1], int(p.qr_sweep[2]))
+    names = ("nofilter", "filter", "kf_ss")
+    out = {"ratios": ratios, "alpha_opt": [], "est": {k: [] for k in names}, "angle": {k: [] for k in names},
+           "healthy": {k: [] for k in names}}
+    for r in ratios:
+        q = _replace(p, sigma_w=float(r * p.sigma_v))
+        out["alpha_opt"].append(build_filter("kf-ss", q, a21).alpha)
+        for name in out["est"]:
+            run = simulate_case(q, a21, seeds, filter_kind=CASES[name][0])
+            ss = (run.t >= p.t_ss)
+            ok = ~run.diverged
+            out["healthy"][name].append(float(np.mean(ok)))
+            if not ok.any():
+                out["est"][name].append(np.nan)
+                out["angle"][name].append(np.nan)
+                continue
+            angle_in = p.step - run.e[ss][:, ok]
+            out["est"][name].append(float(np.sqrt(np.mean((angle_in - run.phi[ss][:, ok]) ** 2))))
+            out["angle"][name].append(float(np.sqrt(np.mean((run.phi[ss][:, ok] - p.step) ** 2))))
+    return {k: (np.asarray(v) if not isinstance(v, dict) else {n: np.asarray(x) for n, x in v.items()})
+            for k, v in out.items()}
 
 
 @dataclass
 class LoopData:
-    """Everything the closed-loop part computes: the cases over the Monte Carlo runs and the sweeps."""
+    """Everything the closed-loop part computes: both regimes over the Monte Carlo runs, the checks and sweeps."""
 
     p: object
     a21: float
     seeds: list
-    runs: dict
+    main: dict
+    literal: dict
     sign_check: dict
     period_check: dict
     angles: np.ndarray
     recovered: dict
     lookup_error: float
     kf_ss_gain: tuple
+    kf_ss_qr_gain: tuple
+    qr: dict
+
+    @property
+    def lit(self):
+        """The literal regime's parameters."""
+        return self.p.literal()
 
 
-def compute_loops(p, a21: float, seeds, progress=lambda msg: None) -> LoopData:
-    """Simulate every case of :data:`CASES` on the same noise, the rule-sign and sampling-period checks
-    (noise-free, one run) and the recovery sweeps of the linear and nonlinear plants."""
-    runs = {}
-    for name, (kind, nonlinear) in CASES.items():
-        progress(f"closed loop: {name} ({len(seeds)} runs)")
-        runs[name] = simulate_case(p, a21, seeds, filter_kind=kind, nonlinear=nonlinear)
+def compute_loops(p, a21: float, seeds, progress=lambda msg: None, qr_seeds=None) -> LoopData:
+    """Both regimes (main: every case of :data:`CASES`; literal: :data:`LITERAL_CASES`) on the same noise, the
+    rule-sign and sampling-period checks (noise-free, one run), the recovery sweeps and the σ_w/σ_v sweep."""
+    progress(f"closed loop, main regime: {len(CASES)} cases × {len(seeds)} runs")
+    main = compute_regime(p, a21, seeds)
+    progress(f"closed loop, literal regime: {len(LITERAL_CASES)} cases × {len(seeds)} runs")
+    literal = compute_regime(p.literal(), a21, seeds, LITERAL_CASES)
     sign = {s: simulate_case(_replace(p, rule_sign=s), a21, [0], noise=False) for s in (1, -1)}
     period = {T: simulate_case(_replace(p, T=T), a21, [0], noise=False) for T in p.period_check}
     angles = np.linspace(*p.recover_angles[:2], int(p.recover_angles[2]))
-    progress("recovery sweeps (linear, nonlinear)")
+    progress("recovery sweeps (linear, nonlinear) and the σ_w/σ_v sweep")
     recovered = {nl: recovery_sweep(p, a21, angles, nonlinear=nl) for nl in (False, True)}
+    qr = qr_sweep(p, a21, seeds[:30] if qr_seeds is None else qr_seeds)
     direct, table = fuzzy_controller(p, lookup=False), fuzzy_controller(p, lookup=True)
     e, ec = np.meshgrid(np.linspace(-0.1, 0.1, 97), np.linspace(-1.5, 1.5, 97))
     err = float(np.max(np.abs(direct.evaluate(e, ec) - table.evaluate(e, ec))))
-    ss = build_filter("kf-ss", p, a21)
-    return LoopData(p=p, a21=a21, seeds=list(seeds), runs=runs, sign_check=sign, period_check=period,
-                    angles=angles, recovered=recovered, lookup_error=err, kf_ss_gain=(ss.alpha, ss.beta))
+    ss, ssq = build_filter("kf-ss", p, a21), build_filter("kf-ss-qr", p, a21)
+    return LoopData(p=p, a21=a21, seeds=list(seeds), main=main, literal=literal, sign_check=sign,
+                    period_check=period, angles=angles, recovered=recovered, lookup_error=err,
+                    kf_ss_gain=(ss.alpha, ss.beta), kf_ss_qr_gain=(ssq.alpha, ssq.beta), qr=qr)
 
 
 def seeds_for(base_seed: int, runs: int) -> list:

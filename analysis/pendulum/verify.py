@@ -9,6 +9,7 @@ covariance, and the stability of the printed filter. Data only: quantities and f
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 from dataclasses import dataclass
@@ -32,7 +33,7 @@ from ctrl_analysis.estimators.kalman import (
 from ctrl_analysis.report import relative_error
 from ctrl_analysis.symbolic.riccati import derive_second_order_gain
 
-from .paper import VERIFY, Verify
+from .paper import VERIFY, Verify, physical_a21
 
 __all__ = [
     "NOISE_DESCRIPTION",
@@ -42,6 +43,7 @@ __all__ = [
     "best_over_sampling_period",
     "compute_verify",
     "fmt_vec",
+    "gain_cells_data",
     "gain_interpretations",
     "pendulum_matrices",
     "verify_printed_P",
@@ -321,6 +323,27 @@ def compute_verify(P: Verify = VERIFY) -> VerifyData:
     return VerifyData(P=P, a21=a21, **s, t=t, traj=traj, end_err=end_err, Pcheck=Pcheck, rows=rows,
                       sweep_best=sweep_best, poles_printed=poles, abf=abf, discrete=_discrete_alpha_beta(P, a21),
                       bode_filters=bode, omega=omega)
+
+
+def gain_cells_data(P: Verify = VERIFY):
+    """What the §4 gain cell needs, cheaply (the sensitivity sweep): the continuous gain and the closest interpretation.
+
+    Cached on the values they depend on (not on tolerances or other settings of ``P``).
+
+    Returns
+    -------
+    (K_cont, closest) : (list, GainInterpretation)
+    """
+    return _gain_cells(P.B2, P.g, P.a21_printed, P.Q, P.R, tuple(P.T_grid), tuple(P.K_printed))
+
+
+@functools.lru_cache(maxsize=8)
+def _gain_cells(B2, g, a21_printed, Q, R, T_grid, K_printed):
+    a21 = physical_a21(B2, g)[1]
+    A, _B, G, C = pendulum_matrices(a21, B2)
+    cont = continuous_steady_state(A, C, G, Q, R, require="observable")
+    rows = gain_interpretations((a21, a21_printed), Q, R, T_grid, K_printed)
+    return cont.K.ravel().tolist(), rows[0]
 
 
 def fmt_vec(v, digits=4):

@@ -14,7 +14,7 @@ from __future__ import annotations
 import control as ct
 import numpy as np
 
-from .._validate import check_array, check_finite
+from .._validate import check_array, check_bool, check_finite
 from ..blocks import StaticBlock, signal_names
 
 __all__ = ["HighOrderDifferentialFeedback", "hurwitz_roots", "gains_from_poles"]
@@ -75,18 +75,28 @@ def hurwitz_roots(K) -> np.ndarray:
     return p[np.lexsort((p.imag, -p.real))]
 
 
-def gains_from_poles(poles) -> np.ndarray:
+def gains_from_poles(poles, *, allow_unstable: bool = False) -> np.ndarray:
     """``K = [k_n, ..., k_1]`` that puts the roots of ``s^n + k_1 s^(n-1) + ... + k_n`` at ``poles``.
 
     Parameters
     ----------
     poles : array_like of complex
-        The ``n`` desired roots (finite; complex ones in conjugate pairs).
+        The ``n`` desired roots (finite; complex ones in conjugate pairs; in the open left
+        half-plane, as :class:`HighOrderDifferentialFeedback` requires).
+    allow_unstable : bool
+        Accept poles with a real part >= 0 (default ``False``: such gains make the closed loop
+        unstable, and the feedback block refuses them).
 
     Returns
     -------
     numpy.ndarray, shape (n,)
         Real gains in the paper's order ``[k_n, ..., k_1]``.
+
+    Raises
+    ------
+    ValueError
+        If a pole is not finite, a complex pole has no conjugate, or (without ``allow_unstable``)
+        a pole has a real part >= 0.
 
     Examples
     --------
@@ -103,6 +113,9 @@ def gains_from_poles(poles) -> np.ndarray:
         raise ValueError(f"poles must be a 1-D sequence of n >= 1 poles, got shape {poles.shape}")
     if not np.all(np.isfinite(poles)):
         raise ValueError(f"poles must be finite, got {poles!r}")
+    if not check_bool("allow_unstable", allow_unstable) and np.max(poles.real) >= 0:
+        raise ValueError(f"poles must lie in the open left half-plane (Re < 0; allow_unstable=True to accept "
+                         f"others), got {complex(poles[np.argmax(poles.real)]):.4g}")
     coeffs = np.poly(poles)  # [1, k_1, ..., k_n]
     if np.max(np.abs(coeffs.imag)) > 1e-9 * max(1.0, np.max(np.abs(coeffs.real))):
         raise ValueError("poles must be real or come in complex-conjugate pairs")

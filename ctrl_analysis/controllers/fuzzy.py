@@ -122,12 +122,17 @@ class _FuzzyBlock(DiscreteBlock):
         Parameters
         ----------
         e, ec : array_like
-            Error and error rate, arrays of equal shape.
+            Error and error rate, finite arrays of equal shape.
 
         Returns
         -------
         ndarray
             ``u``, same shape as ``e``.
+
+        Raises
+        ------
+        ValueError
+            If ``e`` or ``ec`` holds NaN or inf, or their sizes differ.
 
         Notes
         -----
@@ -136,8 +141,8 @@ class _FuzzyBlock(DiscreteBlock):
         aggregated set and numpy takes its centroid); bit for bit the numpy method's result
         (``tests/lib/test_fuzzy.py``).
         """
-        e = np.asarray(e, dtype=float)
-        ec = np.asarray(ec, dtype=float).reshape(-1)
+        e = np.asarray(check_finite("e", e), dtype=float)
+        ec = np.asarray(check_finite("ec", ec), dtype=float).reshape(-1)
         if ec.size != e.size:
             raise ValueError(f"e and ec must have the same number of points, got {e.size} and {ec.size}")
         if e.size >= _COMPILED_MIN and _compiled_ok():  # many points: the compiled twin of output()
@@ -448,13 +453,19 @@ class FuzzyController(_FuzzyBlock):
         Parameters
         ----------
         Ke, Kec, Ku : float, optional
-            Factors to use instead of the controller's.
+            Factors (finite, > 0) to use instead of the controller's.
 
         Returns
         -------
         numpy.ndarray
+
+        Raises
+        ------
+        ValueError
+            If a factor given is not finite and > 0.
         """
-        f = [self.Ke if Ke is None else Ke, self.Kec if Kec is None else Kec, self.Ku if Ku is None else Ku]
+        f = [getattr(self, name) if value is None else check_positive(name, value, scalar=True)
+             for name, value in (("Ke", Ke), ("Kec", Kec), ("Ku", Ku))]
         head = f + [self.X_e, self.X_ec, *self.rules.shape, self.n_u, self.n_grid, self.w_e, self.w_ec]
         return np.concatenate([head, self.c_e, self.c_ec, self.rules.ravel(), self.z, self.mu_u.ravel()]).astype(float)
 

@@ -22,6 +22,7 @@ from .lowpass import LowPassFilter
 from .._validate import check_array, check_finite, check_in, check_int, check_positive
 from ..blocks import ColumnKernels, DiscreteBlock, StaticBlock
 from .._kernels import jitable
+from ..simulate import MAX_SUBSTEPS
 
 __all__ = [
     "fhan",
@@ -196,7 +197,7 @@ class TrackingDifferentiator(ColumnKernels, DiscreteBlock):
         Filtering factor of :func:`fhan`, ``> 0``; default ``h`` (Han's choice without extra
         filtering).
     substeps : int
-        TD steps (each of length ``h``) per sample, ``>= 1``.
+        TD steps (each of length ``h``) per sample, from 1 to :data:`~ctrl_analysis.simulate.MAX_SUBSTEPS`.
     x0 : array_like, shape (2,), optional
         Initial ``(x1, x2)`` (default zero).
     feedthrough : bool
@@ -210,7 +211,7 @@ class TrackingDifferentiator(ColumnKernels, DiscreteBlock):
     Raises
     ------
     ValueError
-        If ``r``, ``h`` or ``h0`` is not finite and ``> 0``, or ``substeps < 1``.
+        If ``r``, ``h`` or ``h0`` is not finite and ``> 0``, or ``substeps`` is outside ``[1, MAX_SUBSTEPS]``.
     TypeError
         If ``feedthrough`` is not a bool.
 
@@ -242,7 +243,7 @@ class TrackingDifferentiator(ColumnKernels, DiscreteBlock):
         self.r = float(check_positive("r", r, scalar=True))
         self.h = float(check_positive("h", h, scalar=True))
         self.h0 = self.h if h0 is None else float(check_positive("h0", h0, scalar=True))
-        self.substeps = check_int("substeps", substeps, minimum=1)
+        self.substeps = check_int("substeps", substeps, minimum=1, maximum=MAX_SUBSTEPS)
         self.dt = self.h * self.substeps
         self.x0 = np.zeros(2) if x0 is None else check_finite("x0", np.ravel(x0), shape=(2,))
         self._p = np.array([self.r, self.h, self.h0, float(self.substeps), float(self.feedthrough)])

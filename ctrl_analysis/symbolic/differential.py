@@ -312,6 +312,9 @@ def coefficients_from_zeros(zeros, gain=KGAIN) -> list:
     gain = _sym_or_number("gain", gain)
     if len(zeros) < 1:
         raise ValueError(f"zeros must hold at least one zero (n0 >= 2), got {len(zeros)}")
+    if len(zeros) > MAX_ORDER - 1:
+        raise ValueError(f"zeros must hold at most MAX_ORDER - 1 = {MAX_ORDER - 1} zeros (n0 <= {MAX_ORDER}), "
+                         f"got {len(zeros)}")
     # (4) numerator K ∏ (s - z_j), read off its coefficients (eq. 5)
     poly = sp.Poly(sp.expand(gain * sp.prod([S - z for z in zeros])), S)
     return poly.all_coeffs()  # already expanded, canonical

@@ -27,6 +27,8 @@ from .._validate import check_bool, check_int, check_positive
 __all__ = [
     "S",
     "EPS",
+    "MAX_ORDER",
+    "MAX_TRANSFER_ORDER",
     "beta_symbols",
     "gain_symbols",
     "characteristic_polynomial",
@@ -39,6 +41,25 @@ __all__ = [
     "bandwidth_match",
     "bandwidth_polynomial",
 ]
+
+#: Largest plant order ``n`` of the symbolic ESO helpers (polynomials, symbols, matrices): beyond it
+#: sympy's expressions grow for minutes, and no practical observer needs more.
+MAX_ORDER = 30
+#: Largest ``n`` of :func:`error_transfer_functions`, :func:`error_dc_gains` and
+#: :func:`error_scaling_exponents`: the symbolic solve of ``(sI - A) E = e`` grows steeply
+#: (about 2 s at n = 7, 40 s at n = 10, minutes beyond).
+MAX_TRANSFER_ORDER = 6
+
+
+def _order(n, maximum: int = MAX_ORDER) -> int:
+    """The plant order ``n``: an integer in ``[1, maximum]`` (the limit named in the message)."""
+    n = check_int("n", n, minimum=1)
+    if n > maximum:
+        which = "MAX_ORDER" if maximum == MAX_ORDER else "MAX_TRANSFER_ORDER"
+        raise ValueError(f"n must be <= {maximum} ({which}: the symbolic computation would run for minutes), "
+                         f"got {n}")
+    return n
+
 
 #: Laplace variable and high-gain parameter.
 S = sp.Symbol("s")
@@ -57,7 +78,7 @@ def beta_symbols(n: int) -> tuple:
     -------
     tuple of sympy.Symbol
     """
-    n = check_int("n", n, minimum=1)
+    n = _order(n)
     return sp.symbols(f"beta1:{n + 2}", positive=True)
 
 
@@ -74,7 +95,7 @@ def gain_symbols(n: int) -> tuple:
     tuple of sympy.Symbol
         ``(L1, ..., L{n+1})``.
     """
-    n = check_int("n", n, minimum=1)
+    n = _order(n)
     return sp.symbols(f"L1:{n + 2}", positive=True)
 
 
@@ -101,7 +122,7 @@ def characteristic_polynomial(n: int, high_gain: bool = True) -> sp.Expr:
     Chen Z., Gao Q., "Modified extended state observer: analysis and implementation", Control
     Theory & Applications 35(8), 2018, eq. (3), (6), (29).
     """
-    return _characteristic_polynomial(check_int("n", n, minimum=1), check_bool("high_gain", high_gain))
+    return _characteristic_polynomial(_order(n), check_bool("high_gain", high_gain))
 
 
 @lru_cache(maxsize=None)
@@ -124,7 +145,7 @@ def characteristic_coefficients(n: int):
         ``numeric(epsilon, beta) -> numpy.ndarray`` of shape ``(n + 2,)``, checking its arguments
         (``epsilon > 0``, ``n + 1`` positive ``beta``).
     """
-    n = check_int("n", n, minimum=1)
+    n = _order(n)
     betas = beta_symbols(n)
     coeffs = sp.Poly(characteristic_polynomial(n), S).all_coeffs()
     f = sp.lambdify((EPS, betas), coeffs, "numpy")
@@ -156,7 +177,7 @@ def observer_matrices(n: int, high_gain: bool = True):
     (A_LC, E, C) : tuple of sympy.Matrix
         Shapes ``(n+1, n+1)``, ``(n+1, 1)``, ``(1, n+1)``.
     """
-    n = check_int("n", n, minimum=1)
+    n = _order(n)
     high_gain = check_bool("high_gain", high_gain)
     m = n + 1
     if high_gain:
@@ -194,7 +215,7 @@ def error_transfer_functions(n: int, high_gain: bool = False) -> tuple:
     ----------
     Chen & Gao 2018, bound (4)/(7).
     """
-    return _error_transfer_functions(check_int("n", n, minimum=1), check_bool("high_gain", high_gain))
+    return _error_transfer_functions(_order(n, MAX_TRANSFER_ORDER), check_bool("high_gain", high_gain))
 
 
 @lru_cache(maxsize=None)
@@ -218,7 +239,7 @@ def error_dc_gains(n: int) -> tuple:
     tuple of sympy.Expr
         One DC gain per observer state, ``n + 1`` in all.
     """
-    return _error_dc_gains(check_int("n", n, minimum=1))
+    return _error_dc_gains(_order(n, MAX_TRANSFER_ORDER))
 
 
 @lru_cache(maxsize=None)
@@ -242,7 +263,7 @@ def error_scaling_exponents(n: int) -> tuple:
         ``k_1 .. k_{n+1}``.
     """
     out = []
-    for g in error_dc_gains(n):
+    for g in error_dc_gains(_order(n, MAX_TRANSFER_ORDER)):
         num, den = sp.fraction(sp.together(g))
         out.append(int(sp.degree(num, EPS) - sp.degree(den, EPS)))
     return tuple(out)
@@ -281,7 +302,7 @@ def bandwidth_polynomial(n: int, omega_o=None) -> sp.Expr:
     -------
     sympy.Expr
     """
-    n = check_int("n", n, minimum=1)
+    n = _order(n)
     w = (sp.Symbol("omega_o", positive=True) if omega_o is None
          else sp.nsimplify(check_positive("omega_o", omega_o, scalar=True)))
     return sp.expand((S + w) ** (n + 1))
@@ -313,6 +334,9 @@ def bandwidth_match(beta, epsilon=None) -> BandwidthMatch:
     beta_arr = np.atleast_1d(check_positive("beta", beta))
     if beta_arr.ndim != 1 or beta_arr.size < 2:
         raise ValueError(f"beta must have n + 1 >= 2 positive entries, got {beta!r}")
+    if beta_arr.size > MAX_ORDER + 1:
+        raise ValueError(f"beta must have at most MAX_ORDER + 1 = {MAX_ORDER + 1} entries (the exact comparison "
+                         f"would run for minutes), got {beta_arr.size}")
     beta = [sp.nsimplify(b, rational=True) for b in (beta if isinstance(beta, (list, tuple)) else beta_arr)]
     eps = None if epsilon is None else sp.nsimplify(check_positive("epsilon", epsilon, scalar=True), rational=True)
     m = len(beta)

@@ -27,10 +27,14 @@ import control as ct
 import numpy as np
 
 import ctrl_analysis
-from ctrl_analysis import _kernels, _validate, blocks, cli, parallel, plants, polynomials, progress, report
+from ctrl_analysis import _kernels, _perrun, _stepcheck, _validate, blocks, cli, parallel, plants, polynomials, progress, report
 from ctrl_analysis import identification as ident
 from ctrl_analysis import loop as loop_mod
 from ctrl_analysis import metrics, report_md, simulate, study
+from ctrl_analysis.arena import cli as arena_cli
+from ctrl_analysis.arena import figures as arena_figures
+from ctrl_analysis.arena import interface as arena_interface
+from ctrl_analysis.arena import recommend as arena_recommend
 from ctrl_analysis.controllers import differential_feedback as hodf
 from ctrl_analysis.controllers import fuzzy, golden_section, mfac, pd
 from ctrl_analysis.estimators import differential as de
@@ -42,6 +46,8 @@ from ctrl_analysis.symbolic import eso as sym_eso
 from ctrl_analysis.symbolic import riccati as sym_ric
 
 NAN, INF = math.nan, math.inf
+HUGE = 10**12  # a size that would hang (minutes or forever) instead of being refused
+HUGE_N = 10**4  # a sympy order that would run for minutes
 
 # -- bad values by kind ------------------------------------------------------------------------
 TYPE_BAD = ["abc", None, 1 + 2j]  # not a number at all
@@ -237,23 +243,23 @@ def build_cases(tmp):
         ("locus_gain", sym_de.locus_gain, dict(s_value=-3.0, n0=5, a=2.0),
          dict(s_value=["abc", None, NAN, [INF]], n0=INT, a=POS)),
         ("coefficients_from_zeros", sym_de.coefficients_from_zeros, dict(zeros=[-1.0, -2.0], gain=3.0),
-         dict(zeros=[[], None, "abc", [NAN]], gain=["abc", None, NAN])),
+         dict(zeros=[[], None, "abc", [NAN], [-1.0] * HUGE_N], gain=["abc", None, NAN])),
         ("differential_coefficients", sym_de.differential_coefficients, dict(n0=5, a=2.0, K=30.0),
          dict(n0=INT, a=POS, K=POS)),
-        ("beta_symbols", sym_eso.beta_symbols, dict(n=2), dict(n=INT + [0])),
-        ("gain_symbols", sym_eso.gain_symbols, dict(n=2), dict(n=INT + [0])),
+        ("beta_symbols", sym_eso.beta_symbols, dict(n=2), dict(n=INT + [0, HUGE_N])),
+        ("gain_symbols", sym_eso.gain_symbols, dict(n=2), dict(n=INT + [0, HUGE_N])),
         ("characteristic_polynomial", sym_eso.characteristic_polynomial, dict(n=2, high_gain=True),
-         dict(n=INT + [0], high_gain=BOOL)),
-        ("characteristic_coefficients", sym_eso.characteristic_coefficients, dict(n=2), dict(n=INT + [0])),
-        ("observer_matrices", sym_eso.observer_matrices, dict(n=2, high_gain=True), dict(n=INT + [0], high_gain=BOOL)),
+         dict(n=INT + [0, HUGE_N], high_gain=BOOL)),
+        ("characteristic_coefficients", sym_eso.characteristic_coefficients, dict(n=2), dict(n=INT + [0, HUGE_N])),
+        ("observer_matrices", sym_eso.observer_matrices, dict(n=2, high_gain=True), dict(n=INT + [0, HUGE_N], high_gain=BOOL)),
         ("error_transfer_functions", sym_eso.error_transfer_functions, dict(n=2, high_gain=False),
-         dict(n=INT + [0], high_gain=BOOL)),
-        ("error_dc_gains", sym_eso.error_dc_gains, dict(n=2), dict(n=INT + [0])),
-        ("error_scaling_exponents", sym_eso.error_scaling_exponents, dict(n=2), dict(n=INT + [0])),
+         dict(n=INT + [0, 7, HUGE_N], high_gain=BOOL)),
+        ("error_dc_gains", sym_eso.error_dc_gains, dict(n=2), dict(n=INT + [0, HUGE_N])),
+        ("error_scaling_exponents", sym_eso.error_scaling_exponents, dict(n=2), dict(n=INT + [0, HUGE_N])),
         ("bandwidth_polynomial", sym_eso.bandwidth_polynomial, dict(n=2, omega_o=10.0),
-         dict(n=INT + [0], omega_o=opt(POS))),
+         dict(n=INT + [0, HUGE_N], omega_o=opt(POS))),
         ("bandwidth_match", sym_eso.bandwidth_match, dict(beta=[3.0, 3.0, 1.0], epsilon=0.1),
-         dict(beta=ARR + [[1.0], [3.0, -3.0, 1.0], [NAN, 3.0, 1.0]], epsilon=opt(POS))),
+         dict(beta=ARR + [[1.0], [3.0, -3.0, 1.0], [NAN, 3.0, 1.0], [1.0] * HUGE_N], epsilon=opt(POS))),
         ("second_order_gain", sym_ric.second_order_gain, dict(a21=1.0, q=2.0), dict(a21=VREAL, q=VPOS)),
         ("random_walk_gain_closed_form", sym_ric.random_walk_gain_closed_form, dict(q=0.5), dict(q=VNONNEG)),
         ("kalata_gains_closed_form", sym_ric.kalata_gains_closed_form, dict(Lambda=0.5), dict(Lambda=VNONNEG)),
@@ -267,10 +273,11 @@ def build_cases(tmp):
          dict(D=ARR + [[1.0, 2.0], [[1.0]], np.ones((2, 2, 2)), [[NAN, 1.0]]], inputs=[None, 3, ["a", 3]],
               outputs=[None, 3, [1.5]])),
         ("RowGroups", blocks.RowGroups, dict(blocks=[LPF, LPF], rows=[1, 2]),
-         dict(blocks=[None, 3, [], [None], [LPF, 3]], rows=[None, "ab", [1], [0, 1], [1.5, 1], [1, 2, 3]])),
+         dict(blocks=[None, 3, [], [None], [LPF, 3]], rows=[None, "ab", [1], [0, 1], [1.5, 1], [1, 2, 3],
+                                  [[0, 1], [1, 2]], [[0], [2]], [[0, 5], [1]], [[0], []], [[0.5], [1]]])),
         ("SampledBlock", blocks.SampledBlock, dict(block=LPF, dt=0.01, method="rk4", substeps=1),
-         dict(block=NOT_A_BLOCK + [PLANT], dt=POS, method=CHOICE, substeps=INT + [0])),
-        ("signal_names", blocks.signal_names, dict(base="x", n=3), dict(base=[None, 3, ""], n=INT + [-1])),
+         dict(block=NOT_A_BLOCK + [PLANT], dt=POS, method=CHOICE, substeps=INT + [0, HUGE])),
+        ("signal_names", blocks.signal_names, dict(base="x", n=3), dict(base=[None, 3, ""], n=INT + [-1, HUGE])),
         ("DiscreteBlock.run", _block_run, dict(u=np.ones(5), x0=None),
          dict(u=ARR + [np.ones((5, 2)), np.ones((2, 5, 2, 2))], x0=opt(ARR) + [[1.0, 2.0], np.ones((2, 2, 2))])),
         ("DiscreteBlock.nlsys", _block_nlsys, dict(dt=0.1, name="p"), dict(dt=["abc", NAN, -1.0, 0.0], name=[3])),
@@ -278,7 +285,7 @@ def build_cases(tmp):
         ("place", loop_mod.place, dict(block=PLANT, name="plant", inputs=["u"], outputs=["y"]),
          dict(block=NOT_A_BLOCK, name=[None, 3, ""], inputs=[3, ["a", "b"], [3]], outputs=[3, ["a", "b"], [None]])),
         ("Loop", _loop, dict(dt=0.1, method="rk4", substeps=1, outputs=None),
-         dict(dt=POS, method=CHOICE, substeps=INT + [0], outputs=[3, ["nonsense"], "y"])),
+         dict(dt=POS, method=CHOICE, substeps=INT + [0, HUGE], outputs=[3, ["nonsense"], "y"])),
         ("Loop(blocks)", loop_mod.Loop, dict(blocks=[loop_mod.place(PLANT, "plant")], dt=0.1),
          dict(blocks=[None, 3, [], [3.0], [loop_mod.place(PLANT, "p"), loop_mod.place(PLANT, "p")]])),
         ("Loop.simulate", _loop_simulate,
@@ -322,7 +329,7 @@ def build_cases(tmp):
          dict(x1=["abc", None], x2=["abc", None], r=POS, h0=POS)),
         ("TrackingDifferentiator", tracking.TrackingDifferentiator,
          dict(r=10.0, h=0.01, h0=None, substeps=1, x0=None, feedthrough=False),
-         dict(r=POS, h=POS, h0=opt(POS), substeps=INT + [0], x0=opt(ARR) + [[1.0], [NAN, 0.0]], feedthrough=BOOL)),
+         dict(r=POS, h=POS, h0=opt(POS), substeps=INT + [0, HUGE], x0=opt(ARR) + [[1.0], [NAN, 0.0]], feedthrough=BOOL)),
         ("softened_setpoint", tracking.softened_setpoint, dict(softener=LPF, r=np.ones(20), h=0.01, method="zoh"),
          dict(softener=NOT_A_BLOCK + [PLANT], r=ARR + [np.ones((2, 2)), [], _nan_like(np.ones(20))], h=POS,
               method=CHOICE)),
@@ -386,7 +393,8 @@ def build_cases(tmp):
               x0=opt(ARR) + [[1.0], [NAN, 0.0]])),
         # controllers
         ("hurwitz_roots", hodf.hurwitz_roots, dict(K=[6.0, 11.0, 6.0]), dict(K=ARR + [[NAN, 1.0], []])),
-        ("gains_from_poles", hodf.gains_from_poles, dict(poles=[-1.0, -2.0]), dict(poles=ARR + [[NAN], [1j], []])),
+        ("gains_from_poles", hodf.gains_from_poles, dict(poles=[-1.0, -2.0]),
+         dict(poles=ARR + [[NAN], [1j], [], [1.0, -2.0], [0.0], [0.5 + 1j, 0.5 - 1j]])),
         ("HighOrderDifferentialFeedback", hodf.HighOrderDifferentialFeedback, dict(K=[6.0, 11.0, 6.0]),
          dict(K=ARR + [[1.0, -1.0, 1.0], [NAN, 1.0, 1.0], np.ones((2, 2)), []])),
         ("HighOrderDifferentialFeedback.u", _hodf_u, dict(theta=[1.0, 0.0, 0.0], x_hat=[0.0, 0.0, 0.0]),
@@ -421,6 +429,10 @@ def build_cases(tmp):
          dict(rules=RULES, Ke=1.0, Kec=1.0, Ku=1.0, input_range=6.0, output_range=7.0, n_output_terms=None, n_grid=41),
          dict(rules=ARR + [np.ones((7, 6)) * 0.5, RULES + 0.5, -RULES, np.ones((2, 2, 2))], Ke=POS, Kec=POS, Ku=POS,
               input_range=[v for v in POS if v != [1.0, 2.0]] + [[1.0, 2.0, 3.0], [1.0, -1.0]], output_range=POS, n_output_terms=opt(INT) + [0, 5], n_grid=INT + [0])),
+        ("FuzzyController.kernel_params", FUZZY.kernel_params, dict(Ke=None, Kec=None, Ku=None),
+         dict(Ke=opt(POS), Kec=opt(POS), Ku=opt(POS))),
+        ("FuzzyController.evaluate", FUZZY.evaluate, dict(e=[0.5, -0.2], ec=[0.1, 0.0]),
+         dict(e=["abc", None, [NAN, 0.0], [INF, 0.0], 0.5], ec=["abc", None, [0.0, NAN], [-INF, 0.0]])),
         ("FuzzyController.control_surface", _fuzzy_surface, dict(n_e=5, n_ec=5), dict(n_e=INT + [0], n_ec=INT + [0])),
         ("FuzzyLookupController", fuzzy.FuzzyLookupController, dict(controller=FUZZY, n_points=21),
          dict(controller=NOT_A_BLOCK, n_points=["3", None, 2.5, NAN, True, 0, 1, [2, 3, 4]])),
@@ -465,7 +477,7 @@ def build_cases(tmp):
         ("resonance_peak", metrics.resonance_peak, dict(sys=TF1, omega=None),
          dict(sys=[3.0, "tf", None], omega=opt(ARR) + [[-1.0, 1.0], [NAN, 1.0]])),
         # simulation engine
-        ("run_seeds", simulate.run_seeds, dict(base_seed=0, runs=3), dict(base_seed=INT + [-1], runs=INT + [0])),
+        ("run_seeds", simulate.run_seeds, dict(base_seed=0, runs=3), dict(base_seed=INT + [-1], runs=INT + [0, HUGE])),
         ("uniform_noise", simulate.uniform_noise, dict(low=-1.0, high=1.0), dict(low=["abc", None, NAN], high=REAL + [-2.0])),
         ("gaussian_noise", simulate.gaussian_noise, dict(std=1.0, mean=0.0),
          dict(std=VNONNEG + [[1.0, -1.0]], mean=["abc", None, NAN])),
@@ -474,7 +486,7 @@ def build_cases(tmp):
         ("simulate_sampled", simulate.simulate_sampled,
          dict(rhs=_rhs, x0=[1.0, 0.0], h=0.1, n_steps=5, method="rk4", substeps=1, t0=0.0, bound=1e8),
          dict(rhs=CALLABLE, x0=ARR + [[NAN, 0.0], np.ones((2, 2, 2))], h=POS, n_steps=INT + [0], method=CHOICE,
-              substeps=INT + [0], t0=REAL, bound=["abc", None, NAN, -INF, 0.0, [1.0]], controller=[3.0, "f"],
+              substeps=INT + [0, HUGE], t0=REAL, bound=["abc", None, NAN, -INF, 0.0, [1.0]], controller=[3.0, "f"],
               observe=[3.0, "f"], seeds=[[1, 2, 3], 5])),
         ("simulate_discrete", simulate.simulate_discrete, dict(step=_step, x0=[1.0], n_steps=5, bound=1e8),
          dict(step=CALLABLE, x0=ARR + [[NAN]], n_steps=INT + [0], bound=["abc", None, NAN, -INF, 0.0],
@@ -488,6 +500,7 @@ def build_cases(tmp):
         ("check_result_memory", simulate.check_result_memory, dict(nbytes=10.0, limit=100.0, where="x"),
          dict(nbytes=NONNEG, limit=POS)),
         # parallel and progress
+        ("chunk_slices(large n)", parallel.chunk_slices, dict(n=HUGE, chunks=4), dict(chunk_size=[1, 1000])),
         ("chunk_slices", parallel.chunk_slices, dict(n=10, chunks=3, chunk_size=None),
          dict(n=INT + [-1], chunks=opt(INT) + [0], chunk_size=opt(INT) + [0])),
         ("check_scheduler_address", parallel.check_scheduler_address, dict(scheduler="tcp://127.0.0.1:8786"),
@@ -531,7 +544,8 @@ def build_cases(tmp):
         ("StudyResult.reconstruction", _reconstruction, dict(name="x", why="because"),
          dict(name=STR + [""], why=STR + [""])),
         ("StudyResult.finding", _finding, dict(id="f", text="found"), dict(id=STR + [""], text=STR + [""])),
-        ("StudyContext", report.StudyContext, dict(out_dir=".", runs=3, seed=0), dict(runs=opt(INT) + [0], seed=INT + [-1])),
+        ("StudyContext", report.StudyContext, dict(out_dir=".", runs=3, seed=0, jobs=1),
+         dict(runs=opt(INT) + [0], seed=INT + [-1], jobs=INT + [0])),
         ("StudyContext.runs_or", _runs_or, dict(default=100, quick_default=5),
          dict(default=INT + [0], quick_default=opt(INT) + [0])),
         ("StudyContext.save_figure", _save_figure, dict(out_dir=tmp / "figs", fig=fig, filename="fig1.png", dpi=50),
@@ -551,7 +565,159 @@ def build_cases(tmp):
          dict(results=[None, 3, [None], ["x"]], this_run=[None, 3, "x"])),
         ("write_report_md", report_md.write_report_md, dict(results=[results], out_dir=tmp / "report"),
          dict(results=[None, 3, [None], ["x"]], out_dir=[None, 3, ""], this_run=[3, "x"], failed=[3, "x"])),
+        *_claim_cases(results),
+        *_arena_cases(tmp),
     ]
+
+
+def _claim_cases(results):
+    """Claims, plausible ranges, the verdict policy and the sensitivity sweep."""
+    from ctrl_analysis import report_claims, sensitivity, verdicts
+    from ctrl_analysis.glossary import glossary_lines
+    from ctrl_analysis.report_format import summarise
+
+    claim = study.Claim("c", "§1", "a claim")
+    return [
+        ("Claim", study.Claim, dict(id="c", section="§1", statement="s"),
+         dict(id=STR + [""], section=STR + [""], statement=STR + [""])),
+        ("span", study.span, dict(low=1.0, high=2.0, why="w"),
+         dict(low=[NAN, INF, 3.0], high=[NAN, INF, 0.5], why=STR + [""], scale=["cubic", 3], points=INT + [1])),
+        ("Plausible", study.Plausible, dict(why="w", options=(1, 2)),
+         dict(why=STR + [""], options=[(), [1, 2], "ab"], points=INT + [1])),
+        ("choices", study.choices, dict(options=(1, 2), why="w"), dict(options=[()], why=STR + [""])),
+        ("fixed", study.fixed, dict(why="w"), dict(why=STR + [""])),
+        ("missing_plausible", study.missing_plausible, dict(params=report.StudyContext(".")),
+         dict(params=[None, 3, report.StudyContext])),
+        ("central_interval", verdicts.central_interval, dict(samples=[1.0, 2.0, 3.0]),
+         dict(samples=[[], [1.0, NAN], None], share=[0.0, 1.0, NAN])),
+        ("digits_tolerance", verdicts.digits_tolerance, dict(paper=0.95, decimals=2),
+         dict(paper=[0.0, NAN, INF], decimals=INT + [-1])),
+        ("ClaimResult", verdicts.ClaimResult, dict(claim=claim, holds=True, evidence=("x",)),
+         dict(claim=[None, "c"], holds=[3, "yes"], evidence=[(3,), ("",)], note=[3])),
+        ("sweep", sensitivity.sweep, dict(evaluate=_toy_evaluate, params={"p": _ToyParams()}),
+         dict(evaluate=[None, 3], params=[None, {}, {"p": 3}], jobs=INT + [0], names=[["p.nope"]])),
+        ("apply", sensitivity.apply, dict(result=_toy_evaluate({"p": _ToyParams()}),
+                                          sens=sensitivity.sweep(_toy_evaluate, {"p": _ToyParams()})),
+         dict(result=[None, 3], sens=[None, 3])),
+        ("plot_sensitivity", sensitivity.plot_sensitivity, dict(result=_swept(), top=3),
+         dict(result=[None, 3, _toy_evaluate({"p": _ToyParams()})], top=INT + [0])),
+        ("Sensitivity", sensitivity.Sensitivity, dict(baseline={}, rows=[], ranges={}), {}),
+        ("scorecard", report_claims.scorecard, dict(results=results), dict(results=[None, 3])),
+        ("claim_counts", report_claims.claim_counts, dict(results=results), dict(results=[None, 3])),
+        ("checks_and_errata", report_claims.checks_and_errata, dict(results=results, fmt=str), dict(results=[None, 3])),
+        ("sensitivity_lines", report_claims.sensitivity_lines, dict(results=results), dict(results=[None, 3])),
+        ("plausible_text", report_claims.plausible_text, dict(p={"low": 1.0, "high": 2.0}), dict(p=[3, "x"])),
+        ("not_reproduced", report_md.not_reproduced, dict(results=results), dict(results=[None, 3])),
+        ("glossary_lines", glossary_lines, dict(text="RMSE"), dict(text=[None, 3])),
+        ("summarise", summarise, dict(value=[1, 2]), {}),
+    ]
+
+
+def _arena_csv(path, rows, header="time,y"):
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(header + "\n" + "\n".join(",".join(f"{v}" for v in r) for r in rows) + "\n", encoding="utf-8")
+    return path
+
+
+def _arena_cases(tmp):
+    """The estimator arena: bound, signals, the algebraic differentiator, the interface and the tuning."""
+    from ctrl_analysis.arena import algebraic, bound, signals, tuning
+
+    interface, recommend = arena_interface, arena_recommend
+
+    setup = tuning.Setup(dt=0.01, n=100, transient=0.2)
+    case = tuning.Case("sines", "uniform", 0.01, 2.0, (1,))
+    pair = bound.adversarial_pair(0.01, 1.0, 0.01, 100, 50)
+    y = np.zeros((50, 1))
+    csv = tmp / "arena"
+    ok = _arena_csv(csv / "ok.csv", [[0.01 * k, math.sin(0.01 * k)] for k in range(30)])
+    bad_csv = [csv / "missing.csv", csv, _arena_csv(csv / "one_column.csv", [[0.01 * k] for k in range(30)], "time"),
+               _arena_csv(csv / "short.csv", [[0.01 * k, 0.0] for k in range(5)]),
+               _arena_csv(csv / "text.csv", [[0.01 * k, "abc"] for k in range(30)]),
+               _arena_csv(csv / "nan.csv", [[0.01 * k, NAN] for k in range(30)]),
+               _arena_csv(csv / "backwards.csv", [[0.01 * (k % 20), 0.0] for k in range(30)]),
+               _arena_csv(csv / "uneven.csv", [[0.01 * k * k, 0.0] for k in range(30)])]
+    (csv / "binary.csv").write_bytes(b"\xff\xfe\x00bad")
+    bad_csv.append(csv / "binary.csv")
+    ints = ["3", None, 2.5, NAN, [2], True]
+    settings = dict(signals=("sines",), noises=("uniform",), eps=(0.01,), L=2.0, records=1, setup=setup, rounds=0,
+                    families=("algebraic",))
+    task = ("algebraic", setup, (case,), [(0, np.array([4.0, 2.0]))], "numpy")
+    results = {"quantities": [{"id": "tunings", "value": 3.0}, {"id": "tuning_seconds", "value": 1.0}],
+               "findings": [{"text": "a finding"}], "figures": ["a.png"], "captions": {"a.png": "c"}}
+    return [
+        ("lower_bound", bound.lower_bound, dict(eps=0.01, L=1.0), dict(eps=VPOS, L=VPOS)),
+        ("adversarial_pair", bound.adversarial_pair, dict(eps=0.01, L=1.0, dt=0.01, n_samples=100, k_star=50, slope=1.0),
+         dict(eps=POS, L=POS, dt=POS, n_samples=ints + [0, -1], k_star=ints + [-1, 100, 5], slope=REAL)),
+        ("adversarial_error", bound.adversarial_error, dict(est_d1=np.zeros((100, 2)), pair=pair, k_from=10),
+         dict(est_d1=["abc", None, np.zeros((99, 2)), np.zeros((100, 3)), np.zeros(100), np.zeros((100, 2, 1, 1))],
+              pair=[None, 3, {}, {"f1": 1.0}], k_from=ints + [-1, 51])),
+        ("algebraic_weights", algebraic.algebraic_weights, dict(window=5, degree=2, dt=0.1),
+         dict(window=ints + [0, 2], degree=ints + [0, 3], dt=POS)),
+        ("algebraic_derivative", algebraic.algebraic_derivative, dict(y=np.zeros((20, 2)), windows=[4, 5], degrees=2, dt=0.1),
+         dict(y=ARR + [np.zeros(20), np.zeros((20, 2, 1)), _nan_like(np.zeros((20, 2)))],
+              windows=["3", None, [4.5, 5], [NAN, 5], [4, 5, 6], [[4, 5]], [0, 5]],
+              degrees=["3", None, 1.5, NAN, [1, 2, 2], 0, 3], dt=POS)),
+        ("make_signal", signals.make_signal, dict(kind="chirp", seed=1, t=np.linspace(0.0, 1.0, 20), L=2.0),
+         dict(kind=CHOICE + [None, ["chirp"]], seed=ints + [-1], t=ARR + [[], np.ones((2, 3)), [0.0, NAN]], L=POS)),
+        ("add_noise", signals.add_noise, dict(kind="uniform", f=np.zeros(20), eps=0.1, seed=3),
+         dict(kind=CHOICE + [None], f=ARR + [[], np.ones((2, 3)), [0.0, INF]], eps=POS, seed=ints + [-1])),
+        ("family", interface.family, dict(name="leso2"), dict(name=CHOICE + [None, ["leso2"]])),
+        ("scales", interface.scales, dict(eps=0.01, L=4.0, dt=0.002), dict(eps=POS, L=POS, dt=POS)),
+        ("estimate", interface.estimate, dict(fam="leso2", P=[[20.0]], y=y, dt=0.01, engine="numpy"),
+         dict(fam=CHOICE + [None], P=ARR + [[[20.0, 1.0]], [[NAN]], [[0.0]], [[-20.0]]],
+              y=ARR + [np.zeros(50), np.zeros((50, 2)), _nan_like(y)], dt=POS, engine=CHOICE + [None])),
+        ("estimate(algebraic)", interface.estimate, dict(fam="algebraic", P=[[4.0, 2.0]], y=y, dt=0.01),
+         dict(P=[[[4.5, 2.0]], [[4.0, 3.0]], [[4.0, 1.5]], [[4.0, 0.0]]])),
+        ("Setup", tuning.Setup, dict(dt=0.01, n=100, transient=0.2),
+         dict(dt=POS, n=INT + [1, 0], transient=NONNEG + [1.0, 5.0])),
+        ("Case", tuning.Case, dict(signal="sines", noise="uniform", eps=0.01, L=2.0, seeds=(1, 2)),
+         dict(signal=STR + [""], noise=STR + [""], eps=POS, L=POS, seeds=[None, 3, (), [1, 2], (1.5,), (-1,), ("a",)])),
+        ("case_records", tuning.case_records, dict(case=case, setup=setup),
+         dict(case=[None, 3, "sines"], setup=[None, 3, recommend.QUICK])),
+        ("param_values", tuning.param_values, dict(fam=interface.family("td"), z=[[0.0, 0.5]], case=case, setup=setup),
+         dict(fam=[None, "td", 3], z=ARR + [[[0.0]], [[0.0, 0.5, 1.0]], [[NAN, 0.0]], [[INF, 0.0]], np.zeros((1, 2, 1))],
+              case=[None, 3], setup=[None, 3])),
+        ("evaluate", tuning.evaluate, dict(task=task),
+         dict(task=[None, 3, task[:4], ("nonsense",) + task[1:], task[:1] + (None,) + task[2:],
+                    task[:2] + ((),) + task[3:], task[:2] + ((case, tuning.Case("sines", "uniform", 0.01, 2.0, (1, 2))),)
+                    + task[3:], task[:3] + (None,) + task[4:], task[:3] + ([(3, [4.0, 2.0])],) + task[4:],
+                    task[:3] + ([(0, [4.0])],) + task[4:], task[:3] + ([(0, [NAN, 2.0])],) + task[4:],
+                    task[:3] + ([3],) + task[4:], task[:4] + ("nonsense",)])),
+        ("tune_family", tuning.tune_family,
+         dict(name="algebraic", cases=[case], setup=setup, rounds=0, engine="numpy", jobs=1, scheduler=None),
+         dict(name=CHOICE + [None], cases=[None, 3, "sines", [], [3]], setup=[None, 3], rounds=INT + [-1],
+              engine=CHOICE, jobs=INT + [0], scheduler=[3, "nonsense"])),
+        ("pareto_front", tuning.pareto_front, dict(points=[[1.0, 5.0], [2.0, 2.0], [INF, 1.0]]),
+         dict(points=ARR + [[1.0, 2.0], [[1.0, 2.0, 3.0]], [[NAN, 1.0]], np.ones((2, 2, 2))])),
+        ("ArenaSettings", recommend.ArenaSettings, settings,
+         dict(signals=[None, "sines", (), ("nonsense",)], noises=[None, (), ("nonsense",)], eps=[None, 0.01, (), (NAN,), (-0.01,), ("abc",)],
+              L=POS, records=INT + [0], setup=[None, 3], rounds=INT + [-1], families=[None, (), ("nonsense",)])),
+        ("arena_report_lines", recommend.arena_report_lines, dict(results=results),
+         dict(results=[None, 3, "x", [], {"quantities": 3}, {"findings": [3]}, {"figures": [None]},
+                       {"quantities": [{"id": "q"}]}])),
+        ("read_record", arena_cli.read_record, dict(path=ok), dict(path=[None, 3, ""] + bad_csv)),
+    ]
+
+
+@dataclasses.dataclass(frozen=True)
+class _ToyParams:
+    k: float = study.reconstructed(1.0, "toy", plausible=study.span(0.5, 3.0, "toy range", points=3))
+
+
+def _toy_evaluate(params):
+    res = report.StudyResult(report.StudyInfo("toy", "", "", ""))
+    res.quantity("gain", "gain", params["p"].k, paper=1.0, tolerance=0.1, unit="")
+    res.claim(study.Claim("small", "§1", "the gain is below 2"), params["p"].k < 2, evidence=["gain"])
+    return res
+
+
+def _swept():
+    from ctrl_analysis import sensitivity
+
+    res = _toy_evaluate({"p": _ToyParams()})
+    sensitivity.apply(res, sensitivity.sweep(_toy_evaluate, {"p": _ToyParams()}))
+    return res
 
 
 def _new_figure_object():
@@ -616,16 +782,23 @@ NOT_FUZZED = {
     fuzzy.triangular_memberships: "per-step arithmetic of FuzzyController.output, unchecked by design",
     fuzzy.piecewise_linear_centroid: "per-step arithmetic of FuzzyController.output, unchecked by design",
     cli.main: "command line, fuzzed in test_cli.py and test_cli_reliability.py",
+    arena_interface.Param: "record of the fixed FAMILIES table (a family's runner is coded per name); users pick a "
+                           "family by name through family() and estimate(fam=...), both fuzzed",
+    arena_interface.Family: "record of the fixed FAMILIES table (a family's runner is coded per name); users pick a "
+                            "family by name through family() and estimate(fam=...), both fuzzed",
+    arena_recommend.run_arena: "runs every family's tuning and draws three figures (seconds even on the smallest "
+                               "settings); its settings are validated by ArenaSettings (fuzzed), its ctx and "
+                               "settings types on entry; run end to end in test_arena_cli.py",
+    arena_figures.save_all: "figure writer fed the tables run_arena built; run by test_arena_cli.py",
+    arena_cli.add_parser: "registers the arena subcommand on the CLI's parser (test_arena_cli.py)",
+    arena_cli.main: "command line, fuzzed in test_arena_cli.py (malformed CSV, missing bounds: one line, exit 2); "
+                    "its CSV reader read_record is fuzzed here",
     **{getattr(_validate, name): "the shared validators themselves (test_validate.py)" for name in _validate.__all__},
     **{getattr(_kernels, name): "compiled per-step kernels and the engine's internals (test_speed_kernels.py)"
        for name in _kernels.__all__},
+    **{getattr(module, name): "the engine's internals, called with arrays it made (semantic_cases below)"
+       for module in (_perrun, _stepcheck) for name in module.__all__},
 }
-
-
-#: Findings in ``loop.py`` and ``simulate.py``, files being split on another branch: (case, argument)
-#: -> what the argument check needs. They are tried and reported but do not fail the test; an entry
-#: whose inputs are all rejected properly is stale and fails it (remove the line once fixed).
-PENDING_IN_LOOP_AND_SIMULATE = {}  # every entry fixed in loop.py / simulate.py
 
 
 def _public_callables():
@@ -652,10 +825,162 @@ def test_every_public_callable_is_fuzzed_or_excused(tmp_path):
     assert not missing, "public callables neither fuzzed nor listed in NOT_FUZZED:\n" + "\n".join(missing)
 
 
-def test_every_public_callable_rejects_bad_arguments_by_name(record_property, tmp_path):
-    tried, problems, pending = 0, [], {}
-    cases = build_cases(tmp_path)
-    for label, fn, valid, bad in cases:
+# -- cases that are not one bad argument of a valid call ---------------------------------------------
+class _ReadsUnfilledSlot(blocks.ColumnKernels, blocks.DiscreteBlock):
+    """A user's block whose kernel reads ``p[2]`` while its parameters have two entries."""
+
+    inputs, outputs, states = ("u",), ("y",), ("x",)
+    column_kernels = {"output": "_copy_output", "update": "_unfilled_update"}
+
+    def __init__(self):
+        self._p = np.array([0.5, 0.0])
+
+
+def _copy_output(t, x, u, p, y):
+    y[0] = x[0]
+
+
+def _unfilled_update(t, x, u, p, x_next):
+    x_next[0] = x[0] + p[0] * u[0] + p[2]  # p[2]: a slot the block never filled
+
+
+def _per_run_loop(rows):
+    """An IKF with one Q per run (``rows`` of them) in a loop of its own."""
+    filt = ikf.ImprovedKalmanFilter(Q=np.linspace(0.1, 0.5, rows), R=1.0)
+    return loop_mod.Loop([loop_mod.place(filt, "f")], dt=1.0)
+
+
+def _engines_agree(rows, runs, chunk_runs):
+    """Both engines on one call: equal answers, or the same error (then raised)."""
+    loop, outcome = _per_run_loop(rows), {}
+    inputs = {s: np.ones((4, runs)) for s in loop.external}
+    for engine in ("numpy", "compiled"):
+        try:
+            outcome[engine] = loop.simulate(4, inputs=inputs, engine=engine, chunk_runs=chunk_runs)["y_hat"]
+        except ValueError as exc:
+            outcome[engine] = str(exc)
+    a, b = outcome["numpy"], outcome["compiled"]
+    if isinstance(a, str) and a == b:
+        raise ValueError(a)
+    return not isinstance(a, str) and not isinstance(b, str) and np.array_equal(a, b)
+
+
+def _ivp_nan_model(t, x, u, params):
+    return np.where(t > 0.3, np.nan, -x)
+
+
+def _ivp_nan_always(t, x, u, params):
+    return x * np.nan
+
+
+def _import_first(module):
+    import subprocess
+    import sys
+
+    return subprocess.run([sys.executable, "-c", f"import {module}"], capture_output=True, text=True).returncode
+
+
+def semantic_cases():
+    """(label, call, argument the error must name, check of the answer or ``None`` when an error is right)."""
+    t5 = np.arange(5.0)
+    return [
+        ("compiled kernel reading an unfilled parameter slot",
+         lambda: loop_mod.Loop([loop_mod.place(_ReadsUnfilledSlot(), "b")], dt=1.0).simulate(
+             3, inputs={"u": 1.0}, engine="compiled"), "kernel", None),
+        ("DiscreteLTI.update with a state of the wrong width",
+         lambda: PLANT.update(0.0, np.zeros((2, 3)), np.ones((2, 1))), "x", None),
+        ("DiscreteLTI.output with an input of the wrong width",
+         lambda: PLANT.output(0.0, np.zeros((2, 1)), np.ones((2, 3))), "u", None),
+        ("LowPassFilter.rhs with a state of the wrong width",
+         lambda: LPF.rhs(0.0, np.zeros((2, 1)), np.ones((2, 1))), "x", None),
+        ("StaticGain.output with x and u of different runs",
+         lambda: blocks.StaticGain([[1.0]], ("a",), ("b",)).output(0.0, np.zeros((2, 0)), np.ones((3, 1))), "x", None),
+        ("FuzzyController.output with an input of the wrong width",
+         lambda: FUZZY.output(0.0, np.zeros((2, 0)), np.ones((2, 3))), "u", None),
+        ("metrics.settling_time of a signal that is NaN at its end",
+         lambda: metrics.settling_time(t5, [0.0, 1.0, 1.0, 1.0, NAN], 1.0), "y", lambda r: math.isnan(r)),
+        ("metrics.settling_time of a signal NaN at one sample",
+         lambda: metrics.settling_time(t5, [0.0, 1.0, NAN, 1.0, 1.0], 1.0), "y", lambda r: r == 3.0),
+        ("simulate_ivp with a model that yields NaN from the start",
+         lambda: simulate.simulate_ivp(_ivp_nan_always, [1.0], [0.0, 0.5, 1.0]), "rhs",
+         lambda r: bool(r.diverged[0]) and r.diverged_step[0] == 0 and np.isnan(r.x).all()),
+        ("simulate_ivp with a model that yields NaN (two runs)",
+         lambda: simulate.simulate_ivp(_ivp_nan_model, [[1.0], [2.0]], [0.0, 0.5, 1.0]), "rhs",
+         lambda r: bool(np.all(r.diverged)) and list(r.diverged_step) == [1, 1] and np.isnan(r.x[1:]).all()),
+        ("numpy engine, per-run parameters, a chunked call",
+         lambda: _engines_agree(rows=5, runs=5, chunk_runs=2), "runs", bool),
+        ("per-run parameters of 1 run on a batch of 5 (both engines)",
+         lambda: _engines_agree(rows=1, runs=5, chunk_runs=None), "runs", None),
+        ("per-run parameters of 5 runs on a batch of 4 (both engines)",
+         lambda: _engines_agree(rows=5, runs=4, chunk_runs=None), "runs", None),
+        ("import ctrl_analysis.ivp as the first import", lambda: _import_first("ctrl_analysis.ivp"), "ivp",
+         lambda rc: rc == 0),
+    ]
+
+
+def _watchdog(seconds):
+    """A context manager raising TimeoutError after ``seconds`` (``None``: no watchdog, as in the test)."""
+    import contextlib
+    import signal
+
+    @contextlib.contextmanager
+    def guard():
+        if seconds is None:
+            yield
+            return
+
+        def fire(signum, frame):
+            raise TimeoutError(f"no answer within {seconds} s")
+
+        old = signal.signal(signal.SIGALRM, fire)
+        signal.alarm(seconds)
+        try:
+            yield
+        finally:
+            signal.alarm(0)
+            signal.signal(signal.SIGALRM, old)
+
+    return guard()
+
+
+def fuzz_table(tmp_path, timeout=None):
+    """Every bad input of :func:`build_cases` and :func:`semantic_cases`, classified.
+
+    Returns ``(totals, problems)``: ``totals`` counts ``clear`` (ValueError/TypeError naming the
+    argument), ``obscure`` (another exception, or one that does not name the argument), ``silent``
+    (accepted, or a wrong answer) and ``hang`` (no answer within ``timeout`` seconds; only counted
+    when a timeout is given, by ``python tests/lib/test_fuzz_api.py``, never in the test).
+    """
+    totals = dict.fromkeys(("clear", "obscure", "silent", "hang"), 0)
+    problems = []
+
+    def attempt(label, call, arg, answer=None):
+        try:
+            with _watchdog(timeout):
+                result = call()
+            if answer is not None:  # a case whose right outcome is an answer, not an error
+                ok = answer(result)
+                totals["clear" if ok else "silent"] += 1
+                if not ok:
+                    problems.append(f"{label}: wrong answer {result!r:.200}")
+                return
+        except TimeoutError as exc:
+            totals["hang"] += 1
+            problems.append(f"{label}: hangs ({exc})")
+        except (ValueError, TypeError) as exc:
+            if _names_argument(str(exc), arg):
+                totals["clear"] += 1
+            else:
+                totals["obscure"] += 1
+                problems.append(f"{label}: {type(exc).__name__} does not name {arg!r}: {exc}")
+        except Exception as exc:  # noqa: BLE001 - anything else is a finding
+            totals["obscure"] += 1
+            problems.append(f"{label}: {type(exc).__name__}: {exc}")
+        else:
+            totals["silent"] += 1
+            problems.append(f"{label}: accepted silently")
+
+    for label, fn, valid, bad in build_cases(tmp_path):
         try:
             fn(**valid)  # the starting point is a valid call
         except Exception as exc:  # noqa: BLE001 - a broken starting point makes the case meaningless
@@ -663,29 +988,27 @@ def test_every_public_callable_rejects_bad_arguments_by_name(record_property, tm
             continue
         for arg, values in bad.items():
             for value in values:
-                tried += 1
-                kwargs = dict(valid, **{arg: value})
-                try:
-                    fn(**kwargs)
-                except (ValueError, TypeError) as exc:
-                    if not _names_argument(str(exc), arg):
-                        problems.append(f"{label}({arg}={value!r}): {type(exc).__name__} does not name "
-                                        f"{arg!r}: {exc}")
-                except Exception as exc:  # noqa: BLE001 - anything else is a finding
-                    problems.append(f"{label}({arg}={value!r}): {type(exc).__name__}: {exc}")
-                else:
-                    problems.append(f"{label}({arg}={value!r}): accepted silently")
-    for problem in list(problems):
-        key = next((k for k in PENDING_IN_LOOP_AND_SIMULATE if problem.startswith(f"{k[0]}({k[1]}=")), None)
-        if key is not None:
-            problems.remove(problem)
-            pending.setdefault(key, []).append(problem)
+                attempt(f"{label}({arg}={value!r:.60})", lambda fn=fn, kw=dict(valid, **{arg: value}): fn(**kw), arg)
+    for label, call, arg, answer in semantic_cases():
+        attempt(label, call, arg, answer)
+    return totals, problems
+
+
+def test_every_public_callable_rejects_bad_arguments_by_name(record_property, tmp_path):
+    totals, problems = fuzz_table(tmp_path)
+    tried = sum(totals.values())
     record_property("fuzz_inputs", tried)
-    print(f"\nfuzz: {tried} bad inputs over {len(cases)} public callables, {len(problems)} problems, "
-          f"{sum(map(len, pending.values()))} pending in loop.py/simulate.py:")
-    for key, found in pending.items():
-        print(f"  {key[0]}({key[1]}): {PENDING_IN_LOOP_AND_SIMULATE[key]}\n    " + "\n    ".join(found))
-    stale = sorted(set(PENDING_IN_LOOP_AND_SIMULATE) - set(pending))
-    assert not stale, f"PENDING_IN_LOOP_AND_SIMULATE entries now fixed, remove them: {stale}"
-    assert tried >= 1200
+    print(f"\nfuzz: {tried} bad inputs over {len(build_cases(tmp_path))} public callables and "
+          f"{len(semantic_cases())} semantic cases: " + ", ".join(f"{v} {k}" for k, v in totals.items()))
+    assert tried >= 1300 and totals["clear"] == tried
     assert not problems, f"{len(problems)} of {tried} inputs:\n" + "\n".join(problems)
+
+
+if __name__ == "__main__":  # the totals with a watchdog of 20 s per input (hangs counted): python tests/lib/test_fuzz_api.py
+    import tempfile
+    from pathlib import Path
+
+    with tempfile.TemporaryDirectory() as d:
+        found, issues = fuzz_table(Path(d), timeout=20)
+    print("\n".join(issues))
+    print(", ".join(f"{v} {k}" for k, v in found.items()))

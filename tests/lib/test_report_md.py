@@ -58,10 +58,11 @@ def test_overview_counts_each_cell_once_and_diverged(tmp_path):
     # the §5 step differs (5.7296 against the printed 5.7325 at 1e-4)
     assert counts == {"agrees": 2, "differs": 2, "diverged": 1, "new": 1}
     overview = text.split("## Overview")[1].split("###")[0]
-    assert "| [demo](#demo) | A paper | yes | 2 | 2 | 1 | 0 | 1 | 2 | 2 |" in overview
+    # claims hold / fail / depend / untestable, cells agree / differ / diverged / lost, checks, new, findings, figures
+    assert "| [demo](#demo) | A paper | yes | 0 | 0 | 0 | 0 | 2 | 2 | 1 | 0 | 0 | 1 | 2 | 2 |" in overview
     assert text.index("## Overview") < text.index("## demo")
     assert tally(data) == {"agrees": 2, "differs": 2, "diverged": 1, "printed": 5, "lost": 0, "new": 1,
-                           "new_diverged": 0}
+                           "new_diverged": 0, "checks": 0}
     # a new quantity whose runs all diverged is not a diverged paper cell
     r = _result()
     r.quantity("beyond", "beyond the paper, all runs diverged", None, runs=3, runs_diverged=3, unit="")
@@ -81,9 +82,10 @@ def test_side_by_side_table_is_laid_out_as_the_paper(tmp_path):
     assert "diverged (4 runs, 4 diverged)" in meso
     # a tight tolerance shows enough digits to see the difference
     assert any(line.startswith("| §5 / 0.1 rad = 5.7325° | 5.7325 | 5.7296 (-0.051 %) ✗") for line in lines)
-    # the tables come before the long quantity list
-    section = text.split("## demo")[1]
-    assert section.index("printed beside reproduced") < section.index("### All quantities")
+    # the long quantity list is in the appendix, after every study section
+    section = text.split("## demo")[1].split("## Appendix")[0]
+    assert "printed beside reproduced" in section and "| `t2.eso.x1` |" not in section
+    assert "| `t2.eso.x1` |" in text.split("## Appendix: every quantity")[1]
 
 
 def test_summary_is_generated_from_verdicts_and_findings(tmp_path):
@@ -92,7 +94,7 @@ def test_summary_is_generated_from_verdicts_and_findings(tmp_path):
     assert lines[0].startswith("- **Agrees:** 2 of 5 printed paper cells") and "Table 2: 2 of 4" in lines[0]
     assert "Table 2 / ESO / est_x1 (2 vs 1, +100 %)" in lines[1]
     assert "Table 2 / MESO / est_x1 (all runs diverged)" in lines[1]
-    assert "*first*: The first finding holds" in lines[2] and "second sentence" not in lines[2]
+    assert "The first finding holds." in lines[2] and "second sentence" not in lines[2]
 
 
 def test_long_arrays_are_summarised_and_captions_shown(tmp_path):
@@ -122,4 +124,5 @@ def test_built_studies_come_first(tmp_path):
     built = _result().to_dict()
     text = write_report_md([empty, built], tmp_path).read_text()
     assert text.index("## demo") < text.index("## empty")
-    assert re.search(r"\*\*Not reproduced:\*\* everything", text)
+    assert re.search(r"\*\*Not reproduced \(1: 0 printed cells outside the verdict policy, 1 part of the paper\):\*\*"
+                     r"\n\n1\. everything", text)

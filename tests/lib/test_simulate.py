@@ -87,7 +87,7 @@ def test_order_of_convergence(method, order):
     errs = []
     hs = [0.02, 0.01, 0.005]
     for h in hs:
-        n = int(round(T / h))
+        n = round(T / h)
         res = simulate_sampled(linear_rhs, x0, h, n, method=method)
         errs.append(np.max(np.abs(res.x[-1, 0] - exact_free([T], x0)[0])))
     slopes = np.diff(np.log(errs)) / np.diff(np.log(hs))

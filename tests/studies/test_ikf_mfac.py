@@ -5,17 +5,19 @@ import dataclasses
 import numpy as np
 import pytest
 
+from analysis.ikf_mfac.claims import judge_claims, record_fig2, table1_cell
 from analysis.ikf_mfac.loops import build_loop, noise_draws, run_scheme
-from analysis.ikf_mfac.paper import EX1, EX2, SCHEMES, TABLE1
+from analysis.ikf_mfac.paper import CLAIMS, EX1, EX2, FIG2, SCHEMES, TABLE1
 from analysis.ikf_mfac.plants import (
     SwitchedPlant,
     plant_start_state,
     reference,
     reference_next,
 )
-from analysis.ikf_mfac.quantities import metrics_of, table1_cell, table1_consistency
+from analysis.ikf_mfac.quantities import metrics_of, table1_consistency
 from ctrl_analysis.report import StudyInfo, StudyResult
-from ctrl_analysis.study import record_parameters
+from ctrl_analysis.simulate import run_seeds
+from ctrl_analysis.study import missing_plausible, record_parameters
 
 
 def test_plant_switch_and_r_with_matlab_round():
@@ -110,3 +112,118 @@ def test_literal_td_mfac_diverges_and_the_loop_is_a_control_interconnect():
     assert runs.diverged.all()
     sys = build_loop(EX2, "ikf_mfac").interconnect()
     assert sys.isdtime() and set(sys.input_labels) == {"v", "y_ref_next"}
+
+
+def test_every_reconstruction_has_a_plausible_range():
+    assert missing_plausible(EX1) == [] and missing_plausible(EX2) == [] and missing_plausible(FIG2) == []
+    # Example 2's controller parameters are only "similar to Example 1": reconstructions, each with a range
+    res = StudyResult(StudyInfo("ikf-mfac", "x", "p", "r"))
+    record_parameters(res, EX2, "ex2")
+    names = {r["name"] for r in res.reconstructions}
+    assert {"ex2.eta", "ex2.mu", "ex2.rho", "ex2.lam", "ex2.phi0", "ex2.phi_reset"} <= names
+
+
+def test_chosen_td_step_counts_lose_no_run_on_table1_seeds():
+    # the reconstruction's stated reason: no diverged run at the count used on the 200 recorded seeds,
+    # while one step fewer than Example 1's count still loses runs (the edge the count was taken from)
+    seeds = run_seeds(0, 200)
+    for ex in (EX1, EX2):
+        r = run_scheme(ex, "td_mfac", noise_draws(ex, seeds))
+        assert not r.diverged.any(), (ex.td_substeps, np.flatnonzero(r.diverged))
+    r = run_scheme(dataclasses.replace(EX1, td_substeps=EX1.td_substeps - 1), "td_mfac", noise_draws(EX1, seeds))
+    assert r.diverged.sum() > 0
+
+
+def _small_result():
+    from analysis.ikf_mfac.evaluate import MonteCarlo, evaluate
+
+    seeds = tuple(run_seeds(0, 12))
+    mc = MonteCarlo(seeds, seeds[:4], seeds[:8], (0.02, 0.1, 0.4), (0.5, 1.0, 2.0))
+    return evaluate({"ex1": EX1, "ex2": EX2, "fig2": FIG2, "mc": mc})
+
+
+def test_claims_of_a_small_run_and_the_verdict_policy():
+    res = _small_result()
+    verdicts = {c.claim.id: c.verdict for c in res.claims}
+    assert set(verdicts) == {c.id for c in CLAIMS}
+    assert verdicts == {"ikf-best-constant": "fails", "ikf-best-varying": "holds", "td-beats-mfac": "fails",
+                        "d-mfac-constant-only": "holds", "filters-beat-d-mfac-varying": "holds",
+                        "fig2-larger-r": "fails", "ikf-best-every-noise": "fails"}
+    assert res.get_claim("ikf-best-constant").evidence == tuple(f"ex1.{s}.rmse" for s in SCHEMES)
+    assert res.get_claim("fig2-larger-r").evidence == ("fig2.R", "fig2.diverged_runs", "fig2.rejection", "fig2.rise")
+    assert "R = 1 (8 of 8)" in res.get_claim("fig2-larger-r").note
+    q = {d["id"]: d for d in res.to_dict()["quantities"]}
+    # RMSE cells: percentile policy over the runs; SNR cells take their RMSE cell's verdict
+    for key in ("ex1", "ex2"):
+        for s in SCHEMES:
+            rm, sn = q[f"{key}.{s}.rmse"], q[f"{key}.{s}.snr"]
+            assert rm["policy"] == "percentile" and sn["policy"] == "derived"
+            assert sn["derived_from"] == f"{key}.{s}.rmse" and sn["verdict"] == rm["verdict"]
+    # Example 1 MFAC: the printed RMSE lies above every run (differs), so its SNR differs too although
+    # the printed SNR 19.05 dB would pass a 5 % tolerance on the reproduced ~19.9 dB
+    assert q["ex1.mfac.rmse"]["percentile"] == 100.0 and q["ex1.mfac.snr"]["verdict"] == "differs"
+    assert abs(q["ex1.mfac.snr"]["value"] - 19.0481) < 0.05 * 19.0481
+
+
+def test_fig2_claim_needs_both_trends_and_no_lost_r():
+    def judged(div, rejection, rise):
+        res = StudyResult(StudyInfo("ikf-mfac", "", "", ""))
+        for key in ("ex1", "ex2"):
+            for s in SCHEMES:
+                res.quantity(f"{key}.{s}.rmse", "x", 1.0)
+            res.quantity(f"{key}.noise.ikf_ratio", "x: σ_v = 1", [0.9])
+        measures = [(d, np.full(10 - d, f), np.full(10 - d, r)) for d, f, r in zip(div, rejection, rise)]
+        record_fig2(res, (0.01, 0.1, 1.0), 10, measures, 0.01)
+        judge_claims(res)
+        return res.get_claim("fig2-larger-r").holds
+
+    assert judged((0, 0, 0), (0.06, 0.05, 0.04), (7, 8, 11))
+    assert not judged((0, 0, 5), (0.06, 0.05, 0.04), (7, 8, 11))      # half the runs lost at the largest R
+    assert not judged((0, 0, 0), (0.06, 0.05, 0.055), (7, 8, 11))     # rejection stops growing
+    assert not judged((0, 0, 0), (0.06, 0.05, 0.04), (7, 7, 7))       # response not slower
+
+
+def test_literal_td_rmse_of_few_survivors_is_diverged_with_its_count():
+    from analysis.ikf_mfac.findings import record_td_scan
+
+    res = StudyResult(StudyInfo("ikf-mfac", "", "", ""))
+    res.quantity("ex2.mfac.rmse", "x", 0.6)
+    lit = np.full(100, np.nan)
+    lit[:3] = 7.0
+    rows = {(False, 1): lit, (True, 34): np.r_[np.full(98, 0.61), np.nan, np.nan], (True, 35): np.full(100, 0.6)}
+    out = record_td_scan(res, {"ex2": {"runs": 100, "rows": rows}}, {"ex2": 35})
+    d = {q["id"]: q for q in res.to_dict()["quantities"]}["ex2.td_mfac_literal.rmse"]
+    assert d["verdict"] == "diverged" and d["runs"] == 100 and d["runs_diverged"] == 97
+    assert out["ex2"]["diverged"] == [2, 0]
+    assert "every count from 35 up is clean" in res.findings[-1]["text"]
+
+
+def test_sweep_figures_never_draw_a_mean_of_few_runs_as_an_ordinary_point():
+    from analysis.ikf_mfac.figures import _plot_runs
+    from ctrl_analysis.report import new_figure
+
+    _, ax = new_figure()
+    rows = [(1.0, 0.1, 50, 0), (2.0, 0.1, 35, 15), (3.0, 0.1, 10, 40)]   # 100 %, 70 %, 20 % healthy
+    note = _plot_runs(ax, [1, 2, 3], rows, "k", "TD-MFAC")
+    line, hollow = ax.lines[0], ax.lines[1]
+    y = np.asarray(line.get_ydata(), dtype=float)
+    assert y[0] == 1.0 and np.isnan(y[1:]).all()                          # only the healthy point is ordinary
+    assert list(hollow.get_xdata()) == [2] and hollow.get_markerfacecolor() == "white"
+    assert note == "TD-MFAC 15/50 at 2, 40/50 at 3 (left out)"
+
+
+def test_sensitivity_marks_the_fig2_claim_as_depending_on_q():
+    from analysis.ikf_mfac.evaluate import MonteCarlo, evaluate
+    from ctrl_analysis import sensitivity
+
+    seeds = tuple(run_seeds(0, 12))
+    params = {"ex1": EX1, "ex2": EX2, "fig2": FIG2,
+              "mc": MonteCarlo(seeds, seeds[:4], seeds[:8], (0.02, 0.1, 0.4), (0.5, 1.0, 2.0))}
+    res = evaluate(params)
+    sensitivity.apply(res, sensitivity.sweep(evaluate, params, names=("ex1.Q", "ex2.rearm")))
+    c = res.get_claim("fig2-larger-r")
+    # at Q = 0.1 the grid's largest R = 1 is Q/R = 0.1, where no run diverges: the claim holds there
+    assert c.verdict == "depends" and c.depends_on[0]["reconstruction"] == "ex1.Q"
+    assert c.depends_on[0]["flips_at"] == [0.1] and c.depends_on[0]["verdict_there"] == ["holds"]
+    assert res.get_claim("ikf-best-varying").verdict == "holds"
+    assert set(res.get_claim("ikf-best-varying").robust_to) == {"ex1.Q", "ex2.rearm"}

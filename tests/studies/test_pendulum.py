@@ -2,13 +2,15 @@
 
 import dataclasses
 import json
+import math
 
 import numpy as np
 import pytest
 
 from analysis import pendulum as pm
-from analysis.pendulum import loops, paper, verify
+from analysis.pendulum import loops, paper, quantities, verify
 from ctrl_analysis.report import StudyContext, write_results_json
+from ctrl_analysis.study import missing_plausible
 from ctrl_analysis.symbolic.riccati import second_order_gain
 
 V, L = paper.VERIFY, paper.LOOP
@@ -89,17 +91,29 @@ def test_compiled_engine_equals_numpy_engine_bit_for_bit(case):
     assert np.ptp(a.u) > 1.0 and np.array_equal(a.diverged, b.diverged)
 
 
-def test_run_smoke(tmp_path):
-    result = pm.run(StudyContext(out_dir=tmp_path, quick=True, runs=4), settings=SMALL)
+@pytest.fixture(scope="module")
+def small_run(tmp_path_factory):
+    """One small run of the whole study (verify, both regimes, claims, sensitivity sweep), shared by the tests."""
+    tmp_path = tmp_path_factory.mktemp("pendulum")
+    return pm.run(StudyContext(out_dir=tmp_path, quick=True, runs=4, seed=3), settings=SMALL), tmp_path
+
+
+def test_run_smoke(small_run):
+    result, tmp_path = small_run
     ids = {q.id for q in result.quantities}
     for qid in ("ss.gain_alpha", "ss.gain_beta", "ss.gain_continuous", "ss.printed_filter_stable",
                 "ss.printed_P_is_covariance", "sec5.step_deg", "cl.rule_sign_ok"):
         assert qid in ids
     for case in ("nofilter", "filter"):
-        for m in ("overshoot", "settling_time", "angle_rms", "accel_rms"):
-            assert f"cl.{case}.{m}" in ids
+        for m in ("overshoot", "overshoot_noise_free", "settling_time", "angle_rms", "accel_rms", "sat_e", "sat_ec"):
+            assert f"cl.{case}.{m}" in ids and f"literal.{case}.{m}" in ids
     for qid in ("ss.gain_alpha", "ss.gain_beta", "ss.gain_continuous", "sec5.step_deg"):
         assert result.get(qid).verdict == "differs"
+    # the paper's 5.7325° for 0.1 rad is a check of its own arithmetic (an erratum), not a reproduction cell
+    assert result.get("sec5.step_deg").kind == "check"
+    assert {f["id"]: f.get("kind") for f in result.findings}["step-degrees"] == "erratum"
+    # "Not reproduced" names the differing §4 cell first
+    assert "K = [0.95, 0.863] is not reproduced (differs)" in result.missing[0]
     assert result.get("ss.gain_continuous").paper == [0.950, 0.863]
     assert result.get("ss.printed_filter_stable").value == 0
     assert result.get("cl.rule_sign_ok").value == 1
@@ -108,8 +122,8 @@ def test_run_smoke(tmp_path):
     assert result.get("beyond.kf_ss.angle_rms").runs == 4
     finding_ids = {f["id"] for f in result.findings}
     assert {"are-sign-flipped", "riccati-limit", "observability-rank", "printed-P-6x6", "gain-not-reproducible",
-            "printed-filter-unstable", "noise-plausibility", "rule-sign", "filter-claim", "step-degrees",
-            "nonlinear-recovery"} <= finding_ids
+            "printed-filter-unstable", "noise-plausibility", "rule-sign", "noise-saturation", "overshoot-vs-noise",
+            "steady-offset", "qr-sweep", "step-degrees", "nonlinear-recovery"} <= finding_ids
     for name in result.figures:
         assert (tmp_path / name).stat().st_size > 10_000
     data = json.loads(write_results_json(result, tmp_path).read_text(encoding="utf-8"))
@@ -146,3 +160,56 @@ def test_loop_equals_python_control_interconnect():
     resp = ct.input_output_response(sys, t, U)
     np.testing.assert_allclose(resp.outputs[0], res["phi"][:N, 0], rtol=0, atol=1e-12)
     np.testing.assert_allclose(resp.outputs[1], res["u"][:N, 0], rtol=0, atol=1e-9)
+
+
+def test_every_reconstruction_has_a_plausible_range():
+    assert missing_plausible(V) == []
+    assert missing_plausible(L) == []
+
+
+def test_main_regime_is_independent_of_the_paper_qr_and_below_the_limit_cycle():
+    """σ_w is chosen independently (the paper's Q/R is not optimal by construction); the literal regime keeps it."""
+    assert L.sigma_w / L.sigma_v != pytest.approx(math.sqrt(L.qr_paper), rel=0.5)
+    lit = L.literal()
+    assert lit.sigma_w / lit.sigma_v == pytest.approx(math.sqrt(L.qr_paper))
+    ss, ssq = (loops.build_filter(k, L, V.a21) for k in ("kf-ss", "kf-ss-qr"))
+    assert ss.alpha > 2 * ssq.alpha  # the gain optimal for the simulated noise is not the paper's Q/R gain
+    # noise-free, the main T holds φ = r with |u| = a21 r / b2 (no limit cycle); the literal T limit-cycles
+    for p, limit_cycle in ((dataclasses.replace(L, t_end=2.0), False), (dataclasses.replace(lit, t_end=2.0), True)):
+        run = loops.simulate_case(p, V.a21, [0], noise=False)
+        u_rms = np.sqrt(np.mean(run.u[run.t >= 1.0, 0] ** 2))
+        assert (u_rms > 2 * V.a21 * p.step / p.b2) == limit_cycle
+
+
+def test_noise_saturates_the_rate_input_only_in_the_literal_regime():
+    p = dataclasses.replace(L, t_end=1.2, t_ss=0.7)
+    for q, lo, hi in ((p, 0.0, 0.02), (p.literal(), 0.3, 0.7)):
+        cases = loops.compute_regime(q, V.a21, [1, 2, 3], ("nofilter", "kf_ss"))
+        m = {n: quantities.case_metrics(c, q) for n, c in cases.items()}
+        assert lo <= np.mean(m["nofilter"]["sat_ec"]) <= hi
+        assert np.mean(m["kf_ss"]["sat_ec"]) < 0.01  # the correct steady-state gain removes it
+        # the noise-free run rides in the batch and equals a separate noise-free simulation
+        alone = loops.simulate_case(q, V.a21, [0], noise=False)
+        assert np.array_equal(cases["nofilter"].quiet.phi, alone.phi)
+
+
+def test_claims_judged_with_evidence(small_run):
+    result, _ = small_run
+    verdicts = {c.claim.id: c.verdict for c in result.claims}
+    assert set(verdicts) == {c.id for c in paper.CLAIMS}
+    assert verdicts["steady-state-gain"] == "fails"
+    assert verdicts["stabilises"] == "holds" and verdicts["stabilises-literal"] == "holds"
+    assert verdicts["overshoot"] == "fails" and verdicts["overshoot-literal"] == "fails"
+    assert verdicts["true-state"] == "holds"
+    ev = {c.claim.id: c.evidence for c in result.claims}
+    assert ev["steady-state-gain"] == ("ss.gain_continuous", "ss.gain_alpha", "ss.gain_beta")
+    assert ev["oscillation-literal"] == ("literal.nofilter.angle_rms", "literal.filter.angle_rms")
+    assert ev["overshoot"][:3] == ("cl.nofilter.overshoot", "cl.filter.overshoot", "cl.nofilter.overshoot_noise_floor")
+    # the sensitivity sweep ran and judged with the same functions (its baseline equals the main judgement here)
+    assert result.sensitivity["evaluations"] > 1
+    assert "sensitivity.png" in result.figures
+    # a verdict is 'depends' exactly where the sweep found a flip inside a plausible range, naming the value
+    for c in result.claims:
+        assert (c.verdict == "depends") == bool(c.depends_on)
+        for d in c.depends_on:
+            assert set(d["flips_at"]) <= set(d["tried"])

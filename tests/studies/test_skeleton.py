@@ -13,6 +13,7 @@ from analysis._skeleton.loops import build_loop, simulate
 from analysis._skeleton.paper import EXAMPLE, QUICK
 from ctrl_analysis.simulate import run_seeds
 from ctrl_analysis.report import StudyContext, write_results_json
+from ctrl_analysis.study import missing_plausible
 
 SMALL = dataclasses.replace(QUICK, t_end=5.5)
 
@@ -55,9 +56,22 @@ def test_run_writes_results_json(tmp_path):
     assert abs(noise["value"] - noise["paper"]) < 3 * noise["std"] / math.sqrt(20) + 0.01 * noise["paper"]
     assert {r["name"] for r in data["reconstructions"]} == {"ex.t_end", "ex.omega_f", "ex.t_settle"}
     assert data["settings"]["ex.tau"] == EXAMPLE.tau
-    assert data["figures"] == ["fig1_step_response.png"] and (tmp_path / "fig1_step_response.png").exists()
+    assert data["figures"] == ["fig1_step_response.png", "sensitivity.png"]
+    assert (tmp_path / "fig1_step_response.png").exists()
     assert data["seeds"]["noise"] == run_seeds(1, 20)
     assert data["findings"][0]["id"] == "noise-reduction"
+    claims = {c["id"]: c for c in data["claims"]}
+    # the filter divides the noise by 4.5 at ω_f = 10 rad/s but only by 2.6 at 30 rad/s: the claim depends on ω_f
+    noise = claims["filter-reduces-noise"]
+    assert noise["base_verdict"] == "holds" and noise["verdict"] == "depends"
+    (dep,) = noise["depends_on"]
+    assert dep["reconstruction"] == "ex.omega_f" and dep["flips_at"] == [30.0]
+    assert claims["step-unaffected"]["verdict"] == "holds"
+    assert sorted(claims["step-unaffected"]["robust_to"]) == ["ex.omega_f", "ex.t_settle"]
+
+
+def test_every_reconstruction_has_a_plausible_range():
+    assert missing_plausible(EXAMPLE) == []
 
 
 def test_skeleton_is_not_registered_in_the_cli():

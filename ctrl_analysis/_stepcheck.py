@@ -1,0 +1,152 @@
+"""Checks of the block protocol made outside the hot loop: argument widths of direct per-step calls, row groups.
+
+A block's per-step methods (``output``, ``update``, ``rhs``) check nothing inside the engine, which
+calls them millions of times with arrays it has shaped itself. Called directly by a user, a state
+or input of the wrong width would be read past its columns or broadcast into a wrong answer, so
+:class:`~ctrl_analysis.blocks.Block` wraps every subclass's per-step methods with
+:func:`checked`: the public method checks the widths, and the engine calls the unwrapped function
+(:func:`unchecked`).
+"""
+
+from __future__ import annotations
+
+import functools
+import itertools
+
+import numpy as np
+
+__all__ = ["check_step_args", "checked", "partition_rows", "unchecked"]
+
+_STEP_METHODS = ("output", "update", "rhs")
+
+
+def check_step_args(block, x, u) -> None:
+    """Raise unless the last axis of ``x`` has ``n_states`` entries and that of ``u`` at most ``len(inputs)``.
+
+    ``x`` is ``(B, n)`` and ``u`` ``(B, m)`` in the engine; one run as 1-D vectors, extra leading
+    batch axes (equal for both) and ``x=None`` for a block without state are accepted too.
+
+    Parameters
+    ----------
+    block : Block
+        The block whose per-step method is called.
+    x, u : array_like
+        The state and the input of the call.
+
+    Raises
+    ------
+    ValueError
+        If a width or the batch shape differs, naming the block, the argument, the shape expected
+        and the one given.
+    """
+    n, m = block.n_states, len(block.inputs)
+    us = np.shape(u)
+    xs = us[:-1] + (0,) if x is None and n == 0 else np.shape(x)
+    name = type(block).__name__
+    if len(xs) < 1 or xs[-1] != n:
+        raise ValueError(f"x must have shape (B, {n}) for {name} (one column per state {tuple(block.states)}), "
+                         f"got shape {xs}")
+    # fewer input columns pass: a block whose output reads only its first inputs may be handed only
+    # those (a filter's correction step given y alone); reading a missing one raises IndexError
+    if len(us) < 1 or us[-1] > m:
+        raise ValueError(f"u must have shape (B, {m}) for {name} (one column per input {tuple(block.inputs)}), "
+                         f"got shape {us}")
+    if xs[:-1] != us[:-1]:
+        raise ValueError(f"x and u must have the same runs (leading shape), got shapes {xs} and {us}")
+
+
+def checked(fn):
+    """``fn(self, t, x, u, params)`` behind a check of the widths of ``x`` and ``u`` (see module docstring).
+
+    Parameters
+    ----------
+    fn : callable
+        A per-step method.
+
+    Returns
+    -------
+    callable
+        The checking method; ``.unchecked`` is ``fn``.
+    """
+    @functools.wraps(fn)
+    def method(self, t, x, u, params=None):
+        check_step_args(self, x, u)
+        return fn(self, t, x, u, params)
+
+    method.unchecked = fn
+    return method
+
+
+def wrap_step_methods(cls) -> None:
+    """Replace the per-step methods ``cls`` defines or inherits unwrapped (from a mixin) by :func:`checked` ones."""
+    for kind in _STEP_METHODS:
+        fn = getattr(cls, kind, None)
+        if callable(fn) and not hasattr(fn, "unchecked"):
+            setattr(cls, kind, checked(fn))
+
+
+def unchecked(block, kind: str):
+    """The bound per-step method ``kind`` of ``block`` without the width check (what the engine calls).
+
+    Parameters
+    ----------
+    block : Block
+    kind : {"output", "update", "rhs"}
+
+    Returns
+    -------
+    callable
+        ``f(t, x, u, params)``.
+    """
+    method = getattr(block, kind)
+    raw = getattr(method, "unchecked", None)
+    return method if raw is None else raw.__get__(block)
+
+
+def partition_rows(rows) -> tuple[list, int]:
+    """Row groups of :class:`~ctrl_analysis.blocks.RowGroups` as index arrays that partition ``range(total)``.
+
+    Parameters
+    ----------
+    rows : sequence
+        Per group either a count (consecutive groups, in order) or the batch rows it runs.
+
+    Returns
+    -------
+    groups : list of slice or numpy.ndarray
+        One per group.
+    total : int
+        The number of runs the groups cover.
+
+    Raises
+    ------
+    TypeError
+        If a row is not an integer.
+    ValueError
+        If counts are < 1, or index arrays are empty, negative, out of range, overlap or leave a
+        run uncovered.
+    """
+    from ._validate import check_int
+
+    if all(np.ndim(r) == 0 for r in rows):
+        counts = [check_int("rows", r, minimum=1) for r in rows]
+        edges = np.concatenate(([0], np.cumsum(counts))).astype(int)
+        return [slice(int(a), int(b)) for a, b in itertools.pairwise(edges)], int(edges[-1])
+    groups = []
+    for r in rows:
+        a = np.asarray(r).ravel()
+        if a.size == 0 or not (np.issubdtype(a.dtype, np.integer) or
+                               (np.issubdtype(a.dtype, np.floating) and np.all(a == np.round(a)))):
+            raise TypeError(f"rows must give each group a count or a non-empty array of run indices, got {r!r:.80}")
+        groups.append(a.astype(np.intp))
+    every = np.concatenate(groups)
+    total = every.size
+    counts = np.bincount(every[(every >= 0) & (every < total)], minlength=total)
+    if np.any(every < 0) or np.any(every >= total):
+        raise ValueError(f"rows must be run indices in [0, {total}) ({total} runs in all), got "
+                         f"{sorted(set(every[(every < 0) | (every >= total)].tolist()))[:5]}")
+    if np.any(counts != 1):
+        raise ValueError(f"rows must partition the runs 0..{total - 1}: each run in exactly one group; runs "
+                         f"{np.flatnonzero(counts > 1)[:5].tolist()} are in several, "
+                         f"{np.flatnonzero(counts == 0)[:5].tolist()} in none")
+    return groups, int(total)

@@ -1,0 +1,1 @@
+"""The estimator arena: every estimator family tuned fairly on common signals and noise, scored against the bound."""

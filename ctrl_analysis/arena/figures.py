@@ -1,0 +1,103 @@
+"""Figures of the arena: Pareto fronts per signal class, ratio-to-bound heat map, best estimators on one signal."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..report import new_figure
+from .interface import estimate, family
+from .tuning import case_records, pareto_front
+
+__all__ = ["save_all"]
+
+
+def _pareto(s, cases, tuned):
+    noise = s.noises[0]
+    eps = s.eps[len(s.eps) // 2]
+    n = len(s.signals)
+    fig, axes = new_figure(1, n, title=f"Pareto fronts: lag vs noise-induced error of f̂' ({noise} noise, ε = {eps:g})",
+                           size=(3.2 * n + 1.5, 3.8))
+    axes = np.array(axes).reshape(1, n)
+    for j, sig in enumerate(s.signals):
+        ax = axes[0, j]
+        ci = next(i for i, c in enumerate(cases) if c.signal == sig and c.noise == noise and c.eps == eps)
+        for name, r in tuned.items():
+            pts = np.array([[m[2], m[3]] for _, m in r["evaluated"][ci]])
+            pts = pts[np.all(np.isfinite(pts), axis=1)]
+            idx = pareto_front(pts)
+            ax.loglog(pts[idx, 0], pts[idx, 1], ".-", label=name)
+        ax.set_title(sig)
+        ax.set_xlabel("lag: worst |f̂' - f'| without noise (1/s)")
+        if j == 0:
+            ax.set_ylabel("noise-induced RMS error of f̂' (1/s)")
+        ax.grid(True, which="both", alpha=0.3)
+    axes[0, -1].legend(loc="center left", bbox_to_anchor=(1.02, 0.5), fontsize=8)
+    return fig
+
+
+def _heat(cases, table):
+    fams = list(table)
+    M = np.array([[table[n][c.key]["ratio"] for c in cases] for n in fams])
+    A = np.array([[table[n][c.key]["adv_ratio"] for c in cases] for n in fams])
+    fig, axes = new_figure(2, 1, title="Tuned worst-case error of f̂' / 2√(εL)", size=(max(8, len(cases) / 3.5 + 3), 7.5))
+    axes = np.array(axes).reshape(2, 1)
+    for ax, data, what in ((axes[0, 0], M, "random classes"), (axes[1, 0], A, "adversarial pair")):
+        im = ax.imshow(np.log10(data), aspect="auto", cmap="viridis")
+        ax.set_yticks(range(len(fams)), fams)
+        ax.set_title(what)
+        cb = ax.figure.colorbar(im, ax=ax)
+        cb.set_label("log10(ratio)")
+    axes[1, 0].set_xticks(range(len(cases)), [c.key for c in cases], rotation=90, fontsize=6)
+    axes[0, 0].set_xticks([])
+    return fig
+
+
+def _sample(s, cases, table):
+    ci = len(s.eps) // 2
+    case = cases[ci]
+    setup = s.setup
+    d1, y, _ = case_records(case, setup)
+    fams = sorted(table, key=lambda n: table[n][case.key]["worst"])[:3]
+    t = setup.dt * np.arange(setup.n)
+    k = setup.k_from  # the scored window only (the start-up peaking is not scored and would hide it)
+    t, d1, y = t[k:], d1[k:], y
+    fig, axes = new_figure(2, 1, title=f"Best 3 estimators of f' on one {case.signal} record ({case.noise}, ε = {case.eps:g}), "
+                                       f"after the {setup.transient:g} s transient",
+                           size=(9, 6), sharex=True)
+    axes = np.array(axes).reshape(2, 1)
+    axes[0, 0].plot(t, d1[:, 0], "k", lw=2, label="true f'")
+    for name in fams:
+        est = estimate(family(name), np.array([table[name][case.key]["params"]]), y[:, :1], setup.dt)[k:, 0, 1]
+        axes[0, 0].plot(t, est, lw=1, label=name)
+        axes[1, 0].plot(t, est - d1[:, 0], lw=1, label=name)
+    for ax in axes[:, 0]:
+        ax.legend(loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize=8)
+        ax.grid(True, alpha=0.3)
+    axes[0, 0].set_ylabel("f' (1/s)")
+    axes[1, 0].set_ylabel("f̂' - f' (1/s)")
+    axes[1, 0].set_xlabel("time (s)")
+    return fig
+
+
+def save_all(ctx, result, s, cases, table, tuned) -> None:
+    """Draw and save the three arena figures with captions.
+
+    Parameters
+    ----------
+    ctx : StudyContext
+    result : StudyResult
+    s : ArenaSettings
+    cases : list of Case
+    table : dict
+    tuned : dict
+        :func:`~ctrl_analysis.arena.tuning.tune_family` output per family.
+    """
+    ctx.save_figure(result, _pareto(s, cases, tuned), "arena_pareto.png",
+                    caption="Per signal class, each family's Pareto front over every configuration evaluated: lag "
+                            "(worst derivative error on the noise-free records) against noise-induced RMS error.")
+    ctx.save_figure(result, _heat(cases, table), "arena_ratio_heatmap.png",
+                    caption="Each family's worst-case-tuned derivative error divided by the bound 2√(εL), per case "
+                            "(signal/noise/ε), on the random records (top) and on the bound's adversarial pair (bottom).")
+    ctx.save_figure(result, _sample(s, cases, table), "arena_best_on_one_signal.png",
+                    caption="The three best-ranked families (worst-case tuning) on one record, over the scored window "
+                            "(after the transient): the derivative estimates and their errors.")

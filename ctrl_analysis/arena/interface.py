@@ -1,0 +1,427 @@
+"""The arena's common interface: every estimator family estimates ``f`` and ``f'`` from noisy samples.
+
+A :class:`Family` names an estimator of the library, its tuning parameters (each with a reference
+value set by the case's noise bound ``ε``, acceleration bound ``L`` and sample period ``dt``, and a
+search range around it) and a runner: :func:`estimate` takes one row of parameters per run and one
+measured record per run and returns the estimates of the signal and its first derivative (and, where
+the family can, its second) at every sample, from all runs in one batch.
+
+The batch is run by the library's engine (:class:`~ctrl_analysis.loop.Loop`, ``engine="auto"``: the
+compiled path with **per-run kernel parameters**), so a tuning grid is one simulation of many runs.
+Where a block's numpy method cannot take per-run parameters as they are, a small adapter here gives it
+the per-run arrays (the equations stay the library's: ``sigma_rhs``/``DifferentialEstimator.rhs``,
+``eso_rhs``/``ExtendedStateObserver.rhs``, ``td_update``, ``alpha_beta_output``/``alpha_beta_update``,
+``lowpass_update``/``lowpass_output``). The algebraic differentiator (:mod:`.algebraic`) is an FIR
+filter run with vectorised numpy.
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.linalg
+
+from .._kernels import BlockKernel, copy_output, eso_rhs, sigma_rhs
+from .._validate import check_finite, check_in, check_positive
+from ..blocks import ColumnKernels, DiscreteBlock
+from ..estimators.differential import DifferentialEstimator
+from ..estimators.eso import ExtendedStateObserver
+from ..estimators.kalman.alpha_beta import alpha_beta_output, alpha_beta_update, kalata_gains
+from ..estimators.lowpass import LowPassFilter, lowpass_output, lowpass_update
+from ..estimators.tracking import TrackingDifferentiator, _td_steps, td_update
+from ..loop import Loop, place
+from ..polynomials import repeated_pole_coefficients
+from ..symbolic.differential import breakaway_gain, differential_coefficients
+from .algebraic import algebraic_derivative
+
+__all__ = ["Param", "Family", "FAMILIES", "family", "scales", "estimate"]
+
+#: Integration substeps (RK4) per sample for the continuous families; every grid keeps ``ω dt <= 1``.
+SUBSTEPS = 2
+#: The fastest pole any family is tuned to, ``OMEGA_DT_MAX / dt``: RK4 with 2 substeps is accurate there.
+OMEGA_DT_MAX = 1.0
+
+
+@dataclass(frozen=True)
+class Param:
+    """One tuning parameter: a reference value (from the case's scales) and a search range around it.
+
+    Attributes
+    ----------
+    name : str
+    ref : str
+        Which scale sets the reference: ``"omega"`` (``√(L/ε)``, rad/s), ``"tau"`` (``1/√(L/ε)``, s),
+        ``"eps"``, ``"L"``, ``"lambda"`` (Kalata's index at ``ω = √(L/ε)``: ``(ω dt)²``) or
+        ``"window"`` (samples spanning ``2/ω``).
+    lo, hi : float
+        Search range as multiples of the reference (log scale).
+    integer : bool
+        Rounded to an integer (and to ``>= 2`` for a window).
+    """
+
+    name: str
+    ref: str
+    lo: float
+    hi: float
+    integer: bool = False
+
+
+@dataclass(frozen=True)
+class Family:
+    """An estimator family of the arena: a library estimator, its tuning parameters and its outputs.
+
+    Attributes
+    ----------
+    name : str
+        Short name (CLI, results ids).
+    label : str
+        What it is, for reports and figures.
+    params : tuple of Param
+    second : bool
+        Whether it also estimates ``f''``.
+    source : str
+        The library code it runs.
+    """
+
+    name: str
+    label: str
+    params: tuple
+    second: bool
+    source: str
+    fixed: dict = field(default_factory=dict)
+
+
+#: Han's fal exponents of the 3-state NESO (Han 2009; the textbook choice 1, 1/2, 1/4).
+NESO_ALPHA = (1.0, 0.5, 0.25)
+
+FAMILIES = (
+    Family("sigma", "Σ, n0 = 3 (breakaway gain)", (Param("a", "omega", 0.1 / 3, 10.0 / 3),), True,
+           "estimators.differential.DifferentialEstimator + _kernels.sigma_rhs"),
+    Family("leso2", "linear ESO, 2 states (ω_o)", (Param("omega_o", "omega", 0.1, 10.0),), False,
+           "estimators.eso.ExtendedStateObserver.from_bandwidth(1, ω_o) + _kernels.eso_rhs"),
+    Family("leso3", "linear ESO, 3 states (ω_o)", (Param("omega_o", "omega", 0.1, 10.0),), True,
+           "estimators.eso.ExtendedStateObserver.from_bandwidth(2, ω_o) + _kernels.eso_rhs"),
+    Family("neso", "fal ESO (NESO), α = 1, 1/2, 1/4", (Param("omega_o", "omega", 0.1, 10.0),
+                                                        Param("delta", "eps", 0.3, 100.0)), True,
+           "estimators.eso.ExtendedStateObserver(alpha, delta) + _kernels.eso_rhs",
+           {"alpha": NESO_ALPHA}),
+    Family("td", "Han's tracking differentiator (r, h0)", (Param("r", "L", 0.5, 50.0),
+                                                           Param("h0", "tau", 0.1, 10.0)), False,
+           "estimators.tracking.TrackingDifferentiator (td_update)"),
+    Family("kalman", "steady-state Kalman α-β (Kalata's Λ)", (Param("Lambda", "lambda", 0.001, 1000.0),), False,
+           "estimators.kalman.AlphaBetaFilter with kalata_gains(Λ)"),
+    Family("difflp", "backward difference + low-pass, order 2 (ω)", (Param("omega", "omega", 0.1, 10.0),), False,
+           "estimators.lowpass.DiscreteLowPass on [y, Δy/dt]"),
+    Family("algebraic", "causal Savitzky–Golay / algebraic (window, degree)",
+           (Param("window", "window", 0.1, 10.0, integer=True), Param("degree", "one", 1.0, 2.0, integer=True)),
+           True, "arena.algebraic.algebraic_derivative (FIR, vectorised numpy)"),
+)
+
+
+def family(name: str) -> Family:
+    """The family called ``name``.
+
+    Parameters
+    ----------
+    name : str
+        One of the names in :data:`FAMILIES`.
+
+    Returns
+    -------
+    Family
+
+    Raises
+    ------
+    ValueError
+        For an unknown name (the message lists the names).
+    """
+    names = [f.name for f in FAMILIES]
+    check_in("family name", name, names)
+    return FAMILIES[names.index(name)]
+
+
+def scales(eps: float, L: float, dt: float) -> dict:
+    """Reference values of the tuning parameters for noise bound ``eps`` and acceleration bound ``L``.
+
+    ``ω = √(L/ε)`` balances a linear differentiator's lag error (``∝ L/ω``) against its noise error
+    (``∝ ε ω``); every family's search range is set around it (and capped at ``ω dt <= 1``).
+
+    Parameters
+    ----------
+    eps, L, dt : float
+        Noise bound, bound on ``|f''|``, sample period (all > 0).
+
+    Returns
+    -------
+    dict
+        ``omega, tau, eps, L, lambda, window, one, dt``.
+
+    Examples
+    --------
+    >>> s = scales(0.01, 4.0, 0.002)
+    >>> round(s["omega"], 6), s["window"]
+    (20.0, 50.0)
+    """
+    eps = float(check_positive("eps", eps, scalar=True))
+    L = float(check_positive("L", L, scalar=True))
+    dt = float(check_positive("dt", dt, scalar=True))
+    omega = float(np.sqrt(L / eps))
+    return {"omega": omega, "tau": 1.0 / omega, "eps": eps, "L": L, "lambda": (omega * dt) ** 2,
+            "window": round(2.0 / omega / dt, 6), "one": 1.0, "dt": dt}
+
+
+# ---------------------------------------------------------------------------------------- adapters
+class _PerRunSigma(DifferentialEstimator):
+    """Σ of order ``n0`` with one gain vector per run (numpy: the class's ``rhs``; compiled: ``sigma_rhs``)."""
+
+    def __init__(self, gains):
+        DifferentialEstimator.__init__(self, gains.shape[1], 1.0)
+        object.__setattr__(self, "a_coeffs", gains)  # (B, n0): broadcast by rhs over the batch
+
+    def kernel(self):
+        return BlockKernel(output=copy_output, params=np.ascontiguousarray(self.a_coeffs), rhs=sigma_rhs)
+
+
+class _PerRunESO(ExtendedStateObserver):
+    """An ESO (linear or fal) with per-run gains (numpy: the class's ``rhs``; compiled: ``eso_rhs``)."""
+
+    def __init__(self, gains, alpha=None, delta=None):
+        super().__init__(gains[0], b0=0.0, alpha=alpha, delta=None if delta is None else float(delta[0]),
+                         allow_unstable=True)
+        B, m = gains.shape
+        self.L = gains  # (B, m)
+        if alpha is not None:
+            self.alpha = np.broadcast_to(np.asarray(alpha, float), (B, m))
+            self.delta = delta[:, None]
+            self._delta_pow = np.power(self.delta, 1.0 - self.alpha)
+        linear = alpha is None
+        a = np.ones((B, m)) if linear else self.alpha
+        dp = np.ones((B, m)) if linear else self._delta_pow
+        dl = np.ones(B) if linear else delta
+        self._params = np.ascontiguousarray(np.column_stack(
+            [np.full(B, 1.0 if linear else 0.0), np.zeros(B), dl, gains, a, dp]))
+
+    def kernel(self):
+        return BlockKernel(output=copy_output, params=self._params, rhs=eso_rhs)
+
+
+class _PerRunTD(TrackingDifferentiator):
+    """Han's TD with per-run ``r`` and ``h0`` (numpy: ``_td_steps`` on the columns; compiled: ``td_update``)."""
+
+    def __init__(self, r, h0, h):
+        TrackingDifferentiator.__init__(self, 1.0, h)
+        self._p = np.ascontiguousarray(np.column_stack([r, np.full(r.size, h), h0, np.ones(r.size),
+                                                        np.zeros(r.size)]))
+
+    def update(self, t, x, u, params=None):
+        x1, x2, _ = _td_steps(x[:, 0], x[:, 1], u[:, 0], self._p[:, 0], self.h, self._p[:, 2], 1)
+        return np.column_stack([x1, x2])
+
+    def output(self, t, x, u, params=None):
+        return x.copy()
+
+    column_kernels = {"update": "td_update", "output": "_copy"}
+
+
+class _SharedColumns(ColumnKernels, DiscreteBlock):
+    """A library discrete kernel run on the batch's columns with per-run parameter rows ``self._p``.
+
+    The entries listed in ``_shared`` are the same for every run and are passed as scalars (the
+    library kernels branch on them: the α-β "has b" flag, the low-pass order).
+    """
+
+    _shared: tuple = ()
+
+    def _columns(self):
+        cols = list(self._p.T)
+        for i in self._shared:
+            cols[i] = float(self._p[0, i])
+        return cols
+
+    def output(self, t, x, u, params=None):
+        y = np.empty((x.shape[0], len(self.outputs)))
+        self._column_fns()["output"](t, x.T, u.T, self._columns(), y.T)
+        return y
+
+    def update(self, t, x, u, params=None):
+        xn = np.empty_like(x)
+        self._column_fns()["update"](t, x.T, u.T, self._columns(), xn.T)
+        return xn
+
+
+class _PerRunAlphaBeta(_SharedColumns):
+    """α-β filter with per-run gains ``[α, β/T]``: the library's kernels (``alpha_beta_output``/``_update``)."""
+
+    inputs, states, outputs, feedthrough = ("y",), ("xpred[0]", "xpred[1]"), ("xhat[0]", "xhat[1]"), True
+    _shared = (0, 3, 4, 5, 6, 7, 8)  # has-b flag, F, b
+    column_kernels = {"output": "alpha_beta_output", "update": "alpha_beta_update"}
+
+    def __init__(self, K, T):
+        B = K.shape[0]
+        F = np.array([1.0, T, 0.0, 1.0])
+        self._p = np.ascontiguousarray(np.column_stack([np.zeros(B), K, np.tile(F, (B, 1)), np.zeros((B, 2))]))
+
+    def initial_state(self):
+        return np.zeros(2)
+
+
+class _PerRunLowPass(_SharedColumns):
+    """:class:`~ctrl_analysis.estimators.lowpass.DiscreteLowPass` of order 2 on two channels, one corner frequency per run."""
+
+    feedthrough = True
+    _shared = (0,)  # the order m
+    column_kernels = {"output": "lowpass_output", "update": "lowpass_update"}
+
+    def __init__(self, omegas, dt, order=2):
+        self._p = np.ascontiguousarray(np.array([_lowpass_params(float(w), dt, order) for w in omegas]))
+        self.order = order
+        self.inputs, self.outputs = ("u[0]", "u[1]"), ("w[0]", "w[1]")
+        self.states = tuple(f"w[{c}][{j}]" for c in range(2) for j in range(order))
+
+    def initial_state(self):
+        return np.zeros(2 * self.order)
+
+
+@functools.lru_cache(maxsize=4096)
+def _lowpass_params(omega: float, dt: float, order: int) -> np.ndarray:
+    """The kernel parameters ``[m, Ad, Bd]`` of :class:`DiscreteLowPass` (2 channels), fast.
+
+    ``Ad, Bd`` are the zero-order-hold discretisation of :class:`LowPassFilter`'s ``(A, B)``, taken as
+    the exponential of the augmented matrix ``[[A, B], [0, 0]] dt`` (what ``control.c2d`` computes,
+    ~1000x faster per call; ``tests/lib/test_arena.py`` holds the two equal).
+    """
+    lp = LowPassFilter(omega, order)
+    M = np.zeros((order + 1, order + 1))
+    M[:order, :order], M[:order, order:] = lp.A, lp.B
+    E = scipy.linalg.expm(M * dt)
+    return np.concatenate([[float(order)], E[:order, :order].reshape(-1), E[:order, order]])
+
+
+@functools.lru_cache(maxsize=64)
+def _sigma_unit_gains(n0: int) -> np.ndarray:
+    """Σ's gains at ``a = 1`` (breakaway design); at any ``a`` they are ``a_i(1) a^i`` (``s = a σ``)."""
+    return differential_coefficients(n0, 1.0, breakaway_gain(n0, 1.0))
+
+
+def _copy(t, x, u, p, y):
+    """Output = state (the TD adapter's compiled output kernel)."""
+    y[0] = x[0]
+    y[1] = x[1]
+
+
+# the library kernels the adapters name in column_kernels (ColumnKernels looks them up in this module)
+_KERNELS = (td_update, alpha_beta_output, alpha_beta_update, lowpass_output, lowpass_update)
+
+
+# ---------------------------------------------------------------------------------------- running
+def _build(fam: Family, P: np.ndarray, dt: float):
+    """``(block, input names, output names)`` for the family with per-run parameter rows ``P``."""
+    if fam.name == "sigma":
+        # a_i = K C(n0-1, i-1) a^(i-1) with K ∝ a: a_i(a) = a_i(1) a^i
+        gains = _sigma_unit_gains(3) * P[:, :1] ** np.arange(1, 4)
+        return _PerRunSigma(gains), ("y",), ("xhat[0]", "xhat[1]", "xhat[2]")
+    if fam.name in ("leso2", "leso3", "neso"):
+        m = 2 if fam.name == "leso2" else 3
+        gains = np.array([repeated_pole_coefficients(m, w)[1:] for w in P[:, 0]])
+        if fam.name != "neso":
+            return _PerRunESO(gains), ("y", "u"), tuple(f"xhat{i}" for i in range(1, m + 1))
+        alpha = np.array(fam.fixed["alpha"])
+        delta = P[:, 1]
+        # linear zone (|e| <= δ) equal to the linear ESO of bandwidth ω_o: L_i δ^(α_i - 1) = C(3, i) ω_o^i
+        gains = gains * np.power(delta[:, None], 1.0 - alpha)
+        return _PerRunESO(gains, alpha, delta), ("y", "u"), ("xhat1", "xhat2", "xhat3")
+    if fam.name == "td":
+        return _PerRunTD(P[:, 0], P[:, 1], dt), ("v",), ("x1", "x2")
+    if fam.name == "kalman":
+        alpha, beta = kalata_gains(P[:, 0])
+        return _PerRunAlphaBeta(np.column_stack([alpha, beta / dt]), dt), ("y",), ("xhat[0]", "xhat[1]")
+    if fam.name == "difflp":
+        return _PerRunLowPass(P[:, 0], dt), ("u[0]", "u[1]"), ("w[0]", "w[1]")
+    raise ValueError(f"family {fam.name!r} has no loop")  # pragma: no cover
+
+
+def _check_params(fam: Family, P: np.ndarray) -> None:
+    """Every tuning parameter > 0; integer parameters integral; a degree (reference ``"one"``) within its range."""
+    for j, p in enumerate(fam.params):
+        col = P[:, j]
+        if np.any(col <= 0):
+            raise ValueError(f"P column {j} ({fam.name} parameter {p.name}) must be > 0, got {col.tolist()!r:.80}")
+        if p.integer and np.any(col != np.round(col)):
+            raise ValueError(f"P column {j} ({fam.name} parameter {p.name}) must be integers, got {col.tolist()!r:.80}")
+        if p.ref == "one" and np.any((col < p.lo) | (col > p.hi)):
+            raise ValueError(f"P column {j} ({fam.name} parameter {p.name}) must be in [{p.lo:g}, {p.hi:g}], "
+                             f"got {col.tolist()!r:.80}")
+
+
+def estimate(fam, P, y, dt: float, *, engine: str = "auto") -> np.ndarray:
+    """Estimates of ``f``, ``f'`` (and ``f''`` where the family gives it) from the records ``y``, one run per column.
+
+    Parameters
+    ----------
+    fam : Family or str
+        The estimator family.
+    P : array_like, shape (B, n_params)
+        One row of tuning parameters per run (the family's ``params`` order).
+    y : array_like, shape (N, B)
+        Measured samples at ``t_k = k dt``, one record per run.
+    dt : float
+        Sample period (> 0).
+    engine : {"auto", "numpy", "compiled"}
+        The engine of :meth:`Loop.simulate` (the algebraic family always runs vectorised numpy).
+
+    Returns
+    -------
+    numpy.ndarray, shape (N, B, k)
+        ``k = 3`` (``f, f', f''``) for families with ``second``, else 2; row ``k`` uses the samples
+        up to ``t_k`` only (causal).
+
+    Raises
+    ------
+    TypeError, ValueError
+        If ``fam`` is not a family, the shapes of ``P`` and ``y`` disagree, a value is not finite, a
+        parameter is not > 0 (an integer parameter not an integer, a degree not 1 or 2), ``dt <= 0`` or
+        ``engine`` is unknown.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = 0.01 * np.arange(400)
+    >>> est = estimate("leso2", [[20.0]], (2.0 * t)[:, None], 0.01)
+    >>> round(float(est[-1, 0, 1]), 2)   # a ramp of slope 2 (the input is held over each sample)
+    1.99
+    """
+    if isinstance(fam, str):
+        fam = family(check_in("fam (family name)", fam, [f.name for f in FAMILIES]))
+    elif not isinstance(fam, Family):
+        raise TypeError(f"fam must be a Family or a family name, got {fam!r:.80}")
+    dt = float(check_positive("dt", dt, scalar=True))
+    check_in("engine", engine, ("auto", "numpy", "compiled"))
+    P = np.atleast_2d(check_finite("P", P))
+    y = np.asarray(check_finite("y", y))
+    if y.ndim != 2 or P.ndim != 2 or P.shape != (y.shape[1], len(fam.params)):
+        raise ValueError(f"P must have shape (B, {len(fam.params)}) and y shape (N, B) with the same B, "
+                         f"got P {P.shape} and y {y.shape}")
+    _check_params(fam, P)
+    N, B = y.shape
+    k = 3 if fam.second else 2
+    if fam.name == "algebraic":
+        return algebraic_derivative(y, P[:, 0].astype(int), P[:, 1].astype(int), dt)
+    block, ins, outs = _build(fam, P, dt)
+    continuous = fam.name in ("sigma", "leso2", "leso3", "neso")
+    loop = Loop([place(block, "est", inputs=[f"_{s}" for s in block.inputs], outputs=list(outs))], dt,
+                substeps=SUBSTEPS if continuous else 1)
+    inputs = {f"_{ins[0]}": y}
+    if fam.name in ("leso2", "leso3", "neso"):
+        inputs["_u"] = 0.0
+    if fam.name == "difflp":
+        dy = np.zeros_like(y)
+        dy[1:] = np.diff(y, axis=0) / dt  # backward difference (y_k - y_(k-1)) / dt
+        inputs = {"_u[0]": y, "_u[1]": dy}
+    res = loop.simulate(N, inputs=inputs, store_states=False, store_signals=list(outs[:k]), chunk_runs=B,
+                        engine=engine, progress=False, bound=np.inf)
+    out = np.empty((N, B, k))
+    for j, s in enumerate(outs[:k]):
+        out[:, :, j] = res.signals[s][:N]
+    return out

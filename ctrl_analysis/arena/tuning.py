@@ -1,0 +1,407 @@
+"""Fair tuning: each family searched over its own parameters on the same signals and noise, for two costs.
+
+**Cases.** A :class:`Case` is a signal class, a noise class and a noise bound ``ε``, with the
+acceleration bound ``L`` and ``S`` seeded signals (and their noise draws): every family is scored
+on exactly the same records.
+
+**Costs** (of the first-derivative error ``e = f̂' - f'``, counted after the stated transient):
+``worst`` = ``max |e|`` over the samples and the ``S`` noisy records; ``rms`` = the root mean
+square of ``e`` over the same. Each configuration is also run on the noise-free records, which
+splits its error into **lag** (the worst |e| without noise) and **noise-induced** error (the RMS of
+the difference of the noisy and the noise-free estimate): the axes of the Pareto front.
+
+**Search** (per family, case and cost), in the log of each parameter relative to its reference
+(:func:`ctrl_analysis.arena.interface.scales`): a grid (9 points for one parameter, 5 per parameter
+for two; a degree parameter takes its values), then a pattern search from the best grid point:
+``±step`` along each parameter, move to the best if it improves, halve the step, ``rounds`` times.
+Every configuration evaluated counts as one tuning. The configurations of all cases of a family are
+run as the runs of a few large batches (per-run parameters), split over processes with
+:func:`ctrl_analysis.parallel.map_chunks` (``jobs``, ``scheduler``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._validate import (
+    check_array,
+    check_finite,
+    check_in,
+    check_int,
+    check_nonnegative,
+    check_positive,
+    check_str,
+)
+from ..parallel import map_chunks
+from .interface import FAMILIES, OMEGA_DT_MAX, Family, estimate, family, scales
+from .signals import add_noise, make_signal
+
+__all__ = ["Setup", "Case", "case_records", "param_values", "evaluate", "tune_family", "pareto_front"]
+
+#: Metric columns returned by :func:`evaluate`.
+METRICS = ("worst", "rms", "lag", "noise")
+#: Runs per engine call (memory: N x runs x outputs doubles).
+RUNS_PER_CALL = 480
+#: Records of user cases (a recorded signal), looked up by :func:`case_records` before drawing.
+_USER_RECORDS: dict = {}
+
+
+@dataclass(frozen=True)
+class Setup:
+    """Time grid and scoring window shared by all cases.
+
+    Attributes
+    ----------
+    dt : float
+        Sample period (s).
+    n : int
+        Samples per record.
+    transient : float
+        Errors before this time are not counted (s).
+    """
+
+    dt: float = 0.002
+    n: int = 4000
+    transient: float = 2.0
+
+    def __post_init__(self):
+        check_positive("dt", self.dt, scalar=True)
+        check_int("n", self.n, minimum=2)
+        check_nonnegative("transient", self.transient, scalar=True)
+        if self.k_from >= self.n:
+            raise ValueError(f"transient must end before the record does (n dt = {self.n * self.dt:g} s), "
+                             f"got transient = {self.transient!r}")
+
+    @property
+    def k_from(self) -> int:
+        """First counted sample."""
+        return int(round(self.transient / self.dt))
+
+
+@dataclass(frozen=True)
+class Case:
+    """One scoring case: a signal class, a noise class, a noise bound and seeded records.
+
+    Attributes
+    ----------
+    signal, noise : str
+        Keys of :data:`~ctrl_analysis.arena.signals.SIGNAL_CLASSES` / ``NOISE_CLASSES``.
+    eps : float
+        Noise bound ``ε``.
+    L : float
+        Bound on ``|f''|``.
+    seeds : tuple of int
+        One seed per record (signal and noise drawn from it).
+    """
+
+    signal: str
+    noise: str
+    eps: float
+    L: float
+    seeds: tuple
+
+    def __post_init__(self):
+        check_str("signal", self.signal)
+        check_str("noise", self.noise)
+        check_positive("eps", self.eps, scalar=True)
+        check_positive("L", self.L, scalar=True)
+        if not isinstance(self.seeds, tuple) or not self.seeds:
+            raise TypeError(f"seeds must be a non-empty tuple of seeds, got {self.seeds!r:.80}")
+        for seed in self.seeds:
+            check_int("seeds", seed, minimum=0)
+
+    @property
+    def key(self) -> str:
+        """``signal/noise/ε``."""
+        return f"{self.signal}/{self.noise}/{self.eps:g}"
+
+
+def case_records(case: Case, setup: Setup) -> tuple:
+    """The case's records: ``(f', y_noisy, f)`` each of shape ``(N, S)``.
+
+    Parameters
+    ----------
+    case : Case
+    setup : Setup
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+    """
+    _check_case_setup(case, setup)
+    if case in _USER_RECORDS:
+        return _USER_RECORDS[case]
+    t = setup.dt * np.arange(setup.n)
+    sig = np.array([make_signal(case.signal, s, t, case.L) for s in case.seeds])  # (S, 3, N)
+    y = np.array([add_noise(case.noise, sig[i, 0], case.eps, s + 1) for i, s in enumerate(case.seeds)])
+    return sig[:, 1].T, y.T, sig[:, 0].T
+
+
+def _check_case_setup(case, setup) -> None:
+    if not isinstance(case, Case):
+        raise TypeError(f"case must be a Case, got {case!r:.80}")
+    if not isinstance(setup, Setup):
+        raise TypeError(f"setup must be a Setup, got {setup!r:.80}")
+
+
+def param_values(fam: Family, z, case: Case, setup: Setup) -> np.ndarray:
+    """Parameter values from log-multipliers ``z`` (one row per configuration), capped for the sample period.
+
+    Parameters
+    ----------
+    fam : Family
+    z : array_like, shape (C, n_params)
+        ``value = reference * exp(z)`` (integers rounded; a degree parameter is ``z`` itself).
+    case : Case
+    setup : Setup
+
+    Returns
+    -------
+    numpy.ndarray, shape (C, n_params)
+    """
+    if not isinstance(fam, Family):
+        raise TypeError(f"fam must be a Family, got {fam!r:.80}")
+    _check_case_setup(case, setup)
+    z = np.atleast_2d(check_finite("z", z))
+    if z.ndim != 2 or z.shape[1] != len(fam.params):
+        raise ValueError(f"z must have shape (C, {len(fam.params)}) (one column per {fam.name} parameter), "
+                         f"got {z.shape}")
+    sc = scales(case.eps, case.L, setup.dt)
+    out = np.empty_like(z)
+    for j, p in enumerate(fam.params):
+        if p.ref == "one":
+            out[:, j] = np.clip(np.round(z[:, j]), p.lo, p.hi)
+            continue
+        v = sc[p.ref] * np.exp(z[:, j])
+        if p.ref == "omega":  # fastest pole ω (Σ: 3a) at most OMEGA_DT_MAX / dt
+            pole = 3.0 if fam.name == "sigma" else 1.0
+            v = np.minimum(v, OMEGA_DT_MAX / (pole * setup.dt))
+        if p.ref == "tau":
+            v = np.maximum(v, setup.dt)
+        if p.integer:
+            v = np.maximum(np.round(v), 2.0)
+        out[:, j] = v
+    return out
+
+
+def _grid(fam: Family) -> tuple:
+    """Grid of ``z`` (C, n_params) and the initial pattern step per parameter."""
+    axes, steps = [], []
+    n = 9 if len(fam.params) == 1 else 5
+    for p in fam.params:
+        if p.ref == "one":
+            axes.append(np.arange(p.lo, p.hi + 1))
+            steps.append(0.0)
+        else:
+            ax = np.linspace(np.log(p.lo), np.log(p.hi), n)
+            axes.append(ax)
+            steps.append(0.5 * (ax[1] - ax[0]))
+    mesh = np.meshgrid(*axes, indexing="ij")
+    return np.column_stack([m.ravel() for m in mesh]), np.array(steps)
+
+
+def evaluate(task) -> np.ndarray:
+    """Metrics of configurations: ``task = (family, setup, cases, configs, engine)``.
+
+    Parameters
+    ----------
+    task : tuple
+        ``family`` name; :class:`Setup`; sequence of :class:`Case`; ``configs`` a list of
+        ``(case index, parameter row)``; ``engine`` for :meth:`Loop.simulate`.
+
+    Returns
+    -------
+    numpy.ndarray, shape (len(configs), 4)
+        Columns :data:`METRICS`: worst, rms, lag, noise.
+    """
+    name, setup, cases, configs, engine = _check_task(task)
+    fam = family(name)
+    records = {}
+    out = np.empty((len(configs), len(METRICS)))
+    per = 2 * len(cases[0].seeds)
+    step = max(1, RUNS_PER_CALL // per)
+    k0 = setup.k_from
+    for lo in range(0, len(configs), step):
+        part = configs[lo:lo + step]
+        ys, truths, P = [], [], []
+        for ci, row in part:
+            if ci not in records:
+                records[ci] = case_records(cases[ci], setup)
+            d1, y, f = records[ci]
+            ys += [y, f]
+            truths.append(d1)
+            P.append(np.tile(row, (per, 1)))
+        est = estimate(fam, np.vstack(P), np.hstack(ys), setup.dt, engine=engine)[:, :, 1]
+        S = per // 2
+        for i in range(len(part)):
+            noisy = est[k0:, i * per:i * per + S]
+            clean = est[k0:, i * per + S:(i + 1) * per]
+            truth = truths[i][k0:]
+            e = noisy - truth
+            out[lo + i] = (np.max(np.abs(e)), np.sqrt(np.mean(e**2)), np.max(np.abs(clean - truth)),
+                           np.sqrt(np.mean((noisy - clean) ** 2)))
+    return np.where(np.isfinite(out), out, np.inf)
+
+
+def _check_task(task) -> tuple:
+    """:func:`evaluate`'s task, each part checked (errors name ``task`` and the part)."""
+    if not isinstance(task, (tuple, list)) or len(task) != 5:
+        raise TypeError(f"task must be a tuple (family, setup, cases, configs, engine), got {task!r:.80}")
+    name, setup, cases, configs, engine = task
+    fam = family(check_in("task family", name, [f.name for f in FAMILIES]))
+    if not isinstance(setup, Setup):
+        raise TypeError(f"task setup must be a Setup, got {setup!r:.80}")
+    if not isinstance(cases, (tuple, list)) or not cases or not all(isinstance(c, Case) for c in cases):
+        raise TypeError(f"task cases must be a non-empty sequence of Case, got {cases!r:.80}")
+    if len({len(c.seeds) for c in cases}) != 1:
+        raise ValueError("task cases must all have the same number of seeds")
+    if not isinstance(configs, (tuple, list)):
+        raise TypeError(f"task configs must be a list of (case index, parameter row), got {configs!r:.80}")
+    for item in configs:
+        if not isinstance(item, (tuple, list)) or len(item) != 2:
+            raise TypeError(f"task configs must hold (case index, parameter row) pairs, got {item!r:.80}")
+        check_int("task configs case index", item[0], minimum=0, maximum=len(cases) - 1)
+        row = np.asarray(check_finite("task configs parameter row", item[1]))
+        if row.shape != (len(fam.params),):
+            raise ValueError(f"task configs parameter row must have {len(fam.params)} entries, got shape {row.shape}")
+    check_in("task engine", engine, ("auto", "numpy", "compiled"))
+    return name, setup, cases, configs, engine
+
+
+def _run(name, setup, cases, configs, engine, jobs, scheduler, desc):
+    """Evaluate ``configs`` in chunks over processes; one metrics row per configuration."""
+    if not configs:
+        return np.empty((0, len(METRICS)))
+    n_chunks = max(1, min(len(configs), 4 * jobs if jobs > 1 else 1))
+    bounds = np.linspace(0, len(configs), n_chunks + 1).astype(int)
+    tasks = [(name, setup, tuple(cases), configs[a:b], engine) for a, b in zip(bounds[:-1], bounds[1:]) if b > a]
+    parts = map_chunks(evaluate, tasks, jobs=jobs, scheduler=scheduler, desc=desc, unit="batch")
+    return np.vstack(parts)
+
+
+def tune_family(name: str, cases, setup: Setup, *, rounds: int = 3, engine: str = "auto", jobs: int = 1,
+                scheduler=None) -> dict:
+    """Tune one family on every case for both costs (grid, then pattern-search refinement).
+
+    Parameters
+    ----------
+    name : str
+        Family name.
+    cases : sequence of Case
+    setup : Setup
+    rounds : int
+        Pattern-search rounds after the grid (>= 0).
+    engine : {"auto", "numpy", "compiled"}
+    jobs : int
+        Processes (:func:`ctrl_analysis.parallel.map_chunks`).
+    scheduler : optional
+        A Dask scheduler address.
+
+    Returns
+    -------
+    dict
+        ``evaluated``: per case, the list of ``(values, metrics)`` of every configuration;
+        ``best``: per case and cost (``"worst"``, ``"rms"``), ``(values, metrics)``; ``tunings``:
+        configurations evaluated.
+    """
+    fam = family(name)
+    rounds = check_int("rounds", rounds, minimum=0)
+    if isinstance(cases, (str, bytes)) or not hasattr(cases, "__iter__"):
+        raise TypeError(f"cases must be a sequence of Case, got {cases!r:.80}")
+    cases = list(cases)
+    if not cases or not all(isinstance(c, Case) for c in cases):
+        raise TypeError(f"cases must be a non-empty sequence of Case, got {cases!r:.80}")
+    if len({len(c.seeds) for c in cases}) != 1:
+        raise ValueError("cases must all have the same number of seeds (they are run as one batch)")
+    if not isinstance(setup, Setup):
+        raise TypeError(f"setup must be a Setup, got {setup!r:.80}")
+    check_in("engine", engine, ("auto", "numpy", "compiled"))
+    check_int("jobs", jobs, minimum=1)
+    grid, steps = _grid(fam)
+    evaluated = [[] for _ in cases]
+
+    def run(zs_per_case, desc):
+        configs, owners = [], []
+        for ci, zs in enumerate(zs_per_case):
+            if len(zs):
+                vals = param_values(fam, zs, cases[ci], setup)
+                configs += [(ci, v) for v in vals]
+                owners += [(ci, z, v) for z, v in zip(zs, vals)]
+        metrics = _run(name, setup, cases, configs, engine, jobs, scheduler, desc)
+        for (ci, z, v), m in zip(owners, metrics):
+            evaluated[ci].append((z, v, m))
+        return metrics
+
+    run([grid] * len(cases), f"{name}: grid")
+    best = {}
+    for cost in range(2):
+        cur = []
+        for ci in range(len(cases)):
+            z, v, m = min(evaluated[ci], key=lambda e: e[2][cost])
+            cur.append([z, m])
+        best[cost] = cur
+    step = steps.copy()
+    free = np.flatnonzero(step > 0)
+    for r in range(rounds):
+        for cost in range(2):
+            cand = []
+            for ci in range(len(cases)):
+                z0 = best[cost][ci][0]
+                zs = []
+                for j in free:
+                    for sgn in (-1, 1):
+                        z = z0.copy()
+                        z[j] += sgn * step[j]
+                        zs.append(z)
+                cand.append(np.array(zs))
+            start = [len(e) for e in evaluated]
+            run(cand, f"{name}: refine {r + 1}/{rounds} ({METRICS[cost]})")
+            for ci in range(len(cases)):
+                for z, v, m in evaluated[ci][start[ci]:]:
+                    if m[cost] < best[cost][ci][1][cost]:
+                        best[cost][ci] = [z, m]
+        step = step / 2
+    out_best = []
+    for ci, case in enumerate(cases):
+        row = {}
+        for cost in range(2):
+            z, m = best[cost][ci]
+            row[METRICS[cost]] = (param_values(fam, z, case, setup)[0], m)
+        out_best.append(row)
+    return {"family": name, "evaluated": [[(v, m) for _, v, m in e] for e in evaluated], "best": out_best,
+            "tunings": int(sum(len(e) for e in evaluated))}
+
+
+def pareto_front(points) -> np.ndarray:
+    """Indices of the non-dominated points (smaller is better in both coordinates), sorted by the first.
+
+    Parameters
+    ----------
+    points : array_like, shape (n, 2)
+
+    Returns
+    -------
+    numpy.ndarray of int
+
+    Examples
+    --------
+    >>> pareto_front([[1, 5], [2, 2], [3, 3], [4, 1]]).tolist()
+    [0, 1, 3]
+    """
+    p = check_array("points", points)
+    if p.ndim != 2 or p.shape[1] != 2:
+        raise ValueError(f"points must have shape (n, 2), got {p.shape}")
+    if np.any(np.isnan(p)):
+        raise ValueError("points must not contain NaN (inf is a valid, dominated coordinate)")
+    order = np.lexsort((p[:, 1], p[:, 0]))
+    keep, best = [], np.inf
+    for i in order:
+        if p[i, 1] < best:
+            keep.append(i)
+            best = p[i, 1]
+    return np.array(keep, dtype=int)
+
+
+

@@ -1,0 +1,174 @@
+"""The arena: the common interface against the library blocks, the algebraic yardstick, signals, noise, tuning."""
+
+import numpy as np
+import pytest
+
+from ctrl_analysis.arena.algebraic import algebraic_derivative, algebraic_weights
+from ctrl_analysis.arena.interface import FAMILIES, _lowpass_params, estimate, family, scales
+from ctrl_analysis.arena.signals import NOISE_CLASSES, SIGNAL_CLASSES, add_noise, make_signal
+from ctrl_analysis.arena.tuning import Case, Setup, pareto_front, tune_family
+from ctrl_analysis.estimators.differential import DifferentialEstimator
+from ctrl_analysis.estimators.eso import ExtendedStateObserver
+from ctrl_analysis.estimators.kalman.alpha_beta import AlphaBetaFilter, kalata_gains
+from ctrl_analysis.estimators.lowpass import DiscreteLowPass, LowPassFilter
+from ctrl_analysis.estimators.tracking import TrackingDifferentiator
+from ctrl_analysis.loop import Loop, place
+
+DT = 0.01
+
+
+def _record(n=300, seed=0, runs=3):
+    t = DT * np.arange(n)
+    rng = np.random.default_rng(seed)
+    return np.sin(1.3 * t)[:, None] + 0.01 * rng.uniform(-1, 1, (n, runs))
+
+
+def _params(fam, runs=3):
+    s = scales(0.01, 2.0, DT)
+    row = [2.0 if p.ref == "one" else round(s[p.ref]) if p.integer else s[p.ref] for p in fam.params]
+    return np.array(row) * np.linspace(1.0, 1.4, runs)[:, None] ** np.array([0 if p.integer else 1 for p in fam.params])
+
+
+# ------------------------------------------------------------------ algebraic yardstick, by hand
+def test_algebraic_weights_match_hand_computation():
+    # W = 2, d = 1: the backward difference; W = 3, d = 1: (y_k - y_(k-2)) / 2T; W = 3, d = 2: (3y_k - 4y_(k-1) + y_(k-2)) / 2T
+    assert np.allclose(algebraic_weights(2, 1, 0.5)[1], [2.0, -2.0])
+    assert np.allclose(algebraic_weights(3, 1, 1.0)[1], [0.5, 0.0, -0.5])
+    assert np.allclose(algebraic_weights(3, 2, 1.0)[1], [1.5, -2.0, 0.5])
+    assert np.allclose(algebraic_weights(3, 2, 1.0)[2], [1.0, -2.0, 1.0])  # second difference
+    assert np.allclose(algebraic_weights(5, 1, 1.0)[1], np.array([2, 1, 0, -1, -2]) / 10.0)  # LS slope
+
+
+def test_algebraic_exact_on_quadratics_and_causal():
+    t = DT * np.arange(60)
+    y = (3 - 2 * t + 5 * t**2)[:, None]
+    est = algebraic_derivative(np.hstack([y, y]), [7, 12], [2, 2], DT)
+    assert np.allclose(est[20:, :, 1], (-2 + 10 * t[20:])[:, None], atol=1e-9)
+    assert np.allclose(est[20:, :, 2], 10.0, atol=1e-6)
+    y2 = y.copy()
+    y2[40:] += 1.0  # a change after sample 39 does not move any estimate before it
+    assert np.array_equal(algebraic_derivative(y2, [7], [2], DT)[:40], est[:40, :1])
+
+
+def test_algebraic_errors_name_the_argument():
+    with pytest.raises(ValueError, match="window"):
+        algebraic_weights(2, 2, 1.0)
+    with pytest.raises(ValueError, match="degree"):
+        algebraic_weights(5, 3, 1.0)
+
+
+# ------------------------------------------------------------------ the interface runs the library's blocks
+def _library_block(name, row):
+    """The library block of one configuration, its input names and the (f, f') outputs."""
+    if name == "sigma":
+        return DifferentialEstimator(3, row[0]), ("y",), ("xhat[0]", "xhat[1]")
+    if name in ("leso2", "leso3"):
+        return ExtendedStateObserver.from_bandwidth(1 if name == "leso2" else 2, row[0]), ("y", "u"), ("xhat1", "xhat2")
+    if name == "neso":
+        alpha = np.array([1.0, 0.5, 0.25])
+        gains = np.array([3 * row[0], 3 * row[0] ** 2, row[0] ** 3]) * row[1] ** (1 - alpha)
+        return ExtendedStateObserver(gains, alpha=alpha, delta=row[1]), ("y", "u"), ("xhat1", "xhat2")
+    if name == "td":
+        return TrackingDifferentiator(row[0], DT, h0=row[1]), ("v",), ("x1", "x2")
+    if name == "kalman":
+        return AlphaBetaFilter(*kalata_gains(row[0]), DT), ("y",), ("xhat[0]", "xhat[1]")
+    return DiscreteLowPass(LowPassFilter(row[0], 2), DT, channels=2), ("u[0]", "u[1]"), ("w[0]", "w[1]")
+
+
+@pytest.mark.parametrize("name", ["sigma", "leso2", "leso3", "neso", "td", "kalman", "difflp"])
+def test_interface_equals_the_library_block_run_alone(name):
+    fam = family(name)
+    y = _record()
+    P = _params(fam)
+    est = estimate(fam, P, y, DT, engine="numpy")
+    b = 2
+    block, ins, outs = _library_block(name, P[b])
+    continuous = name in ("sigma", "leso2", "leso3", "neso")
+    loop = Loop([place(block, "x", outputs=list(block.outputs))], DT, substeps=2 if continuous else 1)
+    inputs = {ins[0]: y[:, b]}
+    if ins[-1] == "u":
+        inputs["u"] = 0.0
+    if name == "difflp":
+        inputs["u[1]"] = np.concatenate([[0.0], np.diff(y[:, b]) / DT])
+    res = loop.simulate(y.shape[0], inputs=inputs, engine="numpy", progress=False)
+    for j, s in enumerate(outs):
+        assert np.allclose(est[:, b, j], res.signals[s][:-1, 0], rtol=1e-12, atol=1e-12), s
+
+
+@pytest.mark.parametrize("name", ["leso3", "kalman"])
+def test_interface_compiled_equals_numpy(name):
+    y = _record(n=200)
+    P = _params(family(name))
+    a = estimate(name, P, y, DT, engine="numpy")
+    c = estimate(name, P, y, DT, engine="compiled")
+    assert np.allclose(a, c, rtol=1e-12, atol=1e-12)
+
+
+@pytest.mark.parametrize("fam", FAMILIES, ids=lambda f: f.name)
+def test_batch_equals_single_runs(fam):
+    y = _record(n=150)
+    P = _params(fam)
+    whole = estimate(fam, P, y, DT, engine="numpy")
+    alone = estimate(fam, P[1:2], y[:, 1:2], DT, engine="numpy")
+    assert np.array_equal(whole[:, 1], alone[:, 0])
+
+
+def test_lowpass_params_equal_the_library_discretisation():
+    assert np.allclose(_lowpass_params(37.0, 0.002, 2), DiscreteLowPass(LowPassFilter(37.0, 2), 0.002, channels=2)._p,
+                       rtol=1e-12, atol=1e-12)
+
+
+def test_estimate_rejects_bad_shapes():
+    with pytest.raises(ValueError, match="P must have shape"):
+        estimate("leso2", [[1.0, 2.0]], np.zeros((10, 1)), DT)
+    with pytest.raises(ValueError, match="family"):
+        estimate("nope", [[1.0]], np.zeros((10, 1)), DT)
+
+
+# ------------------------------------------------------------------ signals and noise
+@pytest.mark.parametrize("kind", sorted(SIGNAL_CLASSES))
+def test_signals_have_their_derivatives_and_bound(kind):
+    t = np.linspace(0, 8, 8001)
+    f = make_signal(kind, 5, t, 3.0)
+    assert np.isclose(np.max(np.abs(f[2])), 3.0)
+    h = t[1] - t[0]
+    # f' and f'' integrate (trapezoid) to f and f' (f'' may jump where a smoothed step starts)
+    for lo, hi in ((0, 1), (1, 2)):
+        integral = f[lo][0] + np.concatenate([[0.0], np.cumsum(0.5 * h * (f[hi][1:] + f[hi][:-1]))])
+        assert np.allclose(integral, f[lo], atol=1e-4 if lo == 0 else 1e-2)  # jumps of f'' cost O(h)
+    assert np.array_equal(make_signal(kind, 5, t, 3.0), f)  # reproducible from its seed
+    assert not np.array_equal(make_signal(kind, 6, t, 3.0), f)
+
+
+def test_noise_classes_respect_their_bound():
+    f = np.linspace(-1, 1, 20000)
+    for kind in NOISE_CLASSES:
+        eta = add_noise(kind, f, 0.02, 1) - f
+        if kind == "gaussian":
+            assert abs(np.std(eta) - 0.02 / 3) < 3e-4
+        else:
+            assert np.max(np.abs(eta)) <= 0.02 + 1e-15 and np.max(np.abs(eta)) > 0.019
+    assert np.array_equal(add_noise("uniform", f, 0.1, 4), add_noise("uniform", f, 0.1, 4))
+
+
+# ------------------------------------------------------------------ tuning
+def test_tuning_finds_the_known_optimum_of_a_one_parameter_family():
+    # the refined optimum is at least as good as every grid point, and the costs are monotone where they must be
+    setup = Setup(dt=DT, n=600, transient=2.0)
+    case = Case("sines", "uniform", 0.01, 2.0, (3,))
+    r = tune_family("leso2", [case], setup, rounds=2, engine="numpy")
+    worst = [m[0] for _, m in r["evaluated"][0]]
+    assert r["best"][0]["worst"][1][0] == min(worst)
+    assert r["tunings"] == 9 + 2 * 2 * 2
+    lag = np.array([[v[0], m[2]] for v, m in r["evaluated"][0]])
+    lag = lag[np.argsort(lag[:, 0])]
+    assert np.all(np.diff(lag[:5, 1]) < 0)  # more bandwidth, less lag at the slow end
+
+
+def test_pareto_front_is_non_dominated():
+    rng = np.random.default_rng(1)
+    p = rng.uniform(size=(200, 2))
+    idx = pareto_front(p)
+    for i in idx:
+        assert not np.any((p[:, 0] <= p[i, 0]) & (p[:, 1] <= p[i, 1]) & ((p[:, 0] < p[i, 0]) | (p[:, 1] < p[i, 1])))
+    assert len(idx) >= 1

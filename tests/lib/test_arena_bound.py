@@ -1,0 +1,58 @@
+"""The lower bound 2√(εL) and its adversarial pair; every tuned family stays above it."""
+
+import numpy as np
+import pytest
+
+from ctrl_analysis.arena.bound import adversarial_error, adversarial_pair, lower_bound
+from ctrl_analysis.arena.interface import FAMILIES, estimate
+from ctrl_analysis.arena.tuning import Case, Setup, tune_family
+
+EPS, L, DT = 0.01, 2.0, 0.01
+
+
+def test_bound_constant():
+    # 2 √(ε L): ε = 0.01, L = 1 gives 0.2; the constant is 2 (and the bound scales as √ε and √L)
+    assert lower_bound(0.01, 1.0) == pytest.approx(0.2, rel=1e-15)
+    assert lower_bound(0.04, 1.0) == pytest.approx(2 * lower_bound(0.01, 1.0))
+    assert lower_bound(0.01, 4.0) == pytest.approx(2 * lower_bound(0.01, 1.0))
+    with pytest.raises(ValueError, match="eps"):
+        lower_bound(-1.0, 1.0)
+
+
+def test_adversarial_pair_is_admissible_and_attains_the_constant():
+    p = adversarial_pair(EPS, L, 0.001, 3000, 2000)
+    k = p["k_star"]
+    # both signals: |f''| <= L, noise |η| <= ε, and measurements equal up to t*
+    assert np.max(np.abs(p["f2"])) <= L * (1 + 1e-12)
+    assert np.max(np.abs(p["noise"])) <= EPS * (1 + 1e-12)
+    assert np.array_equal(p["y"][0, :k + 1], p["y"][1, :k + 1])
+    # f1, f2 are the derivatives of f, f1 (trapezoid integration)
+    h = 0.001
+    for a, b in (("f", "f1"), ("f1", "f2")):
+        for s in range(2):
+            integral = p[a][s, 0] + np.concatenate([[0], np.cumsum(0.5 * h * (p[b][s, 1:] + p[b][s, :-1]))])
+            assert np.allclose(integral, p[a][s], atol=1e-6 if a == "f" else 3 * h * L)  # f'' jumps 3 times
+    # the derivatives differ by 4√(εL) = 2 × bound at t*: the constant 2 of the statement
+    assert p["f1"][0, k] - p["f1"][1, k] == pytest.approx(2 * lower_bound(EPS, L), rel=1e-12)
+
+
+def test_a_noncausal_differentiator_can_beat_the_bound():
+    # the error measure is not >= bound by construction: a central difference that looks past t* beats it there
+    p = adversarial_pair(EPS, L, 0.001, 3000, 2000)
+    k, m = p["k_star"], 100
+    est = (p["y"][:, k + m] - p["y"][:, k - m]) / (2 * m * 0.001)
+    assert np.max(np.abs(est - p["f1"][:, k])) < 0.8 * lower_bound(EPS, L)
+
+
+@pytest.mark.parametrize("fam", FAMILIES, ids=lambda f: f.name)
+def test_every_tuned_family_is_not_below_the_bound(fam):
+    setup = Setup(dt=DT, n=500, transient=2.0)
+    case = Case("sines", "uniform", EPS, L, (11,))
+    tuned = tune_family(fam.name, [case], setup, rounds=1, engine="numpy")
+    row = tuned["best"][0]["worst"][0]
+    pair = adversarial_pair(EPS, L, DT, 500, 400, slope=1.0)
+    est = estimate(fam, np.tile(row, (2, 1)), pair["y"].T, DT, engine="numpy")[:, :, 1]
+    err = adversarial_error(est, pair, k_from=setup.k_from)
+    assert err >= lower_bound(EPS, L) * (1 - 1e-9)
+    # and at t* itself both estimates coincide, so one of the two errs by at least the bound
+    assert est[400, 0] == pytest.approx(est[400, 1], abs=1e-12)
