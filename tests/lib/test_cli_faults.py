@@ -54,7 +54,7 @@ def run(ctx):
 
 @pytest.fixture
 def fake(tmp_path):
-    """A stand-in ``analysis`` package of three studies (0.1, 0.2 and 1 s) and the environment that uses it."""
+    """A stand-in ``analysis`` package of three studies (0.05, 0.1 and 0.6 s) and the environment that uses it."""
     pkg = tmp_path / "fake" / "analysis"
     pkg.mkdir(parents=True)
     (pkg / "__init__.py").write_text(textwrap.dedent(f'''
@@ -64,7 +64,7 @@ def fake(tmp_path):
             return importlib.import_module(STUDIES[name])
         '''))
     for i, name in enumerate(NAMES):
-        (pkg / f"{name}.py").write_text(STUDY.replace("SECONDS", str([0.1, 0.2, 1.0][i])))
+        (pkg / f"{name}.py").write_text(STUDY.replace("SECONDS", str([0.05, 0.1, 0.6][i])))
     # run from the package's folder: `python -m` puts the working directory first on sys.path
     yield {**os.environ, "PYTHONPATH": os.pathsep.join([str(pkg.parent), str(REPO)]), "CTRL_ANALYSIS_PROGRESS": "0",
             "FAKE_CWD": str(pkg.parent)}
