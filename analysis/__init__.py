@@ -22,15 +22,16 @@ STUDIES = {
 
 #: Measured memory of each study, for the CLI's up-front ``--runs`` check: ``{"quick" | "full": (base bytes,
 #: bytes per Monte Carlo run)}``. Measured with ``OPENBLAS_NUM_THREADS=1 python benchmarks/memory_per_run.py``
-#: (2026-11, 2-core machine): the peak resident size (ru_maxrss) each study adds to its process, run in one
-#: process at 10 and 210 runs (--quick) and 5 and 105 runs (full); per run = difference / runs added, base
-#: = the rest. The whole batch's statistics are kept per run, so the footprint is linear in --runs.
+#: (2026-11-24, 2-core machine): the peak resident size (ru_maxrss) each study adds to its process, run in
+#: one process at 10 and 210 runs (--quick) and 5 and 105 runs (full); per run = difference / runs added,
+#: base = the rest. The batch's statistics are kept per run, so the footprint is linear in --runs. Check:
+#: pendulum --quick --runs 1500 --jobs 1 was estimated at 1.79 GB (with the CLI's 223 MiB) and peaked at 1.82 GB.
 MEMORY = {
-    "ikf-mfac": {"quick": (116544307, 1220526), "full": (123884953, 2138644)},
-    "ckf": {"quick": (73534259, 1612308), "full": (173454540, 5499863)},
-    "differential-estimator": {"quick": (81150566, 768348), "full": (365347430, 4434206)},
-    "meso": {"quick": (84377190, 1534812), "full": (250838630, 2483896)},
-    "pendulum": {"quick": (80921190, 280514), "full": (106315161, 417095)},
+    "ikf-mfac": {"quick": (116759961, 1223946), "full": (145489305, 2061230)},
+    "ckf": {"quick": (69324800, 3090432), "full": (154439680, 9568256)},
+    "differential-estimator": {"quick": (87115366, 581468), "full": (382555750, 4312760)},
+    "meso": {"quick": (90019840, 1596416), "full": (202696499, 4156252)},
+    "pendulum": {"quick": (111208243, 965652), "full": (182757990, 2386616)},
 }
 
 
