@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import importlib
 
-__all__ = ["STUDIES", "load_study"]
+__all__ = ["MEMORY", "STUDIES", "load_study"]
 
 #: CLI study name -> module that reproduces it.
 STUDIES = {
@@ -17,6 +17,21 @@ STUDIES = {
     "differential-estimator": "analysis.differential_estimator",
     "meso": "analysis.meso",
     "pendulum": "analysis.pendulum",
+}
+
+
+#: Measured memory of each study, for the CLI's up-front ``--runs`` check: ``{"quick" | "full": (base bytes,
+#: bytes per Monte Carlo run)}``. Measured with ``OPENBLAS_NUM_THREADS=1 python benchmarks/memory_per_run.py``
+#: (2026-11-24, 2-core machine): the peak resident size (ru_maxrss) each study adds to its process, run in
+#: one process at 10 and 210 runs (--quick) and 5 and 105 runs (full); per run = difference / runs added,
+#: base = the rest. The batch's statistics are kept per run, so the footprint is linear in --runs. Check:
+#: pendulum --quick --runs 1500 --jobs 1 was estimated at 1.79 GB (with the CLI's 223 MiB) and peaked at 1.82 GB.
+MEMORY = {
+    "ikf-mfac": {"quick": (116759961, 1223946), "full": (145489305, 2061230)},
+    "ckf": {"quick": (69324800, 3090432), "full": (154439680, 9568256)},
+    "differential-estimator": {"quick": (87115366, 581468), "full": (382555750, 4312760)},
+    "meso": {"quick": (90019840, 1596416), "full": (202696499, 4156252)},
+    "pendulum": {"quick": (111208243, 965652), "full": (182757990, 2386616)},
 }
 
 

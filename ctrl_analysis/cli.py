@@ -3,13 +3,30 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
+import os
 import sys
 import tempfile
 import time
 from pathlib import Path
 
-from .report import StudyContext, staged_directory, summary_table, write_report_md, write_results_json
+from .atomic import (
+    LockedError,
+    exclusive_lock,
+    new_staging,
+    recover_staging,
+    remove_tree,
+    swap_in,
+)
+from .atomic import _sigint_deferred as sigint_deferred
+from .report import (
+    StudyContext,
+    summary_table,
+    validate_results,
+    write_report_md,
+    write_results_json,
+)
 
 __all__ = ["main"]
 
@@ -17,7 +34,7 @@ __all__ = ["main"]
 class _Parser(argparse.ArgumentParser):
     """argparse that reports a usage error as one line on stderr and exit status 2."""
 
-    def error(self, message):  # noqa: D102
+    def error(self, message):
         sys.stderr.write(f"ctrl-analysis: error: {message}\n")
         raise SystemExit(2)
 
@@ -41,11 +58,25 @@ _positive_int = _int_at_least(1, "positive")
 _seed = _int_at_least(0, "non-negative")
 
 
+#: What ``--help`` says about the command (plain text: it is printed on a terminal, not rendered).
+DESCRIPTION = "List the reproduced papers, and reproduce them into figures, results.json and REPORT.md."
+EPILOG = """exit status: 0 done; 1 a study failed (the others still ran, the failures are listed at the end);
+2 the command cannot run, checked before any work (an unknown study, a bad --out, --runs beyond this
+machine's memory, a bad or unreachable --scheduler, another run writing into the same --out);
+130 interrupted with Ctrl-C (the previous output is left intact)."""
+
+
 def _build_parser() -> argparse.ArgumentParser:
-    parser = _Parser(prog="ctrl-analysis", description=__doc__)
+    parser = _Parser(prog="ctrl-analysis", description=DESCRIPTION, epilog=EPILOG,
+                     formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
-    sub.add_parser("list", help="studies and what each reproduces")
-    rep = sub.add_parser("reproduce", help="figures + results.json (+ REPORT.md for all)")
+    sub.add_parser("list", help="studies and what each reproduces", description="List the studies and what each "
+                   "reproduces.")
+    rep = sub.add_parser("reproduce", help="figures + results.json (+ REPORT.md for all)", epilog=EPILOG,
+                         formatter_class=argparse.RawDescriptionHelpFormatter,
+                         description="Reproduce studies into --out: each study's figures and results.json; "
+                                     "'all' also writes REPORT.md, which is rebuilt from the results.json files "
+                                     "on disk after every study.")
     rep.add_argument("studies", nargs="+", metavar="STUDY", help="study names, or 'all'")
     rep.add_argument("--out", default="figures", help="output directory (default: figures)")
     rep.add_argument("--runs", type=_positive_int, default=None, help="Monte Carlo runs where noise is random")
@@ -54,8 +85,11 @@ def _build_parser() -> argparse.ArgumentParser:
     rep.add_argument("--jobs", type=_positive_int, default=None,
                      help="processes: studies run side by side, Monte Carlo chunks split (default: all cores)")
     rep.add_argument("--scheduler", default=None, metavar="ADDRESS",
-                     help="Dask scheduler for sweeps and large Monte Carlo ('local', or tcp://host:8786)")
-    from .arena.cli import add_parser as add_arena  # the arena's subcommand lives in its package
+                     help="run every Monte Carlo batch and sweep on a Dask cluster: 'local' starts one on this "
+                          "machine, or the address of a running scheduler, tcp://host:8786 (same numbers as a "
+                          "local run)")
+    # the arena's subcommand lives in its package
+    from .arena.cli import add_parser as add_arena
 
     add_arena(sub)
     return parser
@@ -98,11 +132,12 @@ def _one_line(exc: BaseException, limit: int = 400) -> str:
 
 
 def _run_study(task) -> dict:
-    """Run one study (here or in a worker process) into a staged directory beside ``out/name``.
+    """Run one study (here or in a worker process) into a fresh staging directory beside ``out/name``.
 
-    The directory is moved into place only when the study completed. Returns a record with the
-    study's name, its summary text and ``error`` (one line, or ``None``); never raises for a study
-    failure, so one failing study does not stop the others.
+    The staged directory is complete when this returns; the main process moves it into place
+    (:func:`_commit`). Returns a record with the study's name, its summary text, the staged path
+    and ``error`` (one line, or ``None``); never raises for a study failure, so one failing study
+    does not stop the others.
     """
     from .progress import set_context
 
@@ -117,21 +152,27 @@ def _run_study(task) -> dict:
 def _run_study_here(name, out, runs, seed, quick, jobs, scheduler) -> dict:
     from analysis import load_study
 
-    record = {"name": name, "error": None, "text": "", "run": {"seed": seed, "runs": runs, "quick": bool(quick)}}
+    record = {"name": name, "error": None, "text": "", "staged": None,
+              "run": {"seed": seed, "runs": runs, "quick": bool(quick)}}
+    staged = new_staging(out / name)
     try:
-        with staged_directory(out / name) as staged:
-            ctx = StudyContext(out_dir=staged, runs=runs, seed=seed, quick=quick, progress=_progress(name),
-                               jobs=jobs, scheduler=scheduler)
-            t0 = time.perf_counter()
-            result = load_study(name).run(ctx)
-            result.runtime_s = time.perf_counter() - t0
-            # what the command line asked for, beside the study's own settings
-            result.settings["cli"] = dict(record["run"])
-            write_results_json(result, staged)
-            data = result.to_dict()
+        ctx = StudyContext(out_dir=staged, runs=runs, seed=seed, quick=quick, progress=_progress(name),
+                           jobs=jobs, scheduler=scheduler)
+        t0 = time.perf_counter()
+        result = load_study(name).run(ctx)
+        result.runtime_s = time.perf_counter() - t0
+        # what the command line asked for, beside the study's own settings
+        result.settings["cli"] = dict(record["run"])
+        write_results_json(result, staged)
+        data = result.to_dict()
     except Exception as exc:  # noqa: BLE001 - any study failure is reported in one line, never a traceback
+        remove_tree(staged)
         record["error"] = _one_line(exc)
         return record
+    except BaseException:
+        remove_tree(staged)
+        raise
+    record["staged"] = str(staged)
     lines = [f"\n== {name}: {out / name / 'results.json'} ({len(result.figures)} figures, {result.runtime_s:.1f} s)"]
     if data["quantities"]:
         lines.append(summary_table(data))
@@ -149,21 +190,266 @@ def _previous_runtime(study_dir: Path) -> float:
         return float("inf")
 
 
+def _read_results(path: Path, name: str) -> dict:
+    """A study's results.json read back; ValueError (one line) when unreadable or not a results record."""
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError) as exc:
+        raise ValueError(f"unreadable results.json: {_one_line(exc)}") from None
+    try:
+        validate_results(data)
+        if data["study"] != name:
+            raise ValueError(f"it is the record of study {data['study']!r}")
+    except (ValueError, TypeError, KeyError, AttributeError) as exc:
+        raise ValueError(f"{path} is not a results record of {name}: {_one_line(exc)}") from None
+    return data
+
+
+class _Run:
+    """What the main process knows of this run: which studies it committed, which failed, the report."""
+
+    def __init__(self, out: Path, report: bool):
+        self.out = out
+        self.report = report  # whether REPORT.md is (re)written
+        self.committed: list[str] = []
+        self.failed: dict = {}
+        self.report_path = None
+
+    def _on_disk(self, replace: dict) -> tuple[list, dict]:
+        """results.json dicts of every registered study as on disk (``replace``: about to be), and the unreadable."""
+        from analysis import STUDIES
+
+        results, bad = [], {}
+        for name in STUDIES:
+            if name in replace:
+                results.append(replace[name])
+                continue
+            path = self.out / name / "results.json"
+            if not path.exists():
+                continue
+            try:
+                results.append(_read_results(path, name))
+            except ValueError as exc:
+                bad[name] = str(exc)
+        return results, bad
+
+    def _render(self, replace: dict, committed: list[str]) -> Path | None:
+        """REPORT.md of the folder as it is (or will be, with ``replace``), written into a hidden folder in ``out``.
+
+        Provenance comes from the files: a study counts as this run's when this run committed it,
+        and its seed, runs and quick flag are those its results.json records (``settings.cli``).
+        """
+        results, bad = self._on_disk(replace)
+        for name, why in bad.items():
+            self.failed.setdefault(name, why)
+        this_run = {r["study"]: dict((r.get("settings") or {}).get("cli") or {}) for r in results
+                    if r["study"] in committed}
+        tmp = Path(tempfile.mkdtemp(dir=self.out, prefix=".REPORT.md.new-"))
+        try:
+            write_report_md(results, tmp, this_run=this_run, failed=dict(self.failed))
+        except BaseException:
+            remove_tree(tmp)
+            raise
+        return tmp
+
+    def _publish(self, tmp: Path | None) -> None:
+        if tmp is None:
+            return
+        os.replace(tmp / "REPORT.md", self.out / "REPORT.md")
+        self.report_path = self.out / "REPORT.md"
+        remove_tree(tmp)
+
+    def commit(self, name: str, staged: Path) -> None:
+        """Move study ``name``'s staged folder into place and rebuild REPORT.md from the files on disk.
+
+        The report is rendered first (with the staged results in place of the old ones), then the
+        folder and the report are swapped in back to back with SIGINT and SIGTERM held, so REPORT.md
+        and every results.json agree before and after.
+        """
+        tmp = None
+        if self.report:
+            new = _read_results(staged / "results.json", name)
+            try:
+                tmp = self._render({name: new}, self.committed + [name])
+            except OSError as exc:  # e.g. a full disk: the study is still committed, the old report stays
+                self.failed["REPORT.md"] = _one_line(exc)
+        with sigint_deferred():
+            swap_in(staged, self.out / name)
+            self.committed.append(name)
+            self.failed.pop(name, None)
+            self._publish(tmp)
+
+    def finish(self) -> None:
+        """Rebuild REPORT.md from the files on disk once more (with every failure of the run)."""
+        if not self.report:
+            return
+        try:
+            tmp = self._render({}, self.committed)
+            with sigint_deferred():
+                self._publish(tmp)
+        except OSError as exc:  # e.g. a full disk: the previous REPORT.md stays as it was
+            self.failed["REPORT.md"] = _one_line(exc)
+            sys.stderr.write(f"ctrl-analysis: error: REPORT.md not written: {self.failed['REPORT.md']}\n")
+
+
+def _resolve_names(studies: list[str], registry) -> list[str]:
+    """The studies asked for, in order, without repeats; ``all`` is every registered one."""
+    unknown = [n for n in studies if n != "all" and n not in registry]
+    if unknown:
+        raise _UsageError(f"unknown study {unknown[0]!r}; choose from {', '.join(registry)} or all")
+    return list(registry) if "all" in studies else list(dict.fromkeys(studies))
+
+
+def _check_targets(out: Path, names: list[str]) -> None:
+    """Refuse (one line) to replace anything in ``out`` that ctrl-analysis did not write."""
+    for name in names:
+        target = out / name
+        if target.is_symlink() or (target.exists() and not target.is_dir()):
+            raise _UsageError(f"--out {str(out)!r} holds {name!r}, which is not a folder ctrl-analysis wrote; "
+                              f"it is not replaced: move it away or choose another --out")
+        if target.is_dir() and not (target / "results.json").exists() and any(target.iterdir()):
+            raise _UsageError(f"--out {str(out)!r} holds a folder {name!r} with files but no results.json, so "
+                              f"ctrl-analysis did not write it; it is not replaced: move it away or choose another --out")
+
+
+#: Resident memory of a process that has imported every study (numpy, scipy, control, matplotlib, numba):
+#: 223 MiB, measured with ru_maxrss after ``load_study`` of the five studies.
+_PROCESS_BYTES = 223 * 2**20
+
+
+def _check_memory(names: list[str], runs: int | None, quick: bool, side_by_side: int) -> None:
+    """Refuse (one line) a ``--runs`` whose Monte Carlo statistics would not fit in this machine's memory.
+
+    The estimate is the registry's measured footprint (``analysis.MEMORY[study]["quick" | "full"]``:
+    base bytes and bytes per run, from ``benchmarks/memory_per_run.py``) plus the process itself; the
+    studies running side by side add up.
+    """
+    import analysis
+
+    table = getattr(analysis, "MEMORY", {})
+    if runs is None:
+        return
+    mode = "quick" if quick else "full"
+    cost = {n: table[n][mode] for n in names if n in table and mode in table[n]}
+    if not cost:
+        return
+    need = {n: _PROCESS_BYTES + base + per_run * runs for n, (base, per_run) in cost.items()}
+    worst = sorted(need, key=need.get, reverse=True)[:side_by_side]
+    total = sum(need[n] for n in worst)
+    avail = _available_memory()
+    if avail is not None and total > avail:
+        per_run = max(cost[n][1] for n in worst)
+        fixed = sum(_PROCESS_BYTES + cost[n][0] for n in worst)
+        fits = max(0, int((avail - fixed) / max(1, sum(cost[n][1] for n in worst))))
+        who = worst[0] if len(worst) == 1 else " + ".join(worst) + " side by side"
+        raise _UsageError(f"--runs {runs} would need about {total / 2**30:.1f} GiB of memory ({who}; up to "
+                          f"{per_run / 1e3:.0f} kB per run, measured), more than the {avail / 2**30:.1f} GiB "
+                          f"available; use --runs {fits} or fewer" + (" or --jobs 1" if side_by_side > 1 else ""))
+
+
+def _available_memory() -> float | None:
+    """Bytes of memory available to new work (MemAvailable on Linux, else physical memory), or None."""
+    try:
+        with open("/proc/meminfo", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    return float(line.split()[1]) * 1024
+    except OSError:
+        pass
+    try:
+        return float(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES"))
+    except (ValueError, OSError, AttributeError):
+        return None
+
+
+def _clean_report_temporaries(out: Path) -> None:
+    """Remove ``.REPORT.md.*.tmp`` files a killed write left (only while the lock is held)."""
+    for p in out.glob(".REPORT.md.*.tmp"):
+        if p.is_file() and not p.is_symlink():
+            with contextlib.suppress(OSError):
+                p.unlink()
+
+
+def _scheduler_timeout() -> float:
+    try:
+        value = float(os.environ.get("CTRL_ANALYSIS_SCHEDULER_TIMEOUT", "10"))
+    except ValueError:
+        value = 10.0
+    return value if value > 0 else 10.0
+
+
 def _reproduce(args) -> int:
     from analysis import STUDIES, load_study
 
-    names = list(STUDIES) if "all" in args.studies else args.studies
-    unknown = [n for n in names if n not in STUDIES]
-    if unknown:
-        raise _UsageError(f"unknown study {unknown[0]!r}; choose from {', '.join(STUDIES)} or all")
-    out = _check_out(args.out)
+    t_start = time.perf_counter()
+    todo = _resolve_names(args.studies, STUDIES)
 
-    from .parallel import default_jobs, map_chunks
+    from .parallel import check_scheduler_address, default_jobs, map_chunks, use_cluster
 
-    todo = list(dict.fromkeys(names))
+    if args.scheduler is not None:
+        try:
+            check_scheduler_address(args.scheduler)
+        except ValueError as exc:
+            raise _UsageError(f"--{exc}") from None
     jobs = default_jobs() if args.jobs is None else args.jobs
     # studies side by side in processes (each with its share of the cores), or one by one on a scheduler
     side_by_side = 1 if args.scheduler is not None else min(jobs, len(todo))
+    _check_memory(todo, args.runs, args.quick, side_by_side)
+    out = _check_out(args.out)  # created here, after every check that needs no folder
+    try:
+        lock = exclusive_lock(out / ".ctrl-analysis.lock", what=f"--out {str(out)!r}")
+        lock.__enter__()
+    except LockedError as exc:
+        raise _UsageError(str(exc)) from None
+    run = _Run(out, report="all" in args.studies or (out / "REPORT.md").exists())
+    try:
+        recover_staging(out, list(STUDIES) + ["REPORT.md"])  # what a killed run left; nobody else writes here
+        _clean_report_temporaries(out)
+        _check_targets(out, todo)
+        cluster = contextlib.nullcontext()
+        if args.scheduler is not None:
+            cluster = use_cluster(args.scheduler, jobs, timeout=_scheduler_timeout())
+            try:
+                cluster.__enter__()
+            except (OSError, ValueError) as exc:
+                raise _UsageError(f"--scheduler: {exc}") from None
+        try:
+            records = _run_studies(args, todo, out, jobs, side_by_side, run, load_study, map_chunks)
+            dask = _cluster_line()
+        finally:
+            cluster.__exit__(None, None, None)
+        for record in records:
+            name = record["name"]
+            if record["error"] is not None:
+                sys.stderr.write(f"ctrl-analysis: error: study {name!r} failed: {run.failed[name]}\n")
+                continue
+            print(record["text"])
+        run.finish()
+        for name, why in run.failed.items():
+            if name not in todo and name != "REPORT.md":  # another study's results.json, left out of the report
+                sys.stderr.write(f"ctrl-analysis: error: REPORT.md leaves out {name}: {why}\n")
+        if run.report_path is not None:
+            print(f"\nreport: {run.report_path}")
+        if dask:
+            print(dask)
+    finally:
+        recover_staging(out, list(STUDIES) + ["REPORT.md"])  # this run's staging, after an interrupt or crash
+        lock.__exit__(None, None, None)
+    n_failed = sum(name != "REPORT.md" for name in run.failed if name in todo)
+    where = f"report: {run.report_path}" if run.report_path is not None else "no REPORT.md (written by reproduce all)"
+    print(f"ctrl-analysis: {len(todo) - n_failed} of {len(todo)} studies OK, {n_failed} failed, "
+          f"{time.perf_counter() - t_start:.1f} s; {where}")
+    if run.failed:
+        order = {name: i for i, name in enumerate([*todo, "REPORT.md", *STUDIES])}
+        failed = [name if name in todo or name == "REPORT.md" else f"{name}'s results.json"
+                  for name in sorted(run.failed, key=lambda name: order.get(name, len(order)))]
+        sys.stderr.write(f"ctrl-analysis: {n_failed} of {len(todo)} studies failed: {', '.join(failed)}\n")
+        return 1
+    return 0
+
+
+def _run_studies(args, todo, out, jobs, side_by_side, run, load_study, map_chunks) -> list[dict]:
+    """Run the studies (side by side in processes, or one by one here); each is committed as it finishes."""
     # longest first (by the runtime of the previous output, unknown first): side by side, the run
     # then ends with the longest study instead of starting it last; summaries print in the asked order
     start = sorted(todo, key=lambda name: -_previous_runtime(out / name))
@@ -172,39 +458,30 @@ def _reproduce(args) -> int:
     if side_by_side > 1:  # import the studies (numpy, scipy, control, matplotlib) once, before the workers fork
         for name in todo:
             load_study(name)
-    records = {r["name"]: r for r in map_chunks(_run_study, tasks, jobs=side_by_side, desc="studies", unit="study")}
-    this_run: dict = {}
-    failed: dict = {}
-    for record in (records[name] for name in todo):
+
+    def commit(i, record):
         name = record["name"]
         if record["error"] is not None:
-            failed[name] = record["error"]
-            sys.stderr.write(f"ctrl-analysis: error: study {name!r} failed: {failed[name]}\n")
-            continue
-        this_run[name] = record["run"]
-        print(record["text"])
-    # `all` writes REPORT.md; a partial run refreshes an existing one, so it never shows a study's old
-    # numbers beside its new files (the studies not run now are marked stale there)
-    if "all" in args.studies or (out / "REPORT.md").exists():
-        results = []
-        for name in STUDIES:
-            p = out / name / "results.json"
-            if p.exists():
-                try:
-                    results.append(json.loads(p.read_text(encoding="utf-8")))
-                except (OSError, ValueError) as exc:
-                    failed.setdefault(name, f"unreadable results.json: {_one_line(exc)}")
+            run.failed[name] = record["error"]
+            return
         try:
-            print(f"\nreport: {write_report_md(results, out, this_run=this_run, failed=failed)}")
-        except OSError as exc:  # e.g. a full disk: the previous REPORT.md stays as it was
-            failed["REPORT.md"] = _one_line(exc)
-            sys.stderr.write(f"ctrl-analysis: error: REPORT.md not written: {failed['REPORT.md']}\n")
-    if failed:
-        n_studies = sum(name != "REPORT.md" for name in failed)
-        sys.stderr.write(f"ctrl-analysis: {n_studies} of {len(dict.fromkeys(names))} studies failed: "
-                         f"{', '.join(failed)}\n")
-        return 1
-    return 0
+            run.commit(name, Path(record["staged"]))
+        except (OSError, ValueError) as exc:
+            record["error"] = run.failed[name] = _one_line(exc)
+
+    records = map_chunks(_run_study, tasks, jobs=side_by_side, scheduler=False, desc="studies", unit="study",
+                         on_result=commit)
+    by_name = {r["name"]: r for r in records}
+    return [by_name[name] for name in todo]
+
+
+def _cluster_line() -> str:
+    from .parallel import active_cluster
+
+    c = active_cluster()
+    if c is None:
+        return ""
+    return f"dask: {c['chunks']} chunks of Monte Carlo batches and sweeps ran on {c['address']}"
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -247,5 +524,28 @@ def main(argv: list[str] | None = None) -> int:
         return 130
 
 
+def _exit(status: int) -> None:
+    """Leave the process with ``status``; an interrupted run leaves with 130, never killed by SIGINT.
+
+    Under ``python -m``, a KeyboardInterrupt that passed through an ``exec()`` of a string (dataclass
+    and namedtuple creation, numba's compiler) sets CPython's "unhandled KeyboardInterrupt" flag even
+    when :func:`main` caught it, and the interpreter then kills itself with SIGINT at exit (status -2,
+    about 1 interrupt in 15). So after an interrupt the exit handlers are run here and the process
+    leaves with 130 directly.
+    """
+    if status != 130:
+        raise SystemExit(status)
+    import atexit
+    import os
+
+    atexit._run_exitfuncs()
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except (OSError, ValueError):
+            pass
+    os._exit(130)
+
+
 if __name__ == "__main__":  # pragma: no cover
-    raise SystemExit(main())
+    _exit(main())

@@ -349,6 +349,8 @@ class Loop:
             Processes the batch is split over (:func:`ctrl_analysis.parallel.map_chunks`); the
             result equals ``jobs=1`` bit for bit. Needs a picklable loop and no callable input
             (otherwise the batch runs in this process, with a warning for an unpicklable loop).
+            With ``jobs=1`` and a process-wide Dask cluster (:func:`ctrl_analysis.parallel.use_cluster`),
+            a compiled batch of two runs or more is split over its workers, with the same numbers.
         run_offset : int
             Index of this batch's first run among the rows of per-run kernel parameters (see
             :class:`~ctrl_analysis._kernels.BlockKernel`); set by the engine when it splits a batch over
@@ -411,12 +413,17 @@ class Loop:
         size = max(1, min(size, int(limit // work))) if chunk_runs is None else size
         check_in("engine", engine, ("auto", "numpy", "compiled"))
         jobs = check_int("jobs", jobs, minimum=1)
-        if jobs > 1 and B > 1 and not funcs and self._picklable():
+        from .parallel import active_cluster, picklable, simulate_chunks
+
+        # over processes, or a process-wide Dask cluster's workers (compiled: per-run parameters follow the chunk)
+        on_cluster = jobs == 1 and B > 1 and not funcs and active_cluster() is not None \
+            and self._compiled(engine, funcs, params, np.isfinite(bound)) is not None
+        if B > 1 and not funcs and (jobs > 1 or on_cluster) and picklable(self):
             opts = {"t0": t0, "params": params, "bound": bound, "store_states": store_states, "store_signals": keep,
                     "chunk_runs": chunk_runs, "max_bytes": max_bytes, "engine": engine,
                     "run_offset": check_int("run_offset", run_offset, minimum=0),
                     "batch_runs": check_int("batch_runs", batch_runs, minimum=1) if batch_runs else None}
-            return self._simulate_parallel(jobs, n_steps, held, x, opts, seeds)
+            return simulate_chunks(self, jobs, n_steps, held, x, opts, seeds)
         run_offset = check_int("run_offset", run_offset, minimum=0)
         runner = compiled_for(self, engine, funcs, params, np.isfinite(bound))  # None: the numpy path
         rows = {p.name: r for p in self.placed if (r := per_run_rows(p.block)) is not None}
@@ -466,20 +473,9 @@ class Loop:
                 if progress is not None:
                     progress((b - a) * n_steps)
 
-    def _picklable(self) -> bool:
-        from .parallel import picklable
-
-        return picklable(self)
-
     def _compiled(self, engine, funcs, params, finite_bound):
         """The compiled runner and the kernels' parameters, or ``None`` for the numpy path."""
         return compiled_for(self, engine, funcs, params, finite_bound)
-
-    def _simulate_parallel(self, jobs, n_steps, held, x, opts, seeds):
-        """Chunks of the batch in ``jobs`` processes, joined into one response (bit for bit ``jobs=1``)."""
-        from .parallel import simulate_chunks
-
-        return simulate_chunks(self, jobs, n_steps, held, x, opts, seeds)
 
     def _run_chunk(self, plan, n_steps, t, x, held, funcs, params, bound, keep_cols, store, xs,
                    diverged, div_step, progress):

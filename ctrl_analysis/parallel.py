@@ -16,15 +16,31 @@ The function passed must be importable by name in a worker (defined at module le
 or a closure) and must reduce its chunk to the arrays the caller needs (per-run metrics rather
 than whole trajectories), which also bounds memory: a batch of 10^6 runs never exists at once.
 
-``scheduler``: ``None`` runs on this machine's processes; ``"local"`` starts a Dask
+``scheduler``: ``None`` runs on this machine's processes, or on the process-wide cluster when one
+is active (:func:`use_cluster`); ``False`` always on this machine; ``"local"`` starts a Dask
 ``LocalCluster`` with ``jobs`` single-threaded workers; any other string is the address of a
 running Dask scheduler (``"tcp://host:8786"``); a ``distributed.Client`` is used as given.
+
+:func:`use_cluster` connects to a cluster once and makes it process-wide: while it is active every
+:func:`map_chunks` call without a ``scheduler`` and every batch of
+:meth:`Loop.simulate <ctrl_analysis.loop.Loop.simulate>` (two runs or more, no callable input, a
+picklable loop) runs its chunks there, with the same numbers as on one process. The command line's
+``--scheduler`` does this, so every study's Monte Carlo batches and sweeps go to the cluster without
+the study knowing.
+
+Local worker processes die with the process that started them (``prctl(PR_SET_PDEATHSIG)`` on
+Linux, a watchdog thread elsewhere) and ignore SIGINT: Ctrl-C is handled once, by the parent, which
+stops them.
 """
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
+import re
+import signal
+import threading
 from collections.abc import Callable, Sequence
 
 import numpy as np
@@ -32,8 +48,13 @@ import numpy as np
 from ._validate import check_int, check_str
 from .progress import bar
 
-__all__ = ["MAX_CHUNKS", "chunk_slices", "default_jobs", "gather", "grid_points", "map_chunks", "monte_carlo", "picklable",
-           "simulate_chunks", "sweep"]
+__all__ = ["MAX_CHUNKS", "active_cluster", "check_scheduler_address", "chunk_slices", "default_jobs", "gather",
+           "grid_points", "map_chunks", "monte_carlo", "picklable", "simulate_chunks", "sweep", "use_cluster"]
+
+#: The process-wide cluster of :func:`use_cluster`: its client, address, and the chunks it ran.
+_CLUSTER: dict = {"client": None, "address": None, "chunks": 0}
+
+_ADDRESS = re.compile(r"^(?:(tcp|tls|ucx|ws|wss)://)?(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9_.-]+):(\d{1,5})$")
 
 
 def default_jobs() -> int:
@@ -101,17 +122,128 @@ def _sequence(name: str, value) -> list:
     return list(value)
 
 
-def _check_scheduler(scheduler):
-    """None, "local", a "host:port" address or a ``distributed.Client``."""
-    if scheduler is None or scheduler == "local" or type(scheduler).__name__ == "Client":
+def check_scheduler_address(scheduler: str) -> str:
+    """``scheduler`` if it is ``"local"`` or a Dask scheduler address ``[tcp|tls|ucx|ws|wss://]host:port``.
+
+    Parameters
+    ----------
+    scheduler : str
+        ``"local"``, or e.g. ``"tcp://10.0.0.5:8786"``, ``"127.0.0.1:8786"``.
+
+    Returns
+    -------
+    str
+        ``scheduler`` unchanged.
+
+    Raises
+    ------
+    ValueError
+        If it is neither, or the port is not in 1..65535.
+
+    Examples
+    --------
+    >>> check_scheduler_address("tcp://127.0.0.1:8786")
+    'tcp://127.0.0.1:8786'
+    """
+    check_str("scheduler", scheduler)
+    if scheduler == "local":
         return scheduler
-    if not isinstance(scheduler, str) or ":" not in scheduler:
-        raise ValueError(f"scheduler must be None, 'local', a scheduler address such as 'tcp://host:8786' "
-                         f"or a distributed.Client, got {scheduler!r}")
+    m = _ADDRESS.match(scheduler)
+    if m is None or not 1 <= int(m.group(3)) <= 65535:
+        raise ValueError(f"scheduler must be 'local' or a Dask scheduler address [tcp://]host:port with a port in "
+                         f"1..65535, such as tcp://127.0.0.1:8786, got {scheduler!r}")
     return scheduler
 
 
-def _client(scheduler, jobs):
+def _check_scheduler(scheduler):
+    """None, False, "local", a "host:port" address or a ``distributed.Client``."""
+    if scheduler is None or scheduler is False or type(scheduler).__name__ == "Client":
+        return scheduler
+    if not isinstance(scheduler, str):
+        raise ValueError(f"scheduler must be None, False, 'local', a scheduler address such as 'tcp://host:8786' "  # noqa: TRY004
+                         f"or a distributed.Client, got {scheduler!r}")
+    return check_scheduler_address(scheduler)
+
+
+@contextlib.contextmanager
+def use_cluster(scheduler, jobs: int | None = None, timeout: float = 10.0):
+    """Make a Dask cluster process-wide while the block runs: chunk mappings and batches go there.
+
+    Connects before yielding (so a bad address fails before any work), and closes what it started
+    on exit.
+
+    Parameters
+    ----------
+    scheduler : str or distributed.Client
+        ``"local"`` (a ``LocalCluster`` of ``jobs`` single-threaded worker processes), the address of a
+        running scheduler (``"tcp://host:8786"``), or a client to use as given.
+    jobs : int, optional
+        Workers of a ``"local"`` cluster (default :func:`default_jobs`).
+    timeout : float
+        Seconds to wait for the scheduler (> 0).
+
+    Yields
+    ------
+    distributed.Client
+
+    Raises
+    ------
+    ValueError
+        For a malformed address.
+    OSError
+        When no scheduler answers at the address within ``timeout`` (connection refused, no route,
+        time-out); the message names the address.
+    """
+    scheduler = _check_scheduler(scheduler)
+    if scheduler is None or scheduler is False:
+        raise ValueError("scheduler must be 'local', a scheduler address or a distributed.Client, got "
+                         f"{scheduler!r}")
+    jobs = default_jobs() if jobs is None else check_int("jobs", jobs, minimum=1)
+    if not (isinstance(timeout, (int, float)) and math.isfinite(timeout) and timeout > 0):
+        raise ValueError(f"timeout must be a finite number of seconds > 0, got {timeout!r}")
+    if _CLUSTER["client"] is not None:
+        raise RuntimeError("a process-wide cluster is already active (use_cluster blocks do not nest)")
+    try:
+        client, own = _client(scheduler, jobs, timeout)
+    except (OSError, TimeoutError) as exc:
+        raise OSError(f"no Dask scheduler answers at {scheduler!r} within {timeout:g} s "
+                      f"({' '.join(str(exc).split())[:200]})") from None
+    _CLUSTER.update(client=client, address=getattr(client.scheduler, "address", str(scheduler)), chunks=0)
+    try:
+        yield client
+    finally:
+        _CLUSTER.update(client=None)
+        if own:
+            _close(client)
+
+
+def active_cluster() -> dict | None:
+    """The process-wide cluster of :func:`use_cluster`, or ``None``.
+
+    Returns
+    -------
+    dict or None
+        ``{"client", "address", "chunks"}``: ``chunks`` counts the calls run there so far.
+    """
+    return dict(_CLUSTER) if _CLUSTER["client"] is not None else None
+
+
+def _cluster_workers() -> int:
+    """Worker threads of the process-wide cluster (at least 1)."""
+    try:
+        return max(1, sum(_CLUSTER["client"].nthreads().values()))
+    except Exception:  # noqa: BLE001 - a cluster that cannot say still takes one chunk
+        return 1
+
+
+def _close(client) -> None:
+    cluster = getattr(client, "cluster", None)
+    client.close()
+    if cluster is not None:
+        cluster.close()
+
+
+def _client(scheduler, jobs, timeout: float = 30.0):
     """A ``distributed.Client`` for ``scheduler`` and whether we own it (must close it)."""
     from distributed import Client, LocalCluster
 
@@ -123,11 +255,49 @@ def _client(scheduler, jobs):
     if not isinstance(scheduler, str) or not scheduler:
         raise ValueError(f"scheduler must be None, 'local', a scheduler address or a distributed.Client, "
                          f"got {scheduler!r}")
-    return Client(scheduler), True
+    return Client(scheduler, timeout=f"{timeout}s"), True
+
+
+def _worker_init(parent: int) -> None:
+    """Initialiser of local worker processes: die with the parent, leave Ctrl-C to it.
+
+    On Linux ``prctl(PR_SET_PDEATHSIG, SIGKILL)`` has the kernel kill this process when its parent
+    dies (even by ``kill -9``); elsewhere a daemon thread polls the parent's pid. SIGINT is ignored:
+    the parent catches Ctrl-C once, stops the workers and reports.
+    """
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        import ctypes
+
+        libc = ctypes.CDLL(None, use_errno=True)
+        armed = libc.prctl(1, int(signal.SIGKILL), 0, 0, 0) == 0  # 1 = PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        armed = False
+    if os.getppid() != parent:  # the parent died before the signal was armed
+        os._exit(1)
+    if not armed:
+        def watch():
+            while os.getppid() == parent:
+                threading.Event().wait(1.0)
+            os._exit(1)
+
+        threading.Thread(target=watch, daemon=True, name="ctrl-analysis-parent-watch").start()
+
+
+def _stop_workers(ex) -> None:
+    """Cancel what has not started and kill the pool's workers (after an exception or Ctrl-C in the parent)."""
+    procs = list((getattr(ex, "_processes", None) or {}).values())  # shutdown() forgets them
+    for proc in procs:
+        with contextlib.suppress(OSError, AttributeError, ValueError):
+            proc.kill()
+    for proc in procs:
+        with contextlib.suppress(OSError, AttributeError, ValueError, AssertionError):
+            proc.join(5)
+    ex.shutdown(wait=True, cancel_futures=True)
 
 
 def map_chunks(fn: Callable, args: Sequence, *, jobs: int = 1, scheduler=None, desc: str = "",
-               unit: str = "chunk") -> list:
+               unit: str = "chunk", on_result: Callable | None = None) -> list:
     """``[fn(a) for a in args]``, computed serially, in local processes or on Dask; results in order.
 
     Parameters
@@ -144,6 +314,9 @@ def map_chunks(fn: Callable, args: Sequence, *, jobs: int = 1, scheduler=None, d
         Label of the progress bar (one unit per finished call).
     unit : str
         What one call is, for the bar (``"chunk"``, ``"study"``).
+    on_result : callable, optional
+        ``on_result(i, fn(args[i]))``, called in this process as each call finishes (in the order they
+        finish), e.g. to commit a study's output while the others still run.
 
     Returns
     -------
@@ -157,9 +330,15 @@ def map_chunks(fn: Callable, args: Sequence, *, jobs: int = 1, scheduler=None, d
     scheduler = _check_scheduler(scheduler)
     check_str("desc", desc, empty=True)
     check_str("unit", unit)
+    if on_result is not None and not callable(on_result):
+        raise TypeError(f"on_result must be callable on_result(i, result), got {on_result!r:.80}")
+    done_one = on_result or (lambda i, value: None)
+    if scheduler is None and _CLUSTER["client"] is not None and args:
+        scheduler = _CLUSTER["client"]
+        _CLUSTER["chunks"] += len(args)
     out = [None] * len(args)
     with bar(len(args), desc=desc, unit=unit) as pb:
-        if scheduler is not None:
+        if scheduler is not None and scheduler is not False:
             from distributed import as_completed
 
             client, own = _client(scheduler, jobs)
@@ -167,18 +346,18 @@ def map_chunks(fn: Callable, args: Sequence, *, jobs: int = 1, scheduler=None, d
                 futures = client.map(fn, args, pure=False)
                 index = {f.key: i for i, f in enumerate(futures)}
                 for fut in as_completed(futures):
-                    out[index[fut.key]] = fut.result()
+                    i = index[fut.key]
+                    out[i] = fut.result()
+                    done_one(i, out[i])
                     pb.update(1)
             finally:
                 if own:
-                    cluster = getattr(client, "cluster", None)
-                    client.close()
-                    if cluster is not None:
-                        cluster.close()
+                    _close(client)
             return out
         if jobs == 1 or len(args) <= 1:
             for i, a in enumerate(args):
                 out[i] = fn(a)
+                done_one(i, out[i])
                 pb.update(1)
             return out
         import multiprocessing as mp
@@ -186,11 +365,19 @@ def map_chunks(fn: Callable, args: Sequence, *, jobs: int = 1, scheduler=None, d
         from concurrent.futures import as_completed as done
 
         method = "fork" if "fork" in mp.get_all_start_methods() else "spawn"
-        with ProcessPoolExecutor(max_workers=min(jobs, len(args)), mp_context=mp.get_context(method)) as ex:
+        ex = ProcessPoolExecutor(max_workers=min(jobs, len(args)), mp_context=mp.get_context(method),
+                                 initializer=_worker_init, initargs=(os.getpid(),))
+        try:
             futures = {ex.submit(fn, a): i for i, a in enumerate(args)}
             for fut in done(futures):
-                out[futures[fut]] = fut.result()
+                i = futures[fut]
+                out[i] = fut.result()
+                done_one(i, out[i])
                 pb.update(1)
+        except BaseException:  # a failed call or Ctrl-C: nothing more starts, no worker outlives this call
+            _stop_workers(ex)
+            raise
+        ex.shutdown(wait=True)
     return out
 
 
@@ -350,8 +537,9 @@ def picklable(obj) -> bool:
     try:
         pickle.dumps(obj)
     except (pickle.PicklingError, AttributeError, TypeError) as exc:
-        warnings.warn(f"jobs > 1 needs a picklable loop ({exc}); running the batch in this process",
-                      RuntimeWarning, stacklevel=4)
+        warnings.warn(f"running a batch in parallel (jobs > 1 or a cluster) needs a picklable loop ({exc}); "
+                      f"running the batch in this process",
+                      RuntimeWarning, stacklevel=3)
         return False
     return True
 
@@ -383,22 +571,24 @@ def simulate_chunks(loop, jobs: int, n_steps: int, held: dict, x, opts: dict, se
     from .response import LoopResponse
 
     tasks = []
-    for sl in chunk_slices(x.shape[0], chunks=jobs):
+    chunks = jobs if _CLUSTER["client"] is None else max(jobs, _cluster_workers())
+    for sl in chunk_slices(x.shape[0], chunks=chunks):
         inputs = {s: (a[:, sl] if a.ndim == 2 else a) for s, a in held.items()}
         x0 = {name: x[sl, bsl] for name, bsl in loop.slices.items()}
         tasks.append((loop, n_steps, dict(opts, inputs=inputs, x0=x0, runs=sl.stop - sl.start, progress=False,
                                           run_offset=opts["run_offset"] + sl.start,
                                           batch_runs=opts["batch_runs"] or opts["run_offset"] + x.shape[0])))
-    parts = map_chunks(_simulate_task, tasks, jobs=jobs, desc="batch chunks")
+    parts = map_chunks(_simulate_task, tasks, jobs=min(jobs, len(tasks)), desc="batch chunks")
     first = parts[0]
     xs = None if first.x is None else np.concatenate([p.x for p in parts], axis=1)
+    x_final = None if first.x_final is None else np.concatenate([p.x_final for p in parts], axis=0)
     signals = {s: np.concatenate([p.signals[s] for p in parts], axis=1) for s in first.signals}
     return LoopResponse(t=first.t, x=xs, u=None, y=None,
                         diverged=np.concatenate([p.diverged for p in parts]),
                         diverged_step=np.concatenate([p.diverged_step for p in parts]),
                         seeds=None if seeds is None else list(seeds), bound=first.bound, signals=signals,
                         slices=dict(loop.slices), external=loop.external, outlist=loop.outlist,
-                        state_names=first.state_names)
+                        state_names=first.state_names, x_final=x_final)
 
 
 def _simulate_task(task):

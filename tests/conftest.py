@@ -1,4 +1,4 @@
-"""Suite-wide ordering: the end-to-end ``reproduce all --quick`` test starts first.
+"""Suite-wide ordering: the end-to-end ``reproduce all --quick`` test starts first, the long waiting tests next.
 
 On a fresh clone numba compiles every loop structure once and caches it on disk. Started first, the
 end-to-end run compiles the studies' structures (in its own processes) while the other pytest-xdist
@@ -7,6 +7,14 @@ compiling the same structures at the same time in another process.
 """
 
 
+#: Long tests that mostly wait (on subprocesses, a Dask cluster, stand-in studies that sleep) start right
+#: after the end-to-end run, so the other worker's short tests fill the time instead of queueing behind them.
+EARLY = ("test_reproduce_all_quick_writes_valid_results", "test_a_study_on_a_real_cluster_equals_the_run_in_one_process",
+         "test_interrupts_and_kills_at_several_points_leave_report_and_results_in_agreement",
+         "test_two_runs_into_one_folder_do_not_interleave")
+
+
 def pytest_collection_modifyitems(config, items):
-    first = [item for item in items if item.nodeid.endswith("test_reproduce_all_quick_writes_valid_results")]
+    first = sorted((item for item in items if item.nodeid.endswith(EARLY)),
+                   key=lambda item: [item.nodeid.endswith(name) for name in EARLY].index(True))
     items[:] = first + [item for item in items if item not in first]

@@ -503,6 +503,8 @@ def build_cases(tmp):
         ("chunk_slices(large n)", parallel.chunk_slices, dict(n=HUGE, chunks=4), dict(chunk_size=[1, 1000])),
         ("chunk_slices", parallel.chunk_slices, dict(n=10, chunks=3, chunk_size=None),
          dict(n=INT + [-1], chunks=opt(INT) + [0], chunk_size=opt(INT) + [0])),
+        ("check_scheduler_address", parallel.check_scheduler_address, dict(scheduler="tcp://127.0.0.1:8786"),
+         dict(scheduler=[None, 3, "", "banana", "tcp://127.0.0.1:0", "tcp://127.0.0.1:99999", "tcp://:8786"])),
         ("gather", parallel.gather, dict(parts=[np.ones(2), np.ones(3)]), dict(parts=[None, 3, []])),
         ("grid_points", parallel.grid_points, dict(grid={"a": [1.0, 2.0]}), dict(grid=[None, 3, {}, {"a": []}, {3: [1.0]}])),
         ("map_chunks", parallel.map_chunks, dict(fn=_square, args=[1.0, 2.0], jobs=1, scheduler=None, desc="",
@@ -770,6 +772,9 @@ NOT_FUZZED = {
     sym_ric.derive_random_walk_gain: "sympy derivation without arguments",
     sym_ric.derive_kalata_gains: "sympy derivation without arguments",
     parallel.default_jobs: "no arguments",
+    parallel.active_cluster: "no arguments",
+    parallel.use_cluster: "connects to a Dask cluster; its address checks are check_scheduler_address's (fuzzed), "
+                          "an unreachable one is tested in tests/lib/test_cli_cluster.py",
     parallel.picklable: "any object is a valid argument (the answer is the check)",
     parallel.simulate_chunks: "internal half of Loop.simulate(jobs > 1), whose arguments are fuzzed",
     progress.NullBar: "no constructor arguments",

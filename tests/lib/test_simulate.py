@@ -87,7 +87,7 @@ def test_order_of_convergence(method, order):
     errs = []
     hs = [0.02, 0.01, 0.005]
     for h in hs:
-        n = int(round(T / h))
+        n = round(T / h)
         res = simulate_sampled(linear_rhs, x0, h, n, method=method)
         errs.append(np.max(np.abs(res.x[-1, 0] - exact_free([T], x0)[0])))
     slopes = np.diff(np.log(errs)) / np.diff(np.log(hs))
@@ -199,3 +199,11 @@ def test_fixed_step_runners_reject_bad_bound(bound):
         simulate_sampled(linear_rhs, [1, 0], 0.1, 10, bound=bound)
     with pytest.raises((ValueError, TypeError), match="bound must be"):
         simulate_discrete(lambda k, x, w, p: x, [1.0], 10, bound=bound)
+
+
+@pytest.mark.parametrize("base_seed", [0, 1, 7, 2**32 - 1, 2**32, 2**64 + 5, 2**127 + 3, 2**130 + 11])
+def test_run_seeds_equal_numpy_seedsequence_children(base_seed):
+    # run_seeds computes SeedSequence's hash vectorised over the children; it must give numpy's own numbers
+    expected = [int(c.generate_state(1)[0]) for c in np.random.SeedSequence(base_seed).spawn(2000)]
+    assert run_seeds(base_seed, 2000) == expected
+    assert all(type(s) is int for s in run_seeds(base_seed, 3))

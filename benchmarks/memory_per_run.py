@@ -1,0 +1,54 @@
+"""Measure each study's memory per Monte Carlo run, for the CLI's up-front ``--runs`` check (``analysis.MEMORY``).
+
+Each study runs in a fresh process at two run counts, quick and full, far enough apart that the
+difference dominates the noise of the resident size; the peak resident size (``ru_maxrss``) minus
+that of the process before the study ran gives a base and a slope per run:
+``base + per_run * runs``. Prints the table to paste into ``analysis/__init__.py``.
+
+    OPENBLAS_NUM_THREADS=1 python benchmarks/memory_per_run.py [study ...]
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]
+POINTS = {"quick": (10, 210), "full": (5, 105)}
+
+CHILD = """
+import json, resource, sys, tempfile, warnings
+from pathlib import Path
+from analysis import load_study
+from ctrl_analysis.report import StudyContext
+name, runs, quick = sys.argv[1], int(sys.argv[2]), sys.argv[3] == "quick"
+study = load_study(name)
+warnings.simplefilter("ignore")
+before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+study.run(StudyContext(out_dir=Path(tempfile.mkdtemp()), runs=runs, quick=quick))
+print(json.dumps(1024 * (resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before)))
+"""
+
+
+def peak(name: str, runs: int, mode: str) -> int:
+    out = subprocess.run([sys.executable, "-c", CHILD, name, str(runs), mode], cwd=REPO, capture_output=True,
+                         text=True, check=True)
+    return int(json.loads(out.stdout.strip().splitlines()[-1]))
+
+
+def main(names) -> None:
+    from analysis import STUDIES
+
+    for name in names or list(STUDIES):
+        row = {}
+        for mode, (r1, r2) in POINTS.items():
+            p1, p2 = peak(name, r1, mode), peak(name, r2, mode)
+            per_run = max(0.0, (p2 - p1) / (r2 - r1))
+            row[mode] = (int(p1 - per_run * r1), int(per_run))
+        print(f'    "{name}": {json.dumps(row)},', flush=True)
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])

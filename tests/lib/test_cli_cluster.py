@@ -1,0 +1,102 @@
+"""`--scheduler` on a real Dask cluster: a scheduler and two workers in separate processes (loopback only).
+
+A study run through the cluster gives the same quantities, seeds and findings as a run in one
+process, and the workers did the work; a malformed or unreachable address is one line, exit 2,
+before any study starts.
+"""
+
+import json
+import os
+import shutil
+import socket
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from ctrl_analysis.cli import main
+
+REPO = Path(__file__).resolve().parents[2]
+ENV = {**os.environ, "PYTHONPATH": str(REPO), "OPENBLAS_NUM_THREADS": "1", "CTRL_ANALYSIS_PROGRESS": "0"}
+STUDY = "ckf"  # the quickest study with Monte Carlo batches (about 10 chunks with --quick)
+
+
+def _cli(*argv, env=ENV):
+    return subprocess.run([sys.executable, "-m", "ctrl_analysis.cli", *argv], capture_output=True, text=True,
+                          cwd=REPO, timeout=240, env=env, check=False)
+
+
+def _dask(*argv, log):
+    dask = shutil.which("dask", path=os.path.dirname(sys.executable)) or shutil.which("dask")
+    return subprocess.Popen([dask, *argv], cwd=REPO, env=ENV, stdout=log, stderr=subprocess.STDOUT)
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest.fixture
+def cluster(tmp_path):
+    """``dask scheduler`` and two ``dask worker`` processes on 127.0.0.1; stopped (and checked gone) after."""
+    port = _free_port()
+    address = f"tcp://127.0.0.1:{port}"
+    log = open(tmp_path / "dask.log", "w")  # noqa: SIM115 - closed in the finally below
+    procs = [_dask("scheduler", "--host", "127.0.0.1", "--port", str(port), "--no-dashboard", log=log)]
+    try:
+        for i in range(2):
+            procs.append(_dask("worker", address, "--nthreads", "1", "--no-nanny", "--no-dashboard",
+                               "--host", "127.0.0.1", "--name", f"w{i}", "--local-directory", str(tmp_path / f"w{i}"),
+                               log=log))
+        from distributed import Client
+
+        with Client(address, timeout="60s") as client:
+            client.wait_for_workers(2, timeout=90)
+            yield address, client
+    finally:
+        for p in procs[::-1]:  # the workers first (a worker whose scheduler is gone waits to reconnect)
+            p.kill()
+            try:
+                p.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                p.kill()
+                p.wait(timeout=10)
+        log.close()
+    assert all(p.poll() is not None for p in procs)
+
+
+def _quantities(out: Path) -> dict:
+    data = json.loads((out / STUDY / "results.json").read_text(encoding="utf-8"))
+    return {"quantities": {q["id"]: (q["value"], q["std"], q["runs"], q["verdict"]) for q in data["quantities"]},
+            "seeds": data["seeds"], "findings": data["findings"], "cli": data["settings"]["cli"]}
+
+
+def test_a_study_on_a_real_cluster_equals_the_run_in_one_process(tmp_path, cluster):
+    address, client = cluster
+    before = sum(client.run(lambda dask_worker: dask_worker.state.transition_counter).values())
+    on_cluster = _cli("reproduce", STUDY, "--quick", "--out", str(tmp_path / "cluster"), "--scheduler", address)
+    assert on_cluster.returncode == 0, on_cluster.stderr[-2000:]
+    # the workers did the work: they moved tasks through their states, and the run says how many chunks
+    per_worker = client.run(lambda dask_worker: dask_worker.state.transition_counter)
+    assert len(per_worker) == 2 and sum(per_worker.values()) > before
+    line = [x for x in on_cluster.stdout.splitlines() if x.startswith("dask: ")]
+    assert len(line) == 1 and line[0].endswith(f"ran on {address}")
+    assert int(line[0].split()[1]) >= 2
+    assert main(["reproduce", STUDY, "--quick", "--out", str(tmp_path / "here"), "--jobs", "1"]) == 0
+    a, b = _quantities(tmp_path / "cluster"), _quantities(tmp_path / "here")
+    assert a["quantities"] and a == b  # every value, std, run count and verdict bit for bit; seeds; findings
+
+
+@pytest.mark.parametrize("address", ["banana", "tcp://127.0.0.1:99999", "unreachable"])
+def test_a_bad_scheduler_address_is_one_line_and_exit_2_before_any_work(tmp_path, address):
+    if address == "unreachable":
+        address = f"tcp://127.0.0.1:{_free_port()}"  # nothing listens there
+    proc = _cli("reproduce", STUDY, "--quick", "--out", str(tmp_path), "--scheduler", address,
+                env={**ENV, "CTRL_ANALYSIS_SCHEDULER_TIMEOUT": "1"})
+    assert proc.returncode == 2
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("ctrl-analysis: error: --scheduler") and address in lines[0]
+    assert proc.stdout == "" and not (tmp_path / STUDY).exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == []  # no lock, no staging folder left
