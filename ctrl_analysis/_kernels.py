@@ -13,8 +13,8 @@ and ``p`` a float64 parameter vector fixed when the block was built. ``BlockKern
 either that vector (shared by every run) or a ``(B, n_p)`` array whose row ``b`` is run ``b``'s
 vector (per-run parameters: a plant gain, an observer bandwidth, a case flag that differ across the
 batch); the engine slices the rows with the batch when it splits it into chunks or processes. A block gives its kernel with
-a method ``kernel() -> BlockKernel`` (or ``None``); the library's Σ and ESO get theirs from
-:func:`kernel_of`'s registry. When every block of a loop has a kernel, :meth:`Loop.simulate
+a method ``kernel() -> BlockKernel`` (or ``None``), which :func:`kernel_of` calls; the engine knows
+no concrete block. When every block of a loop has a kernel, :meth:`Loop.simulate
 <ctrl_analysis.loop.Loop.simulate>` (``engine="auto"`` or ``"compiled"``) generates one numba
 function for the whole loop — runs outermost, the same sample/stage order and the same RK4
 arithmetic as the numpy path — and runs it; otherwise it uses the numpy path.
@@ -194,33 +194,10 @@ def eso_rhs(t, x, u, p, dx):
     dx[m - 2] = dx[m - 2] + p[1] * u[1]  # + b0 u in the n-th equation
 
 
-def _sigma_kernel(block):
-    if block.reading != "state":
-        return None  # the corrected reading's output is a matrix product: numpy path
-    return BlockKernel(output=copy_output, params=np.array(block.a_coeffs, dtype=float), rhs=sigma_rhs)
-
-
-def _eso_kernel(block):
-    if block.known is not None:
-        return None  # a Python callable inside: numpy path
-    m = block.nstates
-    linear = block.alpha is None
-    alpha = np.ones(m) if linear else block.alpha
-    dp = np.ones(m) if linear else block._delta_pow
-    delta = 1.0 if block.delta is None else block.delta
-    p = np.concatenate([[1.0 if linear else 0.0, block.b0, delta], block.L, alpha, dp]).astype(float)
-    return BlockKernel(output=copy_output, params=p, rhs=eso_rhs)
-
-
-def _registry():
-    from .estimators.differential import DifferentialEstimator
-    from .estimators.eso import ExtendedStateObserver
-
-    return {DifferentialEstimator: _sigma_kernel, ExtendedStateObserver: _eso_kernel}
-
-
 def kernel_of(block) -> BlockKernel | None:
-    """The block's kernel: its own ``kernel()`` method, the registry's, or ``None`` (numpy only).
+    """The block's kernel: its own ``kernel()`` method, or ``None`` (numpy only).
+
+    The engine knows no concrete block: a block that can run compiled says so through ``kernel()``.
 
     Parameters
     ----------
@@ -231,10 +208,7 @@ def kernel_of(block) -> BlockKernel | None:
     BlockKernel or None
     """
     own = getattr(block, "kernel", None)
-    if callable(own):
-        return own()
-    make = _registry().get(type(block))
-    return None if make is None else make(block)
+    return own() if callable(own) else None
 
 
 # ------------------------------------------------------------------ the compiled loop runner

@@ -20,13 +20,8 @@ from .atomic import (
     swap_in,
 )
 from .atomic import _sigint_deferred as sigint_deferred
-from .report import (
-    StudyContext,
-    summary_table,
-    validate_results,
-    write_report_md,
-    write_results_json,
-)
+from .report import StudyContext, validate_results, write_results_json
+from .report_md import summary_table, write_report_md
 
 __all__ = ["main"]
 

@@ -1,7 +1,8 @@
 """What a study is handed (StudyContext), results.json writing and its schema check, and the figure style.
 
 The result records themselves (:class:`Quantity`, :class:`StudyResult`, computed verdicts) are in
-:mod:`ctrl_analysis.results` and re-exported here; REPORT.md is written by :mod:`ctrl_analysis.report_md`.
+:mod:`ctrl_analysis.results` and re-exported here; REPORT.md is written by :mod:`ctrl_analysis.report_md`
+(import it from there: this module does not import it, so the two form no import circle).
 """
 
 from __future__ import annotations
@@ -379,13 +380,3 @@ def new_figure(nrows: int = 1, ncols: int = 1, *, title: str | None = None, size
     if title:
         fig.suptitle(title)
     return fig, axes
-
-
-def __getattr__(name):
-    """REPORT.md writing lives in :mod:`.report_md`; its functions are re-exported here lazily (so either
-    module can be imported first)."""
-    if name in ("summary_table", "write_report_md"):
-        from . import report_md
-
-        return getattr(report_md, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

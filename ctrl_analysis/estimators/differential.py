@@ -17,6 +17,7 @@ import control as ct
 import numpy as np
 
 from .._validate import check_array, check_in, check_int, check_positive
+from .._kernels import BlockKernel, copy_output, sigma_rhs
 from ..blocks import ContinuousBlock, signal_names
 from ..symbolic.differential import MAX_ORDER, breakaway_gain, breakaway_point, differential_coefficients
 
@@ -244,6 +245,18 @@ class DifferentialEstimator(ContinuousBlock):
     @property
     def feedthrough(self) -> bool:
         return self.reading == "corrected"
+
+    def kernel(self) -> BlockKernel | None:
+        """The compiled engine's kernel: :func:`~ctrl_analysis._kernels.sigma_rhs` with Σ's coefficients.
+
+        Returns
+        -------
+        BlockKernel or None
+            ``None`` for the corrected reading (its output is a matrix product: numpy path).
+        """
+        if self.reading != "state":
+            return None
+        return BlockKernel(output=copy_output, params=np.array(self.a_coeffs, dtype=float), rhs=sigma_rhs)
 
     def rhs(self, t, z, u, params=None) -> np.ndarray:
         """Right-hand side of eq. (2), the block protocol's ``rhs(t, x, u, params)``.

@@ -23,6 +23,7 @@ from typing import Callable
 import numpy as np
 
 from .._validate import check_array, check_finite, check_hurwitz, check_int, check_positive
+from .._kernels import BlockKernel, copy_output, eso_rhs
 from ..blocks import ContinuousBlock
 from ..polynomials import repeated_pole_coefficients
 
@@ -262,6 +263,24 @@ class ExtendedStateObserver(ContinuousBlock):
             return self.L * e
         # arguments were checked once in __init__; the per-step path skips the checks
         return self.L * _fal(e, self.alpha, self.delta, self._delta_pow)
+
+    def kernel(self) -> BlockKernel | None:
+        """The compiled engine's kernel: :func:`~ctrl_analysis._kernels.eso_rhs` with the packed gains.
+
+        Returns
+        -------
+        BlockKernel or None
+            ``None`` with a known-model term (a Python callable: numpy path).
+        """
+        if self.known is not None:
+            return None
+        m = self.nstates
+        linear = self.alpha is None
+        alpha = np.ones(m) if linear else self.alpha
+        dp = np.ones(m) if linear else self._delta_pow
+        delta = 1.0 if self.delta is None else self.delta
+        p = np.concatenate([[1.0 if linear else 0.0, self.b0, delta], self.L, alpha, dp]).astype(float)
+        return BlockKernel(output=copy_output, params=p, rhs=eso_rhs)
 
     def rhs(self, t, x_hat, u, params=None) -> np.ndarray:
         """Observer right-hand side in python-control's order ``(t, x, u, params)``.

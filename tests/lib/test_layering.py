@@ -101,3 +101,82 @@ def test_study_functions_read_in_a_screen():
 def test_library_modules_hold_one_topic(path):
     n = len(path.read_text(encoding="utf-8").splitlines())
     assert n <= 600, f"{path.relative_to(ROOT)} has {n} lines (> 600): split it by topic"
+
+
+def _import_graph(lazy: bool) -> dict:
+    """``{module: {modules of ctrl_analysis it imports}}`` read from the source (``lazy``: also imports inside functions)."""
+    import ast
+
+    pkg = ROOT / "ctrl_analysis"
+    graph = {}
+    for path in pkg.rglob("*.py"):
+        rel = path.relative_to(ROOT).with_suffix("")
+        name = ".".join(rel.parts[:-1] if rel.name == "__init__" else rel.parts)
+        is_pkg = rel.name == "__init__"
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        nodes = ast.walk(tree) if lazy else tree.body
+        deps = set()
+        for node in nodes:
+            if isinstance(node, ast.ImportFrom):
+                if node.level:
+                    base = name.split(".") if is_pkg else name.split(".")[:-1]
+                    base = base[:len(base) - node.level + 1]
+                    mod = ".".join(base + ([node.module] if node.module else []))
+                else:
+                    mod = node.module or ""
+                targets = [mod] + [f"{mod}.{a.name}" for a in node.names]
+            elif isinstance(node, ast.Import):
+                targets = [a.name for a in node.names]
+            else:
+                continue
+            deps |= {t for t in targets if t.startswith("ctrl_analysis")}
+        graph[name] = deps
+    return {m: {d for d in deps if d in graph and d != m} for m, deps in graph.items()}
+
+
+def _cycles(graph: dict) -> list:
+    import sys
+
+    sys.setrecursionlimit(10000)
+    index, low, stack, on, out, counter = {}, {}, [], set(), [], [0]
+
+    def strong(v):
+        index[v] = low[v] = counter[0]
+        counter[0] += 1
+        stack.append(v)
+        on.add(v)
+        for w in graph[v]:
+            if w not in index:
+                strong(w)
+                low[v] = min(low[v], low[w])
+            elif w in on:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                on.discard(w)
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                out.append(sorted(comp))
+
+    for v in graph:
+        if v not in index:
+            strong(v)
+    return out
+
+
+def test_no_import_cycles():
+    """No two library modules import each other, directly or round a circle (a package's
+    ``__init__`` re-exporting its modules is not a circle with them); imports inside functions count too."""
+    graph = _import_graph(lazy=True)
+    for m in graph:  # a package imports its own modules to re-export them; they may import siblings through it
+        graph[m] = {d for d in graph[m] if not (m.startswith(d + ".") and d in graph)}
+    assert _cycles(graph) == []
+
+
+def test_cycle_detector_finds_a_known_circle():
+    assert _cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
+    assert _cycles({"a": {"b"}, "b": set()}) == []

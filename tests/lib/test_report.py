@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from ctrl_analysis.report import (Quantity, StudyContext, StudyInfo, StudyResult, compute_verdict, relative_error,
-                                  write_report_md, write_results_json)
+                                  write_results_json)
+from ctrl_analysis.report_md import write_report_md
 
 INFO = StudyInfo(name="demo", seed_file="x.txt", paper="A paper", reproduces="things")
 

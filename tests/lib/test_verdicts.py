@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 
 from ctrl_analysis import sensitivity
-from ctrl_analysis.report import StudyInfo, StudyResult, count_verdicts, validate_results, write_report_md
+from ctrl_analysis.report import StudyInfo, StudyResult, count_verdicts, validate_results
+from ctrl_analysis.report_md import write_report_md
 from ctrl_analysis.report_md import not_reproduced, tally
 from ctrl_analysis.study import Claim, choices, fixed, missing_plausible, reconstructed, span
 from ctrl_analysis.verdicts import central_interval, digits_tolerance
