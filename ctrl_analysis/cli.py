@@ -185,6 +185,19 @@ def _previous_runtime(study_dir: Path) -> float:
         return float("inf")
 
 
+def _arena_section(out: Path) -> list[str] | None:
+    """The arena's REPORT.md section from ``out/arena/results.json`` (written by ``ctrl-analysis arena``), if any."""
+    path = out / "arena" / "results.json"
+    if not path.exists():
+        return None
+    from .arena.recommend import arena_report_lines
+
+    try:
+        return arena_report_lines(json.loads(path.read_text(encoding="utf-8")))
+    except (ValueError, TypeError) as exc:
+        return ["## Estimator arena", "", f"The arena's results.json could not be read: {_one_line(exc)}"]
+
+
 def _read_results(path: Path, name: str) -> dict:
     """A study's results.json read back; ValueError (one line) when unreadable or not a results record."""
     try:
@@ -241,7 +254,7 @@ class _Run:
                     if r["study"] in committed}
         tmp = Path(tempfile.mkdtemp(dir=self.out, prefix=".REPORT.md.new-"))
         try:
-            write_report_md(results, tmp, this_run=this_run, failed=dict(self.failed))
+            write_report_md(results, tmp, this_run=this_run, failed=dict(self.failed), extra=_arena_section(self.out))
         except BaseException:
             remove_tree(tmp)
             raise

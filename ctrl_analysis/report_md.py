@@ -475,7 +475,7 @@ def _appendix(results: list[dict]) -> list[str]:
 
 
 def write_report_md(results: list[dict], out_dir: Path, *, this_run: dict | None = None,
-                    failed: dict | None = None) -> Path:
+                    failed: dict | None = None, extra: list[str] | None = None) -> Path:
     """Write ``out_dir/REPORT.md`` atomically from the results.json dicts of several studies.
 
     Parameters
@@ -492,6 +492,9 @@ def write_report_md(results: list[dict], out_dir: Path, *, this_run: dict | None
     failed : dict, optional
         ``{study: reason}`` for studies that failed in this run; their old results (if any) are shown
         as stale with the reason.
+    extra : list of str, optional
+        Markdown lines of further sections (the estimator arena), placed after the studies and before
+        the appendix.
 
     Returns
     -------
@@ -532,6 +535,10 @@ def write_report_md(results: list[dict], out_dir: Path, *, this_run: dict | None
         lines += ["**Failed in this run:** " + "; ".join(f"{k}: {_cell(v)}" for k, v in failed.items()), ""]
     for r in results:
         lines += _study_section(r, this_run, failed)
+    if extra is not None:
+        if not isinstance(extra, (list, tuple)) or not all(isinstance(x, str) for x in extra):
+            raise TypeError(f"extra must be a list of Markdown lines, got {extra!r:.80}")
+        lines += [*extra, ""]
     lines += _appendix(results)
     text = "\n".join(lines)
     lines += glossary_lines(text)

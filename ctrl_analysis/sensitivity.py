@@ -281,7 +281,8 @@ def plot_sensitivity(result: StudyResult, top: int = 12):
     rows = _influence(result)[:top]
     claims = [c for c in result.claims if c.holds is not None]
     n = max(len(rows), 1)
-    fig, (ax, bx) = new_figure(1, 2, size=(12.0, 2.6 + 0.45 * n), gridspec_kw={"width_ratios": [1.1, 1.0]},
+    width = max(12.0, 6.0 + 1.0 * len(claims))
+    fig, (ax, bx) = new_figure(1, 2, size=(width, 2.6 + 0.5 * n), gridspec_kw={"width_ratios": [1.0, max(1.0, len(claims) / 5)]},
                                title=f"{result.info.name}: sensitivity of the verdicts to each reconstruction "
                                      "(one at a time, across its plausible range)")
     labels = [r[0] for r in rows]
@@ -291,6 +292,8 @@ def plot_sensitivity(result: StudyResult, top: int = 12):
     for yi, r, ch in zip(y, rows, change):
         if r[3]:
             ax.text(ch, yi, f"  {r[3]} cell verdict(s) flip", va="center", fontsize=8)
+        elif ch == 0:
+            ax.text(0, yi, "  no paper cell moves", va="center", fontsize=7, color="0.4")
     ax.set_yticks(y, labels, fontsize=8)
     ax.set_xlabel("largest change of a paper cell across the range\n(% of its value at the chosen reconstruction)")
     ax.set_title("Paper cells (red: some cell's verdict flips)", fontsize=10)
@@ -308,9 +311,9 @@ def plot_sensitivity(result: StudyResult, top: int = 12):
                 dep = next((d for d in c.depends_on if d["reconstruction"] == r[0]), None)
                 if dep is not None:
                     there = "/".join(sorted(set(dep["verdict_there"])))
-                    at = ", ".join(f"{v:.3g}" if isinstance(v, float) else str(v) for v in dep["flips_at"][:3])
-                    bx.text(j, i, f"{there} at {at}{'…' if len(dep['flips_at']) > 3 else ''}", ha="center",
-                            va="center", fontsize=7)
+                    at = ", ".join(f"{v:.2g}" if isinstance(v, float) else str(v)[:8] for v in dep["flips_at"][:2])
+                    bx.text(j, i, f"{there}\nat {at}{'…' if len(dep['flips_at']) > 2 else ''}", ha="center",
+                            va="center", fontsize=6.5)
         bx.set_yticks(np.arange(len(rows)), labels, fontsize=8)
         bx.set_xticks(np.arange(len(claims)), [c.claim.id for c in claims], rotation=40, ha="right", fontsize=8)
         bx.set_title("Claims: green robust, orange verdict flips, grey not affected", fontsize=10)

@@ -126,3 +126,12 @@ def test_built_studies_come_first(tmp_path):
     assert text.index("## demo") < text.index("## empty")
     assert re.search(r"\*\*Not reproduced \(1: 0 printed cells outside the verdict policy, 1 part of the paper\):\*\*"
                      r"\n\n1\. everything", text)
+
+
+def test_extra_sections_come_after_the_studies_and_before_the_appendix(tmp_path):
+    text = write_report_md([_result().to_dict()], tmp_path, extra=["## Estimator arena", "", "ranked."]).read_text()
+    assert text.index("## demo") < text.index("## Estimator arena") < text.index("## Appendix: every quantity")
+    import pytest
+
+    with pytest.raises(TypeError, match="extra"):
+        write_report_md([_result().to_dict()], tmp_path, extra=[3])
