@@ -15,21 +15,39 @@ from pathlib import Path
 
 import pytest
 
-from ctrl_analysis.cli import main
 
 REPO = Path(__file__).resolve().parents[2]
-ENV = {**os.environ, "PYTHONPATH": str(REPO), "OPENBLAS_NUM_THREADS": "1", "CTRL_ANALYSIS_PROGRESS": "0"}
-STUDY = "ckf"  # the quickest study with Monte Carlo batches (about 10 chunks with --quick)
+#: The skeleton study (analysis/_skeleton): a real study (Monte Carlo batch on the compiled engine, a
+#: sensitivity sweep through map_chunks) whose one small loop structure compiles in about a second in each
+#: worker, where a paper's study compiles several; registered by a stand-in ``analysis`` package first on
+#: PYTHONPATH whose ``__path__`` also holds the real one (so ``analysis._skeleton`` is the repository's).
+STUDY = "skeleton"
+REGISTRY = f"""
+import importlib
+__path__.append({str(REPO / "analysis")!r})
+STUDIES = {{"skeleton": "analysis._skeleton"}}
+MEMORY = {{}}
+def load_study(name):
+    return importlib.import_module(STUDIES[name])
+"""
 
 
-def _cli(*argv, env=ENV):
+def _registry(tmp_path: Path) -> dict:
+    pkg = tmp_path / "registry" / "analysis"
+    pkg.mkdir(parents=True)
+    (pkg / "__init__.py").write_text(REGISTRY)
+    return {**os.environ, "PYTHONPATH": os.pathsep.join([str(pkg.parent), str(REPO)]), "OPENBLAS_NUM_THREADS": "1",
+            "CTRL_ANALYSIS_PROGRESS": "0"}
+
+
+def _cli(*argv, env):
     return subprocess.run([sys.executable, "-m", "ctrl_analysis.cli", *argv], capture_output=True, text=True,
-                          cwd=REPO, timeout=240, env=env, check=False)
+                          cwd=env["PYTHONPATH"].split(os.pathsep)[0], timeout=240, env=env, check=False)
 
 
-def _dask(*argv, log):
+def _dask(*argv, log, env):
     dask = shutil.which("dask", path=os.path.dirname(sys.executable)) or shutil.which("dask")
-    return subprocess.Popen([dask, *argv], cwd=REPO, env=ENV, stdout=log, stderr=subprocess.STDOUT)
+    return subprocess.Popen([dask, *argv], cwd=REPO, env=env, stdout=log, stderr=subprocess.STDOUT)
 
 
 def _free_port() -> int:
@@ -43,18 +61,19 @@ def cluster(tmp_path):
     """``dask scheduler`` and two ``dask worker`` processes on 127.0.0.1; stopped (and checked gone) after."""
     port = _free_port()
     address = f"tcp://127.0.0.1:{port}"
+    env = _registry(tmp_path)
     log = open(tmp_path / "dask.log", "w")  # noqa: SIM115 - closed in the finally below
-    procs = [_dask("scheduler", "--host", "127.0.0.1", "--port", str(port), "--no-dashboard", log=log)]
+    procs = [_dask("scheduler", "--host", "127.0.0.1", "--port", str(port), "--no-dashboard", log=log, env=env)]
     try:
         for i in range(2):
             procs.append(_dask("worker", address, "--nthreads", "1", "--no-nanny", "--no-dashboard",
                                "--host", "127.0.0.1", "--name", f"w{i}", "--local-directory", str(tmp_path / f"w{i}"),
-                               log=log))
+                               log=log, env=env))
         from distributed import Client
 
         with Client(address, timeout="60s") as client:
             client.wait_for_workers(2, timeout=90)
-            yield address, client
+            yield address, client, env
     finally:
         for p in procs[::-1]:  # the workers first (a worker whose scheduler is gone waits to reconnect)
             p.kill()
@@ -74,9 +93,10 @@ def _quantities(out: Path) -> dict:
 
 
 def test_a_study_on_a_real_cluster_equals_the_run_in_one_process(tmp_path, cluster):
-    address, client = cluster
+    address, client, env = cluster
     before = sum(client.run(lambda dask_worker: dask_worker.state.transition_counter).values())
-    on_cluster = _cli("reproduce", STUDY, "--quick", "--out", str(tmp_path / "cluster"), "--scheduler", address)
+    on_cluster = _cli("reproduce", STUDY, "--quick", "--out", str(tmp_path / "cluster"), "--scheduler", address,
+                      env=env)
     assert on_cluster.returncode == 0, on_cluster.stderr[-2000:]
     # the workers did the work: they moved tasks through their states, and the run says how many chunks
     per_worker = client.run(lambda dask_worker: dask_worker.state.transition_counter)
@@ -84,7 +104,8 @@ def test_a_study_on_a_real_cluster_equals_the_run_in_one_process(tmp_path, clust
     line = [x for x in on_cluster.stdout.splitlines() if x.startswith("dask: ")]
     assert len(line) == 1 and line[0].endswith(f"ran on {address}")
     assert int(line[0].split()[1]) >= 2
-    assert main(["reproduce", STUDY, "--quick", "--out", str(tmp_path / "here"), "--jobs", "1"]) == 0
+    here = _cli("reproduce", STUDY, "--quick", "--out", str(tmp_path / "here"), "--jobs", "1", env=env)
+    assert here.returncode == 0, here.stderr[-2000:]
     a, b = _quantities(tmp_path / "cluster"), _quantities(tmp_path / "here")
     assert a["quantities"] and a == b  # every value, std, run count and verdict bit for bit; seeds; findings
 
@@ -93,10 +114,11 @@ def test_a_study_on_a_real_cluster_equals_the_run_in_one_process(tmp_path, clust
 def test_a_bad_scheduler_address_is_one_line_and_exit_2_before_any_work(tmp_path, address):
     if address == "unreachable":
         address = f"tcp://127.0.0.1:{_free_port()}"  # nothing listens there
-    proc = _cli("reproduce", STUDY, "--quick", "--out", str(tmp_path), "--scheduler", address,
-                env={**ENV, "CTRL_ANALYSIS_SCHEDULER_TIMEOUT": "1"})
+    proc = _cli("reproduce", STUDY, "--quick", "--out", str(tmp_path / "out"), "--scheduler", address,
+                env={**_registry(tmp_path), "CTRL_ANALYSIS_SCHEDULER_TIMEOUT": "1"})
     assert proc.returncode == 2
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("ctrl-analysis: error: --scheduler") and address in lines[0]
-    assert proc.stdout == "" and not (tmp_path / STUDY).exists()
-    assert sorted(p.name for p in tmp_path.iterdir()) == []  # no lock, no staging folder left
+    out = tmp_path / "out"
+    assert proc.stdout == "" and not (out / STUDY).exists()
+    assert not out.exists() or sorted(p.name for p in out.iterdir()) == []  # no lock, no staging folder left
