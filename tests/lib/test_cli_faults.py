@@ -78,11 +78,17 @@ def fake(tmp_path):
 _STARTED: list = []
 
 
+def sigint_default():
+    """In the child before exec: SIGINT back to its default, so Python installs its Ctrl-C handler even when the
+    suite itself was started in the background by a shell without job control (which ignores SIGINT for it)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def _start(env, out, seed, jobs=2):
     argv = [sys.executable, "-m", "ctrl_analysis.cli", "reproduce", "all", "--quick", "--jobs", str(jobs),
             "--out", str(out), "--seed", str(seed)]
     _STARTED.append(subprocess.Popen(argv, cwd=env["FAKE_CWD"], env=env, stdout=subprocess.PIPE,
-                                     stderr=subprocess.PIPE, text=True))
+                                     stderr=subprocess.PIPE, text=True, preexec_fn=sigint_default))
     return _STARTED[-1]
 
 
