@@ -1,7 +1,7 @@
 """The best worst-case accuracy of any causal differentiator, and the adversarial pair of its proof.
 
 **Statement.** Let ``f`` have ``|f''(t)| <= L`` and be measured as ``y = f + η`` with ``|η(t)| <= ε``.
-For every causal differentiator ``D`` (its output at ``t`` depends on ``y`` up to ``t`` only),
+For every causal differentiator ``D`` (its output at ``t`` depends on ``y`` up to ``t`` only)::
 
     sup over admissible (f, η) of  sup_t |D[y](t) - f'(t)|  >=  2 √(ε L).
 

@@ -7,7 +7,7 @@ on exactly the same records.
 **Costs** (of the first-derivative error ``e = f̂' - f'``, counted after the stated transient):
 ``worst`` = ``max |e|`` over the samples and the ``S`` noisy records; ``rms`` = the root mean
 square of ``e`` over the same. Each configuration is also run on the noise-free records, which
-splits its error into **lag** (the worst |e| without noise) and **noise-induced** error (the RMS of
+splits its error into **lag** (the worst ``|e|`` without noise) and **noise-induced** error (the RMS of
 the difference of the noisy and the noise-free estimate): the axes of the Pareto front.
 
 **Search** (per family, case and cost), in the log of each parameter relative to its reference
