@@ -6,28 +6,18 @@ places them in the study's section (the scorecard first, before any table).
 
 from __future__ import annotations
 
+from .report_format import cell as _cell
+from .report_format import check_results
+from .report_format import fmt as _short
+
 __all__ = ["CLAIM_MARK", "checks_and_errata", "claim_counts", "plausible_text", "scorecard", "sensitivity_lines"]
 
 #: How a claim verdict is shown in the scorecard.
 CLAIM_MARK = {"holds": "holds", "fails": "**fails**", "depends": "**depends**", "untestable": "untestable"}
 
 
-def _check(results) -> dict:
-    if not isinstance(results, dict) or not isinstance(results.get("quantities"), list):
-        raise TypeError(f"results must be a results.json dict with a 'quantities' list, got {type(results).__name__}")
-    return results
-
-
-def _cell(text) -> str:
-    return str(text or "").replace("|", "\\|").replace("\n", " ")
-
-
-def _short(value) -> str:
-    if isinstance(value, float):
-        return f"{value:.4g}"
-    if isinstance(value, (list, tuple)):
-        return "[" + ", ".join(_short(v) for v in value) + "]"
-    return str(value)
+def _check(results) -> None:
+    check_results("results", results)
 
 
 def claim_counts(results: dict) -> dict:
@@ -99,15 +89,13 @@ def scorecard(results: dict, max_evidence: int = 3) -> list[str]:
     return lines + [""]
 
 
-def checks_and_errata(results: dict, fmt) -> list[str]:
+def checks_and_errata(results: dict) -> list[str]:
     """Checks (algebraic identities, the paper's own arithmetic) and errata, apart from the reproduced cells.
 
     Parameters
     ----------
     results : dict
         One results.json dict.
-    fmt : callable
-        ``fmt(value) -> str``, the report's number format.
 
     Returns
     -------
@@ -123,7 +111,7 @@ def checks_and_errata(results: dict, fmt) -> list[str]:
              "Algebraic identities and the paper's own arithmetic, not counted as reproduced cells:", ""]
     if checks:
         lines += ["| check | paper | computed | unit | verdict | note |", "|---|---|---|---|---|---|"]
-        lines += [f"| {_cell(q['label'])} | {fmt(q['paper'])} | {fmt(q['value'])} | {_cell(q.get('unit')) or '—'} "
+        lines += [f"| {_cell(q['label'])} | {_short(q['paper'])} | {_short(q['value'])} | {_cell(q.get('unit')) or '—'} "
                   f"| {q['verdict']} | {_cell(q.get('note'))} |" for q in checks]
         lines.append("")
     lines += [f"- **Erratum** — {_cell(f['text'])}" for f in errata]

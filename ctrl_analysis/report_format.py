@@ -90,3 +90,8 @@ def cell(text) -> str:
     return str(text or "").replace("|", "\\|").replace("\n", " ")
 
 
+def check_results(name: str, results) -> None:
+    """Raise ``TypeError`` naming ``name`` unless ``results`` is a results.json dict (``study``, ``quantities`` list)."""
+    if not isinstance(results, dict) or not isinstance(results.get("quantities"), list) \
+            or not isinstance(results.get("study"), str):
+        raise TypeError(f"{name} must be a results.json dict with 'study' and a 'quantities' list, got {results!r:.80}")

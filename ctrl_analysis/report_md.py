@@ -16,7 +16,11 @@ from pathlib import Path
 import numpy as np
 
 from ._validate import check_path
-from .report_format import MAX_LIST, cell as _cell, fmt as _fmt, shorten_lists as _shorten_lists, summarise  # noqa: F401
+from .report_format import MAX_LIST, summarise  # noqa: F401 (public API)
+from .report_format import cell as _cell
+from .report_format import check_results as _check_results
+from .report_format import fmt as _fmt
+from .report_format import shorten_lists as _shorten_lists
 from .glossary import GLOSSARY, glossary_lines  # noqa: F401 (GLOSSARY: public API)
 from .report import relative_error, write_text_atomic
 from .report_claims import checks_and_errata, claim_counts, plausible_text, scorecard, sensitivity_lines
@@ -114,13 +118,6 @@ def _signed_error(value, paper) -> float:
     if np.ndim(value) == 0 and np.ndim(paper) == 0 and value is not None and paper not in (None, 0):
         return (float(value) - float(paper)) / abs(float(paper))
     return relative_error(value, paper)
-
-
-def _check_results(name: str, results) -> None:
-    """A results.json dict: ``study`` (str) and a ``quantities`` list."""
-    if not isinstance(results, dict) or not isinstance(results.get("quantities"), list) \
-            or not isinstance(results.get("study"), str):
-        raise TypeError(f"{name} must be a results.json dict with 'study' and a 'quantities' list, got {results!r:.80}")
 
 
 def tally(results: dict) -> dict:
@@ -429,7 +426,7 @@ def _study_section(r: dict, this_run: dict, failed: dict) -> list[str]:
     tables = paper_tables(r)
     if tables:
         lines += ["### The paper's tables, printed beside reproduced", "", *tables]
-    lines += checks_and_errata(r, _fmt)
+    lines += checks_and_errata(r)
     lines += sensitivity_lines(r)
     if r["reconstructions"]:
         lines += ["### Reconstructions", "",

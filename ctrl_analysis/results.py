@@ -529,29 +529,16 @@ class StudyResult:
     def _quantity_dicts(self) -> list:
         """Every quantity as a dict, derived verdicts resolved (a chain of derivations is followed)."""
         by_id = {q.id: q for q in self.quantities}
-        verdicts: dict = {}
 
-        def verdict(q, seen=()):
-            if q.id in verdicts:
-                return verdicts[q.id]
-            if q.derived_from is None:
-                v = q.verdict
-            else:
-                src = by_id.get(q.derived_from)
-                if src is None or q.derived_from in seen:
-                    raise ValueError(f"quantity {q.id!r} derives from {q.derived_from!r}, which is not recorded "
-                                     "(or the derivations form a circle)")
-                v = q.to_dict(verdict(src, seen + (q.id,)))["verdict"]
-            verdicts[q.id] = v
-            return v
+        def source_verdict(q, seen=()):
+            """The verdict ``q`` takes from the quantity it derives from (a chain of derivations followed)."""
+            src = by_id.get(q.derived_from)
+            if src is None or src.id in seen:
+                raise ValueError(f"quantity {q.id!r} derives from {q.derived_from!r}, which is not recorded "
+                                 "(or the derivations form a circle)")
+            return src.to_dict(None if src.derived_from is None else source_verdict(src, seen + (q.id,)))["verdict"]
 
-        out = []
-        for q in self.quantities:
-            src = by_id.get(q.derived_from) if q.derived_from else None
-            out.append(q.to_dict(verdict(src) if src is not None else None) if q.derived_from else q.to_dict())
-            if q.derived_from and src is None:
-                raise ValueError(f"quantity {q.id!r} derives from {q.derived_from!r}, which is not recorded")
-        return out
+        return [q.to_dict(None if q.derived_from is None else source_verdict(q)) for q in self.quantities]
 
 
 def versions() -> dict:

@@ -31,7 +31,7 @@ CLAIM_VERDICTS = ("holds", "fails", "untestable", "depends")
 KINDS = ("reproduction", "check")
 DEFAULT_TOLERANCE = 0.1
 #: Central share of the Monte Carlo runs within which a paper value from one noisy simulation agrees.
-CENTRAL = 95 / 100
+CENTRAL = 0.95
 #: The verdict policy, printed in the report.
 VERDICT_POLICY = (
     "A number the paper got from one noisy simulation *agrees* when it lies within the central 95 % of the "

@@ -604,7 +604,7 @@ def _claim_cases(results):
         ("Sensitivity", sensitivity.Sensitivity, dict(baseline={}, rows=[], ranges={}), {}),
         ("scorecard", report_claims.scorecard, dict(results=results), dict(results=[None, 3])),
         ("claim_counts", report_claims.claim_counts, dict(results=results), dict(results=[None, 3])),
-        ("checks_and_errata", report_claims.checks_and_errata, dict(results=results, fmt=str), dict(results=[None, 3])),
+        ("checks_and_errata", report_claims.checks_and_errata, dict(results=results), dict(results=[None, 3])),
         ("sensitivity_lines", report_claims.sensitivity_lines, dict(results=results), dict(results=[None, 3])),
         ("plausible_text", report_claims.plausible_text, dict(p={"low": 1.0, "high": 2.0}), dict(p=[3, "x"])),
         ("not_reproduced", report_md.not_reproduced, dict(results=results), dict(results=[None, 3])),

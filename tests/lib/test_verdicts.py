@@ -194,3 +194,15 @@ def test_a_value_where_the_claim_cannot_be_judged_is_not_a_flip():
     c = result.get_claim("below-two")
     assert c.verdict == "holds" and c.depends_on == [] and "toy.k" in c.robust_to
     assert "Untestable at toy.k = 2.0, 2.5, 3.0" in c.note
+
+
+def test_a_chain_of_derivations_is_followed_and_a_circle_refused():
+    r = StudyResult(INFO)
+    r.quantity("rmse", "RMSE", 0.101, paper=0.1248, tolerance=0.1)
+    r.quantity("snr", "SNR", 19.92, paper=19.05, tolerance=0.05, derived_from="rmse")
+    r.quantity("snr2", "SNR again", 19.92, paper=19.05, tolerance=0.05, derived_from="snr")
+    assert [q["verdict"] for q in r.to_dict()["quantities"]] == ["differs", "differs", "differs"]
+    r.quantity("a", "a", 1.0, paper=1.0, derived_from="b")
+    r.quantity("b", "b", 1.0, paper=1.0, derived_from="a")
+    with pytest.raises(ValueError, match="circle"):
+        r.to_dict()
