@@ -9,7 +9,7 @@ import numpy as np
 
 from . import quantities as qty
 from .loops import ID_OPTIONS, plant_tf
-from .paper import CLAIMS, frozen
+from .paper import CLAIMS, READINGS, frozen
 
 __all__ = ["Q_SWEEP", "ablation", "beyond", "claims_table", "paper_number"]
 
@@ -78,7 +78,7 @@ def _options(ctx, result, p):
     bias = qty.identification_bias(result, opts, p_opt)
     best = max(ID_OPTIONS, key=lambda o: (bias[(o, "track")], -abs(bias[(o, "g0")])))
     result.finding("identification-signal", "Only the LPF output as identification signal lets every loop track "
-                   f"({bias[('lpf', 'track')]:.0%} of runs within 5 % of the reference): raw measurement "
+                   f"({bias[('lpf', 'track')]:.0%} of runs within {READINGS.tracks:.0%} of the reference): raw measurement "
                    f"{bias[('raw', 'track')]:.0%}, fed-back signal {bias[('feedback', 'track')]:.0%} (live RLS "
                    f"settings, {p.option_runs} runs, {p_opt.t_end:g} s). Bias of ĝ0 against the noise-free fit (CKF "
                    "case): " + "; ".join(f"{o}: {bias[(o, 'g0')]:+.4f}" for o in ID_OPTIONS)
@@ -182,11 +182,11 @@ def beyond(ctx, result, p, data, errs):
     return {"sweep": sweep, "lpf": lpf, "data2": data2}
 
 
-def claims_table(result, p):
+def claims_table(result, p, r=READINGS):
     """Every claim judged three ways (live identification, frozen-Φ ablation, second plant), as one finding."""
     word = {True: "holds", False: "fails", None: "untestable"}
     cols = {"live": "", "frozen": "frozen.", "plant2": "plant2."}
-    judged = {k: qty.judge_claims(result, p, prefix=v) for k, v in cols.items()}
+    judged = {k: qty.judge_claims(result, p, r, prefix=v) for k, v in cols.items()}
     rows = [f"{c.id}: live {word[judged['live'][c.id][0]]}, frozen-Φ {word[judged['frozen'][c.id][0]]}, second "
             f"plant {word[judged['plant2'][c.id][0]]}" for c in CLAIMS]
     changed = [c.id for c in CLAIMS if judged["live"][c.id][0] != judged["frozen"][c.id][0]]

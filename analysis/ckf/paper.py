@@ -7,7 +7,7 @@ from dataclasses import dataclass
 from ctrl_analysis.controllers.golden_section import GOLDEN_L1, GOLDEN_L2
 from ctrl_analysis.study import Claim, choices, fixed, printed, reconstructed, span
 
-__all__ = ["CLAIMS", "PAPER", "CKFStudy", "frozen"]
+__all__ = ["CLAIMS", "PAPER", "READINGS", "CKFStudy", "Readings", "frozen"]
 
 #: The paper's claims (§3 and the conclusion), judged by :func:`analysis.ckf.quantities.judge_claims`.
 CLAIMS = (
@@ -148,6 +148,35 @@ class CKFStudy:
 
 
 PAPER = CKFStudy()
+
+
+@dataclass(frozen=True)
+class Readings:
+    """How the study reads the paper's qualitative words when it judges the claims (none is printed); kept apart
+    from :class:`CKFStudy` because no simulation depends on them (the sweep re-judges the same runs)."""
+
+    z_significant: float = reconstructed(
+        2.0, "'smaller' / 'steadier' in §3 is read as: the CKF on the claimed side by more than z standard errors of "
+        "the difference of the Monte Carlo means (z = 2, about a two-sided 5 % test)",
+        plausible=span(1.0, 3.0, "from one standard error (a loose reading of 'smaller') to three (a strict one)",
+                       points=3))
+    smoother_ratio: float = reconstructed(
+        0.1, "'far smoother' (§3) is read as the CKF's steady control variance below a tenth of the no-filter one",
+        plausible=span(0.05, 0.3, "'far' read from a twentieth to a third of the variance", scale="log", points=3))
+    accurate: float = reconstructed(
+        0.01, "'accurate' output (§3) is read as a steady RMS error about the reference below 1 % of the reference "
+        "(the same bar for every loop)",
+        plausible=span(0.005, 0.03, "from half a percent to three percent of the reference", scale="log", points=3))
+    tracks: float = reconstructed(
+        0.05, "a loop 'tracks' when its steady output error is below 5 % of the reference; filter comparisons in loops "
+        "that do not track are untestable, not failed (also the bar of the tracking-fraction quantities)",
+        plausible=span(0.02, 0.1, "a tracking bar from 2 % to 10 % of the reference", scale="log", points=3))
+    cheaper_ratio: float = reconstructed(
+        5.0, "'needs far less computation' (§1.2, conclusion) is read as at least 5x fewer multiplications per step",
+        plausible=span(2.0, 10.0, "'far less' read from half to a tenth of the cost", scale="log", points=3))
+
+
+READINGS = Readings()
 
 
 def frozen(p: CKFStudy) -> CKFStudy:

@@ -13,6 +13,8 @@ from ctrl_analysis.loop import Loop, place
 from ctrl_analysis.metrics import mean_std
 from ctrl_analysis.plants import DiscreteLTI
 
+from .paper import READINGS
+
 __all__ = [
     "COMPARED",
     "cost",
@@ -256,7 +258,7 @@ def offset_terms(d, p):
             "e": mean(e)}
 
 
-def identification_bias(result, data_opts, p):
+def identification_bias(result, data_opts, p, r=READINGS):
     """Bias of f̂1, f̂2, ĝ0 (steady-stage mean minus the noise-free fit) per identification option, CKF case."""
     out = {}
     for opt, data in data_opts.items():
@@ -268,10 +270,10 @@ def identification_bias(result, data_opts, p):
             record(result, f"ident.{opt}.{name}_bias", f"identification from '{opt}': bias of {name} (CKF case)",
                    bias, d["ok"], note="steady-stage mean of the estimate minus the noise-free LS fit of the same run")
             out[(opt, name)] = float(np.mean(bias))
-        track = np.mean([np.mean(np.abs(data[c]["y"][m].mean(0) - p.reference) < 0.05 * p.reference)
+        track = np.mean([np.mean(np.abs(data[c]["y"][m].mean(0) - p.reference) < r.tracks * p.reference)
                          for c in data])
         result.quantity(f"ident.{opt}.tracking_fraction", f"identification from '{opt}': fraction of runs (all "
-                        f"cases) whose steady output mean is within 5 % of the reference", float(track),
+                        f"cases) whose steady output mean is within {r.tracks:.0%} of the reference", float(track),
                         runs=int(sum(data[c]["y"].shape[1] for c in data)), unit="")
         out[(opt, "track")] = float(track)
     return out
@@ -327,41 +329,32 @@ def q_sweep(d, p, qs, runs=10):
 #: Comparisons behind the claims: claim id -> (quantity, case the CKF is compared with).
 COMPARED = {"transient": ("filter_rmse_transient", "lpf"), "steady": ("filter_rmse_steady", "lpf"),
             "steady-output": ("y_var", "lpf"), "steady-control": ("u_var", "lpf")}
-#: "Far smoother": the CKF's control variance below this share of the no-filter one; "accurate output": a steady
-#: output RMS error about the reference below this share of the reference (the same bar for every loop).
-SMOOTHER_RATIO, ACCURATE = 0.1, 0.01
-#: "Far less computation": at least this ratio of multiplications per step.
-CHEAPER_RATIO = 5.0
-#: A loop "tracks" when its steady output RMS error about the reference is below this share of the reference (the
-#: bar of the tracking-fraction quantities); a filter comparison in loops that do not track is untestable, not failed.
-TRACKS = 0.05
-
-
-def _not_tracking(result, p, prefix, cases) -> str | None:
+def _not_tracking(result, p, r, prefix, cases) -> str | None:
     """A note naming the cases whose loop does not track the reference (None when all track)."""
     bad = []
     for case in cases:
         q = result.get(f"{prefix}{case}.y_rmse")
-        if q.value is None or q.value >= TRACKS * p.reference:
+        if q.value is None or q.value >= r.tracks * p.reference:
             bad.append(f"{q.label} = {'—' if q.value is None else f'{q.value:.3g}'}")
     if not bad:
         return None
-    return (f"untestable: the loop does not track the reference ({'; '.join(bad)}, against {TRACKS:.0%} of the "
+    return (f"untestable: the loop does not track the reference ({'; '.join(bad)}, against {r.tracks:.0%} of the "
             "reference), so the filters are not compared in the working closed loop the paper describes")
 
 
-def judge_claims(result, p, prefix=""):
+def judge_claims(result, p, r=READINGS, prefix=""):
     """Judge the paper's claims on recorded quantities: ``{claim id: (holds, evidence ids, note)}``.
 
     The same function judges the main run, the frozen-Φ ablation, the second plant and every evaluation of the
-    sensitivity sweep. A comparison holds only when the CKF is on the claimed side by more than two standard
-    errors of the difference of the means.
+    sensitivity sweep. Every bar is a reconstruction of ``r`` (:class:`.paper.Readings`): a comparison holds only
+    when the CKF is on the claimed side by more than ``r.z_significant`` standard errors of the difference of the
+    means.
     """
     out = {}
     for key, (q, other) in COMPARED.items():
         a, b = f"{prefix}ckf.{q}", f"{prefix}{other}.{q}"
-        ok, significant, numbers = _compare(result, a, b)
-        broken = _not_tracking(result, p, prefix, ("ckf", other))
+        ok, significant, numbers = _compare(result, a, b, r.z_significant)
+        broken = _not_tracking(result, p, r, prefix, ("ckf", other))
         out[key] = ((None, [a, b], broken) if broken else
                     (None if ok is None else bool(ok and significant), [a, b], numbers))
     g = lambda i: result.get(prefix + i)
@@ -370,19 +363,19 @@ def judge_claims(result, p, prefix=""):
     if any(v is None for v in vals):
         out["smoother"] = (None, [u_c.id, u_n.id, y_c.id, y_n.id], "a case has no value (all runs diverged)")
     else:
-        holds = vals[0] < SMOOTHER_RATIO * vals[1] and vals[2] < ACCURATE * p.reference
-        note = (f"control variance CKF / no filter = {vals[0] / vals[1]:.3g} (needs < {SMOOTHER_RATIO:g}); steady "
+        holds = vals[0] < r.smoother_ratio * vals[1] and vals[2] < r.accurate * p.reference
+        note = (f"control variance CKF / no filter = {vals[0] / vals[1]:.3g} (needs < {r.smoother_ratio:g}); steady "
                 f"output RMS error about the reference CKF {vals[2]:.3g}, no filter {vals[3]:.3g} (the CKF's needs < "
-                f"{ACCURATE:.0%} of the reference, {ACCURATE * p.reference:g}, the bar of claim nofilter-accurate)")
-        broken = _not_tracking(result, p, prefix, ("ckf",))
+                f"{r.accurate:.1%} of the reference, {r.accurate * p.reference:g}, the bar of claim nofilter-accurate)")
+        broken = _not_tracking(result, p, r, prefix, ("ckf",))
         out["smoother"] = (None if broken else holds, [u_c.id, u_n.id, y_c.id, y_n.id], broken or note)
     v = y_n.value
-    out["nofilter-accurate"] = (None if v is None else v < ACCURATE * p.reference, [y_n.id],
+    out["nofilter-accurate"] = (None if v is None else v < r.accurate * p.reference, [y_n.id],
                                 "no value" if v is None else f"no filter: steady output RMS error about the reference "
-                                f"{v:.3g} against {ACCURATE:.0%} of the reference, {ACCURATE * p.reference:g}")
+                                f"{v:.3g} against {r.accurate:.1%} of the reference, {r.accurate * p.reference:g}")
     ok, significant, numbers = _compare(result, f"{prefix}lpf.filter_rmse_transient",
-                                        f"{prefix}lpf_half.filter_rmse_transient")
-    broken = _not_tracking(result, p, prefix, ("lpf",))
+                                        f"{prefix}lpf_half.filter_rmse_transient", r.z_significant)
+    broken = _not_tracking(result, p, r, prefix, ("lpf",))
     out["lpf-bandwidth"] = (None if ok is None or broken else bool(ok and significant),
                             [f"{prefix}lpf_half.filter_rmse_transient", f"{prefix}lpf.filter_rmse_transient"],
                             broken or numbers)
@@ -390,35 +383,35 @@ def judge_claims(result, p, prefix=""):
     known = result.get("cost.fullorder_known_mults").value
     note = (f"multiplications per step: full-order KF with the identification it would need {full:g} (knowing the "
             f"plant, without identification, {known:g}) vs CKF with its identification {ckf:g}: {full / ckf:.3g}x "
-            f"(needs >= {CHEAPER_RATIO:g}x)")
-    out["cheaper"] = (full / ckf >= CHEAPER_RATIO, ["cost.ckf_mults", "cost.fullorder_mults"], note)
+            f"(needs >= {r.cheaper_ratio:g}x)")
+    out["cheaper"] = (full / ckf >= r.cheaper_ratio, ["cost.ckf_mults", "cost.fullorder_mults"], note)
     return out
 
 
-def record_claims(result, p):
+def record_claims(result, p, r=READINGS):
     """Judge the paper's claims on the main quantities and record them (``result.claim``)."""
     from .paper import CLAIMS
 
-    judged = judge_claims(result, p)
+    judged = judge_claims(result, p, r)
     for c in CLAIMS:
         holds, evidence, note = judged[c.id]
         result.claim(c, holds, evidence=evidence, note=note)
     return judged
 
 
-def _compare(result, a, b):
-    """Whether ``a < b``, whether the difference exceeds 2 standard errors, and the numbers (with labels)."""
+def _compare(result, a, b, z):
+    """Whether ``a < b``, whether the difference exceeds ``z`` standard errors, and the numbers (with labels)."""
     qa, qb = result.get(a), result.get(b)
     if qa.value is None or qb.value is None:
         return None, None, f"{qa.label} or {qb.label} has no value (all runs diverged)"
     diff = qa.value - qb.value
     na, nb = (max(q.runs - (q.runs_diverged or 0), 1) for q in (qa, qb))  # the runs the means are over
     se = float(np.sqrt(qa.std**2 / na + qb.std**2 / nb))
-    significant = bool(abs(diff) > 2 * se)
+    significant = bool(abs(diff) > z * se)
     sig = "significant" if significant else "NOT significant"
     return qa.value < qb.value, significant, (f"{qa.label} = {qa.value:.4g} ± {qa.std:.2g} vs {qb.label} = "
                                               f"{qb.value:.4g} ± {qb.std:.2g} (difference {diff:+.3g}, standard error "
-                                              f"{se:.2g}: {sig} at 2 SE)")
+                                              f"{se:.2g}: {sig} at {z:g} SE)")
 
 
 def missing(result) -> list:

@@ -19,7 +19,7 @@ from ctrl_analysis import sensitivity
 from ctrl_analysis.study import record_parameters
 
 from . import claims, example1, example2, figures, linear_checks
-from .paper import EX1, EX2, LINEAR
+from .paper import EX1, EX2, LINEAR, READINGS
 
 __all__ = ["INFO", "run"]
 
@@ -47,12 +47,12 @@ def run(ctx: StudyContext, ex1=None, ex2=None) -> StudyResult:
     p2 = ex2 or (EX2 if not ctx.quick else replace(EX2, T=5.0, sweep_b1=(-10.0, 0.0, 10.0),
                                                    sweep_b2=(-10.0, 2.0, 10.0), sweep_b3=(0.1, 10.0)))
     runs = ctx.runs_or(100, 3)
-    for prefix, params in (("linear", LINEAR), ("ex1", p1), ("ex2", p2)):
+    for prefix, params in (("linear", LINEAR), ("ex1", p1), ("ex2", p2), ("claims", READINGS)):
         record_parameters(result, params, prefix)
     _linear(ctx, result)
     _example1(ctx, result, p1, runs)
     a_preset = _example2(ctx, result, p2, runs)
-    claims.judge(result, p1, p2)
+    claims.judge(result, p1, p2, READINGS)
     _sensitivity(ctx, result, p1, p2, a_preset)
     result.missing = list(MISSING)  # the differing cells are listed by the report, from their verdicts
     return result
@@ -61,12 +61,12 @@ def run(ctx: StudyContext, ex1=None, ex2=None) -> StudyResult:
 def _sensitivity(ctx, result, p1, p2, a_preset):
     """Every reconstruction's plausible range, one at a time (:func:`.claims.evaluate`); figure sensitivity.png."""
     runs = 3 if ctx.quick else 10
-    names = None if not ctx.quick else ["ex1.eso_tuning_h", "ex2.b1"]
+    names = None if not ctx.quick else ["ex1.eso_tuning_h", "ex2.b1", "claims.fair_margin"]
     ctx.progress(f"sensitivity: each reconstruction across its plausible range ({runs} runs per evaluation)")
     evaluate = functools.partial(claims.evaluate, runs=runs, seed=ctx.seed, a_preset=a_preset,
                                  grid=None if not ctx.quick else {"sweep_b1": (1.0,), "sweep_b2": (2.0,),
                                                                   "sweep_b3": (1.0,)})
-    sens = sensitivity.sweep(evaluate, {"linear": LINEAR, "ex1": p1, "ex2": p2}, names=names, jobs=ctx.jobs,
+    sens = sensitivity.sweep(evaluate, {"linear": LINEAR, "ex1": p1, "ex2": p2, "claims": READINGS}, names=names, jobs=ctx.jobs,
                              scheduler=ctx.scheduler,
                              note=f"{runs} Monte Carlo runs per evaluation (the main run's first seeds); Example 2's "
                                   f"robustness grid reduced to b1 ∈ {claims.EVAL_GRID['sweep_b1']}, b2 ∈ "

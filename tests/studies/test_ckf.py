@@ -8,7 +8,7 @@ import numpy as np
 from analysis import ckf
 from analysis.ckf import quantities as qty
 from analysis.ckf.loops import CASES, ID_OPTIONS, SIGNALS, simulate_cases
-from analysis.ckf.paper import CLAIMS, PAPER, frozen
+from analysis.ckf.paper import CLAIMS, PAPER, READINGS, frozen
 from ctrl_analysis.report import StudyContext, write_results_json
 from ctrl_analysis.study import missing_plausible
 
@@ -16,7 +16,7 @@ SHORT = dataclasses.replace(PAPER, t_end=12.0, t_steady=8.0, option_t_end=12.0, 
 
 
 def test_every_reconstruction_has_a_plausible_range():
-    assert missing_plausible(PAPER) == []
+    assert missing_plausible(PAPER) == [] and missing_plausible(READINGS) == []
     assert {c.id for c in CLAIMS} == set(qty.judge_claims.__globals__["COMPARED"]) | {
         "smoother", "nofilter-accurate", "lpf-bandwidth", "cheaper"}
 
@@ -45,25 +45,27 @@ def test_short_run_writes_table1_claims_and_figures(tmp_path):
     held = {c: claims[c]["base_verdict"] for c in claims}
     assert held == {"transient": "holds", "steady": "fails", "steady-output": "fails", "steady-control": "fails",
                     "smoother": "holds", "nofilter-accurate": "fails", "lpf-bandwidth": "fails", "cheaper": "holds"}
-    # the quick sweep varies P0_rls and the LPF cut-off; the steady-stage claims flip with the cut-off
-    assert set(data["sensitivity"]["ranges"]) == {"P0_rls", "lpf_omega"}
+    # the quick sweep varies P0_rls, the LPF cut-off and the significance bar; the steady-stage claims flip with the
+    # cut-off
+    assert set(data["sensitivity"]["ranges"]) == {"P0_rls", "lpf_omega", "claims.z_significant"}
     flips = {d["reconstruction"] for d in claims["steady"]["depends_on"]}
     assert claims["steady"]["verdict"] == ("depends" if flips else "holds")
     findings = {f["id"] for f in data["findings"]}
     assert {"identification-live", "claims-live-vs-frozen", "plant2-offset", "full-order-kf", "u-rms-scale",
             "identification-signal", "projection-box", "q-sweep"} <= findings
-    assert {"plant2", "frozen_rls", "P0_rls", "max_trace"} <= {r["name"] for r in data["reconstructions"]}
+    assert {"plant2", "frozen_rls", "P0_rls", "max_trace", "claims.smoother_ratio", "claims.tracks"} <= {
+        r["name"] for r in data["reconstructions"]}
     assert len(data["figures"]) == 12 and all((tmp_path / f).exists() for f in data["figures"])
 
 
 def test_claims_of_a_small_evaluation_and_a_known_flip():
     """40 s, 8 runs (seeded): every claim holds at the chosen values; a low LPF cut-off flips the steady claim."""
     p = dataclasses.replace(PAPER, t_end=40.0, t_steady=20.0, sweep_runs=8)
-    res = ckf.evaluate({"": p, "run": ckf.SweepRun(1)})
+    res = ckf.evaluate({"": p, "claims": READINGS, "run": ckf.SweepRun(1)})
     assert {c.claim.id: c.holds for c in res.claims} == dict.fromkeys((c.id for c in CLAIMS), True)
     assert res.get_claim("steady").evidence == ("ckf.filter_rmse_steady", "lpf.filter_rmse_steady")
     assert res.get_claim("smoother").evidence == ("ckf.u_var", "nofilter.u_var", "ckf.y_rmse", "nofilter.y_rmse")
-    low = ckf.evaluate({"": dataclasses.replace(p, lpf_omega=1.0), "run": ckf.SweepRun(1)})
+    low = ckf.evaluate({"": dataclasses.replace(p, lpf_omega=1.0), "claims": READINGS, "run": ckf.SweepRun(1)})
     assert low.get_claim("steady").holds is False  # a slower LPF smooths the steady stage better than the CKF
 
 
@@ -93,6 +95,12 @@ def test_judge_claims_fails_when_the_ckf_is_not_ahead():
     assert judged["lpf-bandwidth"][0] is False  # the half-bandwidth LPF deviates *less* here
     assert judged["steady"][0] is True and judged["cheaper"][0] is True
     assert judged["smoother"][0] is False  # 0.05 / 0.1 is not "far smoother" (needs < 0.1)
+    # the bars are the readings' (swept by the sensitivity analysis), not constants of the judge
+    loose = dataclasses.replace(READINGS, smoother_ratio=0.6, accurate=0.1, cheaper_ratio=1e3, z_significant=200.0)
+    judged = qty.judge_claims(res, PAPER, loose)
+    assert judged["smoother"][0] is True and judged["cheaper"][0] is False
+    assert judged["steady"][0] is False  # 0.05 vs 0.1 with std 0.001 (about 110 standard errors) is not 200 apart
+    assert qty.judge_claims(res, PAPER, dataclasses.replace(READINGS, tracks=0.001))["steady"][0] is None
 
 
 def test_batch_run_equals_single_run():

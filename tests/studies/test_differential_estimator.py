@@ -12,11 +12,11 @@ import pytest
 from analysis.differential_estimator import INFO, run
 from analysis.differential_estimator import example1, example2, linear_checks, loops
 from analysis.differential_estimator import claims, figures
-from analysis.differential_estimator.paper import (CLAIMS, EX1, EX2, LINEAR, applied_gains, han_eso_gains,
-                                                   printed_eq9_gain)
+from analysis.differential_estimator.paper import (CLAIMS, EX1, EX2, LINEAR, READINGS, applied_gains,
+                                                   han_eso_gains, printed_eq9_gain)
 from ctrl_analysis.study import missing_plausible
 from ctrl_analysis.estimators.differential import DifferentialEstimator
-from ctrl_analysis.report import StudyContext, StudyResult, compute_verdict, write_results_json
+from ctrl_analysis.report import StudyContext, StudyResult, write_results_json
 from ctrl_analysis.simulate import run_seeds
 from ctrl_analysis.symbolic.differential import breakaway_gain
 
@@ -213,7 +213,7 @@ def test_corrected_reading_is_a_static_gain_after_sigma():
 
 
 def test_every_reconstruction_has_a_plausible_range():
-    for params in (LINEAR, EX1, EX2):
+    for params in (LINEAR, EX1, EX2, READINGS):
         assert missing_plausible(params) == []
 
 
@@ -238,6 +238,9 @@ def test_evaluate_flips_the_fair_claim_with_the_fal_exponents():
     assert "fal ESO error ÷ Σ's error 0.98" in fair[0].note  # a tie on x1, not an advantage
     for r in at.values():  # robust: the paper's comparison and the divergence of a badly tuned ESO
         assert r.get_claim("sigma-beats-eso").holds and r.get_claim("eso-diverges").holds
+    # the margin is a reading the sweep varies: with a margin below the fal ESO's 0.98 the fair claim holds
+    lax = claims.evaluate(dict(base, claims=replace(READINGS, fair_margin=0.9)), **kw)
+    assert lax.get_claim("sigma-beats-eso-fair").holds and "at least 0.9 " in lax.get_claim("sigma-beats-eso-fair").note
 
 
 def test_quick_run_smoke(tmp_path):
@@ -263,7 +266,8 @@ def test_quick_run_smoke(tmp_path):
     assert {"fig5_tracking_a5_and_a34.png", "ex1_tradeoff.png", "fig_ex2_stability_map.png",
             "sensitivity.png"} <= set(result.figures)
     names = {r["name"] for r in result.reconstructions}
-    assert {"ex1.h", "ex1.eso_alpha", "ex1.eso_tuning_h", "ex2.K", "ex2.omega"} <= names
+    assert {"ex1.h", "ex1.eso_alpha", "ex1.eso_tuning_h", "ex2.K", "ex2.omega", "ex2.ripple_tol",
+            "claims.fair_margin"} <= names
     # the claims, judged with their evidence; deterministic ones do not depend on the Monte Carlo runs
     assert [c.claim.id for c in result.claims] == [c.id for c in CLAIMS]
     verdicts = {c.claim.id: c.base_verdict for c in result.claims}
