@@ -18,13 +18,14 @@ import sys
 from pathlib import Path
 
 import _common  # noqa: F401  (before numpy: single-threaded BLAS)
+import bench_arena
 import bench_ckf
 import bench_example1
 import bench_ikf_mfac
 import bench_pendulum
 from _common import table
 
-BENCHMARKS = (bench_example1, bench_ikf_mfac, bench_ckf, bench_pendulum)
+BENCHMARKS = (bench_example1, bench_ikf_mfac, bench_ckf, bench_pendulum, bench_arena)
 
 
 def main(argv=None) -> int:
@@ -45,7 +46,7 @@ def main(argv=None) -> int:
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     head = (f"Python {platform.python_version()}, {os.cpu_count()} cores, load average {load:.1f} at the end; "
             f"OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS')}; medians of {args.repeat} repeats; "
-            f"Example 1 over {args.T:g} s ({round(args.T / bench_example1.H)} RK4 steps); the study benchmarks have no "
+            f"Example 1 over {args.T:g} s ({round(args.T / bench_example1.H)} RK4 steps); the study benchmarks (not the arena's) have no "
             "compiled reference (— in the last ratio column)")
     text = "\n".join([head, "", table(rows, base, comp), "", *[f"- {x}" for x in notes]])
     print(text)

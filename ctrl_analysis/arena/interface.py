@@ -10,7 +10,7 @@ The batch is run by the library's engine (:class:`~ctrl_analysis.loop.Loop`, ``e
 compiled path with **per-run kernel parameters**), so a tuning grid is one simulation of many runs.
 Where a block's numpy method cannot take per-run parameters as they are, a small adapter here gives it
 the per-run arrays (the equations stay the library's: ``sigma_rhs``/``DifferentialEstimator.rhs``,
-``eso_rhs``/``ExtendedStateObserver.rhs``, ``td_update``, ``alpha_beta_output``/``alpha_beta_update``,
+``eso_rhs``/``ExtendedStateObserver.rhs``, ``td_output``/``td_update``, ``alpha_beta_output``/``alpha_beta_update``,
 ``lowpass_update``/``lowpass_output``). The algebraic differentiator (:mod:`.algebraic`) is an FIR
 filter run with vectorised numpy.
 """
@@ -21,7 +21,6 @@ import functools
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.linalg
 
 from .._kernels import BlockKernel, copy_output, eso_rhs, sigma_rhs
 from .._validate import check_finite, check_in, check_positive
@@ -29,11 +28,10 @@ from ..blocks import ColumnKernels, DiscreteBlock
 from ..estimators.differential import DifferentialEstimator
 from ..estimators.eso import ExtendedStateObserver
 from ..estimators.kalman.alpha_beta import alpha_beta_output, alpha_beta_update, kalata_gains
-from ..estimators.lowpass import LowPassFilter, lowpass_output, lowpass_update
-from ..estimators.tracking import TrackingDifferentiator, _td_steps, td_update
+from ..estimators.lowpass import DiscreteLowPass, LowPassFilter, lowpass_output, lowpass_update
+from ..estimators.tracking import td_output, td_update
 from ..loop import Loop, place
 from ..polynomials import repeated_pole_coefficients
-from ..symbolic.differential import breakaway_gain, differential_coefficients
 from .algebraic import algebraic_derivative
 
 __all__ = ["Param", "Family", "FAMILIES", "family", "scales", "estimate"]
@@ -109,7 +107,7 @@ FAMILIES = (
            {"alpha": NESO_ALPHA}),
     Family("td", "Han's tracking differentiator (r, h0)", (Param("r", "L", 0.5, 50.0),
                                                            Param("h0", "tau", 0.1, 10.0)), False,
-           "estimators.tracking.TrackingDifferentiator (td_update)"),
+           "estimators.tracking.TrackingDifferentiator (td_output, td_update)"),
     Family("kalman", "steady-state Kalman α-β (Kalata's Λ)", (Param("Lambda", "lambda", 0.001, 1000.0),), False,
            "estimators.kalman.AlphaBetaFilter with kalata_gains(Λ)"),
     Family("difflp", "backward difference + low-pass, order 2 (ω)", (Param("omega", "omega", 0.1, 10.0),), False,
@@ -207,48 +205,37 @@ class _PerRunESO(ExtendedStateObserver):
         return BlockKernel(output=copy_output, params=self._params, rhs=eso_rhs)
 
 
-class _PerRunTD(TrackingDifferentiator):
-    """Han's TD with per-run ``r`` and ``h0`` (numpy: ``_td_steps`` on the columns; compiled: ``td_update``)."""
-
-    def __init__(self, r, h0, h):
-        TrackingDifferentiator.__init__(self, 1.0, h)
-        self._p = np.ascontiguousarray(np.column_stack([r, np.full(r.size, h), h0, np.ones(r.size),
-                                                        np.zeros(r.size)]))
-
-    def update(self, t, x, u, params=None):
-        x1, x2, _ = _td_steps(x[:, 0], x[:, 1], u[:, 0], self._p[:, 0], self.h, self._p[:, 2], 1)
-        return np.column_stack([x1, x2])
-
-    def output(self, t, x, u, params=None):
-        return x.copy()
-
-    column_kernels = {"update": "td_update", "output": "_copy"}
-
-
 class _SharedColumns(ColumnKernels, DiscreteBlock):
     """A library discrete kernel run on the batch's columns with per-run parameter rows ``self._p``.
 
     The entries listed in ``_shared`` are the same for every run and are passed as scalars (the
-    library kernels branch on them: the α-β "has b" flag, the low-pass order).
+    library kernels branch on them: the α-β "has b" flag, the low-pass order, the TD's substeps).
     """
 
     _shared: tuple = ()
 
-    def _columns(self):
+    def _on_columns(self, kind, t, x, u, width):
         cols = list(self._p.T)
         for i in self._shared:
             cols[i] = float(self._p[0, i])
-        return cols
+        out = np.empty((x.shape[0], width))
+        self._column_fns()[kind](t, x.T, u.T, cols, out.T)
+        return out
 
-    def output(self, t, x, u, params=None):
-        y = np.empty((x.shape[0], len(self.outputs)))
-        self._column_fns()["output"](t, x.T, u.T, self._columns(), y.T)
-        return y
 
-    def update(self, t, x, u, params=None):
-        xn = np.empty_like(x)
-        self._column_fns()["update"](t, x.T, u.T, self._columns(), xn.T)
-        return xn
+class _PerRunTD(_SharedColumns):
+    """Han's TD (:class:`~ctrl_analysis.estimators.tracking.TrackingDifferentiator`) with per-run ``r`` and ``h0``: its kernels ``td_output``/``td_update``."""
+
+    inputs, states, outputs, feedthrough = ("v",), ("x1", "x2"), ("x1", "x2"), False
+    _shared = (1, 3, 4)  # h, substeps (1), feedthrough (0)
+    column_kernels = {"output": "td_output", "update": "td_update"}
+
+    def __init__(self, r, h0, h):
+        B = r.size
+        self._p = np.ascontiguousarray(np.column_stack([r, np.full(B, h), h0, np.ones(B), np.zeros(B)]))
+
+    def initial_state(self):
+        return np.zeros(2)
 
 
 class _PerRunAlphaBeta(_SharedColumns):
@@ -286,41 +273,25 @@ class _PerRunLowPass(_SharedColumns):
 
 @functools.lru_cache(maxsize=4096)
 def _lowpass_params(omega: float, dt: float, order: int) -> np.ndarray:
-    """The kernel parameters ``[m, Ad, Bd]`` of :class:`DiscreteLowPass` (2 channels), fast.
-
-    ``Ad, Bd`` are the zero-order-hold discretisation of :class:`LowPassFilter`'s ``(A, B)``, taken as
-    the exponential of the augmented matrix ``[[A, B], [0, 0]] dt`` (what ``control.c2d`` computes,
-    ~1000x faster per call; ``tests/lib/test_arena.py`` holds the two equal).
-    """
-    lp = LowPassFilter(omega, order)
-    M = np.zeros((order + 1, order + 1))
-    M[:order, :order], M[:order, order:] = lp.A, lp.B
-    E = scipy.linalg.expm(M * dt)
-    return np.concatenate([[float(order)], E[:order, :order].reshape(-1), E[:order, order]])
+    """The kernel parameters ``[m, Ad, Bd]`` of the library's :class:`DiscreteLowPass` (2 channels), cached per ``ω``."""
+    return DiscreteLowPass(LowPassFilter(omega, order), dt, channels=2)._p
 
 
-@functools.lru_cache(maxsize=64)
-def _sigma_unit_gains(n0: int) -> np.ndarray:
-    """Σ's gains at ``a = 1`` (breakaway design); at any ``a`` they are ``a_i(1) a^i`` (``s = a σ``)."""
-    return differential_coefficients(n0, 1.0, breakaway_gain(n0, 1.0))
-
-
-def _copy(t, x, u, p, y):
-    """Output = state (the TD adapter's compiled output kernel)."""
-    y[0] = x[0]
-    y[1] = x[1]
+@functools.lru_cache(maxsize=4096)
+def _sigma_gains(a: float) -> np.ndarray:
+    """Σ's gains (n0 = 3, breakaway design) from the library's :class:`DifferentialEstimator`, cached per ``a``."""
+    return DifferentialEstimator(3, a).a_coeffs
 
 
 # the library kernels the adapters name in column_kernels (ColumnKernels looks them up in this module)
-_KERNELS = (td_update, alpha_beta_output, alpha_beta_update, lowpass_output, lowpass_update)
+_KERNELS = (td_output, td_update, alpha_beta_output, alpha_beta_update, lowpass_output, lowpass_update)
 
 
 # ---------------------------------------------------------------------------------------- running
 def _build(fam: Family, P: np.ndarray, dt: float):
     """``(block, input names, output names)`` for the family with per-run parameter rows ``P``."""
     if fam.name == "sigma":
-        # a_i = K C(n0-1, i-1) a^(i-1) with K ∝ a: a_i(a) = a_i(1) a^i
-        gains = _sigma_unit_gains(3) * P[:, :1] ** np.arange(1, 4)
+        gains = np.array([_sigma_gains(float(a)) for a in P[:, 0]])
         return _PerRunSigma(gains), ("y",), ("xhat[0]", "xhat[1]", "xhat[2]")
     if fam.name in ("leso2", "leso3", "neso"):
         m = 2 if fam.name == "leso2" else 3

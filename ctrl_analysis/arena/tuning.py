@@ -34,6 +34,7 @@ from .._validate import (
     check_positive,
     check_str,
 )
+from ..metrics import rmse
 from ..parallel import map_chunks
 from .interface import FAMILIES, OMEGA_DT_MAX, Family, estimate, family, scales
 from .signals import add_noise, make_signal
@@ -239,9 +240,8 @@ def evaluate(task) -> np.ndarray:
             noisy = est[k0:, i * per:i * per + S]
             clean = est[k0:, i * per + S:(i + 1) * per]
             truth = truths[i][k0:]
-            e = noisy - truth
-            out[lo + i] = (np.max(np.abs(e)), np.sqrt(np.mean(e**2)), np.max(np.abs(clean - truth)),
-                           np.sqrt(np.mean((noisy - clean) ** 2)))
+            out[lo + i] = (np.max(np.abs(noisy - truth)), rmse(truth, noisy, axis=None),
+                           np.max(np.abs(clean - truth)), rmse(clean, noisy, axis=None))
     return np.where(np.isfinite(out), out, np.inf)
 
 

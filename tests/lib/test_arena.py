@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from ctrl_analysis.arena.algebraic import algebraic_derivative, algebraic_weights
-from ctrl_analysis.arena.interface import FAMILIES, _lowpass_params, estimate, family, scales
+from ctrl_analysis.arena.interface import FAMILIES, estimate, family, scales
 from ctrl_analysis.arena.signals import NOISE_CLASSES, SIGNAL_CLASSES, add_noise, make_signal
 from ctrl_analysis.arena.tuning import Case, Setup, pareto_front, tune_family
 from ctrl_analysis.estimators.differential import DifferentialEstimator
@@ -111,11 +111,6 @@ def test_batch_equals_single_runs(fam):
     whole = estimate(fam, P, y, DT, engine="numpy")
     alone = estimate(fam, P[1:2], y[:, 1:2], DT, engine="numpy")
     assert np.array_equal(whole[:, 1], alone[:, 0])
-
-
-def test_lowpass_params_equal_the_library_discretisation():
-    assert np.allclose(_lowpass_params(37.0, 0.002, 2), DiscreteLowPass(LowPassFilter(37.0, 2), 0.002, channels=2)._p,
-                       rtol=1e-12, atol=1e-12)
 
 
 def test_estimate_rejects_bad_shapes():
