@@ -166,7 +166,7 @@ def _gate(result, s2, gate) -> None:
         f"depends on the chosen gate: the lowest column-scaled condition number of any situation-2 batch is "
         f"{lowest:.4g} (the start-up batch), so thresholds {list(grid)} let "
         f"{', '.join(str(int(p)) for p in passes)} batches through. Re-running the noise-free well-posed MESO with a "
-        f"gate that admits the start-up batch: " + "; ".join(reruns) + f" (threshold 100: Θ_final = "
+        f"gate that admits the start-up batch: " + "; ".join(reruns) + f" (threshold {PAPER.cond_threshold:g}: Θ_final = "
         f"{np.round(s2.theta_batch[-1, base], 3).tolist()}). {int(np.sum(gate['cond'] <= 2 * PAPER.cond_threshold))} "
         f"of {gate['total']} batches have a condition number below twice the threshold.",
         evidence={"thresholds": list(grid), "passes": passes})

@@ -30,7 +30,7 @@ from ctrl_analysis.simulate import draw_noise, uniform_noise
 
 from .identification import BatchIdentification, exact_report
 
-from .paper import PAPER, Paper, Situation
+from .paper import GATE_RERUNS, PAPER, Paper, Situation
 
 __all__ = [
     "ModelledESO",
@@ -577,7 +577,7 @@ def situation_rows(key: str, seeds, paper: Paper = PAPER) -> list:
     else:
         rows += [Row("meso", "direct", seeds[0]), Row("meso", "direct", None),
                  Row("eso", "none", None, b_plant=paper.b + 0.95)]
-        rows += [Row("meso", "wellposed", None, threshold=g) for g in (110.0, 1000.0)]
+        rows += [Row("meso", "wellposed", None, threshold=g) for g in GATE_RERUNS]
         rows += [Row("meso", "literal", None, bypass_w=True)]
     return rows
 

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 from ctrl_analysis.study import Claim, choices, fixed, printed, reconstructed, span
 
-__all__ = ["ANALYSIS", "CLAIMS", "READINGS", "Readings", "METRICS", "PAPER", "SITUATIONS", "TABLES", "TABLE_UNITS", "Analysis", "Paper", "Situation"]
+__all__ = ["ANALYSIS", "CLAIMS", "GATE_GRID", "GATE_RERUNS", "READINGS", "Readings", "METRICS", "PAPER", "SITUATIONS", "TABLES", "TABLE_UNITS", "Analysis", "Paper", "Situation"]
 
 
 @dataclass(frozen=True)
@@ -188,6 +188,11 @@ TABLES = {
            "eso": (1.1862e-04, 0.0070, 0.5797, 0.0031, 0.0037)},
 }
 
+#: Situation 2's identifiability gate seen at other thresholds (evidence for the finding identifiability-threshold,
+#: around the start-up batch's ~104-110): batches passing at each of GATE_GRID; noise-free reruns at GATE_RERUNS
+GATE_GRID = (50.0, 100.0, 104.0, 106.0, 108.0, 110.0, 200.0, 1000.0)
+GATE_RERUNS = (110.0, 1000.0)
+
 
 @dataclass(frozen=True)
 class Analysis:
@@ -202,7 +207,6 @@ class Analysis:
     #: noise runs of each sensitivity-sweep evaluation (the main run's first seeds)
     sweep_runs: int = 10
     bound: float = 1e6
-    threshold_grid: tuple = (50.0, 100.0, 104.0, 108.0, 120.0, 200.0, 1000.0)
 
     def horizon(self, key: str) -> float:
         return dict(self.horizons)[key]

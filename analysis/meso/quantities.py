@@ -15,7 +15,7 @@ from ctrl_analysis.report import StudyResult
 from .identification import equivalent_theta
 from .loops import SituationRun, pick
 from .linear import noise_std
-from .paper import METRICS, PAPER, READINGS, SITUATIONS, TABLE_UNITS, TABLES, Analysis, Paper, Readings
+from .paper import GATE_GRID, GATE_RERUNS, METRICS, PAPER, READINGS, SITUATIONS, TABLE_UNITS, TABLES, Analysis, Paper, Readings
 
 __all__ = [
     "table_cell",
@@ -398,26 +398,26 @@ def gate_passes(sim: SituationRun, thresholds) -> tuple:
 
 
 def _gate_quantities(result, s2) -> dict:
-    """Sensitivity of situation 2's identifiability gate: batches passing per threshold, reruns at 110 and 1000."""
-    grid = (50.0, 100.0, 104.0, 106.0, 108.0, 110.0, 200.0, 1000.0)
+    """Sensitivity of situation 2's identifiability gate: batches passing per threshold, reruns at other thresholds."""
+    grid = GATE_GRID
     passes, total, cond = gate_passes(s2, grid)
     result.quantity("s2.gate_passes", f"situation 2: batches passing the identifiability gate for thresholds {list(grid)} "
                     f"(of {total})", passes, unit="batches",
-                    note="the study's threshold is 100; well-posed runs, noise on and off; column-scaled cond of "
+                    note=f"the study's threshold is {PAPER.cond_threshold:g}; well-posed runs, noise on and off; column-scaled cond of "
                          f"(16); lowest cond seen {np.min(cond):.4g}")
     base = pick(s2.rows, "meso", "wellposed", False)[0]
     out = {"grid": grid, "passes": passes, "total": total, "cond": cond, "reruns": {}}
-    for g in (110.0, 1000.0):
+    for g in GATE_RERUNS:
         i = pick(s2.rows, "meso", "wellposed", False, threshold=g)[0]
         out["reruns"][g] = i
         result.quantity(f"s2.gate{g:g}.theta_final", f"situation 2, well-posed MESO with gate threshold {g:g}: Θ after "
                         "the last batch, noise off", None if s2.diverged[i] else s2.theta_batch[-1, i],
                         diverged=bool(s2.diverged[i]), runs=1, unit="[1/s², 1/s, 1, 1/s²]",
-                        note=f"threshold 100: {np.round(s2.theta_batch[-1, base], 4).tolist()}"
+                        note=f"threshold {PAPER.cond_threshold:g}: {np.round(s2.theta_batch[-1, base], 4).tolist()}"
                              + (f"; diverged at t = {first_divergence(s2, [i]):.2f} s: no value" if s2.diverged[i] else ""))
         result.quantity(f"s2.gate{g:g}.track_x1", f"situation 2, well-posed MESO with gate threshold {g:g}: mean "
                         "|e| track_x1, noise off", None if s2.diverged[i] else _one(s2, i, "track_x1"),
                         diverged=bool(s2.diverged[i]), runs=1, unit="",
-                        note=f"threshold 100: {_one(s2, base, 'track_x1'):.4g}"
+                        note=f"threshold {PAPER.cond_threshold:g}: {_one(s2, base, 'track_x1'):.4g}"
                              + (f"; diverged at t = {first_divergence(s2, [i]):.2f} s: no value" if s2.diverged[i] else ""))
     return out

@@ -109,8 +109,8 @@ def evaluate(params: dict, seeds=(0,)) -> StudyResult:
 
 
 #: fields of ClosedLoop that only judge (windows, bands, margins, sweep grids): no simulation depends on them
-_JUDGING = ("clear_margin", "near_margin", "settle_band", "settle_hold", "t_ss", "qr_sweep", "recover_angles",
-            "recover_tol", "period_check")
+_JUDGING = ("clear_margin", "near_margin", "settle_band", "settled_share_min", "settle_hold", "t_tr", "t_ss",
+            "qr_sweep", "recover_angles", "recover_tol", "period_check")
 
 
 def _simulation_key(L):

@@ -186,6 +186,10 @@ class ClosedLoop:
                                  plausible=choices(((1e-4, 0.01), (1.0, 100.0)), "a confident and a vague prior"))
     settle_band: float = reconstructed(0.05, "settling band ±5 % of the step",
                                        plausible=choices((0.02, 0.1), "the other usual bands (2 %, 10 %)"))
+    settled_share_min: float = reconstructed(
+        0.5, "the claim 'settles no later' compares settling times only of cases that settle; a case counts as "
+             "settling when at least half of its Monte Carlo runs settle into the band and stay",
+        plausible=span(0.5, 0.9, "from a majority of the runs to nearly all of them", points=3))
     settle_hold: float = reconstructed(0.5, "a run counts as settled only if it stays in the band for the last 0.5 s "
                                             "of the record (otherwise its settling time is not defined)",
                                        plausible=fixed("a definition guard; the band is the varied choice"))

@@ -663,14 +663,15 @@ def record_claims(result: StudyResult, p) -> None:
     a, b = qid("nofilter", "settling_time"), qid("filter", "settling_time")
     qa, qb = result.get(a), result.get(b)
     share = {x: result.get(x.replace("settling_time", "settled_share")).value for x in (a, b)}
-    settled = {x: q.value if (q.value is not None and (share[x] or 0) >= 0.5) else None for x, q in ((a, qa), (b, qb))}
+    settled = {x: q.value if (q.value is not None and (share[x] or 0) >= p.settled_share_min) else None for x, q in ((a, qa), (b, qb))}
     # "no later": within one sample period (settling times are multiples of T; their means differ by less)
     result.claim(C.C_SETTLES, None if qb.is_diverged else (
         settled[b] is not None and (settled[a] is None or settled[b] <= settled[a] + p.T)),
                  evidence=[a, b, a.replace("settling_time", "settled_share"), b.replace("settling_time", "settled_share")],
                  note=f"settling time into the ±{p.settle_band:.0%} band, mean over the runs that settle: {_val(result, b)} "
                       f"with the paper's K vs {_val(result, a)} without filter (main regime; 'no later' within one "
-                      f"sample period T = {p.T * 1e3:g} ms; a case counts as settling when at least half of its runs do)")
+                      f"sample period T = {p.T * 1e3:g} ms; a case counts as settling when at least "
+                      f"{p.settled_share_min:.0%} of its runs do)")
     for claim, lit in ((C.C_STABILISES, False), (C.C_STABILISES_LIT, True)):
         ev = [qid("filter", "angle_rms", lit), qid("filter", "settling_time_noise_free", lit), qid("filter", "settling_time", lit)]
         q0, q1, q2 = (result.get(e) for e in ev)
