@@ -45,7 +45,7 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from ._validate import check_int, check_str
+from ._validate import check_int, check_positive, check_str
 from .progress import bar
 
 __all__ = ["MAX_CHUNKS", "active_cluster", "check_scheduler_address", "chunk_slices", "default_jobs", "gather",
@@ -200,8 +200,7 @@ def use_cluster(scheduler, jobs: int | None = None, timeout: float = 10.0):
         raise ValueError("scheduler must be 'local', a scheduler address or a distributed.Client, got "
                          f"{scheduler!r}")
     jobs = default_jobs() if jobs is None else check_int("jobs", jobs, minimum=1)
-    if not (isinstance(timeout, (int, float)) and math.isfinite(timeout) and timeout > 0):
-        raise ValueError(f"timeout must be a finite number of seconds > 0, got {timeout!r}")
+    timeout = check_positive("timeout", timeout, scalar=True)
     if _CLUSTER["client"] is not None:
         raise RuntimeError("a process-wide cluster is already active (use_cluster blocks do not nest)")
     try:
