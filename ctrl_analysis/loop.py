@@ -417,7 +417,7 @@ class Loop:
 
         # over processes, or a process-wide Dask cluster's workers (compiled: per-run parameters follow the chunk)
         on_cluster = jobs == 1 and B > 1 and not funcs and active_cluster() is not None \
-            and self._compiled(engine, funcs, params, np.isfinite(bound)) is not None
+            and compiled_for(self, engine, funcs, params, np.isfinite(bound)) is not None
         if B > 1 and not funcs and (jobs > 1 or on_cluster) and picklable(self):
             opts = {"t0": t0, "params": params, "bound": bound, "store_states": store_states, "store_signals": keep,
                     "chunk_runs": chunk_runs, "max_bytes": max_bytes, "engine": engine,
@@ -472,10 +472,6 @@ class Loop:
                              None if xs is None else xs[:, a:b], diverged[a:b], div_step[a:b], rows=(run_offset + a, None))
                 if progress is not None:
                     progress((b - a) * n_steps)
-
-    def _compiled(self, engine, funcs, params, finite_bound):
-        """The compiled runner and the kernels' parameters, or ``None`` for the numpy path."""
-        return compiled_for(self, engine, funcs, params, finite_bound)
 
     def _run_chunk(self, plan, n_steps, t, x, held, funcs, params, bound, keep_cols, store, xs,
                    diverged, div_step, progress):

@@ -22,7 +22,7 @@ is active (:func:`use_cluster`); ``False`` always on this machine; ``"local"`` s
 running Dask scheduler (``"tcp://host:8786"``); a ``distributed.Client`` is used as given.
 
 :func:`use_cluster` connects to a cluster once and makes it process-wide: while it is active every
-:func:`map_chunks` call without a ``scheduler`` and every batch of
+:func:`map_chunks` call without a ``scheduler`` (or with the one the cluster was made from) and every batch of
 :meth:`Loop.simulate <ctrl_analysis.loop.Loop.simulate>` (two runs or more, no callable input, a
 picklable loop) runs its chunks there, with the same numbers as on one process. The command line's
 ``--scheduler`` does this, so every study's Monte Carlo batches and sweeps go to the cluster without
@@ -45,14 +45,15 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from ._validate import check_int, check_str
+from ._validate import check_int, check_positive, check_str
 from .progress import bar
 
 __all__ = ["MAX_CHUNKS", "active_cluster", "check_scheduler_address", "chunk_slices", "default_jobs", "gather",
            "grid_points", "map_chunks", "monte_carlo", "picklable", "simulate_chunks", "sweep", "use_cluster"]
 
-#: The process-wide cluster of :func:`use_cluster`: its client, address, and the chunks it ran.
-_CLUSTER: dict = {"client": None, "address": None, "chunks": 0}
+#: The process-wide cluster of :func:`use_cluster`: its client, the ``scheduler`` it was given, its
+#: address, and the chunks it ran.
+_CLUSTER: dict = {"client": None, "scheduler": None, "address": None, "chunks": 0}
 
 _ADDRESS = re.compile(r"^(?:(tcp|tls|ucx|ws|wss)://)?(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9_.-]+):(\d{1,5})$")
 
@@ -199,8 +200,7 @@ def use_cluster(scheduler, jobs: int | None = None, timeout: float = 10.0):
         raise ValueError("scheduler must be 'local', a scheduler address or a distributed.Client, got "
                          f"{scheduler!r}")
     jobs = default_jobs() if jobs is None else check_int("jobs", jobs, minimum=1)
-    if not (isinstance(timeout, (int, float)) and math.isfinite(timeout) and timeout > 0):
-        raise ValueError(f"timeout must be a finite number of seconds > 0, got {timeout!r}")
+    timeout = check_positive("timeout", timeout, scalar=True)
     if _CLUSTER["client"] is not None:
         raise RuntimeError("a process-wide cluster is already active (use_cluster blocks do not nest)")
     try:
@@ -208,11 +208,12 @@ def use_cluster(scheduler, jobs: int | None = None, timeout: float = 10.0):
     except (OSError, TimeoutError) as exc:
         raise OSError(f"no Dask scheduler answers at {scheduler!r} within {timeout:g} s "
                       f"({' '.join(str(exc).split())[:200]})") from None
-    _CLUSTER.update(client=client, address=getattr(client.scheduler, "address", str(scheduler)), chunks=0)
+    _CLUSTER.update(client=client, scheduler=scheduler,
+                    address=getattr(client.scheduler, "address", str(scheduler)), chunks=0)
     try:
         yield client
     finally:
-        _CLUSTER.update(client=None)
+        _CLUSTER.update(client=None, scheduler=None)
         if own:
             _close(client)
 
@@ -333,7 +334,9 @@ def map_chunks(fn: Callable, args: Sequence, *, jobs: int = 1, scheduler=None, d
     if on_result is not None and not callable(on_result):
         raise TypeError(f"on_result must be callable on_result(i, result), got {on_result!r:.80}")
     done_one = on_result or (lambda i, value: None)
-    if scheduler is None and _CLUSTER["client"] is not None and args:
+    # no scheduler, or the one the process-wide cluster was made from (a study handed --scheduler):
+    # the cluster already running, not a second LocalCluster or client per call
+    if _CLUSTER["client"] is not None and args and scheduler in (None, _CLUSTER["scheduler"]):
         scheduler = _CLUSTER["client"]
         _CLUSTER["chunks"] += len(args)
     out = [None] * len(args)

@@ -113,6 +113,28 @@ def test_sweep_on_a_two_worker_local_cluster_equals_the_local_sweep_bit_for_bit(
     assert local[2, 1].mean() < local[0, 1].mean()
 
 
+def test_map_chunks_given_the_process_wide_clusters_scheduler_runs_there_not_on_a_second_cluster(monkeypatch):
+    # a study hands its context's --scheduler to a sweep while the CLI's use_cluster is active
+    from distributed import Client, LocalCluster
+
+    made = []
+
+    def client(scheduler, jobs, timeout=30.0):
+        if isinstance(scheduler, Client):
+            return scheduler, False
+        made.append(scheduler)
+        cluster = LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None)
+        return Client(cluster), True
+
+    monkeypatch.setattr(parallel, "_client", client)
+    with parallel.use_cluster("local", 1):
+        assert parallel.map_chunks(abs, [-1, -2, 3], scheduler="local") == [1, 2, 3]
+        assert parallel.map_chunks(abs, [-4]) == [4]
+        assert parallel.active_cluster()["chunks"] == 4
+    assert made == ["local"]
+    assert parallel.active_cluster() is None
+
+
 def test_loop_chunked_batch_equals_unchunked_bit_for_bit():
     seeds = run_seeds(2, 7)
     noise = draw_noise(seeds, N_STEPS, gaussian_noise([0.3, 0.01]))
