@@ -232,6 +232,13 @@ def apply(result: StudyResult, sens: Sensitivity) -> None:
                           "baseline_claims": sens.baseline["claims"]}
 
 
+def _short_value(v) -> str:
+    """A tried value in a grid cell: numbers to 3 digits, vectors as (a, b, …)."""
+    if isinstance(v, (list, tuple)):
+        return "(" + ", ".join(_short_value(x) for x in v) + ")"
+    return f"{v:.3g}" if isinstance(v, float) else str(v)[:10]
+
+
 def _influence(result: StudyResult) -> list:
     """``[(name, largest relative cell change, claim flips, cell verdict flips)]``, most influential first."""
     names = list(result.sensitivity.get("ranges", {}))
@@ -290,8 +297,10 @@ def plot_sensitivity(result: StudyResult, top: int = 12):
     change = [100 * r[1] for r in rows]
     ax.barh(y, change, color=["tab:red" if r[3] else "tab:blue" for r in rows], alpha=0.8)
     for yi, r, ch in zip(y, rows, change):
-        if r[3]:
-            ax.text(ch, yi, f"  {r[3]} cell verdict(s) flip", va="center", fontsize=8)
+        if r[3]:  # inside the bar's end when the bar is long, else after it
+            inside = ch > 0.6 * max(change)
+            ax.text(ch, yi, f"{r[3]} cell verdict(s) flip " if inside else f"  {r[3]} cell verdict(s) flip",
+                    va="center", ha="right" if inside else "left", fontsize=8, color="white" if inside else "black")
         elif ch == 0:
             ax.text(0, yi, "  no paper cell moves", va="center", fontsize=7, color="0.4")
     ax.set_yticks(y, labels, fontsize=8)
@@ -311,7 +320,7 @@ def plot_sensitivity(result: StudyResult, top: int = 12):
                 dep = next((d for d in c.depends_on if d["reconstruction"] == r[0]), None)
                 if dep is not None:
                     there = "/".join(sorted(set(dep["verdict_there"])))
-                    at = ", ".join(f"{v:.2g}" if isinstance(v, float) else str(v)[:8] for v in dep["flips_at"][:2])
+                    at = ", ".join(_short_value(v) for v in dep["flips_at"][:2])
                     bx.text(j, i, f"{there}\nat {at}{'…' if len(dep['flips_at']) > 2 else ''}", ha="center",
                             va="center", fontsize=6.5)
         bx.set_yticks(np.arange(len(rows)), labels, fontsize=8)
