@@ -10,8 +10,12 @@ import numpy as np
 from ._kernels import available, compiled_runner, kernel_of
 
 
-def compiled_for(loop, engine, funcs, params, finite_bound):
-    """The compiled runner and the kernels' parameters, or ``None`` for the numpy path."""
+def compiled_for(loop, engine, funcs, variants, finite_bound):
+    """The compiled runner and the kernels' parameters, or ``None`` for the numpy path.
+
+    ``variants`` (block name -> :class:`~ctrl_analysis.engine.params.Variant`) are the run-time
+    parameters: a changed block's kernel, or per-run parameter rows.
+    """
     import os
 
     if engine == "numpy" or (engine == "auto" and os.environ.get("CTRL_ANALYSIS_ENGINE") == "numpy"):
@@ -20,23 +24,31 @@ def compiled_for(loop, engine, funcs, params, finite_bound):
     why = None
     if not available():
         why = "numba is not installed"
-    elif funcs or params is not None:
-        why = "callable inputs and params need the numpy path"
+    elif funcs:
+        why = "callable inputs need the numpy path"
     kernels = {}
+    variants = variants or {}
     if why is None:
         for p in loop.placed:
-            k = kernel_of(p.block)
+            v = variants.get(p.name)
+            if v is not None and v.groups is not None and v.rows is None:
+                why = f"block {p.name!r} ({type(p.block).__name__}) has per-run parameters but no kernel"
+                break
+            k = kernel_of(p.block if v is None else v.block)
             if k is None:
                 why = f"block {p.name!r} ({type(p.block).__name__}) has no kernel"
                 break
+            if v is not None and v.rows is not None:
+                k = k._replace(params=v.rows)
             kernels[p.name] = k
     if why is not None:
         if engine == "compiled":
             raise ValueError(f"engine='compiled' is not possible for this loop: {why}")
         return None
-    if getattr(loop, "_kernels_checked", None) is not loop.placed:
+    if variants or getattr(loop, "_kernels_checked", None) is not loop.placed:
         check_kernel_reads(loop, kernels)
-        loop._kernels_checked = loop.placed  # once per loop: its blocks (and their parameters) are fixed
+        if not variants:
+            loop._kernels_checked = loop.placed  # once per loop: its blocks (and their parameters) are fixed
     try:
         run = compiled_runner(loop, kernels, finite_bound)
     except Exception as exc:  # a kernel numba cannot compile: say so, and use the numpy path under "auto"
@@ -48,7 +60,8 @@ def compiled_for(loop, engine, funcs, params, finite_bound):
                       "using the numpy engine", RuntimeWarning, stacklevel=3)
         return None
     P = [_params_2d(p.name, kernels[p.name].params) for p in loop.placed]
-    return run, P, {p.name: np.ndim(kernels[p.name].params) == 2 for p in loop.placed}
+    per_run = {p.name: np.ndim(kernels[p.name].params) == 2 for p in loop.placed}
+    return run, P, per_run, {p.name for p in loop.placed if p.name in variants and variants[p.name].rows is not None}
 
 
 def check_kernel_reads(loop, kernels: dict) -> None:
@@ -112,13 +125,14 @@ def run_compiled(loop, runner, plan, n_steps, t, x, held, bound, keep_cols, stor
                  rows=(0, None)):
     """One chunk through the compiled runner, writing into the result slices.
 
-    ``rows = (lo, hi)`` are the chunk's runs within the batch: per-run kernel parameters are sliced
-    to them.
+    ``rows = (lo, a)``: the chunk's first run within the batch (where the rows of per-run parameters
+    held by blocks are read) and within this call (run-time parameters' rows).
     """
-    run, P, per_run = runner
+    run, P, per_run, run_time = runner
     B = x.shape[0]
-    lo = rows[0]
-    P = [Pi[lo:lo + B] if per_run[p.name] else Pi[0] for Pi, p in zip(P, loop.placed)]
+    P = [Pi[(rows[1] if p.name in run_time else rows[0]):][:B] if per_run[p.name] else Pi[:1]
+         for Pi, p in zip(P, loop.placed)]
+    PS = np.array([1 if per_run[p.name] else 0 for p in loop.placed], dtype=np.intp)
     col = plan["col"]
     S0 = np.zeros(len(plan["names"]))
     for s, a in held.items():
@@ -131,7 +145,7 @@ def run_compiled(loop, runner, plan, n_steps, t, x, held, bound, keep_cols, stor
     xs_arg = np.empty((0, 0, 0)) if xs is None else xs
     X = np.array(x, dtype=float, order="C")  # a copy, stepped in place by the runner
     run(n_steps, t, loop.dt / loop.substeps, loop.substeps, X, H, HC, HS, HCS, S0,
-        keep_cols, store, xs_arg, float(bound), diverged, div_step, *P)
+        keep_cols, store, xs_arg, float(bound), diverged, div_step, PS, *P)
     x[...] = X  # the final state, as the numpy path leaves it (final_states, chunk carry-over)
 
 

@@ -256,7 +256,7 @@ def _gen_source(blocks, order, stage, discrete, continuous, nc, method, finite_b
         # arithmetic); the inputs are gathered from the signal row with literal indices
         xv = f"X[b, {lo}:{hi}]" if xx == "X" else f"{xx}[{lo}:{hi}]"
         lines = [f"UB{i}[{j}] = S[{c}]" for j, c in enumerate(b["ic"])]
-        pr = f"P{i}[b]" if b["per_run"] else f"P{i}"
+        pr = f"P{i}[b * PS[{i}]]"  # PS[i] = 1: one row per run, 0: one row shared
         if kind == "out":
             lines.append(f"K{i}_out({t}, {xv}, UB{i}, {pr}, YB{i})")
             lines += [f"S[{c}] = YB{i}[{j}]" for j, c in enumerate(b["oc"])]
@@ -273,7 +273,7 @@ def _gen_source(blocks, order, stage, discrete, continuous, nc, method, finite_b
             out += call(i, "rhs", tau, xx, dx, ind)
         return out
 
-    add(f"def run(n_steps, t, h, substeps, X0, H, HC, HS, HCS, S0, KEEP, store, xs, bound, diverged, div_step, "
+    add(f"def run(n_steps, t, h, substeps, X0, H, HC, HS, HCS, S0, KEEP, store, xs, bound, diverged, div_step, PS, "
         f"{pargs}):")
     add("    B = X0.shape[0]")
     add("    n = X0.shape[1]")
@@ -381,15 +381,14 @@ def compiled_runner(loop, kernels: dict, finite_bound: bool):
     for p in loop.placed:
         sl = loop.slices.get(p.name, slice(0, 0))
         blocks.append({"ic": [col[s] for s in p.inputs], "oc": [col[s] for s in p.outputs],
-                       "np": len(p.outputs), "sl": (sl.start, sl.stop),
-                       "per_run": np.ndim(kernels[p.name].params) == 2})
+                       "np": len(p.outputs), "sl": (sl.start, sl.stop)})
     idx = {n: i for i, n in enumerate(names)}
     stage_set = {e[0] for e in plan["stage"]}
     stage = [idx[p.name] for p in loop.stage_order if p.block in stage_set]
     order = [idx[p.name] for p in loop.order]
     discrete = [idx[p.name] for p in loop.discrete]
     continuous = [idx[p.name] for p in loop.continuous]
-    key = (tuple((tuple(b["ic"]), tuple(b["oc"]), b["sl"], b["per_run"]) for b in blocks), tuple(order), tuple(stage),
+    key = (tuple((tuple(b["ic"]), tuple(b["oc"]), b["sl"]) for b in blocks), tuple(order), tuple(stage),
            tuple(discrete), tuple(continuous), loop.n_continuous, loop.method, finite_bound,
            tuple((kernels[n].output, kernels[n].rhs, kernels[n].update) for n in names))
     if key not in _RUNNERS:
@@ -409,8 +408,8 @@ def compiled_runner(loop, kernels: dict, finite_bound: bool):
         f64, i64 = numba.float64, numba.int64
         sig = numba.void(i64, f64[::1], f64, i64, f64[:, ::1], f64[:, :, ::1], numba.intp[::1], f64[:, ::1],
                          numba.intp[::1], f64[::1],
-                         numba.intp[::1], f64[:, :, :], f64[:, :, :], f64, numba.boolean[:], i64[:],
-                         *[f64[:, ::1] if b["per_run"] else f64[::1] for b in blocks])
+                         numba.intp[::1], f64[:, :, :], f64[:, :, :], f64, numba.boolean[:], i64[:], numba.intp[::1],
+                         *[f64[:, ::1] for b in blocks])
         run = numba.njit(sig, cache=True, error_model="numpy")(module.run)
         _RUNNERS[key] = (run, time.perf_counter() - t0)
         _COMPILE["seconds"] += _RUNNERS[key][1]

@@ -85,7 +85,37 @@ def _window(fn, start: int, total: int):
     return call
 
 
-def chunk_functions(plan: dict, rows: dict, start: int, B: int) -> dict:
+def _variant_function(variant, kind: str, lo: int, B: int):
+    """The per-step function of a block under run-time parameters, for runs ``lo:lo+B`` of the call."""
+    if variant.rows is not None and hasattr(variant.block, "batched"):
+        P = variant.rows[lo:lo + B]
+        block = variant.block
+
+        def call(t, x, u, params=None):
+            return block.batched(kind, t, x, u, P)
+
+        return call
+    if variant.groups is not None:
+        parts = []
+        for block, idx in variant.groups:
+            mine = idx[(idx >= lo) & (idx < lo + B)] - lo
+            if mine.size:
+                parts.append((unchecked(block, kind), mine))
+
+        def call(t, x, u, params=None):
+            out = None
+            for f, idx in parts:
+                y = np.asarray(f(t, x[idx], u[idx], None))
+                if out is None:
+                    out = np.empty((x.shape[0],) + y.shape[1:])
+                out[idx] = y
+            return out
+
+        return call
+    return unchecked(variant.block, kind)
+
+
+def chunk_functions(plan: dict, rows: dict, start: int, B: int, variants=None, lo: int = 0) -> dict:
     """The per-step functions the numpy engine calls for a chunk of ``B`` runs from run ``start``.
 
     Parameters
@@ -96,6 +126,10 @@ def chunk_functions(plan: dict, rows: dict, start: int, B: int) -> dict:
         ``id(block)`` -> runs of its per-run parameters.
     start, B : int
         The chunk's first run within the batch and its runs.
+    variants : dict of int -> Variant, optional
+        ``id(block)`` -> the block's run-time parameters (:mod:`ctrl_analysis.engine.params`).
+    lo : int
+        The chunk's first run within this call (where the run-time parameter rows are read).
 
     Returns
     -------
@@ -103,7 +137,11 @@ def chunk_functions(plan: dict, rows: dict, start: int, B: int) -> dict:
         Per key of ``plan``, ``(output or rhs or update function, ic, oc, sl)`` with the unchecked
         methods, windowed for blocks with per-run parameters unless the chunk is the whole batch.
     """
+    variants = variants or {}
+
     def fn(block, kind):
+        if id(block) in variants:
+            return _variant_function(variants[id(block)], kind, lo, B)
         f = unchecked(block, kind)
         total = rows.get(id(block))
         return f if total is None or (start == 0 and B == total) else _window(f, start, total)

@@ -96,6 +96,64 @@ class Block:
         super().__init_subclass__(**kwargs)
         wrap_step_methods(cls)
 
+    def __new__(cls, *args, **kwargs):
+        # the constructor's arguments, for init_args / with_params (pickling restores them from __dict__)
+        obj = super().__new__(cls)
+        obj.__dict__["_init_call"] = (args, kwargs)
+        return obj
+
+    def _bound_args(self):
+        """The constructor call that built the block, bound to its signature (defaults filled in)."""
+        import inspect
+
+        call = self.__dict__.get("_init_call")
+        if call is None:
+            raise TypeError(f"{type(self).__name__} records no constructor arguments, so its parameters cannot be "
+                            f"changed by name")
+        sig = inspect.signature(type(self).__init__)
+        sig = sig.replace(parameters=list(sig.parameters.values())[1:])
+        bound = sig.bind(*call[0], **call[1])
+        bound.apply_defaults()
+        return bound
+
+    def init_args(self) -> dict:
+        """The arguments the block was built with, by name (defaults filled in).
+
+        Returns
+        -------
+        dict of str -> value
+        """
+        return dict(self._bound_args().arguments)
+
+    def with_params(self, **changes) -> Block:
+        """A new block of the same class built with some constructor arguments changed.
+
+        What :meth:`Loop.simulate(params=...) <ctrl_analysis.loop.Loop.simulate>` and python-control's
+        ``params`` use: the constructor validates the new values, so a per-run value obeys the rules
+        of the block's own argument.
+
+        Parameters
+        ----------
+        **changes
+            Constructor arguments by name.
+
+        Returns
+        -------
+        Block
+
+        Raises
+        ------
+        ValueError
+            If a name is not a constructor argument (or what the constructor raises for the value).
+        """
+        bound = self._bound_args()
+        unknown = sorted(set(changes) - set(bound.arguments))
+        if unknown:
+            raise ValueError(f"{unknown} are not parameters of {type(self).__name__}; its parameters are "
+                             f"{sorted(bound.arguments)}")
+        bound.arguments.update(changes)
+        return type(self)(*bound.args, **bound.kwargs)
+
     @property
     def n_states(self) -> int:
         """Number of states ``n`` (the number of columns of ``x``)."""
@@ -154,6 +212,7 @@ class Block:
 
 
 Block.output = checked(Block.output)
+
 
 
 class ContinuousBlock(Block):

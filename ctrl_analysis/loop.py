@@ -317,8 +317,13 @@ class Loop:
             Initial state per block name, shape ``(n,)`` or ``(B, n)``; default ``initial_state()``.
         runs : int, optional
             Batch size B when no input or state says it.
-        params : optional
-            Passed to every block callback (python-control's ``params``).
+        params : dict of block name -> dict of parameter name -> value, optional
+            Run-time block parameters (:mod:`ctrl_analysis.engine.params`): constructor arguments of
+            the named blocks, changed for this simulation. A value with one axis more than the
+            block's own (first axis: the ``B`` runs) differs per run, e.g.
+            ``params={"law": {"eta": eta_runs}}``; any other value is shared by every run. Each
+            distinct value is validated by the block's constructor; per-run values follow the runs
+            into chunks and processes.
         bound : float
             A run whose state leaves ``|x| <= bound`` or becomes non-finite is flagged.
         store_states : bool
@@ -341,7 +346,7 @@ class Loop:
         engine : {"auto", "numpy", "compiled"}
             ``"numpy"``: the blocks' batched methods. ``"compiled"``: one numba function for the whole
             loop built from the blocks' kernels (:mod:`ctrl_analysis._kernels`); needs a kernel for
-            every block, no callable input and ``params=None``. ``"auto"``: compiled when possible
+            every block and no callable input. ``"auto"``: compiled when possible
             (the environment variable ``CTRL_ANALYSIS_ENGINE=numpy`` makes ``"auto"`` mean numpy).
             The choice depends on the loop only, never on the batch size, so run ``b`` is the same
             whatever the batch; the two engines agree to rounding (bit for bit without ``pow``).
@@ -413,11 +418,15 @@ class Loop:
         size = max(1, min(size, int(limit // work))) if chunk_runs is None else size
         check_in("engine", engine, ("auto", "numpy", "compiled"))
         jobs = check_int("jobs", jobs, minimum=1)
-        from .parallel import active_cluster, picklable, simulate_chunks
+        from .engine.params import resolve
+        from .engine.processes import simulate_chunks
+        from .parallel import active_cluster, picklable
+
+        variants = resolve(self, params, B)  # validated here, before any work
 
         # over processes, or a process-wide Dask cluster's workers (compiled: per-run parameters follow the chunk)
         on_cluster = jobs == 1 and B > 1 and not funcs and active_cluster() is not None \
-            and compiled_for(self, engine, funcs, params, np.isfinite(bound)) is not None
+            and compiled_for(self, engine, funcs, variants, np.isfinite(bound)) is not None
         if B > 1 and not funcs and (jobs > 1 or on_cluster) and picklable(self):
             opts = {"t0": t0, "params": params, "bound": bound, "store_states": store_states, "store_signals": keep,
                     "chunk_runs": chunk_runs, "max_bytes": max_bytes, "engine": engine,
@@ -425,8 +434,8 @@ class Loop:
                     "batch_runs": check_int("batch_runs", batch_runs, minimum=1) if batch_runs else None}
             return simulate_chunks(self, jobs, n_steps, held, x, opts, seeds)
         run_offset = check_int("run_offset", run_offset, minimum=0)
-        runner = compiled_for(self, engine, funcs, params, np.isfinite(bound))  # None: the numpy path
-        rows = {p.name: r for p in self.placed if (r := per_run_rows(p.block)) is not None}
+        runner = compiled_for(self, engine, funcs, variants, np.isfinite(bound))  # None: the numpy path
+        rows = {p.name: r for p in self.placed if p.name not in variants and (r := per_run_rows(p.block)) is not None}
         check_rows(rows, run_offset, B, batch_runs)  # both engines: the same batch, the same answer
         rows = {id(p.block): rows[p.name] for p in self.placed if p.name in rows}
         t = t0 + self.dt * np.arange(n_steps + 1)
@@ -441,7 +450,7 @@ class Loop:
         auto = progress is None and B * n_steps >= AUTO_BAR_WORK and enabled()
         with updater(progress if callable(progress) else auto, B * n_steps,
                      f"{B} runs x {n_steps} samples", "run-sample") as pbar:
-            self._run_chunks(plan, runner, n_steps, t, x, held, funcs, per_run_funcs, params, bound, keep_cols,
+            self._run_chunks(plan, runner, n_steps, t, x, held, funcs, per_run_funcs, variants, bound, keep_cols,
                              store, xs, diverged, div_step, chunk_bounds(B, size), (run_offset, rows), pbar)
         sig_store = {s: store[:, :, j] for j, s in enumerate(keep)}
         state_names = [f"{p.name}.{s}" for p in self.continuous + self.discrete for s in p.block.states]
@@ -450,7 +459,7 @@ class Loop:
                             slices=dict(self.slices), external=self.external, outlist=self.outlist,
                             state_names=state_names, x_final=x if xs is None else xs[-1].copy())
 
-    def _run_chunks(self, plan, runner, n_steps, t, x, held, funcs, per_run_funcs, params, bound, keep_cols,
+    def _run_chunks(self, plan, runner, n_steps, t, x, held, funcs, per_run_funcs, variants, bound, keep_cols,
                     store, xs, diverged, div_step, bounds, offset_rows, progress):
         """Step every chunk ``(lo, hi)`` of the batch (compiled or numpy), reporting run-samples to ``progress``."""
         run_offset, rows = offset_rows
@@ -459,7 +468,8 @@ class Loop:
                    for s, f in funcs.items()}
             h_c = {s: (a[:, lo:hi] if a.ndim == 2 else a) for s, a in held.items()}
             if runner is None:
-                self._run_chunk(plan | chunk_functions(plan, rows, run_offset + lo, hi - lo), n_steps, t, x[lo:hi], h_c, f_c, params, bound, keep_cols,
+                fns = chunk_functions(plan, rows, run_offset + lo, hi - lo, self._variant_ids(variants), lo)
+                self._run_chunk(plan | fns, n_steps, t, x[lo:hi], h_c, f_c, None, bound, keep_cols,
                                 store[:, lo:hi], None if xs is None else xs[:, lo:hi],
                                 diverged[lo:hi], div_step[lo:hi], progress)
                 continue
@@ -469,9 +479,12 @@ class Loop:
             for a, b in parts if progress is None else [(lo + a, lo + b) for a, b in parts]:
                 h_p = {s: (v[:, a:b] if v.ndim == 2 else v) for s, v in held.items()}
                 run_compiled(self, runner, plan, n_steps, t, x[a:b], h_p, bound, keep_cols, store[:, a:b],
-                             None if xs is None else xs[:, a:b], diverged[a:b], div_step[a:b], rows=(run_offset + a, None))
+                             None if xs is None else xs[:, a:b], diverged[a:b], div_step[a:b], rows=(run_offset + a, a))
                 if progress is not None:
                     progress((b - a) * n_steps)
+
+    def _variant_ids(self, variants) -> dict:  # the plan holds the placed blocks: id -> Variant
+        return {id(p.block): variants[p.name] for p in self.placed if p.name in variants}
 
     def _run_chunk(self, plan, n_steps, t, x, held, funcs, params, bound, keep_cols, store, xs,
                    diverged, div_step, progress):

@@ -32,6 +32,9 @@ from ctrl_analysis import identification as ident
 from ctrl_analysis import loop as loop_mod
 from ctrl_analysis import metrics, report_md, simulate, study
 from ctrl_analysis.arena import cli as arena_cli
+from ctrl_analysis.engine import kernels as engine_kernels
+from ctrl_analysis.engine import params as engine_params
+from ctrl_analysis.engine import processes
 from ctrl_analysis.arena import figures as arena_figures
 from ctrl_analysis.arena import interface as arena_interface
 from ctrl_analysis.arena import recommend as arena_recommend
@@ -187,6 +190,14 @@ def _loop_simulate(**kw):
     return _loop(dt=0.1).simulate(**kw)
 
 
+def _layout(fields):
+    return engine_kernels.Layout(*fields)
+
+
+def _layout_pack(**kw):
+    return engine_kernels.Layout("a", ("b", 2)).pack(**kw)
+
+
 def _loop_interconnect(name):
     return _loop(dt=0.1).interconnect(name)
 
@@ -295,7 +306,13 @@ def build_cases(tmp):
               x0=[3, {"nonsense": [0.0]}, {"plant": [NAN]}, {"plant": [1.0, 2.0, 3.0]}],
               runs=opt(INT) + [0], t0=REAL, bound=["abc", None, NAN, -INF, 0.0, [1.0]], store_states=BOOL,
               seeds=[[1, 2, 3], 5], store_signals=[3, ["nonsense"]], chunk_runs=opt(INT) + [0],
-              max_bytes=opt(POS), progress=[3.0, "f"], engine=CHOICE, jobs=INT + [0])),
+              max_bytes=opt(POS), progress=[3.0, "f"], engine=CHOICE, jobs=INT + [0],
+              params=[3, "abc", {"nonsense": {}}, {"plant": 3}, {"plant": {"nonsense": 1.0}},
+                      {"plant": {"dt": [0.1, 0.2, 0.3]}}, {"plant": {"dt": -1.0}}, {"plant": {"dt": NAN}}])),
+        ("Layout", _layout, dict(fields=("a", ("b", 2))),
+         dict(fields=[(3,), ("a", "a"), ("1x",), (("a", -1),), (("a", "x"),)])),
+        ("Layout.pack", _layout_pack, dict(a=1.0, b=[1.0, 2.0]),
+         dict(a=["abc", None, [1.0, 2.0]], b=[3.0, "abc", [1.0, 2.0, 3.0]])),
         ("Loop.interconnect", _loop_interconnect, dict(name="sys"), dict(name=[3])),
         ("LoopResponse.to_timeresponse", _response_timeresponse, dict(run=1), dict(run=INT + [-1, 2])),
         # estimators
@@ -751,6 +768,15 @@ NOT_FUZZED = {
     blocks.DiscreteBlock: "abstract base class without constructor arguments (run/nlsys are fuzzed above)",
     blocks.ColumnKernels: "mixin without constructor arguments (the blocks using it are fuzzed)",
     loop_mod.Placed: "record built by place(), which is fuzzed",
+    engine_kernels.KernelBlock: "mixin without constructor arguments (the blocks using it are fuzzed)",
+    engine_kernels.Layout: "fuzzed through _layout (its fields are variadic) and _layout_pack",
+    engine_kernels.Kernels: "record of kernel functions, checked when the block runs (check_kernel_reads)",
+    engine_kernels.copy_output: "per-step kernel, unchecked by design",
+    engine_kernels.jitable: "decorator: any function is a valid argument",
+    engine_params.Variant: "record built by resolve",
+    engine_params.resolve: "internal half of Loop.simulate(params=...), whose params are fuzzed",
+    engine_params.split: "internal half of Loop.simulate(params=...), whose params are fuzzed",
+    engine_params.take: "internal half of Loop.simulate(params=...), whose params are fuzzed",
     loop_mod.LoopResponse: "result record built by Loop.simulate",
     simulate.SimResult: "result record built by the simulators",
     simulate.euler_step: "per-step integrator, unchecked by design",
@@ -776,7 +802,7 @@ NOT_FUZZED = {
     parallel.use_cluster: "connects to a Dask cluster; its address checks are check_scheduler_address's (fuzzed), "
                           "an unreachable one is tested in tests/lib/test_cli_cluster.py",
     parallel.picklable: "any object is a valid argument (the answer is the check)",
-    parallel.simulate_chunks: "internal half of Loop.simulate(jobs > 1), whose arguments are fuzzed",
+    processes.simulate_chunks: "internal half of Loop.simulate(jobs > 1), whose arguments are fuzzed",
     progress.NullBar: "no constructor arguments",
     report.versions: "no arguments",
     fuzzy.triangular_memberships: "per-step arithmetic of FuzzyController.output, unchecked by design",

@@ -1,0 +1,344 @@
+"""Kernel-first blocks: a block is its signals, a declared parameter layout and its scalar kernels.
+
+A block's equations are written **once**, as plain module-level Python functions on one run,
+which numba can compile:
+
+* ``output(t, x, u, p, y)`` — the outputs, written into ``y``;
+* ``update(t, x, u, p, x_next)`` (discrete) or ``rhs(t, x, u, p, dx)`` (continuous).
+
+``x`` and ``u`` are the run's state and input vectors and ``p`` its parameter vector, packed by the
+block's :class:`Layout` (names and shapes; the kernels read ``p[AT.name]``, where the module-level
+``AT = LAYOUT.at`` holds the offsets, so no position is kept by hand; numba takes the namedtuple
+``AT`` as a constant, but not the ``Layout`` object itself). A block lists its kernels in a
+:class:`Kernels` (``kernels = Kernels(output=..., update=...)``, the functions themselves, not their
+names) and derives from :class:`KernelBlock`; from that the library derives
+
+* the batched methods ``output`` / ``update`` / ``rhs`` on ``(B, n)`` arrays (the kernel applied
+  to the batch's columns when it has no per-value branch, ``Kernels(columns=True)``, the default;
+  otherwise run by run);
+* the compiled engine's per-run kernel (:meth:`KernelBlock.kernel`);
+* ``nlsys(dt)`` for python-control (through the batched methods), where python-control's
+  ``params`` dict changes the block's parameters by name;
+* per-run parameters: :meth:`ctrl_analysis.loop.Loop.simulate` takes
+  ``params={"block name": {"parameter": value or per-run values}}``; every numeric argument of the
+  block's constructor can be given (:meth:`~ctrl_analysis.blocks.Block.with_params` rebuilds the
+  block for each distinct value, so the constructor validates it), and the packed rows are sliced
+  with chunks and processes like per-run inputs.
+
+Examples
+--------
+A first-order low-pass filter ``x(k+1) = x(k) + a (u(k) - x(k))`` as a kernel-first block:
+
+>>> import numpy as np
+>>> from ctrl_analysis.blocks import DiscreteBlock
+>>> LAG = Layout("a")
+>>> AT = LAG.at
+>>> def lag_update(t, x, u, p, x_next):
+...     x_next[0] = x[0] + p[AT.a] * (u[0] - x[0])
+>>> class Lag(KernelBlock, DiscreteBlock):
+...     inputs, outputs, states = ("u",), ("y",), ("y",)
+...     kernels = Kernels(update=lag_update)
+...     def __init__(self, a=0.5):
+...         self.kernel_params = LAG.pack(a=a)
+>>> Lag(0.5).update(0.0, np.zeros((2, 1)), np.array([[1.0], [2.0]]))
+array([[0.5],
+       [1. ]])
+"""
+
+from __future__ import annotations
+
+from collections import namedtuple
+from collections.abc import Callable
+from typing import ClassVar, NamedTuple
+
+import numpy as np
+
+__all__ = ["KernelBlock", "Kernels", "Layout", "copy_output", "jitable"]
+
+
+def jitable(fn=None, **options):
+    """Decorator: ``fn`` unchanged in Python, and callable from numba-compiled kernels.
+
+    ``numba.extending.register_jitable`` (a no-op without numba). A helper written with scalar
+    indexing and ``np`` ufuncs then serves the batch's columns in Python and one run's scalars in a
+    compiled kernel: one source for both engines. Use as ``@jitable`` or ``@jitable(inline="always")``.
+
+    Parameters
+    ----------
+    fn : callable, optional
+        The function (when used without options).
+    **options
+        Passed to ``register_jitable`` (e.g. ``inline="always"``).
+
+    Returns
+    -------
+    callable
+        ``fn`` itself, or a decorator when ``fn`` is omitted.
+    """
+    def wrap(f):
+        try:
+            from numba.extending import register_jitable
+        except ImportError:  # pragma: no cover - numba is optional: the numpy engine needs none of this
+            return f
+        return register_jitable(**options)(f) if options else register_jitable(f)
+
+    return wrap if fn is None else wrap(fn)
+
+
+def copy_output(t, x, u, p, y):
+    """Output = the whole state (the default output kernel).
+
+    Parameters
+    ----------
+    t, x, u, p
+        Time, one run's state, its inputs and the parameters (only ``x`` is read).
+    y : numpy.ndarray
+        The output, overwritten with ``x`` (a compiled kernel returns nothing and allocates nothing).
+    """
+    for i in range(x.shape[0]):
+        y[i] = x[i]
+
+
+class Layout:
+    """Names and shapes of a block's kernel parameters, packed into one float vector.
+
+    Parameters
+    ----------
+    *fields : str or (str, int or tuple of int)
+        The parameters in vector order: a name (a scalar) or ``(name, shape)``; a matrix is packed
+        row-major.
+
+    Attributes
+    ----------
+    at : namedtuple of int
+        The offset of each parameter in the vector; an array's first entry. Kernels read
+        ``p[AT.eta]``, ``p[AT.gains + i]`` with ``AT = LAYOUT.at`` at module level: numba takes that
+        namedtuple as a compile-time constant (a ``Layout`` object it cannot type).
+    size : int
+        Length of the packed vector.
+
+    Raises
+    ------
+    ValueError
+        If a name repeats, is not an identifier, or a shape is negative.
+
+    Examples
+    --------
+    >>> L = Layout("eta", ("gains", 3), ("F", (2, 2)))
+    >>> L.at, L.size
+    (at(eta=0, gains=1, F=4), 8)
+    >>> L.pack(eta=0.5, gains=[1, 2, 3], F=np.eye(2))
+    array([0.5, 1. , 2. , 3. , 1. , 0. , 0. , 1. ])
+    """
+
+    def __init__(self, *fields):
+        names, shapes = [], []
+        for f in fields:
+            try:
+                name, shape = (f, ()) if isinstance(f, str) else f
+                shape = (shape,) if isinstance(shape, (int, np.integer)) else tuple(shape)
+            except (TypeError, ValueError):
+                raise TypeError(f"fields: each field must be a name or (name, shape), got {f!r:.80}") from None
+            if not isinstance(name, str) or not name.isidentifier():
+                raise ValueError(f"fields: a parameter name must be an identifier, got {name!r}")
+            if not all(isinstance(s, (int, np.integer)) and not isinstance(s, bool) for s in shape):
+                raise TypeError(f"fields: the shape of {name!r} must be an int or a tuple of ints, got {shape!r:.80}")
+            if any(s < 0 for s in shape):
+                raise ValueError(f"fields: the shape of {name!r} must not be negative, got {shape}")
+            names.append(name)
+            shapes.append(shape)
+        if len(set(names)) != len(names):
+            raise ValueError(f"fields: parameter names must be unique, got {names}")
+        self.names, self.shapes = tuple(names), tuple(shapes)
+        offsets, start = [], 0
+        for s in self.shapes:
+            offsets.append(start)
+            start += int(np.prod(s, dtype=int))
+        self.size = start
+        self.at = namedtuple("at", self.names)(*offsets)
+
+    def pack(self, **values) -> np.ndarray:
+        """The parameter vector from one value per name (shapes checked).
+
+        Parameters
+        ----------
+        **values : float or array_like
+            Every parameter of the layout, by name.
+
+        Returns
+        -------
+        numpy.ndarray, shape (size,)
+
+        Raises
+        ------
+        ValueError
+            If a name is missing or unknown, or a value has the wrong shape, is not a number or is NaN.
+        """
+        unknown = sorted(set(values) - set(self.names))
+        missing = [n for n in self.names if n not in values]
+        if unknown or missing:
+            raise ValueError(f"pack needs exactly the layout's parameters {list(self.names)}: "
+                             f"missing {missing}, unknown {unknown}")
+        out = np.empty(self.size)
+        for name, shape, lo in zip(self.names, self.shapes, self.at):
+            try:
+                v = np.asarray(values[name], dtype=float)
+            except (TypeError, ValueError):
+                v = None
+            if v is None or values[name] is None or np.isnan(v).any():
+                raise ValueError(f"parameter {name!r} must be a number or an array of numbers (no NaN), "
+                                 f"got {values[name]!r:.80}")
+            if v.shape != shape:
+                raise ValueError(f"parameter {name!r} must have shape {shape}, got {v.shape}")
+            out[lo:lo + v.size] = v.reshape(-1)
+        return out
+
+    def unpack(self, p) -> dict:
+        """The parameters of a packed vector, by name (arrays in their declared shapes).
+
+        Parameters
+        ----------
+        p : array_like, shape (size,)
+
+        Returns
+        -------
+        dict of str -> float or numpy.ndarray
+        """
+        p = np.asarray(p, dtype=float)
+        if p.shape != (self.size,):
+            raise ValueError(f"p must have shape ({self.size},), got {p.shape}")
+        out = {}
+        for name, shape, lo in zip(self.names, self.shapes, self.at):
+            n = int(np.prod(shape, dtype=int))
+            out[name] = float(p[lo]) if shape == () else p[lo:lo + n].reshape(shape).copy()
+        return out
+
+    def __repr__(self) -> str:
+        return "Layout(" + ", ".join(n if s == () else f"({n!r}, {s})" for n, s in zip(self.names, self.shapes)) + ")"
+
+
+class Kernels(NamedTuple):
+    """A block's kernel functions (module-level, plain Python that numba can compile).
+
+    Attributes
+    ----------
+    output : callable
+        ``output(t, x, u, p, y)``; default :func:`copy_output` (the whole state).
+    update : callable, optional
+        ``update(t, x, u, p, x_next)`` of a discrete block.
+    rhs : callable, optional
+        ``rhs(t, x, u, p, dx)`` of a continuous block.
+    columns : bool
+        Whether the kernels can be called on the batch's columns (``x.T``, ``u.T``, ``p``): scalar
+        indexing and no branch on a value (``if x[0] > 0``). Otherwise the batched methods call
+        them run by run.
+    """
+
+    output: Callable = copy_output
+    update: Callable | None = None
+    rhs: Callable | None = None
+    columns: bool = True
+
+
+class KernelBlock:
+    """Mixin (first among the bases): the block's batched methods and compiled kernel from its :class:`Kernels`.
+
+    A subclass sets the class attribute ``kernels`` and, in its constructor, ``self.kernel_params``
+    (the packed 1-D vector, e.g. ``LAYOUT.pack(...)``). Nothing else: ``output``, ``update`` /
+    ``rhs``, :meth:`kernel` and python-control's ``nlsys`` follow.
+    """
+
+    kernels: ClassVar[Kernels] = Kernels()
+    #: The packed parameter vector (set by the constructor).
+    kernel_params: np.ndarray
+
+    # --------------------------------------------------------------- the batched methods, derived
+    def batched(self, kind: str, t, x, u, P) -> np.ndarray:
+        """Kernel ``kind`` on a batch: ``x`` ``(B, n)``, ``u`` ``(B, m)``, ``P`` ``(n_p,)`` shared or ``(B, n_p)``.
+
+        The engine's numpy path calls this with the chunk's parameter rows.
+
+        Parameters
+        ----------
+        kind : {"output", "update", "rhs"}
+        t : float
+        x, u : numpy.ndarray
+        P : numpy.ndarray
+            The parameter vector (every run) or one row per run.
+
+        Returns
+        -------
+        numpy.ndarray, shape (B, width)
+        """
+        fn = getattr(self.kernels, kind)
+        B = u.shape[0]
+        out = np.empty((B, len(self.outputs) if kind == "output" else x.shape[1]))
+        if self.kernels.columns:
+            fn(t, x.T, u.T, P if P.ndim == 1 else P.T, out.T)
+            return out
+        for b in range(B):
+            fn(t, x[b], u[b], P if P.ndim == 1 else P[b], out[b])
+        return out
+
+    def _vector(self, params):
+        """The parameter vector of a direct call: this block's, or python-control's ``params`` applied."""
+        if not params:
+            return self.kernel_params
+        return self.with_params(**params).kernel_params
+
+    def output(self, t, x, u, params=None) -> np.ndarray:
+        """The outputs of every run (the ``output`` kernel on the batch).
+
+        Parameters
+        ----------
+        t : float
+        x : numpy.ndarray, shape (B, n)
+        u : numpy.ndarray, shape (B, m)
+        params : dict, optional
+            python-control's ``params``: constructor arguments changed by name for this call.
+
+        Returns
+        -------
+        numpy.ndarray, shape (B, len(outputs))
+        """
+        return self.batched("output", t, x, u, self._vector(params))
+
+    def update(self, t, x, u, params=None) -> np.ndarray:
+        """The next state of every run (the ``update`` kernel; discrete blocks).
+
+        Parameters
+        ----------
+        t, x, u, params
+            As in :meth:`output`.
+
+        Returns
+        -------
+        numpy.ndarray, shape (B, n)
+        """
+        return self.batched("update", t, x, u, self._vector(params))
+
+    def rhs(self, t, x, u, params=None) -> np.ndarray:
+        """The state derivative of every run (the ``rhs`` kernel; continuous blocks).
+
+        Parameters
+        ----------
+        t, x, u, params
+            As in :meth:`output`.
+
+        Returns
+        -------
+        numpy.ndarray, shape (B, n)
+        """
+        return self.batched("rhs", t, x, u, self._vector(params))
+
+    def kernel(self):
+        """The compiled engine's kernel: the block's :class:`Kernels` and its parameter vector.
+
+        Returns
+        -------
+        ctrl_analysis._kernels.BlockKernel
+        """
+        from .._kernels import BlockKernel
+
+        k = self.kernels
+        return BlockKernel(output=k.output, params=self.kernel_params, rhs=k.rhs, update=k.update)

@@ -1,0 +1,192 @@
+"""Run-time block parameters: ``Loop.simulate(params={"block": {"name": value or per-run values}})``.
+
+A block is independent of the batch size. The parameters a simulation changes are given to
+:meth:`~ctrl_analysis.loop.Loop.simulate` by block name and constructor argument; a value with one
+more axis than the block's own value (its first axis the batch's runs) differs per run, any
+other value is shared by every run. :func:`resolve` rebuilds the block once per distinct value with
+:meth:`~ctrl_analysis.blocks.Block.with_params`, so the block's constructor validates every value,
+and gives the engines what they run:
+
+* a kernel block: its parameter vector, or the ``(B, n_p)`` rows of per-run values (the compiled
+  engine and the derived batched methods read row ``b`` for run ``b``);
+* any other block: the rebuilt block, or groups of runs each with its own rebuilt block.
+
+:func:`take` cuts the per-run values to a chunk of runs, as per-run inputs are cut, so a chunk in
+another process gets exactly its runs' parameters.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["Variant", "resolve", "split", "take"]
+
+
+@dataclass(frozen=True)
+class Variant:
+    """What the engines run for one placed block under run-time parameters.
+
+    Attributes
+    ----------
+    block : Block
+        The block with the shared changes applied (the placed block itself when none).
+    rows : numpy.ndarray or None
+        Per-run values of a block with a kernel: one kernel parameter row per run, ``(B, n_p)``
+        (the compiled engine, and the batched methods of a :class:`~ctrl_analysis.engine.kernels.KernelBlock`).
+    groups : tuple of (Block, numpy.ndarray) or None
+        Per-run values: each distinct block and the runs (indices) it serves (the numpy engine, for
+        blocks that have no derived batched methods).
+    """
+
+    block: object
+    rows: np.ndarray | None = None
+    groups: tuple | None = None
+
+
+def split(block, values: dict, B: int, where: str) -> tuple[dict, dict]:
+    """Shared and per-run values of one block's parameters.
+
+    Parameters
+    ----------
+    block : Block
+    values : dict of str -> value
+        Constructor arguments by name.
+    B : int
+        Runs of the batch.
+    where : str
+        How the caller names the block in messages (``params['plant']``).
+
+    Returns
+    -------
+    shared, per_run : dict
+        ``per_run`` values have a leading axis of length ``B``.
+
+    Raises
+    ------
+    TypeError
+        If ``values`` is not a dict.
+    ValueError
+        If a name is not a constructor argument, or a per-run value does not have ``B`` rows.
+    """
+    if not isinstance(values, dict):
+        raise TypeError(f"{where} must be a dict of parameter name -> value, got {values!r:.80}")
+    current = block.init_args()
+    unknown = sorted(set(values) - set(current))
+    if unknown:
+        raise ValueError(f"{where} names {unknown}, not parameters of {type(block).__name__}; its parameters are "
+                         f"{sorted(current)}")
+    shared, per_run = {}, {}
+    for name, v in values.items():
+        own = current[name]
+        a = np.asarray(v) if not isinstance(v, (str, bytes)) else None
+        if a is not None and own is not None and a.dtype != object and a.ndim == np.ndim(own) + 1:
+            if a.shape[0] != B:
+                raise ValueError(f"{where}[{name!r}] differs per run (one axis more than the block's value), so "
+                                 f"its first axis must have the batch's {B} runs, got shape {a.shape}")
+            per_run[name] = a
+        else:
+            shared[name] = v
+    return shared, per_run
+
+
+def _rebuild(block, changes: dict, where: str):
+    try:
+        return block.with_params(**changes)
+    except (TypeError, ValueError) as exc:
+        raise type(exc)(f"{where}: {exc}") from None
+
+
+def resolve(loop, params, B: int) -> dict:
+    """The :class:`Variant` of every block ``params`` changes.
+
+    Parameters
+    ----------
+    loop : Loop
+    params : dict of block name -> dict of parameter name -> value, or None
+    B : int
+        Runs of the batch.
+
+    Returns
+    -------
+    dict of block name -> Variant
+
+    Raises
+    ------
+    TypeError, ValueError
+        Naming ``params[block]`` (and the parameter) for an unknown block or parameter, a per-run
+        value of the wrong length, a value the block's constructor refuses, or per-run values that
+        change a kernel block's parameter layout.
+    """
+    if params is None:
+        return {}
+    if not isinstance(params, dict):
+        raise TypeError(f"params must be a dict of block name -> {{parameter: value}}, got {params!r:.80}")
+    placed = {p.name: p for p in loop.placed}
+    unknown = sorted(set(params) - set(placed))
+    if unknown:
+        raise ValueError(f"params names blocks {unknown} that are not in the loop; its blocks are {list(placed)}")
+    out = {}
+    for name, values in params.items():
+        where = f"params[{name!r}]"
+        block = placed[name].block
+        shared, per_run = split(block, values, B, where)
+        base = _rebuild(block, shared, where) if shared else block
+        if not per_run:
+            out[name] = Variant(base)
+            continue
+        flat = np.concatenate([np.asarray(v, dtype=float).reshape(B, -1) for v in per_run.values()], axis=1)
+        _, first, inverse = np.unique(flat, axis=0, return_index=True, return_inverse=True)
+        inverse = np.asarray(inverse).reshape(-1)
+        blocks = [_rebuild(block, {**shared, **{k: v[b] for k, v in per_run.items()}}, where) for b in first.tolist()]
+        order = np.argsort(inverse, kind="stable")
+        cuts = np.searchsorted(inverse[order], np.arange(1, len(blocks)))
+        groups = tuple(zip(blocks, (g.astype(np.intp) for g in np.split(order, cuts))))
+        out[name] = Variant(blocks[0], rows=_kernel_rows(blocks, inverse, per_run, where), groups=groups)
+    return out
+
+
+def _kernel_rows(blocks, inverse, per_run, where):
+    """One kernel parameter row per run, or ``None`` when the blocks have no kernel with a parameter vector."""
+    from .._kernels import kernel_of
+
+    try:
+        kernels = [kernel_of(b) for b in blocks]
+    except Exception:  # noqa: BLE001 - a block the compiled engine cannot take runs on numpy
+        return None
+    if any(k is None or np.ndim(k.params) != 1 for k in kernels):
+        return None
+    if len({(k.output, k.update, k.rhs) for k in kernels}) > 1:
+        return None  # different kernel functions per value: only the numpy engine can run them side by side
+    sizes = {np.size(k.params) for k in kernels}
+    if len(sizes) > 1:
+        raise ValueError(f"{where}: per-run values of {sorted(per_run)} change the size of the block's "
+                         f"parameter vector ({sorted(sizes)}); values that change a block's structure "
+                         f"(an order, a number of states) cannot vary per run")
+    return np.ascontiguousarray(np.stack([np.asarray(k.params, dtype=float) for k in kernels])[inverse])
+
+
+def take(params, B: int, loop, lo: int, hi: int):
+    """``params`` for runs ``lo:hi`` of a batch of ``B``: per-run values cut, shared values kept.
+
+    Parameters
+    ----------
+    params : dict or None
+        As :meth:`~ctrl_analysis.loop.Loop.simulate` takes it (already checked by :func:`resolve`).
+    B : int
+    loop : Loop
+    lo, hi : int
+
+    Returns
+    -------
+    dict or None
+    """
+    if not params:
+        return params
+    placed = {p.name: p for p in loop.placed}
+    out = {}
+    for name, values in params.items():
+        shared, per_run = split(placed[name].block, values, B, f"params[{name!r}]")
+        out[name] = {**shared, **{k: v[lo:hi] for k, v in per_run.items()}}
+    return out

@@ -1,0 +1,122 @@
+"""Run-time block parameters (``Loop.simulate(params=...)``) and kernel-first blocks (Layout, Kernels, KernelBlock)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from ctrl_analysis.blocks import DiscreteBlock
+from ctrl_analysis.engine.kernels import KernelBlock, Kernels, Layout
+from ctrl_analysis.estimators.differential import DifferentialEstimator
+from ctrl_analysis.loop import Loop, place
+
+N = 150
+A = np.array([1.0, 2.0, 3.0, 2.0])  # per-run Σ bandwidths (two runs share one)
+
+
+def _y(B):
+    return np.sin(5e-3 * np.arange(N + 1))[:, None] * np.linspace(1.0, 2.0, B)[None, :]
+
+
+def _sigma_loop(a=2.0):
+    return Loop([place(DifferentialEstimator(3, a), "sigma")], dt=1e-3)
+
+
+@pytest.mark.parametrize("engine", ["numpy", "compiled"])
+def test_per_run_parameters_equal_single_runs_through_chunks(engine):
+    y = _y(A.size)
+    res = _sigma_loop().simulate(N, inputs={"y": y}, params={"sigma": {"a": A}}, engine=engine)
+    for b, a in enumerate(A):
+        alone = _sigma_loop(a).simulate(N, inputs={"y": y[:, b]}, engine=engine)
+        assert np.array_equal(res.x[:, b], alone.x[:, 0]), f"run {b} (a = {a}) differs from the block built with a"
+    chunked = _sigma_loop().simulate(N, inputs={"y": y}, params={"sigma": {"a": A}}, engine=engine, chunk_runs=3)
+    assert np.array_equal(chunked.x, res.x)
+
+
+def test_per_run_parameters_through_processes():
+    y = _y(A.size)
+    one = _sigma_loop().simulate(N, inputs={"y": y}, params={"sigma": {"a": A}})
+    two = _sigma_loop().simulate(N, inputs={"y": y}, params={"sigma": {"a": A}}, jobs=2)
+    assert np.array_equal(one.x, two.x)
+
+
+def test_shared_parameter_changes_every_run():
+    y = _y(2)
+    res = _sigma_loop(2.0).simulate(N, inputs={"y": y}, params={"sigma": {"a": 3.0}})
+    ref = _sigma_loop(3.0).simulate(N, inputs={"y": y})
+    assert np.array_equal(res.x, ref.x)
+
+
+@pytest.mark.parametrize(("params", "match"), [
+    ({"nope": {}}, "not in the loop"),
+    ({"sigma": {"b": 1.0}}, "not parameters of DifferentialEstimator"),
+    ({"sigma": {"a": [1.0, 2.0]}}, r"params\['sigma'\]\['a'\].*4 runs"),
+    ({"sigma": {"a": -1.0}}, r"params\['sigma'\]: a must be > 0"),
+    ({"sigma": {"n0": [3, 3, 4, 4]}}, "change the size"),
+])
+def test_bad_parameters_are_named(params, match):
+    with pytest.raises(ValueError, match=match):
+        _sigma_loop().simulate(N, inputs={"y": _y(4)}, params=params)
+
+
+LAG = Layout("a", ("w", 2))
+AT = LAG.at  # the offsets, a compile-time constant in numba (a Layout object is not)
+
+
+def lag_update(t, x, u, p, x_next):
+    x_next[0] = x[0] + p[AT.a] * (p[AT.w] * u[0] + p[AT.w + 1] - x[0])
+
+
+def lag_branchy_update(t, x, u, p, x_next):
+    e = u[0] - x[0]
+    x_next[0] = x[0] + (p[AT.a] * e if e > 0 else 0.5 * p[AT.a] * e)  # a branch on a value
+
+
+class Lag(KernelBlock, DiscreteBlock):
+    inputs, outputs, states = ("u",), ("y",), ("y",)
+    kernels = Kernels(update=lag_update)
+
+    def __init__(self, a=0.5, w=(1.0, 0.0)):
+        if not 0 < a < 2:
+            raise ValueError(f"a must be in (0, 2) for a stable lag, got {a}")
+        self.kernel_params = LAG.pack(a=a, w=w)
+
+
+class BranchyLag(Lag):
+    kernels = Kernels(update=lag_branchy_update, columns=False)
+
+
+def test_layout_offsets_pack_and_unpack():
+    assert LAG.at == (0, 1) and LAG.size == 3
+    p = LAG.pack(a=0.25, w=[2.0, -1.0])
+    assert p.tolist() == [0.25, 2.0, -1.0]
+    back = LAG.unpack(p)
+    assert back["a"] == 0.25 and back["w"].tolist() == [2.0, -1.0]
+    with pytest.raises(ValueError, match="'w' must have shape"):
+        LAG.pack(a=1.0, w=[1.0])
+
+
+@pytest.mark.parametrize("cls", [Lag, BranchyLag])
+def test_kernel_block_derived_methods_equal_the_compiled_engine_and_a_hand_computation(cls):
+    u = np.cos(0.1 * np.arange(N + 1))[:, None] * np.array([[1.0, -2.0, 0.5]])
+    a = np.array([0.2, 0.7, 1.3])
+    loop = Loop([place(cls(), "lag")], dt=1.0)
+    res = {e: loop.simulate(N, inputs={"u": u}, params={"lag": {"a": a}}, engine=e) for e in ("numpy", "compiled")}
+    assert np.array_equal(res["numpy"].x, res["compiled"].x)
+    x = np.zeros(3)  # the recursion by hand, run by run
+    for k in range(N):
+        e = u[k] - x
+        x = x + (a * e if cls is Lag else np.where(e > 0, a * e, 0.5 * a * e))
+    assert np.allclose(res["numpy"].x[-1, :, 0], x, rtol=1e-14, atol=0)
+
+
+def test_kernel_block_validates_run_time_values_with_its_constructor_and_serves_python_control():
+    with pytest.raises(ValueError, match=r"params\['lag'\]: a must be in \(0, 2\)"):
+        Loop([place(Lag(), "lag")], dt=1.0).simulate(3, inputs={"u": np.ones((4, 2))},
+                                                    params={"lag": {"a": [0.5, 2.5]}})
+    import control as ct
+
+    sys = Lag(0.5).nlsys(1.0)
+    t = np.arange(6.0)
+    r = ct.input_output_response(sys, t, np.ones(6), params={"a": 0.25})
+    assert np.allclose(r.outputs, 1.0 - 0.75 ** t)  # python-control's params change a by name
