@@ -122,8 +122,8 @@ def _params_2d(name, params):
 
 
 def run_compiled(loop, runner, plan, n_steps, t, x, held, bound, keep_cols, store, xs, diverged, div_step,
-                 rows=(0, None)):
-    """One chunk through the compiled runner, writing into the result slices.
+                 rows=(0, None), every=1):
+    """One chunk through the compiled runner, writing into the result slices (every ``every``-th sample).
 
     ``rows = (lo, a)``: the chunk's first run within the batch (where the rows of per-run parameters
     held by blocks are read) and within this call (run-time parameters' rows).
@@ -145,7 +145,7 @@ def run_compiled(loop, runner, plan, n_steps, t, x, held, bound, keep_cols, stor
     xs_arg = np.empty((0, 0, 0)) if xs is None else xs
     X = np.array(x, dtype=float, order="C")  # a copy, stepped in place by the runner
     run(n_steps, t, loop.dt / loop.substeps, loop.substeps, X, H, HC, HS, HCS, S0,
-        keep_cols, store, xs_arg, float(bound), diverged, div_step, PS, *P)
+        keep_cols, every, store, xs_arg, float(bound), diverged, div_step, PS, *P)
     x[...] = X  # the final state, as the numpy path leaves it (final_states, chunk carry-over)
 
 

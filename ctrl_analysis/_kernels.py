@@ -273,7 +273,7 @@ def _gen_source(blocks, order, stage, discrete, continuous, nc, method, finite_b
             out += call(i, "rhs", tau, xx, dx, ind)
         return out
 
-    add(f"def run(n_steps, t, h, substeps, X0, H, HC, HS, HCS, S0, KEEP, store, xs, bound, diverged, div_step, PS, "
+    add(f"def run(n_steps, t, h, substeps, X0, H, HC, HS, HCS, S0, KEEP, EVERY, store, xs, bound, diverged, div_step, PS, "
         f"{pargs}):")
     add("    B = X0.shape[0]")
     add("    n = X0.shape[1]")
@@ -298,11 +298,12 @@ def _gen_source(blocks, order, stage, discrete, continuous, nc, method, finite_b
     ind = " " * 12
     for i in order:
         L.extend(call(i, "out", "tk", "X", None, ind))
-    add("            for j in range(KEEP.shape[0]):")
-    add("                store[k, b, j] = S[KEEP[j]]")
-    add("            if xs.shape[0] > 0:")
-    add("                for j in range(n):")
-    add("                    xs[k, b, j] = X[b, j]")
+    add("            if k % EVERY == 0:  # every EVERY-th sample is kept")
+    add("                for j in range(KEEP.shape[0]):")
+    add("                    store[k // EVERY, b, j] = S[KEEP[j]]")
+    add("                if xs.shape[0] > 0:")
+    add("                    for j in range(n):")
+    add("                        xs[k // EVERY, b, j] = X[b, j]")
     add("            if k == n_steps:")
     add("                continue")
     add("            for j in range(n):")
@@ -366,7 +367,7 @@ def compiled_runner(loop, kernels: dict, finite_bound: bool):
     Returns
     -------
     run : callable
-        ``run(n_steps, t, h, substeps, X0, H, HC, HS, HCS, S0, KEEP, store, xs, bound, diverged, div_step, *P)``:
+        ``run(n_steps, t, h, substeps, X0, H, HC, HS, HCS, S0, KEEP, EVERY, store, xs, bound, diverged, div_step, PS, *P)``:
         ``H`` holds the per-run inputs ``(., N+1, B)`` at signal columns ``HC``, ``HS`` the inputs
         shared by every run ``(N+1, .)`` at columns ``HCS``.
     consts : dict
@@ -408,7 +409,7 @@ def compiled_runner(loop, kernels: dict, finite_bound: bool):
         f64, i64 = numba.float64, numba.int64
         sig = numba.void(i64, f64[::1], f64, i64, f64[:, ::1], f64[:, :, ::1], numba.intp[::1], f64[:, ::1],
                          numba.intp[::1], f64[::1],
-                         numba.intp[::1], f64[:, :, :], f64[:, :, :], f64, numba.boolean[:], i64[:], numba.intp[::1],
+                         numba.intp[::1], i64, f64[:, :, :], f64[:, :, :], f64, numba.boolean[:], i64[:], numba.intp[::1],
                          *[f64[:, ::1] for b in blocks])
         run = numba.njit(sig, cache=True, error_model="numpy")(module.run)
         _RUNNERS[key] = (run, time.perf_counter() - t0)

@@ -301,7 +301,7 @@ class Loop:
                  params=None, bound: float = 1e8, store_states: bool = True, seeds=None,
                  store_signals=None, chunk_runs: int | None = None, max_bytes: float | None = None,
                  progress=None, engine: str = "auto", jobs: int = 1, run_offset: int = 0,
-                 batch_runs: int | None = None) -> LoopResponse:
+                 batch_runs: int | None = None, keep=None, every: int = 1) -> LoopResponse:
         """Step the loop ``n_steps`` samples over a batch of runs.
 
         Parameters
@@ -332,6 +332,11 @@ class Loop:
             Per-run seeds, recorded in the response.
         store_signals : sequence of str, optional
             Signals kept in the response (default: all); fewer save memory in large batches.
+        keep : sequence of str, optional
+            The same as ``store_signals`` (the newer name; give one of the two).
+        every : int
+            Keep every ``every``-th sample only (instants ``t0, t0 + every dt, ...``; default 1: all):
+            a Monte Carlo that needs a metric need not pay for storing the whole trajectory.
         chunk_runs : int, optional
             Step the batch in chunks of at most this many runs (default: chosen from ``max_bytes``).
             The per-step work of a chunk stays in cache; every run's result is the same bit for bit.
@@ -390,8 +395,13 @@ class Loop:
             raise TypeError(f"x0 must be a dict of block name -> initial state, got {x0!r:.80}")
         if seeds is not None and (isinstance(seeds, (str, bytes)) or not hasattr(seeds, "__len__")):
             raise TypeError(f"seeds must be a sequence of one seed per run, got {seeds!r:.80}")
-        if store_signals is not None:
+        if keep is not None:
+            if store_signals is not None:
+                raise ValueError("give keep or store_signals (the same thing), not both")
+            store_signals = check_names("keep", keep)
+        elif store_signals is not None:
             store_signals = check_names("store_signals", store_signals)
+        every = check_int("every", every, minimum=1)
         if max_bytes is not None:
             max_bytes = check_positive("max_bytes", max_bytes, scalar=True)
         if not isinstance(progress, bool):
@@ -408,9 +418,10 @@ class Loop:
         keep = names if store_signals is None else list(dict.fromkeys(store_signals))
         for s in keep:
             if s not in col:
-                raise ValueError(f"store_signals names unknown signal {s!r}; signals are {names}")
+                raise ValueError(f"keep (store_signals) names unknown signal {s!r}; signals are {names}")
         keep_cols = np.array([col[s] for s in keep], dtype=np.intp)
-        per_run = self._memory_per_run(n_steps, len(keep), store_states)
+        n_kept = n_steps // every + 1  # stored instants
+        per_run = self._memory_per_run(n_kept - 1, len(keep), store_states)
         check_result_memory(per_run * B, RESULT_BYTES, "Loop.simulate")
         limit = CHUNK_BYTES if max_bytes is None else check_positive("max_bytes", max_bytes)
         work = 8 * (8 * self.n_states + 2 * len(names)) + per_run  # temporaries + stored rows, per run
@@ -429,6 +440,7 @@ class Loop:
             and compiled_for(self, engine, funcs, variants, np.isfinite(bound)) is not None
         if B > 1 and not funcs and (jobs > 1 or on_cluster) and picklable(self):
             opts = {"t0": t0, "params": params, "bound": bound, "store_states": store_states, "store_signals": keep,
+                    "every": every,
                     "chunk_runs": chunk_runs, "max_bytes": max_bytes, "engine": engine,
                     "run_offset": check_int("run_offset", run_offset, minimum=0),
                     "batch_runs": check_int("batch_runs", batch_runs, minimum=1) if batch_runs else None}
@@ -439,8 +451,8 @@ class Loop:
         check_rows(rows, run_offset, B, batch_runs)  # both engines: the same batch, the same answer
         rows = {id(p.block): rows[p.name] for p in self.placed if p.name in rows}
         t = t0 + self.dt * np.arange(n_steps + 1)
-        store = np.empty((n_steps + 1, B, len(keep)))
-        xs = np.empty((n_steps + 1, B, self.n_states)) if store_states else None
+        store = np.empty((n_kept, B, len(keep)))
+        xs = np.empty((n_kept, B, self.n_states)) if store_states else None
         diverged = np.zeros(B, dtype=bool)
         div_step = np.full(B, -1, dtype=int)
         # a callable input returning one value per run is sliced with its chunk
@@ -451,18 +463,19 @@ class Loop:
         with updater(progress if callable(progress) else auto, B * n_steps,
                      f"{B} runs x {n_steps} samples", "run-sample") as pbar:
             self._run_chunks(plan, runner, n_steps, t, x, held, funcs, per_run_funcs, variants, bound, keep_cols,
-                             store, xs, diverged, div_step, chunk_bounds(B, size), (run_offset, rows), pbar)
+                             (store, xs, every), diverged, div_step, chunk_bounds(B, size), (run_offset, rows), pbar)
         sig_store = {s: store[:, :, j] for j, s in enumerate(keep)}
         state_names = [f"{p.name}.{s}" for p in self.continuous + self.discrete for s in p.block.states]
-        return LoopResponse(t=t, x=xs, u=None, y=None, diverged=diverged, diverged_step=div_step,
+        return LoopResponse(t=t[::every], x=xs, u=None, y=None, diverged=diverged, diverged_step=div_step,
                             seeds=None if seeds is None else list(seeds), bound=bound, signals=sig_store,
                             slices=dict(self.slices), external=self.external, outlist=self.outlist,
-                            state_names=state_names, x_final=x if xs is None else xs[-1].copy())
+                            state_names=state_names, x_final=x)
 
     def _run_chunks(self, plan, runner, n_steps, t, x, held, funcs, per_run_funcs, variants, bound, keep_cols,
-                    store, xs, diverged, div_step, bounds, offset_rows, progress):
+                    stored, diverged, div_step, bounds, offset_rows, progress):
         """Step every chunk ``(lo, hi)`` of the batch (compiled or numpy), reporting run-samples to ``progress``."""
         run_offset, rows = offset_rows
+        store, xs, every = stored
         for lo, hi in bounds:
             f_c = {s: (f if s not in per_run_funcs else (lambda tt, f=f, lo=lo, hi=hi: np.asarray(f(tt))[lo:hi]))
                    for s, f in funcs.items()}
@@ -470,7 +483,7 @@ class Loop:
             if runner is None:
                 fns = chunk_functions(plan, rows, run_offset + lo, hi - lo, self._variant_ids(variants), lo)
                 self._run_chunk(plan | fns, n_steps, t, x[lo:hi], h_c, f_c, None, bound, keep_cols,
-                                store[:, lo:hi], None if xs is None else xs[:, lo:hi],
+                                (store[:, lo:hi], None if xs is None else xs[:, lo:hi], every),
                                 diverged[lo:hi], div_step[lo:hi], progress)
                 continue
             # compiled: one call per chunk, or (with progress) about 20 calls over its runs (runs are
@@ -479,20 +492,22 @@ class Loop:
             for a, b in parts if progress is None else [(lo + a, lo + b) for a, b in parts]:
                 h_p = {s: (v[:, a:b] if v.ndim == 2 else v) for s, v in held.items()}
                 run_compiled(self, runner, plan, n_steps, t, x[a:b], h_p, bound, keep_cols, store[:, a:b],
-                             None if xs is None else xs[:, a:b], diverged[a:b], div_step[a:b], rows=(run_offset + a, a))
+                             None if xs is None else xs[:, a:b], diverged[a:b], div_step[a:b], rows=(run_offset + a, a),
+                             every=every)
                 if progress is not None:
                     progress((b - a) * n_steps)
 
     def _variant_ids(self, variants) -> dict:  # the plan holds the placed blocks: id -> Variant
         return {id(p.block): variants[p.name] for p in self.placed if p.name in variants}
 
-    def _run_chunk(self, plan, n_steps, t, x, held, funcs, params, bound, keep_cols, store, xs,
+    def _run_chunk(self, plan, n_steps, t, x, held, funcs, params, bound, keep_cols, stored,
                    diverged, div_step, progress):
         """Step one chunk of runs, writing into the result slices ``store``, ``xs``, ``diverged``.
 
         ``x`` (a view into the caller's state array) holds the final state on return.
         """
         x_out = x
+        store, xs, every = stored
         B = x.shape[0]
         col = plan["col"]
         S = np.zeros((B, len(plan["names"])))  # every signal at the current instant or stage
@@ -531,9 +546,10 @@ class Loop:
                 for j, f in fcols:
                     S[:, j] = f(tk)
                 evaluate(order, tk, x)
-                store[k] = S if store_all else S[:, keep_cols]
-                if xs is not None:
-                    xs[k] = x
+                if k % every == 0:
+                    store[k // every] = S if store_all else S[:, keep_cols]
+                    if xs is not None:
+                        xs[k // every] = x
                 if k == n_steps:
                     break
                 if discrete:

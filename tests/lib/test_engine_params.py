@@ -120,3 +120,17 @@ def test_kernel_block_validates_run_time_values_with_its_constructor_and_serves_
     t = np.arange(6.0)
     r = ct.input_output_response(sys, t, np.ones(6), params={"a": 0.25})
     assert np.allclose(r.outputs, 1.0 - 0.75 ** t)  # python-control's params change a by name
+
+
+@pytest.mark.parametrize("engine", ["numpy", "compiled"])
+@pytest.mark.parametrize("every", [1, 7])
+def test_keep_and_every_store_the_decimated_signals_of_the_full_run(engine, every):
+    y = _y(3)
+    full = _sigma_loop().simulate(N, inputs={"y": y}, engine=engine)
+    some = _sigma_loop().simulate(N, inputs={"y": y}, engine=engine, keep=["xhat[1]"], every=every, store_states=False)
+    assert list(some.signals) == ["xhat[1]"] and some.x is None
+    assert np.array_equal(some.t, full.t[::every]) and some.t.size == N // every + 1
+    assert np.array_equal(some["xhat[1]"], full["xhat[1]"][::every])
+    assert np.array_equal(some.x_final, full.x[-1])  # the final state whatever is stored
+    with pytest.raises(ValueError, match="every must be"):
+        _sigma_loop().simulate(N, inputs={"y": y}, every=0)
