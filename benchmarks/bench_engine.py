@@ -82,8 +82,8 @@ def run(T=2.0, repeat=5, B=1000):
         rows.append(Row(NAME, name, runs, seconds, agree))
     base = timed["float loop (plain Python), 1 run"][0]
     ref = timed[f"compiled reference (numba), {B} runs"][0] / B
-    notes = [f"numba compile of the reference: {t_compile:.2f} s; engine runner compile (or disk-cache load): "
-             f"{t_engine_compile:.2f} s; neither is in the rows"]
+    notes = [(f"numba compile of the reference: {t_compile:.2f} s; engine runner compile (or disk-cache load): "
+              f"{t_engine_compile:.2f} s; neither is in the rows")]
     return rows, base, ref, notes
 
 
