@@ -10,7 +10,7 @@ import numpy as np
 from ._kernels import available, compiled_runner, kernel_of
 
 
-def compiled_for(loop, engine, funcs, variants, finite_bound):
+def compiled_for(loop, engine, funcs, variants):
     """The compiled runner and the kernels' parameters, or ``None`` for the numpy path.
 
     ``variants`` (block name -> :class:`~ctrl_analysis.engine.params.Variant`) are the run-time
@@ -50,7 +50,7 @@ def compiled_for(loop, engine, funcs, variants, finite_bound):
         if not variants:
             loop._kernels_checked = loop.placed  # once per loop: its blocks (and their parameters) are fixed
     try:
-        run = compiled_runner(loop, kernels, finite_bound)
+        run = compiled_runner(loop, kernels)
     except Exception as exc:  # a kernel numba cannot compile: say so, and use the numpy path under "auto"
         if engine == "compiled":
             raise

@@ -235,7 +235,7 @@ def _jit(fn):
     return _JIT[fn]
 
 
-def _gen_source(blocks, order, stage, discrete, continuous, nc, method, finite_bound):
+def _gen_source(blocks, order, stage, discrete, continuous, nc, method):
     """Python source of the runner (see :func:`compiled_runner`).
 
     Runs are stepped side by side (steps outermost, so the result rows are written in memory
@@ -317,20 +317,12 @@ def _gen_source(blocks, order, stage, discrete, continuous, nc, method, finite_b
         add("            for _ in range(substeps):")
         ind2 = " " * 16
         if method == "rk4":
-            # the arithmetic of ctrl_analysis.simulate.rk4_step, element by element; the four stages
-            # are one loop (xt = xc + a_s h k_(s-1), tau + c_s h: exact for a, c in {0, 1/2, 1}), so
-            # the kernels are inlined once rather than four times (numba's compile time)
+            # ctrl_analysis.engine.integrators' rk4_stage / rk4_combine, the numpy engine's RK4 too;
+            # the four stages are one loop, so the kernels are inlined once rather than four times
             add("                for s in range(4):")
-            add("                    if s == 0:")
-            L.extend(f"                        xt[{j}] = xc[{j}]" for j in range(nc))
-            add("                        ts = tau")
-            add("                    else:")
-            add("                        a = h if s == 3 else 0.5 * h")
-            L.extend(f"                        xt[{j}] = xc[{j}] + a * KS[s - 1, {j}]" for j in range(nc))
-            add("                        ts = tau + a")
+            add("                    ts = tau + RK4_STAGE(xc, KS, s, h, xt)")
             L.extend(stage_lines("ts", "xt", "KS[s]", " " * 20))
-            L.extend(f"                xc[{j}] = xc[{j}] + (h / 6.0) * (KS[0, {j}] + 2.0 * KS[1, {j}] + 2.0 * KS[2, {j}]"
-                     f" + KS[3, {j}])" for j in range(nc))
+            add("                RK4_COMBINE(xc, KS, h)")
         else:
             # ctrl_analysis.simulate.euler_step
             L.extend(stage_lines("tau", "xc", "k1", ind2))
@@ -338,11 +330,11 @@ def _gen_source(blocks, order, stage, discrete, continuous, nc, method, finite_b
         add("                tau += h")
         add(f"            for j in range({nc}):")
         add("                xn[j] = xc[j]")
-    # divergence: the test of ctrl_analysis.simulate._check_bad, per run
+    # divergence: ctrl_analysis.engine.integrators.is_bad, the numpy engine's test too
     add("            bad = False")
     add("            for j in range(n):")
     add("                v = xn[j]")
-    add("                if not (abs(v) <= bound):" if finite_bound else "                if not np.isfinite(v):")
+    add("                if IS_BAD(v, bound):")
     add("                    bad = True")
     add("                X[b, j] = v")
     add("            if bad and not diverged[b]:")
@@ -353,7 +345,7 @@ def _gen_source(blocks, order, stage, discrete, continuous, nc, method, finite_b
     return "\n".join(L) + "\n"
 
 
-def compiled_runner(loop, kernels: dict, finite_bound: bool):
+def compiled_runner(loop, kernels: dict):
     """The numba runner of ``loop`` (generated once per structure and process) and its constant arguments.
 
     Parameters
@@ -361,8 +353,6 @@ def compiled_runner(loop, kernels: dict, finite_bound: bool):
     loop : Loop
     kernels : dict of block name -> BlockKernel
         Every block's kernel.
-    finite_bound : bool
-        Whether the divergence bound is finite (the test differs for ``inf``).
 
     Returns
     -------
@@ -390,12 +380,14 @@ def compiled_runner(loop, kernels: dict, finite_bound: bool):
     discrete = [idx[p.name] for p in loop.discrete]
     continuous = [idx[p.name] for p in loop.continuous]
     key = (tuple((tuple(b["ic"]), tuple(b["oc"]), b["sl"]) for b in blocks), tuple(order), tuple(stage),
-           tuple(discrete), tuple(continuous), loop.n_continuous, loop.method, finite_bound,
+           tuple(discrete), tuple(continuous), loop.n_continuous, loop.method,
            tuple((kernels[n].output, kernels[n].rhs, kernels[n].update) for n in names))
     if key not in _RUNNERS:
         t0 = time.perf_counter()
-        src = _gen_source(blocks, order, stage, discrete, continuous, loop.n_continuous, loop.method, finite_bound)
-        fns = {}
+        src = _gen_source(blocks, order, stage, discrete, continuous, loop.n_continuous, loop.method)
+        from .engine.integrators import is_bad, rk4_combine, rk4_stage
+
+        fns = {"RK4_STAGE": rk4_stage, "RK4_COMBINE": rk4_combine, "IS_BAD": is_bad}
         for i, n in enumerate(names):
             k = kernels[n]
             fns[f"K{i}_out"] = k.output

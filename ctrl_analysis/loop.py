@@ -437,7 +437,7 @@ class Loop:
 
         # over processes, or a process-wide Dask cluster's workers (compiled: per-run parameters follow the chunk)
         on_cluster = jobs == 1 and B > 1 and not funcs and active_cluster() is not None \
-            and compiled_for(self, engine, funcs, variants, np.isfinite(bound)) is not None
+            and compiled_for(self, engine, funcs, variants) is not None
         if B > 1 and not funcs and (jobs > 1 or on_cluster) and picklable(self):
             opts = {"t0": t0, "params": params, "bound": bound, "store_states": store_states, "store_signals": keep,
                     "every": every,
@@ -446,7 +446,7 @@ class Loop:
                     "batch_runs": check_int("batch_runs", batch_runs, minimum=1) if batch_runs else None}
             return simulate_chunks(self, jobs, n_steps, held, x, opts, seeds)
         run_offset = check_int("run_offset", run_offset, minimum=0)
-        runner = compiled_for(self, engine, funcs, variants, np.isfinite(bound))  # None: the numpy path
+        runner = compiled_for(self, engine, funcs, variants)  # None: the numpy path
         rows = {p.name: r for p in self.placed if p.name not in variants and (r := per_run_rows(p.block)) is not None}
         check_rows(rows, run_offset, B, batch_runs)  # both engines: the same batch, the same answer
         rows = {id(p.block): rows[p.name] for p in self.placed if p.name in rows}

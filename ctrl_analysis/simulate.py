@@ -32,6 +32,7 @@ from ._validate import (
     check_nonnegative,
     check_positive,
 )
+from .engine.integrators import MAX_SUBSTEPS, STEPPERS, _flag_divergence, euler_step, rk4_step  # noqa: F401
 from .ivp import simulate_ivp
 from .noise import _check_seeds, draw_noise, gaussian_noise, run_seeds, uniform_noise  # noqa: F401 (public API)
 from .simresult import SimResult, _check_bound, _prepare
@@ -54,81 +55,6 @@ __all__ = [
     "simulate_sampled",
     "uniform_noise",
 ]
-
-
-# ----------------------------------------------------------------------------------------------
-# Fixed-step integrators (one piece of code for every continuous block)
-# ----------------------------------------------------------------------------------------------
-
-def euler_step(rhs: Callable, t: float, x: np.ndarray, u, h: float, params=None) -> np.ndarray:
-    """One forward-Euler step of ``x' = rhs(t, x, u, params)`` with ``u`` held.
-
-    Parameters
-    ----------
-    rhs : callable
-        ``rhs(t, x, u, params) -> dx/dt``, batched.
-    t, h : float
-        Start of the step and its length.
-    x : numpy.ndarray, shape (B, n)
-    u : object
-        Held input passed to ``rhs``.
-    params : optional
-
-    Returns
-    -------
-    numpy.ndarray, shape (B, n)
-        The state at ``t + h``.
-    """
-    return x + h * rhs(t, x, u, params)
-
-
-def rk4_step(rhs: Callable, t: float, x: np.ndarray, u, h: float, params=None) -> np.ndarray:
-    """One classical Runge-Kutta step of ``x' = rhs(t, x, u, params)`` with ``u`` held over the step.
-
-    Parameters
-    ----------
-    rhs, t, x, u, h, params
-        As for :func:`euler_step`.
-
-    Returns
-    -------
-    numpy.ndarray, shape (B, n)
-        The state at ``t + h`` (local error O(h⁵)).
-    """
-    k1 = rhs(t, x, u, params)
-    k2 = rhs(t + 0.5 * h, x + 0.5 * h * k1, u, params)
-    k3 = rhs(t + 0.5 * h, x + 0.5 * h * k2, u, params)
-    k4 = rhs(t + h, x + h * k3, u, params)
-    return x + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
-
-
-#: Fixed-step integrators by name.
-STEPPERS = {"euler": euler_step, "rk4": rk4_step}
-
-#: Most integration steps per sample (``substeps``) a runner or a block accepts: beyond it one
-#: sample would take minutes; use a smaller sampling period instead.
-MAX_SUBSTEPS = 100_000
-
-
-def _check_bad(x_new: np.ndarray, bound: float) -> np.ndarray:
-    """Runs whose state is non-finite or leaves ``|x| <= bound`` (NaN fails every comparison)."""
-    if x_new.shape[1] == 0:
-        return np.zeros(x_new.shape[0], dtype=bool)
-    with np.errstate(invalid="ignore"):
-        if np.isfinite(bound):
-            return ~(np.abs(x_new).max(axis=1) <= bound)
-        return ~np.isfinite(x_new).all(axis=1)
-
-
-def _flag_divergence(x, bound, diverged, div_step, step_index):
-    """Mark runs that just left the bound (in place) and set every diverged run's state to NaN."""
-    bad = _check_bad(x, bound) & ~diverged
-    if bad.any():
-        diverged |= bad
-        div_step[bad] = step_index
-        x = x.copy()
-        x[diverged] = np.nan
-    return x
 
 
 # ----------------------------------------------------------------------------------------------

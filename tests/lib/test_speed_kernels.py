@@ -209,8 +209,8 @@ def test_auto_engine_falls_back_to_numpy_with_a_warning_when_a_kernel_does_not_c
 def test_environment_can_make_auto_mean_numpy(monkeypatch):
     loop = sigma_loop()
     monkeypatch.setenv("CTRL_ANALYSIS_ENGINE", "numpy")
-    assert compiled_for(loop, "auto", {}, None, True) is None
-    assert compiled_for(loop, "compiled", {}, None, True) is not None  # an explicit request still compiles
+    assert compiled_for(loop, "auto", {}, None) is None
+    assert compiled_for(loop, "compiled", {}, None) is not None  # an explicit request still compiles
 
 
 def test_study_kernels_are_the_numpy_methods():
