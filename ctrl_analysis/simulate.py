@@ -32,7 +32,13 @@ from ._validate import (
     check_nonnegative,
     check_positive,
 )
-from .engine.integrators import MAX_SUBSTEPS, STEPPERS, _flag_divergence, euler_step, rk4_step  # noqa: F401
+from .engine.integrators import (
+    MAX_SUBSTEPS,
+    STEPPERS,
+    _flag_divergence,
+    euler_step,
+    rk4_step,
+)
 from .ivp import simulate_ivp
 from .noise import _check_seeds, draw_noise, gaussian_noise, run_seeds, uniform_noise  # noqa: F401 (public API)
 from .simresult import SimResult, _check_bound, _prepare
