@@ -1,4 +1,4 @@
-"""Controllers as blocks: the MFAC family, golden-section adaptive control, high-order differential feedback, PD, fuzzy."""
+"""Controllers as blocks: the MFAC family, golden-section adaptive control, high-order differential feedback, PD, PID, fuzzy."""
 
 from .differential_feedback import (
     HighOrderDifferentialFeedback,
@@ -17,6 +17,7 @@ from .mfac import (
     mfac_controller,
 )
 from .pd import PDFeedforward, bandwidth_gains
+from .pid import DiscretePID
 
 __all__ = [
     "GOLDEN_L1",
@@ -24,6 +25,7 @@ __all__ = [
     "CFDLLaw",
     "CFDLPredictor",
     "DecreasingGainLaw",
+    "DiscretePID",
     "FuzzyController",
     "FuzzyLookupController",
     "GoldenSectionController",

@@ -32,6 +32,7 @@ from ctrl_analysis import identification as ident
 from ctrl_analysis import loop as loop_mod
 from ctrl_analysis import metrics, report_md, simulate, study
 from ctrl_analysis.arena import cli as arena_cli
+from ctrl_analysis.engine import integrators
 from ctrl_analysis.engine import kernels as engine_kernels
 from ctrl_analysis.engine import params as engine_params
 from ctrl_analysis.engine import processes
@@ -39,7 +40,7 @@ from ctrl_analysis.arena import figures as arena_figures
 from ctrl_analysis.arena import interface as arena_interface
 from ctrl_analysis.arena import recommend as arena_recommend
 from ctrl_analysis.controllers import differential_feedback as hodf
-from ctrl_analysis.controllers import fuzzy, golden_section, mfac, pd
+from ctrl_analysis.controllers import fuzzy, golden_section, mfac, pd, pid
 from ctrl_analysis.estimators import differential as de
 from ctrl_analysis.estimators import eso, lowpass, tracking
 from ctrl_analysis.estimators.kalman import _checks, alpha_beta, ckf, continuous, discrete, ikf, scalar
@@ -453,6 +454,9 @@ def build_cases(tmp):
         ("FuzzyController.control_surface", _fuzzy_surface, dict(n_e=5, n_ec=5), dict(n_e=INT + [0], n_ec=INT + [0])),
         ("FuzzyLookupController", fuzzy.FuzzyLookupController, dict(controller=FUZZY, n_points=21),
          dict(controller=NOT_A_BLOCK, n_points=["3", None, 2.5, NAN, True, 0, 1, [2, 3, 4]])),
+        ("DiscretePID", pid.DiscretePID, dict(kp=1.0, ki=0.5, kd=0.1, T=0.1, Tf=0.01, u_min=-1.0, u_max=1.0),
+         dict(kp=REAL + [-1.0], ki=REAL + [-1.0], kd=REAL + [-1.0], T=POS, Tf=REAL + [-0.1], u_min=["abc", None, 2.0],
+              u_max=["abc", None, -2.0])),
         # plants
         ("DiscreteLTI", plants.DiscreteLTI, dict(sys=TF1, dt=0.1, x0=None),
          dict(sys=[3.0, "tf", None, TF2, ct.tf([1.0], [1.0, 1.0], 0.5)], dt=POS,
@@ -772,6 +776,11 @@ NOT_FUZZED = {
     engine_kernels.Layout: "fuzzed through _layout (its fields are variadic) and _layout_pack",
     engine_kernels.Kernels: "record of kernel functions, checked when the block runs (check_kernel_reads)",
     engine_kernels.copy_output: "per-step kernel, unchecked by design",
+    pid.pid_output: "per-step kernel, unchecked by design",
+    integrators.is_bad: "per-step divergence test, unchecked by design",
+    integrators.rk4_stage: "per-step integrator helper, unchecked by design",
+    integrators.rk4_combine: "per-step integrator helper, unchecked by design",
+    pid.pid_update: "per-step kernel, unchecked by design",
     engine_kernels.jitable: "decorator: any function is a valid argument",
     engine_params.Variant: "record built by resolve",
     engine_params.resolve: "internal half of Loop.simulate(params=...), whose params are fuzzed",
