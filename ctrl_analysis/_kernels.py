@@ -231,7 +231,10 @@ def _jit(fn):
     import numba
 
     if fn not in _JIT:
-        _JIT[fn] = numba.njit(cache=True, error_model="numpy", inline="always")(fn)
+        try:
+            _JIT[fn] = numba.njit(cache=True, error_model="numpy", inline="always")(fn)
+        except RuntimeError:  # no file to cache against (a notebook cell, exec'd code): compile, don't cache
+            _JIT[fn] = numba.njit(cache=False, error_model="numpy", inline="always")(fn)
     return _JIT[fn]
 
 

@@ -323,7 +323,7 @@ class Loop:
             block's own (first axis: the ``B`` runs) differs per run, e.g.
             ``params={"law": {"eta": eta_runs}}``; any other value is shared by every run. Each
             distinct value is validated by the block's constructor; per-run values follow the runs
-            into chunks and processes.
+            into chunks and processes, and give the batch size when nothing else does.
         bound : float
             A run whose state leaves ``|x| <= bound`` or becomes non-finite is flagged.
         store_states : bool
@@ -410,6 +410,10 @@ class Loop:
         x0_B = max((np.ndim(v) == 2 and np.shape(v)[0]) or 1 for v in (x0 or {}).values()) if x0 else 1
         if B == 1 and x0_B > 1:
             B = x0_B
+        if B == 1 and runs is None:
+            from .engine.params import runs_of
+
+            B = runs_of(self, params) or 1  # per-run parameters say how many runs
         x = self._x0(x0, B)
         if seeds is not None and len(seeds) != B:
             raise ValueError(f"seeds must have one entry per run ({B}), got {len(seeds)}")

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Variant", "resolve", "split", "take"]
+__all__ = ["Variant", "resolve", "runs_of", "split", "take"]
 
 
 @dataclass(frozen=True)
@@ -89,6 +89,41 @@ def split(block, values: dict, B: int, where: str) -> tuple[dict, dict]:
         else:
             shared[name] = v
     return shared, per_run
+
+
+def runs_of(loop, params) -> int | None:
+    """The number of runs ``params``' per-run values give (their first axis), or ``None`` if none differs per run.
+
+    Lets :meth:`~ctrl_analysis.loop.Loop.simulate` take the batch size from the parameters, as it
+    does from per-run inputs. Malformed ``params`` give ``None`` here and their error in :func:`resolve`.
+
+    Parameters
+    ----------
+    loop : Loop
+    params : dict or None
+
+    Returns
+    -------
+    int or None
+    """
+    if not isinstance(params, dict):
+        return None
+    placed = {p.name: p.block for p in loop.placed}
+    for name, values in params.items():
+        if name not in placed or not isinstance(values, dict):
+            continue
+        try:
+            current = placed[name].init_args()
+        except TypeError:
+            continue
+        for key, v in values.items():
+            own = current.get(key)
+            if own is None or isinstance(v, (str, bytes)):
+                continue
+            a = np.asarray(v)
+            if a.dtype != object and a.ndim == np.ndim(own) + 1 and a.shape[0] > 0:
+                return int(a.shape[0])
+    return None
 
 
 def _rebuild(block, changes: dict, where: str):

@@ -785,6 +785,7 @@ NOT_FUZZED = {
     engine_params.Variant: "record built by resolve",
     engine_params.resolve: "internal half of Loop.simulate(params=...), whose params are fuzzed",
     engine_params.split: "internal half of Loop.simulate(params=...), whose params are fuzzed",
+    engine_params.runs_of: "internal half of Loop.simulate(params=...): malformed params give None, then resolve's error",
     engine_params.take: "internal half of Loop.simulate(params=...), whose params are fuzzed",
     loop_mod.LoopResponse: "result record built by Loop.simulate",
     simulate.SimResult: "result record built by the simulators",
