@@ -12,7 +12,7 @@ __all__ = ["save_all"]
 
 
 #: f̂' in matplotlib's mathtext (a combining circumflex does not render in the figures' font)
-FHAT = r"$\hat{f}'$"
+FHAT = r"$\hat{f}{}'$"
 
 
 def _pareto(s, cases, tuned):
