@@ -91,3 +91,16 @@ def test_report_shows_the_arena_verdict_beside_the_study_claim(tmp_path):
     assert "[arena: holds](#x)" in rows["A beats B"] and "arena" not in rows["Something else"]
     with pytest.raises(ValueError, match="claim and claim_verdict"):
         StudyResult(INFO).finding("x", "text", claim="demo/a")
+
+
+def test_cli_reads_the_arena_links_for_the_report(tmp_path):
+    import json
+
+    from ctrl_analysis.cli import _arena_links
+
+    assert _arena_links(tmp_path) == {}  # no arena run: no links
+    arena = StudyResult(INFO)
+    judge_claims(arena, CASES, _table([1.0] * 3, [0.5] * 3), SETUP, checks=[_check()])
+    (tmp_path / "arena").mkdir()
+    (tmp_path / "arena" / "results.json").write_text(json.dumps(arena.to_dict(), default=str))
+    assert _arena_links(tmp_path) == {"demo/a-beats-b": "[arena: does not hold at best tuning](#estimator-arena)"}
