@@ -59,7 +59,7 @@ def test_a_fixed_configuration_loser_is_evaluated_on_the_same_records():
     for sigma, verdict in ((0.1, "holds"), (10.0, "fails")):
         r = StudyResult(INFO)
         assert judge_claims(r, CASES, _table([sigma] * 3, [1] * 3), SETUP, checks=[chk])[0][1] == verdict
-    err = np.array(list(r.findings[0]["evidence"]["algebraic at window = 2, degree = 1 / sigma"].values())) * 10.0
+    err = np.array(list(r.findings[0]["evidence"]["algebraic fixed at window = 2, degree = 1 / sigma"].values())) * 10.0
     eps = np.array([c.eps for c in CASES])
     assert err == pytest.approx(np.sqrt(2) * eps / np.sqrt(3) / SETUP.dt, rel=0.15)  # uniform noise: σ = ε/√3
 
