@@ -22,8 +22,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._validate import check_str
-from .interface import family
+from .._validate import check_finite, check_in, check_str
+from .interface import FAMILIES, family
 
 __all__ = ["VERDICT_TEXT", "ClaimCheck", "judge_claims", "register_claim_check", "registered_claim_checks"]
 
@@ -68,10 +68,19 @@ class ClaimCheck:
         if bool(self.winners) != bool(self.losers):
             raise ValueError(f"winners and losers must both be given or both be empty, got {self.winners!r} and "
                              f"{self.losers!r}")
+        names = [f.name for f in FAMILIES]
         for w in self.winners:
-            family(w)
+            check_in("winners", w, names)
         for lo in self.losers:
-            family(lo if isinstance(lo, str) else lo[0])
+            if not isinstance(lo, str) and not (isinstance(lo, tuple) and len(lo) == 2 and isinstance(lo[1], tuple)):
+                raise TypeError(f"losers must hold family names or (family, parameter tuple) pairs, got {lo!r:.80}")
+            fam = family(check_in("losers", lo if isinstance(lo, str) else lo[0], names))
+            if not isinstance(lo, str):
+                row = np.asarray(check_finite("losers parameters", lo[1]), dtype=float)
+                if row.shape != (len(fam.params),):
+                    raise ValueError(f"losers parameters of {fam.name} must have {len(fam.params)} entries, got {lo[1]!r}")
+        for sig in self.signals:
+            check_str("signals", sig)
         check_str("statement", self.statement)
         check_str("how", self.how)
 
@@ -141,6 +150,20 @@ def judge_claims(result, cases, table, setup, checks=None) -> list:
     list of (str, str)
         ``(claim, verdict)`` per check.
     """
+    from ..results import StudyResult
+    from .tuning import Case, Setup
+
+    if not isinstance(result, StudyResult):
+        raise TypeError(f"result must be a StudyResult, got {result!r:.80}")
+    if not isinstance(cases, (list, tuple)) or not all(isinstance(c, Case) for c in cases):
+        raise TypeError(f"cases must be a list of Case, got {cases!r:.80}")
+    if not isinstance(table, dict):
+        raise TypeError(f"table must be a dict table[family][case key], got {table!r:.80}")
+    if not isinstance(setup, Setup):
+        raise TypeError(f"setup must be a Setup, got {setup!r:.80}")
+    if checks is not None and (not isinstance(checks, (list, tuple)) or
+                               not all(isinstance(c, ClaimCheck) for c in checks)):
+        raise TypeError(f"checks must be a list of ClaimCheck or None, got {checks!r:.80}")
     out = []
     for chk in registered_claim_checks() if checks is None else checks:
         run = [c for c in cases if not chk.signals or c.signal in chk.signals]
