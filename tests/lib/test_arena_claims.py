@@ -66,7 +66,8 @@ def test_a_fixed_configuration_loser_is_evaluated_on_the_same_records():
 
 @pytest.mark.parametrize("kw, match", [
     ({"claim": "no-slash"}, "claim"),
-    ({"winners": ("nope",)}, "family"),
+    ({"winners": ("nope",)}, "winners"),
+    ({"losers": (("algebraic", (2.0,)),)}, "losers"),
     ({"losers": ()}, "winners and losers"),
     ({"signals": ["sines"]}, "signals"),
 ])
