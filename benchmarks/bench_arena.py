@@ -12,7 +12,8 @@ Run by hand (never a timed test)::
    thread) and python-control (the discrete LTI map of the two RK4 substeps, one
    ``forced_response`` per run). All must agree to round-off on ``f̂'``.
 2. Notes: tunings per second of every family, ``evaluate`` on the compiled and numpy engines (one
-   tuning = one configuration on one case of 3 noisy + 3 noise-free records).
+   tuning = one configuration on one case of 3 noisy + 3 noise-free records), medians of interleaved
+   rounds; ``--tunings`` prints them as a table.
 
 Medians of repeats, the methods interleaved in every round; compile (or disk-cache load) before timing.
 """
@@ -27,7 +28,14 @@ from _common import Row, round_robin
 
 from ctrl_analysis.arena.interface import FAMILIES, estimate
 from ctrl_analysis.arena.signals import add_noise, make_signal
-from ctrl_analysis.arena.tuning import RUNS_PER_CALL, Case, Setup, _grid, evaluate, param_values
+from ctrl_analysis.arena.tuning import (
+    RUNS_PER_CALL,
+    Case,
+    Setup,
+    _grid,
+    evaluate,
+    param_values,
+)
 
 NAME = "arena, 3-state linear ESO (RK4, 2 substeps)"
 SETUP = Setup()  # dt = 2 ms, 4000 samples: the arena's default record
@@ -105,7 +113,7 @@ def bench_loop(repeat, sizes=SIZES):
     sysd = pc_system(dt, OMEGA)
     n_c = 20
     fns = {"float": lambda: float_loop(ylist, dt, OMEGA),
-           "numba": lambda: [fn(y[:, b], dt, OMEGA) for b in range(n_c)][0],
+           "numba": lambda: [fn(y[:, b], dt, OMEGA) for b in range(n_c)][0],  # noqa: RUF015 (all n_c runs timed)
            "python-control": lambda: ct.forced_response(sysd, U=y[:, 0]).outputs}
     for engine in ("numpy", "compiled"):
         for B in sizes:
@@ -117,21 +125,26 @@ def bench_loop(repeat, sizes=SIZES):
     return {k: v[0] for k, v in timed.items()}, err, (t_compile, t_compile_engine), n_c
 
 
-def tunings_per_second(configs=60):
-    """Per family: tunings per second on the compiled and numpy engines (``evaluate``, after a warm-up)."""
+def tunings_per_second(configs=60, repeat=3):
+    """Per family: ``(name, compiled tunings/s, numpy tunings/s)`` of ``evaluate``, medians of interleaved rounds.
+
+    One tuning is one configuration scored on one case of 3 noisy + 3 noise-free records (4000 samples
+    each); ``configs`` configurations (the family's grid, repeated) are one call. Compile / warm-up
+    before timing; the two engines alternate in every round, so a change in the machine's load hits
+    both alike.
+    """
     case = Case("sines", "uniform", 0.01, 4.0, (1, 2, 3))
     out = []
     for fam in FAMILIES:
         z, _ = _grid(fam)
         z = z.repeat(-(-configs // len(z)), axis=0)[:configs]
         cfg = [(0, v) for v in param_values(fam, z, case, SETUP)]
-        rates = {}
+        fns = {}
         for engine in ("compiled", "numpy"):  # the algebraic family is an FIR in numpy on both
             evaluate((fam.name, SETUP, (case,), cfg[:2], engine))  # warm-up / compile
-            t0 = time.perf_counter()
-            evaluate((fam.name, SETUP, (case,), cfg, engine))
-            rates[engine] = len(cfg) / (time.perf_counter() - t0)
-        out.append((fam.name, rates["compiled"], rates["numpy"]))
+            fns[engine] = lambda e=engine, n=fam.name, c=cfg: evaluate((n, SETUP, (case,), c, e))
+        timed = round_robin(fns, repeat)
+        out.append((fam.name, len(cfg) / timed["compiled"][0], len(cfg) / timed["numpy"][0]))
     return out
 
 
@@ -145,11 +158,12 @@ def run(repeat=3):
                 times["python-control"], f"{err['python-control']:.1e}")]
     rows += [Row(NAME, f"`estimate` (engine `Loop`, {e}), B = {B}", B, times[(e, B)], f"{err[(e, B)]:.1e}")
              for e in ("numpy", "compiled") for B in SIZES]
-    notes = [f"{n} samples at dt = {SETUP.dt:g} s, ω_o = {OMEGA:g} rad/s; agreement: largest |f̂'| difference to the "
-             "float loop on run 0",
+    notes = [(f"{n} samples at dt = {SETUP.dt:g} s, ω_o = {OMEGA:g} rad/s; agreement: largest |f̂'| difference to "
+              "the float loop on run 0"),
              f"compile (or disk-cache load) before timing: numba reference {tc:.2f} s, engine runner {tce:.2f} s",
-             "tunings per second (compiled / numpy engine, 6 records of 4000 samples a tuning): "
-             + "; ".join(f"{name} {c:.0f} / {p:.0f}" for name, c, p in tunings_per_second())]
+             f"tunings per second (compiled / numpy engine, 6 records of 4000 samples a tuning, medians of {repeat} "
+             "interleaved rounds of 60): "
+             + "; ".join(f"{name} {c:.0f} / {p:.0f}" for name, c, p in tunings_per_second(repeat=repeat))]
     return rows, times["float"], times["numba"] / n_c, notes
 
 
@@ -160,7 +174,14 @@ def main(argv=None):
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=3, help="timing repeats (median)")
+    ap.add_argument("--tunings", action="store_true", help="only the tunings-per-second table")
     args = ap.parse_args(argv)
+    if args.tunings:
+        print("| family | tunings/s, compiled engine | tunings/s, numpy engine | compiled / numpy |")
+        print("| --- | ---: | ---: | ---: |")
+        for name, c, p in tunings_per_second(repeat=args.repeat):
+            print(f"| `{name}` | {c:.0f} | {p:.0f} | {c / p:.1f} |")
+        return
     rows, base, comp, notes = run(args.repeat)
     print(table(rows, {NAME: base}, {NAME: comp}))
     print()

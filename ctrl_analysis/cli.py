@@ -177,6 +177,20 @@ def _run_study_here(name, out, runs, seed, quick, jobs, scheduler) -> dict:
     return record
 
 
+def _arena_links(out: Path) -> dict:
+    """The arena's verdicts on the studies' claims, ``{"<study>/<claim id>": text}``, linked to its section."""
+    path = out / "arena" / "results.json"
+    if not path.exists():
+        return {}
+    from .arena.recommend import arena_claim_links
+
+    try:
+        links = arena_claim_links(json.loads(path.read_text(encoding="utf-8")))
+    except (ValueError, TypeError):
+        return {}
+    return {k: f"[{v}](#estimator-arena)" for k, v in links.items()}
+
+
 def _previous_runtime(study_dir: Path) -> float:
     """``runtime_s`` of the results.json already in ``study_dir`` (``inf`` when there is none)."""
     try:
@@ -254,7 +268,8 @@ class _Run:
                     if r["study"] in committed}
         tmp = Path(tempfile.mkdtemp(dir=self.out, prefix=".REPORT.md.new-"))
         try:
-            write_report_md(results, tmp, this_run=this_run, failed=dict(self.failed), extra=_arena_section(self.out))
+            write_report_md(results, tmp, this_run=this_run, failed=dict(self.failed), extra=_arena_section(self.out),
+                            claim_links=_arena_links(self.out))
         except BaseException:
             remove_tree(tmp)
             raise
@@ -520,8 +535,11 @@ def main(argv: list[str] | None = None) -> int:
                 print(f"{name:24s} {info.reproduces}")
             return 0
         if args.command == "arena":
+            from analysis import arena_hooks
+
             from .arena.cli import main as arena_main
 
+            arena_hooks.register()  # the studies' plant signals and the paper claims the arena judges
             return arena_main(args)
         return _reproduce(args)
     except _UsageError as exc:

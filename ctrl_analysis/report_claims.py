@@ -48,7 +48,7 @@ def _depends_text(c: dict) -> str:
     return "; ".join(parts)
 
 
-def scorecard(results: dict, max_evidence: int = 3) -> list[str]:
+def scorecard(results: dict, max_evidence: int = 3, links: dict | None = None) -> list[str]:
     """The study's claims: statement, section, verdict, and what the verdict rests on.
 
     A ``depends`` verdict names its base verdict (at the chosen reconstructions) and each reconstruction
@@ -60,6 +60,9 @@ def scorecard(results: dict, max_evidence: int = 3) -> list[str]:
         One results.json dict.
     max_evidence : int
         Quantities named per claim.
+    links : dict, optional
+        ``{"<study>/<claim id>": Markdown}`` added to that claim's row (another section's finding about
+        it, e.g. the estimator arena's verdict at each family's best tuning).
 
     Returns
     -------
@@ -85,6 +88,9 @@ def scorecard(results: dict, max_evidence: int = 3) -> list[str]:
             robust = c.get("robust_to") or []
             if robust and c["verdict"] in ("holds", "fails"):
                 rests += f" — robust to {len(robust)} reconstruction{'s' if len(robust) != 1 else ''}"
+        extra = (links or {}).get(f"{results['study']}/{c['id']}")
+        if extra:
+            rests = f"{rests} — {extra}" if rests else extra
         lines.append(f"| {_cell(c['statement'])} | {_cell(c['section'])} | {verdict} | {_cell(rests) or '—'} |")
     return lines + [""]
 

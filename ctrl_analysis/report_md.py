@@ -401,14 +401,14 @@ def not_reproduced(results: dict) -> list[str]:
     return bad + [str(m) for m in results.get("missing") or []]
 
 
-def _study_section(r: dict, this_run: dict, failed: dict) -> list[str]:
+def _study_section(r: dict, this_run: dict, failed: dict, claim_links: dict | None = None) -> list[str]:
     c = tally(r)
     lines = [f"## {r['study']}", ""]
     if r["study"] not in this_run:
         why = f" This run failed: {_cell(failed[r['study']])}." if r["study"] in failed else ""
         lines += [f"> **Stale:** these results are not from this run; they were written by an earlier run.{why}", ""]
     lines += [f"*{r['paper']}* — paper text `{r['seed_file']}`.", ""]
-    lines += scorecard(r)
+    lines += scorecard(r, links=claim_links)
     lines += [f"Paper cells: {c['agrees']} agree, {c['differs']} differ, {c['diverged']} diverged"
               + (f", {c['lost']} lost in extraction" if c["lost"] else "")
               + (f"; {c['checks']} checks and errata apart" if c["checks"] else "")
@@ -472,7 +472,8 @@ def _appendix(results: list[dict]) -> list[str]:
 
 
 def write_report_md(results: list[dict], out_dir: Path, *, this_run: dict | None = None,
-                    failed: dict | None = None, extra: list[str] | None = None) -> Path:
+                    failed: dict | None = None, extra: list[str] | None = None,
+                    claim_links: dict | None = None) -> Path:
     """Write ``out_dir/REPORT.md`` atomically from the results.json dicts of several studies.
 
     Parameters
@@ -492,6 +493,9 @@ def write_report_md(results: list[dict], out_dir: Path, *, this_run: dict | None
     extra : list of str, optional
         Markdown lines of further sections (the estimator arena), placed after the studies and before
         the appendix.
+    claim_links : dict, optional
+        ``{"<study>/<claim id>": Markdown}`` shown beside those claims in the studies' scorecards (the
+        arena's verdicts, :func:`ctrl_analysis.arena.recommend.arena_claim_links`).
 
     Returns
     -------
@@ -501,7 +505,7 @@ def write_report_md(results: list[dict], out_dir: Path, *, this_run: dict | None
     if not isinstance(results, (list, tuple)) or not all(isinstance(r, dict) and "study" in r for r in results):
         raise TypeError(f"results must be a list of results.json dicts, got {results!r:.80}")
     out_dir = check_path("out_dir", out_dir)
-    for name, value in (("this_run", this_run), ("failed", failed)):
+    for name, value in (("this_run", this_run), ("failed", failed), ("claim_links", claim_links)):
         if value is not None and not isinstance(value, dict):
             raise TypeError(f"{name} must be a dict keyed by study name, got {value!r}")
     failed = dict(failed or {})
@@ -531,7 +535,7 @@ def write_report_md(results: list[dict], out_dir: Path, *, this_run: dict | None
     if failed:
         lines += ["**Failed in this run:** " + "; ".join(f"{k}: {_cell(v)}" for k, v in failed.items()), ""]
     for r in results:
-        lines += _study_section(r, this_run, failed)
+        lines += _study_section(r, this_run, failed, claim_links)
     if extra is not None:
         if not isinstance(extra, (list, tuple)) or not all(isinstance(x, str) for x in extra):
             raise TypeError(f"extra must be a list of Markdown lines, got {extra!r:.80}")

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ._validate import check_array, check_bool, check_int, check_nonnegative, check_str
+from ._validate import check_array, check_bool, check_in, check_int, check_nonnegative, check_str
 from .study import Claim, Plausible
 from .verdicts import (CENTRAL, CLAIM_VERDICTS, DEFAULT_TOLERANCE, KINDS, VERDICT_POLICY, VERDICTS,
                        ClaimResult, _check_tolerance, central_interval, compute_verdict, digits_tolerance,
@@ -438,7 +438,8 @@ class StudyResult:
             item["plausible"] = plausible.to_dict()
         self.reconstructions.append(item)
 
-    def finding(self, id: str, text: str, evidence=None, *, kind: str = "finding") -> None:
+    def finding(self, id: str, text: str, evidence=None, *, kind: str = "finding", claim: str | None = None,
+                claim_verdict: str | None = None) -> None:
         """Record an inconsistency, an irreproducible claim, an instability, or (``kind="erratum"``) an erratum.
 
         Errata (the paper's own slips: a typo, an arithmetic error) are listed with the checks.
@@ -450,6 +451,10 @@ class StudyResult:
         evidence : object, optional
             The numbers behind it (kept whole in results.json, summarised in REPORT.md).
         kind : {"finding", "erratum"}
+        claim, claim_verdict : str, optional
+            A finding about another study's claim (the estimator arena's): ``"<study>/<claim id>"`` and
+            what the finding says of it (``"holds"``, ``"fails"``, ``"mixed"``, ``"untestable"``); REPORT.md
+            shows it beside that claim. Given together.
         """
         if kind not in ("finding", "erratum"):
             raise ValueError(f"kind must be 'finding' or 'erratum', got {kind!r}")
@@ -458,6 +463,11 @@ class StudyResult:
             item["evidence"] = evidence
         if kind != "finding":
             item["kind"] = kind
+        if (claim is None) != (claim_verdict is None):
+            raise ValueError(f"claim and claim_verdict must be given together, got {claim!r} and {claim_verdict!r}")
+        if claim is not None:
+            item["claim"] = check_str("claim", claim)
+            item["claim_verdict"] = check_in("claim_verdict", claim_verdict, ("holds", "fails", "mixed", "untestable"))
         self.findings.append(item)
 
     def get(self, id: str) -> Quantity:

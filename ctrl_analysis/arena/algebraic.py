@@ -14,7 +14,7 @@ import numpy as np
 
 from .._validate import check_finite, check_int, check_positive
 
-__all__ = ["algebraic_weights", "algebraic_derivative"]
+__all__ = ["algebraic_derivative", "algebraic_weights"]
 
 
 def algebraic_weights(window: int, degree: int, dt: float) -> np.ndarray:

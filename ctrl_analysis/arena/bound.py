@@ -1,17 +1,33 @@
 """The best worst-case accuracy of any causal differentiator, and the adversarial pair of its proof.
 
-**Statement.** Let ``f`` have ``|f''(t)| <= L`` and be measured as ``y = f + η`` with ``|η(t)| <= ε``.
-For every causal differentiator ``D`` (its output at ``t`` depends on ``y`` up to ``t`` only)::
+**Statement.** Let ``f`` have ``|f''(t)| <= L`` and be measured as ``y = f + η`` with ``|η(t)| <= ε``,
+``ε`` and ``L`` known. For every causal differentiator ``D`` (its output at ``t`` depends on ``y`` up
+to ``t`` only)::
 
     sup over admissible (f, η) of  sup_t |D[y](t) - f'(t)|  >=  2 √(ε L).
 
-Seeber & Haimovich state this limit (continuous time) and the sampled-data version (a sampled
-differentiator sees less, so the same number bounds it from below); linear adaptive and
-Lipschitz-output differentiators attain it (Seeber & Haimovich, "Optimal robust exact
-differentiation via linear adaptive techniques", Automatica 146, 2022, 110617, arXiv:2111.12638;
-Haimovich, Seeber, Aldana-López, Gómez-Gutiérrez, "Differentiator for noisy sampled signals with
-best worst-case accuracy", IEEE Control Systems Letters 6, 2022, arXiv:2106.05320; Aldana-López,
-Seeber, Haimovich, Gómez-Gutiérrez, IEEE TAC 2025, arXiv:2404.05863).
+The constant 2 is tight: the difference quotient over a window ``T_w = 2√(ε/L)`` errs by at most
+``ε·2/T_w + L T_w/2 = 2√(εL)`` (sampled every ``Δ``, with the window rounded up to whole samples, by at
+most ``2√(εL) + LΔ/2``).
+
+**Sources, and what the search found.** Seeber & Haimovich, "Optimal robust exact differentiation
+via linear adaptive techniques", Automatica 148 (2023) 110725, arXiv:2111.12638 (continuous-time and
+sampled-data limits on the smallest achievable worst-case error of causal differentiators, and a
+linear adaptive differentiator that attains them); Haimovich, Seeber, Aldana-López, Gómez-Gutiérrez,
+"Differentiator for noisy sampled signals with best worst-case accuracy", IEEE Control Systems
+Letters 6 (2022), DOI 10.1109/LCSYS.2021.3087542, arXiv:2106.05320; Aldana-López, Seeber, Haimovich,
+Gómez-Gutiérrez, "Optimal robust exact first-order differentiators with Lipschitz-continuous output",
+IEEE TAC (2025), DOI 10.1109/TAC.2025.3555481, arXiv:2404.05863. The library's search reached
+these papers' abstracts and the authors' code for the TAC paper (github.com/RodrigoAldana/OREdiff),
+not the theorems' text, so the constant is derived here (the proof below is Landau's sharp
+half-line inequality ``‖d'‖ <= 2√(‖d‖ ‖d''‖)`` for ``d = f+ - f-``, ``‖d‖ <= 2ε``, ``‖d''‖ <= 2L``)
+and checked against the TAC paper's example as the authors' testbench runs it (``f = L sin t``,
+``L = 1``, uniform noise bounded by ``N = 0.08``, ``Δ = 0.01`` s). That example draws the accuracy
+guaranteed by the paper's differentiator, ``2√(2NL) + LΔ/2 = 0.805``: √2 times this bound plus the
+sampling term, the price of not knowing ``N`` (the differentiator estimates it). With ``N`` known,
+the fixed window above, ``⌈2√(N/L)/Δ⌉ = 57`` samples, errs by ``2√(NL) = 0.566`` on the
+construction below and by at most ``2√(NL) + LΔ/2 = 0.571`` on any admissible signal
+(``tests/lib/test_arena_bound.py``).
 
 **Proof (the construction coded here).** Take ``d(t) = -2ε`` before ``t0``, ``d = -2ε + L (t-t0)²`` on
 ``[t0, t*]`` with ``t* = t0 + 2√(ε/L)`` (so ``d(t*) = 2ε``, ``d'(t*) = 4√(εL)``), and the two signals
@@ -20,6 +36,12 @@ both (``η± = ∓d/2``, ``|η±| <= ε``) up to ``t*``; a causal estimator retu
 ``t*`` for both, while ``f+'(t*) - f-'(t*) = 4√(εL)``, so it errs by at least ``2√(εL)`` on one of
 them. After ``t*`` each signal bends back with ``f'' = ∓L`` until its slope is ``g'`` again and
 is measured exactly, so the error after ``t*`` also shows how fast the estimator recovers.
+
+**What the pair can and cannot show.** Every causal estimator, good or bad, errs by at least the
+bound on it: a tuned estimator measured there below the bound exposes a bug (in the construction,
+the error measure or the estimator's causality), never a good estimator. An estimator that has
+converged on the common ramp returns ``g'`` at ``t*``, midway between the two derivatives, and errs
+by exactly the bound: the pair does not rank estimators.
 """
 
 from __future__ import annotations
@@ -28,7 +50,7 @@ import numpy as np
 
 from .._validate import check_array, check_finite, check_int, check_positive
 
-__all__ = ["lower_bound", "adversarial_pair", "adversarial_error"]
+__all__ = ["adversarial_error", "adversarial_pair", "lower_bound"]
 
 
 def lower_bound(eps, L):

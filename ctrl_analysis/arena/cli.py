@@ -150,9 +150,9 @@ def _full(args, jobs) -> int:
 
     from ..atomic import staged_directory
     from ..report import StudyContext, write_results_json
-    from .recommend import DEFAULT, QUICK, run_arena
+    from .recommend import QUICK, default_settings, run_arena
 
-    settings = QUICK if args.quick else DEFAULT
+    settings = QUICK if args.quick else default_settings()
     if args.runs is not None:
         if args.runs < 1:
             raise ValueError(f"--runs must be >= 1, got {args.runs}")

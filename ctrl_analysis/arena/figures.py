@@ -11,15 +11,21 @@ from .tuning import case_records, pareto_front
 __all__ = ["save_all"]
 
 
+#: f̂' in matplotlib's mathtext (a combining circumflex does not render in the figures' font)
+FHAT = r"$\hat{f}{}'$"
+
+
 def _pareto(s, cases, tuned):
     noise = s.noises[0]
     eps = s.eps[len(s.eps) // 2]
     n = len(s.signals)
-    fig, axes = new_figure(1, n, title=f"Pareto fronts: lag vs noise-induced error of f̂' ({noise} noise, ε = {eps:g})",
-                           size=(3.2 * n + 1.5, 3.8))
-    axes = np.array(axes).reshape(1, n)
+    ncols = min(n, 4)
+    nrows = -(-n // ncols)
+    fig, axes = new_figure(nrows, ncols, title=f"Pareto fronts: lag vs noise-induced error of {FHAT} ({noise} noise, "
+                                               f"ε = {eps:g})", size=(3.6 * ncols + 1.6, 3.3 * nrows + 0.5))
+    axes = np.array(axes).reshape(nrows, ncols)
     for j, sig in enumerate(s.signals):
-        ax = axes[0, j]
+        ax = axes.flat[j]
         ci = next(i for i, c in enumerate(cases) if c.signal == sig and c.noise == noise and c.eps == eps)
         for name, r in tuned.items():
             pts = np.array([[m[2], m[3]] for _, m in r["evaluated"][ci]])
@@ -27,11 +33,14 @@ def _pareto(s, cases, tuned):
             idx = pareto_front(pts)
             ax.loglog(pts[idx, 0], pts[idx, 1], ".-", label=name)
         ax.set_title(sig)
-        ax.set_xlabel("lag: worst |f̂' - f'| without noise (1/s)")
-        if j == 0:
-            ax.set_ylabel("noise-induced RMS error of f̂' (1/s)")
+        if j + ncols >= n:  # no panel below
+            ax.set_xlabel(f"lag: worst |{FHAT} - f'| without noise (1/s)")
+        if j % ncols == 0:
+            ax.set_ylabel(f"noise-induced RMS error of {FHAT} (1/s)")
         ax.grid(True, which="both", alpha=0.3)
-    axes[0, -1].legend(loc="center left", bbox_to_anchor=(1.02, 0.5), fontsize=8)
+    for ax in axes.flat[n:]:
+        ax.set_visible(False)
+    axes.flat[ncols - 1].legend(loc="center left", bbox_to_anchor=(1.02, 0.5), fontsize=8)
     return fig
 
 
@@ -39,9 +48,12 @@ def _heat(cases, table):
     fams = list(table)
     M = np.array([[table[n][c.key]["ratio"] for c in cases] for n in fams])
     A = np.array([[table[n][c.key]["adv_ratio"] for c in cases] for n in fams])
-    fig, axes = new_figure(2, 1, title="Tuned worst-case error of f̂' / 2√(εL)", size=(max(8, len(cases) / 3.5 + 3), 7.5))
+    fig, axes = new_figure(2, 1, title=f"Tuned worst-case error of {FHAT} / 2√(εL)",
+                           size=(max(8, len(cases) / 3.5 + 3), 7.5))
     axes = np.array(axes).reshape(2, 1)
-    for ax, data, what in ((axes[0, 0], M, "random classes"), (axes[1, 0], A, "adversarial pair")):
+    adv = (f"adversarial pair of the bound's proof: {A.min():.3f}..{A.max():.3f}\n"
+           "(≥ 1 for any causal estimator: a causality check, not a ranking)")
+    for ax, data, what in ((axes[0, 0], M, "random records (seeded signals and noise)"), (axes[1, 0], A, adv)):
         im = ax.imshow(np.log10(data), aspect="auto", cmap="viridis")
         ax.set_yticks(range(len(fams)), fams)
         ax.set_title(what)
@@ -60,7 +72,7 @@ def _sample(s, cases, table):
     fams = sorted(table, key=lambda n: table[n][case.key]["worst"])[:3]
     t = setup.dt * np.arange(setup.n)
     k = setup.k_from  # the scored window only (the start-up peaking is not scored and would hide it)
-    t, d1, y = t[k:], d1[k:], y
+    t, d1 = t[k:], d1[k:]
     fig, axes = new_figure(2, 1, title=f"Best 3 estimators of f' on one {case.signal} record ({case.noise}, ε = {case.eps:g}), "
                                        f"after the {setup.transient:g} s transient",
                            size=(9, 6), sharex=True)
@@ -74,7 +86,7 @@ def _sample(s, cases, table):
         ax.legend(loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize=8)
         ax.grid(True, alpha=0.3)
     axes[0, 0].set_ylabel("f' (1/s)")
-    axes[1, 0].set_ylabel("f̂' - f' (1/s)")
+    axes[1, 0].set_ylabel(f"{FHAT} - f' (1/s)")
     axes[1, 0].set_xlabel("time (s)")
     return fig
 
@@ -97,7 +109,9 @@ def save_all(ctx, result, s, cases, table, tuned) -> None:
                             "(worst derivative error on the noise-free records) against noise-induced RMS error.")
     ctx.save_figure(result, _heat(cases, table), "arena_ratio_heatmap.png",
                     caption="Each family's worst-case-tuned derivative error divided by the bound 2√(εL), per case "
-                            "(signal/noise/ε), on the random records (top) and on the bound's adversarial pair (bottom).")
+                            "(signal/noise/ε), on the random records (top) and on the bound's adversarial pair "
+                            "(bottom: at least 1 for any causal estimator, so a check of the construction and of "
+                            "causality, not a ranking).")
     ctx.save_figure(result, _sample(s, cases, table), "arena_best_on_one_signal.png",
                     caption="The three best-ranked families (worst-case tuning) on one record, over the scored window "
                             "(after the transient): the derivative estimates and their errors.")

@@ -11,7 +11,7 @@ compiled path with **per-run kernel parameters**), so a tuning grid is one simul
 Where a block's numpy method cannot take per-run parameters as they are, a small adapter here gives it
 the per-run arrays (the equations stay the library's: ``sigma_rhs``/``DifferentialEstimator.rhs``,
 ``eso_rhs``/``ExtendedStateObserver.rhs``, ``td_output``/``td_update``, ``alpha_beta_output``/``alpha_beta_update``,
-``lowpass_update``/``lowpass_output``). The algebraic differentiator (:mod:`.algebraic`) is an FIR
+``alpha_beta_gamma_output``/``alpha_beta_gamma_update``, ``lowpass_update``/``lowpass_output``). The algebraic differentiator (:mod:`.algebraic`) is an FIR
 filter run with vectorised numpy.
 """
 
@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import functools
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 import numpy as np
 
@@ -27,14 +28,26 @@ from .._validate import check_finite, check_in, check_positive
 from ..blocks import ColumnKernels, DiscreteBlock
 from ..estimators.differential import DifferentialEstimator
 from ..estimators.eso import ExtendedStateObserver
-from ..estimators.kalman.alpha_beta import alpha_beta_output, alpha_beta_update, kalata_gains
-from ..estimators.lowpass import DiscreteLowPass, LowPassFilter, lowpass_output, lowpass_update
+from ..estimators.kalman.alpha_beta import (
+    alpha_beta_gamma_gains,
+    alpha_beta_gamma_output,
+    alpha_beta_gamma_update,
+    alpha_beta_output,
+    alpha_beta_update,
+    kalata_gains,
+)
+from ..estimators.lowpass import (
+    DiscreteLowPass,
+    LowPassFilter,
+    lowpass_output,
+    lowpass_update,
+)
 from ..estimators.tracking import td_output, td_update
 from ..loop import Loop, place
 from ..polynomials import repeated_pole_coefficients
 from .algebraic import algebraic_derivative
 
-__all__ = ["Param", "Family", "FAMILIES", "family", "scales", "estimate"]
+__all__ = ["FAMILIES", "Family", "Param", "estimate", "family", "scales"]
 
 #: Integration substeps (RK4) per sample for the continuous families; every grid keeps ``ω dt <= 1``.
 SUBSTEPS = 2
@@ -51,8 +64,9 @@ class Param:
     name : str
     ref : str
         Which scale sets the reference: ``"omega"`` (``√(L/ε)``, rad/s), ``"tau"`` (``1/√(L/ε)``, s),
-        ``"eps"``, ``"L"``, ``"lambda"`` (Kalata's index at ``ω = √(L/ε)``: ``(ω dt)²``) or
-        ``"window"`` (samples spanning ``2/ω``).
+        ``"eps"``, ``"L"``, ``"lambda"`` (Kalata's α-β index at ``ω = √(L/ε)``: ``(ω dt)²``),
+        ``"lambda3"`` (the α-β-γ index at that ``ω``: ``(ω dt)³``, for small ``Λ`` the third gain is
+        ``γ/(2T²) ≈ ω³ T``) or ``"window"`` (samples spanning ``2/ω``).
     lo, hi : float
         Search range as multiples of the reference (log scale).
     integer : bool
@@ -110,6 +124,9 @@ FAMILIES = (
            "estimators.tracking.TrackingDifferentiator (td_output, td_update)"),
     Family("kalman", "steady-state Kalman α-β (Kalata's Λ)", (Param("Lambda", "lambda", 0.001, 1000.0),), False,
            "estimators.kalman.AlphaBetaFilter with kalata_gains(Λ)"),
+    Family("abg", "steady-state Kalman α-β-γ (Kalata's Λ, constant acceleration)",
+           (Param("Lambda", "lambda3", 0.001, 1000.0),), True,
+           "estimators.kalman.alpha_beta: alpha_beta_gamma_gains(Λ) + alpha_beta_gamma_output/_update"),
     Family("difflp", "backward difference + low-pass, order 2 (ω)", (Param("omega", "omega", 0.1, 10.0),), False,
            "estimators.lowpass.DiscreteLowPass on [y, Δy/dt]"),
     Family("algebraic", "causal Savitzky–Golay / algebraic (window, degree)",
@@ -154,7 +171,7 @@ def scales(eps: float, L: float, dt: float) -> dict:
     Returns
     -------
     dict
-        ``omega, tau, eps, L, lambda, window, one, dt``.
+        ``omega, tau, eps, L, lambda, lambda3, window, one, dt``.
 
     Examples
     --------
@@ -167,7 +184,7 @@ def scales(eps: float, L: float, dt: float) -> dict:
     dt = float(check_positive("dt", dt, scalar=True))
     omega = float(np.sqrt(L / eps))
     return {"omega": omega, "tau": 1.0 / omega, "eps": eps, "L": L, "lambda": (omega * dt) ** 2,
-            "window": round(2.0 / omega / dt, 6), "one": 1.0, "dt": dt}
+            "lambda3": (omega * dt) ** 3, "window": round(2.0 / omega / dt, 6), "one": 1.0, "dt": dt}
 
 
 # ---------------------------------------------------------------------------------------- adapters
@@ -228,7 +245,7 @@ class _PerRunTD(_SharedColumns):
 
     inputs, states, outputs, feedthrough = ("v",), ("x1", "x2"), ("x1", "x2"), False
     _shared = (1, 3, 4)  # h, substeps (1), feedthrough (0)
-    column_kernels = {"output": "td_output", "update": "td_update"}
+    column_kernels: ClassVar[dict] = {"output": "td_output", "update": "td_update"}
 
     def __init__(self, r, h0, h):
         B = r.size
@@ -243,7 +260,7 @@ class _PerRunAlphaBeta(_SharedColumns):
 
     inputs, states, outputs, feedthrough = ("y",), ("xpred[0]", "xpred[1]"), ("xhat[0]", "xhat[1]"), True
     _shared = (0, 3, 4, 5, 6, 7, 8)  # has-b flag, F, b
-    column_kernels = {"output": "alpha_beta_output", "update": "alpha_beta_update"}
+    column_kernels: ClassVar[dict] = {"output": "alpha_beta_output", "update": "alpha_beta_update"}
 
     def __init__(self, K, T):
         B = K.shape[0]
@@ -254,12 +271,27 @@ class _PerRunAlphaBeta(_SharedColumns):
         return np.zeros(2)
 
 
+class _PerRunAlphaBetaGamma(_SharedColumns):
+    """Constant-gain α-β-γ filter with per-run gains ``[α, β/T, γ/(2T²)]``: the library's kernels ``alpha_beta_gamma_output``/``_update``."""
+
+    inputs, states, outputs = ("y",), ("xpred[0]", "xpred[1]", "xpred[2]"), ("xhat[0]", "xhat[1]", "xhat[2]")
+    feedthrough = True
+    _shared = (3,)  # the sample period T
+    column_kernels: ClassVar[dict] = {"output": "alpha_beta_gamma_output", "update": "alpha_beta_gamma_update"}
+
+    def __init__(self, alpha, beta, gamma, T):
+        self._p = np.ascontiguousarray(np.column_stack([alpha, beta / T, gamma / (2.0 * T * T), np.full(alpha.size, T)]))
+
+    def initial_state(self):
+        return np.zeros(3)
+
+
 class _PerRunLowPass(_SharedColumns):
     """:class:`~ctrl_analysis.estimators.lowpass.DiscreteLowPass` of order 2 on two channels, one corner frequency per run."""
 
     feedthrough = True
     _shared = (0,)  # the order m
-    column_kernels = {"output": "lowpass_output", "update": "lowpass_update"}
+    column_kernels: ClassVar[dict] = {"output": "lowpass_output", "update": "lowpass_update"}
 
     def __init__(self, omegas, dt, order=2):
         self._p = np.ascontiguousarray(np.array([_lowpass_params(float(w), dt, order) for w in omegas]))
@@ -283,8 +315,23 @@ def _sigma_gains(a: float) -> np.ndarray:
     return DifferentialEstimator(3, a).a_coeffs
 
 
+def _abg_gains(lam: np.ndarray) -> tuple:
+    """α, β, γ per run from :func:`~ctrl_analysis.estimators.kalman.alpha_beta.alpha_beta_gamma_gains` (one batched
+    DARE solve for the values not seen before; cached per ``Λ``)."""
+    new = sorted({float(x) for x in lam} - _ABG_CACHE.keys())
+    if new:
+        for x, *g in zip(new, *alpha_beta_gamma_gains(np.array(new))):
+            _ABG_CACHE[x] = tuple(float(v) for v in g)
+    return tuple(np.array(v) for v in zip(*(_ABG_CACHE[float(x)] for x in lam)))
+
+
+#: Λ -> (α, β, γ), filled by :func:`_abg_gains`
+_ABG_CACHE: dict = {}
+
+
 # the library kernels the adapters name in column_kernels (ColumnKernels looks them up in this module)
-_KERNELS = (td_output, td_update, alpha_beta_output, alpha_beta_update, lowpass_output, lowpass_update)
+_KERNELS = (td_output, td_update, alpha_beta_output, alpha_beta_update, alpha_beta_gamma_output,
+            alpha_beta_gamma_update, lowpass_output, lowpass_update)
 
 
 # ---------------------------------------------------------------------------------------- running
@@ -308,6 +355,8 @@ def _build(fam: Family, P: np.ndarray, dt: float):
     if fam.name == "kalman":
         alpha, beta = kalata_gains(P[:, 0])
         return _PerRunAlphaBeta(np.column_stack([alpha, beta / dt]), dt), ("y",), ("xhat[0]", "xhat[1]")
+    if fam.name == "abg":
+        return _PerRunAlphaBetaGamma(*_abg_gains(P[:, 0]), dt), ("y",), ("xhat[0]", "xhat[1]", "xhat[2]")
     if fam.name == "difflp":
         return _PerRunLowPass(P[:, 0], dt), ("u[0]", "u[1]"), ("w[0]", "w[1]")
     raise ValueError(f"family {fam.name!r} has no loop")  # pragma: no cover

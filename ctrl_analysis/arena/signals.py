@@ -5,16 +5,31 @@ and second derivatives (closed forms), then scaled so that ``max |f''|`` over th
 ``L``. Noise classes: bounded uniform (``|η| <= ε``), Gaussian (``σ = ε/3``: ``ε`` is its nominal
 3σ bound) and quantisation (step ``q = 2ε`` with a random offset, so ``|η| <= ε``), drawn with the
 library's samplers (:func:`ctrl_analysis.noise.uniform_noise`, :func:`~ctrl_analysis.noise.gaussian_noise`).
+
+**Registered classes.** Signals the library cannot build by itself (a paper's plant output: the
+plant, its parameters and its loop belong to the study, and the library never imports the studies)
+are added with :func:`register_signal_class`: a generator ``generate(seed, dt, n) -> (f, f', f'', L)``
+on the samples ``t_k = k dt`` at the signal's own scale, with its bound ``L >= |f''|`` over the whole
+record (e.g. over every integration step, not only the samples), and a sentence saying how ``L`` is
+computed. :func:`make_signal` scales them by the case's ``L`` over that bound (a change of units: the
+shape and time scale stay the plant's, and ``|f''| <= L`` holds between the samples too);
+:func:`native_bound` gives the bound in the plant's own units. The CLI registers the studies' classes
+(``analysis/arena_hooks.py``) before it runs the arena.
 """
 
 from __future__ import annotations
 
+import functools
+from collections.abc import Callable
+from dataclasses import dataclass
+
 import numpy as np
 
-from .._validate import check_finite, check_in, check_int, check_positive
+from .._validate import check_finite, check_in, check_int, check_positive, check_str
 from ..noise import gaussian_noise, uniform_noise
 
-__all__ = ["SIGNAL_CLASSES", "NOISE_CLASSES", "make_signal", "add_noise"]
+__all__ = ["NOISE_CLASSES", "SIGNAL_CLASSES", "SignalClass", "add_noise", "make_signal", "native_bound",
+           "register_signal_class", "registered_signal_classes", "signal_classes"]
 
 #: Signal classes: name -> what it is.
 SIGNAL_CLASSES = {
@@ -30,6 +45,137 @@ NOISE_CLASSES = {
     "gaussian": "white Gaussian, σ = ε/3 (ε is its nominal 3σ bound)",
     "quantisation": "quantiser of step 2ε with a random offset (|η| <= ε)",
 }
+
+
+
+
+@dataclass(frozen=True)
+class SignalClass:
+    """A signal class registered from outside the library (see :func:`register_signal_class`).
+
+    Attributes
+    ----------
+    name, description : str
+    generate : callable
+        ``generate(seed, dt, n) -> (f, f', f'', L)``: three arrays of shape ``(n,)`` at ``t_k = k dt``
+        in the signal's own units and the bound ``L >= max |f''|`` over the record; a module-level
+        function (picklable by reference).
+    bound_how : str
+        How the bound ``L`` is computed (shown in results.json).
+    """
+
+    name: str
+    description: str
+    generate: Callable
+    bound_how: str
+
+
+#: Registered classes, name -> SignalClass (:func:`register_signal_class`).
+_REGISTERED: dict = {}
+
+
+def register_signal_class(name: str, description: str, generate: Callable, bound_how: str) -> SignalClass:
+    """Add a signal class (registering the same name again replaces it).
+
+    Parameters
+    ----------
+    name : str
+        Class name (not one of :data:`SIGNAL_CLASSES`).
+    description : str
+        What the signal is.
+    generate : callable
+        ``generate(seed, dt, n) -> (f, f', f'', L)`` on ``t_k = k dt``, ``k < n``, at the signal's own
+        scale, ``L >= |f''|`` over the whole record.
+    bound_how : str
+        How its bound ``L`` on ``|f''|`` is computed.
+
+    Returns
+    -------
+    SignalClass
+
+    Raises
+    ------
+    TypeError, ValueError
+        A name, description or ``bound_how`` that is not a non-empty string, a built-in class name, or
+        ``generate`` not callable.
+    """
+    for arg, value in (("name", name), ("description", description), ("bound_how", bound_how)):
+        check_str(arg, value)
+    if name in SIGNAL_CLASSES:
+        raise ValueError(f"name must not be a built-in signal class ({', '.join(SIGNAL_CLASSES)}), got {name!r}")
+    if not callable(generate):
+        raise TypeError(f"generate must be callable generate(seed, dt, n), got {generate!r:.80}")
+    cls = SignalClass(name, description, generate, bound_how)
+    _REGISTERED[name] = cls
+    _native.cache_clear()
+    return cls
+
+
+def registered_signal_classes() -> dict:
+    """The registered classes, name -> :class:`SignalClass` (a copy).
+
+    Returns
+    -------
+    dict
+    """
+    return dict(_REGISTERED)
+
+
+def signal_classes() -> dict:
+    """Every signal class, built-in (:data:`SIGNAL_CLASSES`) then registered: name -> description.
+
+    Returns
+    -------
+    dict
+    """
+    return {**SIGNAL_CLASSES, **{k: c.description for k, c in _REGISTERED.items()}}
+
+
+@functools.lru_cache(maxsize=256)
+def _native(kind: str, seed: int, dt: float, n: int) -> tuple:
+    """A registered class's ``(f, f', f'', L)`` at its own scale, checked, cached (a plant is simulated once)."""
+    cls = _REGISTERED[kind]
+    out = tuple(cls.generate(seed, dt, n))
+    arrays = tuple(np.asarray(a, dtype=float) for a in out[:3])
+    if len(out) != 4 or any(a.shape != (n,) for a in arrays) or not all(np.all(np.isfinite(a)) for a in arrays):
+        raise ValueError(f"signal class {kind!r}: generate(seed, dt, n) must return three finite arrays of shape "
+                         f"({n},) and a bound, got {len(out)} items")
+    bound = float(out[3])
+    if not np.isfinite(bound) or bound <= 0 or bound < np.max(np.abs(arrays[2])) * (1 - 1e-12):
+        raise ValueError(f"signal class {kind!r}: the bound must be finite, > 0 and >= max |f''| on the samples "
+                         f"({np.max(np.abs(arrays[2])):.6g}), got {bound!r}")
+    for a in arrays:
+        a.setflags(write=False)
+    return (*arrays, bound)
+
+
+def _uniform_grid(t) -> float:
+    """The step of a uniform grid starting at 0 (a registered class is generated on ``t_k = k dt``)."""
+    dt = float(t[1] - t[0]) if t.size > 1 else 1.0
+    if t[0] != 0.0 or dt <= 0 or not np.allclose(np.diff(t), dt, rtol=1e-9, atol=0.0):
+        raise ValueError(f"t must be uniform samples k dt from 0 for a registered signal class, got t[0] = {t[0]:g} "
+                         f"and steps {np.min(np.diff(t)) if t.size > 1 else 0:g}..{np.max(np.diff(t)) if t.size > 1 else 0:g}")
+    return dt
+
+
+def native_bound(kind: str, seed: int, t) -> float:
+    """The bound ``L`` on ``|f''|`` of one record of a registered class, in its own units (from its generator).
+
+    Parameters
+    ----------
+    kind : str
+        A registered class.
+    seed : int
+    t : array_like, shape (N,)
+        Uniform samples ``k dt`` from 0.
+
+    Returns
+    -------
+    float
+    """
+    check_in("kind", kind, tuple(_REGISTERED))
+    t = _samples("t", t)
+    return _native(kind, check_int("seed", seed, minimum=0), _uniform_grid(t), t.size)[3]
 
 
 def _sines(rng, t):
@@ -87,13 +233,14 @@ def make_signal(kind: str, seed: int, t, L: float) -> np.ndarray:
     Parameters
     ----------
     kind : str
-        A key of :data:`SIGNAL_CLASSES`.
+        A key of :data:`SIGNAL_CLASSES` or a registered class (:func:`register_signal_class`).
     seed : int
         Seed of the draw (same seed, same signal).
     t : array_like, shape (N,)
         Sample instants (s).
     L : float
-        Bound on ``|f''|`` (> 0), attained on ``t``.
+        Bound on ``|f''|`` (> 0), attained on ``t`` (a registered class: attained on its record, between
+        the samples if there).
 
     Returns
     -------
@@ -107,10 +254,14 @@ def make_signal(kind: str, seed: int, t, L: float) -> np.ndarray:
     >>> float(np.max(np.abs(f[2])))
     4.0
     """
-    check_in("kind", kind, tuple(SIGNAL_CLASSES))
+    check_in("kind", kind, tuple(signal_classes()))
     L = float(check_positive("L", L, scalar=True))
     t = _samples("t", t)
-    rng = np.random.default_rng(check_int("seed", seed, minimum=0))
+    seed = check_int("seed", seed, minimum=0)
+    if kind in _REGISTERED:
+        *parts, bound = _native(kind, seed, _uniform_grid(t), t.size)
+        return np.array(parts) * (L / bound)
+    rng = np.random.default_rng(seed)
     if kind == "sines":
         parts = _sines(rng, t)
     elif kind == "steps":

@@ -21,6 +21,7 @@ run as the runs of a few large batches (per-run parameters), split over processe
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 
 import numpy as np
@@ -37,9 +38,14 @@ from .._validate import (
 from ..metrics import rmse
 from ..parallel import map_chunks
 from .interface import FAMILIES, OMEGA_DT_MAX, Family, estimate, family, scales
-from .signals import add_noise, make_signal
+from .signals import (
+    add_noise,
+    make_signal,
+    register_signal_class,
+    registered_signal_classes,
+)
 
-__all__ = ["Setup", "Case", "case_records", "param_values", "evaluate", "tune_family", "pareto_front"]
+__all__ = ["Case", "Setup", "case_records", "evaluate", "param_values", "pareto_front", "tune_family"]
 
 #: Metric columns returned by :func:`evaluate`.
 METRICS = ("worst", "rms", "lag", "noise")
@@ -78,7 +84,7 @@ class Setup:
     @property
     def k_from(self) -> int:
         """First counted sample."""
-        return int(round(self.transient / self.dt))
+        return round(float(self.transient / self.dt))
 
 
 @dataclass(frozen=True)
@@ -88,7 +94,8 @@ class Case:
     Attributes
     ----------
     signal, noise : str
-        Keys of :data:`~ctrl_analysis.arena.signals.SIGNAL_CLASSES` / ``NOISE_CLASSES``.
+        A signal class (:func:`~ctrl_analysis.arena.signals.signal_classes`: built-in or registered) and a
+        key of :data:`~ctrl_analysis.arena.signals.NOISE_CLASSES`.
     eps : float
         Noise bound ``ε``.
     L : float
@@ -204,13 +211,15 @@ def _grid(fam: Family) -> tuple:
 
 
 def evaluate(task) -> np.ndarray:
-    """Metrics of configurations: ``task = (family, setup, cases, configs, engine)``.
+    """Metrics of configurations: ``task = (family, setup, cases, configs, engine[, classes])``.
 
     Parameters
     ----------
     task : tuple
         ``family`` name; :class:`Setup`; sequence of :class:`Case`; ``configs`` a list of
-        ``(case index, parameter row)``; ``engine`` for :meth:`Loop.simulate`.
+        ``(case index, parameter row)``; ``engine`` for :meth:`Loop.simulate`; optionally the
+        registered signal classes the cases use (``{name: SignalClass}``), registered here when this
+        process lacks them (a Dask worker: a forked process inherits them).
 
     Returns
     -------
@@ -218,6 +227,10 @@ def evaluate(task) -> np.ndarray:
         Columns :data:`METRICS`: worst, rms, lag, noise.
     """
     name, setup, cases, configs, engine = _check_task(task)
+    known = registered_signal_classes()
+    for cls in (task[5] if len(task) == 6 else {}).values():
+        if cls.name not in known:
+            register_signal_class(cls.name, cls.description, cls.generate, cls.bound_how)
     fam = family(name)
     records = {}
     out = np.empty((len(configs), len(METRICS)))
@@ -247,9 +260,11 @@ def evaluate(task) -> np.ndarray:
 
 def _check_task(task) -> tuple:
     """:func:`evaluate`'s task, each part checked (errors name ``task`` and the part)."""
-    if not isinstance(task, (tuple, list)) or len(task) != 5:
-        raise TypeError(f"task must be a tuple (family, setup, cases, configs, engine), got {task!r:.80}")
-    name, setup, cases, configs, engine = task
+    if not isinstance(task, (tuple, list)) or len(task) not in (5, 6):
+        raise TypeError(f"task must be a tuple (family, setup, cases, configs, engine[, classes]), got {task!r:.80}")
+    name, setup, cases, configs, engine = task[:5]
+    if len(task) == 6 and not isinstance(task[5], dict):
+        raise TypeError(f"task classes must be a dict of registered signal classes, got {task[5]!r:.80}")
     fam = family(check_in("task family", name, [f.name for f in FAMILIES]))
     if not isinstance(setup, Setup):
         raise TypeError(f"task setup must be a Setup, got {setup!r:.80}")
@@ -276,7 +291,10 @@ def _run(name, setup, cases, configs, engine, jobs, scheduler, desc):
         return np.empty((0, len(METRICS)))
     n_chunks = max(1, min(len(configs), 4 * jobs if jobs > 1 else 1))
     bounds = np.linspace(0, len(configs), n_chunks + 1).astype(int)
-    tasks = [(name, setup, tuple(cases), configs[a:b], engine) for a, b in zip(bounds[:-1], bounds[1:]) if b > a]
+    reg = registered_signal_classes()
+    classes = {c.signal: reg[c.signal] for c in cases if c.signal in reg}
+    tasks = [(name, setup, tuple(cases), configs[a:b], engine, classes) for a, b in itertools.pairwise(bounds)
+             if b > a]
     parts = map_chunks(evaluate, tasks, jobs=jobs, scheduler=scheduler, desc=desc, unit="batch")
     return np.vstack(parts)
 

@@ -5,7 +5,12 @@ import pytest
 
 from ctrl_analysis.arena.algebraic import algebraic_derivative, algebraic_weights
 from ctrl_analysis.arena.interface import FAMILIES, estimate, family, scales
-from ctrl_analysis.arena.signals import NOISE_CLASSES, SIGNAL_CLASSES, add_noise, make_signal
+from ctrl_analysis.arena.signals import (
+    NOISE_CLASSES,
+    SIGNAL_CLASSES,
+    add_noise,
+    make_signal,
+)
 from ctrl_analysis.arena.tuning import Case, Setup, pareto_front, tune_family
 from ctrl_analysis.estimators.differential import DifferentialEstimator
 from ctrl_analysis.estimators.eso import ExtendedStateObserver

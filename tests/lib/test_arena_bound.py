@@ -56,3 +56,28 @@ def test_every_tuned_family_is_not_below_the_bound(fam):
     assert err >= lower_bound(EPS, L) * (1 - 1e-9)
     # and at t* itself both estimates coincide, so one of the two errs by at least the bound
     assert est[400, 0] == pytest.approx(est[400, 1], abs=1e-12)
+
+
+def test_bound_constant_against_the_papers_example():
+    # Aldana-López, Seeber, Haimovich, Gómez-Gutiérrez, IEEE TAC 2025 (arXiv:2404.05863), example as the authors'
+    # testbench (github.com/RodrigoAldana/OREdiff, matlab/diff_testbench.m) runs it: f = L sin t, L = 1, noise
+    # uniform within N = 0.08, sampling Δ = 0.01 s. Its dashed line, the accuracy its differentiator guarantees
+    # without knowing N, is A = 2√(2 N L) + L Δ/2 = 0.805: √2 × our bound plus the sampling term.
+    L, N, D = 1.0, 0.08, 0.01
+    assert np.sqrt(2.0) * lower_bound(N, L) + L * D / 2 == pytest.approx(0.805, abs=5e-4)
+    # with N known, the difference quotient over ⌈2√(N/L)/Δ⌉ = 57 samples errs by at most 2√(NL) + LΔ/2 = 0.5707
+    # on every admissible signal (window error: 2N/(lΔ) + L lΔ/2) and by at least 2√(NL) = 0.5657 on the pair:
+    # the bound's constant 2 is pinned to within LΔ/2 (a constant of 1 or 2√2 fails one of the two asserts)
+    l = int(np.ceil(2 * np.sqrt(N / L) / D))
+    assert l == 57
+    lo, hi = lower_bound(N, L), lower_bound(N, L) + L * D / 2
+    assert (round(lo, 4), round(hi, 4)) == (0.5657, 0.5707)
+    rng = np.random.default_rng(7)
+    t = D * np.arange(2001)
+    y = L * np.sin(t) + N * rng.uniform(-1, 1, t.size)
+    err_sin = np.max(np.abs((y[l:] - y[:-l]) / (l * D) - L * np.cos(t[l:])))
+    assert err_sin <= hi  # the example's signal and noise
+    pair = adversarial_pair(N, L, D, 2001, 1200)
+    est = (pair["y"][:, l:] - pair["y"][:, :-l]) / (l * D)
+    err_pair = np.max(np.abs(est - pair["f1"][:, l:]))
+    assert lo * (1 - 1e-9) <= err_pair <= hi

@@ -40,7 +40,7 @@ def test_missing_bounds_are_a_usage_error(tmp_path, capsys):
 def test_read_record_with_derivative(tmp_path):
     t = 0.01 * np.arange(40)
     f = _csv(tmp_path / "d.csv", np.column_stack([t, t**2, 2 * t]), "t,y,dy")
-    tt, y, d1 = read_record(f)
+    tt, _, d1 = read_record(f)
     assert np.allclose(tt, t) and np.allclose(d1, 2 * t)
 
 

@@ -31,6 +31,7 @@ from ctrl_analysis import _kernels, _perrun, _stepcheck, _validate, blocks, cli,
 from ctrl_analysis import identification as ident
 from ctrl_analysis import loop as loop_mod
 from ctrl_analysis import metrics, report_md, simulate, study
+from ctrl_analysis.arena import claims, signals
 from ctrl_analysis.arena import cli as arena_cli
 from ctrl_analysis.engine import integrators
 from ctrl_analysis.engine import kernels as engine_kernels
@@ -389,6 +390,7 @@ def build_cases(tmp):
         ("tracking_index_from_gains", alpha_beta.tracking_index_from_gains, dict(alpha=0.5, beta=0.2),
          dict(alpha=VREAL + [1.5], beta=VREAL)),
         ("kalata_gains", alpha_beta.kalata_gains, dict(Lambda=0.5), dict(Lambda=VNONNEG)),
+        ("alpha_beta_gamma_gains", alpha_beta.alpha_beta_gamma_gains, dict(Lambda=0.5), dict(Lambda=VPOS + [[1.0, -2.0]])),
         ("alpha_beta_stable", alpha_beta.alpha_beta_stable, dict(alpha=0.5, beta=0.2), dict(alpha=REAL, beta=REAL)),
         ("AlphaBetaFilter", alpha_beta.AlphaBetaFilter,
          dict(alpha=0.5, beta=0.2, T=0.1, F=None, b=None, x0=None, require_stable=True),
@@ -642,7 +644,7 @@ def _arena_csv(path, rows, header="time,y"):
 
 def _arena_cases(tmp):
     """The estimator arena: bound, signals, the algebraic differentiator, the interface and the tuning."""
-    from ctrl_analysis.arena import algebraic, bound, signals, tuning
+    from ctrl_analysis.arena import algebraic, bound, claims, signals, tuning
 
     interface, recommend = arena_interface, arena_recommend
 
@@ -718,6 +720,41 @@ def _arena_cases(tmp):
          dict(results=[None, 3, "x", [], {"quantities": 3}, {"findings": [3]}, {"figures": [None]},
                        {"quantities": [{"id": "q"}]}])),
         ("read_record", arena_cli.read_record, dict(path=ok), dict(path=[None, 3, ""] + bad_csv)),
+        *_arena_registry_cases(case, setup),
+    ]
+
+
+def _fuzz_parabola(seed, dt, n):
+    t = dt * np.arange(n)
+    return 3.0 * t**2, 6.0 * t, np.full(n, 6.0), 6.0
+
+
+def _arena_registry_cases(case, setup):
+    """Registered signal classes and claim checks (the studies' hooks into the arena)."""
+    from ctrl_analysis.arena import claims, signals
+
+    signals.register_signal_class("fuzz-parabola", "3t²", _fuzz_parabola, "f'' = 6")
+    check = dict(claim="s/c", winners=("sigma",), losers=("neso",), signals=("sines",), statement="x", how="y")
+    table = {"sigma": {case.key: {"rms": 1.0}}, "neso": {case.key: {"rms": 2.0}}}
+    return [
+        ("register_signal_class", signals.register_signal_class,
+         dict(name="fuzz-parabola", description="3t²", generate=_fuzz_parabola, bound_how="f'' = 6"),
+         dict(name=STR + ["", "sines"], description=STR + [""], generate=CALLABLE, bound_how=STR + [""])),
+        ("native_bound", signals.native_bound, dict(kind="fuzz-parabola", seed=1, t=np.arange(20) * 0.1),
+         dict(kind=CHOICE + [None, "sines"], seed=INT + [-1],
+              t=ARR + [[], np.ones((2, 3)), [0.0, NAN], [0.0, 0.1, 0.3], [1.0, 1.1, 1.2]])),
+        ("ClaimCheck", claims.ClaimCheck, check,
+         dict(claim=STR + ["", "noslash", "a/b/c", "/c"], winners=[None, ["sigma"], ("nope",), (3,)],
+              losers=[None, ("nope",), ((("algebraic", [2.0, 1.0])),), (("algebraic", (2.0,)),), ()],
+              signals=[None, ["sines"], (3,)], statement=STR + [""], how=STR + [""])),
+        ("register_claim_check", claims.register_claim_check, dict(check=claims.ClaimCheck(**check)),
+         dict(check=[None, 3, check])),
+        ("judge_claims", claims.judge_claims,
+         dict(result=report.StudyResult(arena_recommend.INFO), cases=[case], table=table, setup=setup,
+              checks=[claims.ClaimCheck(**check)]),
+         dict(result=[None, 3], cases=[None, 3, [3]], table=[None, 3], setup=[None, 3], checks=[3, [3], "x"])),
+        ("arena_claim_links", arena_recommend.arena_claim_links, dict(results={"findings": []}),
+         dict(results=[None, 3, "x"])),
     ]
 
 
@@ -827,6 +864,13 @@ NOT_FUZZED = {
                                "settings types on entry; run end to end in test_arena_cli.py",
     arena_figures.save_all: "figure writer fed the tables run_arena built; run by test_arena_cli.py",
     arena_cli.add_parser: "registers the arena subcommand on the CLI's parser (test_arena_cli.py)",
+    arena_recommend.default_settings: "no arguments",
+    signals.registered_signal_classes: "no arguments",
+    signals.signal_classes: "no arguments",
+    signals.SignalClass: "record built by register_signal_class (fuzzed)",
+    claims.registered_claim_checks: "no arguments",
+    alpha_beta.alpha_beta_gamma_output: "compiled per-step kernel (test_arena_abg.py: against the matrix-form filter)",
+    alpha_beta.alpha_beta_gamma_update: "compiled per-step kernel (test_arena_abg.py: against the matrix-form filter)",
     arena_cli.main: "command line, fuzzed in test_arena_cli.py (malformed CSV, missing bounds: one line, exit 2); "
                     "its CSV reader read_record is fuzzed here",
     **{getattr(_validate, name): "the shared validators themselves (test_validate.py)" for name in _validate.__all__},

@@ -308,3 +308,108 @@ def alpha_beta_update(t, x, u, p, x_next):
     if p[0] != 0.0:
         x_next[0] = x_next[0] + u[1] * p[7]
         x_next[1] = x_next[1] + u[1] * p[8]
+
+
+# --------------------------------------------------------------------------------------------
+# α-β-γ (constant-acceleration) steady-state gains and constant-gain kernels
+# --------------------------------------------------------------------------------------------
+
+
+def alpha_beta_gamma_gains(Lambda):
+    """Steady-state α-β-γ gains of the constant-acceleration model as functions of Kalata's tracking index Λ.
+
+    Model (discrete Wiener-process acceleration; Bar-Shalom, Li & Kirubarajan 2001, §6.3.3)::
+
+        x(k+1) = F x(k) + Γ w(k),  F = [[1, T, T²/2], [0, 1, T], [0, 0, 1]],  Γ = [T²/2, T, 1]ᵀ
+        y(k)   = x₀(k) + v(k),     Λ = σ_w T² / σ_v
+
+    The gains are the filter-form steady-state Kalman gain ``K = [α, β/T, γ/(2T²)]`` of that model,
+    solved by :func:`~ctrl_analysis.estimators.kalman.discrete.discrete_steady_state_batch` at ``T = 1``
+    (in the states ``[x, T ẋ, T² ẍ]`` the model depends on Λ alone, so the dimensionless gains do
+    too). They satisfy Kalata's relations ``β = 2(2 − α) − 4√(1 − α)``, ``γ = β²/α`` and
+    ``Λ² = γ²/(4(1 − α))``.
+
+    Parameters
+    ----------
+    Lambda : float or array_like, > 0
+        Tracking index.
+
+    Returns
+    -------
+    (alpha, beta, gamma) : floats or arrays
+        Dimensionless gains, the shape of ``Lambda``.
+
+    Raises
+    ------
+    ValueError
+        If ``Lambda`` is not finite and > 0.
+
+    References
+    ----------
+    P. R. Kalata, "The tracking index: a generalized parameter for α-β and α-β-γ target trackers",
+    IEEE Trans. AES 20(2), 1984, 174–182; Bar-Shalom, Li & Kirubarajan (2001), §6.5.
+
+    Examples
+    --------
+    >>> a, b, g = alpha_beta_gamma_gains(1.0)
+    >>> round(float(b - (2 * (2 - a) - 4 * np.sqrt(1 - a))), 12), round(float(g - b * b / a), 12)
+    (0.0, 0.0)
+    """
+    from .discrete import discrete_steady_state_batch
+
+    lam = np.asarray(check_positive("Lambda", Lambda), dtype=float)
+    flat = lam.reshape(-1)
+    F = np.array([[1.0, 1.0, 0.5], [0.0, 1.0, 1.0], [0.0, 0.0, 1.0]])
+    G = np.array([0.5, 1.0, 1.0])
+    Qd = flat[:, None, None] ** 2 * np.outer(G, G)[None]  # σ_v = 1, σ_w = Λ at T = 1
+    K = discrete_steady_state_batch(np.broadcast_to(F, (flat.size, 3, 3)), np.array([[1.0, 0.0, 0.0]]), Qd,
+                                    1.0).K_filter[:, :, 0]
+    alpha, beta, gamma = K[:, 0], K[:, 1], 2.0 * K[:, 2]
+    if lam.ndim == 0:
+        return float(alpha[0]), float(beta[0]), float(gamma[0])
+    return alpha.reshape(lam.shape), beta.reshape(lam.shape), gamma.reshape(lam.shape)
+
+
+def alpha_beta_gamma_output(t, x, u, p, y):
+    """α-β-γ correction ``x̂(k|k) = x̂(k|k−1) + K (y(k) − x̂(k|k−1)[0])``, ``K = [α, β/T, γ/(2T²)]``.
+
+    Scalar-indexed: the kernel of one run and, on a batch's transposed arrays, a block's numpy
+    method (:class:`~ctrl_analysis.blocks.ColumnKernels`).
+
+    Parameters
+    ----------
+    t : float
+        Time (unused).
+    x : numpy.ndarray, shape (3,)
+        The prediction ``x̂(k|k−1)`` (position, velocity, acceleration).
+    u : numpy.ndarray, shape (1,)
+        ``[y(k)]``.
+    p : numpy.ndarray, shape (4,)
+        ``[K₀, K₁, K₂, T]`` (filter-form gain, sample period).
+    y : numpy.ndarray, shape (3,)
+        The estimate ``x̂(k|k)``, written in place.
+    """
+    r = u[0] - x[0]  # innovation
+    y[0] = x[0] + p[0] * r
+    y[1] = x[1] + p[1] * r
+    y[2] = x[2] + p[2] * r
+
+
+def alpha_beta_gamma_update(t, x, u, p, x_next):
+    """α-β-γ prediction ``x̂(k+1|k) = F x̂(k|k)`` with ``F = [[1, T, T²/2], [0, 1, T], [0, 0, 1]]``.
+
+    Parameters
+    ----------
+    t, x, u, p
+        As :func:`alpha_beta_gamma_output`.
+    x_next : numpy.ndarray, shape (3,)
+        The next prediction, written in place.
+    """
+    r = u[0] - x[0]  # the correction of alpha_beta_gamma_output, repeated (a compiled kernel cannot call it)
+    f0, f1, f2 = x[0] + p[0] * r, x[1] + p[1] * r, x[2] + p[2] * r
+    x_next[0] = f0 + p[3] * f1 + 0.5 * p[3] * p[3] * f2
+    x_next[1] = f1 + p[3] * f2
+    x_next[2] = f2
+
+
+__all__ += ["alpha_beta_gamma_gains", "alpha_beta_gamma_output", "alpha_beta_gamma_update"]

@@ -1,0 +1,196 @@
+"""Paper claims of one estimator against another, judged at each family's best tuning.
+
+A study that claims "estimator A is more accurate than estimator B" judged it at the paper's one
+tuning. The arena can say whether the claim survives when each family is tuned to its own best on
+the same records: a :class:`ClaimCheck` names the study's claim (``"<study>/<claim id>"``), the
+families on each side, the signal classes it is judged on, and how the arena reads it. The checks
+are registered from outside the library (the studies know their claim ids; the library does not),
+with :func:`register_claim_check`.
+
+**Verdict** (per claim, from the arena's numbers): the accuracy measure is the RMS error of ``f̂'``
+after the transient, each family tuned for it (the papers compare mean errors); a claimed winner
+*holds* when it is more accurate than every claimed loser in every case (signal class × noise
+class × noise bound) of the claim's classes, *fails* when it is less accurate in every case,
+*mixed* otherwise, and *untestable* when the claim cannot be put to the arena's estimators (the
+check says why) or its classes were not run. A loser may be a fixed configuration
+``(family, parameters)`` rather than a tuned family (e.g. the raw backward difference).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._validate import check_finite, check_in, check_str
+from .interface import FAMILIES, family
+
+__all__ = ["VERDICT_TEXT", "ClaimCheck", "judge_claims", "register_claim_check", "registered_claim_checks"]
+
+#: How each verdict reads in a report.
+VERDICT_TEXT = {"holds": "holds at best tuning", "fails": "does not hold at best tuning",
+                "mixed": "holds in some cases only, at best tuning", "untestable": "not testable in the arena"}
+
+
+@dataclass(frozen=True)
+class ClaimCheck:
+    """One paper claim of estimator against estimator, in the arena's terms.
+
+    Attributes
+    ----------
+    claim : str
+        ``"<study>/<claim id>"`` of the study's judged claim.
+    winners, losers : tuple
+        Family names claimed better / worse; a loser may also be ``(family, parameters)``, a fixed
+        configuration. Both empty: the claim cannot be put to the arena (``how`` says why).
+    signals : tuple of str
+        Signal classes it is judged on (empty: every class of the run).
+    statement : str
+        The claim, in the arena's words.
+    how : str
+        How the arena reads it, or why it cannot.
+    """
+
+    claim: str
+    winners: tuple
+    losers: tuple
+    signals: tuple
+    statement: str
+    how: str
+
+    def __post_init__(self):
+        check_str("claim", self.claim)
+        if self.claim.count("/") != 1 or not all(self.claim.split("/")):
+            raise ValueError(f"claim must be '<study>/<claim id>', got {self.claim!r}")
+        for name in ("winners", "losers", "signals"):
+            if not isinstance(getattr(self, name), tuple):
+                raise TypeError(f"{name} must be a tuple, got {getattr(self, name)!r:.80}")
+        if bool(self.winners) != bool(self.losers):
+            raise ValueError(f"winners and losers must both be given or both be empty, got {self.winners!r} and "
+                             f"{self.losers!r}")
+        names = [f.name for f in FAMILIES]
+        for w in self.winners:
+            check_in("winners", w, names)
+        for lo in self.losers:
+            if not isinstance(lo, str) and not (isinstance(lo, tuple) and len(lo) == 2 and isinstance(lo[1], tuple)):
+                raise TypeError(f"losers must hold family names or (family, parameter tuple) pairs, got {lo!r:.80}")
+            fam = family(check_in("losers", lo if isinstance(lo, str) else lo[0], names))
+            if not isinstance(lo, str):
+                row = np.asarray(check_finite("losers parameters", lo[1]), dtype=float)
+                if row.shape != (len(fam.params),):
+                    raise ValueError(f"losers parameters of {fam.name} must have {len(fam.params)} entries, got {lo[1]!r}")
+        for sig in self.signals:
+            check_str("signals", sig)
+        check_str("statement", self.statement)
+        check_str("how", self.how)
+
+
+_CHECKS: dict = {}
+
+
+def register_claim_check(check: ClaimCheck) -> ClaimCheck:
+    """Register a claim check (the same claim again replaces it).
+
+    Parameters
+    ----------
+    check : ClaimCheck
+
+    Returns
+    -------
+    ClaimCheck
+    """
+    if not isinstance(check, ClaimCheck):
+        raise TypeError(f"check must be a ClaimCheck, got {check!r:.80}")
+    _CHECKS[check.claim] = check
+    return check
+
+
+def registered_claim_checks() -> list:
+    """The registered checks, in registration order.
+
+    Returns
+    -------
+    list of ClaimCheck
+    """
+    return list(_CHECKS.values())
+
+
+def _loser_errors(lo, cases, table, setup) -> tuple:
+    """``(label, RMS error per case)`` of a loser: a tuned family's best, or a fixed configuration evaluated here."""
+    if isinstance(lo, str):
+        return lo, np.array([table[lo][c.key]["rms"] for c in cases])
+    from .tuning import evaluate
+
+    name, params = lo[0], np.asarray(lo[1], dtype=float)
+    m = evaluate((name, setup, tuple(cases), [(i, params) for i in range(len(cases))], "auto"))
+    label = f"{name} fixed at " + ", ".join(f"{p.name} = {v:g}" for p, v in zip(family(name).params, params))
+    return label, m[:, 1]
+
+
+def _verdict(wins: np.ndarray) -> str:
+    return "holds" if wins.all() else "fails" if not wins.any() else "mixed"
+
+
+def judge_claims(result, cases, table, setup, checks=None) -> list:
+    """Record one finding per claim check (``claim`` and ``claim_verdict`` set) and return the verdicts.
+
+    Parameters
+    ----------
+    result : StudyResult
+        The arena's record.
+    cases : list of Case
+    table : dict
+        ``table[family][case key]`` with ``"rms"`` (the RMS-tuned error), from the arena's run.
+    setup : Setup
+    checks : list of ClaimCheck, optional
+        Default: the registered ones.
+
+    Returns
+    -------
+    list of (str, str)
+        ``(claim, verdict)`` per check.
+    """
+    from ..results import StudyResult
+    from .tuning import Case, Setup
+
+    if not isinstance(result, StudyResult):
+        raise TypeError(f"result must be a StudyResult, got {result!r:.80}")
+    if not isinstance(cases, (list, tuple)) or not all(isinstance(c, Case) for c in cases):
+        raise TypeError(f"cases must be a list of Case, got {cases!r:.80}")
+    if not isinstance(table, dict):
+        raise TypeError(f"table must be a dict table[family][case key], got {table!r:.80}")
+    if not isinstance(setup, Setup):
+        raise TypeError(f"setup must be a Setup, got {setup!r:.80}")
+    if checks is not None and (not isinstance(checks, (list, tuple)) or
+                               not all(isinstance(c, ClaimCheck) for c in checks)):
+        raise TypeError(f"checks must be a list of ClaimCheck or None, got {checks!r:.80}")
+    out = []
+    for chk in registered_claim_checks() if checks is None else checks:
+        run = [c for c in cases if not chk.signals or c.signal in chk.signals]
+        study, cid = chk.claim.split("/")
+        fid = f"claim-{study}-{cid}"
+        missing = [f for f in chk.winners + tuple(x for x in chk.losers if isinstance(x, str)) if f not in table]
+        if not chk.winners or not run or missing:
+            why = (chk.how if not chk.winners else f"its signal classes ({', '.join(chk.signals)}) were not run"
+                   if not run else f"the families {', '.join(missing)} were not run")
+            verdict, evidence = "untestable", None
+            text = f"{study} claim '{cid}' — {chk.statement}: {VERDICT_TEXT[verdict]}: {why}."
+        else:
+            parts, evidence, wins_all = [], {}, []
+            for w in chk.winners:
+                ew = np.array([table[w][c.key]["rms"] for c in run])
+                for lo in chk.losers:
+                    label, el = _loser_errors(lo, run, table, setup)
+                    ratio = el / ew
+                    wins_all.append(ratio > 1.0)
+                    evidence[f"{label} / {w}"] = {c.key: float(r) for c, r in zip(run, ratio)}
+                    parts.append(f"RMS error of f̂', {label} / {w}: {np.min(ratio):.2f}..{np.max(ratio):.2f} "
+                                 f"(median {np.median(ratio):.2f}; {w} better in {int(np.sum(ratio > 1))} of "
+                                 f"{len(run)})")
+            verdict = _verdict(np.concatenate(wins_all))
+            text = (f"{study} claim '{cid}' — {chk.statement}: {VERDICT_TEXT[verdict]}. Each family tuned to its "
+                    f"best RMS error on {len(run)} case{'s' if len(run) != 1 else ''} ({', '.join(sorted({c.signal for c in run}))}): "
+                    + "; ".join(parts) + f". Reading: {chk.how}.")
+        result.finding(fid, text, evidence, claim=chk.claim, claim_verdict=verdict)
+        out.append((chk.claim, verdict))
+    return out

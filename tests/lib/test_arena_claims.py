@@ -1,0 +1,107 @@
+"""The arena's verdicts on the papers' estimator-against-estimator claims, and their link in REPORT.md."""
+
+import numpy as np
+import pytest
+
+from ctrl_analysis.arena.claims import ClaimCheck, judge_claims
+from ctrl_analysis.arena.recommend import INFO, arena_claim_links, arena_report_lines
+from ctrl_analysis.arena.tuning import Case, Setup
+from ctrl_analysis.report import StudyInfo, StudyResult
+from ctrl_analysis.report_md import write_report_md
+from ctrl_analysis.study import Claim
+
+SETUP = Setup(dt=0.01, n=300, transient=1.0)
+CASES = [Case("sines", "uniform", e, 2.0, (5,)) for e in (0.005, 0.01, 0.02)]
+
+
+def _table(sigma, neso):
+    return {"sigma": {c.key: {"rms": s} for c, s in zip(CASES, sigma)},
+            "neso": {c.key: {"rms": v} for c, v in zip(CASES, neso)}}
+
+
+def _check(**kw):
+    base = {"claim": "demo/a-beats-b", "winners": ("sigma",), "losers": ("neso",), "signals": ("sines",),
+            "statement": "Σ beats the fal ESO", "how": "each at its best"}
+    base.update(kw)
+    return ClaimCheck(**base)
+
+
+@pytest.mark.parametrize("sigma, neso, verdict", [
+    ([1.0, 1.0, 1.0], [1.1, 2.0, 1.01], "holds"),
+    ([1.0, 1.0, 1.0], [0.9, 0.5, 0.99], "fails"),
+    ([1.0, 1.0, 1.0], [1.1, 0.5, 1.01], "mixed"),
+])
+def test_verdict_follows_from_every_case(sigma, neso, verdict):
+    r = StudyResult(INFO)
+    out = judge_claims(r, CASES, _table(sigma, neso), SETUP, checks=[_check()])
+    assert out == [("demo/a-beats-b", verdict)]
+    f = r.findings[-1]
+    assert (f["id"], f["claim"], f["claim_verdict"]) == ("claim-demo-a-beats-b", "demo/a-beats-b", verdict)
+    ratios = list(f["evidence"]["neso / sigma"].values())
+    assert ratios == pytest.approx(np.array(neso) / np.array(sigma))
+    assert f"sigma better in {sum(n > s for s, n in zip(sigma, neso))} of 3" in f["text"]
+
+
+def test_untestable_when_the_claim_or_its_classes_are_not_in_the_arena():
+    r = StudyResult(INFO)
+    out = judge_claims(r, CASES, _table([1] * 3, [2] * 3), SETUP,
+                       checks=[_check(winners=(), losers=(), how="the arena has no model input"),
+                               _check(claim="demo/other", signals=("chirp",))])
+    assert out == [("demo/a-beats-b", "untestable"), ("demo/other", "untestable")]
+    assert "the arena has no model input" in r.findings[0]["text"]
+    assert "(chirp) were not run" in r.findings[1]["text"]
+
+
+def test_a_fixed_configuration_loser_is_evaluated_on_the_same_records():
+    # the raw backward difference (algebraic, window 2, degree 1) on noisy sines: its RMS error of f' is about
+    # √2 ε_rms / dt ≈ 0.8 at ε = 0.01, dt = 0.01; a winner at 0.1 beats it everywhere, one at 10 nowhere
+    chk = _check(winners=("sigma",), losers=(("algebraic", (2.0, 1.0)),))
+    for sigma, verdict in ((0.1, "holds"), (10.0, "fails")):
+        r = StudyResult(INFO)
+        assert judge_claims(r, CASES, _table([sigma] * 3, [1] * 3), SETUP, checks=[chk])[0][1] == verdict
+    err = np.array(list(r.findings[0]["evidence"]["algebraic fixed at window = 2, degree = 1 / sigma"].values())) * 10.0
+    eps = np.array([c.eps for c in CASES])
+    assert err == pytest.approx(np.sqrt(2) * eps / np.sqrt(3) / SETUP.dt, rel=0.15)  # uniform noise: σ = ε/√3
+
+
+@pytest.mark.parametrize("kw, match", [
+    ({"claim": "no-slash"}, "claim"),
+    ({"winners": ("nope",)}, "winners"),
+    ({"losers": (("algebraic", (2.0,)),)}, "losers"),
+    ({"losers": ()}, "winners and losers"),
+    ({"signals": ["sines"]}, "signals"),
+])
+def test_claim_check_errors_name_the_argument(kw, match):
+    with pytest.raises((ValueError, TypeError), match=match):
+        _check(**kw)
+
+
+def test_report_shows_the_arena_verdict_beside_the_study_claim(tmp_path):
+    arena = StudyResult(INFO)
+    judge_claims(arena, CASES, _table([1.0] * 3, [2.0] * 3), SETUP, checks=[_check()])
+    data = arena.to_dict()
+    links = arena_claim_links(data)
+    assert links == {"demo/a-beats-b": "arena: holds at best tuning"}
+    assert any("| demo/a-beats-b | holds at best tuning |" in line for line in arena_report_lines(data))
+    study = StudyResult(StudyInfo("demo", "x.txt", "A paper", "things"))
+    study.quantity("q", "a quantity", 1.0, unit="")
+    study.claim(Claim("a-beats-b", "§4", "A beats B"), False, ["q"])
+    study.claim(Claim("other", "§5", "Something else"), True, ["q"])
+    text = write_report_md([study.to_dict()], tmp_path, claim_links={"demo/a-beats-b": "[arena: holds](#x)"}).read_text()
+    rows = {line.split("|")[1].strip(): line for line in text.splitlines() if line.startswith(("| A beats B", "| Something else"))}
+    assert "[arena: holds](#x)" in rows["A beats B"] and "arena" not in rows["Something else"]
+    with pytest.raises(ValueError, match="claim and claim_verdict"):
+        StudyResult(INFO).finding("x", "text", claim="demo/a")
+
+
+def test_cli_reads_the_arena_links_for_the_report(tmp_path):
+    import json
+
+    from ctrl_analysis.cli import _arena_links
+
+    assert _arena_links(tmp_path) == {}  # no arena run: no links
+    arena = StudyResult(INFO)
+    judge_claims(arena, CASES, _table([1.0] * 3, [0.5] * 3), SETUP, checks=[_check()])
+    (tmp_path / "arena").mkdir()
+    (tmp_path / "arena" / "results.json").write_text(json.dumps(arena.to_dict(), default=str))
+    assert _arena_links(tmp_path) == {"demo/a-beats-b": "[arena: does not hold at best tuning](#estimator-arena)"}
