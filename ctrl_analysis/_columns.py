@@ -23,7 +23,8 @@ class ColumnKernels:
     (``x.T``, ``u.T``, ``p.T``, ``out.T``) they are the block's numpy methods. A block using the
     mixin lists its functions' names in ``column_kernels`` (keys ``"output"`` and ``"update"`` or
     ``"rhs"``; names looked up in the block's module) and sets ``self._p``: its parameter vector
-    (shared by every run) or a ``(B, n_p)`` array (one row per run).
+    (values per run are given to ``Loop.simulate(params=...)``; a ``(B, n_p)`` array, one row per run,
+    ties the block to one batch size, see :class:`~ctrl_analysis._kernels.BlockKernel`).
 
     Put the mixin first among the bases (``class F(ColumnKernels, DiscreteBlock)``).
     """

@@ -1,6 +1,8 @@
 """The compiled path of :meth:`Loop.simulate <ctrl_analysis.loop.Loop.simulate>`: choosing it, per-run parameters, running a chunk.
 
-The runner itself is generated and compiled by :mod:`ctrl_analysis._kernels`.
+The runner itself is generated and compiled by :mod:`ctrl_analysis._kernels`. Per-run parameters
+are run-time values (``Loop.simulate(params=...)``, :mod:`ctrl_analysis.engine.params`): one kernel
+parameter row per run of the call, read at the run's index within the call.
 """
 
 from __future__ import annotations
@@ -15,12 +17,17 @@ def compiled_for(loop, engine, funcs, variants):
 
     ``variants`` (block name -> :class:`~ctrl_analysis.engine.params.Variant`) are the run-time
     parameters: a changed block's kernel, or per-run parameter rows.
+
+    Returns
+    -------
+    tuple or None
+        ``(run, P, per_run)``: the runner, each block's parameters as ``(1, n_p)`` (shared) or
+        ``(B, n_p)`` rows, and whether each block's are per run.
     """
     import os
 
     if engine == "numpy" or (engine == "auto" and os.environ.get("CTRL_ANALYSIS_ENGINE") == "numpy"):
         return None
-    
     why = None
     if not available():
         why = "numba is not installed"
@@ -60,8 +67,54 @@ def compiled_for(loop, engine, funcs, variants):
                       "using the numpy engine", RuntimeWarning, stacklevel=3)
         return None
     P = [_params_2d(p.name, kernels[p.name].params) for p in loop.placed]
-    per_run = {p.name: np.ndim(kernels[p.name].params) == 2 for p in loop.placed}
-    return run, P, per_run, {p.name for p in loop.placed if p.name in variants and variants[p.name].rows is not None}
+    return run, P, [np.ndim(kernels[p.name].params) == 2 for p in loop.placed]
+
+
+def held_rows(loop, variants, B: int, *, split: bool) -> bool:
+    """Whether a block holds its own kernel parameter rows, one per run; checks that they fit the call.
+
+    Per-run values are given to :meth:`Loop.simulate <ctrl_analysis.loop.Loop.simulate>` as
+    ``params``. A block whose kernel parameters are a ``(B, n_p)`` array it built itself (the
+    adapters of :mod:`ctrl_analysis.arena`, or a block given per-run arrays) ties the loop to one
+    batch size: the call must have exactly those runs, and is stepped as one chunk in this process.
+
+    Parameters
+    ----------
+    loop : Loop
+    variants : dict of block name -> Variant
+        Blocks under run-time parameters (their own parameters are not consulted).
+    B : int
+        Runs of the call.
+    split : bool
+        Whether the caller asked to split the batch (``jobs > 1`` or ``chunk_runs < B``).
+
+    Returns
+    -------
+    bool
+
+    Raises
+    ------
+    ValueError
+        If the rows are not the call's runs, or the call asks for a split.
+    """
+    rows = {}
+    for p in loop.placed:
+        if p.name in variants:
+            continue
+        try:
+            k = kernel_of(p.block)
+        except Exception:  # noqa: BLE001, S112 - a block the compiled engine cannot take has no rows here
+            continue
+        if k is not None and np.ndim(k.params) == 2:
+            rows[p.name] = int(np.shape(k.params)[0])
+    if any(n != B for n in rows.values()):
+        raise ValueError(f"blocks {rows} hold kernel parameters for that many runs, but the batch has {B}: give "
+                         f"per-run values to Loop.simulate(params={{block: {{parameter: values}}}}) instead")
+    if rows and split:
+        raise ValueError(f"blocks {sorted(rows)} hold one kernel parameter row per run themselves, so the batch "
+                         f"is stepped whole (no chunk_runs < B, no jobs > 1): give per-run values to "
+                         f"Loop.simulate(params=...) to split it")
+    return bool(rows)
 
 
 def check_kernel_reads(loop, kernels: dict) -> None:
@@ -121,18 +174,16 @@ def _params_2d(name, params):
     return np.ascontiguousarray(a[None, :] if a.ndim == 1 else a)
 
 
-def run_compiled(loop, runner, plan, n_steps, t, x, held, bound, keep_cols, store, xs, diverged, div_step,
-                 rows=(0, None), every=1):
+def run_compiled(loop, runner, plan, n_steps, t, x, held, bound, keep_cols, store, xs, diverged, div_step, lo=0,
+                 every=1):
     """One chunk through the compiled runner, writing into the result slices (every ``every``-th sample).
 
-    ``rows = (lo, a)``: the chunk's first run within the batch (where the rows of per-run parameters
-    held by blocks are read) and within this call (run-time parameters' rows).
+    ``lo`` is the chunk's first run within the call: per-run parameter rows ``lo:lo+B`` are its runs'.
     """
-    run, P, per_run, run_time = runner
+    run, P, per_run = runner
     B = x.shape[0]
-    P = [Pi[(rows[1] if p.name in run_time else rows[0]):][:B] if per_run[p.name] else Pi[:1]
-         for Pi, p in zip(P, loop.placed)]
-    PS = np.array([1 if per_run[p.name] else 0 for p in loop.placed], dtype=np.intp)
+    P = [Pi[lo:lo + B] if pr else Pi[:1] for Pi, pr in zip(P, per_run)]
+    PS = np.array(per_run, dtype=np.intp)
     col = plan["col"]
     S0 = np.zeros(len(plan["names"]))
     for s, a in held.items():

@@ -9,11 +9,11 @@ overhead on every operation, which dominates at small and medium batches. A bloc
 * ``output(t, x, u, p, y)``,
 
 writing their result into the last argument; ``x``, ``u`` are the run's state and input vectors
-and ``p`` a float64 parameter vector fixed when the block was built. ``BlockKernel.params`` is
-either that vector (shared by every run) or a ``(B, n_p)`` array whose row ``b`` is run ``b``'s
-vector (per-run parameters: a plant gain, an observer bandwidth, a case flag that differ across the
-batch); the engine slices the rows with the batch when it splits it into chunks or processes. A block gives its kernel with
-a method ``kernel() -> BlockKernel`` (or ``None``), which :func:`kernel_of` calls; the engine knows
+and ``p`` a float64 parameter vector fixed when the block was built (``BlockKernel.params``). Values
+that differ per run (a plant gain, an observer bandwidth, a case flag) are given to the simulation,
+``Loop.simulate(params=...)`` (:mod:`ctrl_analysis.engine.params`): the engine passes the runner
+one parameter row per run and slices the rows with the batch's chunks and processes. A block gives
+its kernel with a method ``kernel() -> BlockKernel`` (or ``None``), which :func:`kernel_of` calls; the engine knows
 no concrete block. When every block of a loop has a kernel, :meth:`Loop.simulate
 <ctrl_analysis.loop.Loop.simulate>` (``engine="auto"`` or ``"compiled"``) generates one numba
 function for the whole loop — runs outermost, the same sample/stage order and the same RK4
@@ -59,7 +59,9 @@ __all__ = [
 class BlockKernel(NamedTuple):
     """A block's per-run kernel functions (plain Python, numba-compilable) and its parameters.
 
-    ``params`` is a 1-D vector shared by every run or a 2-D ``(B, n_p)`` array, one row per run.
+    ``params`` is the block's 1-D parameter vector. (A 2-D ``(B, n_p)`` array, one row per run,
+    ties the block to one batch size: the engine still runs it, whole and in one process, for the
+    adapters of :mod:`ctrl_analysis.arena`; per-run values belong in ``Loop.simulate(params=...)``.)
     """
 
     output: Callable

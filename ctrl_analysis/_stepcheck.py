@@ -1,4 +1,4 @@
-"""Checks of the block protocol made outside the hot loop: argument widths of direct per-step calls, row groups.
+"""Checks of the block protocol made outside the hot loop: argument widths of direct per-step calls.
 
 A block's per-step methods (``output``, ``update``, ``rhs``) check nothing inside the engine, which
 calls them millions of times with arrays it has shaped itself. Called directly by a user, a state
@@ -11,11 +11,10 @@ or input of the wrong width would be read past its columns or broadcast into a w
 from __future__ import annotations
 
 import functools
-import itertools
 
 import numpy as np
 
-__all__ = ["check_step_args", "checked", "partition_rows", "unchecked"]
+__all__ = ["check_step_args", "checked", "unchecked"]
 
 _STEP_METHODS = ("output", "update", "rhs")
 
@@ -101,52 +100,3 @@ def unchecked(block, kind: str):
     method = getattr(block, kind)
     raw = getattr(method, "unchecked", None)
     return method if raw is None else raw.__get__(block)
-
-
-def partition_rows(rows) -> tuple[list, int]:
-    """Row groups of :class:`~ctrl_analysis.blocks.RowGroups` as index arrays that partition ``range(total)``.
-
-    Parameters
-    ----------
-    rows : sequence
-        Per group either a count (consecutive groups, in order) or the batch rows it runs.
-
-    Returns
-    -------
-    groups : list of slice or numpy.ndarray
-        One per group.
-    total : int
-        The number of runs the groups cover.
-
-    Raises
-    ------
-    TypeError
-        If a row is not an integer.
-    ValueError
-        If counts are < 1, or index arrays are empty, negative, out of range, overlap or leave a
-        run uncovered.
-    """
-    from ._validate import check_int
-
-    if all(np.ndim(r) == 0 for r in rows):
-        counts = [check_int("rows", r, minimum=1) for r in rows]
-        edges = np.concatenate(([0], np.cumsum(counts))).astype(int)
-        return [slice(int(a), int(b)) for a, b in itertools.pairwise(edges)], int(edges[-1])
-    groups = []
-    for r in rows:
-        a = np.asarray(r).ravel()
-        if a.size == 0 or not (np.issubdtype(a.dtype, np.integer) or
-                               (np.issubdtype(a.dtype, np.floating) and np.all(a == np.round(a)))):
-            raise TypeError(f"rows must give each group a count or a non-empty array of run indices, got {r!r:.80}")
-        groups.append(a.astype(np.intp))
-    every = np.concatenate(groups)
-    total = every.size
-    counts = np.bincount(every[(every >= 0) & (every < total)], minlength=total)
-    if np.any(every < 0) or np.any(every >= total):
-        raise ValueError(f"rows must be run indices in [0, {total}) ({total} runs in all), got "
-                         f"{sorted(set(every[(every < 0) | (every >= total)].tolist()))[:5]}")
-    if np.any(counts != 1):
-        raise ValueError(f"rows must partition the runs 0..{total - 1}: each run in exactly one group; runs "
-                         f"{np.flatnonzero(counts > 1)[:5].tolist()} are in several, "
-                         f"{np.flatnonzero(counts == 0)[:5].tolist()} in none")
-    return groups, int(total)

@@ -25,7 +25,7 @@ from collections.abc import Callable
 import numpy as np
 
 from ._columns import ColumnKernels
-from ._stepcheck import checked, partition_rows, unchecked, wrap_step_methods
+from ._stepcheck import checked, unchecked, wrap_step_methods
 from ._validate import (
     check_finite,
     check_in,
@@ -41,7 +41,6 @@ __all__ = [
     "ColumnKernels",
     "ContinuousBlock",
     "DiscreteBlock",
-    "RowGroups",
     "SampledBlock",
     "StaticBlock",
     "StaticGain",
@@ -412,24 +411,25 @@ class StaticBlock(Block):
 
 
 class StaticGain(StaticBlock):
-    """A static gain ``y = D u`` (sums, differences, scalings, per-run selections), with a compiled kernel.
+    """A static gain ``y = D u`` (sums, differences, scalings, selections), with a compiled kernel.
 
     The common static blocks of a loop (a measurement ``y + v``, an error ``r - y``, a case switch
     that routes one of several signals) are gains; written as one they run in the compiled engine.
+    A gain per run (e.g. which filter a run feeds back) is given to the simulation:
+    ``Loop.simulate(params={"name": {"D": (B, p, m) gains}})``.
 
     Parameters
     ----------
-    D : array_like, shape (p, m) or (B, p, m)
-        The gain matrix, shared by every run, or one per run (row ``b`` for run ``b``; e.g. which
-        filter a run feeds back).
+    D : array_like, shape (p, m)
+        The gain matrix.
     inputs, outputs : sequence of str
         Signal names: ``m`` inputs, ``p`` outputs.
 
     Raises
     ------
     ValueError
-        If ``D`` is not finite, has the wrong number of dimensions, or its shape does not match the
-        numbers of inputs and outputs.
+        If ``D`` is not finite, is not a matrix, or its shape does not match the numbers of inputs
+        and outputs.
 
     Examples
     --------
@@ -443,25 +443,23 @@ class StaticGain(StaticBlock):
     def __init__(self, D, inputs, outputs):
         D = check_finite("D", D)
         ins, outs = check_names("inputs", inputs), check_names("outputs", outputs)
-        if D.ndim not in (2, 3):
-            raise ValueError(f"D must have shape (p, m) or (B, p, m), got shape {D.shape}")
-        if D.shape[-2:] != (len(outs), len(ins)):
-            raise ValueError(f"D must have shape (p, m) = ({len(outs)}, {len(ins)}) (outputs, inputs) "
-                             f"[or (B, p, m)], got {D.shape}")
+        if D.shape != (len(outs), len(ins)):
+            raise ValueError(f"D must have shape (p, m) = ({len(outs)}, {len(ins)}) (outputs, inputs), got "
+                             f"{D.shape}; a gain per run is given to Loop.simulate(params={{name: {{'D': (B, p, m)}}}})")
         self.D = D
         super().__init__(self._apply, ins, outs)
 
     def _apply(self, t, u):
         # y_i = sum_j D_ij u_j, summed left to right as the kernel does (bit-identical engines)
-        D = self.D if self.D.ndim == 3 else self.D[None]
-        y = np.zeros((u.shape[0], D.shape[1]))
-        for i in range(D.shape[1]):
-            for j in range(D.shape[2]):
-                y[:, i] += D[:, i, j] * u[:, j]
+        D = self.D
+        y = np.zeros((u.shape[0], D.shape[0]))
+        for i in range(D.shape[0]):
+            for j in range(D.shape[1]):
+                y[:, i] += D[i, j] * u[:, j]
         return y
 
     def kernel(self):
-        """The compiled kernel: :func:`ctrl_analysis._kernels.gain_output` with ``D`` flattened (per run if 3-D).
+        """The compiled kernel: :func:`ctrl_analysis._kernels.gain_output` with ``D`` flattened row-major.
 
         Returns
         -------
@@ -469,8 +467,7 @@ class StaticGain(StaticBlock):
         """
         from ._kernels import BlockKernel, gain_output
 
-        p = self.D.reshape(self.D.shape[0], -1) if self.D.ndim == 3 else self.D.reshape(-1)
-        return BlockKernel(output=gain_output, params=p)
+        return BlockKernel(output=gain_output, params=self.D.reshape(-1))
 
     def __repr__(self) -> str:
         return f"StaticGain(D shape {self.D.shape}, inputs={self.inputs}, outputs={self.outputs})"
@@ -521,69 +518,3 @@ class SampledBlock(DiscreteBlock):
 
     def __repr__(self) -> str:
         return f"SampledBlock({self.block!r}, dt={self.dt}, method={self.method!r}, substeps={self.substeps})"
-
-
-class RowGroups(ContinuousBlock):
-    """Several continuous blocks with the same signals, each on its own rows of the batch.
-
-    Puts presets that differ only in a block's parameters (Σ with two values of ``a``, observers with
-    two values of ε) on one batch; row ``b`` of group ``j`` runs ``blocks[j]`` exactly as it would alone.
-
-    Parameters
-    ----------
-    blocks : sequence of ContinuousBlock
-        Equal ``inputs``, ``outputs``, ``states`` and ``feedthrough``.
-    rows : sequence of int or of index arrays
-        Per block either a count (consecutive groups, in order) or the batch rows it runs; the
-        groups partition the runs ``0 .. run_rows - 1`` (the batch must have ``run_rows`` runs).
-
-    Raises
-    ------
-    ValueError
-        If the blocks' signals differ, ``rows`` does not give one group per block, or the groups
-        do not partition the runs (an index out of range, in two groups, or in none).
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from ctrl_analysis.estimators.differential import DifferentialEstimator
-    >>> g = RowGroups([DifferentialEstimator(3, 1.0), DifferentialEstimator(3, 2.0)], [1, 2])
-    >>> g.rhs(0.0, np.zeros((3, 3)), np.ones((3, 1)))[:, 0]  # z1' = a_1 y, a_1 = K = 27 a / 4
-    array([ 6.75, 13.5 , 13.5 ])
-    """
-
-    def __init__(self, blocks, rows):
-        if not isinstance(blocks, (list, tuple)):
-            raise TypeError(f"blocks must be a list of ContinuousBlock, got {blocks!r:.80}")
-        blocks = tuple(blocks)
-        if not blocks or not all(isinstance(b, ContinuousBlock) for b in blocks):
-            raise TypeError(f"blocks must be a non-empty sequence of ContinuousBlock, got {blocks!r:.80}")
-        b0 = blocks[0]
-        for b in blocks:
-            if (b.inputs, b.outputs, b.states, b.feedthrough) != (b0.inputs, b0.outputs, b0.states, b0.feedthrough):
-                raise ValueError("blocks must have equal inputs, outputs, states and feedthrough")
-        if not isinstance(rows, (list, tuple)) or len(rows) != len(blocks):
-            raise ValueError(f"rows must give one group per block ({len(blocks)}), got {rows!r:.80}")
-        rows, self.run_rows = partition_rows(rows)
-        self.blocks, self.rows = blocks, tuple(rows)
-        self.inputs, self.outputs, self.states, self.feedthrough = b0.inputs, b0.outputs, b0.states, b0.feedthrough
-
-    def initial_state(self) -> np.ndarray:
-        return self.blocks[0].initial_state()
-
-    def _each(self, fn, t, x, u, params):
-        if len(self.blocks) == 1:
-            return unchecked(self.blocks[0], fn)(t, x, u, params)
-        out = None
-        for block, idx in zip(self.blocks, self.rows):
-            y = unchecked(block, fn)(t, x[idx], u[idx], params)
-            if out is None:
-                out = np.empty((x.shape[0],) + y.shape[1:])
-            out[idx] = y
-        return out
-
-    def rhs(self, t, x, u, params=None) -> np.ndarray:
-        return self._each("rhs", t, x, u, params)
-
-    def output(self, t, x, u, params=None) -> np.ndarray:
-        return self._each("output", t, x, u, params)

@@ -30,8 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._compiled import compiled_for, run_compiled
-from ._perrun import check_rows, chunk_functions, per_run_rows
+from ._compiled import compiled_for, held_rows, run_compiled
 from ._validate import (
     check_bool,
     check_callable,
@@ -44,6 +43,7 @@ from ._validate import (
     check_str,
 )
 from .blocks import Block, ContinuousBlock, DiscreteBlock
+from .engine.params import chunk_functions, resolve
 from .response import LoopResponse
 from .simulate import (
     CHUNK_BYTES,
@@ -300,8 +300,7 @@ class Loop:
     def simulate(self, n_steps: int, *, inputs=None, x0=None, runs: int | None = None, t0: float = 0.0,
                  params=None, bound: float = 1e8, store_states: bool = True, seeds=None,
                  store_signals=None, chunk_runs: int | None = None, max_bytes: float | None = None,
-                 progress=None, engine: str = "auto", jobs: int = 1, run_offset: int = 0,
-                 batch_runs: int | None = None, keep=None, every: int = 1) -> LoopResponse:
+                 progress=None, engine: str = "auto", jobs: int = 1, keep=None, every: int = 1) -> LoopResponse:
         """Step the loop ``n_steps`` samples over a batch of runs.
 
         Parameters
@@ -361,13 +360,6 @@ class Loop:
             (otherwise the batch runs in this process, with a warning for an unpicklable loop).
             With ``jobs=1`` and a process-wide Dask cluster (:func:`ctrl_analysis.parallel.use_cluster`),
             a compiled batch of two runs or more is split over its workers, with the same numbers.
-        run_offset : int
-            Index of this batch's first run among the rows of per-run kernel parameters (see
-            :class:`~ctrl_analysis._kernels.BlockKernel`); set by the engine when it splits a batch over
-            processes.
-        batch_runs : int, optional
-            Runs of the whole batch this call is a part of (set by the engine with ``run_offset``;
-            default ``run_offset + B``). Per-run kernel parameters must have exactly this many rows.
 
         Returns
         -------
@@ -433,27 +425,21 @@ class Loop:
         size = max(1, min(size, int(limit // work))) if chunk_runs is None else size
         check_in("engine", engine, ("auto", "numpy", "compiled"))
         jobs = check_int("jobs", jobs, minimum=1)
-        from .engine.params import resolve
         from .engine.processes import simulate_chunks
         from .parallel import active_cluster, picklable
 
         variants = resolve(self, params, B)  # validated here, before any work
+        whole = held_rows(self, variants, B, split=(jobs > 1 and B > 1) or (chunk_runs is not None and size < B))
+        size = B if whole else size  # a block built for this batch's runs: stepped whole, in this process
 
-        # over processes, or a process-wide Dask cluster's workers (compiled: per-run parameters follow the chunk)
-        on_cluster = jobs == 1 and B > 1 and not funcs and active_cluster() is not None \
+        # over processes, or a process-wide Dask cluster's workers (per-run parameters follow the chunk)
+        on_cluster = not whole and jobs == 1 and B > 1 and not funcs and active_cluster() is not None \
             and compiled_for(self, engine, funcs, variants) is not None
         if B > 1 and not funcs and (jobs > 1 or on_cluster) and picklable(self):
             opts = {"t0": t0, "params": params, "bound": bound, "store_states": store_states, "store_signals": keep,
-                    "every": every,
-                    "chunk_runs": chunk_runs, "max_bytes": max_bytes, "engine": engine,
-                    "run_offset": check_int("run_offset", run_offset, minimum=0),
-                    "batch_runs": check_int("batch_runs", batch_runs, minimum=1) if batch_runs else None}
+                    "every": every, "chunk_runs": chunk_runs, "max_bytes": max_bytes, "engine": engine}
             return simulate_chunks(self, jobs, n_steps, held, x, opts, seeds)
-        run_offset = check_int("run_offset", run_offset, minimum=0)
         runner = compiled_for(self, engine, funcs, variants)  # None: the numpy path
-        rows = {p.name: r for p in self.placed if p.name not in variants and (r := per_run_rows(p.block)) is not None}
-        check_rows(rows, run_offset, B, batch_runs)  # both engines: the same batch, the same answer
-        rows = {id(p.block): rows[p.name] for p in self.placed if p.name in rows}
         t = t0 + self.dt * np.arange(n_steps + 1)
         store = np.empty((n_kept, B, len(keep)))
         xs = np.empty((n_kept, B, self.n_states)) if store_states else None
@@ -467,7 +453,7 @@ class Loop:
         with updater(progress if callable(progress) else auto, B * n_steps,
                      f"{B} runs x {n_steps} samples", "run-sample") as pbar:
             self._run_chunks(plan, runner, n_steps, t, x, held, funcs, per_run_funcs, variants, bound, keep_cols,
-                             (store, xs, every), diverged, div_step, chunk_bounds(B, size), (run_offset, rows), pbar)
+                             (store, xs, every), diverged, div_step, chunk_bounds(B, size), pbar)
         sig_store = {s: store[:, :, j] for j, s in enumerate(keep)}
         state_names = [f"{p.name}.{s}" for p in self.continuous + self.discrete for s in p.block.states]
         return LoopResponse(t=t[::every], x=xs, u=None, y=None, diverged=diverged, diverged_step=div_step,
@@ -476,16 +462,15 @@ class Loop:
                             state_names=state_names, x_final=x)
 
     def _run_chunks(self, plan, runner, n_steps, t, x, held, funcs, per_run_funcs, variants, bound, keep_cols,
-                    stored, diverged, div_step, bounds, offset_rows, progress):
+                    stored, diverged, div_step, bounds, progress):
         """Step every chunk ``(lo, hi)`` of the batch (compiled or numpy), reporting run-samples to ``progress``."""
-        run_offset, rows = offset_rows
         store, xs, every = stored
         for lo, hi in bounds:
             f_c = {s: (f if s not in per_run_funcs else (lambda tt, f=f, lo=lo, hi=hi: np.asarray(f(tt))[lo:hi]))
                    for s, f in funcs.items()}
             h_c = {s: (a[:, lo:hi] if a.ndim == 2 else a) for s, a in held.items()}
             if runner is None:
-                fns = chunk_functions(plan, rows, run_offset + lo, hi - lo, self._variant_ids(variants), lo)
+                fns = chunk_functions(plan, self._variant_ids(variants), lo, hi - lo)
                 self._run_chunk(plan | fns, n_steps, t, x[lo:hi], h_c, f_c, None, bound, keep_cols,
                                 (store[:, lo:hi], None if xs is None else xs[:, lo:hi], every),
                                 diverged[lo:hi], div_step[lo:hi], progress)
@@ -496,8 +481,7 @@ class Loop:
             for a, b in parts if progress is None else [(lo + a, lo + b) for a, b in parts]:
                 h_p = {s: (v[:, a:b] if v.ndim == 2 else v) for s, v in held.items()}
                 run_compiled(self, runner, plan, n_steps, t, x[a:b], h_p, bound, keep_cols, store[:, a:b],
-                             None if xs is None else xs[:, a:b], diverged[a:b], div_step[a:b], rows=(run_offset + a, a),
-                             every=every)
+                             None if xs is None else xs[:, a:b], diverged[a:b], div_step[a:b], lo=a, every=every)
                 if progress is not None:
                     progress((b - a) * n_steps)
 
@@ -529,7 +513,7 @@ class Loop:
         nc = self.n_continuous
         tick = max(1, n_steps // 100)
 
-        def evaluate(blocks, tau, xx):  # the plan's unchecked (and per-run windowed) block functions
+        def evaluate(blocks, tau, xx):  # the chunk's unchecked block functions (chunk_functions)
             for output, ic, oc, sl in blocks:
                 S[:, oc] = output(tau, xx[:, sl], S[:, ic], params)
 

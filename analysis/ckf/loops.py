@@ -2,17 +2,20 @@
 
 One loop holds every case side by side on the batch axis: plant, measurement, the digital LPF,
 the CKF, the identification (regressor + RLS) and the golden-section controller all run in every
-run; per-run selectors (external inputs) say which signal is fed back (raw, LPF or CKF, raw before
-``t_filter``) and which one forms the identification's ``z`` and ``h``. Run ``b`` of the batch
-is therefore exactly the loop of its case alone, and the three cases see the same noise.
+run; per-run selection weights (given to the simulation, :func:`run_params`) say which signal is fed
+back (raw, LPF or CKF, raw before ``t_filter``) and which one forms the identification's ``z`` and
+``h``. Run ``b`` of the batch is therefore exactly the loop of its case alone, and the three cases
+see the same noise.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from ctrl_analysis.blocks import StaticGain
+from ctrl_analysis._validate import check_finite
+from ctrl_analysis.blocks import StaticBlock, StaticGain
 from ctrl_analysis.controllers.golden_section import GoldenSectionController
+from ctrl_analysis.engine.kernels import KernelBlock, Kernels, Layout
 from ctrl_analysis.estimators.kalman import CharacteristicKalmanFilter
 from ctrl_analysis.estimators.lowpass import LowPassFilter
 from ctrl_analysis.identification import ArxRegressor, RecursiveLeastSquares
@@ -20,7 +23,8 @@ from ctrl_analysis.loop import Loop, place
 from ctrl_analysis.plants import DiscreteLTI
 from ctrl_analysis.simulate import draw_noise, gaussian_noise, run_seeds
 
-__all__ = ["CASES", "ID_OPTIONS", "SIGNALS", "FeedbackSwitch", "build_loop", "gated_gain_output", "plant_tf", "simulate_cases", "split_cases"]
+__all__ = ["CASES", "ID_OPTIONS", "SIGNALS", "SWITCH", "FeedbackSwitch", "build_loop", "gated_gain_output", "plant_tf",
+           "run_params", "simulate_cases", "split_cases"]
 
 #: Feedback cases: (selector of the LPF signal, selector of the CKF signal).
 CASES = {"nofilter": (0.0, 0.0), "lpf": (1.0, 0.0), "ckf": (0.0, 1.0)}
@@ -47,10 +51,13 @@ def plant_tf(name: str):
     raise ValueError(f"plant must be 'interlaced' or 'resonant-delay', got {name!r}")
 
 
-def gated_gain_output(t, x, u, p, y):
-    """``y = u[0]`` before ``t_on = p[0]``, then ``y = Σ_j D_j u_j`` with ``D = p[1:]`` (summed left to right).
+#: The kernel parameters of :class:`FeedbackSwitch`: the switching time and the weights of its 3 inputs.
+SWITCH = Layout("t_on", ("weights", 3))
+AT = SWITCH.at
 
-    Kernel of :class:`FeedbackSwitch` (the compiled twin of its numpy output, ``StaticGain``'s sum after ``t_on``).
+
+def gated_gain_output(t, x, u, p, y):
+    """``y = u[0]`` before ``t_on``, then ``y = Σ_j w_j u_j`` (summed left to right); the kernel of :class:`FeedbackSwitch`.
 
     Parameters
     ----------
@@ -61,58 +68,55 @@ def gated_gain_output(t, x, u, p, y):
     u : numpy.ndarray
         The candidate signals, the raw one first.
     p : numpy.ndarray
-        ``[t_on, D_0 .. D_(m-1)]``.
+        :data:`SWITCH`: ``t_on``, then the weights ``w_0 .. w_2``.
     y : numpy.ndarray
         The selected signal, written in place.
     """
     acc = 0.0
     for j in range(u.shape[0]):
-        acc += p[1 + j] * u[j]
-    y[0] = u[0] if t < p[0] - 1e-9 else acc  # an expression, not an if statement: numba compiles it leaner
+        acc += p[AT.weights + j] * u[j]
+    y[0] = u[0] if t < p[AT.t_on] - 1e-9 else acc  # an expression, not an if statement: numba compiles it leaner
 
 
-class FeedbackSwitch(StaticGain):
-    """The fed-back signal: the raw measurement (first input) before ``t_on``, then ``D u`` per run.
+class FeedbackSwitch(KernelBlock, StaticBlock):
+    """The fed-back signal: the raw measurement (first input) before ``t_on``, then ``Σ_j w_j u_j``.
+
+    Kernel :func:`gated_gain_output` (a branch on the time against a parameter: the batched methods
+    call it run by run).
 
     Parameters
     ----------
-    D : numpy.ndarray, shape (B, 1, m)
-        One selection row per run (e.g. ``[0, 1, 0]``: the LPF output).
+    weights : array_like, shape (3,)
+        Weights of the three inputs (e.g. ``[0, 1, 0]``: the LPF output); per run through
+        ``Loop.simulate(params={"select": {"weights": ...}})``.
     t_on : float
         When the selected signal replaces the raw one (the paper's 2 s).
     inputs, outputs : sequence of str
-        ``m`` inputs (the raw signal first), one output.
+        Three inputs (the raw signal first), one output.
     """
 
-    def __init__(self, D, t_on, inputs, outputs):
-        super().__init__(D, inputs, outputs)
-        self.t_on = float(t_on)
+    kernels = Kernels(output=gated_gain_output, columns=False)
 
-    def _apply(self, t, u):
-        return u[:, :1].copy() if t < self.t_on - 1e-9 else super()._apply(t, u)
+    def __init__(self, weights, t_on, inputs, outputs):
+        super().__init__(self._select, inputs, outputs)
+        if len(self.inputs) != 3 or len(self.outputs) != 1:
+            raise ValueError(f"FeedbackSwitch has 3 inputs and 1 output, got {self.inputs} and {self.outputs}")
+        self.t_on = check_finite("t_on", t_on, scalar=True)
+        self.kernel_params = SWITCH.pack(t_on=self.t_on, weights=check_finite("weights", weights))
 
-    def kernel(self):
-        """:func:`gated_gain_output` with per-run parameters ``[t_on, D_b]``.
-
-        Returns
-        -------
-        ctrl_analysis._kernels.BlockKernel
-        """
-        from ctrl_analysis._kernels import BlockKernel
-
-        P = np.column_stack([np.full(self.D.shape[0], self.t_on), self.D.reshape(self.D.shape[0], -1)])
-        return BlockKernel(output=gated_gain_output, params=P)
+    def _select(self, t, u):  # StaticBlock's fn (python-control): the kernel on the batch
+        return self.output(t, np.zeros((u.shape[0], 0)), u)
 
 
-def build_loop(p, sel, plant=None) -> Loop:
+def build_loop(p, plant=None) -> Loop:
     """Plant, measurement, LPF, CKF, identification and golden-section control wired by signal names.
+
+    The case (which signal is fed back and which one is identified) is the weights of ``select``
+    and ``idsignal``, the raw measurement here; :func:`run_params` gives them per run.
 
     Parameters
     ----------
     p : CKFStudy
-    sel : numpy.ndarray, shape (4, B)
-        Per-run selectors: LPF / CKF fed back, LPF / fed-back signal identified (:data:`CASES`,
-        :data:`ID_OPTIONS`); they become per-run gains, so the loop runs in the compiled engine.
     plant : control.TransferFunction or StateSpace, optional
         Default ``plant_tf(p.plant)``.
 
@@ -124,9 +128,7 @@ def build_loop(p, sel, plant=None) -> Loop:
 
     sys = plant_tf(p.plant) if plant is None else plant
     lo, hi = (p.lower, p.upper) if p.project else (None, None)
-    # rows [raw, LPF, CKF] (fed back) and [raw, LPF, fed back] (identified): 1 − s1 − s2, s1, s2 per run
-    D_fb = np.stack([1.0 - sel[0] - sel[1], sel[0], sel[1]], axis=1)[:, None, :]
-    D_id = np.stack([1.0 - sel[2] - sel[3], sel[2], sel[3]], axis=1)[:, None, :]
+    raw = [1.0, 0.0, 0.0]
     blocks = [
         place(DiscreteLTI(sys, p.Ts), "plant", inputs=["u"], outputs=["y"]),
         place(StaticGain([[1.0, 1.0]], ("y", "v"), ("y_m",)), "meas"),
@@ -134,8 +136,8 @@ def build_loop(p, sel, plant=None) -> Loop:
         place(DiscreteLTI(ct.tf([1.0], [1.0, 0.0], True), p.Ts), "delay", inputs=["u"], outputs=["u_prev"]),
         place(CharacteristicKalmanFilter(Q=p.Q, R=p.R, P0=p.P0_ckf), "ckf",
               inputs=["y_m", "u_prev", "f1", "f2", "g0"], outputs=["y_ckf", "y_ckf_prev"]),
-        place(FeedbackSwitch(D_fb, p.t_filter, ("y_m", "y_lpf", "y_ckf"), ("y_fb",)), "select"),
-        place(StaticGain(D_id, ("y_m", "y_lpf", "y_fb"), ("s_id",)), "idsignal"),
+        place(FeedbackSwitch(raw, p.t_filter, ("y_m", "y_lpf", "y_ckf"), ("y_fb",)), "select"),
+        place(StaticGain([raw], ("y_m", "y_lpf", "y_fb"), ("s_id",)), "idsignal"),
         place(ArxRegressor(2, 1, lag=0), "regressor", inputs=["s_id", "u"], outputs=["z", "h0", "h1", "h2"]),
         place(RecursiveLeastSquares(3, p.forgetting, p.P0_rls, p.theta0, lower=lo, upper=hi,
                                     max_trace=p.max_trace, feedthrough=False), "rls",
@@ -144,6 +146,26 @@ def build_loop(p, sel, plant=None) -> Loop:
               inputs=["y_fb", "r", "f1", "f2", "g0"], outputs=["u"]),
     ]
     return Loop(blocks, p.Ts)
+
+
+def run_params(sel) -> dict:
+    """The per-run weights of ``select`` and ``idsignal`` from the selectors, for :meth:`Loop.simulate`.
+
+    Parameters
+    ----------
+    sel : numpy.ndarray, shape (4, B)
+        Per-run selectors: LPF / CKF fed back, LPF / fed-back signal identified (:data:`CASES`,
+        :data:`ID_OPTIONS`).
+
+    Returns
+    -------
+    dict
+        ``{"select": {"weights": (B, 3)}, "idsignal": {"D": (B, 1, 3)}}``: rows ``[raw, LPF, CKF]``
+        (fed back) and ``[raw, LPF, fed back]`` (identified), ``1 − s1 − s2, s1, s2`` per run.
+    """
+    w_fb = np.stack([1.0 - sel[0] - sel[1], sel[0], sel[1]], axis=1)
+    w_id = np.stack([1.0 - sel[2] - sel[3], sel[2], sel[3]], axis=1)
+    return {"select": {"weights": w_fb}, "idsignal": {"D": w_id[:, None, :]}}
 
 
 def simulate_cases(p, runs: int, seed: int, *, options=None, plant=None, noise_std=None, engine="auto"):
@@ -184,9 +206,10 @@ def simulate_cases(p, runs: int, seed: int, *, options=None, plant=None, noise_s
         sl = slice(i * runs, (i + 1) * runs)
         index[(o, c)] = sl
         sel[:, sl] = np.array(CASES[c] + ID_OPTIONS[o])[:, None]
-    loop = build_loop(p, sel, plant)
-    res = loop.simulate(n, inputs={"v": np.tile(v, (1, len(combos))), "r": p.reference},
-                        runs=B, store_states=False, store_signals=SIGNALS, seeds=seeds * len(combos), engine=engine)
+    loop = build_loop(p, plant)
+    res = loop.simulate(n, inputs={"v": np.tile(v, (1, len(combos))), "r": p.reference}, runs=B,
+                        params=run_params(sel), store_states=False, store_signals=SIGNALS, seeds=seeds * len(combos),
+                        engine=engine)
     return res, index
 
 

@@ -138,9 +138,10 @@ def simulate(p: Example2, seeds, a_new: float, runs: int) -> dict:
 
     def batch(rows, keep):  # rows: a slice or index array of the batch, half of them per preset
         k = len(range(2 * per)[rows]) if isinstance(rows, slice) else len(rows)
-        loop = loops.example2_loop(p, (p.a, a_new), (k // 2,) * 2, b=tuple(v[rows] for v in b))
+        params = loops.example2_params(p, np.repeat([p.a, a_new], k // 2), tuple(v[rows] for v in b))
         inputs = thetas | {"xi": noise[0][:, rows], "eta": noise[1][:, rows]}
-        return loops.simulate_signals(loop, n, keep, inputs=inputs, runs=k, bound=p.bound)
+        return loops.simulate_signals(loops.example2_loop(p), n, keep, inputs=inputs, runs=k, bound=p.bound,
+                                      params=params)
 
     sig, div, step = batch(slice(None), ["x1", "u"])
     ok = ~div

@@ -3,9 +3,10 @@
 The plants (19) and (20) are study blocks (they are the paper's); Σ, Han's ESO, the low-pass
 softener and the differential feedback (18) come from the library; the sensor is a static sum.
 Every block of the simulated loops has a compiled kernel (the plants' kernels are also their numpy
-methods; Example 2's parameter grid and Σ presets are per-run kernel parameters), so each loop runs
-as one numba function, and the study needs three loop structures: Example 1 with RK4 and with
-Euler (always Σ beside :data:`OBSERVERS` observers) and Example 2. The same loops give, through
+methods; Example 2's parameter grid and Σ presets are per-run values given to the simulation,
+:func:`example2_params`), so each loop runs as one numba function, and the study needs three loop
+structures: Example 1 with RK4 and with Euler (always Σ beside :data:`OBSERVERS` observers) and
+Example 2. The same loops give, through
 :meth:`Loop.interconnect` and :func:`control.linearize`, the linearisation of Example 2.
 """
 
@@ -16,11 +17,13 @@ import math
 import control as ct
 import numpy as np
 
-from ctrl_analysis._kernels import BlockKernel, copy_output, sigma_rhs
-from ctrl_analysis.blocks import ContinuousBlock, RowGroups, StaticBlock, StaticGain, signal_names
+from ctrl_analysis._kernels import BlockKernel, copy_output
+from ctrl_analysis._validate import check_finite
+from ctrl_analysis.blocks import ContinuousBlock, StaticBlock, StaticGain, signal_names
 from ctrl_analysis.controllers.differential_feedback import (
     HighOrderDifferentialFeedback,
 )
+from ctrl_analysis.engine.kernels import KernelBlock, Kernels, Layout
 from ctrl_analysis.estimators.differential import DifferentialEstimator
 from ctrl_analysis.estimators.eso import ExtendedStateObserver
 from ctrl_analysis.loop import Loop, place
@@ -28,14 +31,15 @@ from ctrl_analysis.loop import Loop, place
 from .paper import Example1, Example2, han_eso_gains
 
 __all__ = [
+    "PLANT20",
     "LinearPath",
     "Plant19",
     "Plant20",
-    "SigmaRows",
     "Sensor",
     "example1_loop",
     "example2_linear",
     "example2_loop",
+    "example2_params",
     "han_eso",
     "impulse_response",
     "max_real_eig",
@@ -110,97 +114,51 @@ class Sensor(StaticBlock):
         return BlockKernel(output=sensor_output, params=np.zeros(1))
 
 
+#: Plant (20)'s kernel parameters.
+PLANT20 = Layout("b1", "b2", "b3", "w_amp", "w_freq")
+AT20 = PLANT20.at
+
+
 def plant20_rhs(t, x, u, p, dx):
-    """Kernel of :class:`Plant20` (one run; on a batch's columns it is the numpy method); ``p = [b1, b2, b3, w_amp, ω_w]``.
+    """Kernel of :class:`Plant20` (one run; on a batch's columns it is the numpy method); ``p``: :data:`PLANT20`.
 
     Branch-free (the sign of ``cos`` as a difference of comparisons) so that ``p`` may also hold one
     row per run, transposed: ``p[k]`` is then a column of the batch.
     """
-    c = np.cos(p[4] * t)
+    c = np.cos(p[AT20.w_freq] * t)
     w = 1.0 * (c > 0) - 1.0 * (c < 0)  # w = sign(cos(ω_w t))
     dx[0] = x[1]  # (20) x1' = x2
     dx[1] = x[2]  # (20) x2' = x3
     # (20) x3' = b1 x1 - (b2 - x1²) x2 - b3 x3 |x3| + w_amp w + ξ + u
-    dx[2] = (p[0] * x[0] - (p[1] - x[0] * x[0]) * x[1] - p[2] * x[2] * abs(x[2]) + p[3] * w + u[1] + u[0])
+    dx[2] = (p[AT20.b1] * x[0] - (p[AT20.b2] - x[0] * x[0]) * x[1] - p[AT20.b3] * x[2] * abs(x[2])
+             + p[AT20.w_amp] * w + u[1] + u[0])
 
 
-class Plant20(ContinuousBlock):
+class Plant20(KernelBlock, ContinuousBlock):
     """Plant (20) of Example 2: ``x''' = b1 x1 - (b2 - x1²) x2 - b3 x3|x3| + w + ξ + u``.
 
-    Inputs ``u`` (control), ``xi`` (process noise); states and outputs ``x1, x2, x3``. ``b1``,
-    ``b2``, ``b3`` may be arrays of shape ``(B,)``: a parameter grid on the batch axis, given to
-    the compiled engine as per-run kernel parameters. The batched ``rhs`` applies the kernel
-    :func:`plant20_rhs` to the batch's columns (one source for both engines).
+    Inputs ``u`` (control), ``xi`` (process noise); states and outputs ``x1, x2, x3``. Kernel
+    :func:`plant20_rhs` (the batched methods are derived from it). A parameter grid on the batch
+    axis is given to the simulation: ``Loop.simulate(params={"plant": {"b": (B, 3) values}})``.
 
     Parameters
     ----------
     p : Example2
-    b : tuple of three floats or arrays, optional
+    b : tuple of three floats, optional
         ``(b1, b2, b3)``; default ``p``'s.
     w_amp : float, optional
         Amplitude of ``w = w_amp sign(cos(ω_w t))``; 0 makes the origin an equilibrium.
     """
 
     inputs, outputs, states = ("u", "xi"), ("x1", "x2", "x3"), ("x1", "x2", "x3")
+    kernels = Kernels(rhs=plant20_rhs)
 
     def __init__(self, p: Example2, b=None, w_amp=None):
-        b1, b2, b3 = (p.b1, p.b2, p.b3) if b is None else b
-        self.b1, self.b2, self.b3 = (np.asarray(v, dtype=float) if np.ndim(v) else float(v) for v in (b1, b2, b3))
-        self.w_amp = float(p.w_amp if w_amp is None else w_amp)
+        b = check_finite("b", (p.b1, p.b2, p.b3) if b is None else b, shape=(3,))
+        self.b1, self.b2, self.b3 = (float(v) for v in b)
+        self.w_amp = check_finite("w_amp", p.w_amp if w_amp is None else w_amp, scalar=True)
         self.w_freq = float(p.w_freq)
-        rows = max([np.size(v) for v in (self.b1, self.b2, self.b3) if np.ndim(v)], default=0)
-        if rows:  # one parameter row per run
-            cols = [np.broadcast_to(v, (rows,)) for v in (self.b1, self.b2, self.b3, self.w_amp, self.w_freq)]
-            self.p = np.ascontiguousarray(np.stack(cols, axis=1))
-        else:
-            self.p = np.array([self.b1, self.b2, self.b3, self.w_amp, self.w_freq])
-
-    def rhs(self, t, X, U, params=None):
-        dX = np.empty_like(X)
-        plant20_rhs(t, X.T, U.T, self.p.T, dX.T)
-        return dX
-
-    def kernel(self) -> BlockKernel:
-        """The per-run kernel: output = state, ``rhs`` = :func:`plant20_rhs`, parameters per run for a grid.
-
-        Returns
-        -------
-        BlockKernel
-        """
-        return BlockKernel(output=copy_output, params=self.p, rhs=plant20_rhs)
-
-
-class SigmaRows(RowGroups):
-    """Σ with a different ``a`` on groups of rows (:class:`RowGroups`), with a compiled kernel.
-
-    The numpy methods are :class:`RowGroups`'; the kernel is Σ's (:func:`ctrl_analysis._kernels.sigma_rhs`)
-    with one row of coefficients ``a_1..a_n0`` per run, so the presets run in one compiled loop.
-
-    Parameters
-    ----------
-    estimators : sequence of DifferentialEstimator
-        Same ``n0``, state reading.
-    rows : sequence of int
-        Consecutive rows per estimator.
-    """
-
-    def __init__(self, estimators, rows):
-        super().__init__(estimators, rows)
-        n_rows = sum(r.stop - r.start if isinstance(r, slice) else r.size for r in self.rows)
-        self.coeffs = np.empty((n_rows, self.blocks[0].n0))
-        for est, r in zip(self.blocks, self.rows):
-            self.coeffs[r] = est.a_coeffs
-
-    def kernel(self) -> BlockKernel | None:
-        """Σ's kernel with per-run coefficients (``None`` for the corrected reading: numpy path).
-
-        Returns
-        -------
-        BlockKernel or None
-        """
-        if any(est.reading != "state" for est in self.blocks):
-            return None
-        return BlockKernel(output=copy_output, params=self.coeffs, rhs=sigma_rhs)
+        self.kernel_params = PLANT20.pack(b1=self.b1, b2=self.b2, b3=self.b3, w_amp=self.w_amp, w_freq=self.w_freq)
 
 
 def sensor(signal: str = "x1") -> Sensor:
@@ -244,19 +202,20 @@ def example1_loop(p: Example1, esos=None, *, method: str | None = None, h: float
     return Loop(blocks, p.h if h is None else h, method=p.method if method is None else method)
 
 
-def example2_loop(p: Example2, a_values=(None,), rows=None, *, b=None, w_amp=None, sigma_reading=None,
+def example2_loop(p: Example2, a: float | None = None, *, b=None, w_amp=None, sigma_reading=None,
                   extra_gain: float = 0.0) -> Loop:
     """Plant (20) + sensor + Σ + controller (18); external ``theta[0..2]``, ``xi``, ``eta``.
+
+    Built for one configuration; a Σ bandwidth and plant coefficients per run are given to the
+    simulation (:func:`example2_params`).
 
     Parameters
     ----------
     p : Example2
-    a_values : sequence of float
-        Σ's ``a`` per group of rows (``None``: ``p.a``); several values need ``rows``.
-    rows : sequence of int, optional
-        Rows per ``a`` group.
+    a : float, optional
+        Σ's ``a`` (default ``p.a``).
     b, w_amp :
-        Passed to :class:`Plant20`.
+        Passed to :class:`Plant20` (``b`` default ``p``'s).
     sigma_reading : {"state", "corrected"}, optional
         Σ's estimate reading (default ``p.reading``).
     extra_gain : float
@@ -264,18 +223,15 @@ def example2_loop(p: Example2, a_values=(None,), rows=None, *, b=None, w_amp=Non
         trailing 1 multiplies ε4 = θ4 - x̂4 with θ4 = v''' = 0 (a sensitivity of the linear analysis).
     """
     reading = p.reading if sigma_reading is None else sigma_reading
-    ests = [DifferentialEstimator(p.n0, p.a if a is None else a, reading="state") for a in a_values]
-    sigma = ests[0] if len(ests) == 1 else SigmaRows(ests, rows)
+    sigma = DifferentialEstimator(p.n0, p.a if a is None else a, reading="state")
     ctrl = HighOrderDifferentialFeedback(p.K)
     u_name = "u" if extra_gain == 0.0 else "u18"
-    blocks = [place(Plant20(p, b, w_amp), "plant"), place(sensor(), "sensor")]
+    blocks = [place(Plant20(p, (p.b1, p.b2, p.b3) if b is None else b, w_amp), "plant"), place(sensor(), "sensor")]
     if reading == "state":
         blocks.append(place(sigma, "sigma"))
-    else:  # eq. (11): x̂ = C z + D y, a static gain after Σ's states (per run for several a), so Σ keeps its kernel
+    else:  # eq. (11): x̂ = C z + D y, a static gain after Σ's states, so Σ keeps its kernel
         blocks.append(place(sigma, "sigma", outputs=signal_names("z", p.n0)))
-        mats = [np.hstack(est.estimate_matrices(reading)) for est in ests]
-        D = mats[0] if len(ests) == 1 else np.concatenate([np.repeat(m[None], r, axis=0) for m, r in zip(mats, rows)])
-        blocks.append(place(StaticGain(D, inputs=(*signal_names("z", p.n0), "y"),
+        blocks.append(place(StaticGain(_reading_gain(sigma, reading), inputs=(*signal_names("z", p.n0), "y"),
                                        outputs=signal_names("xhat", p.n0)), "reading"))
     blocks.append(place(ctrl, "ctrl", inputs=list(signal_names("theta", 3)) + list(signal_names("xhat", 3)),
                         outputs=[u_name]))
@@ -284,11 +240,44 @@ def example2_loop(p: Example2, a_values=(None,), rows=None, *, b=None, w_amp=Non
     return Loop(blocks, p.h)
 
 
+def _reading_gain(est: DifferentialEstimator, reading: str) -> np.ndarray:
+    """``[C D]`` of eq. (11)'s reading ``x̂ = C z + D y`` of Σ ``est``."""
+    return np.hstack(est.estimate_matrices(reading))
+
+
+def example2_params(p: Example2, a, b, *, sigma_reading=None) -> dict:
+    """Per-run values of :func:`example2_loop`'s blocks for :meth:`Loop.simulate <ctrl_analysis.loop.Loop.simulate>`.
+
+    Parameters
+    ----------
+    p : Example2
+    a : array_like, shape (B,)
+        Σ's ``a`` per run.
+    b : tuple of three array_like, shape (B,)
+        ``b1``, ``b2``, ``b3`` per run.
+    sigma_reading : {"state", "corrected"}, optional
+        As in :func:`example2_loop` (the corrected reading's gain follows each run's ``a``).
+
+    Returns
+    -------
+    dict
+        ``{"plant": {"b": (B, 3)}, "sigma": {"a": (B,)}}`` (and ``{"reading": {"D": ...}}``).
+    """
+    reading = p.reading if sigma_reading is None else sigma_reading
+    a = np.asarray(a, dtype=float)
+    params = {"plant": {"b": np.column_stack([np.asarray(v, dtype=float) for v in b])}, "sigma": {"a": a}}
+    if reading != "state":
+        gains = {v: _reading_gain(DifferentialEstimator(p.n0, v, reading="state"), reading) for v in np.unique(a)}
+        params["reading"] = {"D": np.stack([gains[v] for v in a])}
+    return params
+
+
 def simulate_signals(loop: Loop, n_steps: int, keep, *, inputs, runs: int, chunk: int = 2000, bound: float = 1e8,
-                     seeds=None):
+                     seeds=None, params=None):
     """Run ``loop`` in time chunks (to bound memory), keeping only the signals ``keep``.
 
-    The state is carried exactly from chunk to chunk, so the result equals one long run.
+    The state is carried exactly from chunk to chunk, so the result equals one long run; ``params``
+    (per-run block parameters) are passed to every chunk's :meth:`Loop.simulate`.
 
     Returns
     -------
@@ -304,8 +293,8 @@ def simulate_signals(loop: Loop, n_steps: int, keep, *, inputs, runs: int, chunk
     for k0 in range(0, n_steps, chunk):
         n = min(chunk, n_steps - k0)
         ins = {s: (v[k0:k0 + n + 1] if isinstance(v, np.ndarray) and v.ndim else v) for s, v in inputs.items()}
-        res = loop.simulate(n, inputs=ins, x0=x0, runs=runs, t0=k0 * loop.dt, bound=bound, seeds=seeds,
-                            store_signals=list(keep), store_states=False)
+        res = loop.simulate(n, inputs=ins, x0=x0, runs=runs, t0=k0 * loop.dt, params=params, bound=bound,
+                            seeds=seeds, store_signals=list(keep), store_states=False)
         for s in keep:
             out[s][k0:k0 + n + 1] = res[s]
         new = res.diverged & ~diverged
@@ -323,7 +312,7 @@ def example2_linear(p: Example2, a: float | None = None, b1: float | None = None
     linearised at x = 0, inputs (θ, ξ, η) = 0. ``b3`` drops out (x3|x3| has zero slope at 0).
     """
     b = (p.b1 if b1 is None else b1, p.b2 if b2 is None else b2, p.b3)
-    loop = example2_loop(p, (a,), b=b, w_amp=0.0, sigma_reading=reading, extra_gain=extra_gain)
+    loop = example2_loop(p, a, b=b, w_amp=0.0, sigma_reading=reading, extra_gain=extra_gain)
     sys = loop.interconnect()
     lin = ct.linearize(sys, np.zeros(sys.nstates), np.zeros(sys.ninputs))
     return np.asarray(lin.A)

@@ -22,7 +22,7 @@ from ctrl_analysis.simulate import draw_noise, gaussian_noise
 from .paper import Example
 from .plants import SwitchedPlant, plant_start_state, reference, reference_next
 
-__all__ = ["SchemeRuns", "build_loop", "noise_draws", "run_scheme"]
+__all__ = ["RUN_TIME", "SchemeRuns", "build_loop", "noise_draws", "run_params", "run_scheme"]
 
 #: A run whose plant or controller state leaves |x| <= BOUND is flagged as diverged: in a working
 #: loop the outputs stay O(1-10), the TD rate O(100) and the D-MFAC age counter <= N = 1000.
@@ -34,19 +34,46 @@ def _measurement() -> StaticGain:
     return StaticGain([[1.0, 1.0]], inputs=("y", "v"), outputs=("y_m",))
 
 
-def _per_run(ex: Example, runs: int) -> Example:
-    """``ex`` with the parameters the sweeps vary (ρ, λ, Q, R) as one value per run.
+#: The parameters the sweeps vary per run (attribute of :class:`~.paper.Example` -> block and constructor
+#: argument of :func:`~ctrl_analysis.controllers.mfac.mfac_controller`'s blocks).
+RUN_TIME = {"rho": ("law", "rho"), "lam": ("law", "lam"), "Q": ("filter", "Q"), "R": ("filter", "R")}
 
-    Every batch then builds the same compiled loop (per-run kernel parameters), whatever varies.
+
+def run_params(ex: Example, scheme: str) -> tuple[Example, dict]:
+    """``ex`` with one value of each parameter given per run, and the per-run values for ``simulate(params=...)``.
+
+    A sweep sets ρ, λ, Q or R of ``ex`` to one value per run (a 1-D array); the loop is built with
+    the first and the values go to :meth:`Loop.simulate <ctrl_analysis.loop.Loop.simulate>` (Q and
+    R only where the scheme has the IKF). Every batch therefore runs the same compiled loop.
+
+    Parameters
+    ----------
+    ex : Example
+    scheme : str
+
+    Returns
+    -------
+    ex : Example
+        Scalars only.
+    params : dict
+        ``{block: {argument: per-run values}}`` (empty when nothing varies per run).
     """
-    return dataclasses.replace(ex, **{name: np.broadcast_to(np.asarray(getattr(ex, name), dtype=float), (runs,)).copy()
-                                      for name in ("rho", "lam", "Q", "R")})
+    fixed, params = {}, {}
+    for name, (block, arg) in RUN_TIME.items():
+        value = np.asarray(getattr(ex, name), dtype=float)
+        if value.ndim == 0:
+            continue
+        fixed[name] = float(value.reshape(-1)[0])
+        if block != "filter" or scheme == "ikf_mfac":
+            params.setdefault(block, {})[arg] = value
+    return dataclasses.replace(ex, **fixed), params
 
 
 def build_loop(ex: Example, scheme: str) -> Loop:
     """The closed loop of ``scheme`` for example ``ex``: plant, y_m = y + v, and the controller blocks.
 
-    External inputs: ``v`` (measurement noise) and ``y_ref_next`` (``y*(k+1)``).
+    External inputs: ``v`` (measurement noise) and ``y_ref_next`` (``y*(k+1)``). ``ex`` holds one value
+    per parameter (per-run values: :func:`run_params`).
     """
     y0, u0 = ex.y_init, ex.u_init
     ppd = PPDEstimator(ex.eta, ex.mu, ex.epsilon, ex.phi0, ex.phi_reset, y0=y0, u0=u0)
@@ -101,15 +128,16 @@ def run_scheme(ex: Example, scheme: str, v: np.ndarray, engine: str = "auto") ->
     The engine starts at ``k = ex.k_start`` with ``y(k_start)`` from the plant; the given
     ``y(1:k_start−1)``, ``u(1:k_start−1)`` are put in front, so every returned row is ``k = 1..N``.
     """
-    loop = build_loop(_per_run(ex, v.shape[1]), scheme)
+    ex, params = run_params(ex, scheme)
+    loop = build_loop(ex, scheme)
     ks, n = ex.k_start, ex.n
     n_steps = n - ks
     plant = loop.placed[0].block
     k_eng = ks + np.arange(n_steps + 1)
     keep = _STORED + (("y_f",) if scheme in _FILTERED else ())
     res = loop.simulate(n_steps, t0=float(ks), inputs={"v": v[ks - 1:], "y_ref_next": reference_next(ex.reference, k_eng)},
-                        x0={"plant": plant_start_state(plant, ex.y_init, ex.u_init, ks)}, bound=BOUND,
-                        store_states=False, engine=engine, store_signals=keep)
+                        x0={"plant": plant_start_state(plant, ex.y_init, ex.u_init, ks)}, params=params,
+                        bound=BOUND, store_states=False, engine=engine, store_signals=keep)
     B = v.shape[1]
     head = np.full((ks - 1, B), ex.y_init)
     y = np.vstack([head, res["y"]])

@@ -7,7 +7,8 @@ observer, ``K̄ = b0 u + Σ k_l x̂_l`` of (14)); at the end of every ``N``-samp
 regression of its variant with :func:`ctrl_analysis.identification.batch_least_squares` and
 outputs the new Θ, which W(s) smooths before the observer and the controller use it.
 
-Variants (one per run, on the batch axis):
+Variants (one per run, on the batch axis: :meth:`BatchIdentification.identify` takes them per run;
+the per-sample block is the same for every variant):
 
 * ``literal``: the paper's rule, Θ = Σ_i Θ̂_i, each Θ̂_i fitted to the residual x̂3 — (22)-(23) in
   situation 1, (16)-(20) through Λ and X_Θ in situation 2;
@@ -24,12 +25,13 @@ from __future__ import annotations
 import numpy as np
 
 from ctrl_analysis._kernels import jitable
-from ctrl_analysis._validate import check_in, check_int, check_positive
+from ctrl_analysis._validate import check_finite, check_in, check_int, check_positive
 from ctrl_analysis.blocks import DiscreteBlock, signal_names
+from ctrl_analysis.engine.kernels import KernelBlock, Kernels, Layout
 from ctrl_analysis.identification import batch_least_squares, identifiability
 
-
 __all__ = [
+    "LSM",
     "PHI",
     "VARIANTS",
     "BatchIdentification",
@@ -49,6 +51,9 @@ PHI = ("xhat1", "xhat2", "1", "xhat3", "f", "u", "kbar")
 _NPHI = len(PHI)
 #: largest column-scaled condition number a Gram matrix resolves in double precision (1/sqrt(eps))
 GRAM_COND_LIMIT = 1.0 / np.sqrt(np.finfo(float).eps)
+#: The kernel parameters of :class:`BatchIdentification`: the batch size, b0 and the controller gains.
+LSM = Layout("N", "b0", ("k", 3))
+AT = LSM.at
 
 
 def regressors(xh1, xh2, xh3, u, f, kbar) -> np.ndarray:
@@ -218,117 +223,6 @@ def exact_report(variant, regression, Phi, threshold=100.0):
     return identifiability(Phi @ T_H.T, cond_threshold=threshold)
 
 
-class BatchIdentification(DiscreteBlock):
-    """Batch least squares every ``N`` samples on the MESO's estimates, one variant per run (a discrete block).
-
-    The block's per-sample update only accumulates the batch's Gram matrix of φ
-    (:func:`gram_update`, the compiled engine's kernel and, on the batch's columns, the numpy
-    method). The batch-end solve (:meth:`identify`: SVD-based least squares, once per ``N``
-    samples) is applied to the block's state by the caller between batches: the loop is stepped
-    one batch per :meth:`~ctrl_analysis.loop.Loop.simulate` call and :meth:`identify` is applied to
-    the final state before the next call (see :func:`analysis.meso.loops.simulate_situation`).
-
-    Parameters
-    ----------
-    N : int
-        Batch size in samples (>= 4).
-    h : float
-        Sample period (s; recorded, the caller marks the batch ends).
-    b0 : float
-        Nominal input gain (for K̄ and X_Θ).
-    k_gains : array_like, shape (3,)
-        Controller gains ``k1, k2, k3`` of (30).
-    regression : {"reduced", "full"}
-    variants : sequence of str
-        One of :data:`VARIANTS` per run (fixes the batch size B).
-    thresholds : float or sequence of float
-        Identifiability gate (column-scaled condition number) per run.
-
-    Block signals: inputs ``xhat1..3``, ``u``, ``theta[0..3]`` (the Θ in use); outputs ``c[0..3]``
-    (the latest LSM result, input of W(s)), ``log10_cond`` (column-scaled) and ``rank`` of the latest
-    batch's first regression (0 before the first batch and for ``none``); states: the
-    outputs, then the batch's Gram matrix of φ divided by N (49 entries).
-
-    References
-    ----------
-    Chen & Gao 2018, Table 1, eq. (9)-(23), Theorem 1. Departures: the batch is accumulated as a
-    Gram matrix (same solution; condition numbers above ~1e7 not resolved), the well-posed and
-    direct variants (see the module docstring).
-    """
-
-    feedthrough = False
-
-    def __init__(self, N, h, b0, k_gains, regression, variants, thresholds=100.0):
-        self.N = check_int("N", N, minimum=4)
-        self.h = float(check_positive("h", h))
-        self.b0 = float(b0)
-        self.k = np.asarray(k_gains, dtype=float)
-        self.regression = check_in("regression", regression, ("reduced", "full"))
-        self.variants = tuple(check_in("variants", v, VARIANTS) for v in variants)
-        self.thresholds = np.broadcast_to(check_positive("thresholds", thresholds), (len(self.variants),)).copy()
-        self.inputs = ("xhat1", "xhat2", "xhat3", "u") + signal_names("theta", 4)
-        self.outputs = signal_names("c", 4) + ("log10_cond", "rank")
-        self.states = self.outputs + tuple(f"G[{i}][{j}]" for i in range(_NPHI) for j in range(_NPHI))
-        self._active = [b for b, v in enumerate(self.variants) if v != "none"]
-        # kernel parameters: [N, b0, k1, k2, k3]
-        self._p = np.concatenate([[float(self.N), self.b0], self.k[:3]])
-
-    def phi(self, u) -> np.ndarray:
-        """φ of this sample from the block's inputs.
-
-        Parameters
-        ----------
-        u : ndarray, shape (B, 8)
-            The block's inputs.
-
-        Returns
-        -------
-        ndarray, shape (B, 7)
-        """
-        phi = np.empty((u.shape[0], _NPHI))
-        regressor_vector(u.T, self._p, phi.T)
-        return phi
-
-    def update(self, t, x, u, params=None) -> np.ndarray:
-        x_next = np.empty_like(x)
-        gram_update(t, x.T, u.T, self._p, x_next.T)  # the kernel on the batch's columns: one source
-        return x_next
-
-    def identify(self, x) -> None:
-        """Batch end: solve every active run's regression from its Gram matrix, reset the Gram (in place).
-
-        Parameters
-        ----------
-        x : ndarray, shape (B, 55)
-            The block's states after the batch's last sample; runs whose Gram matrix is not finite
-            (diverged) keep their outputs.
-        """
-        for b in self._active:
-            G = x[b, 6:].reshape(_NPHI, _NPHI)
-            if not np.all(np.isfinite(G)):
-                continue
-            theta, rep = solve_batch(self.variants[b], self.regression, x[b, :4], self.k, self.b0,
-                                     self.thresholds[b], G=G)
-            x[b, :4] = theta
-            # log10 keeps the state bounded (the loop flags states beyond its bound as diverged)
-            x[b, 4], x[b, 5] = np.log10(min(rep.cond_scaled, 1e99)), rep.rank
-        x[:, 6:] = 0.0
-
-    def output(self, t, x, u, params=None) -> np.ndarray:
-        return x[:, :6]
-
-    def kernel(self):
-        """The compiled engine's kernel (:func:`gram_update`; the numpy update calls it too).
-
-        Returns
-        -------
-        ctrl_analysis._kernels.BlockKernel
-        """
-        from ctrl_analysis._kernels import BlockKernel
-
-        return BlockKernel(output=_held_outputs, params=self._p, update=gram_update)
-
-
 @jitable(inline="always")  # the kernels call it; numba compiles it into them
 def regressor_vector(u, p, phi):
     """``φ = [x̂1, x̂2, 1, x̂3, f, u, K̄]`` of one sample from the block's inputs (scalar-indexed).
@@ -338,7 +232,7 @@ def regressor_vector(u, p, phi):
     u : ndarray
         The inputs ``[x̂1, x̂2, x̂3, u, θ1..θ4]`` (one run's vector, or a batch's columns).
     p : ndarray
-        ``[N, b0, k1, k2, k3]``.
+        :data:`LSM`: ``N, b0, k1, k2, k3``.
     phi : ndarray
         φ, written in place (7 entries).
     """
@@ -351,7 +245,7 @@ def regressor_vector(u, p, phi):
     phi[4] = u[4] * xh1 + u[5] * xh2 + u[6] * uc + u[7]
     phi[5] = uc
     # (14) K̄ = b0 u + Σ_l k_l x̂_l
-    phi[6] = p[1] * uc + p[2] * xh1 + p[3] * xh2 + p[4] * xh3
+    phi[6] = p[AT.b0] * uc + p[AT.k] * xh1 + p[AT.k + 1] * xh2 + p[AT.k + 2] * xh3
 
 
 def gram_update(t, x, u, p, x_next):
@@ -366,7 +260,7 @@ def gram_update(t, x, u, p, x_next):
     u : ndarray
         The inputs ``[x̂1, x̂2, x̂3, u, θ1..θ4]``.
     p : ndarray
-        ``[N, b0, k1, k2, k3]``.
+        :data:`LSM`: ``N, b0, k1, k2, k3``.
     x_next : ndarray
         The next state, written in place; its entries 6..12 serve as φ's scratch before the Gram
         is written.
@@ -378,7 +272,7 @@ def gram_update(t, x, u, p, x_next):
     for i in range(_NPHI - 1, -1, -1):
         pi = x_next[6 + i]
         for j in range(_NPHI - 1, i - 1, -1):
-            inc = pi * x_next[6 + j] / p[0]  # φ_i φ_j / N = φ_j φ_i / N exactly: computed once per pair
+            inc = pi * x_next[6 + j] / p[AT.N]  # φ_i φ_j / N = φ_j φ_i / N exactly: computed once per pair
             x_next[6 + j * _NPHI + i] = x[6 + j * _NPHI + i] + inc
             x_next[6 + i * _NPHI + j] = x[6 + i * _NPHI + j] + inc
 
@@ -387,3 +281,102 @@ def _held_outputs(t, x, u, p, y):
     """Outputs: the latest LSM result, log10 cond and rank (the state's first 6 entries)."""
     for i in range(y.shape[0]):
         y[i] = x[i]
+
+
+class BatchIdentification(KernelBlock, DiscreteBlock):
+    """Batch least squares every ``N`` samples on the MESO's estimates (a discrete block; the variant per run at the batch end).
+
+    The block's per-sample update only accumulates the batch's Gram matrix of φ (kernel
+    :func:`gram_update`; the batched methods are derived from it). The batch-end solve
+    (:meth:`identify`: SVD-based least squares, once per ``N`` samples, each run with its own
+    variant and identifiability gate) is applied to the block's state by the caller between
+    batches: the loop is stepped one batch per :meth:`~ctrl_analysis.loop.Loop.simulate` call and
+    :meth:`identify` is applied to the final state before the next call (see
+    :func:`analysis.meso.loops.simulate_situation`).
+
+    Parameters
+    ----------
+    N : int
+        Batch size in samples (>= 4).
+    h : float
+        Sample period (s; recorded, the caller marks the batch ends).
+    b0 : float
+        Nominal input gain (for K̄ and X_Θ).
+    k_gains : array_like, shape (3,)
+        Controller gains ``k1, k2, k3`` of (30).
+    regression : {"reduced", "full"}
+
+    Block signals: inputs ``xhat1..3``, ``u``, ``theta[0..3]`` (the Θ in use); outputs ``c[0..3]``
+    (the latest LSM result, input of W(s)), ``log10_cond`` (column-scaled) and ``rank`` of the latest
+    batch's first regression (0 before the first batch and for ``none``); states: the
+    outputs, then the batch's Gram matrix of φ divided by N (49 entries).
+
+    References
+    ----------
+    Chen & Gao 2018, Table 1, eq. (9)-(23), Theorem 1. Departures: the batch is accumulated as a
+    Gram matrix (same solution; condition numbers above ~1e7 not resolved), the well-posed and
+    direct variants (see the module docstring).
+    """
+
+    feedthrough = False
+    inputs = ("xhat1", "xhat2", "xhat3", "u") + signal_names("theta", 4)
+    outputs = signal_names("c", 4) + ("log10_cond", "rank")
+    states = outputs + tuple(f"G[{i}][{j}]" for i in range(_NPHI) for j in range(_NPHI))
+    kernels = Kernels(output=_held_outputs, update=gram_update)
+
+    def __init__(self, N, h, b0, k_gains, regression):
+        self.N = check_int("N", N, minimum=4)
+        self.h = float(check_positive("h", h))
+        self.b0 = check_finite("b0", b0, scalar=True)
+        self.k = check_finite("k_gains", k_gains, shape=(3,))
+        self.regression = check_in("regression", regression, ("reduced", "full"))
+        self.kernel_params = LSM.pack(N=float(self.N), b0=self.b0, k=self.k)
+
+    def phi(self, u) -> np.ndarray:
+        """φ of this sample from the block's inputs.
+
+        Parameters
+        ----------
+        u : ndarray, shape (B, 8)
+            The block's inputs.
+
+        Returns
+        -------
+        ndarray, shape (B, 7)
+        """
+        phi = np.empty((u.shape[0], _NPHI))
+        regressor_vector(u.T, self.kernel_params, phi.T)
+        return phi
+
+    def identify(self, x, variants, thresholds) -> None:
+        """Batch end: solve every active run's regression from its Gram matrix, reset the Gram (in place).
+
+        Parameters
+        ----------
+        x : ndarray, shape (B, 55)
+            The block's states after the batch's last sample; runs whose Gram matrix is not finite
+            (diverged) keep their outputs.
+        variants : sequence of str
+            One of :data:`VARIANTS` per run (``"none"``: the ESO, no identification).
+        thresholds : float or sequence of float
+            Identifiability gate (column-scaled condition number) per run.
+
+        Raises
+        ------
+        ValueError
+            If a variant is unknown, a threshold not > 0, or their number is not the runs'.
+        """
+        B = x.shape[0]
+        variants = [check_in("variants", v, VARIANTS) for v in variants]
+        thresholds = np.broadcast_to(check_positive("thresholds", thresholds), (B,))
+        if len(variants) != B:
+            raise ValueError(f"variants must have one entry per run ({B}), got {len(variants)}")
+        for b, variant in enumerate(variants):
+            G = x[b, 6:].reshape(_NPHI, _NPHI)
+            if variant == "none" or not np.all(np.isfinite(G)):
+                continue
+            theta, rep = solve_batch(variant, self.regression, x[b, :4], self.k, self.b0, thresholds[b], G=G)
+            x[b, :4] = theta
+            # log10 keeps the state bounded (the loop flags states beyond its bound as diverged)
+            x[b, 4], x[b, 5] = np.log10(min(rep.cond_scaled, 1e99)), rep.rank
+        x[:, 6:] = 0.0

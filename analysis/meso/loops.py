@@ -8,9 +8,11 @@ states (:meth:`~.identification.BatchIdentification.identify`), and the table su
 identification records and the trajectories of a few runs kept for the figures are taken from the
 named signals.
 
-Every block has a compiled kernel (per-run parameters: the plant gain b, the observer gains L(ε),
-the W(s) bypass flag), so :meth:`Loop.simulate <ctrl_analysis.loop.Loop.simulate>` runs the whole
-loop as one numba function; ``CTRL_ANALYSIS_ENGINE=numpy`` gives the same results bit for bit.
+Every block has a compiled kernel, so :meth:`Loop.simulate <ctrl_analysis.loop.Loop.simulate>`
+runs the whole loop as one numba function; ``CTRL_ANALYSIS_ENGINE=numpy`` gives the same results bit
+for bit. The blocks are built for one configuration; what differs per run (the plant gain b, the
+observer's ε, the W(s) bypass flag) is given to the simulation (:func:`run_params`), and the
+identification's variant and gate per run to its batch-end solve.
 """
 
 from __future__ import annotations
@@ -19,9 +21,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ctrl_analysis._kernels import BlockKernel, copy_output, eso_rhs, kernel_of
-from ctrl_analysis.blocks import ColumnKernels, ContinuousBlock, DiscreteBlock, RowGroups, signal_names
+from ctrl_analysis._kernels import eso_rhs, kernel_of
+from ctrl_analysis._validate import check_bool, check_finite, check_positive
+from ctrl_analysis.blocks import ContinuousBlock, DiscreteBlock, signal_names
 from ctrl_analysis.controllers.pd import PDFeedforward
+from ctrl_analysis.engine.kernels import KernelBlock, Kernels, Layout, copy_output
 from ctrl_analysis.estimators.eso import ExtendedStateObserver
 from ctrl_analysis.estimators.lowpass import LowPassFilter
 from ctrl_analysis.loop import Loop, place
@@ -29,7 +33,6 @@ from ctrl_analysis.parallel import chunk_slices, map_chunks
 from ctrl_analysis.simulate import draw_noise, uniform_noise
 
 from .identification import BatchIdentification, exact_report
-
 from .paper import GATE_RERUNS, PAPER, Paper, Situation
 
 __all__ = [
@@ -44,6 +47,7 @@ __all__ = [
     "pick",
     "plant_output",
     "plant_rhs",
+    "run_params",
     "simulate_situation",
     "situation_rows",
     "x3_true",
@@ -80,26 +84,10 @@ class Row:
         return f"{self.observer}{v}/" + ("no-noise" if self.seed is None else f"seed{self.seed}") + extra
 
 
-class Plant(ColumnKernels, ContinuousBlock):
-    """Plant (27) with the disturbance (31)/(32): ``x1' = x2``, ``x2' = θ1 x1 + θ2 x2 + θ4 + b u``, ``y = x1 + v``.
+#: Plant (27)'s kernel parameters.
+PLANT = Layout("theta1", "theta2", "b")
+AT_PLANT = PLANT.at
 
-    ``b`` may differ per run (array of shape (B,)). Inputs ``u``, ``level`` (θ4, held), ``v``
-    (measurement noise, held); outputs ``x1``, ``x2``, ``y``. The numpy methods are the kernels
-    :func:`plant_rhs` / :func:`plant_output` on the batch's columns.
-    """
-
-    inputs = ("u", "level", "v")
-    outputs = ("x1", "x2", "y")
-    states = ("x1", "x2")
-    feedthrough = True
-
-    def __init__(self, paper: Paper, b):
-        self.theta1, self.theta2 = paper.theta1, paper.theta2
-        self.b = np.asarray(b, dtype=float)
-        # kernel parameters, one row per run: [θ1, θ2, b]
-        self._p = np.stack([np.full(self.b.shape, self.theta1), np.full(self.b.shape, self.theta2), self.b], axis=-1)
-
-    column_kernels = {"output": "plant_output", "rhs": "plant_rhs"}  # numpy methods + compiled kernel
 
 def plant_rhs(t, x, u, p, dx):
     """(27)/(31)/(32) of one run (or a batch's columns): ``x1' = x2``, ``x2' = θ1 x1 + θ2 x2 + θ4 + b u``.
@@ -113,12 +101,12 @@ def plant_rhs(t, x, u, p, dx):
     u : ndarray
         ``[u, θ4, v]``.
     p : ndarray
-        ``[θ1, θ2, b]``.
+        :data:`PLANT`: ``θ1, θ2, b``.
     dx : ndarray
         The derivative, written in place.
     """
     dx[0] = x[1]
-    dx[1] = p[0] * x[0] + p[1] * x[1] + u[1] + p[2] * u[0]
+    dx[1] = p[AT_PLANT.theta1] * x[0] + p[AT_PLANT.theta2] * x[1] + u[1] + p[AT_PLANT.b] * u[0]
 
 
 def plant_output(t, x, u, p, y):
@@ -136,51 +124,49 @@ def plant_output(t, x, u, p, y):
     y[2] = x[0] + u[2]
 
 
-def _model_term(t, x_hat, u, params=None):
-    # (29) XᵀΘ with X = [x̂1, x̂2, u, 1]; u = [y, u, θ1, θ2, θ3, θ4]
-    return u[:, 2] * x_hat[:, 0] + u[:, 3] * x_hat[:, 1] + u[:, 4] * u[:, 1] + u[:, 5]
+class Plant(KernelBlock, ContinuousBlock):
+    """Plant (27) with the disturbance (31)/(32): ``x1' = x2``, ``x2' = θ1 x1 + θ2 x2 + θ4 + b u``, ``y = x1 + v``.
 
+    Kernels :func:`plant_rhs` / :func:`plant_output` (the batched methods are derived from them).
 
-class ModelledESO(RowGroups):
-    """The linear (M)ESO (29) with the identified model XᵀΘ as the known part, Θ an input signal.
+    Parameters
+    ----------
+    paper : Paper
+        ``θ1``, ``θ2`` are read from it.
+    b : float
+        Input gain of the simulated plant (per run through ``Loop.simulate(params={"plant": {"b": ...}})``).
 
-    Wraps :class:`~ctrl_analysis.estimators.eso.ExtendedStateObserver` (its ``rhs`` is called, with
-    ``known = XᵀΘ``); Θ = 0 gives the conventional ESO (6). ``epsilons`` may differ per run: the runs
-    are grouped by ε, one observer per group (:class:`~ctrl_analysis.blocks.RowGroups`); the compiled
-    kernel (:func:`meso_rhs`) has the gains L(ε) as per-run parameters.
-
-    Inputs ``y``, ``u``, ``theta[0..3]``; states and outputs ``xhat1..3``.
+    Block signals: inputs ``u``, ``level`` (θ4, held), ``v`` (measurement noise, held); outputs
+    ``x1``, ``x2``, ``y``; states ``x1``, ``x2``.
     """
 
-    def __init__(self, paper: Paper, b0: float, epsilons):
-        eps = np.asarray(epsilons, dtype=float)
-        values = np.unique(eps)
-        super().__init__([ExtendedStateObserver.from_epsilon(paper.n, e, paper.beta, b0=b0, known=_model_term)
-                          for e in values], [np.flatnonzero(eps == e) for e in values])
-        # the observer reads u[:, :2]; the model term reads Θ from the columns after them
-        self.inputs = ("y", "u") + signal_names("theta", 4)
-        # kernel parameters per run: the ESO kernel's packing with b0 = 0, then b0 (see meso_rhs)
-        rows = {}
-        for e in values:
-            plain = ExtendedStateObserver.from_epsilon(paper.n, e, paper.beta, b0=0.0)
-            rows[e] = np.concatenate([kernel_of(plain).params, [float(b0)]])
-        self._p = np.array([rows[e] for e in eps])
+    inputs = ("u", "level", "v")
+    outputs = ("x1", "x2", "y")
+    states = ("x1", "x2")
+    feedthrough = True
+    kernels = Kernels(output=plant_output, rhs=plant_rhs)
 
-    def kernel(self):
-        """The compiled kernel: :func:`meso_rhs` with per-run ESO parameters (L from each run's ε).
+    def __init__(self, paper: Paper, b: float):
+        self.theta1, self.theta2 = paper.theta1, paper.theta2
+        self.b = check_finite("b", b, scalar=True)
+        self.kernel_params = PLANT.pack(theta1=self.theta1, theta2=self.theta2, b=self.b)
 
-        Returns
-        -------
-        ctrl_analysis._kernels.BlockKernel
-        """
-        return BlockKernel(output=copy_output, params=self._p, rhs=meso_rhs)
+
+def _eso_vector(paper: Paper, epsilon: float) -> np.ndarray:
+    """The parameter vector of :func:`~ctrl_analysis._kernels.eso_rhs` for the linear ESO (29) at ε, its b0 slot 0."""
+    return kernel_of(ExtendedStateObserver.from_epsilon(paper.n, epsilon, paper.beta, b0=0.0)).params
+
+
+#: (29)'s kernel parameters: ``eso_rhs``'s vector (its b0 slot 0, see :func:`meso_rhs`), then b0.
+OBSERVER = Layout(("eso", _eso_vector(PAPER, PAPER.epsilon).size), "b0")
+AT_OBSERVER = OBSERVER.at
 
 
 def meso_rhs(t, x, u, p, dx):
     """(29) of one run: the ESO of :func:`ctrl_analysis._kernels.eso_rhs` plus ``b0 u + XᵀΘ`` in row n.
 
     ``eso_rhs`` is called with ``b0 = 0`` in its parameters (adding ``0 u`` is exact), and the drive
-    ``b0 u + XᵀΘ`` is added afterwards, in the order of the block's numpy method (bit for bit).
+    ``b0 u + XᵀΘ`` is added afterwards.
 
     Parameters
     ----------
@@ -191,7 +177,7 @@ def meso_rhs(t, x, u, p, dx):
     u : ndarray
         ``[y, u, θ1, θ2, θ3, θ4]``.
     p : ndarray
-        ``eso_rhs``'s parameters (its b0 slot 0), then ``b0``.
+        :data:`OBSERVER`: ``eso_rhs``'s parameters (first, as it reads them), then ``b0``.
     dx : ndarray
         The derivative, written in place.
     """
@@ -199,49 +185,46 @@ def meso_rhs(t, x, u, p, dx):
     m = x.shape[0]
     # (29) XᵀΘ with X = [x̂1, x̂2, u, 1]
     f = u[2] * x[0] + u[3] * x[1] + u[4] * u[1] + u[5]
-    dx[m - 2] = dx[m - 2] + (p[p.shape[0] - 1] * u[1] + f)
+    dx[m - 2] = dx[m - 2] + (p[AT_OBSERVER.b0] * u[1] + f)
 
 
-class ParameterPath(DiscreteBlock):
-    """Θ_used = W(s)-smoothed LSM result, or the raw LSM result for runs with ``bypass`` (a discrete block).
+class ModelledESO(KernelBlock, ContinuousBlock):
+    """The linear (M)ESO (29) with the identified model XᵀΘ as the known part, Θ an input signal.
 
-    Discrete (its inputs change only at the samples), so the compiled engine evaluates it once per
-    sample, not at every RK4 stage; kernel :func:`path_output` with the per-run flag.
+    The observer of :class:`~ctrl_analysis.estimators.eso.ExtendedStateObserver` (its kernel
+    :func:`~ctrl_analysis._kernels.eso_rhs`, gains ``L_i = β_i / ε^i``) with ``b0 u + XᵀΘ`` in the
+    n-th equation (:func:`meso_rhs`); Θ = 0 gives the conventional ESO (6). ``eso_rhs`` branches on
+    its parameters, so the batched methods call the kernel run by run.
 
     Parameters
     ----------
-    bypass : array_like of bool, shape (B,)
-        Runs whose observer and controller receive the LSM result without W(s) (the literal rule
-        without W(s), a claim check).
+    paper : Paper
+        ``n`` and ``β`` are read from it.
+    b0 : float
+        Nominal input gain.
+    epsilon : float
+        High-gain parameter ε (> 0; per run through ``Loop.simulate(params={"observer": {"epsilon": ...}})``).
 
-    Block signals: inputs ``c[0..3]`` (LSM result), ``w[0..3]`` (after W(s)); outputs ``theta[0..3]``.
+    Block signals: inputs ``y``, ``u``, ``theta[0..3]``; states and outputs ``xhat1..3``.
     """
 
-    inputs = signal_names("c", 4) + signal_names("w", 4)
-    outputs = signal_names("theta", 4)
-    feedthrough = True
+    inputs = ("y", "u") + signal_names("theta", 4)
+    outputs = states = ("xhat1", "xhat2", "xhat3")
+    kernels = Kernels(rhs=meso_rhs, columns=False)
 
-    def __init__(self, bypass):
-        self.bypass = np.asarray(bypass, dtype=bool)[:, None]
+    def __init__(self, paper: Paper, b0: float, epsilon: float):
+        self.b0 = check_finite("b0", b0, scalar=True)
+        self.epsilon = check_positive("epsilon", epsilon, scalar=True)
+        self.kernel_params = OBSERVER.pack(eso=_eso_vector(paper, self.epsilon), b0=self.b0)
 
-    def update(self, t, x, u, params=None):
-        return x
 
-    def output(self, t, x, u, params=None):
-        return np.where(self.bypass, u[:, :4], u[:, 4:])
-
-    def kernel(self):
-        """The compiled kernel: :func:`path_output`, per-run ``[bypass]`` (no state).
-
-        Returns
-        -------
-        ctrl_analysis._kernels.BlockKernel
-        """
-        return BlockKernel(output=path_output, params=self.bypass.astype(float), update=copy_output)
+#: The W(s) bypass flag of :class:`ParameterPath`.
+PATH = Layout("bypass")
+AT_PATH = PATH.at
 
 
 def path_output(t, x, u, p, y):
-    """Θ_used of one run: the LSM result ``c`` if ``p[0]`` (bypass), else its W(s)-smoothed ``w``.
+    """Θ_used of one run: the LSM result ``c`` if bypassed, else its W(s)-smoothed ``w``.
 
     Parameters
     ----------
@@ -250,23 +233,47 @@ def path_output(t, x, u, p, y):
     u : ndarray
         ``[c0..c3, w0..w3]``.
     p : ndarray
-        ``[bypass (0/1)]``.
+        :data:`PATH`: ``bypass`` (1 or 0).
     y : ndarray
         Θ_used, written in place.
     """
-    off = 0 if p[0] != 0.0 else 4
+    off = 0 if p[AT_PATH.bypass] != 0.0 else 4
     for i in range(4):
         y[i] = u[off + i]
 
 
-def build_loop(sit: Situation, rows, paper: Paper = PAPER) -> Loop:
-    """The loop of situation ``sit`` with one run per row.
+class ParameterPath(KernelBlock, DiscreteBlock):
+    """Θ_used = W(s)-smoothed LSM result, or the raw LSM result with ``bypass`` (a discrete block without state).
+
+    Discrete (its inputs change only at the samples), so the compiled engine evaluates it once per
+    sample, not at every RK4 stage; kernel :func:`path_output` (a branch on the flag: the batched
+    methods call it run by run).
+
+    Parameters
+    ----------
+    bypass : bool
+        The observer and the controller receive the LSM result without W(s) (the literal rule
+        without W(s), a claim check); per run through ``Loop.simulate(params={"path": {"bypass": ...}})``.
+
+    Block signals: inputs ``c[0..3]`` (LSM result), ``w[0..3]`` (after W(s)); outputs ``theta[0..3]``.
+    """
+
+    inputs = signal_names("c", 4) + signal_names("w", 4)
+    outputs = signal_names("theta", 4)
+    feedthrough = True
+    kernels = Kernels(output=path_output, update=copy_output, columns=False)
+
+    def __init__(self, bypass: bool = False):
+        self.bypass = check_bool("bypass", bypass)
+        self.kernel_params = PATH.pack(bypass=float(self.bypass))
+
+
+def build_loop(sit: Situation, paper: Paper = PAPER) -> Loop:
+    """The loop of situation ``sit`` at the paper's configuration (per-run changes: :func:`run_params`).
 
     Parameters
     ----------
     sit : Situation
-    rows : sequence of Row
-        One configuration per run of the batch.
     paper : Paper
 
     Returns
@@ -277,17 +284,34 @@ def build_loop(sit: Situation, rows, paper: Paper = PAPER) -> Loop:
     """
     pd = PDFeedforward(b0=sit.b0, omega_c=paper.omega_c, order=paper.n, model=True)
     lpf = LowPassFilter(paper.omega_f, order=2).digital(paper.h, channels=4)
-    ident = BatchIdentification(sit.N, paper.h, sit.b0, pd.k, sit.regression, [r.variant for r in rows],
-                                [r.threshold for r in rows])
+    ident = BatchIdentification(sit.N, paper.h, sit.b0, pd.k, sit.regression)
     xhat = ("xhat1", "xhat2", "xhat3")
     return Loop([
-        place(Plant(paper, [r.b_plant for r in rows]), "plant"),
-        place(ModelledESO(paper, sit.b0, [r.epsilon for r in rows]), "observer"),
+        place(Plant(paper, paper.b), "plant"),
+        place(ModelledESO(paper, sit.b0, paper.epsilon), "observer"),
         place(pd, "pd", inputs=signal_names("r", 3) + xhat + signal_names("theta", 4)),
         place(ident, "lsm"),
         place(lpf, "W", inputs=signal_names("c", 4), outputs=signal_names("w", 4)),
-        place(ParameterPath([r.bypass_w for r in rows]), "path"),
+        place(ParameterPath(), "path"),
     ], paper.h, method=paper.integrator)
+
+
+def run_params(rows) -> dict:
+    """The per-run block parameters of ``rows`` for :meth:`Loop.simulate <ctrl_analysis.loop.Loop.simulate>`.
+
+    Parameters
+    ----------
+    rows : sequence of Row
+        One configuration per run of the batch.
+
+    Returns
+    -------
+    dict
+        ``{"plant": {"b": ...}, "observer": {"epsilon": ...}, "path": {"bypass": ...}}``, one value per run.
+    """
+    return {"plant": {"b": np.array([r.b_plant for r in rows], dtype=float)},
+            "observer": {"epsilon": np.array([r.epsilon for r in rows], dtype=float)},
+            "path": {"bypass": np.array([r.bypass_w for r in rows], dtype=bool)}}
 
 
 @dataclass
@@ -408,8 +432,10 @@ def _simulate_rows(sit, rows, T, paper, window, keep, exact, bound, progress) ->
     t_all = h * np.arange(K + 1)
     level = np.where(t_all >= paper.t_step - 0.5 * h, paper.step, 0.0)
     noise = _situation_noise(rows, K, paper)
-    loop = build_loop(sit, rows, paper)
+    loop = build_loop(sit, paper)
+    params = run_params(rows)
     ident = loop.placed[3].block
+    variants, thresholds = [r.variant for r in rows], [r.threshold for r in rows]
     in_window = (t_all[:K] >= window[0]) & (np.arange(K) < round(window[1] / h))
     metrics = ("est_x1", "est_x2", "est_x3", "est_x3_no_bu", "track_x1", "track_x2")
     out = SituationRun(rows=list(rows), t=t_all[:K], sums={m: np.zeros(B) for m in metrics},
@@ -428,14 +454,14 @@ def _simulate_rows(sit, rows, T, paper, window, keep, exact, bound, progress) ->
         sl = slice(k0, k0 + n + 1)
         inputs = {"level": level[sl], "v": noise[sl], "r[0]": np.sin(t_all[sl]), "r[1]": np.cos(t_all[sl]),
                   "r[2]": -np.sin(t_all[sl])}
-        res = loop.simulate(n, inputs=inputs, x0=x0, runs=B, t0=t_all[k0], bound=bound, store_states=False,
-                            store_signals=_STORED)
+        res = loop.simulate(n, inputs=inputs, x0=x0, runs=B, t0=t_all[k0], params=params, bound=bound,
+                            store_states=False, store_signals=_STORED)
         new = res.diverged & ~out.diverged
         out.diverged_step[new] = k0 + res.diverged_step[new]
         out.diverged |= res.diverged
         states = res.final_states
         if n == N:  # a full batch ended at the chunk's last sample: solve it before the next sample
-            _end_batch(out, states, ident, res.diverged, k0 + n, bound)
+            _end_batch(out, states, ident, (variants, thresholds), res.diverged, k0 + n, bound)
         sig = {s: res[s][:n] for s in res.signals}
         err, x3 = _chunk_errors(sig, t_all[k0:k0 + n], rows, paper, sit.b0)
         w = in_window[k0:k0 + n]
@@ -461,15 +487,17 @@ def _simulate_rows(sit, rows, T, paper, window, keep, exact, bound, progress) ->
     return out
 
 
-def _end_batch(out, states, ident, chunk_diverged, k: int, bound: float) -> None:
+def _end_batch(out, states, ident, configs, chunk_diverged, k: int, bound: float) -> None:
     """The identification's batch-end solve on the final states (in place), with the loop's divergence test.
+
+    ``configs`` is ``(variants, thresholds)``, one of each per run.
 
     A run (not yet diverged in this chunk) whose new LSM result leaves ``|x| <= bound`` is flagged
     as diverged at step ``k`` and its states set to NaN, as the loop does when a state leaves the
     bound in an update.
     """
     x = states["lsm"]
-    ident.identify(x)
+    ident.identify(x, *configs)
     bad = ~np.all(np.abs(x) <= bound, axis=1) & ~chunk_diverged
     new = bad & ~out.diverged
     out.diverged_step[new] = k

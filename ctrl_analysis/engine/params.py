@@ -11,8 +11,9 @@ and gives the engines what they run:
   engine and the derived batched methods read row ``b`` for run ``b``);
 * any other block: the rebuilt block, or groups of runs each with its own rebuilt block.
 
-:func:`take` cuts the per-run values to a chunk of runs, as per-run inputs are cut, so a chunk in
-another process gets exactly its runs' parameters.
+:func:`chunk_functions` gives the numpy engine the per-step functions of a chunk of runs (its rows
+of the per-run values); :func:`take` cuts the per-run values to a chunk of runs, as per-run inputs
+are cut, so a chunk in another process gets exactly its runs' parameters.
 """
 
 from __future__ import annotations
@@ -21,7 +22,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Variant", "resolve", "runs_of", "split", "take"]
+from .._stepcheck import unchecked
+
+__all__ = ["Variant", "chunk_functions", "resolve", "runs_of", "split", "take"]
 
 
 @dataclass(frozen=True)
@@ -225,3 +228,60 @@ def take(params, B: int, loop, lo: int, hi: int):
         shared, per_run = split(placed[name].block, values, B, f"params[{name!r}]")
         out[name] = {**shared, **{k: v[lo:hi] for k, v in per_run.items()}}
     return out
+
+
+def _variant_function(variant, kind: str, lo: int, B: int):
+    """The per-step function of a block under run-time parameters, for runs ``lo:lo+B`` of the call."""
+    if variant.rows is not None and hasattr(variant.block, "batched"):
+        P = variant.rows[lo:lo + B]
+        block = variant.block
+
+        def call(t, x, u, params=None):
+            return block.batched(kind, t, x, u, P)
+
+        return call
+    if variant.groups is not None:
+        parts = []
+        for block, idx in variant.groups:
+            mine = idx[(idx >= lo) & (idx < lo + B)] - lo
+            if mine.size:
+                parts.append((unchecked(block, kind), mine))
+
+        def call(t, x, u, params=None):
+            out = None
+            for f, idx in parts:
+                y = np.asarray(f(t, x[idx], u[idx], None))
+                if out is None:
+                    out = np.empty((x.shape[0],) + y.shape[1:])
+                out[idx] = y
+            return out
+
+        return call
+    return unchecked(variant.block, kind)
+
+
+def chunk_functions(plan: dict, variants: dict, lo: int, B: int) -> dict:
+    """The per-step functions the numpy engine calls for the ``B`` runs from run ``lo`` of the call.
+
+    Parameters
+    ----------
+    plan : dict
+        The loop's plan (``order``, ``stage``, ``discrete``, ``continuous``: ``(block, ic, oc, sl)``).
+    variants : dict of int -> Variant
+        ``id(block)`` -> the block's run-time parameters (:func:`resolve`).
+    lo, B : int
+        The chunk's first run within the call, and its runs.
+
+    Returns
+    -------
+    dict
+        Per key of ``plan``, ``(output or rhs or update function, ic, oc, sl)``: the blocks' unchecked
+        methods, or for a block under run-time parameters a function on the chunk's values.
+    """
+    def fn(block, kind):
+        if id(block) in variants:
+            return _variant_function(variants[id(block)], kind, lo, B)
+        return unchecked(block, kind)
+
+    kinds = {"order": "output", "stage": "output", "discrete": "update", "continuous": "rhs"}
+    return {key: [(fn(b, kind), ic, oc, sl) for b, ic, oc, sl in plan[key]] for key, kind in kinds.items()}

@@ -29,7 +29,7 @@ def simulate_chunks(loop, jobs: int, n_steps: int, held: dict, x, opts: dict, se
     x : ndarray, shape (B, n)
         Initial states of the whole batch.
     opts : dict
-        The remaining keyword arguments of :meth:`Loop.simulate` (incl. ``run_offset``, ``batch_runs``).
+        The remaining keyword arguments of :meth:`Loop.simulate` (``params`` is cut to each chunk's runs).
     seeds : list or None
         Recorded in the response.
 
@@ -46,9 +46,7 @@ def simulate_chunks(loop, jobs: int, n_steps: int, held: dict, x, opts: dict, se
         inputs = {s: (a[:, sl] if a.ndim == 2 else a) for s, a in held.items()}
         x0 = {name: x[sl, bsl] for name, bsl in loop.slices.items()}
         tasks.append((loop, n_steps, dict(opts, inputs=inputs, x0=x0, runs=sl.stop - sl.start, progress=False,
-                                          params=take(opts["params"], x.shape[0], loop, sl.start, sl.stop),
-                                          run_offset=opts["run_offset"] + sl.start,
-                                          batch_runs=opts["batch_runs"] or opts["run_offset"] + x.shape[0])))
+                                          params=take(opts["params"], x.shape[0], loop, sl.start, sl.stop))))
     parts = map_chunks(_simulate_task, tasks, jobs=min(jobs, len(tasks)), desc="batch chunks")
     first = parts[0]
     xs = None if first.x is None else np.concatenate([p.x for p in parts], axis=1)

@@ -27,7 +27,7 @@ import control as ct
 import numpy as np
 
 import ctrl_analysis
-from ctrl_analysis import _kernels, _perrun, _stepcheck, _validate, blocks, cli, parallel, plants, polynomials, progress, report
+from ctrl_analysis import _kernels, _stepcheck, _validate, blocks, cli, parallel, plants, polynomials, progress, report
 from ctrl_analysis import identification as ident
 from ctrl_analysis import loop as loop_mod
 from ctrl_analysis import metrics, report_md, simulate, study
@@ -285,9 +285,6 @@ def build_cases(tmp):
         ("StaticGain", blocks.StaticGain, dict(D=[[1.0, -1.0]], inputs=("r", "y"), outputs=("e",)),
          dict(D=ARR + [[1.0, 2.0], [[1.0]], np.ones((2, 2, 2)), [[NAN, 1.0]]], inputs=[None, 3, ["a", 3]],
               outputs=[None, 3, [1.5]])),
-        ("RowGroups", blocks.RowGroups, dict(blocks=[LPF, LPF], rows=[1, 2]),
-         dict(blocks=[None, 3, [], [None], [LPF, 3]], rows=[None, "ab", [1], [0, 1], [1.5, 1], [1, 2, 3],
-                                  [[0, 1], [1, 2]], [[0], [2]], [[0, 5], [1]], [[0], []], [[0.5], [1]]])),
         ("SampledBlock", blocks.SampledBlock, dict(block=LPF, dt=0.01, method="rk4", substeps=1),
          dict(block=NOT_A_BLOCK + [PLANT], dt=POS, method=CHOICE, substeps=INT + [0, HUGE])),
         ("signal_names", blocks.signal_names, dict(base="x", n=3), dict(base=[None, 3, ""], n=INT + [-1, HUGE])),
@@ -824,6 +821,7 @@ NOT_FUZZED = {
     engine_params.split: "internal half of Loop.simulate(params=...), whose params are fuzzed",
     engine_params.runs_of: "internal half of Loop.simulate(params=...): malformed params give None, then resolve's error",
     engine_params.take: "internal half of Loop.simulate(params=...), whose params are fuzzed",
+    engine_params.chunk_functions: "the numpy engine's internals, called with the plan and values it made",
     loop_mod.LoopResponse: "result record built by Loop.simulate",
     simulate.SimResult: "result record built by the simulators",
     simulate.euler_step: "per-step integrator, unchecked by design",
@@ -877,7 +875,7 @@ NOT_FUZZED = {
     **{getattr(_kernels, name): "compiled per-step kernels and the engine's internals (test_speed_kernels.py)"
        for name in _kernels.__all__},
     **{getattr(module, name): "the engine's internals, called with arrays it made (semantic_cases below)"
-       for module in (_perrun, _stepcheck) for name in module.__all__},
+       for module in (_stepcheck,) for name in module.__all__},
 }
 
 
@@ -924,19 +922,16 @@ def _unfilled_update(t, x, u, p, x_next):
     x_next[0] = x[0] + p[0] * u[0] + p[2]  # p[2]: a slot the block never filled
 
 
-def _per_run_loop(rows):
-    """An IKF with one Q per run (``rows`` of them) in a loop of its own."""
-    filt = ikf.ImprovedKalmanFilter(Q=np.linspace(0.1, 0.5, rows), R=1.0)
-    return loop_mod.Loop([loop_mod.place(filt, "f")], dt=1.0)
-
-
 def _engines_agree(rows, runs, chunk_runs):
-    """Both engines on one call: equal answers, or the same error (then raised)."""
-    loop, outcome = _per_run_loop(rows), {}
+    """An IKF with one Q per run (``rows`` of them, through ``params``) on both engines: equal answers,
+    or the same error (then raised)."""
+    loop = loop_mod.Loop([loop_mod.place(ikf.ImprovedKalmanFilter(Q=0.1, R=1.0), "f")], dt=1.0)
+    params, outcome = {"f": {"Q": np.linspace(0.1, 0.5, rows)}}, {}
     inputs = {s: np.ones((4, runs)) for s in loop.external}
     for engine in ("numpy", "compiled"):
         try:
-            outcome[engine] = loop.simulate(4, inputs=inputs, engine=engine, chunk_runs=chunk_runs)["y_hat"]
+            outcome[engine] = loop.simulate(4, inputs=inputs, params=params, engine=engine,
+                                            chunk_runs=chunk_runs)["y_hat"]
         except ValueError as exc:
             outcome[engine] = str(exc)
     a, b = outcome["numpy"], outcome["compiled"]

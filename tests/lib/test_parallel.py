@@ -148,7 +148,7 @@ def test_loop_chunked_batch_equals_unchunked_bit_for_bit():
             assert np.array_equal(whole[s], part[s])
     kept = loop.simulate(N_STEPS, inputs=inputs, store_signals=["y"], store_states=False, chunk_runs=2)
     assert list(kept.signals) == ["y"] and kept.x is None and np.array_equal(kept["y"], whole["y"])
-    with pytest.raises(ValueError, match="store_signals names unknown signal 'nope'"):
+    with pytest.raises(ValueError, match="names unknown signal 'nope'"):
         loop.simulate(N_STEPS, inputs=inputs, store_signals=["nope"])
 
 

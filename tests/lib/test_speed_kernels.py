@@ -256,30 +256,56 @@ class KOscPerRun(KOsc):
         return BlockKernel(output=osc_output, params=self.P, rhs=osc_rhs)
 
 
-def test_per_run_kernel_params_follow_their_runs_through_chunks_and_processes():
+def test_per_run_params_follow_their_runs_through_chunks_and_processes():
+    """Per-run values given to simulate(params=...): a kernel block (rows) and a static gain (a gain per
+    run) equal their runs alone on both engines, through chunks and processes."""
     from ctrl_analysis.blocks import StaticGain
 
     k = np.array([1.0, 4.0, 9.0, 16.0, 25.0])
     D = np.zeros((5, 1, 2))
     D[:, 0, 0] = 1.0
     D[::2, 0, 1] = 1.0  # runs 0, 2, 4 see the noise, runs 1, 3 do not: a per-run switch
-    loop = Loop([place(KOscPerRun(k), "plant"), place(StaticGain(D, ("y", "v"), ("ym",)), "sw"),
+    loop = Loop([place(KOsc(), "plant"), place(StaticGain([[1.0, 0.0]], ("y", "v"), ("ym",)), "sw"),
                  place(KAcc(0.01), "acc", inputs=["ym"])], dt=0.01)
+    params = {"plant": {"k": k}, "sw": {"D": D}}
     noise = draw_noise(run_seeds(1, 5), 300, gaussian_noise([0.0, 0.1]))
     inputs = {"w": 0.0, "v": noise[:, :, 1]}
-    a = loop.simulate(300, inputs=inputs, engine="numpy")
-    b = loop.simulate(300, inputs=inputs, engine="compiled")
-    c = loop.simulate(300, inputs=inputs, engine="compiled", chunk_runs=2)
-    d = loop.simulate(300, inputs=inputs, engine="compiled", jobs=2)
-    for r in (b, c, d):
+    a = loop.simulate(300, inputs=inputs, params=params, engine="numpy")
+    b = loop.simulate(300, inputs=inputs, params=params, engine="compiled")
+    c = loop.simulate(300, inputs=inputs, params=params, engine="compiled", chunk_runs=2)
+    d = loop.simulate(300, inputs=inputs, params=params, engine="compiled", jobs=2)
+    e = loop.simulate(300, inputs=inputs, params=params, engine="numpy", chunk_runs=2)
+    for r in (b, c, d, e):
         assert np.array_equal(a.x, r.x) and np.array_equal(a["ym"], r["ym"])
+    for i in range(5):  # run i = the loop with run i's values, alone
+        alone = loop.simulate(300, inputs={"w": 0.0, "v": noise[:, i, 1]}, engine="compiled",
+                              params={"plant": {"k": k[i]}, "sw": {"D": D[i]}})
+        assert np.array_equal(alone.x[:, 0], a.x[:, i])
     # each run oscillates at its own frequency sqrt(k) (damped, c = 0.4): zero crossings of x ~ 2 f T
     crossings = (np.diff(np.sign(a.x[:, :, 0]), axis=0) != 0).sum(axis=0)
     assert np.all(np.diff(crossings) > 0)
     assert np.array_equal(a["ym"][:, 1], a["y"][:, 1]) and not np.array_equal(a["ym"][:, 0], a["y"][:, 0])
-    for runs in (4, 6):  # blocks built for 5 runs: a batch of another size is refused, not silently cut
-        with pytest.raises(ValueError, match="describe 5 runs, but the batch has"):
-            loop.simulate(300, inputs={"w": 0.0, "v": 0.0}, runs=runs, engine="compiled")
+    for runs in (4, 6):  # values for 5 runs: a batch of another size is refused, not silently cut
+        with pytest.raises(ValueError, match=f"the batch's {runs} runs"):
+            loop.simulate(300, inputs={"w": 0.0, "v": 0.0}, runs=runs, params=params, engine="compiled")
+
+
+def test_a_block_holding_its_own_per_run_rows_runs_whole():
+    """A block whose kernel parameters are (B, n_p) rows it built itself (the arena's adapters) runs on
+    both engines for exactly B runs, as one chunk in one process; anything else is refused."""
+    k = np.array([1.0, 4.0, 9.0])
+    loop = Loop([place(KOscPerRun(k), "plant"), place(KAcc(0.01), "acc")], dt=0.01)
+    inputs = {"w": 0.0, "v": 0.0}
+    a = loop.simulate(200, inputs=inputs, runs=3, engine="numpy", max_bytes=1.0)  # memory chunks: stepped whole
+    b = loop.simulate(200, inputs=inputs, runs=3, engine="compiled")
+    assert np.array_equal(a.x, b.x)
+    alone = Loop([place(KOsc(9.0), "plant"), place(KAcc(0.01), "acc")], dt=0.01).simulate(200, inputs=inputs)
+    assert np.array_equal(alone.x[:, 0], b.x[:, 2])
+    with pytest.raises(ValueError, match="hold kernel parameters for that many runs, but the batch has 4"):
+        loop.simulate(200, inputs=inputs, runs=4)
+    for kw in ({"chunk_runs": 2}, {"jobs": 2}):
+        with pytest.raises(ValueError, match="stepped whole"):
+            loop.simulate(200, inputs=inputs, runs=3, **kw)
 
 
 def test_static_gain_kernel_equals_its_numpy_output():
@@ -288,19 +314,20 @@ def test_static_gain_kernel_equals_its_numpy_output():
 
     rng = np.random.default_rng(3)
     u = rng.normal(size=(7, 3))
-    for D in (rng.normal(size=(2, 3)), rng.normal(size=(7, 2, 3))):
-        g = StaticGain(D, ("a", "b", "c"), ("p", "q"))
-        y = g.output(0.0, np.zeros((7, 0)), u)
-        np.testing.assert_allclose(y, (D @ u.T).T if D.ndim == 2 else np.einsum("bij,bj->bi", D, u), rtol=1e-14)
-        k = g.kernel()
-        P = k.params if k.params.ndim == 2 else np.broadcast_to(k.params, (7, k.params.size))
-        for fn in (gain_output, _kernels._jit(gain_output)):
-            out = np.empty((7, 2))
-            for b in range(7):
-                fn(0.0, np.zeros(0), u[b], P[b], out[b])
-            assert np.array_equal(out, y)
+    D = rng.normal(size=(2, 3))
+    g = StaticGain(D, ("a", "b", "c"), ("p", "q"))
+    y = g.output(0.0, np.zeros((7, 0)), u)
+    np.testing.assert_allclose(y, (D @ u.T).T, rtol=1e-14)
+    k = g.kernel()
+    for fn in (gain_output, _kernels._jit(gain_output)):
+        out = np.empty((7, 2))
+        for b in range(7):
+            fn(0.0, np.zeros(0), u[b], k.params, out[b])
+        assert np.array_equal(out, y)
     with pytest.raises(ValueError, match=r"D must have shape \(p, m\) = \(1, 2\)"):
         StaticGain(np.ones((2, 2)), ("a", "b"), ("y",))
+    with pytest.raises(ValueError, match=r"a gain per run is given to Loop.simulate"):
+        StaticGain(np.ones((3, 1, 2)), ("a", "b"), ("y",))
     with pytest.raises(ValueError, match="D must .*finite"):
         StaticGain([[np.nan, 1.0]], ("a", "b"), ("y",))
 

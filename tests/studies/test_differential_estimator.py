@@ -136,29 +136,41 @@ def test_stable_preset_is_the_smallest_integer_a_with_the_margin():
 
 
 @pytest.mark.parametrize("compiled", [False, True])
-def test_example2_kernels_are_the_numpy_methods(compiled):
-    """Plant (20) and Σ on groups of rows: the per-run kernels, run by run, equal the batched numpy methods."""
-    from ctrl_analysis._kernels import _jit
+def test_example2_kernels_with_per_run_rows_equal_each_runs_own_block(compiled):
+    """Plant (20) and Σ with per-run values: the kernels run by run (plain or jitted), on the rows
+    ``simulate(params=...)`` packs, equal the batched methods and each run's own block bit for bit."""
+    from ctrl_analysis._kernels import _jit, kernel_of
+    from ctrl_analysis._stepcheck import unchecked
+    from ctrl_analysis.engine.params import resolve
 
     rng = np.random.default_rng(7)
     B = 6
     b = (rng.normal(scale=10, size=B), rng.normal(scale=10, size=B), rng.uniform(0.1, 10, size=B))
-    sigma = loops.SigmaRows([DifferentialEstimator(5, 5.0), DifferentialEstimator(5, 34.0)], [2, 4])
-    for block, n_u in ((loops.Plant20(EX2, b), 2), (loops.Plant20(EX2), 2), (sigma, 1)):
-        k = block.kernel()
+    a = np.array([5.0, 5.0, 34.0, 34.0, 34.0, 34.0])
+    loop = loops.example2_loop(EX2)
+    variants = resolve(loop, loops.example2_params(EX2, a, b), B)
+    own = {"plant": [loops.Plant20(EX2, (b[0][r], b[1][r], b[2][r])) for r in range(B)],
+           "sigma": [DifferentialEstimator(EX2.n0, a[r], reading="state") for r in range(B)]}
+    for name, n_u in (("plant", 2), ("sigma", 1)):
+        v, first = variants[name], own[name][0]
+        k = kernel_of(first)
         rhs = _jit(k.rhs) if compiled else k.rhs
-        x, u = rng.normal(size=(B, block.n_states)), rng.normal(size=(B, n_u))
+        x, u = rng.normal(size=(B, first.n_states)), rng.normal(size=(B, n_u))
         for t in (0.5, 3.2, 6.4):  # w = sign(cos(0.5 t)) = +1, 0-crossing side, -1
             dx = np.empty_like(x)
             for r in range(B):
-                rhs(t, x[r], u[r], k.params[r] if np.ndim(k.params) == 2 else k.params, dx[r])
-            assert np.array_equal(dx, block.rhs(t, x, u))  # bit for bit
+                rhs(t, x[r], u[r], v.rows[r], dx[r])
+            alone = np.concatenate([unchecked(blk, "rhs")(t, x[r:r + 1], u[r:r + 1], None)
+                                    for r, blk in enumerate(own[name])])
+            assert np.array_equal(dx, alone)  # bit for bit
+            if name == "plant":
+                assert np.array_equal(dx, v.block.batched("rhs", t, x, u, v.rows))
     # (20) written out, and Σ's rows use their own a
-    plant = loops.Plant20(EX2, b)
     x, u = rng.normal(size=(B, 3)), rng.normal(size=(B, 2))
     x3 = b[0] * x[:, 0] - (b[1] - x[:, 0] ** 2) * x[:, 1] - b[2] * x[:, 2] * np.abs(x[:, 2]) + EX2.w_amp + u.sum(1)
-    np.testing.assert_allclose(plant.rhs(0.0, x, u)[:, 2], x3, rtol=1e-12, atol=1e-12)
-    np.testing.assert_array_equal(sigma.kernel().params[3], DifferentialEstimator(5, 34.0).a_coeffs)
+    np.testing.assert_allclose(variants["plant"].block.batched("rhs", 0.0, x, u, variants["plant"].rows)[:, 2], x3,
+                               rtol=1e-12, atol=1e-12)
+    np.testing.assert_array_equal(variants["sigma"].rows[3], DifferentialEstimator(5, 34.0).a_coeffs)
 
 
 def test_example2_loop_compiled_equals_numpy_with_a_grid_and_two_presets():
@@ -180,7 +192,7 @@ def test_example2_loop_compiled_equals_numpy_with_a_grid_and_two_presets():
     np.testing.assert_array_equal(b["traces"]["x1"], b["sig"]["x1"][:, b["pick"]])
     from ctrl_analysis._kernels import kernel_of
 
-    loop = loops.example2_loop(p, (5.0, 34.0), (1, 1), b=([1.0, 2.0], [2.0, 2.0], [1.0, 1.0]))
+    loop = loops.example2_loop(p)
     assert all(kernel_of(pl.block) is not None for pl in loop.placed)  # "auto" ran the compiled engine
     assert np.ptp(b["sig"]["u"][:, 0] - b["sig"]["u"][:, 4]) > 0  # the presets differ (Σ a = 5 vs 34)
 

@@ -227,3 +227,15 @@ def test_sensitivity_marks_the_fig2_claim_as_depending_on_q():
     assert c.depends_on[0]["flips_at"] == [0.1] and c.depends_on[0]["verdict_there"] == ["holds"]
     assert res.get_claim("ikf-best-varying").verdict == "holds"
     assert set(res.get_claim("ikf-best-varying").robust_to) == {"ex1.Q", "ex2.rearm"}
+
+
+@pytest.mark.parametrize("scheme, name, values", [("ikf_mfac", "R", (0.01, 0.1)), ("d_mfac", "rho", (0.5, 1.0))])
+def test_per_run_sweep_values_equal_the_runs_alone(scheme, name, values):
+    """A sweep's per-run ρ, λ, Q or R go to simulate(params=...): each run equals the loop built with its value."""
+    v = noise_draws(EX1, [0, 1])
+    batch = run_scheme(dataclasses.replace(EX1, **{name: np.repeat(values, 2)}), scheme, np.tile(v, (1, 2)),
+                       engine="numpy")
+    for i, value in enumerate(values):
+        alone = run_scheme(dataclasses.replace(EX1, **{name: value}), scheme, v, engine="numpy")
+        np.testing.assert_array_equal(batch.y[:, 2 * i:2 * i + 2], alone.y)
+    assert not np.array_equal(batch.y[:, :2], batch.y[:, 2:])

@@ -69,7 +69,8 @@ def test_gram_solution_equals_batch_least_squares_on_the_raw_batch():
 def test_identification_block_identifies_every_N_samples_and_accumulates_the_literal_rule():
     xh1, xh2, xh3, u, _f, _kbar = _synthetic_batch(N=40)
     N, h = 20, 0.1
-    block = BatchIdentification(N, h, 3.0, [100.0, 20.0, 1.0], "reduced", ["none", "wellposed", "literal"])
+    block = BatchIdentification(N, h, 3.0, [100.0, 20.0, 1.0], "reduced")
+    variants = ["none", "wellposed", "literal"]
     # Θ_used = [0.3, −0.2, 0, 0.1] gives f; the block's inputs: x̂1..3, u, Θ_used
     useq = np.stack([xh1, xh2, xh3, u, 0.3 + 0 * u, -0.2 + 0 * u, 0 * u, 0.1 + 0 * u], axis=1)
     batch = np.repeat(useq[:, None, :], 3, axis=1)
@@ -81,7 +82,7 @@ def test_identification_block_identifies_every_N_samples_and_accumulates_the_lit
     phi[:, 4] = 0.3 * xh1[:N] - 0.2 * xh2[:N] + 0.1                               # f from Θ_used
     np.testing.assert_allclose(G[1], phi.T @ phi / N, rtol=1e-12, atol=1e-14)
     x1 = x[N].copy()
-    block.identify(x1)                                  # the batch end
+    block.identify(x1, variants, 100.0)                 # the batch end
     np.testing.assert_array_equal(x1[:, 6:], 0.0)       # the Gram restarts
     np.testing.assert_array_equal(x1[0, :6], 0.0)       # "none": the ESO, Θ ≡ 0
     np.testing.assert_allclose(x1[1, :4], [1.3, -1.6, 0.0, 0.7], atol=2e-3)
@@ -89,10 +90,12 @@ def test_identification_block_identifies_every_N_samples_and_accumulates_the_lit
     y2, x2 = block.run(batch[N:], x0=x1, t=h * np.arange(N, 2 * N))
     np.testing.assert_array_equal(y2[:, 2, :4], np.repeat(x1[None, 2, :4], N, axis=0))   # held over the batch
     x2 = x2[N].copy()
-    block.identify(x2)
+    block.identify(x2, variants, [100.0] * 3)
     np.testing.assert_allclose(x2[2, :4], 2 * x1[2, :4], rtol=0.05)   # literal: Θ̂_1 + Θ̂_2 ≈ 2 Θ̂_1
     with pytest.raises(ValueError, match="variants"):
-        BatchIdentification(N, h, 3.0, [100.0, 20.0, 1.0], "reduced", ["bogus"])
+        block.identify(x2, ["bogus"] * 3, 100.0)
+    with pytest.raises(ValueError, match="one entry per run"):
+        block.identify(x2, variants[:2], 100.0)
 
 
 @pytest.mark.parametrize("key,T,expected", [
@@ -208,44 +211,58 @@ def test_claim_verdicts_of_a_small_run_and_the_sweep_flips(tmp_path):
     assert "s2.theta_rel_error.end" in result.get_claim("s2-theta-converges").evidence
 
 
+def _model_term(t, x_hat, u, params=None):
+    # (29) XᵀΘ with X = [x̂1, x̂2, u, 1]; u = [y, u, θ1, θ2, θ3, θ4]
+    return u[:, 2] * x_hat[:, 0] + u[:, 3] * x_hat[:, 1] + u[:, 4] * u[:, 1] + u[:, 5]
+
+
 @pytest.mark.parametrize("compiled", [False, True])
-def test_kernels_are_the_numpy_methods(compiled):
-    """Plant, (M)ESO and Gram update: each kernel run by run (plain or jitted) = the block's batched method."""
-    from ctrl_analysis._kernels import _jit
+def test_kernels_with_per_run_rows_equal_the_blocks_built_for_each_run(compiled):
+    """Plant, (M)ESO, path and Gram update: the batched methods on per-run parameter rows (as the engine
+    passes ``params=``) = each run's own block = its kernel run alone (plain or jitted); the (M)ESO
+    equals the library's ESO with the model as its known part, bit for bit."""
     from analysis.meso.loops import ModelledESO, ParameterPath, Plant
+    from ctrl_analysis._kernels import _jit
+    from ctrl_analysis._stepcheck import unchecked
+    from ctrl_analysis.estimators.eso import ExtendedStateObserver
 
     rng = np.random.default_rng(7)
-    B = 6
-    rows = [Row("meso", "wellposed", None, epsilon=e, b_plant=b)
-            for e, b in zip((0.05, 0.1, 0.05, 0.025, 0.1, 0.05), (3.95, 4.9, 3.0, 3.95, 3.95, 4.2))]
-    ident = BatchIdentification(20, 0.003, 3.0, [100.0, 20.0, 1.0], "full", ["wellposed"] * B)
-    blocks = [(Plant(PAPER, [r.b_plant for r in rows]), "rhs"), (ModelledESO(PAPER, 3.0, [r.epsilon for r in rows]), "rhs"),
-              (ident, "update")]
-    for block, kind in blocks:
-        k = block.kernel()
-        fn = getattr(k, kind)
-        out_fn = _jit(k.output) if compiled else k.output
-        fn = _jit(fn) if compiled else fn
-        x = rng.normal(size=(B, len(block.states)))
-        u = rng.normal(size=(B, len(block.inputs)))
-        got, y = np.empty_like(x), np.empty((B, len(block.outputs)))
-        for b in range(B):
-            p = k.params[b] if np.ndim(k.params) == 2 else k.params
-            fn(0.1, x[b], u[b], p, got[b])
-            out_fn(0.1, x[b], u[b], p, y[b])
-        assert np.array_equal(got, getattr(block, kind)(0.1, x, u)), type(block).__name__
-        assert np.array_equal(y, block.output(0.1, x, u)), type(block).__name__
-    path = ParameterPath([True, False, False, True, False, True])
-    k, up = path.kernel(), rng.normal(size=(B, 8))
-    fn = _jit(k.output) if compiled else k.output
-    y = np.empty((B, 4))
-    for b in range(B):
-        fn(0.1, np.empty(0), up[b], k.params[b], y[b])
-    assert np.array_equal(y, path.output(0.1, np.empty((B, 0)), up)) and np.array_equal(y[1], up[1, 4:])
+    eps = (0.05, 0.1, 0.05, 0.025, 0.1, 0.05)
+    B = len(eps)
+    per_run = {
+        "plant": ([Plant(PAPER, b) for b in (3.95, 4.9, 3.0, 3.95, 3.95, 4.2)], "rhs"),
+        "observer": ([ModelledESO(PAPER, 3.0, e) for e in eps], "rhs"),
+        "path": ([ParameterPath(f) for f in (True, False, False, True, False, True)], "output"),
+        "lsm": ([BatchIdentification(20, 0.003, 3.0, [100.0, 20.0, 1.0], "full")] * B, "update"),
+    }
+    for name, (blocks, kind) in per_run.items():
+        first = blocks[0]
+        P = np.stack([b.kernel_params for b in blocks])
+        fns = {k: getattr(first.kernels, k) for k in (kind, "output")}
+        fns = {k: (_jit(f) if compiled else f) for k, f in fns.items()}
+        x = rng.normal(size=(B, len(first.states)))
+        u = rng.normal(size=(B, len(first.inputs)))
+        for k, fn in fns.items():
+            got = np.empty((B, len(first.outputs) if k == "output" else x.shape[1]))
+            for b in range(B):
+                fn(0.1, x[b], u[b], P[b], got[b])
+            assert np.array_equal(got, first.batched(k, 0.1, x, u, P)), (name, k)
+            own = np.concatenate([getattr(blk, k)(0.1, x[b:b + 1], u[b:b + 1]) for b, blk in enumerate(blocks)])
+            assert np.array_equal(got, own), (name, k)
+        if name == "observer":
+            esos = [ExtendedStateObserver.from_epsilon(PAPER.n, e, PAPER.beta, b0=3.0, known=_model_term) for e in eps]
+            # the library ESO reads [y, u] and hands the whole u (Θ after them) to the model term
+            ref = np.concatenate([unchecked(o, "rhs")(0.1, x[b:b + 1], u[b:b + 1], None) for b, o in enumerate(esos)])
+            assert np.array_equal(ref, first.batched("rhs", 0.1, x, u, P))
+        if name == "path":
+            y = first.batched("output", 0.1, x, u, P)
+            assert np.array_equal(y[0], u[0, :4]) and np.array_equal(y[1], u[1, 4:])
     # the Gram update adds φφᵀ/N of the block's own regressors
+    ident = per_run["lsm"][0][0]
+    x, u = rng.normal(size=(B, 55)), rng.normal(size=(B, 8))
     phi = ident.phi(u)
-    np.testing.assert_allclose(got[:, 6:] - x[:, 6:], (phi[:, :, None] * phi[:, None, :]).reshape(B, -1) / 20,
-                               rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(ident.update(0.1, x, u)[:, 6:] - x[:, 6:],
+                               (phi[:, :, None] * phi[:, None, :]).reshape(B, -1) / 20, rtol=1e-12, atol=1e-12)
 
 
 def test_compiled_engine_equals_numpy_engine(monkeypatch):
