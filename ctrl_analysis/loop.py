@@ -548,8 +548,11 @@ class Loop:
         """The same arrangement as a ``control.interconnect`` (for one trace).
 
         All blocks must be continuous (or static), giving a continuous system, or all discrete (or
-        static), giving a discrete system with the loop's ``dt``. Inputs are the loop's external
-        inputs, outputs its ``outputs``.
+        static), giving a discrete system with the loop's ``dt``. The system's inputs are the loop's
+        external inputs **in the order of** ``self.external`` (the order in which the placed blocks
+        first read them, never sorted by name), so row ``i`` of the input array given to
+        :func:`control.input_output_response` is ``external[i]``; its outputs are the loop's
+        ``outputs``, in that order.
 
         Parameters
         ----------
@@ -559,11 +562,21 @@ class Loop:
         Returns
         -------
         control.InterconnectedSystem
+            With ``input_labels == list(self.external)`` and ``output_labels == list(self.outlist)``.
 
         Raises
         ------
         ValueError
             If the loop mixes continuous and discrete blocks.
+
+        Examples
+        --------
+        Inputs declared ``r`` then ``TL`` stay in that order (not sorted: ``"TL" < "r"``):
+
+        >>> from ctrl_analysis.blocks import StaticGain
+        >>> loop = Loop([place(StaticGain([[1.0, -1.0]], ("r", "TL"), ("e",)), "err")], dt=0.1)
+        >>> loop.external, loop.interconnect().input_labels
+        (('r', 'TL'), ['r', 'TL'])
         """
         import control as ct
 

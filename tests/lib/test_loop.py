@@ -4,7 +4,13 @@ import control as ct
 import numpy as np
 import pytest
 
-from ctrl_analysis.blocks import ContinuousBlock, DiscreteBlock, SampledBlock, StaticBlock
+from ctrl_analysis.blocks import (
+    ContinuousBlock,
+    DiscreteBlock,
+    SampledBlock,
+    StaticBlock,
+    StaticGain,
+)
 from ctrl_analysis.estimators.differential import DifferentialEstimator
 from ctrl_analysis.estimators.kalman import AlphaBetaFilter, kalata_gains
 from ctrl_analysis.loop import Loop, place
@@ -79,6 +85,35 @@ def test_discrete_block_engine_equals_control_interconnect():
     for b in (0, 3):
         resp = ct.input_output_response(sys, res.t[:300], np.stack([acc, v[:, b]]))
         np.testing.assert_allclose(res.to_timeresponse(b).outputs[:, :300], resp.outputs, rtol=1e-12, atol=1e-12)
+
+
+class Motor(DiscreteBlock):
+    """w(k+1) = 0.9 w(k) + 0.1 tau(k) - 0.5 TL(k): a sampled motor speed with a load torque TL."""
+
+    inputs, outputs, states = ("tau", "TL"), ("w",), ("w",)
+
+    def update(self, t, x, u, params=None):
+        return 0.9 * x + 0.1 * u[:, :1] - 0.5 * u[:, 1:]
+
+
+def test_interconnect_keeps_the_declared_input_order_and_the_engine_numbers():
+    # r is read first (by the controller), TL second (by the motor): declared order r, TL, while
+    # sorting by name would give ['TL', 'r'] ('T' < 'r')
+    loop = Loop([place(StaticGain([[2.0, -2.0]], ("r", "w"), ("tau",)), "ctrl"), place(Motor(), "motor")], dt=0.1)
+    assert loop.external == ("r", "TL")
+    sys = loop.interconnect()
+    assert sys.input_labels == ["r", "TL"]
+    assert sys.output_labels == list(loop.outlist)
+    n = 80
+    r = np.where(np.arange(n + 1) < 10, 0.0, 1.0)
+    TL = 0.3 * np.sin(0.2 * np.arange(n + 1))
+    res = loop.simulate(n, inputs={"r": r, "TL": TL})
+    stacked = np.stack([r, TL])  # [r, TL], the declared order
+    resp = ct.input_output_response(sys, res.t, stacked)
+    np.testing.assert_allclose(resp.outputs, res.to_timeresponse(0).outputs, rtol=1e-12, atol=1e-12)
+    # the two inputs act differently, so the other order would have been caught
+    swapped = ct.input_output_response(sys, res.t, stacked[::-1])
+    assert np.max(np.abs(swapped.outputs - resp.outputs)) > 0.1
 
 
 def test_batch_equals_stacked_single_runs_bit_for_bit():
