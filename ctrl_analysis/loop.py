@@ -43,7 +43,7 @@ from ._validate import (
     check_real,
     check_str,
 )
-from .blocks import Block, ContinuousBlock, DiscreteBlock
+from .blocks import Block, ContinuousBlock, DiscreteBlock, check_states_declared
 from .response import LoopResponse
 from .simulate import (
     CHUNK_BYTES,
@@ -129,8 +129,9 @@ class Loop:
     Raises
     ------
     ValueError
-        Two blocks with one name, a signal produced twice, or an algebraic loop (a cycle of
-        feedthrough blocks).
+        Two blocks with one name, a signal produced twice, an algebraic loop (a cycle of
+        feedthrough blocks), or a continuous or discrete block that declares no ``states``
+        (:func:`~ctrl_analysis.blocks.check_states_declared`).
 
     Examples
     --------
@@ -156,6 +157,8 @@ class Loop:
         placed = [b if isinstance(b, Placed) else place(b, f"b{i}") for i, b in enumerate(blocks)]
         if not placed:
             raise ValueError("blocks must contain at least one block")
+        for p in placed:
+            check_states_declared(p.block, p.name)
         names = [p.name for p in placed]
         if len(set(names)) != len(names):
             raise ValueError(f"blocks: block names must be unique, got {names}")

@@ -219,6 +219,7 @@ class ParameterPath(DiscreteBlock):
 
     inputs = signal_names("c", 4) + signal_names("w", 4)
     outputs = signal_names("theta", 4)
+    states = ()
     feedthrough = True
 
     def __init__(self, bypass):

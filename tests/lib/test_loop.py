@@ -116,6 +116,31 @@ def test_interconnect_keeps_the_declared_input_order_and_the_engine_numbers():
     assert np.max(np.abs(swapped.outputs - resp.outputs)) > 0.1
 
 
+def test_a_block_with_state_that_declares_no_states_is_a_clear_error():
+    class Forgot(DiscreteBlock):  # x(k+1) = x(k) + r(k), but no `states`: Block.states = () is inherited
+        inputs, outputs = ("r",), ("s",)
+
+        def update(self, t, x, u, params=None):
+            return x + u
+
+    class ForgotToo(ContinuousBlock):
+        inputs, outputs = ("r",), ("s",)
+
+        def rhs(self, t, x, u, params=None):
+            return u
+
+    rule = r"declares no states: a {} must name its states, e.g. states = \('x',\)"
+    with pytest.raises(ValueError, match=r"block 'acc' \(Forgot\) " + rule.format("DiscreteBlock")):
+        Loop([place(Forgot(), "acc")], dt=1.0)
+    with pytest.raises(ValueError, match=r"block 'int' \(ForgotToo\) " + rule.format("ContinuousBlock")):
+        Loop([place(ForgotToo(), "int")], dt=1.0)
+    with pytest.raises(ValueError, match=r"block Forgot declares no states"):
+        Forgot().run(np.ones(3))
+    # a block whose state is really empty says so (states = ()), and runs
+    res = Loop([place(Oscillator(2.0), "plant"), place(_Gain(), "k")], dt=0.01).simulate(3)
+    np.testing.assert_array_equal(res["f"][:, 0], -3.0 * res["y"][:, 0])
+
+
 def test_batch_equals_stacked_single_runs_bit_for_bit():
     T = 0.1
     alpha, beta = kalata_gains(0.3)
