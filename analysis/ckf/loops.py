@@ -15,7 +15,7 @@ from ctrl_analysis.blocks import StaticGain
 from ctrl_analysis.controllers.golden_section import GoldenSectionController
 from ctrl_analysis.estimators.kalman import CharacteristicKalmanFilter
 from ctrl_analysis.estimators.lowpass import LowPassFilter
-from ctrl_analysis.identification import ArxRegressor, RecursiveLeastSquares
+from ctrl_analysis.identification import ArxRegressor, RecursiveLeastSquaresBlock
 from ctrl_analysis.loop import Loop, place
 from ctrl_analysis.plants import DiscreteLTI
 from ctrl_analysis.simulate import draw_noise, gaussian_noise, run_seeds
@@ -137,8 +137,8 @@ def build_loop(p, sel, plant=None) -> Loop:
         place(FeedbackSwitch(D_fb, p.t_filter, ("y_m", "y_lpf", "y_ckf"), ("y_fb",)), "select"),
         place(StaticGain(D_id, ("y_m", "y_lpf", "y_fb"), ("s_id",)), "idsignal"),
         place(ArxRegressor(2, 1, lag=0), "regressor", inputs=["s_id", "u"], outputs=["z", "h0", "h1", "h2"]),
-        place(RecursiveLeastSquares(3, p.forgetting, p.P0_rls, p.theta0, lower=lo, upper=hi,
-                                    max_trace=p.max_trace, feedthrough=False), "rls",
+        place(RecursiveLeastSquaresBlock(3, p.forgetting, p.P0_rls, p.theta0, lower=lo, upper=hi,
+                                         max_trace=p.max_trace, feedthrough=False), "rls",
               inputs=["z", "h0", "h1", "h2"], outputs=["f1", "f2", "g0"]),
         place(GoldenSectionController(p.k_I, p.c2, mu=p.mu, l1=p.l1, l2=p.l2), "ctrl",
               inputs=["y_fb", "r", "f1", "f2", "g0"], outputs=["u"]),
