@@ -246,7 +246,7 @@ def test_evaluate_flips_the_fair_claim_with_the_fal_exponents():
 def test_quick_run_smoke(tmp_path):
     ctx = StudyContext(out_dir=tmp_path, quick=True, runs=2, seed=5)
     ex2 = replace(EX2, T=1.0, sweep_b1=(-10.0, 0.0, 10.0), sweep_b2=(2.0,), sweep_b3=(1.0,))
-    result = run(ctx, ex1=replace(EX1, T=0.4, t_sens=0.2), ex2=ex2)
+    result = run(ctx, params={"ex1": replace(EX1, T=0.4, t_sens=0.2), "ex2": ex2})
     ids = {q.id for q in result.quantities}
     assert {"eq9.gain_K", "ex1.sigma.mean_abs_err_x1", "ex1.eso_over_sigma_x2", "ex1.fair.equal_bw.leso.mean_abs_err_x2",
             "ex1.tradeoff.sigma.err_x2", "ex1.n0_sweep.fixed_a.err_x1", "ex2.literal.max_real_eig",

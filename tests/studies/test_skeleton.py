@@ -53,7 +53,7 @@ def test_batch_equals_single_runs():
 
 def test_run_writes_results_json(tmp_path):
     ctx = StudyContext(out_dir=tmp_path, runs=20, seed=1)
-    result = run(ctx, params=SMALL)
+    result = run(ctx, params={"ex": SMALL})
     write_results_json(result, tmp_path)
     data = json.loads((tmp_path / "results.json").read_text(encoding="utf-8"))
     assert data["study"] == INFO.name
