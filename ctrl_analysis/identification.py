@@ -581,8 +581,8 @@ class ArxRegressor(ColumnKernels, DiscreteBlock):
     lag : int
         Age ``d`` of the regression (>= 0).
 
-    Block signals: inputs ``s, u``; outputs ``z, h[0..na+nb-1]``; states ``s[1..na+d]`` (``s(k−i)``)
-    and ``u[1..nb+d]`` (``u(k−i)``).
+    Block signals: inputs ``s, u``; outputs ``z, h[0..na+nb-1]``; states ``s_prev[0..na+d-1]``
+    (``s_prev[i] = s(k−1−i)``) and ``u_prev[0..nb+d-1]`` (``u(k−1−i)``).
 
     Raises
     ------
@@ -607,8 +607,7 @@ class ArxRegressor(ColumnKernels, DiscreteBlock):
         if self.na + self.nb < 1:
             raise ValueError(f"na + nb must be >= 1, got na={na}, nb={nb}")
         self.ns, self.nu = self.na + self.lag, self.nb + self.lag
-        self.states = (tuple(f"s[{i}]" for i in range(1, self.ns + 1))
-                       + tuple(f"u[{i}]" for i in range(1, self.nu + 1)))
+        self.states = signal_names("s_prev", self.ns) + signal_names("u_prev", self.nu)
         self.outputs = ("z",) + signal_names("h", self.na + self.nb)
         self.feedthrough = self.lag == 0
         self._p = np.array([self.na, self.nb, self.lag], dtype=float)

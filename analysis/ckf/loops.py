@@ -136,10 +136,10 @@ def build_loop(p, sel, plant=None) -> Loop:
               inputs=["y_m", "u_prev", "f1", "f2", "g0"], outputs=["y_ckf", "y_ckf_prev"]),
         place(FeedbackSwitch(D_fb, p.t_filter, ("y_m", "y_lpf", "y_ckf"), ("y_fb",)), "select"),
         place(StaticGain(D_id, ("y_m", "y_lpf", "y_fb"), ("s_id",)), "idsignal"),
-        place(ArxRegressor(2, 1, lag=0), "regressor", inputs=["s_id", "u"], outputs=["z", "h0", "h1", "h2"]),
+        place(ArxRegressor(2, 1, lag=0), "regressor", inputs=["s_id", "u"]),  # outputs z, h[0], h[1], h[2]
         place(RecursiveLeastSquaresBlock(3, p.forgetting, p.P0_rls, p.theta0, lower=lo, upper=hi,
                                          max_trace=p.max_trace, feedthrough=False), "rls",
-              inputs=["z", "h0", "h1", "h2"], outputs=["f1", "f2", "g0"]),
+              outputs=["f1", "f2", "g0"]),  # reads z, h[0..2]; θ = [f1, f2, g0], the characteristic model's names
         place(GoldenSectionController(p.k_I, p.c2, mu=p.mu, l1=p.l1, l2=p.l2), "ctrl",
               inputs=["y_fb", "r", "f1", "f2", "g0"], outputs=["u"]),
     ]

@@ -128,14 +128,14 @@ def _example1(ctx, result, p, runs):
     example1.n0_sweep(result, p, d)
     example1.eso_divergence(result, p, seeds)
     b = int(np.flatnonzero(d["ok"])[0]) if d["ok"].any() else 0
-    t, s = p.h * np.arange(d["sig"]["x1"].shape[0]), d["sig"]
-    ctx.save_figure(result, figures.plot_x2(t, s["x2"][:, b], s["sig[1]"][:, b], f"Fig. 3 — Example 1: x2 and Σ's "
+    t, s = p.h * np.arange(d["sig"]["x[0]"].shape[0]), d["sig"]
+    ctx.save_figure(result, figures.plot_x2(t, s["x[1]"][:, b], s["sig[1]"][:, b], f"Fig. 3 — Example 1: x2 and Σ's "
                     f"estimate z2 (n0 = {p.n0}, a = {p.a:g}; seed {seeds[b]})", r"$\hat x_2 = z_2$ (Σ)"),
                     "fig3_sigma_x2.png",
                     caption="Redraws the paper's Fig. 3 (Example 1): the true x2 and Σ's estimate z2 (state reading) "
                             "in one run, the error, and a 0.5 s zoom; its mean error over the runs is the §4 Example 1 Σ "
                             "|ε̄2| cell.")
-    ctx.save_figure(result, figures.plot_x2(t, s["x2"][:, b], s["eso0[1]"][:, b], f"Fig. 4 — Example 1: x2 and "
+    ctx.save_figure(result, figures.plot_x2(t, s["x[1]"][:, b], s["eso[0][1]"][:, b], f"Fig. 4 — Example 1: x2 and "
                     f"Han's nonlinear ESO estimate (textbook gains; seed {seeds[b]})", r"$\hat x_2$ (ESO)"),
                     "fig4_eso_x2.png",
                     caption="Redraws the paper's Fig. 4 (Example 1): the true x2 and the estimate of Han's nonlinear "
@@ -165,8 +165,8 @@ def _example2(ctx, result, p, runs):
     s, t, per = d["sig"], d["t"], d["per"]
     pick, tr = d["pick"], d["traces"]
     traces = [(f"{name} (Σ n0 = {p.n0}, a = {d['a'][j]:g}; seed {d['seeds'][pick[j] - j * per]})",
-               {"x1": tr["x1"][:-1, j], "xhat1": tr["xhat[0]"][:-1, j], "x2": tr["x2"][:-1, j],
-                "xhat2": tr["xhat[1]"][:-1, j]})
+               {"x[0]": tr["x[0]"][:-1, j], "xhat[0]": tr["xhat[0]"][:-1, j], "x[1]": tr["x[1]"][:-1, j],
+                "xhat[1]": tr["xhat[1]"][:-1, j]})
               for j, name in enumerate(("paper's configuration", "preset fast_estimator"))]
     ctx.save_figure(result, figures.plot_fig5(t[:-1], d["r"], d["theta"][:, 0], traces, "Fig. 5 — Example 2: "
                     "setpoint, output and estimates under controller (18), as printed (a = 5) and preset a = "
@@ -181,7 +181,7 @@ def _example2(ctx, result, p, runs):
     b = pick[0]
     pair = lin["pair"]
     ctx.save_figure(result, figures.plot_literal(
-        t[:-1], d["theta"][:, 0], s["x1"][:-1, b], s["u"][:-1, b], zoom,
+        t[:-1], d["theta"][:, 0], s["x[0]"][:-1, b], s["u"][:-1, b], zoom,
         f"Example 2 as printed (Σ a = {p.a:g}, K = [2184, 506, 39]): output and control (seed {d['seeds'][b]})",
         f"last 2 s: amplitude {q['amp'][b]:.3g}, {q['freq'][b]:.2f} Hz (linearised pair {pair.real:+.1f} ± "
         f"{abs(pair.imag):.1f}j rad/s)"), "fig_ex2_literal.png",

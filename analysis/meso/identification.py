@@ -45,7 +45,7 @@ __all__ = [
 
 VARIANTS = ("none", "wellposed", "literal", "direct", "no_const")
 #: the regressor vector whose Gram matrix the block accumulates
-PHI = ("xhat1", "xhat2", "1", "xhat3", "f", "u", "kbar")
+PHI = ("xhat[0]", "xhat[1]", "1", "xhat[2]", "f", "u", "kbar")
 _NPHI = len(PHI)
 #: largest column-scaled condition number a Gram matrix resolves in double precision (1/sqrt(eps))
 GRAM_COND_LIMIT = 1.0 / np.sqrt(np.finfo(float).eps)
@@ -244,7 +244,7 @@ class BatchIdentification(DiscreteBlock):
     thresholds : float or sequence of float
         Identifiability gate (column-scaled condition number) per run.
 
-    Block signals: inputs ``xhat1..3``, ``u``, ``theta[0..3]`` (the Θ in use); outputs ``c[0..3]``
+    Block signals: inputs ``xhat[0..2]``, ``u``, ``theta[0..3]`` (the Θ in use); outputs ``c[0..3]``
     (the latest LSM result, input of W(s)), ``log10_cond`` (column-scaled) and ``rank`` of the latest
     batch's first regression (0 before the first batch and for ``none``); states: the
     outputs, then the batch's Gram matrix of φ divided by N (49 entries).
@@ -266,7 +266,7 @@ class BatchIdentification(DiscreteBlock):
         self.regression = check_in("regression", regression, ("reduced", "full"))
         self.variants = tuple(check_in("variants", v, VARIANTS) for v in variants)
         self.thresholds = np.broadcast_to(check_positive("thresholds", thresholds), (len(self.variants),)).copy()
-        self.inputs = ("xhat1", "xhat2", "xhat3", "u") + signal_names("theta", 4)
+        self.inputs = signal_names("xhat", 3) + ("u",) + signal_names("theta", 4)
         self.outputs = signal_names("c", 4) + ("log10_cond", "rank")
         self.states = self.outputs + tuple(f"G[{i}][{j}]" for i in range(_NPHI) for j in range(_NPHI))
         self._active = [b for b, v in enumerate(self.variants) if v != "none"]

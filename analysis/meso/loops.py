@@ -84,13 +84,13 @@ class Plant(ColumnKernels, ContinuousBlock):
     """Plant (27) with the disturbance (31)/(32): ``x1' = x2``, ``x2' = θ1 x1 + θ2 x2 + θ4 + b u``, ``y = x1 + v``.
 
     ``b`` may differ per run (array of shape (B,)). Inputs ``u``, ``level`` (θ4, held), ``v``
-    (measurement noise, held); outputs ``x1``, ``x2``, ``y``. The numpy methods are the kernels
+    (measurement noise, held); outputs ``x[0]``, ``x[1]`` (the states ``x1``, ``x2``), ``y``. The numpy methods are the kernels
     :func:`plant_rhs` / :func:`plant_output` on the batch's columns.
     """
 
     inputs = ("u", "level", "v")
-    outputs = ("x1", "x2", "y")
-    states = ("x1", "x2")
+    outputs = ("x[0]", "x[1]", "y")
+    states = ("x[0]", "x[1]")
     feedthrough = True
 
     def __init__(self, paper: Paper, b):
@@ -149,7 +149,7 @@ class ModelledESO(RowGroups):
     are grouped by ε, one observer per group (:class:`~ctrl_analysis.blocks.RowGroups`); the compiled
     kernel (:func:`meso_rhs`) has the gains L(ε) as per-run parameters.
 
-    Inputs ``y``, ``u``, ``theta[0..3]``; states and outputs ``xhat1..3``.
+    Inputs ``y``, ``u``, ``theta[0..3]``; states and outputs ``xhat[0..2]``.
     """
 
     def __init__(self, paper: Paper, b0: float, epsilons):
@@ -280,7 +280,7 @@ def build_loop(sit: Situation, rows, paper: Paper = PAPER) -> Loop:
     lpf = LowPassFilter(paper.omega_f, order=2).digital(paper.h, channels=4)
     ident = BatchIdentification(sit.N, paper.h, sit.b0, pd.k, sit.regression, [r.variant for r in rows],
                                 [r.threshold for r in rows])
-    xhat = ("xhat1", "xhat2", "xhat3")
+    xhat = signal_names("xhat", 3)
     return Loop([
         place(Plant(paper, [r.b_plant for r in rows]), "plant"),
         place(ModelledESO(paper, sit.b0, [r.epsilon for r in rows]), "observer"),
@@ -319,7 +319,7 @@ def x3_true(sig, rows, paper, b0):
     Parameters
     ----------
     sig : dict of str -> ndarray, shape (n, B)
-        Signals ``x1, x2, u, level, xhat1, xhat2, theta[0..3]``.
+        Signals ``x[0], x[1], u, level, xhat[0], xhat[1], theta[0..3]``.
     rows : sequence of Row
         The runs (their plant gain ``b``).
     paper : Paper
@@ -330,9 +330,9 @@ def x3_true(sig, rows, paper, b0):
     ndarray, shape (n, B)
     """
     b = np.array([r.b_plant for r in rows])
-    x1, x2, u = sig["x1"], sig["x2"], sig["u"]
+    x1, x2, u = sig["x[0]"], sig["x[1]"], sig["u"]
     x2dot = paper.theta1 * x1 + paper.theta2 * x2 + sig["level"] + b * u
-    f = sig["theta[0]"] * sig["xhat1"] + sig["theta[1]"] * sig["xhat2"] + sig["theta[2]"] * u + sig["theta[3]"]
+    f = sig["theta[0]"] * sig["xhat[0]"] + sig["theta[1]"] * sig["xhat[1]"] + sig["theta[2]"] * u + sig["theta[3]"]
     return x2dot - b0 * u - f
 
 
@@ -340,16 +340,16 @@ def _chunk_errors(sig, t, rows, paper, b0):
     """|e| of every table metric at the chunk's samples, each (n, B)."""
     x3 = x3_true(sig, rows, paper, b0)
     return {
-        "est_x1": np.abs(sig["x1"] - sig["xhat1"]),
-        "est_x2": np.abs(sig["x2"] - sig["xhat2"]),
-        "est_x3": np.abs(x3 - sig["xhat3"]),
-        "est_x3_no_bu": np.abs(x3 - (paper.b - b0) * sig["u"] - sig["xhat3"]),
-        "track_x1": np.abs(np.sin(t)[:, None] - sig["x1"]),
-        "track_x2": np.abs(np.cos(t)[:, None] - sig["x2"]),
+        "est_x1": np.abs(sig["x[0]"] - sig["xhat[0]"]),
+        "est_x2": np.abs(sig["x[1]"] - sig["xhat[1]"]),
+        "est_x3": np.abs(x3 - sig["xhat[2]"]),
+        "est_x3_no_bu": np.abs(x3 - (paper.b - b0) * sig["u"] - sig["xhat[2]"]),
+        "track_x1": np.abs(np.sin(t)[:, None] - sig["x[0]"]),
+        "track_x2": np.abs(np.cos(t)[:, None] - sig["x[1]"]),
     }, x3
 
 
-_KEPT = ("x1", "x2", "xhat1", "xhat2", "xhat3", "u", "theta[0]", "theta[1]", "theta[2]", "theta[3]")
+_KEPT = ("x[0]", "x[1]", "xhat[0]", "xhat[1]", "xhat[2]", "u", "theta[0]", "theta[1]", "theta[2]", "theta[3]")
 #: below this many run-steps (runs × samples) a situation is simulated in one process (~1 s of work)
 _PARALLEL_RUN_STEPS = 1e6
 #: the signals the chunk post-processing reads (errors, x3, kept runs, exact identifiability)

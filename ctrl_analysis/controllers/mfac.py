@@ -189,7 +189,7 @@ class PPDEstimator(DiscreteBlock):
     is never used as an estimate, only as the sign (7) keeps.
 
     Block signals: inputs ``y`` (the output the controller sees, ``y_f``) and ``u_prev``
-    (``u(k−1)``); states ``phi_hat``, ``y_prev``, ``u_prev2``; output ``phi_hat``; direct
+    (``u(k−1)``); states ``phi_hat``, ``y_prev``, ``u_prev_prev``; output ``phi_hat``; direct
     feedthrough.
 
     Parameters
@@ -212,7 +212,7 @@ class PPDEstimator(DiscreteBlock):
         the first estimate is then 0.5.
     y0, u0 : float
         ``y_f`` and ``u`` before the first sample: ``y_f(k0−1)`` and ``u(k0−2)`` (the state's
-        ``y_prev``, ``u_prev2``).
+        ``y_prev``, ``u_prev_prev``).
 
     Raises
     ------
@@ -238,7 +238,7 @@ class PPDEstimator(DiscreteBlock):
     """
 
     inputs = ("y", "u_prev")
-    states = ("phi_hat", "y_prev", "u_prev2")
+    states = ("phi_hat", "y_prev", "u_prev_prev")
     outputs = ("phi_hat",)
     feedthrough = True
 
@@ -437,7 +437,7 @@ class CFDLPredictor(ColumnKernels, DiscreteBlock):
     can read its prediction (11) before the estimator and the law of sample ``k`` run.
 
     Block signals: inputs ``phi_hat``, ``u`` (``φ̂(k)``, ``u(k)``, stored by the update);
-    states ``phi_prev``, ``u_prev``, ``u_prev2``; output ``dy_model``.
+    states ``phi_prev``, ``u_prev``, ``u_prev_prev``; output ``dy_model``.
 
     Parameters
     ----------
@@ -450,7 +450,7 @@ class CFDLPredictor(ColumnKernels, DiscreteBlock):
     """
 
     inputs = ("phi_hat", "u")
-    states = ("phi_prev", "u_prev", "u_prev2")
+    states = ("phi_prev", "u_prev", "u_prev_prev")
     outputs = ("dy_model",)
     feedthrough = False
 
@@ -522,9 +522,9 @@ def mfac_controller(estimator: PPDEstimator, law: Block, output_filter: Block | 
         # the TD's steps once per sample (the block's output and update would run them twice): its
         # state (x1, x2) in two delays fed by the steps' outputs, the same numbers
         y_f = "y_f"
-        blocks.append(place(output_filter.step_block(), "filter", inputs=[measured, "td_x1", "td_x2"],
+        blocks.append(place(output_filter.step_block(), "filter", inputs=[measured, "td_x[0]", "td_x[1]"],
                             outputs=["y_f", "y_f_rate"]))
-        blocks += [place(UnitDelay(output_filter.x0[i]), f"filter_x{i + 1}", inputs=[s], outputs=[f"td_x{i + 1}"])
+        blocks += [place(UnitDelay(output_filter.x0[i]), f"filter_x{i + 1}", inputs=[s], outputs=[f"td_x[{i}]"])
                    for i, s in enumerate(("y_f", "y_f_rate"))]
     elif isinstance(output_filter, TrackingDifferentiator):
         y_f = "y_f"

@@ -156,8 +156,8 @@ ARX = (1.5, -0.7, 0.5)  # y(k) = 1.5 y(k-1) - 0.7 y(k-2) + 0.5 u(k-1): poles 0.7
 def arx_loop(rls, dt=0.1):
     plant = DiscreteLTI(ct.tf([ARX[2], 0.0], [1.0, -ARX[0], -ARX[1]], True), dt)
     return Loop([place(plant, "plant", inputs=["u"], outputs=["y"]),
-                 place(ArxRegressor(2, 1), "reg", inputs=["y", "u"], outputs=["z", "h0", "h1", "h2"]),
-                 place(rls, "rls", inputs=["z", "h0", "h1", "h2"], outputs=["a1", "a2", "b1"])], dt)
+                 place(ArxRegressor(2, 1), "reg", inputs=["y", "u"]),  # z, h[0..2] feed the RLS block's inputs
+                 place(rls, "rls", outputs=["a1", "a2", "b1"])], dt)
 
 
 def test_rls_block_recovers_second_order_arx():

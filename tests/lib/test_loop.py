@@ -270,3 +270,69 @@ def test_continuation_from_final_states_equals_one_run():
     assert first.x is None
     second = loop.simulate(50, runs=2, x0=first.final_states, t0=first.t[-1])
     np.testing.assert_array_equal(second["y"], whole["y"][50:])
+
+
+# ---------------------------------------------------------------------------------------------- signal names
+#: scalars the papers name with a digit (the characteristic model's coefficients): not vector indices
+_PAPER_SCALARS = {"f1", "f2", "g0"}
+
+
+def _library_blocks():
+    """One instance of every library block (and the signals of the composed MFAC controllers)."""
+    from ctrl_analysis.controllers.differential_feedback import (
+        HighOrderDifferentialFeedback,
+    )
+    from ctrl_analysis.controllers.golden_section import GoldenSectionController
+    from ctrl_analysis.controllers.mfac import (
+        CFDLLaw,
+        CFDLPredictor,
+        DecreasingGainLaw,
+        PPDEstimator,
+        UnitDelay,
+        mfac_controller,
+    )
+    from ctrl_analysis.controllers.pd import PDFeedforward
+    from ctrl_analysis.estimators.eso import ExtendedStateObserver
+    from ctrl_analysis.estimators.kalman import (
+        CharacteristicKalmanFilter,
+        ImprovedKalmanFilter,
+    )
+    from ctrl_analysis.estimators.kalman.filter import DiscreteKalmanFilter
+    from ctrl_analysis.estimators.lowpass import LowPassFilter
+    from ctrl_analysis.estimators.tracking import TrackingDifferentiator
+    from ctrl_analysis.identification import ArxRegressor, RecursiveLeastSquaresBlock
+    from ctrl_analysis.plants import DiscreteLTI
+
+    td = TrackingDifferentiator(10.0, 0.01, substeps=2, feedthrough=True)
+    ppd = PPDEstimator(0.5, 1.0, 1e-5, 2.0)
+    blocks = [DifferentialEstimator(3, 5.0), ExtendedStateObserver.from_bandwidth(2, 10.0),
+              PDFeedforward(b0=2.0, omega_c=10.0, model=True), td, td.step_block(), AlphaBetaFilter(0.5, 0.2, 0.1),
+              DiscreteKalmanFilter(np.array([[1.0, 0.1], [0.0, 1.0]]), [1.0, 0.0], 0.01 * np.eye(2), 1.0),
+              CharacteristicKalmanFilter(), ImprovedKalmanFilter(0.05, 0.1), LowPassFilter(10.0, 2),
+              LowPassFilter(10.0, 2).digital(0.01, channels=2), RecursiveLeastSquaresBlock(3),
+              ArxRegressor(2, 1, lag=1), UnitDelay(), ppd, CFDLLaw(1.0, 2.0), DecreasingGainLaw(1.0, 2.0, 0.3),
+              CFDLPredictor(), GoldenSectionController(0.01, 0.95), HighOrderDifferentialFeedback([6.0, 11.0, 6.0]),
+              DiscreteLTI(ct.tf([1.0], [1.0, -0.5, 0.1], 0.1), 0.1)]
+    placed = mfac_controller(ppd, CFDLLaw(1.0, 2.0), td) + mfac_controller(ppd, CFDLLaw(1.0, 2.0),
+                                                                           ImprovedKalmanFilter(0.05, 0.1))
+    return blocks, placed
+
+
+def test_every_library_signal_follows_the_naming_rule():
+    """CONTRIBUTING's rule: a vector's components are base[i] (0-based), a matrix's base[i][j]; no index in a name."""
+    import re
+
+    pattern = re.compile(r"^(?P<base>[A-Za-z_][A-Za-z0-9_]*)(\[(0|[1-9][0-9]*)\])*$")
+    blocks, placed = _library_blocks()
+    names = {(type(b).__name__, kind, s) for b in blocks for kind in ("inputs", "outputs", "states")
+             for s in getattr(b, kind)}
+    names |= {(p.name, kind, s) for p in placed for kind in ("inputs", "outputs") for s in getattr(p, kind)}
+    bad = sorted(f"{who}.{kind}: {s!r}" for who, kind, s in names
+                 if not (m := pattern.match(s)) or (m["base"][-1].isdigit() and m["base"] not in _PAPER_SCALARS))
+    assert not bad, "signal names outside the rule:\n" + "\n".join(bad)
+    # and the rule's own examples, so the check is not vacuous
+    for wrong in ("xhat1", "td_x2", "h0", "P[0,1]"):
+        m = pattern.match(wrong)
+        assert not m or m["base"][-1].isdigit()
+    assert {"xhat[0]", "x[1]", "td_x[0]", "P[0][1]", "h[0]"} <= {s for *_, s in names}
+

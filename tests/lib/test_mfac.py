@@ -314,8 +314,8 @@ def test_every_mfac_block_in_one_loop_compiled_equals_numpy_engine_bit_for_bit()
               place(StaticGain([[1.0, 1.0]], inputs=("y", "v"), outputs=("y_m",)), "meas")]
     blocks += ikf_mfac(est, law, ikf)
     blocks += [place(TrackingDifferentiator(300.0, 0.01, 0.02, substeps=3, x0=(1.0, 0.0), feedthrough=True), "td",
-                     inputs=["y_m"], outputs=["td_x1", "td_x2"]),
-               place(CFDLLaw(0.6, rng.uniform(1.0, 3.0, B)), "law2", inputs=["phi_hat", "td_x1", "y_ref_next", "u_prev"],
+                     inputs=["y_m"], outputs=["td_x[0]", "td_x[1]"]),
+               place(CFDLLaw(0.6, rng.uniform(1.0, 3.0, B)), "law2", inputs=["phi_hat", "td_x[0]", "y_ref_next", "u_prev"],
                      outputs=["u_td"])]
     loop = Loop(blocks, dt=1.0)
     v = 0.1 * rng.standard_normal((n, B))
@@ -324,6 +324,6 @@ def test_every_mfac_block_in_one_loop_compiled_equals_numpy_engine_bit_for_bit()
     a, c = runs["numpy"], runs["compiled"]
     assert not a.diverged.any() and np.array_equal(a.diverged, c.diverged)
     assert np.array_equal(a.x, c.x)
-    for s in ("y", "u", "phi_hat", "y_f", "K", "P", "td_x1", "td_x2", "u_td", "dy_model"):
+    for s in ("y", "u", "phi_hat", "y_f", "K", "P", "td_x[0]", "td_x[1]", "u_td", "dy_model"):
         assert np.array_equal(a[s], c[s]), s
     assert np.std(a["u"][-1]) > 0  # the per-run parameters act

@@ -284,5 +284,5 @@ def test_rows_split_over_processes_join_bit_for_bit(monkeypatch):
         assert np.array_equal(a.sums[m], b.sums[m]) and np.array_equal(a.window_sums[m], b.window_sums[m])
     for f in ("theta_batch", "log10_cond", "rank", "sup_dx3", "diverged", "t_batch"):
         assert np.array_equal(getattr(a, f), getattr(b, f), equal_nan=True), f
-    assert all(np.array_equal(a.keep[k]["xhat3"], b.keep[k]["xhat3"]) for k in a.keep)
+    assert all(np.array_equal(a.keep[k]["xhat[2]"], b.keep[k]["xhat[2]"]) for k in a.keep)
     assert all(np.array_equal(a.exact_cond[k], b.exact_cond[k], equal_nan=True) for k in a.exact_cond)
