@@ -8,11 +8,9 @@ Linear regression ``z = H θ + v`` with ``H`` the regression matrix (one row ``h
 * :func:`batch_least_squares` solves the batch problem (``θ = (HᵀH)⁻¹ Hᵀ z``, computed by an
   SVD-based solver), warns with :class:`IdentifiabilityWarning` when the problem is ill-conditioned
   and, in ``strict`` mode, raises when it is rank-deficient.
-* :class:`RecursiveLeastSquaresBlock` is the recursive form with exponential forgetting and
-  optional projection onto box bounds, a discrete block batched over independent runs (any
-  regressor size), for a :class:`~ctrl_analysis.loop.Loop`; :class:`ArxRegressor` forms its
-  regression from delayed signals inside a loop. :class:`RecursiveLeastSquares` is the same
-  equations as an estimator object that keeps its state (``step(h, z)``, ``run(H, z)``).
+* :class:`RecursiveLeastSquaresBlock`: the recursive form (forgetting, box projection), a discrete
+  block for a :class:`~ctrl_analysis.loop.Loop`, fed by :class:`ArxRegressor`'s delayed signals;
+  :class:`RecursiveLeastSquares`: its equations as an estimator object (``step(h, z)``, ``run(H, z)``).
 """
 
 from __future__ import annotations
@@ -419,10 +417,9 @@ class RecursiveLeastSquaresBlock(DiscreteBlock):
 class RecursiveLeastSquares:
     """Recursive least squares as an estimator object that keeps its state: :meth:`step` one sample, :meth:`run` a record.
 
-    The equations are those of :class:`RecursiveLeastSquaresBlock` (forgetting factor ``λ``,
-    box projection, trace cap), stepped by its own per-sample code: this object holds a block and
-    its state ``[θ, vec R]`` and exposes them as :attr:`theta`, :attr:`P` and the last gain
-    :attr:`K`. Put the block, not this object, in a :class:`~ctrl_analysis.loop.Loop`.
+    The equations are :class:`RecursiveLeastSquaresBlock`'s, stepped by its own per-sample code:
+    this object holds a block and its state ``[θ, vec R]``. In a :class:`~ctrl_analysis.loop.Loop`,
+    place the block.
 
     Parameters
     ----------
@@ -435,13 +432,10 @@ class RecursiveLeastSquares:
     Attributes
     ----------
     block : RecursiveLeastSquaresBlock
-        The equations (and their settings: ``n_params``, ``forgetting``, ``lower``, ...).
-    theta : ndarray, shape (p,) or (B, p)
-        The estimate after the last sample (``theta0`` before the first).
-    P : ndarray, shape (p, p) or (B, p, p)
-        The covariance ``R(k)``.
-    K : ndarray, shape (p,) or (B, p)
-        The last gain ``D(k)`` (zeros before the first sample).
+        The equations and their settings (``block.n_params``, ``block.forgetting``, ...).
+    theta, P, K : ndarray, shapes (p,), (p, p), (p,) (with a leading B for a batch)
+        The estimate after the last sample (``theta0`` before the first), the covariance
+        ``R(k)`` and the last gain ``D(k)`` (zeros before the first sample).
 
     Raises
     ------
@@ -466,25 +460,15 @@ class RecursiveLeastSquares:
         self.batch = None if batch is None else check_int("batch", batch, minimum=1)
         self.reset()
 
-    @property
-    def n_params(self) -> int:
-        """Number of parameters ``p``."""
-        return self.block.n_params
-
-    @property
-    def forgetting(self) -> float:
-        """Forgetting factor ``λ``."""
-        return self.block.forgetting
-
     def reset(self) -> None:
         """Return to ``theta0`` and ``P0``."""
         B = 1 if self.batch is None else self.batch
         self._x = np.tile(self.block.initial_state(), (B, 1))
-        self.K = np.zeros((B, self.n_params))
+        self.K = np.zeros((B, self.block.n_params))
         self._sync()
 
     def _sync(self):
-        p = self.n_params
+        p = self.block.n_params
         theta = self._x[:, :p].copy()
         P = self._x[:, p:].reshape(-1, p, p).copy()
         if self.batch is None:
@@ -514,7 +498,7 @@ class RecursiveLeastSquares:
         """
         h = np.asarray(check_finite("h", h), dtype=float)
         z = np.asarray(check_finite("z", z), dtype=float)
-        p = self.n_params
+        p = self.block.n_params
         if self.batch is None:
             if h.shape != (p,):
                 raise ValueError(f"h must have shape ({p},), got {h.shape}")
@@ -562,7 +546,7 @@ class RecursiveLeastSquares:
         return out
 
     def __repr__(self) -> str:
-        return f"RecursiveLeastSquares(n_params={self.n_params}, forgetting={self.forgetting}, batch={self.batch})"
+        return f"RecursiveLeastSquares({self.block!r}, batch={self.batch})"
 
 
 class ArxRegressor(ColumnKernels, DiscreteBlock):

@@ -571,15 +571,6 @@ class Loop:
         ------
         ValueError
             If the loop mixes continuous and discrete blocks.
-
-        Examples
-        --------
-        Inputs declared ``r`` then ``TL`` stay in that order (not sorted: ``"TL" < "r"``):
-
-        >>> from ctrl_analysis.blocks import StaticGain
-        >>> loop = Loop([place(StaticGain([[1.0, -1.0]], ("r", "TL"), ("e",)), "err")], dt=0.1)
-        >>> loop.external, loop.interconnect().input_labels
-        (('r', 'TL'), ['r', 'TL'])
         """
         import control as ct
 

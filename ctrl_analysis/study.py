@@ -403,6 +403,8 @@ def study_params(defaults: dict, params=None, result=None) -> dict:
     if not isinstance(defaults, dict) or not all(
             dataclasses.is_dataclass(d) and not isinstance(d, type) for d in defaults.values()):
         raise TypeError("defaults must be a dict {prefix: dataclass instance}")
+    if result is not None and not isinstance(getattr(result, "settings", None), dict):
+        raise TypeError(f"result must be a StudyResult (or None), got {type(result).__name__}")
     if params is None:
         return dict(defaults)
     if not isinstance(params, dict):

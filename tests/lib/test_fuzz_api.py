@@ -534,6 +534,9 @@ def build_cases(tmp):
         ("record_parameters", study.record_parameters, dict(result=_new_result(), params=_PARAMS, prefix=""),
          dict(result=[None, 3, {}], params=[None, 3, "x"], prefix=[None, 3])),
         ("reconstructions_of", study.reconstructions_of, dict(params=_PARAMS), dict(params=[None, 3, "x"])),
+        ("study_params", study.study_params, dict(defaults={"p": _PARAMS}, params={"p": {"k": 3.0}}, result=_new_result()),
+         dict(defaults=[None, 3, {"p": 3}, {"p": _Params}], params=[3, "x", {"q": {}}, {"p": {"j": 1.0}}, {"p": 3}],
+              result=[3, "x", {}])),
         # report
         ("relative_error", report.relative_error, dict(value=1.0, paper=2.0), dict(value=["abc", None], paper=["abc"])),
         ("compute_verdict", report.compute_verdict, dict(value=1.0, paper=1.0, tolerance=0.1),
