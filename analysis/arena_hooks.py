@@ -69,7 +69,7 @@ def de_example1(seed: int, dt: float, n: int) -> tuple:
     plant = Plant19(EX1)
     res = Loop([place(plant, "plant")], h, method=EX1.method).simulate(K, inputs={"xi": xi}, progress=False)
     steps = np.arange(start * sub, K)
-    x = np.column_stack([res.signals["x1"][steps, 0], res.signals["x2"][steps, 0]])
+    x = np.column_stack([res.signals["x[0]"][steps, 0], res.signals["x[1]"][steps, 0]])
     x2dot = np.array([plant.rhs(h * k, x[i:i + 1], xi[k:k + 1])[0, 1] for i, k in enumerate(steps)])
     return x[::sub, 0], x[::sub, 1], x2dot[::sub], float(np.max(np.abs(x2dot)))
 
@@ -104,9 +104,9 @@ def meso_situation1(seed: int, dt: float, n: int) -> tuple:
     steps = np.arange(start * sub, (start + n) * sub)
     t = run.t[steps]
     level = np.where(t >= paper.t_step - 0.5 * h, paper.step, 0.0)  # θ4 of (31): the loop's input at t
-    x = np.column_stack([kept["x1"][steps], kept["x2"][steps]])
+    x = np.column_stack([kept["x[0]"][steps], kept["x[1]"][steps]])
     u = np.column_stack([kept["u"][steps], level, 0 * t])
-    x2dot = Plant(paper, np.full(t.size, paper.b)).rhs(0.0, x, u)[:, 1]
+    x2dot = Plant(paper, paper.b).rhs(0.0, x, u)[:, 1]
     return x[::sub, 0], x[::sub, 1], x2dot[::sub], float(np.max(np.abs(x2dot)))
 
 

@@ -34,7 +34,7 @@ import numpy as np
 from _common import Row, median_time, round_robin
 
 from ctrl_analysis._kernels import BlockKernel
-from ctrl_analysis.blocks import ContinuousBlock
+from ctrl_analysis.blocks import ContinuousBlock, signal_names
 from ctrl_analysis.estimators.differential import DifferentialEstimator
 from ctrl_analysis.estimators.eso import ExtendedStateObserver
 from ctrl_analysis.loop import Loop, place
@@ -69,7 +69,7 @@ class Plant19(ContinuousBlock):
     compiled path run one piece of code per equation.
     """
 
-    inputs, outputs, states = ("xi", "eta"), ("y", "x1", "x2"), ("x1", "x2")
+    inputs, outputs, states = ("xi", "eta"), ("y", "x[0]", "x[1]"), ("x[0]", "x[1]")
     feedthrough = True
 
     def __init__(self, b1=B1, b2=B2, w_freq=W_FREQ):
@@ -98,8 +98,8 @@ def han_eso(h=H):
 
 def build_loop(h=H, substeps=1):
     sigma, eso = DifferentialEstimator(5, 7.0), han_eso(h)
-    return Loop([place(Plant19(), "plant"), place(sigma, "sigma"), place(eso, "eso", inputs=["y", "uc"])],
-                dt=h, substeps=substeps)
+    return Loop([place(Plant19(), "plant"), place(sigma, "sigma"),
+                 place(eso, "eso", inputs=["y", "uc"], outputs=signal_names("eso_xhat", 3))], dt=h, substeps=substeps)
 
 
 def coefficients(loop):
@@ -186,9 +186,10 @@ def compiled_loop():
 # ------------------------------------------------------------------ engine and python-control
 def engine_errors(res):
     """The study's quantities from a LoopResponse: mean |x1 - z1|, |x2 - z2|, |x1 - x̂1|, |x2 - x̂2| per run."""
-    x1, x2 = res["x1"], res["x2"]
+    x1, x2 = res["x[0]"], res["x[1]"]
     return np.stack([np.mean(np.abs(x1 - res["xhat[0]"]), axis=0), np.mean(np.abs(x2 - res["xhat[1]"]), axis=0),
-                     np.mean(np.abs(x1 - res["xhat1"]), axis=0), np.mean(np.abs(x2 - res["xhat2"]), axis=0)], axis=1)
+                     np.mean(np.abs(x1 - res["eso_xhat[0]"]), axis=0), np.mean(np.abs(x2 - res["eso_xhat[1]"]), axis=0)],
+                    axis=1)
 
 
 def final_state(res, run=0):
@@ -238,8 +239,8 @@ def pc_adaptive(sys_c, noise1, n, h, rtol):
 def state_order(sys_c):
     """Indices mapping the interconnect's states onto the engine's (plant, Σ, ESO) order."""
     labels = sys_c.state_labels
-    want = ([f"plant_x{i}" for i in (1, 2)] + [f"sigma_z[{i}]" for i in range(5)]
-            + [f"eso_xhat{i}" for i in (1, 2, 3)])
+    want = ([f"plant_x[{i}]" for i in range(2)] + [f"sigma_z[{i}]" for i in range(5)]
+            + [f"eso_xhat[{i}]" for i in range(3)])
     return [labels.index(w) for w in want]
 
 
@@ -268,7 +269,7 @@ def run(T=2.0, io_T=0.05, repeat=3, sizes=(1, 100, 1000)):
         return [fn_c(xi_c[b], eta_c[b], n, H, c) for b in range(n_c)]
 
     notes.append(f"numba compile time of the reference: {t_compile:.2f} s (first call; cached on disk afterwards)")
-    keep = ["x1", "x2", "xhat[0]", "xhat[1]", "xhat1", "xhat2"]  # what the study's quantities need
+    keep = ["x[0]", "x[1]", "xhat[0]", "xhat[1]", "eso_xhat[0]", "eso_xhat[1]"]  # what the study's quantities need
     c0 = _kernels.compile_seconds()
     loop.simulate(2, inputs={"xi": 0.0, "eta": 0.0, "uc": 0.0}, engine="compiled")  # compile (or load) once
     notes.append(f"compiled engine: generating + compiling (or loading from the disk cache) the loop runner "

@@ -213,6 +213,39 @@ class Block:
 Block.output = checked(Block.output)
 
 
+def check_states_declared(block: Block, name: str | None = None) -> None:
+    """Raise a ``ValueError`` if a continuous or discrete block never declared its :attr:`~Block.states`.
+
+    A block with state must name its states (``states = ("x",)``, or ``signal_names("x", n)``):
+    the engine sizes ``x`` from them. A subclass that forgets them inherits ``Block.states = ()``,
+    and its ``update`` or ``rhs`` would then meet a state of zero columns (a numpy broadcast error,
+    or a state silently dropped). A block whose state is really empty says so, ``states = ()``.
+
+    Parameters
+    ----------
+    block : Block
+        The block to check (static blocks always pass).
+    name : str, optional
+        The block's name in a loop, for the message.
+
+    Raises
+    ------
+    ValueError
+        Naming the block and the rule.
+    """
+    if not isinstance(block, (ContinuousBlock, DiscreteBlock)) or "states" in vars(block):
+        return
+    for cls in type(block).__mro__:
+        if cls is Block:
+            break
+        if "states" in vars(cls):
+            return
+    kind = "ContinuousBlock" if isinstance(block, ContinuousBlock) else "DiscreteBlock"
+    where = f"block {name!r} ({type(block).__name__})" if name else f"block {type(block).__name__}"
+    raise ValueError(f"{where} declares no states: a {kind} must name its states, e.g. states = ('x',) or "
+                     f"states = signal_names('x', n) (a class attribute, or set in __init__); one without "
+                     f"state declares states = () (or is a StaticBlock)")
+
 
 class ContinuousBlock(Block):
     """A block with continuous-time state: ``dx/dt = rhs(t, x, u, params)``."""
@@ -318,6 +351,7 @@ class DiscreteBlock(Block):
         """
         from ._validate import check_finite
 
+        check_states_declared(self)
         m = len(self.inputs)
         u = np.asarray(check_finite("u", u), dtype=float)
         if u.ndim == 1 and m == 1:

@@ -154,7 +154,7 @@ def _run_study_here(name, out, runs, seed, quick, jobs, scheduler) -> dict:
         ctx = StudyContext(out_dir=staged, runs=runs, seed=seed, quick=quick, progress=_progress(name),
                            jobs=jobs, scheduler=scheduler)
         t0 = time.perf_counter()
-        result = load_study(name).run(ctx)
+        result = load_study(name).run(ctx, params=None)  # the study's chosen values (analysis/__init__.py)
         result.runtime_s = time.perf_counter() - t0
         # what the command line asked for, beside the study's own settings
         result.settings["cli"] = dict(record["run"])

@@ -8,9 +8,9 @@ Linear regression ``z = H θ + v`` with ``H`` the regression matrix (one row ``h
 * :func:`batch_least_squares` solves the batch problem (``θ = (HᵀH)⁻¹ Hᵀ z``, computed by an
   SVD-based solver), warns with :class:`IdentifiabilityWarning` when the problem is ill-conditioned
   and, in ``strict`` mode, raises when it is rank-deficient.
-* :class:`RecursiveLeastSquares` is the recursive form with exponential forgetting and optional
-  projection onto box bounds, a discrete block batched over independent runs (any regressor size);
-  :class:`ArxRegressor` forms its regression from delayed signals inside a loop.
+* :class:`RecursiveLeastSquaresBlock`: the recursive form (forgetting, box projection), a discrete
+  block for a :class:`~ctrl_analysis.loop.Loop`, fed by :class:`ArxRegressor`'s delayed signals;
+  :class:`RecursiveLeastSquares`: its equations as an estimator object (``step(h, z)``, ``run(H, z)``).
 """
 
 from __future__ import annotations
@@ -32,6 +32,7 @@ __all__ = [
     "IdentifiabilityWarning",
     "LeastSquaresResult",
     "RecursiveLeastSquares",
+    "RecursiveLeastSquaresBlock",
     "batch_least_squares",
     "identifiability",
 ]
@@ -239,8 +240,8 @@ def batch_least_squares(H, z, *, strict: bool = False, cond_threshold: float = D
     return LeastSquaresResult(theta=theta, residual_rms=float(np.sqrt(np.mean(resid**2))), report=report)
 
 
-class RecursiveLeastSquares(DiscreteBlock):
-    """Recursive least squares with exponential forgetting and optional box projection, a discrete block.
+class RecursiveLeastSquaresBlock(DiscreteBlock):
+    """Recursive least squares with exponential forgetting and optional box projection, as a discrete block.
 
     For each new sample ``z(k) = h(k)ᵀ θ + v(k)``::
 
@@ -250,18 +251,16 @@ class RecursiveLeastSquares(DiscreteBlock):
 
     with ``Π`` the projection onto the box ``lower <= θ <= upper`` (the identity without bounds).
     The gain is called ``D`` and the covariance ``R`` in the characteristic-model literature;
-    here they are :attr:`K` and :attr:`P`.
+    here (state names, and :class:`RecursiveLeastSquares`' attributes) they are ``K`` and ``P``.
 
-    Two interfaces share the same per-step kernel:
-
-    * the block protocol (batched, for :class:`ctrl_analysis.loop.Loop` and
-      ``control.interconnect``): inputs ``z, h[0..p-1]``; states ``theta[0..p-1]`` and the
-      covariance row by row ``P[i][j]``; outputs ``theta[0..p-1]`` = ``θ(k)`` *after* the update
-      with the current sample (direct feedthrough, as :class:`~ctrl_analysis.estimators.lowpass.DiscreteLowPass`),
-      or the previous estimate ``θ(k−1)`` with ``feedthrough=False``;
-    * the stateful :meth:`step` / :meth:`run` (attributes :attr:`theta`, :attr:`P`, :attr:`K`);
-      ``run(H, z)`` here feeds a record and replaces the protocol's open-loop runner, which stays
-      available as ``DiscreteBlock.run(rls, u)``.
+    The block protocol (batched, for :class:`ctrl_analysis.loop.Loop` and
+    ``control.interconnect``): inputs ``z, h[0..p-1]``; states ``theta[0..p-1]`` and the
+    covariance row by row ``P[i][j]``; outputs ``theta[0..p-1]`` = ``θ(k)`` *after* the update
+    with the current sample (direct feedthrough, as :class:`~ctrl_analysis.estimators.lowpass.DiscreteLowPass`),
+    or the previous estimate ``θ(k−1)`` with ``feedthrough=False``. Its :meth:`run` is the
+    protocol's open-loop runner (``u`` of shape ``(N, 1 + p)``: ``z`` then ``h``). To feed samples
+    or a record to an estimator that keeps its state, use :class:`RecursiveLeastSquares`, which
+    steps this block's equations (one implementation).
 
     Parameters
     ----------
@@ -274,9 +273,6 @@ class RecursiveLeastSquares(DiscreteBlock):
         Initial covariance (a scalar means ``P0 * I``; symmetric positive definite).
     theta0 : array_like, shape (p,), optional
         Initial estimate (default zeros; inside the bounds when given).
-    batch : int, optional
-        Number of independent runs ``B`` of :meth:`step`; ``None`` for a single run (arrays without
-        a batch axis). The block protocol takes ``B`` from its arrays.
     lower, upper : array_like, shape (p,), optional
         Box bounds of the projection (``-inf`` / ``inf`` entries leave a parameter free).
     max_trace : float, optional
@@ -284,17 +280,10 @@ class RecursiveLeastSquares(DiscreteBlock):
         (with forgetting and weak excitation ``R`` otherwise grows like ``λ⁻ᵏ``, and the estimate
         bursts). ``None`` (default) leaves ``R`` unbounded.
     feedthrough : bool
-        Block protocol only: ``True`` (default) outputs ``θ(k)``, the estimate after the update
-        with the current sample; ``False`` outputs the stored ``θ(k−1)`` (no direct feedthrough: a
-        loop may then feed the estimate back into the regression without an algebraic loop, and
-        the output costs nothing).
-
-    Attributes
-    ----------
-    theta : ndarray, shape (p,) or (B, p)
-    P : ndarray, shape (p, p) or (B, p, p)
-    K : ndarray, shape (p,) or (B, p)
-        Last gain.
+        ``True`` (default) outputs ``θ(k)``, the estimate after the update with the current
+        sample; ``False`` outputs the stored ``θ(k−1)`` (no direct feedthrough: a loop may then
+        feed the estimate back into the regression without an algebraic loop, and the output
+        costs nothing).
 
     Raises
     ------
@@ -310,17 +299,18 @@ class RecursiveLeastSquares(DiscreteBlock):
 
     Examples
     --------
+    Open loop, the samples ``z(k) = 3 sin k − 2`` with ``h(k) = [sin k, 1]`` as the input ``[z, h]``:
+
     >>> import numpy as np
-    >>> rls = RecursiveLeastSquares(2, forgetting=1.0, P0=1e6)
-    >>> for k in range(20):
-    ...     h = np.array([np.sin(k), 1.0])
-    ...     _ = rls.step(h, 3 * np.sin(k) - 2)
-    >>> rls.theta.round(6)
+    >>> k = np.arange(20.0)
+    >>> y, _ = RecursiveLeastSquaresBlock(2, forgetting=1.0, P0=1e6).run(
+    ...     np.column_stack([3 * np.sin(k) - 2, np.sin(k), np.ones(20)]))
+    >>> y[-1, 0].round(6)
     array([ 3., -2.])
     """
 
-    def __init__(self, n_params: int, forgetting: float = 1.0, P0=1e6, theta0=None, batch: int | None = None,
-                 lower=None, upper=None, max_trace: float | None = None, feedthrough: bool = True):
+    def __init__(self, n_params: int, forgetting: float = 1.0, P0=1e6, theta0=None, *, lower=None, upper=None,
+                 max_trace: float | None = None, feedthrough: bool = True):
         self.feedthrough = check_bool("feedthrough", feedthrough)
         self.max_trace = None if max_trace is None else float(check_positive("max_trace", max_trace, scalar=True))
         self.n_params = check_int("n_params", n_params, minimum=1)
@@ -358,13 +348,11 @@ class RecursiveLeastSquares(DiscreteBlock):
         if np.any(theta0 < lower) or np.any(theta0 > upper):
             raise ValueError(f"theta0 must lie within [lower, upper], got {theta0}")
         self.theta0 = theta0
-        self.batch = None if batch is None else check_int("batch", batch, minimum=1)
         self.inputs = ("z",) + signal_names("h", p)
         self.outputs = signal_names("theta", p)
         self.states = self.outputs + tuple(f"P[{i}][{j}]" for i in range(p) for j in range(p))
         # kernel parameters (ctrl_analysis.identification_kernels)
         self._p = np.concatenate([[p, forgetting, self.max_trace or 0.0, float(self.projected)], lower, upper])
-        self.reset()
 
     # ------------------------------------------------------------------ block protocol
     def initial_state(self) -> np.ndarray:
@@ -422,16 +410,65 @@ class RecursiveLeastSquares(DiscreteBlock):
         output = rls_output if self.feedthrough else rls_hold_output
         return BlockKernel(output=output, params=self._p, update=rls_update)
 
-    # ------------------------------------------------------------------ stateful interface
+    def __repr__(self) -> str:
+        return f"RecursiveLeastSquaresBlock(n_params={self.n_params}, forgetting={self.forgetting})"
+
+
+class RecursiveLeastSquares:
+    """Recursive least squares as an estimator object that keeps its state: :meth:`step` one sample, :meth:`run` a record.
+
+    The equations are :class:`RecursiveLeastSquaresBlock`'s, stepped by its own per-sample code:
+    this object holds a block and its state ``[θ, vec R]``. In a :class:`~ctrl_analysis.loop.Loop`,
+    place the block.
+
+    Parameters
+    ----------
+    n_params, forgetting, P0, theta0, lower, upper, max_trace
+        As :class:`RecursiveLeastSquaresBlock`.
+    batch : int, optional
+        Number of independent runs ``B`` stepped side by side; ``None`` for a single run (arrays
+        without a batch axis).
+
+    Attributes
+    ----------
+    block : RecursiveLeastSquaresBlock
+        The equations and their settings (``block.n_params``, ``block.forgetting``, ...).
+    theta, P, K : ndarray, shapes (p,), (p, p), (p,) (with a leading B for a batch)
+        The estimate after the last sample (``theta0`` before the first), the covariance
+        ``R(k)`` and the last gain ``D(k)`` (zeros before the first sample).
+
+    Raises
+    ------
+    ValueError
+        As :class:`RecursiveLeastSquaresBlock`, or ``batch`` not an integer ``>= 1``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rls = RecursiveLeastSquares(2, forgetting=1.0, P0=1e6)
+    >>> for k in range(20):
+    ...     h = np.array([np.sin(k), 1.0])
+    ...     _ = rls.step(h, 3 * np.sin(k) - 2)
+    >>> rls.theta.round(6)
+    array([ 3., -2.])
+    """
+
+    def __init__(self, n_params: int, forgetting: float = 1.0, P0=1e6, theta0=None, batch: int | None = None,
+                 lower=None, upper=None, max_trace: float | None = None):
+        self.block = RecursiveLeastSquaresBlock(n_params, forgetting, P0, theta0, lower=lower, upper=upper,
+                                                max_trace=max_trace)
+        self.batch = None if batch is None else check_int("batch", batch, minimum=1)
+        self.reset()
+
     def reset(self) -> None:
         """Return to ``theta0`` and ``P0``."""
         B = 1 if self.batch is None else self.batch
-        self._x = np.tile(self.initial_state(), (B, 1))
-        self.K = np.zeros((B, self.n_params))
+        self._x = np.tile(self.block.initial_state(), (B, 1))
+        self.K = np.zeros((B, self.block.n_params))
         self._sync()
 
     def _sync(self):
-        p = self.n_params
+        p = self.block.n_params
         theta = self._x[:, :p].copy()
         P = self._x[:, p:].reshape(-1, p, p).copy()
         if self.batch is None:
@@ -439,7 +476,7 @@ class RecursiveLeastSquares(DiscreteBlock):
         self.theta, self.P = theta, P
 
     def step(self, h, z) -> np.ndarray:
-        """Update with one sample (the stateful interface).
+        """Update with one sample.
 
         Parameters
         ----------
@@ -461,7 +498,7 @@ class RecursiveLeastSquares(DiscreteBlock):
         """
         h = np.asarray(check_finite("h", h), dtype=float)
         z = np.asarray(check_finite("z", z), dtype=float)
-        p = self.n_params
+        p = self.block.n_params
         if self.batch is None:
             if h.shape != (p,):
                 raise ValueError(f"h must have shape ({p},), got {h.shape}")
@@ -473,7 +510,7 @@ class RecursiveLeastSquares(DiscreteBlock):
         h = np.broadcast_to(h, (B, p))
         z = np.broadcast_to(z.reshape(-1) if z.ndim else z, (B,))
         u = np.concatenate([z[:, None], h], axis=1)
-        theta_new, P_new, D = self._kernel(self._x, u)
+        theta_new, P_new, D = self.block._kernel(self._x, u)  # the block's equations, one step
         self._x = np.concatenate([theta_new, P_new], axis=1)
         self.K = D
         self._sync()
@@ -509,13 +546,13 @@ class RecursiveLeastSquares(DiscreteBlock):
         return out
 
     def __repr__(self) -> str:
-        return f"RecursiveLeastSquares(n_params={self.n_params}, forgetting={self.forgetting})"
+        return f"RecursiveLeastSquares({self.block!r}, batch={self.batch})"
 
 
 class ArxRegressor(ColumnKernels, DiscreteBlock):
     """Tapped delay lines forming the ARX regression ``z = s(k−d)``, ``h = [s(k−d−1..k−d−na), u(k−d−1..k−d−nb)]``.
 
-    Feeds :class:`RecursiveLeastSquares` with the model
+    Feeds :class:`RecursiveLeastSquaresBlock` with the model
     ``s(k) = a_1 s(k−1) + ... + a_na s(k−na) + b_1 u(k−1) + ... + b_nb u(k−nb)``. With ``lag`` ``d = 0``
     the target is the current sample (direct feedthrough from ``s``); with ``d >= 1`` the whole
     regression is ``d`` samples old and comes from the state only, so an estimator whose output is
@@ -528,8 +565,8 @@ class ArxRegressor(ColumnKernels, DiscreteBlock):
     lag : int
         Age ``d`` of the regression (>= 0).
 
-    Block signals: inputs ``s, u``; outputs ``z, h[0..na+nb-1]``; states ``s[1..na+d]`` (``s(k−i)``)
-    and ``u[1..nb+d]`` (``u(k−i)``).
+    Block signals: inputs ``s, u``; outputs ``z, h[0..na+nb-1]``; states ``s_prev[0..na+d-1]``
+    (``s_prev[i] = s(k−1−i)``) and ``u_prev[0..nb+d-1]`` (``u(k−1−i)``).
 
     Raises
     ------
@@ -554,8 +591,7 @@ class ArxRegressor(ColumnKernels, DiscreteBlock):
         if self.na + self.nb < 1:
             raise ValueError(f"na + nb must be >= 1, got na={na}, nb={nb}")
         self.ns, self.nu = self.na + self.lag, self.nb + self.lag
-        self.states = (tuple(f"s[{i}]" for i in range(1, self.ns + 1))
-                       + tuple(f"u[{i}]" for i in range(1, self.nu + 1)))
+        self.states = signal_names("s_prev", self.ns) + signal_names("u_prev", self.nu)
         self.outputs = ("z",) + signal_names("h", self.na + self.nb)
         self.feedthrough = self.lag == 0
         self._p = np.array([self.na, self.nb, self.lag], dtype=float)

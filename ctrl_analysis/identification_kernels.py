@@ -4,7 +4,7 @@
   :class:`~ctrl_analysis.identification.ArxRegressor`, written with scalar indexing only, so they
   are both its compiled kernel and, called on a batch's transposed arrays, its numpy methods.
 * :func:`rls_update` / :func:`rls_output` (:func:`rls_hold_output` without feedthrough): the compiled twins of
-  :class:`~ctrl_analysis.identification.RecursiveLeastSquares`' numpy step (its projection and
+  :class:`~ctrl_analysis.identification.RecursiveLeastSquaresBlock`' numpy step (its projection and
   trace cap branch per value); ``tests/lib/test_identification.py`` holds the two equal bit for bit.
 
 Parameters ``p`` of the RLS kernels: ``[n, λ, max_trace (0: none), projected (0/1, informative: the kernels
@@ -92,7 +92,7 @@ def _rls_theta(x, p, out, den, innov):
 
 
 def rls_update(t, x, u, p, x_next):
-    """One RLS step, eq. (9): ``[θ(k), R(k)]``, compiled twin of ``RecursiveLeastSquares.update``.
+    """One RLS step, eq. (9): ``[θ(k), R(k)]``, compiled twin of ``RecursiveLeastSquaresBlock.update``.
 
     Parameters
     ----------

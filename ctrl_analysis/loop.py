@@ -42,7 +42,7 @@ from ._validate import (
     check_real,
     check_str,
 )
-from .blocks import Block, ContinuousBlock, DiscreteBlock
+from .blocks import Block, ContinuousBlock, DiscreteBlock, check_states_declared
 from .engine.params import chunk_functions, resolve
 from .response import LoopResponse
 from .simulate import (
@@ -129,8 +129,9 @@ class Loop:
     Raises
     ------
     ValueError
-        Two blocks with one name, a signal produced twice, or an algebraic loop (a cycle of
-        feedthrough blocks).
+        Two blocks with one name, a signal produced twice, an algebraic loop (a cycle of
+        feedthrough blocks), or a continuous or discrete block that declares no ``states``
+        (:func:`~ctrl_analysis.blocks.check_states_declared`).
 
     Examples
     --------
@@ -156,6 +157,8 @@ class Loop:
         placed = [b if isinstance(b, Placed) else place(b, f"b{i}") for i, b in enumerate(blocks)]
         if not placed:
             raise ValueError("blocks must contain at least one block")
+        for p in placed:
+            check_states_declared(p.block, p.name)
         names = [p.name for p in placed]
         if len(set(names)) != len(names):
             raise ValueError(f"blocks: block names must be unique, got {names}")
@@ -565,8 +568,11 @@ class Loop:
         """The same arrangement as a ``control.interconnect`` (for one trace).
 
         All blocks must be continuous (or static), giving a continuous system, or all discrete (or
-        static), giving a discrete system with the loop's ``dt``. Inputs are the loop's external
-        inputs, outputs its ``outputs``.
+        static), giving a discrete system with the loop's ``dt``. The system's inputs are the loop's
+        external inputs **in the order of** ``self.external`` (the order in which the placed blocks
+        first read them, never sorted by name), so row ``i`` of the input array given to
+        :func:`control.input_output_response` is ``external[i]``; its outputs are the loop's
+        ``outputs``, in that order.
 
         Parameters
         ----------
@@ -576,6 +582,7 @@ class Loop:
         Returns
         -------
         control.InterconnectedSystem
+            With ``input_labels == list(self.external)`` and ``output_labels == list(self.outlist)``.
 
         Raises
         ------

@@ -33,7 +33,7 @@ import numpy as np
 from ._validate import check_int, check_str
 
 __all__ = ["Claim", "Plausible", "choices", "fixed", "missing_plausible", "printed", "reconstructed",
-           "record_parameters", "reconstructions_of", "span"]
+           "record_parameters", "reconstructions_of", "span", "study_params"]
 
 _SCALES = ("linear", "log", "int")
 
@@ -348,3 +348,89 @@ def record_parameters(result, params, prefix: str = "") -> None:
         result.settings[name(f.name)] = getattr(params, f.name)
     for rec in reconstructions_of(params):
         result.reconstruction(name(rec["name"]), rec["value"], rec["why"], plausible=rec.get("plausible"))
+
+
+def _differs(a, b) -> bool:
+    try:
+        return not bool(np.all(np.asarray(a == b)))
+    except (TypeError, ValueError):
+        return True
+
+
+def study_params(defaults: dict, params=None, result=None) -> dict:
+    """A study's parameter objects for ``run(ctx, params=None)``: its defaults, with ``params``' overrides applied.
+
+    Every study's ``run(ctx, params=None)`` calls this once. ``defaults`` are the frozen parameter
+    objects the study runs with (the paper's values and its reconstructions, or its ``--quick``
+    settings), under the prefixes of their names in results.json (:func:`record_parameters`) —
+    the dict :func:`ctrl_analysis.sensitivity.sweep` and the study's ``evaluate(params)`` take.
+    ``params`` overrides some of them, each entry either a whole object of the default's class or
+    a dict of the fields to change (``{"ex1": {"Q": 0.02}}``).
+
+    Parameters
+    ----------
+    defaults : dict
+        ``{prefix: dataclass instance}``.
+    params : dict, optional
+        ``{prefix: dataclass instance or {field: value}}``, prefixes among ``defaults``.
+    result : ctrl_analysis.results.StudyResult, optional
+        When given and ``params`` changes a value, the changed fields are recorded in
+        ``result.settings["overridden"]`` (``{prefix: [field, ...]}``), so a results.json made with
+        overrides says so beside the reasons recorded for the defaults.
+
+    Returns
+    -------
+    dict
+        ``{prefix: dataclass instance}``, the keys of ``defaults``.
+
+    Raises
+    ------
+    TypeError
+        ``params`` not a dict, or an entry neither a dict nor an object of the default's class.
+    ValueError
+        A prefix or a field the study does not have.
+
+    Examples
+    --------
+    >>> from dataclasses import dataclass
+    >>> @dataclass(frozen=True)
+    ... class Example:
+    ...     Q: float = reconstructed(0.01, "not printed", plausible=span(0.001, 0.1, "a decade either side"))
+    ...     n: int = printed(1000, "§4")
+    >>> study_params({"ex1": Example()}, {"ex1": {"Q": 0.02}})["ex1"]
+    Example(Q=0.02, n=1000)
+    """
+    if not isinstance(defaults, dict) or not all(
+            dataclasses.is_dataclass(d) and not isinstance(d, type) for d in defaults.values()):
+        raise TypeError("defaults must be a dict {prefix: dataclass instance}")
+    if result is not None and not isinstance(getattr(result, "settings", None), dict):
+        raise TypeError(f"result must be a StudyResult (or None), got {type(result).__name__}")
+    if params is None:
+        return dict(defaults)
+    if not isinstance(params, dict):
+        raise TypeError(f"params must be a dict {{prefix: parameter object or {{field: value}}}}, got "
+                        f"{type(params).__name__}")
+    out, changed = dict(defaults), {}
+    for prefix, value in params.items():
+        if prefix not in defaults:
+            raise ValueError(f"params names {prefix!r}, not a parameter object of this study; it takes "
+                             f"{sorted(defaults)}")
+        default = defaults[prefix]
+        if isinstance(value, dict):
+            fields = {f.name for f in dataclasses.fields(default)}
+            unknown = sorted(set(value) - fields)
+            if unknown:
+                raise ValueError(f"params[{prefix!r}] names fields {unknown} that {type(default).__name__} "
+                                 f"does not have")
+            value = dataclasses.replace(default, **value)
+        elif not isinstance(value, type(default)):
+            raise TypeError(f"params[{prefix!r}] must be a {type(default).__name__} or a dict of its fields, "
+                            f"got {type(value).__name__}")
+        out[prefix] = value
+        diff = [f.name for f in dataclasses.fields(default)
+                if _differs(getattr(value, f.name), getattr(default, f.name))]
+        if diff:
+            changed[prefix] = diff
+    if result is not None and changed:
+        result.settings["overridden"] = changed
+    return out

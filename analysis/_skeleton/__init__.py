@@ -11,7 +11,7 @@ from __future__ import annotations
 from ctrl_analysis import sensitivity
 from ctrl_analysis.report import StudyContext, StudyInfo, StudyResult
 from ctrl_analysis.simulate import run_seeds
-from ctrl_analysis.study import record_parameters
+from ctrl_analysis.study import record_parameters, study_params
 
 from . import figures, loops, quantities
 from .paper import EXAMPLE, QUICK
@@ -33,15 +33,17 @@ def run(ctx: StudyContext, params=None) -> StudyResult:
     ----------
     ctx : StudyContext
         Output folder, runs, seed and ``quick`` from the CLI (or a test).
-    params : Example, optional
-        Settings (default :data:`~.paper.EXAMPLE`, or :data:`~.paper.QUICK` with ``ctx.quick``).
+    params : dict, optional
+        Overrides of the study's settings (:func:`ctrl_analysis.study.study_params`): ``{"ex": Example}``
+        or ``{"ex": {field: value}}``; default :data:`~.paper.EXAMPLE`, or :data:`~.paper.QUICK`
+        with ``ctx.quick``.
 
     Returns
     -------
     StudyResult
     """
-    p = params if params is not None else (QUICK if ctx.quick else EXAMPLE)
     result = StudyResult(INFO)
+    p = study_params({"ex": QUICK if ctx.quick else EXAMPLE}, params, result)["ex"]
     record_parameters(result, p, prefix="ex")
     seeds = run_seeds(ctx.seed, ctx.runs_or(100, quick_default=10))
     result.seeds["noise"] = seeds

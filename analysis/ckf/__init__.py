@@ -16,7 +16,7 @@ import functools
 
 from ctrl_analysis import sensitivity
 from ctrl_analysis.report import StudyContext, StudyInfo, StudyResult
-from ctrl_analysis.study import record_parameters
+from ctrl_analysis.study import record_parameters, study_params
 
 from . import beyond, figures
 from . import quantities as qty
@@ -87,10 +87,17 @@ def _order(plant):
     return len(plant_tf(plant).poles())
 
 
-def run(ctx: StudyContext, p=PAPER, r=READINGS) -> StudyResult:
+def run(ctx: StudyContext, params=None) -> StudyResult:
     """Reproduce Table 1 and Fig. 2-9 with the live identification, then the ablation and the studies beyond
-    the paper (Fig. 10-12), then the sensitivity of every claim to every reconstruction."""
+    the paper (Fig. 10-12), then the sensitivity of every claim to every reconstruction.
+
+    ``params`` overrides the settings (:func:`ctrl_analysis.study.study_params`): ``{"": Paper}`` (the paper's
+    values and reconstructions, :data:`.paper.PAPER`) and ``{"claims": Readings}`` (:data:`.paper.READINGS`),
+    each an object or a dict of its fields; ``--quick`` then shortens the horizon and the option and sweep runs.
+    """
     result = StudyResult(INFO)
+    chosen = study_params({"": PAPER, "claims": READINGS}, params, result)
+    p, r = chosen[""], chosen["claims"]
     if ctx.quick:
         p = dataclasses.replace(p, t_end=min(p.t_end, 30.0), option_runs=min(p.option_runs, 3),
                                 sweep_runs=min(p.sweep_runs, 3))

@@ -18,7 +18,7 @@ from ctrl_analysis.controllers.golden_section import GoldenSectionController
 from ctrl_analysis.engine.kernels import KernelBlock, Kernels, Layout
 from ctrl_analysis.estimators.kalman import CharacteristicKalmanFilter
 from ctrl_analysis.estimators.lowpass import LowPassFilter
-from ctrl_analysis.identification import ArxRegressor, RecursiveLeastSquares
+from ctrl_analysis.identification import ArxRegressor, RecursiveLeastSquaresBlock
 from ctrl_analysis.loop import Loop, place
 from ctrl_analysis.plants import DiscreteLTI
 from ctrl_analysis.simulate import draw_noise, gaussian_noise, run_seeds
@@ -138,10 +138,10 @@ def build_loop(p, plant=None) -> Loop:
               inputs=["y_m", "u_prev", "f1", "f2", "g0"], outputs=["y_ckf", "y_ckf_prev"]),
         place(FeedbackSwitch(raw, p.t_filter, ("y_m", "y_lpf", "y_ckf"), ("y_fb",)), "select"),
         place(StaticGain([raw], ("y_m", "y_lpf", "y_fb"), ("s_id",)), "idsignal"),
-        place(ArxRegressor(2, 1, lag=0), "regressor", inputs=["s_id", "u"], outputs=["z", "h0", "h1", "h2"]),
-        place(RecursiveLeastSquares(3, p.forgetting, p.P0_rls, p.theta0, lower=lo, upper=hi,
-                                    max_trace=p.max_trace, feedthrough=False), "rls",
-              inputs=["z", "h0", "h1", "h2"], outputs=["f1", "f2", "g0"]),
+        place(ArxRegressor(2, 1, lag=0), "regressor", inputs=["s_id", "u"]),  # outputs z, h[0], h[1], h[2]
+        place(RecursiveLeastSquaresBlock(3, p.forgetting, p.P0_rls, p.theta0, lower=lo, upper=hi,
+                                         max_trace=p.max_trace, feedthrough=False), "rls",
+              outputs=["f1", "f2", "g0"]),  # reads z, h[0..2]; θ = [f1, f2, g0], the characteristic model's names
         place(GoldenSectionController(p.k_I, p.c2, mu=p.mu, l1=p.l1, l2=p.l2), "ctrl",
               inputs=["y_fb", "r", "f1", "f2", "g0"], outputs=["u"]),
     ]

@@ -16,7 +16,7 @@ from ctrl_analysis.estimators.differential import DifferentialEstimator
 from ctrl_analysis.report import StudyContext, StudyInfo, StudyResult
 from ctrl_analysis.simulate import run_seeds
 from ctrl_analysis import sensitivity
-from ctrl_analysis.study import record_parameters
+from ctrl_analysis.study import record_parameters, study_params
 
 from . import claims, example1, example2, figures, linear_checks
 from .paper import EX1, EX2, LINEAR, READINGS
@@ -40,25 +40,32 @@ MISSING = [
 ]
 
 
-def run(ctx: StudyContext, ex1=None, ex2=None) -> StudyResult:
-    """Reproduce the study: linear part, Example 1 (+ fair comparison), Example 2 (+ robustness), claims, sensitivity."""
+def run(ctx: StudyContext, params=None) -> StudyResult:
+    """Reproduce the study: linear part, Example 1 (+ fair comparison), Example 2 (+ robustness), claims, sensitivity.
+
+    ``params`` overrides the settings (:func:`ctrl_analysis.study.study_params`): ``"linear"``, ``"ex1"``, ``"ex2"``,
+    ``"claims"`` (defaults :data:`.paper.LINEAR`, :data:`.paper.EX1`, :data:`.paper.EX2`, :data:`.paper.READINGS`;
+    with ``--quick`` shorter Examples 1-2 and a coarser Example 2 grid), each an object or a dict of its fields.
+    """
     result = StudyResult(INFO)
-    p1 = ex1 or (EX1 if not ctx.quick else replace(EX1, T=2.0))
-    p2 = ex2 or (EX2 if not ctx.quick else replace(EX2, T=5.0, sweep_b1=(-10.0, 0.0, 10.0),
-                                                   sweep_b2=(-10.0, 2.0, 10.0), sweep_b3=(0.1, 10.0)))
+    quick1, quick2 = replace(EX1, T=2.0), replace(EX2, T=5.0, sweep_b1=(-10.0, 0.0, 10.0),
+                                                   sweep_b2=(-10.0, 2.0, 10.0), sweep_b3=(0.1, 10.0))
+    chosen = study_params({"linear": LINEAR, "ex1": quick1 if ctx.quick else EX1, "ex2": quick2 if ctx.quick else EX2,
+                           "claims": READINGS}, params, result)
+    lin, p1, p2, r = chosen["linear"], chosen["ex1"], chosen["ex2"], chosen["claims"]
     runs = ctx.runs_or(100, 3)
-    for prefix, params in (("linear", LINEAR), ("ex1", p1), ("ex2", p2), ("claims", READINGS)):
-        record_parameters(result, params, prefix)
-    _linear(ctx, result)
+    for prefix, obj in chosen.items():
+        record_parameters(result, obj, prefix)
+    _linear(ctx, result, lin)
     _example1(ctx, result, p1, runs)
     a_preset = _example2(ctx, result, p2, runs)
-    claims.judge(result, p1, p2, READINGS)
-    _sensitivity(ctx, result, p1, p2, a_preset)
+    claims.judge(result, p1, p2, r)
+    _sensitivity(ctx, result, chosen, a_preset)
     result.missing = list(MISSING)  # the differing cells are listed by the report, from their verdicts
     return result
 
 
-def _sensitivity(ctx, result, p1, p2, a_preset):
+def _sensitivity(ctx, result, chosen, a_preset):
     """Every reconstruction's plausible range, one at a time (:func:`.claims.evaluate`); figure sensitivity.png."""
     runs = 3 if ctx.quick else 10
     names = None if not ctx.quick else ["ex1.eso_tuning_h", "ex2.b1", "claims.fair_margin"]
@@ -66,7 +73,7 @@ def _sensitivity(ctx, result, p1, p2, a_preset):
     evaluate = functools.partial(claims.evaluate, runs=runs, seed=ctx.seed, a_preset=a_preset,
                                  grid=None if not ctx.quick else {"sweep_b1": (1.0,), "sweep_b2": (2.0,),
                                                                   "sweep_b3": (1.0,)})
-    sens = sensitivity.sweep(evaluate, {"linear": LINEAR, "ex1": p1, "ex2": p2, "claims": READINGS}, names=names, jobs=ctx.jobs,
+    sens = sensitivity.sweep(evaluate, chosen, names=names, jobs=ctx.jobs,
                              scheduler=ctx.scheduler,
                              note=f"{runs} Monte Carlo runs per evaluation (the main run's first seeds); Example 2's "
                                   f"robustness grid reduced to b1 ∈ {claims.EVAL_GRID['sweep_b1']}, b2 ∈ "
@@ -80,28 +87,28 @@ def _sensitivity(ctx, result, p1, p2, a_preset):
                             "reconstruction at a time.")
 
 
-def _linear(ctx, result):
+def _linear(ctx, result, lin):
     ctx.progress("linear part: eq. (9), (5), Fig. 1-2")
-    eq9 = linear_checks.eq9_checks(result, LINEAR)
-    linear_checks.eq5_checks(result, LINEAR)
-    linear_checks.lowpass_checks(result, LINEAR)
-    linear_checks.controller_poles(result, LINEAR)
-    n0, a = LINEAR.fig1_n0, LINEAR.fig1_a
+    eq9 = linear_checks.eq9_checks(result, lin)
+    linear_checks.eq5_checks(result, lin)
+    linear_checks.lowpass_checks(result, lin)
+    linear_checks.controller_poles(result, lin)
+    n0, a = lin.fig1_n0, lin.fig1_a
     fig = figures.plot_root_locus(
-        DifferentialEstimator(n0, a), printed_K=eq9["K_printed_by_n"][LINEAR.eq9_n], printed_n=LINEAR.eq9_n,
+        DifferentialEstimator(n0, a), printed_K=eq9["K_printed_by_n"][lin.eq9_n], printed_n=lin.eq9_n,
         title=f"Fig. 1  Root locus of G(s) = K(s+{a:g})^{n0 - 1}/s^{n0} (n0 = {n0}, a = {a:g}); "
               "× = closed-loop poles at the design gain")
     ctx.save_figure(result, fig, "fig1_root_locus.png",
                     caption=f"Redraws the paper's Fig. 1: root locus of Σ's loop G(s) = K(s+a)^(n0−1)/s^n0 for n0 = {n0}, "
                             f"a = {a:g}, with the closed-loop poles at the design gain (the breakaway point s = −n0 a); "
                             "see the check 'breakaway point' and the erratum on eq. (9)'s exponent.")
-    est2 = DifferentialEstimator(LINEAR.fig2_n0, LINEAR.fig2_a)
+    est2 = DifferentialEstimator(lin.fig2_n0, lin.fig2_a)
     ctx.save_figure(result, figures.plot_bode(est2, title=f"Fig. 2  Bode plot of Φ(s), y → z₁ (n0 = {est2.n0}, "
                                                           f"a = {est2.a:g}, K = {est2.K:.4g})"), "fig2_bode.png",
                     caption="Redraws the paper's Fig. 2: Bode plot of Σ's transfer function Φ(s) from the measurement y "
                             "to the estimate z1; a low-pass with unit DC gain (its −3 dB bandwidth and resonance peak are "
                             "quantities 'Fig. 2: -3 dB bandwidth of Φ' and 'Fig. 2: resonance peak of |Φ|'; claim lowpass).")
-    ctx.save_figure(result, figures.plot_normalised_magnitude(LINEAR.table_n0, title="Beyond the paper: |Φ(jω)| of Σ "
+    ctx.save_figure(result, figures.plot_normalised_magnitude(lin.table_n0, title="Beyond the paper: |Φ(jω)| of Σ "
                     "at the design gain, against ω/a, n0 = 2..8"), "extra_phi_magnitude_vs_n0.png",
                     caption="Beyond the paper: |Φ(jω)| of Σ at the design gain against the normalised frequency ω/a "
                             "for n0 = 2 to 8; the bandwidth scales with a, and n0 sets the bandwidth ω_b/a and the resonance "
@@ -121,14 +128,14 @@ def _example1(ctx, result, p, runs):
     example1.n0_sweep(result, p, d)
     example1.eso_divergence(result, p, seeds)
     b = int(np.flatnonzero(d["ok"])[0]) if d["ok"].any() else 0
-    t, s = p.h * np.arange(d["sig"]["x1"].shape[0]), d["sig"]
-    ctx.save_figure(result, figures.plot_x2(t, s["x2"][:, b], s["sig[1]"][:, b], f"Fig. 3 — Example 1: x2 and Σ's "
+    t, s = p.h * np.arange(d["sig"]["x[0]"].shape[0]), d["sig"]
+    ctx.save_figure(result, figures.plot_x2(t, s["x[1]"][:, b], s["sig[1]"][:, b], f"Fig. 3 — Example 1: x2 and Σ's "
                     f"estimate z2 (n0 = {p.n0}, a = {p.a:g}; seed {seeds[b]})", r"$\hat x_2 = z_2$ (Σ)"),
                     "fig3_sigma_x2.png",
                     caption="Redraws the paper's Fig. 3 (Example 1): the true x2 and Σ's estimate z2 (state reading) "
                             "in one run, the error, and a 0.5 s zoom; its mean error over the runs is the §4 Example 1 Σ "
                             "|ε̄2| cell.")
-    ctx.save_figure(result, figures.plot_x2(t, s["x2"][:, b], s["eso0[1]"][:, b], f"Fig. 4 — Example 1: x2 and "
+    ctx.save_figure(result, figures.plot_x2(t, s["x[1]"][:, b], s["eso[0][1]"][:, b], f"Fig. 4 — Example 1: x2 and "
                     f"Han's nonlinear ESO estimate (textbook gains; seed {seeds[b]})", r"$\hat x_2$ (ESO)"),
                     "fig4_eso_x2.png",
                     caption="Redraws the paper's Fig. 4 (Example 1): the true x2 and the estimate of Han's nonlinear "
@@ -158,8 +165,8 @@ def _example2(ctx, result, p, runs):
     s, t, per = d["sig"], d["t"], d["per"]
     pick, tr = d["pick"], d["traces"]
     traces = [(f"{name} (Σ n0 = {p.n0}, a = {d['a'][j]:g}; seed {d['seeds'][pick[j] - j * per]})",
-               {"x1": tr["x1"][:-1, j], "xhat1": tr["xhat[0]"][:-1, j], "x2": tr["x2"][:-1, j],
-                "xhat2": tr["xhat[1]"][:-1, j]})
+               {"x[0]": tr["x[0]"][:-1, j], "xhat[0]": tr["xhat[0]"][:-1, j], "x[1]": tr["x[1]"][:-1, j],
+                "xhat[1]": tr["xhat[1]"][:-1, j]})
               for j, name in enumerate(("paper's configuration", "preset fast_estimator"))]
     ctx.save_figure(result, figures.plot_fig5(t[:-1], d["r"], d["theta"][:, 0], traces, "Fig. 5 — Example 2: "
                     "setpoint, output and estimates under controller (18), as printed (a = 5) and preset a = "
@@ -174,7 +181,7 @@ def _example2(ctx, result, p, runs):
     b = pick[0]
     pair = lin["pair"]
     ctx.save_figure(result, figures.plot_literal(
-        t[:-1], d["theta"][:, 0], s["x1"][:-1, b], s["u"][:-1, b], zoom,
+        t[:-1], d["theta"][:, 0], s["x[0]"][:-1, b], s["u"][:-1, b], zoom,
         f"Example 2 as printed (Σ a = {p.a:g}, K = [2184, 506, 39]): output and control (seed {d['seeds'][b]})",
         f"last 2 s: amplitude {q['amp'][b]:.3g}, {q['freq'][b]:.2f} Hz (linearised pair {pair.real:+.1f} ± "
         f"{abs(pair.imag):.1f}j rad/s)"), "fig_ex2_literal.png",

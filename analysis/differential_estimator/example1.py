@@ -96,7 +96,7 @@ def simulate(p: Example1, seeds) -> dict:
     tune = equal_bandwidth_tuning(p, bw)
     noise = draw(p, seeds)
     sig, div, step = loops.simulate_example1(p, seeds, noise, [loops.han_eso(p), loops.han_eso(p, tune["h_tuning"])])
-    x = np.stack([sig["x1"][:-1], sig["x2"][:-1]], axis=2)
+    x = np.stack([sig["x[0]"][:-1], sig["x[1]"][:-1]], axis=2)
     eta = noise[:, :, 1]
     y = x[:, :, 0] + eta
     zc = est.estimates(np.stack([sig["sig[0]"][:-1], sig["sig[1]"][:-1]] + [0 * y] * (p.n0 - 2), axis=2), y,
@@ -105,7 +105,7 @@ def simulate(p: Example1, seeds) -> dict:
     corrected = mean_abs_error(x[:, :, 1], zc[:, :, 1])
     err = {"sigma": state if p.reading == "state" else np.stack([state[:, 0], corrected], axis=1),
            "sigma_state": state, "sigma_corrected": corrected,
-           **{k: mean_abs_error(x, np.stack([sig[f"eso{j}[0]"][:-1], sig[f"eso{j}[1]"][:-1]], axis=2))
+           **{k: mean_abs_error(x, np.stack([sig[f"eso[{j}][0]"][:-1], sig[f"eso[{j}][1]"][:-1]], axis=2))
               for j, k in enumerate(("eso", "eso_fal_eq"))}}
     return {"sig": sig, "noise": noise, "ok": ~div, "diverged": div, "step": step, "err": err, "bw_sigma": bw,
             "tune": tune, "seeds": list(seeds)}
@@ -161,9 +161,9 @@ def sensitivities(result: StudyResult, p: Example1, d: dict) -> None:
     """Euler instead of RK4 (same noise), and a halved step over the first ``p.t_sens`` s; finding ``ex1-step-size``."""
     seeds, noise, err, ok = d["seeds"], d["noise"], d["err"], d["ok"]
     sig, div_e, _ = loops.simulate_example1(p, seeds, noise, method="euler")
-    x = np.stack([sig["x1"][:-1], sig["x2"][:-1]], axis=2)
+    x = np.stack([sig["x[0]"][:-1], sig["x[1]"][:-1]], axis=2)
     err_e = {"sigma": mean_abs_error(x, np.stack([sig["sig[0]"][:-1], sig["sig[1]"][:-1]], axis=2)),
-             "eso": mean_abs_error(x, np.stack([sig["eso0[0]"][:-1], sig["eso0[1]"][:-1]], axis=2))}
+             "eso": mean_abs_error(x, np.stack([sig["eso[0][0]"][:-1], sig["eso[0][1]"][:-1]], axis=2))}
     ok_e = ~div_e
     for who in ("sigma", "eso"):
         for i in (0, 1):
@@ -210,7 +210,7 @@ def _half_step(result: StudyResult, p: Example1, d: dict) -> dict:
     noise_h = np.concatenate([np.repeat(noise[:n_win], 2, axis=0), draw(p, seeds, n_half)], axis=1)
     runs = len(seeds)
     out, div_h, _ = loops.simulate_example1(ph, list(seeds) * 2, noise_h, [])
-    e = lambda s, k: np.stack([s["x1"][:k], s["x2"][:k]], 2) - np.stack([s["sig[0]"][:k], s["sig[1]"][:k]], 2)
+    e = lambda s, k: np.stack([s["x[0]"][:k], s["x[1]"][:k]], 2) - np.stack([s["sig[0]"][:k], s["sig[1]"][:k]], 2)
     err_h = np.mean(np.abs(e(out, n_half)[::2]), axis=0)  # the 1 ms instants of the window
     err_m = np.mean(np.abs(e(sig, n_win)), axis=0)
     ratios = {}
@@ -236,7 +236,7 @@ def _errors(x, est_out) -> np.ndarray:
 def fair_comparison(result: StudyResult, p: Example1, d: dict, tradeoff: bool = True) -> dict | None:
     """ESO vs Σ at equal −3 dB bandwidth, and (``tradeoff``) the x1-error/x2-error trade-off over the bandwidth; quantities ``ex1.fair.*``, ``ex1.tradeoff.*``."""
     sig, eta, ok = d["sig"], d["noise"][:, :, 1], d["ok"]
-    x = np.stack([sig["x1"][:-1], sig["x2"][:-1]], axis=2)
+    x = np.stack([sig["x[0]"][:-1], sig["x[1]"][:-1]], axis=2)
     x1 = np.where(ok, x[:, :, 0], 0.0)
     est = DifferentialEstimator(p.n0, p.a)
     bw_s, tune = d["bw_sigma"], d["tune"]
@@ -334,7 +334,7 @@ def n0_sweep(result: StudyResult, p: Example1, d: dict, n0_values=(2, 3, 4, 5, 6
     The finding ``ex1-n0`` is recorded when both modes are computed.
     """
     sig, ok = d["sig"], d["ok"]
-    x = np.stack([sig["x1"][:-1], sig["x2"][:-1]], axis=2)
+    x = np.stack([sig["x[0]"][:-1], sig["x[1]"][:-1]], axis=2)
     path = d.get("path") or loops.LinearPath(np.where(ok, x[:, :, 0], 0.0), d["noise"][:, :, 1], p.h)
     out = {}
     for mode in modes:

@@ -143,11 +143,11 @@ def simulate(p: Example2, seeds, a_new: float, runs: int) -> dict:
         return loops.simulate_signals(loops.example2_loop(p), n, keep, inputs=inputs, runs=k, bound=p.bound,
                                       params=params)
 
-    sig, div, step = batch(slice(None), ["x1", "u"])
+    sig, div, step = batch(slice(None), ["x[0]", "u"])
     ok = ~div
     pick = [int(np.flatnonzero(ok[j * per:j * per + runs])[0]) + j * per if ok[j * per:j * per + runs].any()
             else j * per for j in (0, 1)]
-    traces, _, _ = batch(np.array(pick), ["x1", "x2", "xhat[0]", "xhat[1]"])
+    traces, _, _ = batch(np.array(pick), ["x[0]", "x[1]", "xhat[0]", "xhat[1]"])
     return {"sig": sig, "ok": ok, "diverged": div, "step": step, "r": r, "theta": theta, "per": per,
             "runs": runs, "grid": G, "t": p.h * np.arange(n + 1), "a": (p.a, a_new), "seeds": list(seeds),
             "pick": pick, "traces": traces}
@@ -156,11 +156,11 @@ def simulate(p: Example2, seeds, a_new: float, runs: int) -> dict:
 def quantities(result: StudyResult, p: Example2, d: dict, lin: dict | None) -> dict:
     """Per-preset quantities ``ex2.<preset>.*`` and ``ex2.sweep.*`` (findings too unless ``lin`` is None); returns the stability maps."""
     sig, ok, per, runs = d["sig"], d["ok"], d["per"], d["runs"]
-    n = sig["x1"].shape[0] - 1
+    n = sig["x[0]"].shape[0] - 1
     v = d["theta"][:, 0]
-    e = sig["x1"][:-1] - v[:, None]
+    e = sig["x[0]"][:-1] - v[:, None]
     tail = slice(n - n // 4, n)
-    err = mean_abs_error(sig["x1"][:-1], v[:, None])
+    err = mean_abs_error(sig["x[0]"][:-1], v[:, None])
     amp, freq = oscillation(e[tail], p.h)
     stable = ok & (amp < p.ripple_tol)
     # outcome per run: 0 settles, 1 oscillates (bounded, ripple above the tolerance), 2 diverges

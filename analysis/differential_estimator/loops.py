@@ -71,7 +71,7 @@ def sensor_output(t, x, u, p, y):
 class Plant19(ContinuousBlock):
     """Plant (19) of Example 1: ``x1' = x2``, ``x2' = -(b1 x1 + b2 x1² x2) + w + ξ``, ``w = sign(cos(ω_w t))``.
 
-    Input ``xi`` (the process noise ξ, held per step); states and outputs ``x1``, ``x2``. The batched
+    Input ``xi`` (the process noise ξ, held per step); states and outputs ``x[0]``, ``x[1]`` (``x1``, ``x2``). The batched
     ``rhs`` applies the kernel :func:`plant19_rhs` to the batch's columns (one piece of code for the
     numpy and the compiled engine).
 
@@ -81,7 +81,7 @@ class Plant19(ContinuousBlock):
         ``b1``, ``b2`` and ``w_freq`` are read from it.
     """
 
-    inputs, outputs, states = ("xi",), ("x1", "x2"), ("x1", "x2")
+    inputs, outputs, states = ("xi",), ("x[0]", "x[1]"), ("x[0]", "x[1]")
 
     def __init__(self, p: Example1):
         self.b1, self.b2, self.w_freq = float(p.b1), float(p.b2), float(p.w_freq)
@@ -100,7 +100,7 @@ class Plant19(ContinuousBlock):
 class Sensor(StaticBlock):
     """``y = x1 + η`` (19)/(20), a static sum block with a kernel (:func:`sensor_output`)."""
 
-    def __init__(self, signal: str = "x1"):
+    def __init__(self, signal: str = "x[0]"):
         super().__init__(self._sum, inputs=(signal, "eta"), outputs=("y",))
 
     @staticmethod
@@ -137,7 +137,7 @@ def plant20_rhs(t, x, u, p, dx):
 class Plant20(KernelBlock, ContinuousBlock):
     """Plant (20) of Example 2: ``x''' = b1 x1 - (b2 - x1²) x2 - b3 x3|x3| + w + ξ + u``.
 
-    Inputs ``u`` (control), ``xi`` (process noise); states and outputs ``x1, x2, x3``. Kernel
+    Inputs ``u`` (control), ``xi`` (process noise); states and outputs ``x[0], x[1], x[2]`` (``x1, x2, x3``). Kernel
     :func:`plant20_rhs` (the batched methods are derived from it). A parameter grid on the batch
     axis is given to the simulation: ``Loop.simulate(params={"plant": {"b": (B, 3) values}})``.
 
@@ -150,7 +150,7 @@ class Plant20(KernelBlock, ContinuousBlock):
         Amplitude of ``w = w_amp sign(cos(ω_w t))``; 0 makes the origin an equilibrium.
     """
 
-    inputs, outputs, states = ("u", "xi"), ("x1", "x2", "x3"), ("x1", "x2", "x3")
+    inputs, outputs, states = ("u", "xi"), ("x[0]", "x[1]", "x[2]"), ("x[0]", "x[1]", "x[2]")
     kernels = Kernels(rhs=plant20_rhs)
 
     def __init__(self, p: Example2, b=None, w_amp=None):
@@ -161,7 +161,7 @@ class Plant20(KernelBlock, ContinuousBlock):
         self.kernel_params = PLANT20.pack(b1=self.b1, b2=self.b2, b3=self.b3, w_amp=self.w_amp, w_freq=self.w_freq)
 
 
-def sensor(signal: str = "x1") -> Sensor:
+def sensor(signal: str = "x[0]") -> Sensor:
     """``y = x1 + η`` (19)/(20), a static sum block (:class:`Sensor`)."""
     return Sensor(signal)
 
@@ -182,7 +182,7 @@ def han_eso(p: Example1, tuning_h: float | None = None) -> ExtendedStateObserver
 
 
 def example1_loop(p: Example1, esos=None, *, method: str | None = None, h: float | None = None) -> Loop:
-    """Plant (19) + sensor + Σ (outputs ``sig[i]``) + ESOs (outputs ``eso{j}[i]``), external ``xi``, ``eta``, ``u0``.
+    """Plant (19) + sensor + Σ (outputs ``sig[i]``) + ESOs (ESO ``j``'s outputs ``eso[j][i]``), external ``xi``, ``eta``, ``u_eso``.
 
     Parameters
     ----------
@@ -198,7 +198,7 @@ def example1_loop(p: Example1, esos=None, *, method: str | None = None, h: float
     blocks = [place(Plant19(p), "plant"), place(sensor(), "sensor"),
               place(sigma, "sigma", outputs=signal_names("sig", p.n0))]
     for j, eso in enumerate(esos):
-        blocks.append(place(eso, f"eso{j}", inputs=["y", "u0"], outputs=signal_names(f"eso{j}", 3)))
+        blocks.append(place(eso, f"eso{j}", inputs=["y", "u_eso"], outputs=tuple(f"eso[{j}][{i}]" for i in range(3))))
     return Loop(blocks, p.h if h is None else h, method=p.method if method is None else method)
 
 
@@ -350,14 +350,14 @@ def simulate_example1(p: Example1, seeds, noise, esos=None, *, method: str | Non
 
     The loop carries :func:`pad_observers` ``(esos)``; only the observers ``esos`` are kept.
 
-    Returns ``(signals, diverged, diverged_step)`` of :func:`simulate_signals` with ``x1``, ``x2``,
-    Σ's ``sig[0]``, ``sig[1]`` and each ESO's ``eso{j}[0]``, ``eso{j}[1]``.
+    Returns ``(signals, diverged, diverged_step)`` of :func:`simulate_signals` with ``x[0]``, ``x[1]``,
+    Σ's ``sig[0]``, ``sig[1]`` and each ESO's ``eso[j][0]``, ``eso[j][1]``.
     """
     esos = [han_eso(p)] if esos is None else list(esos)
     loop = example1_loop(p, pad_observers(esos), method=method)
-    keep = ["x1", "x2", "sig[0]", "sig[1]"] + [f"eso{j}[{i}]" for j in range(len(esos)) for i in (0, 1)]
+    keep = ["x[0]", "x[1]", "sig[0]", "sig[1]"] + [f"eso[{j}][{i}]" for j in range(len(esos)) for i in (0, 1)]
     n_steps = noise.shape[0]
-    inputs = {"xi": noise[:, :, 0], "eta": noise[:, :, 1], "u0": 0.0}
+    inputs = {"xi": noise[:, :, 0], "eta": noise[:, :, 1], "u_eso": 0.0}
     return simulate_signals(loop, n_steps, keep, inputs=inputs, runs=len(seeds), chunk=chunk, bound=p.bound,
                             seeds=seeds)
 

@@ -14,7 +14,7 @@ import numpy as np
 from ctrl_analysis import sensitivity
 from ctrl_analysis.report import StudyContext, StudyInfo, StudyResult
 from ctrl_analysis.simulate import run_seeds
-from ctrl_analysis.study import record_parameters
+from ctrl_analysis.study import record_parameters, study_params
 
 from . import figures as F
 from .claims import judge_claims, record_fig2, record_noise_margin, record_table1
@@ -53,18 +53,22 @@ INFO = StudyInfo(
 _GAINS = {"q": (0.03, 0.1, 0.3, 1.0, 3.0, 10.0, 30.0), "rho": (0.2, 0.4, 0.6, 0.8, 1.0), "lam": (0.5, 1.0, 2.0, 4.0, 8.0)}
 SWEEPS = {"ex1": {"noise": (0.02, 0.05, 0.1, 0.2, 0.3, 0.4), **_GAINS},
           "ex2": {"noise": (0.25, 0.5, 1.0, 1.5, 2.0), **_GAINS}}
-EXAMPLES = {"ex1": EX1, "ex2": EX2}
 #: TD step counts scanned (x1 after the steps) on Table 1's seeds, around and above each chosen count.
 TD_COUNTS = {"ex1": (1, 2, 4, 8, 12, 16, 17, 18, 19, 20, 24, 32, 48, 64),
              "ex2": (1, 4, 8, 16, 24, 28, 30, 31, 32, 33, 34, 35, 36, 40, 48, 64)}
 
 
-def run(ctx: StudyContext) -> StudyResult:
-    """Reproduce Table 1 and Fig. 2-6 by Monte Carlo, judge the claims, sweep the reconstructions and beyond the paper."""
+def run(ctx: StudyContext, params=None) -> StudyResult:
+    """Reproduce Table 1 and Fig. 2-6 by Monte Carlo, judge the claims, sweep the reconstructions and beyond the paper.
+
+    ``params`` overrides the settings (:func:`ctrl_analysis.study.study_params`): ``"ex1"``, ``"ex2"`` (the examples,
+    :data:`.paper.EX1`, :data:`.paper.EX2`) and ``"fig2"`` (:data:`.paper.FIG2`), each an object or a dict of its fields.
+    """
     result = StudyResult(INFO)
-    for key, ex in EXAMPLES.items():
+    chosen = study_params({"ex1": EX1, "ex2": EX2, "fig2": FIG2}, params, result)
+    examples, fig2p = {"ex1": chosen["ex1"], "ex2": chosen["ex2"]}, chosen["fig2"]
+    for key, ex in chosen.items():
         record_parameters(result, ex, key)
-    record_parameters(result, FIG2, "fig2")
     runs = ctx.runs_or(200, 10)
     seeds = run_seeds(ctx.seed, runs)
     sweep_seeds = seeds[: min(runs, 50)]
@@ -73,25 +77,25 @@ def run(ctx: StudyContext) -> StudyResult:
     result.settings["sweeps"] = SWEEPS
     ctx.progress(f"ikf-mfac: Table 1 ({runs} runs) and the sweeps ({len(sweep_seeds)} runs a point), side by side")
     all_runs, points = {}, {}
-    for key, ex in EXAMPLES.items():
+    for key, ex in examples.items():
         done = {s: run_with_sweeps(ex, s, seeds, sweep_seeds, SWEEPS[key]) for s in SCHEMES}
         all_runs[key] = {s: d[0] for s, d in done.items()}
         points[key] = {s: d[1] for s, d in done.items()}
-    sweeps = {key: sweep_table(points[key], SWEEPS[key]) for key in EXAMPLES}
+    sweeps = {key: sweep_table(points[key], SWEEPS[key]) for key in examples}
     per_run = {}
-    for key in EXAMPLES:
+    for key in examples:
         per_run[key] = {s: metrics_of(all_runs[key][s]) for s in SCHEMES}
         where = {s: [f"run {b} at k = {k}" for b, k in zip(np.flatnonzero(r.diverged), r.diverged_step[r.diverged])]
                  for s, r in all_runs[key].items()}
         record_table1(result, key, per_run[key], where)
         record_noise_margin(result, key, SWEEPS[key]["noise"], {s: sweeps[key][s]["noise"] for s in SCHEMES})
-    fig2, fig2_first = fig2_data(EX1, FIG2, fig2_seeds, keep_first=True)
-    record_fig2(result, FIG2.R, len(fig2_seeds), fig2, EX1.Q)
+    fig2, fig2_first = fig2_data(examples["ex1"], fig2p, fig2_seeds, keep_first=True)
+    record_fig2(result, fig2p.R, len(fig2_seeds), fig2, examples["ex1"].Q)
     judge_claims(result)
     record_ranking(result, per_run)
-    record_consistency(result, EX1.n, EX2.n)
-    record_steady_gain(result, EX2, EX2.n)
-    for key, ex in EXAMPLES.items():
+    record_consistency(result, examples["ex1"].n, examples["ex2"].n)
+    record_steady_gain(result, examples["ex2"], examples["ex2"].n)
+    for key, ex in examples.items():
         record_rearm(result, key, ex, d_mfac_rearm_variant(ex, seeds))
     ctx.progress("ikf-mfac: TD steps per sample")
     # --quick: the literal TD (one step a sample) on the numpy engine, its loop is the only one no other
@@ -100,24 +104,24 @@ def run(ctx: StudyContext) -> StudyResult:
                    "rows": td_step_scan(ex, seeds, (ex.td_substeps,) if ctx.quick else TD_COUNTS[key], (True,))
                    | td_step_scan(ex, seeds, (1,) if ctx.quick else (1, ex.td_substeps), (False,),
                                   engine="numpy" if ctx.quick else "auto")}
-             for key, ex in EXAMPLES.items()}
-    td_scan = record_td_scan(result, scans, {key: ex.td_substeps for key, ex in EXAMPLES.items()})
-    ratio = {key: ratio_rows(points[key]["ikf_mfac"], SWEEPS[key], ex) for key, ex in EXAMPLES.items()}
+             for key, ex in examples.items()}
+    td_scan = record_td_scan(result, scans, {key: ex.td_substeps for key, ex in examples.items()})
+    ratio = {key: ratio_rows(points[key]["ikf_mfac"], SWEEPS[key], ex) for key, ex in examples.items()}
     record_where_ikf_wins(result, sweeps, ratio, SWEEPS)
-    _sensitivity(ctx, result, seeds)
+    _sensitivity(ctx, result, seeds, chosen)
     result.missing = missing(result)
-    _figures(ctx, result, all_runs, per_run, sweeps, ratio, seeds, fig2_first, td_scan)
+    _figures(ctx, result, chosen, all_runs, per_run, sweeps, ratio, seeds, fig2_first, td_scan)
     return result
 
 
-def _sensitivity(ctx, result, seeds) -> None:
+def _sensitivity(ctx, result, seeds, chosen) -> None:
     """Every reconstruction across its plausible range, one at a time, on the first recorded seeds."""
     n_table, n_noise, n_fig2 = (4, 3, 4) if ctx.quick else (60, 20, 40)
     mc = MonteCarlo(tuple(seeds[:n_table]), tuple(seeds[:n_noise]), tuple(seeds[:n_fig2]),
                     SWEEPS["ex1"]["noise"], SWEEPS["ex2"]["noise"])
     names = ("ex1.Q", "ex2.rearm") if ctx.quick else None
     ctx.progress("ikf-mfac: sensitivity of the claims and cells to every reconstruction")
-    sens = sensitivity.sweep(evaluate, {"ex1": EX1, "ex2": EX2, "fig2": FIG2, "mc": mc}, names=names, jobs=ctx.jobs,
+    sens = sensitivity.sweep(evaluate, {**chosen, "mc": mc}, names=names, jobs=ctx.jobs,
                              scheduler=ctx.scheduler,
                              note=f"each evaluation: Table 1's cells on the first {len(mc.table)} recorded seeds, "
                                   f"{len(mc.noise)} runs per noise level, {len(mc.fig2)} runs per Fig. 2 R"
@@ -125,21 +129,23 @@ def _sensitivity(ctx, result, seeds) -> None:
     sensitivity.apply(result, sens)
 
 
-def _figures(ctx, result, all_runs, per_run, sweeps, ratio, seeds, fig2_first, td_scan) -> None:
+def _figures(ctx, result, chosen, all_runs, per_run, sweeps, ratio, seeds, fig2_first, td_scan) -> None:
     """Fig. 2-6, the TD step scan, the Monte Carlo spread, the sweeps and the sensitivity (low resolution with --quick)."""
+    ex1, ex2, fig2p = chosen["ex1"], chosen["ex2"], chosen["fig2"]
+    examples = {"ex1": ex1, "ex2": ex2}
     dpi = 70 if ctx.quick else 120
-    k1 = np.arange(1, EX1.n + 1)
+    k1 = np.arange(1, ex1.n + 1)
     runs2 = result.get("fig2.diverged_runs").runs
-    ctx.save_figure(result, F.plot_fig2(k1, all_runs["ex1"]["mfac"].y_ref, fig2_first, FIG2.R, runs2,
+    ctx.save_figure(result, F.plot_fig2(k1, all_runs["ex1"]["mfac"].y_ref, fig2_first, fig2p.R, runs2,
                                         result.get("fig2.diverged_runs").value, result.get("fig2.rejection").value,
-                                        result.get("fig2.rise").value, EX1.Q, FIG2.rise_level, FIG2.steady),
+                                        result.get("fig2.rise").value, ex1.Q, fig2p.rise_level, fig2p.steady),
                "fig2_ikf_q_over_r.png", dpi=dpi,
                caption="Redraws the paper's Fig. 2: IKF-MFAC in Example 1 for measurement variances R increasing at "
-                       f"a fixed Q = {EX1.Q:g} (the paper's R values and Example 1's Q are not in the paper text: "
+                       f"a fixed Q = {ex1.Q:g} (the paper's R values and Example 1's Q are not in the paper text: "
                        "reconstructed). Left: the output of one run per R. Right: what the paper's Fig. 2 claims, "
                        f"measured over {runs2} runs per R: the disturbance rejection (steady RMS of y − y* over k = "
-                       f"{FIG2.steady[0]}..{FIG2.steady[1]}, smaller = stronger) and the response speed (samples from "
-                       f"k = 3 until y first reaches {FIG2.rise_level:g}, larger = slower); an R at which at least half "
+                       f"{fig2p.steady[0]}..{fig2p.steady[1]}, smaller = stronger) and the response speed (samples from "
+                       f"k = 3 until y first reaches {fig2p.rise_level:g}, larger = slower); an R at which at least half "
                        "the runs diverge is shaded and its count printed (claim fig2-larger-r).")
     for key, (fo, fe), kind in (("ex1", (3, 4), "constant"), ("ex2", (5, 6), "time-varying")):
         r = all_runs[key]
@@ -160,28 +166,28 @@ def _figures(ctx, result, all_runs, per_run, sweeps, ratio, seeds, fig2_first, t
                        "paper's printed RMSE marked; shows whether a printed value is a typical run or lies in a "
                        "tail (each Table 1 RMSE cell agrees when the printed value lies within the central 95 % of "
                        "these runs; its percentile is recorded).")
-    ctx.save_figure(result, F.plot_td_scan(td_scan, {k: e.td_substeps for k, e in EXAMPLES.items()},
-                                           {k: result.get(f"{k}.mfac.rmse").value for k in EXAMPLES}),
+    ctx.save_figure(result, F.plot_td_scan(td_scan, {k: e.td_substeps for k, e in examples.items()},
+                                           {k: result.get(f"{k}.mfac.rmse").value for k in examples}),
                     "td_substeps_scan.png", dpi=dpi,
                     caption="TD-MFAC's mean RMSE (left axis) and its diverged runs (bars, right axis) against the "
                             "number of TD steps per control sample, which the paper does not print, on Table 1's "
                             "seeds; the count used (dashed), plain MFAC's RMSE and Table 1's TD-MFAC value are "
                             "marked. Too few steps lose runs; more steps bring TD-MFAC to plain MFAC, never below it "
                             "(finding td-steps-per-sample).")
-    ctx.save_figure(result, F.plot_noise_sweep({k: SWEEPS[k]["noise"] for k in EXAMPLES}, sweeps, {"ex1": EX1.noise_std, "ex2": EX2.noise_std}),
+    ctx.save_figure(result, F.plot_noise_sweep({k: SWEEPS[k]["noise"] for k in examples}, sweeps, {"ex1": ex1.noise_std, "ex2": ex2.noise_std}),
                "beyond_rmse_vs_noise.png", dpi=dpi,
                caption="Beyond the paper: mean RMSE of the four schemes against the measurement-noise std in "
                        "both examples (the paper's level marked), every other parameter at the example's value "
                        "(Example 1's IKF Q, R reconstructed); a mean over at least 80 % of the runs is a filled "
                        "point, over 50-80 % a hollow annotated one, and a point where at least half the runs diverged "
                        "is left out; the diverged counts are in the panel titles (claim ikf-best-every-noise).")
-    ctx.save_figure(result, F.plot_ratio_sweep(ratio, {k: e.Q / e.R for k, e in EXAMPLES.items()}),
+    ctx.save_figure(result, F.plot_ratio_sweep(ratio, {k: e.Q / e.R for k, e in examples.items()}),
                "beyond_rmse_vs_q_over_r.png", dpi=dpi,
                caption="Beyond the paper: IKF-MFAC's mean RMSE against the IKF's q = Q/R in both examples, with "
-                       f"the ratio used marked (Example 2: the paper's Q/R = {EX2.Q:g}/{EX2.R:g}; Example 1: "
+                       f"the ratio used marked (Example 2: the paper's Q/R = {ex2.Q:g}/{ex2.R:g}; Example 1: "
                        "reconstructed, not printed) and the steady gain K∞(q) on a second axis; Q is varied at the example's R; "
                        "points with diverged runs follow the 80 % rule of the other sweeps.")
-    ctx.save_figure(result, F.plot_gain_sweep(_GAINS, sweeps, {"rho": EX1.rho, "lam": EX1.lam}),
+    ctx.save_figure(result, F.plot_gain_sweep(_GAINS, sweeps, {"rho": ex1.rho, "lam": ex1.lam}),
                "beyond_rmse_vs_rho_lambda.png", dpi=dpi,
                caption="Beyond the paper: mean RMSE of the four schemes against MFAC's step factor ρ and weight "
                        "λ (Example 1's printed values marked; Example 2 only says 'similar'), showing where IKF-MFAC's "

@@ -17,7 +17,7 @@ from dataclasses import asdict
 from ctrl_analysis import sensitivity
 from ctrl_analysis.report import StudyContext, StudyInfo, StudyResult
 from ctrl_analysis.simulate import run_seeds
-from ctrl_analysis.study import record_parameters
+from ctrl_analysis.study import record_parameters, study_params
 
 from . import claims, figures, findings, linear, quantities
 from .loops import pick, simulate_situation, situation_rows
@@ -34,13 +34,17 @@ INFO = StudyInfo(
 )
 
 
-def run(ctx: StudyContext, analysis=None) -> StudyResult:
+def run(ctx: StudyContext, params=None) -> StudyResult:
     """Reproduce the linear analysis, situations 1 and 2 (Tables 2-3, Fig. 3-6), the claims and the findings.
 
-    ``analysis`` overrides the settings (default: :data:`.paper.ANALYSIS`, or :data:`.paper.QUICK` with --quick).
+    ``params`` overrides the settings (:func:`ctrl_analysis.study.study_params`): ``{"analysis": Analysis}`` or a
+    dict of its fields (default :data:`.paper.ANALYSIS`, or :data:`.paper.QUICK` with --quick: runs, horizons,
+    grids, tolerances). The paper's values and reconstructions (:data:`.paper.PAPER`, the situations, the readings)
+    are not run-time parameters of this study: its modules read them directly, and the sensitivity sweep varies
+    them through :func:`.claims.evaluate`.
     """
     result = StudyResult(INFO)
-    an = analysis or (QUICK if ctx.quick else ANALYSIS)
+    an = study_params({"analysis": QUICK if ctx.quick else ANALYSIS}, params, result)["analysis"]
     seeds = run_seeds(ctx.seed, ctx.runs_or(an.runs, an.quick_runs))
     sweep_seeds = tuple(seeds[:an.quick_runs if ctx.quick else an.sweep_runs])
     horizons = {k: an.horizon(k) for k in SITUATIONS}

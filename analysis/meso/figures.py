@@ -145,8 +145,8 @@ def plot_situation(sim: SituationRun, series: dict, title: str, max_points: int 
         for b, name, color in runs:
             k = sim.keep[b]
             x3 = _x3(sim, b)
-            for r, y in enumerate((k["u"], np.sin(t) - k["x1"], k["x1"] - k["xhat1"], k["x2"] - k["xhat2"],
-                                   x3 - k["xhat3"])):
+            for r, y in enumerate((k["u"], np.sin(t) - k["x[0]"], k["x[0]"] - k["xhat[0]"], k["x[1]"] - k["xhat[1]"],
+                                   x3 - k["xhat[2]"])):
                 a = ax[r, c]
                 if r >= 2 and col in (smooth or {}):
                     a.plot(t[::dec], y[::dec], color=color, lw=0.4, alpha=0.3)
@@ -211,9 +211,9 @@ def _moving_average(y, n):
 def _x3(sim, b):
     """True x3 at the samples for kept run ``b`` (x2' − b0 u − XᵀΘ_used)."""
     k = sim.keep[b]
-    sig = {"x1": k["x1"][:, None], "x2": k["x2"][:, None], "u": k["u"][:, None],
+    sig = {"x[0]": k["x[0]"][:, None], "x[1]": k["x[1]"][:, None], "u": k["u"][:, None],
            "level": np.where(sim.t >= PAPER.t_step - 0.5 * PAPER.h, PAPER.step, 0.0)[:, None],
-           "xhat1": k["xhat1"][:, None], "xhat2": k["xhat2"][:, None]}
+           "xhat[0]": k["xhat[0]"][:, None], "xhat[1]": k["xhat[1]"][:, None]}
     sig.update({f"theta[{i}]": k[f"theta[{i}]"][:, None] for i in range(4)})
     return x3_true(sig, [sim.rows[b]], PAPER, sim.b0)[:, 0]
 

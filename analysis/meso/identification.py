@@ -47,7 +47,7 @@ __all__ = [
 
 VARIANTS = ("none", "wellposed", "literal", "direct", "no_const")
 #: the regressor vector whose Gram matrix the block accumulates
-PHI = ("xhat1", "xhat2", "1", "xhat3", "f", "u", "kbar")
+PHI = ("xhat[0]", "xhat[1]", "1", "xhat[2]", "f", "u", "kbar")
 _NPHI = len(PHI)
 #: largest column-scaled condition number a Gram matrix resolves in double precision (1/sqrt(eps))
 GRAM_COND_LIMIT = 1.0 / np.sqrt(np.finfo(float).eps)
@@ -306,7 +306,7 @@ class BatchIdentification(KernelBlock, DiscreteBlock):
         Controller gains ``k1, k2, k3`` of (30).
     regression : {"reduced", "full"}
 
-    Block signals: inputs ``xhat1..3``, ``u``, ``theta[0..3]`` (the Θ in use); outputs ``c[0..3]``
+    Block signals: inputs ``xhat[0..2]``, ``u``, ``theta[0..3]`` (the Θ in use); outputs ``c[0..3]``
     (the latest LSM result, input of W(s)), ``log10_cond`` (column-scaled) and ``rank`` of the latest
     batch's first regression (0 before the first batch and for ``none``); states: the
     outputs, then the batch's Gram matrix of φ divided by N (49 entries).
@@ -319,7 +319,7 @@ class BatchIdentification(KernelBlock, DiscreteBlock):
     """
 
     feedthrough = False
-    inputs = ("xhat1", "xhat2", "xhat3", "u") + signal_names("theta", 4)
+    inputs = signal_names("xhat", 3) + ("u",) + signal_names("theta", 4)
     outputs = signal_names("c", 4) + ("log10_cond", "rank")
     states = outputs + tuple(f"G[{i}][{j}]" for i in range(_NPHI) for j in range(_NPHI))
     kernels = Kernels(output=_held_outputs, update=gram_update)

@@ -141,8 +141,8 @@ class Plant(KernelBlock, ContinuousBlock):
     """
 
     inputs = ("u", "level", "v")
-    outputs = ("x1", "x2", "y")
-    states = ("x1", "x2")
+    outputs = ("x[0]", "x[1]", "y")
+    states = ("x[0]", "x[1]")
     feedthrough = True
     kernels = Kernels(output=plant_output, rhs=plant_rhs)
 
@@ -205,11 +205,11 @@ class ModelledESO(KernelBlock, ContinuousBlock):
     epsilon : float
         High-gain parameter ε (> 0; per run through ``Loop.simulate(params={"observer": {"epsilon": ...}})``).
 
-    Block signals: inputs ``y``, ``u``, ``theta[0..3]``; states and outputs ``xhat1..3``.
+    Block signals: inputs ``y``, ``u``, ``theta[0..3]``; states and outputs ``xhat[0..2]``.
     """
 
     inputs = ("y", "u") + signal_names("theta", 4)
-    outputs = states = ("xhat1", "xhat2", "xhat3")
+    outputs = states = ("xhat[0]", "xhat[1]", "xhat[2]")
     kernels = Kernels(rhs=meso_rhs, columns=False)
 
     def __init__(self, paper: Paper, b0: float, epsilon: float):
@@ -260,6 +260,7 @@ class ParameterPath(KernelBlock, DiscreteBlock):
 
     inputs = signal_names("c", 4) + signal_names("w", 4)
     outputs = signal_names("theta", 4)
+    states = ()
     feedthrough = True
     kernels = Kernels(output=path_output, update=copy_output, columns=False)
 
@@ -285,7 +286,7 @@ def build_loop(sit: Situation, paper: Paper = PAPER) -> Loop:
     pd = PDFeedforward(b0=sit.b0, omega_c=paper.omega_c, order=paper.n, model=True)
     lpf = LowPassFilter(paper.omega_f, order=2).digital(paper.h, channels=4)
     ident = BatchIdentification(sit.N, paper.h, sit.b0, pd.k, sit.regression)
-    xhat = ("xhat1", "xhat2", "xhat3")
+    xhat = signal_names("xhat", 3)
     return Loop([
         place(Plant(paper, paper.b), "plant"),
         place(ModelledESO(paper, sit.b0, paper.epsilon), "observer"),
@@ -342,7 +343,7 @@ def x3_true(sig, rows, paper, b0):
     Parameters
     ----------
     sig : dict of str -> ndarray, shape (n, B)
-        Signals ``x1, x2, u, level, xhat1, xhat2, theta[0..3]``.
+        Signals ``x[0], x[1], u, level, xhat[0], xhat[1], theta[0..3]``.
     rows : sequence of Row
         The runs (their plant gain ``b``).
     paper : Paper
@@ -353,9 +354,9 @@ def x3_true(sig, rows, paper, b0):
     ndarray, shape (n, B)
     """
     b = np.array([r.b_plant for r in rows])
-    x1, x2, u = sig["x1"], sig["x2"], sig["u"]
+    x1, x2, u = sig["x[0]"], sig["x[1]"], sig["u"]
     x2dot = paper.theta1 * x1 + paper.theta2 * x2 + sig["level"] + b * u
-    f = sig["theta[0]"] * sig["xhat1"] + sig["theta[1]"] * sig["xhat2"] + sig["theta[2]"] * u + sig["theta[3]"]
+    f = sig["theta[0]"] * sig["xhat[0]"] + sig["theta[1]"] * sig["xhat[1]"] + sig["theta[2]"] * u + sig["theta[3]"]
     return x2dot - b0 * u - f
 
 
@@ -363,16 +364,16 @@ def _chunk_errors(sig, t, rows, paper, b0):
     """|e| of every table metric at the chunk's samples, each (n, B)."""
     x3 = x3_true(sig, rows, paper, b0)
     return {
-        "est_x1": np.abs(sig["x1"] - sig["xhat1"]),
-        "est_x2": np.abs(sig["x2"] - sig["xhat2"]),
-        "est_x3": np.abs(x3 - sig["xhat3"]),
-        "est_x3_no_bu": np.abs(x3 - (paper.b - b0) * sig["u"] - sig["xhat3"]),
-        "track_x1": np.abs(np.sin(t)[:, None] - sig["x1"]),
-        "track_x2": np.abs(np.cos(t)[:, None] - sig["x2"]),
+        "est_x1": np.abs(sig["x[0]"] - sig["xhat[0]"]),
+        "est_x2": np.abs(sig["x[1]"] - sig["xhat[1]"]),
+        "est_x3": np.abs(x3 - sig["xhat[2]"]),
+        "est_x3_no_bu": np.abs(x3 - (paper.b - b0) * sig["u"] - sig["xhat[2]"]),
+        "track_x1": np.abs(np.sin(t)[:, None] - sig["x[0]"]),
+        "track_x2": np.abs(np.cos(t)[:, None] - sig["x[1]"]),
     }, x3
 
 
-_KEPT = ("x1", "x2", "xhat1", "xhat2", "xhat3", "u", "theta[0]", "theta[1]", "theta[2]", "theta[3]")
+_KEPT = ("x[0]", "x[1]", "xhat[0]", "xhat[1]", "xhat[2]", "u", "theta[0]", "theta[1]", "theta[2]", "theta[3]")
 #: below this many run-steps (runs × samples) a situation is simulated in one process (~1 s of work)
 _PARALLEL_RUN_STEPS = 1e6
 #: the signals the chunk post-processing reads (errors, x3, kept runs, exact identifiability)

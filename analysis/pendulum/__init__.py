@@ -21,7 +21,7 @@ import functools
 
 from ctrl_analysis import sensitivity
 from ctrl_analysis.report import StudyContext, StudyInfo, StudyResult
-from ctrl_analysis.study import record_parameters
+from ctrl_analysis.study import record_parameters, study_params
 
 from . import figures, loops, paper, quantities, verify
 
@@ -51,14 +51,18 @@ SWEEP_RUNS, SWEEP_RUNS_QUICK = 16, 3
 QUICK_SWEEP = ("loop.sigma_v", "loop.clear_margin")
 
 
-def run(ctx: StudyContext, settings=None) -> StudyResult:
+def run(ctx: StudyContext, params=None) -> StudyResult:
     """Reproduce the study: the verify part (§2, §4), the fuzzy closed loop in both regimes (§3.2, §5), the claims
     and their sensitivity to every reconstruction.
 
-    ``settings`` = ``(Verify, ClosedLoop)`` overrides the defaults (``--quick``: :func:`paper.quick`).
+    ``params`` overrides the settings (:func:`ctrl_analysis.study.study_params`): ``"verify"`` (a ``Verify``,
+    default :data:`.paper.VERIFY`) and ``"loop"`` (a ``ClosedLoop``, default :data:`.paper.LOOP`), each an object or
+    a dict of its fields; with ``--quick`` the defaults are :func:`.paper.quick`'s.
     """
     result = StudyResult(INFO)
-    P, L = settings or (paper.quick() if ctx.quick else (paper.VERIFY, paper.LOOP))
+    P, L = paper.quick() if ctx.quick else (paper.VERIFY, paper.LOOP)
+    chosen = study_params({"verify": P, "loop": L}, params, result)
+    P, L = chosen["verify"], chosen["loop"]
     L = _with_runs(L, ctx)
     record_parameters(result, P, prefix="verify")
     record_parameters(result, L, prefix="loop")

@@ -25,7 +25,7 @@ import numpy as np
 
 from .._kernels import BlockKernel, copy_output, eso_rhs, sigma_rhs
 from .._validate import check_finite, check_in, check_positive
-from ..blocks import ColumnKernels, DiscreteBlock
+from ..blocks import ColumnKernels, DiscreteBlock, signal_names
 from ..estimators.differential import DifferentialEstimator
 from ..estimators.eso import ExtendedStateObserver
 from ..estimators.kalman.alpha_beta import (
@@ -243,7 +243,7 @@ class _SharedColumns(ColumnKernels, DiscreteBlock):
 class _PerRunTD(_SharedColumns):
     """Han's TD (:class:`~ctrl_analysis.estimators.tracking.TrackingDifferentiator`) with per-run ``r`` and ``h0``: its kernels ``td_output``/``td_update``."""
 
-    inputs, states, outputs, feedthrough = ("v",), ("x1", "x2"), ("x1", "x2"), False
+    inputs, states, outputs, feedthrough = ("v",), ("x[0]", "x[1]"), ("x[0]", "x[1]"), False
     _shared = (1, 3, 4)  # h, substeps (1), feedthrough (0)
     column_kernels: ClassVar[dict] = {"output": "td_output", "update": "td_update"}
 
@@ -344,14 +344,14 @@ def _build(fam: Family, P: np.ndarray, dt: float):
         m = 2 if fam.name == "leso2" else 3
         gains = np.array([repeated_pole_coefficients(m, w)[1:] for w in P[:, 0]])
         if fam.name != "neso":
-            return _PerRunESO(gains), ("y", "u"), tuple(f"xhat{i}" for i in range(1, m + 1))
+            return _PerRunESO(gains), ("y", "u"), signal_names("xhat", m)
         alpha = np.array(fam.fixed["alpha"])
         delta = P[:, 1]
         # linear zone (|e| <= δ) equal to the linear ESO of bandwidth ω_o: L_i δ^(α_i - 1) = C(3, i) ω_o^i
         gains = gains * np.power(delta[:, None], 1.0 - alpha)
-        return _PerRunESO(gains, alpha, delta), ("y", "u"), ("xhat1", "xhat2", "xhat3")
+        return _PerRunESO(gains, alpha, delta), ("y", "u"), signal_names("xhat", 3)
     if fam.name == "td":
-        return _PerRunTD(P[:, 0], P[:, 1], dt), ("v",), ("x1", "x2")
+        return _PerRunTD(P[:, 0], P[:, 1], dt), ("v",), ("x[0]", "x[1]")
     if fam.name == "kalman":
         alpha, beta = kalata_gains(P[:, 0])
         return _PerRunAlphaBeta(np.column_stack([alpha, beta / dt]), dt), ("y",), ("xhat[0]", "xhat[1]")

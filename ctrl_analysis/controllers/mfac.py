@@ -180,10 +180,16 @@ class PPDEstimator(DiscreteBlock):
         φ̂(k) = φ̂(k−1) + η Δu(k−1) (Δy_f(k) − φ̂(k−1) Δu(k−1)) / (μ + Δu(k−1)²)     (6)
         φ̂(k) = φ_reset  if |φ̂(k)| <= ε or |Δu(k−1)| <= ε or sign φ̂(k) ≠ sign φ̂(1)   (7)
 
-    The update stores ``(φ̂(k), y_f(k), u(k−1))``.
+    The update stores ``(φ̂(k), y_f(k), u(k−1))``. The reset rule (7) applies at every sample,
+    the first one included: the paper states (6)-(7) for every ``k``, with no exception for the
+    first sample and no other first value than ``φ̂(1)``. At the first sample ``k0``, (6) starts from
+    ``φ̂(k0−1) = phi0`` with ``Δu(k0−1) = u(k0−1) − u0``; when ``|Δu(k0−1)| <= ε`` — in
+    particular when the loop starts at rest, ``u(k0−1) = u0`` (Lu & Hou's ``u(1:2) = 0``) — (6)
+    leaves ``φ̂ = phi0`` and (7) replaces it: the first estimate is ``phi_reset``, and ``phi0``
+    is never used as an estimate, only as the sign (7) keeps.
 
     Block signals: inputs ``y`` (the output the controller sees, ``y_f``) and ``u_prev``
-    (``u(k−1)``); states ``phi_hat``, ``y_prev``, ``u_prev2``; output ``phi_hat``; direct
+    (``u(k−1)``); states ``phi_hat``, ``y_prev``, ``u_prev_prev``; output ``phi_hat``; direct
     feedthrough.
 
     Parameters
@@ -195,12 +201,18 @@ class PPDEstimator(DiscreteBlock):
     epsilon : float
         Reset threshold ``ε > 0``.
     phi0 : float
-        ``φ̂(1)``, non-zero: the initial estimate, and the sign the reset rule keeps.
+        ``φ̂(1)`` of (7), non-zero, in two roles: (a) the sign every estimate must keep (7), for
+        the whole run; (b) the state's ``φ̂(k0−1)``, the previous estimate (6) starts from at the
+        first sample — which (7) then replaces by ``phi_reset`` if ``|Δu(k0−1)| <= ε`` (see
+        above), so with a loop starting at rest ``phi0`` only sets the sign.
     phi_reset : float, optional
-        Value after a reset, non-zero with the sign of ``phi0`` (default ``phi0``, as (7) prints;
-        the simulations of Lu & Hou use 0.5 with ``φ̂(1) = 2``).
+        The value (7) sets whenever it fires, at any sample including the first; non-zero with
+        the sign of ``phi0``. Default ``phi0``: eq. (7) as printed resets to ``φ̂(1)``. Lu & Hou's
+        simulations state ``φ̂(1) = 2`` and a separate reset value 0.5; with their ``u(1:2) = 0``
+        the first estimate is then 0.5.
     y0, u0 : float
-        ``y_f`` and ``u`` before the first sample (the state's ``y_prev``, ``u_prev2``).
+        ``y_f`` and ``u`` before the first sample: ``y_f(k0−1)`` and ``u(k0−2)`` (the state's
+        ``y_prev``, ``u_prev_prev``).
 
     Raises
     ------
@@ -212,10 +224,21 @@ class PPDEstimator(DiscreteBlock):
     ----------
     Hou Z., Jin S., *Model Free Adaptive Control: Theory and Applications*, CRC Press 2013, §4.2;
     Lu & Hou (2022), eq. (6)-(7) and (33)-(34).
+
+    Examples
+    --------
+    Starting at rest (``u(k0−1) = u0 = 0``), the first estimate is the reset value, not ``phi0``;
+    the second one is (6) from it:
+
+    >>> import numpy as np
+    >>> est = PPDEstimator(eta=0.5, mu=1.0, epsilon=1e-5, phi0=2.0, phi_reset=0.5, y0=1.0)
+    >>> y, _ = est.run(np.array([[1.3, 0.0], [1.7, 0.4]]))   # inputs (y_f(k), u(k−1))
+    >>> y[:, 0, 0].round(6)                                    # 0.5, 0.5 + 0.5·0.4·(0.4 − 0.2)/1.16
+    array([0.5     , 0.534483])
     """
 
     inputs = ("y", "u_prev")
-    states = ("phi_hat", "y_prev", "u_prev2")
+    states = ("phi_hat", "y_prev", "u_prev_prev")
     outputs = ("phi_hat",)
     feedthrough = True
 
@@ -414,7 +437,7 @@ class CFDLPredictor(ColumnKernels, DiscreteBlock):
     can read its prediction (11) before the estimator and the law of sample ``k`` run.
 
     Block signals: inputs ``phi_hat``, ``u`` (``φ̂(k)``, ``u(k)``, stored by the update);
-    states ``phi_prev``, ``u_prev``, ``u_prev2``; output ``dy_model``.
+    states ``phi_prev``, ``u_prev``, ``u_prev_prev``; output ``dy_model``.
 
     Parameters
     ----------
@@ -427,7 +450,7 @@ class CFDLPredictor(ColumnKernels, DiscreteBlock):
     """
 
     inputs = ("phi_hat", "u")
-    states = ("phi_prev", "u_prev", "u_prev2")
+    states = ("phi_prev", "u_prev", "u_prev_prev")
     outputs = ("dy_model",)
     feedthrough = False
 
@@ -499,9 +522,9 @@ def mfac_controller(estimator: PPDEstimator, law: Block, output_filter: Block | 
         # the TD's steps once per sample (the block's output and update would run them twice): its
         # state (x1, x2) in two delays fed by the steps' outputs, the same numbers
         y_f = "y_f"
-        blocks.append(place(output_filter.step_block(), "filter", inputs=[measured, "td_x1", "td_x2"],
+        blocks.append(place(output_filter.step_block(), "filter", inputs=[measured, "td_x[0]", "td_x[1]"],
                             outputs=["y_f", "y_f_rate"]))
-        blocks += [place(UnitDelay(output_filter.x0[i]), f"filter_x{i + 1}", inputs=[s], outputs=[f"td_x{i + 1}"])
+        blocks += [place(UnitDelay(output_filter.x0[i]), f"filter_x{i + 1}", inputs=[s], outputs=[f"td_x[{i}]"])
                    for i, s in enumerate(("y_f", "y_f_rate"))]
     elif isinstance(output_filter, TrackingDifferentiator):
         y_f = "y_f"

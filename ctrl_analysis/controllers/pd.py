@@ -75,7 +75,7 @@ class PDFeedforward(ColumnKernels, DiscreteBlock):
         u(k-1), 1]`` with ``Θ`` (``n + 2`` parameters) an input, the previous sample's estimates and
         control held in the block's state (eq. (12); zero before the first sample).
 
-    Block signals: inputs ``r[0] .. r[n]`` (``ξ, ξ', .., ξ^(n)``), ``xhat1 .. xhat{n+1}`` and, with
+    Block signals: inputs ``r[0] .. r[n]`` (``ξ, ξ', .., ξ^(n)``), ``xhat[0] .. xhat[n]`` and, with
     ``model``, ``theta[0] .. theta[n+1]``; output ``u``; states (``model`` only)
     ``xhat_prev[0] .. xhat_prev[n-1]``, ``u_prev``. Direct feedthrough.
 
@@ -144,7 +144,7 @@ class PDFeedforward(ColumnKernels, DiscreteBlock):
             raise TypeError(f"model must be True or False, got {model!r}")
         self.model = bool(model)
         n = self.n
-        self.inputs = (signal_names("r", n + 1) + tuple(f"xhat{i}" for i in range(1, n + 2))
+        self.inputs = (signal_names("r", n + 1) + signal_names("xhat", n + 1)
                        + (signal_names("theta", n + 2) if self.model else ()))
         self.outputs = ("u",)
         self.states = signal_names("xhat_prev", n) + ("u_prev",) if self.model else ()

@@ -24,7 +24,7 @@ import numpy as np
 
 from .._validate import check_array, check_finite, check_hurwitz, check_int, check_positive
 from .._kernels import BlockKernel, copy_output, eso_rhs
-from ..blocks import ContinuousBlock
+from ..blocks import ContinuousBlock, signal_names
 from ..polynomials import repeated_pole_coefficients
 
 __all__ = ["fal", "ExtendedStateObserver"]
@@ -104,7 +104,7 @@ class ExtendedStateObserver(ContinuousBlock):
         unless this is ``True`` (to study an unstable design on purpose). Same opt-out as
         ``DifferentialEstimator(allow_unstable=...)``; ``AlphaBetaFilter(require_stable=False)``.
 
-    Block signals: inputs ``y``, ``u``; states and outputs ``xhat1 .. xhat{n+1}``.
+    Block signals: inputs ``y``, ``u``; states and outputs ``xhat[0] .. xhat[n]`` (``x̂_1 .. x̂_{n+1}``).
 
     Attributes
     ----------
@@ -321,7 +321,7 @@ class ExtendedStateObserver(ContinuousBlock):
 
     @property
     def states(self) -> tuple:
-        return tuple(f"xhat{i}" for i in range(1, self.nstates + 1))
+        return signal_names("xhat", self.nstates)
 
     @property
     def outputs(self) -> tuple:
@@ -392,7 +392,7 @@ class ExtendedStateObserver(ContinuousBlock):
         Returns
         -------
         list of control.TransferFunction
-            ``n + 1`` SISO transfer functions, ``e_1 .. e_{n+1}``.
+            ``n + 1`` SISO transfer functions, ``e_1 .. e_{n+1}`` (outputs ``e[0] .. e[n]``).
 
         References
         ----------
@@ -411,7 +411,7 @@ class ExtendedStateObserver(ContinuousBlock):
             if wrt == "state":
                 num = np.concatenate([num, [0.0]])
             out.append(ct.tf(num, den, inputs="h" if wrt == "derivative" else "x_ext",
-                             outputs=f"e{i}"))
+                             outputs=f"e[{i - 1}]"))
         return out
 
     def __repr__(self) -> str:

@@ -183,7 +183,7 @@ class TrackingDifferentiator(ColumnKernels, DiscreteBlock):
     so one sample spans ``dt = substeps * h`` of the TD's own time. ``fh`` of the last sub-step
     (:meth:`acceleration`) is the acceleration of ``x1``: an estimate of ``v''``.
 
-    Block signals: input ``v``; states and outputs ``x1``, ``x2``. Without feedthrough (default)
+    Block signals: input ``v``; states and outputs ``x[0]``, ``x[1]`` (``x1``, ``x2``). Without feedthrough (default)
     the output at sample ``k`` is the state reached with the inputs up to ``k - 1``; with
     ``feedthrough=True`` it is the state after this sample's steps, driven by ``v(k)`` too.
 
@@ -231,8 +231,8 @@ class TrackingDifferentiator(ColumnKernels, DiscreteBlock):
     """
 
     inputs = ("v",)
-    states = ("x1", "x2")
-    outputs = ("x1", "x2")
+    states = ("x[0]", "x[1]")
+    outputs = ("x[0]", "x[1]")
     feedthrough = False
 
     def __init__(self, r: float, h: float, h0: float | None = None, substeps: int = 1, x0=None,
@@ -254,7 +254,7 @@ class TrackingDifferentiator(ColumnKernels, DiscreteBlock):
     column_kernels = {"output": "td_output", "update": "td_update"}  # numpy methods + compiled kernel
 
     def step_block(self):
-        """The sample's steps as a static block (inputs ``v``, ``x1``, ``x2``; outputs ``x1``, ``x2`` after them).
+        """The sample's steps as a static block (inputs ``v``, ``x[0]``, ``x[1]``; outputs ``x[0]``, ``x[1]`` after them).
 
         With two :class:`~ctrl_analysis.controllers.mfac.UnitDelay` blocks holding its outputs it is
         this TD with feedthrough, computing the steps once per sample where the block's output and
@@ -291,8 +291,8 @@ class TrackingDifferentiator(ColumnKernels, DiscreteBlock):
 class TDStep(StaticBlock):
     """The steps of one sample of a :class:`TrackingDifferentiator`, a static block with a compiled kernel.
 
-    Block signals: inputs ``v``, ``x1``, ``x2`` (the TD state before the steps); outputs ``x1``,
-    ``x2`` after them. Made by :meth:`TrackingDifferentiator.step_block`.
+    Block signals: inputs ``v``, ``x[0]``, ``x[1]`` (the TD state ``x1``, ``x2`` before the steps); outputs
+    ``x[0]``, ``x[1]`` after them. Made by :meth:`TrackingDifferentiator.step_block`.
 
     Parameters
     ----------
@@ -304,7 +304,7 @@ class TDStep(StaticBlock):
         if not isinstance(td, TrackingDifferentiator):
             raise TypeError(f"td must be a TrackingDifferentiator, got {type(td).__name__}")
         self._p = td.kernel().params
-        super().__init__(self._steps, inputs=("v", "x1", "x2"), outputs=("x1", "x2"))
+        super().__init__(self._steps, inputs=("v", "x[0]", "x[1]"), outputs=("x[0]", "x[1]"))
 
     def _steps(self, t, u):
         y = np.empty((u.shape[0], 2))

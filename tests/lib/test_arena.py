@@ -68,13 +68,13 @@ def _library_block(name, row):
     if name == "sigma":
         return DifferentialEstimator(3, row[0]), ("y",), ("xhat[0]", "xhat[1]")
     if name in ("leso2", "leso3"):
-        return ExtendedStateObserver.from_bandwidth(1 if name == "leso2" else 2, row[0]), ("y", "u"), ("xhat1", "xhat2")
+        return ExtendedStateObserver.from_bandwidth(1 if name == "leso2" else 2, row[0]), ("y", "u"), ("xhat[0]", "xhat[1]")
     if name == "neso":
         alpha = np.array([1.0, 0.5, 0.25])
         gains = np.array([3 * row[0], 3 * row[0] ** 2, row[0] ** 3]) * row[1] ** (1 - alpha)
-        return ExtendedStateObserver(gains, alpha=alpha, delta=row[1]), ("y", "u"), ("xhat1", "xhat2")
+        return ExtendedStateObserver(gains, alpha=alpha, delta=row[1]), ("y", "u"), ("xhat[0]", "xhat[1]")
     if name == "td":
-        return TrackingDifferentiator(row[0], DT, h0=row[1]), ("v",), ("x1", "x2")
+        return TrackingDifferentiator(row[0], DT, h0=row[1]), ("v",), ("x[0]", "x[1]")
     if name == "kalman":
         return AlphaBetaFilter(*kalata_gains(row[0]), DT), ("y",), ("xhat[0]", "xhat[1]")
     return DiscreteLowPass(LowPassFilter(row[0], 2), DT, channels=2), ("u[0]", "u[1]"), ("w[0]", "w[1]")

@@ -35,7 +35,7 @@ from ctrl_analysis.simulate import run_seeds
 INFO = StudyInfo(name=__name__.split(".")[-1], seed_file="s.txt", paper="P", reproduces="r")
 
 
-def run(ctx):
+def run(ctx, params=None):
     ctx.progress("started")
     result = StudyResult(INFO)
     seeds = run_seeds(ctx.seed, ctx.runs_or(8, quick_default=4))
@@ -231,7 +231,7 @@ def _fake_study(name):
         INFO = StudyInfo(name=name, seed_file="s.txt", paper="P", reproduces="r")
 
         @staticmethod
-        def run(ctx):
+        def run(ctx, params=None):
             result = StudyResult(Fake.INFO)
             result.quantity("q", "q", float(ctx.seed), runs=ctx.runs)
             return result

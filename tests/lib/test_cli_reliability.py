@@ -61,7 +61,7 @@ def _fake_study(name, fail=None):
         INFO = StudyInfo(name=name, seed_file="s.txt", paper="P", reproduces="r")
 
         @staticmethod
-        def run(ctx):
+        def run(ctx, params=None):
             if fail is not None:
                 raise fail
             result = StudyResult(Fake.INFO)

@@ -99,7 +99,7 @@ def test_adaptive_loop_compiled_equals_numpy_engine_bit_for_bit():
     """
     from ctrl_analysis.blocks import StaticGain
     from ctrl_analysis.estimators.kalman import CharacteristicKalmanFilter
-    from ctrl_analysis.identification import ArxRegressor, RecursiveLeastSquares
+    from ctrl_analysis.identification import ArxRegressor, RecursiveLeastSquaresBlock
 
     dt = 0.01
     loop = Loop([
@@ -108,10 +108,10 @@ def test_adaptive_loop_compiled_equals_numpy_engine_bit_for_bit():
         place(StaticGain([[1.0, 1.0]], ("y", "v"), ("y_m",)), "meas"),
         place(CharacteristicKalmanFilter(Q=1e-4, R=0.01), "ckf", inputs=["y_m", "u_prev", "f1", "f2", "g0"],
               outputs=["y_f", "y_f1"]),
-        place(ArxRegressor(2, 1), "reg", inputs=["y_f", "u"], outputs=["z", "h0", "h1", "h2"]),
-        place(RecursiveLeastSquares(3, 0.995, 1e-3, (1.7, -0.75, 0.05), lower=(1.0, -1.0, 0.01),
-                                    upper=(2.0, -0.5, 1.0), max_trace=3e-3, feedthrough=False), "rls",
-              inputs=["z", "h0", "h1", "h2"], outputs=["f1", "f2", "g0"]),
+        place(ArxRegressor(2, 1), "reg", inputs=["y_f", "u"]),
+        place(RecursiveLeastSquaresBlock(3, 0.995, 1e-3, (1.7, -0.75, 0.05), lower=(1.0, -1.0, 0.01),
+                                         upper=(2.0, -0.5, 1.0), max_trace=3e-3, feedthrough=False), "rls",
+              outputs=["f1", "f2", "g0"]),
         place(GoldenSectionController(k_I=0.01, c2=0.95, mu=0.5), "ctrl", inputs=["y_f", "r", "f1", "f2", "g0"],
               outputs=["u"])], dt)
     v = 0.1 * np.random.default_rng(12).normal(size=(1001, 3))

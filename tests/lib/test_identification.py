@@ -11,6 +11,7 @@ from ctrl_analysis.identification import (
     ArxRegressor,
     IdentifiabilityWarning,
     RecursiveLeastSquares,
+    RecursiveLeastSquaresBlock,
     batch_least_squares,
     identifiability,
 )
@@ -74,6 +75,29 @@ def test_rls_converges_to_ls():
     np.testing.assert_allclose(hist[-1], theta, atol=0.02)
 
 
+def test_rls_is_the_regularised_batch_least_squares_solution_at_every_sample():
+    # with λ = 1, θ(k) minimises Σ_{i<=k} (z_i − h_iᵀθ)² + (θ − θ0)ᵀ P0⁻¹ (θ − θ0) and R(k) = (P0⁻¹ + H_kᵀH_k)⁻¹:
+    # the batch problem with the prior as p extra rows P0^(-1/2) θ = P0^(-1/2) θ0, solved by numpy.linalg.lstsq
+    rng = np.random.default_rng(11)
+    N, p, P0 = 40, 3, 2.0
+    H = rng.normal(size=(N, p))
+    z = H @ np.array([1.5, -0.7, 0.5]) + 0.3 * rng.normal(size=N)
+    theta0 = np.array([0.2, 0.1, -0.3])
+    rls = RecursiveLeastSquares(p, forgetting=1.0, P0=P0, theta0=theta0)
+    prior = np.eye(p) / np.sqrt(P0)
+    for k in range(N):
+        theta_k = rls.step(H[k], z[k])
+        A = np.vstack([prior, H[:k + 1]])
+        b = np.concatenate([prior @ theta0, z[:k + 1]])
+        np.testing.assert_allclose(theta_k, np.linalg.lstsq(A, b, rcond=None)[0], rtol=1e-10, atol=1e-12)
+        np.testing.assert_allclose(rls.P, np.linalg.inv(A.T @ A), rtol=1e-10, atol=1e-14)
+    # a vague prior (P0 = 1e8): the plain batch solution of all N samples
+    vague = RecursiveLeastSquares(p, forgetting=1.0, P0=1e8).run(H, z)[-1]
+    np.testing.assert_allclose(vague, np.linalg.lstsq(H, z, rcond=None)[0], rtol=1e-6)
+    # and the prior matters at P0 = 2: the two answers differ
+    assert np.max(np.abs(rls.theta - vague)) > 1e-3
+
+
 def test_rls_forgetting_tracks_jump_and_batch():
     rng = np.random.default_rng(4)
     N = 600
@@ -117,6 +141,8 @@ def test_ls_bad_input():
         batch_least_squares(H, np.full(len(z), np.nan))
     with pytest.raises(ValueError, match="h must have shape"):
         RecursiveLeastSquares(3).step(np.ones(2), 1.0)
+    with pytest.raises(ValueError, match="batch"):
+        RecursiveLeastSquares(3, batch=0)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -130,13 +156,13 @@ ARX = (1.5, -0.7, 0.5)  # y(k) = 1.5 y(k-1) - 0.7 y(k-2) + 0.5 u(k-1): poles 0.7
 def arx_loop(rls, dt=0.1):
     plant = DiscreteLTI(ct.tf([ARX[2], 0.0], [1.0, -ARX[0], -ARX[1]], True), dt)
     return Loop([place(plant, "plant", inputs=["u"], outputs=["y"]),
-                 place(ArxRegressor(2, 1), "reg", inputs=["y", "u"], outputs=["z", "h0", "h1", "h2"]),
-                 place(rls, "rls", inputs=["z", "h0", "h1", "h2"], outputs=["a1", "a2", "b1"])], dt)
+                 place(ArxRegressor(2, 1), "reg", inputs=["y", "u"]),  # z, h[0..2] feed the RLS block's inputs
+                 place(rls, "rls", outputs=["a1", "a2", "b1"])], dt)
 
 
 def test_rls_block_recovers_second_order_arx():
     u = np.random.default_rng(5).standard_normal((400, 3))
-    res = arx_loop(RecursiveLeastSquares(3, forgetting=1.0, P0=1e4)).simulate(399, inputs={"u": u}, engine="numpy")
+    res = arx_loop(RecursiveLeastSquaresBlock(3, forgetting=1.0, P0=1e4)).simulate(399, inputs={"u": u}, engine="numpy")
     theta = np.stack([res["a1"][-1], res["a2"][-1], res["b1"][-1]], axis=1)
     # exact data: only the prior P0 = 1e4 I biases the estimate, by ~ 1 / (P0 Σ h²) ≪ 1e-4
     np.testing.assert_allclose(theta, np.tile(ARX, (3, 1)), atol=1e-4)
@@ -147,11 +173,14 @@ def test_rls_block_equals_step_interface_and_batch():
     H, z = rng.normal(size=(50, 2, 3)), rng.normal(size=(50, 2))
     rls = RecursiveLeastSquares(3, forgetting=0.98, P0=10.0, batch=2)
     hist = rls.run(H, z)
-    block_run = DiscreteBlock.run  # RecursiveLeastSquares.run(H, z) is the record interface
-    y, _ = block_run(RecursiveLeastSquares(3, forgetting=0.98, P0=10.0), np.concatenate([z[:, :, None], H], axis=2))
+    block = RecursiveLeastSquaresBlock(3, forgetting=0.98, P0=10.0)
+    y, x = block.run(np.concatenate([z[:, :, None], H], axis=2))  # the block protocol's open-loop runner
     np.testing.assert_array_equal(y, hist)  # block output theta(k) == step()'s theta after sample k
-    single, _ = block_run(RecursiveLeastSquares(3, forgetting=0.98, P0=10.0), np.concatenate([z[:, :1, None], H[:, :1]], 2))
+    np.testing.assert_array_equal(x[-1, :, 3:].reshape(2, 3, 3), rls.P)  # the same covariance, bit for bit
+    single, _ = block.run(np.concatenate([z[:, :1, None], H[:, :1]], 2))
     np.testing.assert_array_equal(single[:, 0], y[:, 0])  # a run does not depend on the batch size
+    # the estimator object is not a block (its run(H, z) is not the protocol's run(u, x0, params, t))
+    assert not isinstance(rls, DiscreteBlock) and isinstance(rls.block, RecursiveLeastSquaresBlock)
 
 
 def test_projection_keeps_parameters_in_bounds():
@@ -186,6 +215,8 @@ def test_max_trace_bounds_covariance_windup():
 ])
 def test_rls_block_bad_input(kwargs, match):
     with pytest.raises(ValueError, match=match):
+        RecursiveLeastSquaresBlock(**kwargs)
+    with pytest.raises(ValueError, match=match):  # the estimator object validates through its block
         RecursiveLeastSquares(**kwargs)
 
 
@@ -197,7 +228,7 @@ def test_arx_regressor_lags_and_bad_input():
 
 
 def test_rls_loop_runs_in_control_interconnect():
-    loop = arx_loop(RecursiveLeastSquares(3, forgetting=0.99, P0=100.0, lower=[-2, -2, 0], upper=[2, 2, 1]))
+    loop = arx_loop(RecursiveLeastSquaresBlock(3, forgetting=0.99, P0=100.0, lower=[-2, -2, 0], upper=[2, 2, 1]))
     u = np.random.default_rng(8).standard_normal(60)
     res = loop.simulate(59, inputs={"u": u}, engine="numpy")  # compiled = numpy: test_golden_section's adaptive loop
     sys = loop.interconnect()
@@ -220,14 +251,14 @@ def test_rls_and_arx_kernels_equal_the_numpy_methods_bit_for_bit(compiled):
     P = M @ M.transpose(0, 2, 1) + 0.1 * np.eye(3)
     x = np.concatenate([theta, P.reshape(B, 9)], axis=1)
     u = rng.normal(size=(B, 4)) * [3.0, 1.0, 1.0, 1.0]
-    for rls in (RecursiveLeastSquares(3, 0.98, lower=[-1, -1, -1], upper=[1, 1, 1], max_trace=4.0),
-                RecursiveLeastSquares(3, 1.0, feedthrough=False)):
+    for rls in (RecursiveLeastSquaresBlock(3, 0.98, lower=[-1, -1, -1], upper=[1, 1, 1], max_trace=4.0),
+                RecursiveLeastSquaresBlock(3, 1.0, feedthrough=False)):
         k = rls.kernel()
         nxt = kernel_runs(jit(k.update), k.params, x, u, 12)
         assert np.array_equal(nxt, rls.update(0.0, x, u))
         assert np.array_equal(kernel_runs(jit(k.output), k.params, x, u, 3), rls.output(0.0, x, u))
     tr = nxt[:, [3, 7, 11]].sum(axis=1)
-    first = RecursiveLeastSquares(3, 0.98, lower=[-1, -1, -1], upper=[1, 1, 1], max_trace=4.0).update(0.0, x, u)
+    first = RecursiveLeastSquaresBlock(3, 0.98, lower=[-1, -1, -1], upper=[1, 1, 1], max_trace=4.0).update(0.0, x, u)
     assert np.any(np.abs(first[:, :3]) == 1.0) and np.isclose(first[:, [3, 7, 11]].sum(axis=1), 4.0).any()
     assert np.any(tr > 4.0)  # without the cap the trace exceeds it: the cap branch was exercised above
     for reg in (ArxRegressor(2, 1), ArxRegressor(1, 2, lag=2)):

@@ -4,7 +4,13 @@ import control as ct
 import numpy as np
 import pytest
 
-from ctrl_analysis.blocks import ContinuousBlock, DiscreteBlock, SampledBlock, StaticBlock
+from ctrl_analysis.blocks import (
+    ContinuousBlock,
+    DiscreteBlock,
+    SampledBlock,
+    StaticBlock,
+    StaticGain,
+)
 from ctrl_analysis.estimators.differential import DifferentialEstimator
 from ctrl_analysis.estimators.kalman import AlphaBetaFilter, kalata_gains
 from ctrl_analysis.loop import Loop, place
@@ -79,6 +85,60 @@ def test_discrete_block_engine_equals_control_interconnect():
     for b in (0, 3):
         resp = ct.input_output_response(sys, res.t[:300], np.stack([acc, v[:, b]]))
         np.testing.assert_allclose(res.to_timeresponse(b).outputs[:, :300], resp.outputs, rtol=1e-12, atol=1e-12)
+
+
+class Motor(DiscreteBlock):
+    """w(k+1) = 0.9 w(k) + 0.1 tau(k) - 0.5 TL(k): a sampled motor speed with a load torque TL."""
+
+    inputs, outputs, states = ("tau", "TL"), ("w",), ("w",)
+
+    def update(self, t, x, u, params=None):
+        return 0.9 * x + 0.1 * u[:, :1] - 0.5 * u[:, 1:]
+
+
+def test_interconnect_keeps_the_declared_input_order_and_the_engine_numbers():
+    # r is read first (by the controller), TL second (by the motor): declared order r, TL, while
+    # sorting by name would give ['TL', 'r'] ('T' < 'r')
+    loop = Loop([place(StaticGain([[2.0, -2.0]], ("r", "w"), ("tau",)), "ctrl"), place(Motor(), "motor")], dt=0.1)
+    assert loop.external == ("r", "TL")
+    sys = loop.interconnect()
+    assert sys.input_labels == ["r", "TL"]
+    assert sys.output_labels == list(loop.outlist)
+    n = 80
+    r = np.where(np.arange(n + 1) < 10, 0.0, 1.0)
+    TL = 0.3 * np.sin(0.2 * np.arange(n + 1))
+    res = loop.simulate(n, inputs={"r": r, "TL": TL})
+    stacked = np.stack([r, TL])  # [r, TL], the declared order
+    resp = ct.input_output_response(sys, res.t, stacked)
+    np.testing.assert_allclose(resp.outputs, res.to_timeresponse(0).outputs, rtol=1e-12, atol=1e-12)
+    # the two inputs act differently, so the other order would have been caught
+    swapped = ct.input_output_response(sys, res.t, stacked[::-1])
+    assert np.max(np.abs(swapped.outputs - resp.outputs)) > 0.1
+
+
+def test_a_block_with_state_that_declares_no_states_is_a_clear_error():
+    class Forgot(DiscreteBlock):  # x(k+1) = x(k) + r(k), but no `states`: Block.states = () is inherited
+        inputs, outputs = ("r",), ("s",)
+
+        def update(self, t, x, u, params=None):
+            return x + u
+
+    class ForgotToo(ContinuousBlock):
+        inputs, outputs = ("r",), ("s",)
+
+        def rhs(self, t, x, u, params=None):
+            return u
+
+    rule = r"declares no states: a {} must name its states, e.g. states = \('x',\)"
+    with pytest.raises(ValueError, match=r"block 'acc' \(Forgot\) " + rule.format("DiscreteBlock")):
+        Loop([place(Forgot(), "acc")], dt=1.0)
+    with pytest.raises(ValueError, match=r"block 'int' \(ForgotToo\) " + rule.format("ContinuousBlock")):
+        Loop([place(ForgotToo(), "int")], dt=1.0)
+    with pytest.raises(ValueError, match=r"block Forgot declares no states"):
+        Forgot().run(np.ones(3))
+    # a block whose state is really empty says so (states = ()), and runs
+    res = Loop([place(Oscillator(2.0), "plant"), place(_Gain(), "k")], dt=0.01).simulate(3)
+    np.testing.assert_array_equal(res["f"][:, 0], -3.0 * res["y"][:, 0])
 
 
 def test_batch_equals_stacked_single_runs_bit_for_bit():
@@ -210,3 +270,69 @@ def test_continuation_from_final_states_equals_one_run():
     assert first.x is None
     second = loop.simulate(50, runs=2, x0=first.final_states, t0=first.t[-1])
     np.testing.assert_array_equal(second["y"], whole["y"][50:])
+
+
+# ---------------------------------------------------------------------------------------------- signal names
+#: scalars the papers name with a digit (the characteristic model's coefficients): not vector indices
+_PAPER_SCALARS = {"f1", "f2", "g0"}
+
+
+def _library_blocks():
+    """One instance of every library block (and the signals of the composed MFAC controllers)."""
+    from ctrl_analysis.controllers.differential_feedback import (
+        HighOrderDifferentialFeedback,
+    )
+    from ctrl_analysis.controllers.golden_section import GoldenSectionController
+    from ctrl_analysis.controllers.mfac import (
+        CFDLLaw,
+        CFDLPredictor,
+        DecreasingGainLaw,
+        PPDEstimator,
+        UnitDelay,
+        mfac_controller,
+    )
+    from ctrl_analysis.controllers.pd import PDFeedforward
+    from ctrl_analysis.estimators.eso import ExtendedStateObserver
+    from ctrl_analysis.estimators.kalman import (
+        CharacteristicKalmanFilter,
+        ImprovedKalmanFilter,
+    )
+    from ctrl_analysis.estimators.kalman.filter import DiscreteKalmanFilter
+    from ctrl_analysis.estimators.lowpass import LowPassFilter
+    from ctrl_analysis.estimators.tracking import TrackingDifferentiator
+    from ctrl_analysis.identification import ArxRegressor, RecursiveLeastSquaresBlock
+    from ctrl_analysis.plants import DiscreteLTI
+
+    td = TrackingDifferentiator(10.0, 0.01, substeps=2, feedthrough=True)
+    ppd = PPDEstimator(0.5, 1.0, 1e-5, 2.0)
+    blocks = [DifferentialEstimator(3, 5.0), ExtendedStateObserver.from_bandwidth(2, 10.0),
+              PDFeedforward(b0=2.0, omega_c=10.0, model=True), td, td.step_block(), AlphaBetaFilter(0.5, 0.2, 0.1),
+              DiscreteKalmanFilter(np.array([[1.0, 0.1], [0.0, 1.0]]), [1.0, 0.0], 0.01 * np.eye(2), 1.0),
+              CharacteristicKalmanFilter(), ImprovedKalmanFilter(0.05, 0.1), LowPassFilter(10.0, 2),
+              LowPassFilter(10.0, 2).digital(0.01, channels=2), RecursiveLeastSquaresBlock(3),
+              ArxRegressor(2, 1, lag=1), UnitDelay(), ppd, CFDLLaw(1.0, 2.0), DecreasingGainLaw(1.0, 2.0, 0.3),
+              CFDLPredictor(), GoldenSectionController(0.01, 0.95), HighOrderDifferentialFeedback([6.0, 11.0, 6.0]),
+              DiscreteLTI(ct.tf([1.0], [1.0, -0.5, 0.1], 0.1), 0.1)]
+    placed = mfac_controller(ppd, CFDLLaw(1.0, 2.0), td) + mfac_controller(ppd, CFDLLaw(1.0, 2.0),
+                                                                           ImprovedKalmanFilter(0.05, 0.1))
+    return blocks, placed
+
+
+def test_every_library_signal_follows_the_naming_rule():
+    """CONTRIBUTING's rule: a vector's components are base[i] (0-based), a matrix's base[i][j]; no index in a name."""
+    import re
+
+    pattern = re.compile(r"^(?P<base>[A-Za-z_][A-Za-z0-9_]*)(\[(0|[1-9][0-9]*)\])*$")
+    blocks, placed = _library_blocks()
+    names = {(type(b).__name__, kind, s) for b in blocks for kind in ("inputs", "outputs", "states")
+             for s in getattr(b, kind)}
+    names |= {(p.name, kind, s) for p in placed for kind in ("inputs", "outputs") for s in getattr(p, kind)}
+    bad = sorted(f"{who}.{kind}: {s!r}" for who, kind, s in names
+                 if not (m := pattern.match(s)) or (m["base"][-1].isdigit() and m["base"] not in _PAPER_SCALARS))
+    assert not bad, "signal names outside the rule:\n" + "\n".join(bad)
+    # and the rule's own examples, so the check is not vacuous
+    for wrong in ("xhat1", "td_x2", "h0", "P[0,1]"):
+        m = pattern.match(wrong)
+        assert not m or m["base"][-1].isdigit()
+    assert {"xhat[0]", "x[1]", "td_x[0]", "P[0][1]", "h[0]"} <= {s for *_, s in names}
+

@@ -72,6 +72,48 @@ def test_ppd_reset_fires_on_each_condition(phi_prev, dy, du, why):
     assert ppd_out(phi_prev, dy, du) == 0.5
 
 
+def test_ppd_first_sample_from_rest_is_the_reset_value_by_hand():
+    # Lu & Hou's start: φ̂(1) = 2, reset value 0.5, u(k0−1) = u(k0−2) = 0, y_f(k0−1) = 1
+    est = PPDEstimator(eta=0.5, mu=1.0, epsilon=1e-5, phi0=2.0, phi_reset=0.5, y0=1.0, u0=0.0)
+    np.testing.assert_array_equal(est.initial_state(), [2.0, 1.0, 0.0])  # φ̂(k0−1) = phi0 in the state
+    # k0: Δu(k0−1) = 0 − 0 = 0, so (6) gives φ̂ = 2 + 0 = 2 and (7) fires (|Δu| <= ε): φ̂(k0) = 0.5
+    # k0+1: Δu = 0.4, Δy_f = 1.7 − 1.3 = 0.4: φ̂ = 0.5 + 0.5·0.4·(0.4 − 0.5·0.4)/(1 + 0.16) (no reset)
+    y, x = est.run(np.array([[1.3, 0.0], [1.7, 0.4]]))
+    assert y[0, 0, 0] == 0.5
+    np.testing.assert_allclose(y[1, 0, 0], 0.5 + 0.5 * 0.4 * (0.4 - 0.2) / 1.16, rtol=1e-15)
+    np.testing.assert_array_equal(x[1, 0], [0.5, 1.3, 0.0])  # stored (φ̂(k0), y_f(k0), u(k0−1))
+    # had phi0 been used as the first estimate, the second one would be 2 + 0.5·0.4·(0.4 − 0.8)/1.16
+    assert abs(y[1, 0, 0] - (2.0 - 0.08 / 1.16)) > 1.0
+    # phi_reset defaults to phi0 (eq. (7) as printed resets to φ̂(1)): the first estimate is then 2
+    y, _ = PPDEstimator(eta=0.5, mu=1.0, epsilon=1e-5, phi0=2.0, y0=1.0).run(np.array([[1.3, 0.0]]))
+    assert y[0, 0, 0] == 2.0
+
+
+def test_ppd_first_sample_with_an_input_step_starts_from_phi0_by_hand():
+    # u(k0−2) = −1, u(k0−1) = 0: Δu = 1, Δy_f = 4 − 1 = 3: φ̂ = 2 + 0.5·1·(3 − 2·1)/(1 + 1) = 2.25, no reset
+    est = PPDEstimator(eta=0.5, mu=1.0, epsilon=1e-5, phi0=2.0, phi_reset=0.5, y0=1.0, u0=-1.0)
+    y, _ = est.run(np.array([[4.0, 0.0]]))
+    assert y[0, 0, 0] == 2.25
+    # Δy_f = −3: 2 + 0.25·(−5) = 0.75; Δy_f = −8 flips the sign of (6), 2 + 0.25·(−10) = −0.5, so (7) resets
+    y, _ = est.run(np.array([[[-2.0, 0.0], [-7.0, 0.0]]]))
+    np.testing.assert_array_equal(y[0, :, 0], [0.75, 0.5])
+
+
+def test_ppd_first_sample_in_a_closed_loop_and_in_the_kernel_is_the_reset_value():
+    from ctrl_analysis.controllers.mfac import ppd_output
+
+    loop = Loop([place(StaticGainPlant(0.8), "plant")]
+                + mfac_controller(ppd(), CFDLLaw(rho=1.0, lam=2.0), measured="y"), dt=1.0)
+    res = loop.simulate(3, inputs={"y_ref_next": 1.0})
+    assert res["phi_hat"][0, 0] == 0.5  # u(−1) = u(−2) = 0: the reset fires at the first sample
+    # so the first control is (8) with φ̂ = 0.5: u = 0 + 1·0.5·(1 − 0)/(2 + 0.25)
+    np.testing.assert_allclose(res["u"][0, 0], 0.5 / 2.25, rtol=1e-15)
+    # the compiled engine's kernel does the same at the first sample
+    est, y = ppd(), np.zeros(1)
+    ppd_output(0.0, est.initial_state(), np.array([1.3, 0.0]), est.kernel().params, y)
+    assert y[0] == 0.5
+
+
 def test_mfac_converges_on_a_constant_ppd_plant():
     b = 0.8
     loop = Loop([place(StaticGainPlant(b), "plant")]
@@ -272,8 +314,8 @@ def test_every_mfac_block_in_one_loop_compiled_equals_numpy_engine_bit_for_bit()
               place(StaticGain([[1.0, 1.0]], inputs=("y", "v"), outputs=("y_m",)), "meas")]
     blocks += ikf_mfac(est, law, ikf)
     blocks += [place(TrackingDifferentiator(300.0, 0.01, 0.02, substeps=3, x0=(1.0, 0.0), feedthrough=True), "td",
-                     inputs=["y_m"], outputs=["td_x1", "td_x2"]),
-               place(CFDLLaw(0.6, rng.uniform(1.0, 3.0, B)), "law2", inputs=["phi_hat", "td_x1", "y_ref_next", "u_prev"],
+                     inputs=["y_m"], outputs=["td_x[0]", "td_x[1]"]),
+               place(CFDLLaw(0.6, rng.uniform(1.0, 3.0, B)), "law2", inputs=["phi_hat", "td_x[0]", "y_ref_next", "u_prev"],
                      outputs=["u_td"])]
     loop = Loop(blocks, dt=1.0)
     v = 0.1 * rng.standard_normal((n, B))
@@ -282,6 +324,6 @@ def test_every_mfac_block_in_one_loop_compiled_equals_numpy_engine_bit_for_bit()
     a, c = runs["numpy"], runs["compiled"]
     assert not a.diverged.any() and np.array_equal(a.diverged, c.diverged)
     assert np.array_equal(a.x, c.x)
-    for s in ("y", "u", "phi_hat", "y_f", "K", "P", "td_x1", "td_x2", "u_td", "dy_model"):
+    for s in ("y", "u", "phi_hat", "y_f", "K", "P", "td_x[0]", "td_x[1]", "u_td", "dy_model"):
         assert np.array_equal(a[s], c[s]), s
     assert np.std(a["u"][-1]) > 0  # the per-run parameters act

@@ -55,7 +55,7 @@ def test_block_output_is_the_control_law():
     ref, xh = rng.normal(size=(2, 5, 3))
     u = pd.output(0.0, np.zeros((5, 0)), np.concatenate([ref, xh], axis=1))
     np.testing.assert_allclose(u[:, 0], pd.control(ref, xh), rtol=1e-14)
-    assert pd.inputs == ("r[0]", "r[1]", "r[2]", "xhat1", "xhat2", "xhat3") and pd.states == ()
+    assert pd.inputs == ("r[0]", "r[1]", "r[2]", "xhat[0]", "xhat[1]", "xhat[2]") and pd.states == ()
 
 
 def test_model_term_uses_the_previous_sample_eq12():
@@ -141,7 +141,7 @@ def test_compiled_loop_with_the_law_equals_the_numpy_loop():
     lpf = LowPassFilter(3.0, order=2).digital(0.01, channels=3)
     theta = StaticGain(np.array([[0.1], [-0.2], [0.05], [0.3]]), inputs=("r[0]",),
                        outputs=("theta[0]", "theta[1]", "theta[2]", "theta[3]"))
-    loop = Loop([place(lpf, "obs", inputs=("r[0]", "r[1]", "r[2]"), outputs=("xhat1", "xhat2", "xhat3")),
+    loop = Loop([place(lpf, "obs", inputs=("r[0]", "r[1]", "r[2]"), outputs=("xhat[0]", "xhat[1]", "xhat[2]")),
                  place(theta, "model"), place(pd, "pd")], 0.01)
     t = 0.01 * np.arange(201)
     ins = {"r[0]": np.sin(t), "r[1]": np.cos(t), "r[2]": -np.sin(t)}

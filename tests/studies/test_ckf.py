@@ -22,7 +22,7 @@ def test_every_reconstruction_has_a_plausible_range():
 
 
 def test_short_run_writes_table1_claims_and_figures(tmp_path):
-    result = ckf.run(StudyContext(out_dir=tmp_path, runs=3, seed=1, quick=True), p=SHORT)
+    result = ckf.run(StudyContext(out_dir=tmp_path, runs=3, seed=1, quick=True), params={"": SHORT})
     data = json.loads(write_results_json(result, tmp_path).read_text())
     q = {x["id"]: x for x in data["quantities"]}
     for case in CASES:

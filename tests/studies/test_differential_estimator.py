@@ -59,7 +59,7 @@ def test_example1_loop_is_batch_invariant_and_matches_interconnect():
     sig, div, _ = loops.simulate_example1(p, seeds, noise, chunk=120)
     alone, _, _ = loops.simulate_example1(p, seeds[1:2], noise[:, 1:2], chunk=300)
     assert not div.any()
-    for s in ("x1", "sig[1]", "eso0[1]"):
+    for s in ("x[0]", "sig[1]", "eso[0][1]"):
         np.testing.assert_array_equal(sig[s][:, 1], alone[s][:, 0])  # chunked, batched == one run alone
     # Σ alone, noise-free: the engine's RK4 equals python-control's interconnect
     loop = loops.example1_loop(p, [])
@@ -76,8 +76,8 @@ def test_padding_observers_changes_no_other_signal():
     noise = example1.draw(p, seeds)
     one, _, _ = loops.simulate_example1(p, seeds, noise)  # Han's ESO + a linear rider
     two, _, _ = loops.simulate_example1(p, seeds, noise, [loops.han_eso(p), loops.han_eso(p, 2e-3)])
-    assert len(loops.pad_observers([])) == loops.OBSERVERS and "eso1[0]" not in one
-    for s in ("x1", "x2", "sig[0]", "sig[1]", "eso0[1]"):
+    assert len(loops.pad_observers([])) == loops.OBSERVERS and "eso[1][0]" not in one
+    for s in ("x[0]", "x[1]", "sig[0]", "sig[1]", "eso[0][1]"):
         np.testing.assert_array_equal(one[s], two[s])
 
 
@@ -87,7 +87,7 @@ def test_linear_path_equals_the_engine():
     noise = example1.draw(p, seeds)
     sig, _, _ = loops.simulate_example1(p, seeds, noise, [])
     est = DifferentialEstimator(p.n0, p.a)
-    z1, z2 = loops.LinearPath(sig["x1"][:-1], noise[:, :, 1], p.h).estimates(est.ss)
+    z1, z2 = loops.LinearPath(sig["x[0]"][:-1], noise[:, :, 1], p.h).estimates(est.ss)
     scale = np.abs(sig["sig[1]"]).max()
     np.testing.assert_allclose(z2, sig["sig[1]"][:-1], atol=1e-4 * scale)
     np.testing.assert_allclose(z1, sig["sig[0]"][:-1], atol=1e-5 * np.abs(sig["sig[0]"]).max())
@@ -183,13 +183,13 @@ def test_example2_loop_compiled_equals_numpy_with_a_grid_and_two_presets():
             mp.setenv("CTRL_ANALYSIS_ENGINE", os_env)
             out[engine] = example2.simulate(p, seeds, 34.0, 2)
     a, b = out["numpy"], out["auto"]
-    assert a["sig"]["x1"].shape == (401, 8) and not a["diverged"].any()
-    for s in ("x1", "u"):
+    assert a["sig"]["x[0]"].shape == (401, 8) and not a["diverged"].any()
+    for s in ("x[0]", "u"):
         np.testing.assert_array_equal(a["sig"][s], b["sig"][s])
-    for s in ("x2", "xhat[0]", "xhat[1]"):
+    for s in ("x[1]", "xhat[0]", "xhat[1]"):
         np.testing.assert_array_equal(a["traces"][s], b["traces"][s])
     # the re-run traces are the batch's runs
-    np.testing.assert_array_equal(b["traces"]["x1"], b["sig"]["x1"][:, b["pick"]])
+    np.testing.assert_array_equal(b["traces"]["x[0]"], b["sig"]["x[0]"][:, b["pick"]])
     from ctrl_analysis._kernels import kernel_of
 
     loop = loops.example2_loop(p)
@@ -258,7 +258,7 @@ def test_evaluate_flips_the_fair_claim_with_the_fal_exponents():
 def test_quick_run_smoke(tmp_path):
     ctx = StudyContext(out_dir=tmp_path, quick=True, runs=2, seed=5)
     ex2 = replace(EX2, T=1.0, sweep_b1=(-10.0, 0.0, 10.0), sweep_b2=(2.0,), sweep_b3=(1.0,))
-    result = run(ctx, ex1=replace(EX1, T=0.4, t_sens=0.2), ex2=ex2)
+    result = run(ctx, params={"ex1": replace(EX1, T=0.4, t_sens=0.2), "ex2": ex2})
     ids = {q.id for q in result.quantities}
     assert {"eq9.gain_K", "ex1.sigma.mean_abs_err_x1", "ex1.eso_over_sigma_x2", "ex1.fair.equal_bw.leso.mean_abs_err_x2",
             "ex1.tradeoff.sigma.err_x2", "ex1.n0_sweep.fixed_a.err_x1", "ex2.literal.max_real_eig",

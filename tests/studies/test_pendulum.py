@@ -95,7 +95,8 @@ def test_compiled_engine_equals_numpy_engine_bit_for_bit(case):
 def small_run(tmp_path_factory):
     """One small run of the whole study (verify, both regimes, claims, sensitivity sweep), shared by the tests."""
     tmp_path = tmp_path_factory.mktemp("pendulum")
-    return pm.run(StudyContext(out_dir=tmp_path, quick=True, runs=4, seed=3), settings=SMALL), tmp_path
+    return pm.run(StudyContext(out_dir=tmp_path, quick=True, runs=4, seed=3),
+                  params={"verify": SMALL[0], "loop": SMALL[1]}), tmp_path
 
 
 def test_run_smoke(small_run):

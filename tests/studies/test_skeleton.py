@@ -3,6 +3,7 @@
 import dataclasses
 import json
 import math
+import pickle
 
 import control as ct
 import numpy as np
@@ -11,8 +12,9 @@ from analysis import STUDIES
 from analysis._skeleton import INFO, run
 from analysis._skeleton.loops import build_loop, simulate
 from analysis._skeleton.paper import EXAMPLE, QUICK
-from ctrl_analysis.simulate import run_seeds
+from ctrl_analysis.blocks import StaticBlock, StaticGain
 from ctrl_analysis.report import StudyContext, write_results_json
+from ctrl_analysis.simulate import run_seeds
 from ctrl_analysis.study import missing_plausible
 
 SMALL = dataclasses.replace(QUICK, t_end=5.5)
@@ -31,6 +33,17 @@ def test_noise_free_loop_matches_python_control():
     np.testing.assert_allclose(res["y_hat"][:-1, 0], ref[1:], atol=1e-12)
 
 
+def test_loop_follows_contributing_no_lambda_and_picklable():
+    # CONTRIBUTING: static sums are a StaticGain (or a named block), never StaticBlock(lambda ...), so the
+    # loop can go to worker processes (and compile once its blocks have kernels)
+    loop = build_loop(SMALL)
+    static = [p for p in loop.placed if isinstance(p.block, StaticBlock)]
+    assert [p.name for p in static] == ["sensor"]
+    assert all(type(p.block) is not StaticBlock for p in static)
+    assert isinstance(static[0].block, StaticGain) and static[0].block.D.tolist() == [[1.0, 1.0]]
+    pickle.loads(pickle.dumps(loop))
+
+
 def test_batch_equals_single_runs():
     p = dataclasses.replace(SMALL, t_end=1.0)
     batch = simulate(p, [3, 4, 5])
@@ -40,7 +53,7 @@ def test_batch_equals_single_runs():
 
 def test_run_writes_results_json(tmp_path):
     ctx = StudyContext(out_dir=tmp_path, runs=20, seed=1)
-    result = run(ctx, params=SMALL)
+    result = run(ctx, params={"ex": SMALL})
     write_results_json(result, tmp_path)
     data = json.loads((tmp_path / "results.json").read_text(encoding="utf-8"))
     assert data["study"] == INFO.name

@@ -44,7 +44,7 @@ class DiscreteKalmanFilter(DiscreteBlock):
     P0 : array_like, shape (n, n), optional
         Initial prediction covariance (default identity).
 
-    Block signals: inputs ``y`` (and ``u``); states ``xpred[i]``, ``P[i,j]``; outputs ``xhat[i]``.
+    Block signals: inputs ``y`` (and ``u``); states ``xpred[i]``, ``P[i][j]``; outputs ``xhat[i]``.
 
     References
     ----------
@@ -74,7 +74,7 @@ class DiscreteKalmanFilter(DiscreteBlock):
         if np.min(np.linalg.eigvalsh(self.P0)) < -1e-12 * max(1.0, np.abs(self.P0).max()):
             raise ValueError(f"P0 must be positive semidefinite (a covariance), got {self.P0.tolist()}")
         self.outputs = signal_names("xhat", n)
-        self.states = signal_names("xpred", n) + tuple(f"P[{i},{j}]" for i in range(n) for j in range(n))
+        self.states = signal_names("xpred", n) + tuple(f"P[{i}][{j}]" for i in range(n) for j in range(n))
         # kernel parameters: [n, has b, R, h, F (row-major), Qd (row-major), b]
         self._p = np.concatenate([[n, 0.0 if self.b is None else 1.0, self.R], self.h, self.F.ravel(),
                                   self.Qd.ravel(), np.zeros(n) if self.b is None else self.b]).astype(float)
