@@ -184,8 +184,8 @@ def run_compiled(loop, runner, plan, n_steps, t, x, held, bound, keep_cols, stor
     B = x.shape[0]
     P = [Pi[lo:lo + B] if pr else Pi[:1] for Pi, pr in zip(P, per_run)]
     PS = np.array(per_run, dtype=np.intp)
-    col = plan["col"]
-    S0 = np.zeros(len(plan["names"]))
+    col = plan.col
+    S0 = np.zeros(len(plan.names))
     for s, a in held.items():
         if a.ndim == 0:
             S0[col[s]] = a

@@ -371,7 +371,7 @@ def compiled_runner(loop, kernels: dict):
     import numba
 
     plan = loop._plan()
-    col = plan["col"]
+    col = plan.col
     names = [p.name for p in loop.placed]
     blocks = []
     for p in loop.placed:
@@ -379,7 +379,7 @@ def compiled_runner(loop, kernels: dict):
         blocks.append({"ic": [col[s] for s in p.inputs], "oc": [col[s] for s in p.outputs],
                        "np": len(p.outputs), "sl": (sl.start, sl.stop)})
     idx = {n: i for i, n in enumerate(names)}
-    stage_set = {e[0] for e in plan["stage"]}
+    stage_set = {e[0] for e in plan.stage}
     stage = [idx[p.name] for p in loop.stage_order if p.block in stage_set]
     order = [idx[p.name] for p in loop.order]
     discrete = [idx[p.name] for p in loop.discrete]

@@ -26,7 +26,8 @@ processes (``jobs``, :mod:`ctrl_analysis.parallel`). :meth:`Loop.interconnect` b
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from typing import ClassVar
 
 import numpy as np
 
@@ -43,14 +44,15 @@ from ._validate import (
     check_str,
 )
 from .blocks import Block, ContinuousBlock, DiscreteBlock, check_states_declared
+from .engine.numpy_engine import run_numpy
 from .engine.params import chunk_functions, resolve
+from .engine.plan import Plan, make_plan
 from .response import LoopResponse
 from .simulate import (
     CHUNK_BYTES,
     MAX_SUBSTEPS,
     RESULT_BYTES,
     STEPPERS,
-    _flag_divergence,
     check_result_memory,
     chunk_bounds,
 )
@@ -262,48 +264,23 @@ class Loop:
             x[:, self.slices[p.name]] = v
         return x
 
-    def _plan(self):
-        """Index arrays of the fast path, built once: every signal a column of one ``(B, n_sig)`` array."""
-        if getattr(self, "_compiled_plan", None) is not None:
-            return self._compiled_plan
-        names = list(self.external) + [s for p in self.placed for s in p.outputs]
-        col = {s: j for j, s in enumerate(names)}
-
-        def cols(sigs):
-            idx = [col[s] for s in sigs]
-            if idx and idx == list(range(idx[0], idx[0] + len(idx))):
-                return slice(idx[0], idx[0] + len(idx))  # contiguous: a view, no gather
-            return np.array(idx, dtype=np.intp)
-
-        entries = {p.name: (p.block, cols(p.inputs), cols(p.outputs), self.slices.get(p.name, _NO_STATE))
-                   for p in self.placed}
-        # at integration stages only the blocks feeding a continuous block (through static blocks) matter
-        producer = {s: p for p in self.placed for s in p.outputs}
-        needed, todo = set(), [s for p in self.continuous for s in p.inputs]
-        while todo:
-            s = todo.pop()
-            p = producer.get(s)
-            if p is None or p.name in needed or isinstance(p.block, DiscreteBlock):
-                continue
-            needed.add(p.name)
-            if p.block.feedthrough:
-                todo.extend(p.inputs)
-        stage = [entries[p.name] for p in self.stage_order if p.name in needed]
-        plan = {"names": names, "col": col, "order": [entries[p.name] for p in self.order], "stage": stage,
-                "discrete": [entries[p.name] for p in self.discrete],
-                "continuous": [entries[p.name] for p in self.continuous]}
-        self._compiled_plan = plan
-        return plan
+    def _plan(self) -> Plan:
+        """The loop's execution plan (:class:`~ctrl_analysis.engine.plan.Plan`), built once."""
+        if getattr(self, "_compiled_plan", None) is None:
+            self._compiled_plan = make_plan(self)
+        return self._compiled_plan
 
     def _memory_per_run(self, n_steps, n_stored_signals, store_states):
         """Bytes one run's stored trajectories take (signals, plus states when stored)."""
         width = n_stored_signals + (self.n_states if store_states else 0)
         return 8 * (n_steps + 1) * max(width, 1)
 
-    def simulate(self, n_steps: int, *, inputs=None, x0=None, runs: int | None = None, t0: float = 0.0,
-                 params=None, bound: float = 1e8, store_states: bool = True, seeds=None,
-                 store_signals=None, chunk_runs: int | None = None, max_bytes: float | None = None,
-                 progress=None, engine: str = "auto", jobs: int = 1, keep=None, every: int = 1) -> LoopResponse:
+    #: The less common keyword arguments of :meth:`simulate`, with their defaults.
+    OPTIONS: ClassVar[dict] = {"t0": 0.0, "bound": 1e8, "store_states": True, "seeds": None, "chunk_runs": None,
+                               "max_bytes": None, "progress": None, "store_signals": None}
+
+    def simulate(self, n_steps: int, *, inputs=None, x0=None, params=None, runs: int | None = None, keep=None,
+                 every: int = 1, engine: str = "auto", jobs: int = 1, **options) -> LoopResponse:
         """Step the loop ``n_steps`` samples over a batch of runs.
 
         Parameters
@@ -326,30 +303,11 @@ class Loop:
             ``params={"law": {"eta": eta_runs}}``; any other value is shared by every run. Each
             distinct value is validated by the block's constructor; per-run values follow the runs
             into chunks and processes, and give the batch size when nothing else does.
-        bound : float
-            A run whose state leaves ``|x| <= bound`` or becomes non-finite is flagged.
-        store_states : bool
-            Keep the state trajectory (``False`` saves memory in large batches).
-        seeds : list, optional
-            Per-run seeds, recorded in the response.
-        store_signals : sequence of str, optional
-            Signals kept in the response (default: all); fewer save memory in large batches.
         keep : sequence of str, optional
-            The same as ``store_signals`` (the newer name; give one of the two).
+            Signals kept in the response (default: all); fewer save memory in large batches.
         every : int
             Keep every ``every``-th sample only (instants ``t0, t0 + every dt, ...``; default 1: all):
             a Monte Carlo that needs a metric need not pay for storing the whole trajectory.
-        chunk_runs : int, optional
-            Step the batch in chunks of at most this many runs (default: chosen from ``max_bytes``).
-            The per-step work of a chunk stays in cache; every run's result is the same bit for bit.
-        max_bytes : float, optional
-            Memory allowed for the working arrays of one chunk (default
-            :data:`ctrl_analysis.simulate.CHUNK_BYTES`); the batch is split into chunks that fit.
-        progress : callable, bool or None
-            ``progress(n)`` is called as work completes, ``n`` counting run-samples (one run advanced
-            one sample; the total is ``B * n_steps``), e.g. a tqdm ``update``. ``None`` (default): a
-            progress bar of its own (:func:`ctrl_analysis.progress.bar`, stderr, only when it is a
-            terminal) for long simulations (``B * n_steps >= AUTO_BAR_WORK``); ``False``: none.
         engine : {"auto", "numpy", "compiled"}
             ``"numpy"``: the blocks' batched methods. ``"compiled"``: one numba function for the whole
             loop built from the blocks' kernels (:mod:`ctrl_analysis._kernels`); needs a kernel for
@@ -364,6 +322,30 @@ class Loop:
             With ``jobs=1`` and a process-wide Dask cluster (:func:`ctrl_analysis.parallel.use_cluster`),
             a compiled batch of two runs or more is split over its workers, with the same numbers.
 
+        Other Parameters
+        ----------------
+        t0 : float
+            Time of the first sample (default 0).
+        bound : float
+            A run whose state leaves ``|x| <= bound`` or becomes non-finite is flagged.
+        store_states : bool
+            Keep the state trajectory (``False`` saves memory in large batches).
+        seeds : list, optional
+            Per-run seeds, recorded in the response.
+        chunk_runs : int, optional
+            Step the batch in chunks of at most this many runs (default: chosen from ``max_bytes``).
+            The per-step work of a chunk stays in cache; every run's result is the same bit for bit.
+        max_bytes : float, optional
+            Memory allowed for the working arrays of one chunk (default
+            :data:`ctrl_analysis.simulate.CHUNK_BYTES`); the batch is split into chunks that fit.
+        progress : callable, bool or None
+            ``progress(n)`` is called as work completes, ``n`` counting run-samples (one run advanced
+            one sample; the total is ``B * n_steps``), e.g. a tqdm ``update``. ``None`` (default): a
+            progress bar of its own (:func:`ctrl_analysis.progress.bar`, stderr, only when it is a
+            terminal) for long simulations (``B * n_steps >= AUTO_BAR_WORK``); ``False``: none.
+        store_signals : sequence of str, optional
+            The older name of ``keep``.
+
         Returns
         -------
         LoopResponse
@@ -375,6 +357,13 @@ class Loop:
             :data:`~ctrl_analysis.simulate.RESULT_BYTES` (half the physical memory); the message
             says what to change.
         """
+        unknown = sorted(set(options) - set(self.OPTIONS))
+        if unknown:
+            raise TypeError(f"simulate got unknown keyword arguments {unknown}; besides n_steps, inputs, x0, params, "
+                            f"runs, keep, every, engine and jobs it takes {sorted(self.OPTIONS)}")
+        o = self.OPTIONS | options
+        t0, bound, store_states, seeds = o["t0"], o["bound"], o["store_states"], o["seeds"]
+        chunk_runs, max_bytes, progress, store_signals = o["chunk_runs"], o["max_bytes"], o["progress"], o["store_signals"]
         n_steps = check_int("n_steps", n_steps, minimum=1)
         if runs is not None:
             runs = check_int("runs", runs, minimum=1)
@@ -413,7 +402,7 @@ class Loop:
         if seeds is not None and len(seeds) != B:
             raise ValueError(f"seeds must have one entry per run ({B}), got {len(seeds)}")
         plan = self._plan()
-        names, col = plan["names"], plan["col"]
+        names, col = plan.names, plan.col
         keep = names if store_signals is None else list(dict.fromkeys(store_signals))
         for s in keep:
             if s not in col:
@@ -473,10 +462,10 @@ class Loop:
                    for s, f in funcs.items()}
             h_c = {s: (a[:, lo:hi] if a.ndim == 2 else a) for s, a in held.items()}
             if runner is None:
-                fns = chunk_functions(plan, self._variant_ids(variants), lo, hi - lo)
-                self._run_chunk(plan | fns, n_steps, t, x[lo:hi], h_c, f_c, None, bound, keep_cols,
-                                (store[:, lo:hi], None if xs is None else xs[:, lo:hi], every),
-                                diverged[lo:hi], div_step[lo:hi], progress)
+                chunk_plan = replace(plan, **chunk_functions(plan, self._variant_ids(variants), lo, hi - lo))
+                run_numpy(self, chunk_plan, n_steps, t, x[lo:hi], h_c, f_c, bound, keep_cols,
+                          (store[:, lo:hi], None if xs is None else xs[:, lo:hi], every),
+                          (diverged[lo:hi], div_step[lo:hi]), progress)
                 continue
             # compiled: one call per chunk, or (with progress) about 20 calls over its runs (runs are
             # independent: the same numbers either way)
@@ -490,78 +479,6 @@ class Loop:
 
     def _variant_ids(self, variants) -> dict:  # the plan holds the placed blocks: id -> Variant
         return {id(p.block): variants[p.name] for p in self.placed if p.name in variants}
-
-    def _run_chunk(self, plan, n_steps, t, x, held, funcs, params, bound, keep_cols, stored,
-                   diverged, div_step, progress):
-        """Step one chunk of runs, writing into the result slices ``store``, ``xs``, ``diverged``.
-
-        ``x`` (a view into the caller's state array) holds the final state on return.
-        """
-        x_out = x
-        store, xs, every = stored
-        B = x.shape[0]
-        col = plan["col"]
-        S = np.zeros((B, len(plan["names"])))  # every signal at the current instant or stage
-        per_step = []
-        for s, a in held.items():
-            if a.ndim == 0:
-                S[:, col[s]] = a  # constant: written once
-            else:
-                per_step.append((col[s], a, a.shape[0] - 1))
-        fcols = [(col[s], f) for s, f in funcs.items()]
-        order, stage, discrete, continuous = plan["order"], plan["stage"], plan["discrete"], plan["continuous"]
-        store_all = keep_cols.size == S.shape[1] and np.array_equal(keep_cols, np.arange(S.shape[1]))
-        step = STEPPERS[self.method]
-        h = self.dt / self.substeps
-        nc = self.n_continuous
-        tick = max(1, n_steps // 100)
-
-        def evaluate(blocks, tau, xx):  # the chunk's unchecked block functions (chunk_functions)
-            for output, ic, oc, sl in blocks:
-                S[:, oc] = output(tau, xx[:, sl], S[:, ic], params)
-
-        def stage_rhs(tau, xc, _u, p):
-            for j, f in fcols:
-                S[:, j] = f(tau)
-            evaluate(stage, tau, xc)  # continuous blocks come first in x: xc holds their states
-            dx = np.empty_like(xc)
-            for rhs, ic, _, sl in continuous:
-                dx[:, sl] = rhs(tau, xc[:, sl], S[:, ic], p)
-            return dx
-
-        with np.errstate(all="ignore"):
-            for k in range(n_steps + 1):
-                tk = t[k]
-                for j, a, last in per_step:
-                    S[:, j] = a[min(k, last)]
-                for j, f in fcols:
-                    S[:, j] = f(tk)
-                evaluate(order, tk, x)
-                if k % every == 0:
-                    store[k // every] = S if store_all else S[:, keep_cols]
-                    if xs is not None:
-                        xs[k // every] = x
-                if k == n_steps:
-                    break
-                if discrete:
-                    x_next = x.copy()
-                    for update, ic, _, sl in discrete:
-                        x_next[:, sl] = update(tk, x[:, sl], S[:, ic], params)
-                else:
-                    x_next = x
-                if nc:
-                    xc, tau = x[:, :nc], tk
-                    for _ in range(self.substeps):
-                        xc = step(stage_rhs, tau, xc, None, h, params)
-                        tau += h
-                    if discrete:
-                        x_next[:, :nc] = xc
-                    else:
-                        x_next = xc
-                x = _flag_divergence(x_next, bound, diverged, div_step, k + 1)
-                if progress is not None and (k + 1) % tick == 0:
-                    progress(tick * B)
-        x_out[...] = x
 
     # ------------------------------------------------------------------ python-control
     def interconnect(self, name: str | None = None):
@@ -608,5 +525,3 @@ class Loop:
         return ct.interconnect(syslist, inplist=list(self.external), outlist=list(self.outlist),
                                inputs=list(self.external), outputs=list(self.outlist), name=name)
 
-
-_NO_STATE = slice(0, 0)

@@ -208,7 +208,7 @@ def simulate_cases(p, runs: int, seed: int, *, options=None, plant=None, noise_s
         sel[:, sl] = np.array(CASES[c] + ID_OPTIONS[o])[:, None]
     loop = build_loop(p, plant)
     res = loop.simulate(n, inputs={"v": np.tile(v, (1, len(combos))), "r": p.reference}, runs=B,
-                        params=run_params(sel), store_states=False, store_signals=SIGNALS, seeds=seeds * len(combos),
+                        params=run_params(sel), store_states=False, keep=SIGNALS, seeds=seeds * len(combos),
                         engine=engine)
     return res, index
 

@@ -298,7 +298,7 @@ def open_loop(block, signals, output):
     outs = (output,) + tuple(f"_{o}" for o in block.outputs[1:])
     loop = Loop([place(block, "b", inputs=list(signals), outputs=list(outs))], dt=1.0)
     N, B = next(iter(signals.values())).shape
-    res = loop.simulate(N - 1, inputs=signals, runs=B, store_states=False, store_signals=[output], bound=np.inf)
+    res = loop.simulate(N - 1, inputs=signals, runs=B, store_states=False, keep=[output], bound=np.inf)
     return res[output]
 
 

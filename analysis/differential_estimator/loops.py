@@ -294,7 +294,7 @@ def simulate_signals(loop: Loop, n_steps: int, keep, *, inputs, runs: int, chunk
         n = min(chunk, n_steps - k0)
         ins = {s: (v[k0:k0 + n + 1] if isinstance(v, np.ndarray) and v.ndim else v) for s, v in inputs.items()}
         res = loop.simulate(n, inputs=ins, x0=x0, runs=runs, t0=k0 * loop.dt, params=params, bound=bound,
-                            seeds=seeds, store_signals=list(keep), store_states=False)
+                            seeds=seeds, keep=list(keep), store_states=False)
         for s in keep:
             out[s][k0:k0 + n + 1] = res[s]
         new = res.diverged & ~diverged

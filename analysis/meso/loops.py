@@ -456,7 +456,7 @@ def _simulate_rows(sit, rows, T, paper, window, keep, exact, bound, progress) ->
         inputs = {"level": level[sl], "v": noise[sl], "r[0]": np.sin(t_all[sl]), "r[1]": np.cos(t_all[sl]),
                   "r[2]": -np.sin(t_all[sl])}
         res = loop.simulate(n, inputs=inputs, x0=x0, runs=B, t0=t_all[k0], params=params, bound=bound,
-                            store_states=False, store_signals=_STORED)
+                            store_states=False, keep=_STORED)
         new = res.diverged & ~out.diverged
         out.diverged_step[new] = k0 + res.diverged_step[new]
         out.diverged |= res.diverged

@@ -260,12 +260,12 @@ def _variant_function(variant, kind: str, lo: int, B: int):
     return unchecked(variant.block, kind)
 
 
-def chunk_functions(plan: dict, variants: dict, lo: int, B: int) -> dict:
+def chunk_functions(plan, variants: dict, lo: int, B: int) -> dict:
     """The per-step functions the numpy engine calls for the ``B`` runs from run ``lo`` of the call.
 
     Parameters
     ----------
-    plan : dict
+    plan : Plan
         The loop's plan (``order``, ``stage``, ``discrete``, ``continuous``: ``(block, ic, oc, sl)``).
     variants : dict of int -> Variant
         ``id(block)`` -> the block's run-time parameters (:func:`resolve`).
@@ -284,4 +284,4 @@ def chunk_functions(plan: dict, variants: dict, lo: int, B: int) -> dict:
         return unchecked(block, kind)
 
     kinds = {"order": "output", "stage": "output", "discrete": "update", "continuous": "rhs"}
-    return {key: [(fn(b, kind), ic, oc, sl) for b, ic, oc, sl in plan[key]] for key, kind in kinds.items()}
+    return {key: [(fn(b, kind), ic, oc, sl) for b, ic, oc, sl in getattr(plan, key)] for key, kind in kinds.items()}

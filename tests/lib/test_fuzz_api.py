@@ -35,6 +35,7 @@ from ctrl_analysis.arena import claims, signals
 from ctrl_analysis.arena import cli as arena_cli
 from ctrl_analysis.engine import integrators
 from ctrl_analysis.engine import kernels as engine_kernels
+from ctrl_analysis.engine import numpy_engine, plan
 from ctrl_analysis.engine import params as engine_params
 from ctrl_analysis.engine import processes
 from ctrl_analysis.arena import figures as arena_figures
@@ -300,11 +301,11 @@ def build_cases(tmp):
          dict(blocks=[None, 3, [], [3.0], [loop_mod.place(PLANT, "p"), loop_mod.place(PLANT, "p")]])),
         ("Loop.simulate", _loop_simulate,
          dict(n_steps=3, inputs={"u": 1.0}, x0=None, runs=2, t0=0.0, bound=1e8, store_states=True, seeds=None,
-              store_signals=None, chunk_runs=None, max_bytes=None, progress=None, engine="numpy", jobs=1),
+              keep=None, chunk_runs=None, max_bytes=None, progress=None, engine="numpy", jobs=1),
          dict(n_steps=INT + [0], inputs=[3, {"nonsense": 1.0}, {"u": "abc"}, {"u": np.ones(7)}, {"u": NAN}],
               x0=[3, {"nonsense": [0.0]}, {"plant": [NAN]}, {"plant": [1.0, 2.0, 3.0]}],
               runs=opt(INT) + [0], t0=REAL, bound=["abc", None, NAN, -INF, 0.0, [1.0]], store_states=BOOL,
-              seeds=[[1, 2, 3], 5], store_signals=[3, ["nonsense"]], chunk_runs=opt(INT) + [0],
+              seeds=[[1, 2, 3], 5], keep=[3, ["nonsense"]], chunk_runs=opt(INT) + [0],
               max_bytes=opt(POS), progress=[3.0, "f"], engine=CHOICE, jobs=INT + [0],
               params=[3, "abc", {"nonsense": {}}, {"plant": 3}, {"plant": {"nonsense": 1.0}},
                       {"plant": {"dt": [0.1, 0.2, 0.3]}}, {"plant": {"dt": -1.0}}, {"plant": {"dt": NAN}}])),
@@ -820,6 +821,9 @@ NOT_FUZZED = {
     engine_kernels.copy_output: "per-step kernel, unchecked by design",
     pid.pid_output: "per-step kernel, unchecked by design",
     integrators.is_bad: "per-step divergence test, unchecked by design",
+    numpy_engine.run_numpy: "internal half of Loop.simulate(engine='numpy'), whose arguments are fuzzed",
+    plan.Plan: "record built by make_plan",
+    plan.make_plan: "built from a Loop, whose constructor is fuzzed",
     integrators.rk4_stage: "per-step integrator helper, unchecked by design",
     integrators.rk4_combine: "per-step integrator helper, unchecked by design",
     pid.pid_update: "per-step kernel, unchecked by design",

@@ -146,10 +146,10 @@ def test_loop_chunked_batch_equals_unchunked_bit_for_bit():
         assert np.array_equal(whole.x, part.x)
         for s in whole.signals:
             assert np.array_equal(whole[s], part[s])
-    kept = loop.simulate(N_STEPS, inputs=inputs, store_signals=["y"], store_states=False, chunk_runs=2)
+    kept = loop.simulate(N_STEPS, inputs=inputs, keep=["y"], store_states=False, chunk_runs=2)
     assert list(kept.signals) == ["y"] and kept.x is None and np.array_equal(kept["y"], whole["y"])
     with pytest.raises(ValueError, match="names unknown signal 'nope'"):
-        loop.simulate(N_STEPS, inputs=inputs, store_signals=["nope"])
+        loop.simulate(N_STEPS, inputs=inputs, keep=["nope"])
 
 
 def test_simulate_sampled_chunked_equals_unchunked_and_refuses_a_controller():
@@ -209,7 +209,7 @@ def test_long_simulation_shows_its_own_labelled_bar_and_counts_every_run_sample(
     progress.set_context("mystudy", None)
     try:
         capsys.readouterr()
-        loop.simulate(n, inputs={"u[0]": u, **ins}, store_states=False, store_signals=[])  # progress=None: own bar
+        loop.simulate(n, inputs={"u[0]": u, **ins}, store_states=False, keep=[])  # progress=None: own bar
         err = capsys.readouterr().err
         assert f"mystudy: {B} runs x {n} samples" in err
         loop.simulate(n - 1, inputs={"u[0]": u[:-1, :10], **ins}, store_states=False)  # short: no bar
