@@ -36,11 +36,11 @@ from __future__ import annotations
 import os
 import sys
 import time
-from collections.abc import Callable
 from pathlib import Path
-from typing import NamedTuple
 
 import numpy as np
+
+from .engine.kernels import BlockKernel, copy_output, jitable
 
 __all__ = [
     "BlockKernel",
@@ -54,18 +54,6 @@ __all__ = [
     "kernel_of",
     "sigma_rhs",
 ]
-
-
-class BlockKernel(NamedTuple):
-    """A block's per-run kernel functions (plain Python, numba-compilable) and its parameters.
-
-    ``params`` is a 1-D vector shared by every run or a 2-D ``(B, n_p)`` array, one row per run.
-    """
-
-    output: Callable
-    params: np.ndarray
-    rhs: Callable | None = None
-    update: Callable | None = None
 
 
 def available() -> bool:
@@ -82,50 +70,7 @@ def available() -> bool:
     return True
 
 
-def jitable(fn=None, **options):
-    """Decorator: ``fn`` unchanged in Python, and callable from numba-compiled kernels.
-
-    ``numba.extending.register_jitable`` (a no-op without numba). A helper written with scalar
-    indexing and ``np`` ufuncs then serves the batch's columns in Python and one run's scalars in a
-    compiled kernel: one source for both engines. Use as ``@jitable`` or ``@jitable(inline="always")``.
-
-    Parameters
-    ----------
-    fn : callable, optional
-        The function (when used without options).
-    **options
-        Passed to ``register_jitable`` (e.g. ``inline="always"``).
-
-    Returns
-    -------
-    callable
-        ``fn`` itself, or a decorator when ``fn`` is omitted.
-    """
-    def wrap(f):
-        try:
-            from numba.extending import register_jitable
-        except ImportError:  # pragma: no cover - numba is optional: the numpy engine needs none of this
-            return f
-        return register_jitable(**options)(f) if options else register_jitable(f)
-
-    return wrap if fn is None else wrap(fn)
-
-
 # ------------------------------------------------------------------ kernels of library blocks
-def copy_output(t, x, u, p, y):
-    """Output = the whole state (``Block.output``'s default).
-
-    Parameters
-    ----------
-    t, x, u, p
-        Time, one run's state, its inputs and the parameters (only ``x`` is read).
-    y : numpy.ndarray
-        The output, overwritten with ``x`` (a compiled kernel returns nothing and allocates nothing).
-    """
-    for i in range(x.shape[0]):
-        y[i] = x[i]
-
-
 def gain_output(t, x, u, p, y):
     """Static gain ``y = D u`` with ``p = D`` flattened row-major (:class:`~ctrl_analysis.blocks.StaticGain`).
 
