@@ -34,6 +34,7 @@ from ._validate import (
     check_positive,
     check_str,
 )
+from .engine.kernels import KernelBlock, Kernels, Layout
 
 __all__ = [
     "MAX_SIGNALS",
@@ -401,9 +402,11 @@ class StaticBlock(Block):
 
         ins, outs, _ = self._io_names(inputs, outputs, (), name)
         m = len(ins)
+        output = unchecked(self, "output")
 
         def outfcn(t, x, u, params=None):
-            return np.asarray(self.fn(t, np.asarray(u, dtype=float).reshape(1, m)), dtype=float).reshape(-1)
+            ub = np.asarray(u, dtype=float).reshape(1, m)
+            return np.asarray(output(t, np.empty((1, 0)), ub, params or None), dtype=float).reshape(-1)
 
         return ct.nlsys(None, outfcn, inputs=ins, outputs=outs, name=name, dt=dt)
 
@@ -411,11 +414,32 @@ class StaticBlock(Block):
         return f"StaticBlock(inputs={self.inputs}, outputs={self.outputs})"
 
 
-class StaticGain(StaticBlock):
+def gain_output(t, x, u, p, y):
+    """Static gain ``y = D u``, the kernel of :class:`StaticGain`: ``y_i = Σ_j D_ij u_j`` summed left to right.
+
+    Scalar indexing only: one run in the compiled engine, the batch's columns in the batched methods.
+
+    Parameters
+    ----------
+    t, x, u, p
+        Time and state (unused), the ``m`` inputs and ``D`` (``p × m``, row-major).
+    y : numpy.ndarray
+        The ``p`` outputs, written in place.
+    """
+    m = u.shape[0]
+    for i in range(y.shape[0]):
+        acc = 0.0
+        for j in range(m):
+            acc += p[i * m + j] * u[j]
+        y[i] = acc
+
+
+class StaticGain(KernelBlock, StaticBlock):
     """A static gain ``y = D u`` (sums, differences, scalings, per-run selections), with a compiled kernel.
 
     The common static blocks of a loop (a measurement ``y + v``, an error ``r - y``, a case switch
     that routes one of several signals) are gains; written as one they run in the compiled engine.
+    The kernel is :func:`gain_output`.
 
     Parameters
     ----------
@@ -440,37 +464,23 @@ class StaticGain(StaticBlock):
            [1. ]])
     """
 
+    kernels = Kernels(output=gain_output)
+
     def __init__(self, D, inputs, outputs):
         D = check_finite("D", D)
         ins, outs = check_names("inputs", inputs), check_names("outputs", outputs)
+        if not outs:
+            raise ValueError("outputs must name at least one signal")
         if D.ndim not in (2, 3):
             raise ValueError(f"D must have shape (p, m) or (B, p, m), got shape {D.shape}")
         if D.shape[-2:] != (len(outs), len(ins)):
             raise ValueError(f"D must have shape (p, m) = ({len(outs)}, {len(ins)}) (outputs, inputs) "
                              f"[or (B, p, m)], got {D.shape}")
         self.D = D
-        super().__init__(self._apply, ins, outs)
-
-    def _apply(self, t, u):
-        # y_i = sum_j D_ij u_j, summed left to right as the kernel does (bit-identical engines)
-        D = self.D if self.D.ndim == 3 else self.D[None]
-        y = np.zeros((u.shape[0], D.shape[1]))
-        for i in range(D.shape[1]):
-            for j in range(D.shape[2]):
-                y[:, i] += D[:, i, j] * u[:, j]
-        return y
-
-    def kernel(self):
-        """The compiled kernel: :func:`ctrl_analysis._kernels.gain_output` with ``D`` flattened (per run if 3-D).
-
-        Returns
-        -------
-        ctrl_analysis._kernels.BlockKernel
-        """
-        from ._kernels import BlockKernel, gain_output
-
-        p = self.D.reshape(self.D.shape[0], -1) if self.D.ndim == 3 else self.D.reshape(-1)
-        return BlockKernel(output=gain_output, params=p)
+        self.inputs, self.outputs, self.feedthrough = ins, outs, bool(ins)
+        layout = Layout(("D", D.shape[-2:]))  # the kernel's parameters: D, row-major
+        # one packed vector, or one per run for a per-run D (the rows of the engines' per-run parameters)
+        self.kernel_params = np.stack([layout.pack(D=d) for d in D]) if D.ndim == 3 else layout.pack(D=D)
 
     def __repr__(self) -> str:
         return f"StaticGain(D shape {self.D.shape}, inputs={self.inputs}, outputs={self.outputs})"

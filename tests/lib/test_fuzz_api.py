@@ -772,6 +772,7 @@ NOT_FUZZED = {
     engine_kernels.Layout: "fuzzed through _layout (its fields are variadic) and _layout_pack",
     engine_kernels.Kernels: "record of kernel functions, checked when the block runs (check_kernel_reads)",
     engine_kernels.copy_output: "per-step kernel, unchecked by design",
+    engine_kernels.as_int: "per-step helper of kernels (a size read from p), unchecked by design",
     engine_kernels.jitable: "decorator: any function is a valid argument",
     engine_params.Variant: "record built by resolve",
     engine_params.resolve: "internal half of Loop.simulate(params=...), whose params are fuzzed",
