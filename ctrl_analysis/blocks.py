@@ -417,14 +417,8 @@ class StaticBlock(Block):
 def gain_output(t, x, u, p, y):
     """Static gain ``y = D u``, the kernel of :class:`StaticGain`: ``y_i = Σ_j D_ij u_j`` summed left to right.
 
-    Scalar indexing only: one run in the compiled engine, the batch's columns in the batched methods.
-
-    Parameters
-    ----------
-    t, x, u, p
-        Time and state (unused), the ``m`` inputs and ``D`` (``p × m``, row-major).
-    y : numpy.ndarray
-        The ``p`` outputs, written in place.
+    ``u``: the ``m`` inputs of one run (or the batch's columns), ``p``: ``D`` (``p × m``, row-major),
+    ``y``: the ``p`` outputs, written in place; ``t``, ``x`` unused.
     """
     m = u.shape[0]
     for i in range(y.shape[0]):
@@ -478,9 +472,15 @@ class StaticGain(KernelBlock, StaticBlock):
                              f"[or (B, p, m)], got {D.shape}")
         self.D = D
         self.inputs, self.outputs, self.feedthrough = ins, outs, bool(ins)
-        layout = Layout(("D", D.shape[-2:]))  # the kernel's parameters: D, row-major
-        # one packed vector, or one per run for a per-run D (the rows of the engines' per-run parameters)
+        layout = Layout(("D", D.shape[-2:]))  # the kernel's parameters: D (one packed row per run if 3-D)
         self.kernel_params = np.stack([layout.pack(D=d) for d in D]) if D.ndim == 3 else layout.pack(D=D)
+
+    def output(self, t, x, u, params=None) -> np.ndarray:
+        return (self.with_params(**params) if params else self)._apply(t, u)
+
+    def _apply(self, t, u):
+        """``D u`` of every run, the kernel on the batch's columns (a subclass may gate it: analysis/ckf)."""
+        return self.batched("output", t, None, u, self.kernel_params)
 
     def __repr__(self) -> str:
         return f"StaticGain(D shape {self.D.shape}, inputs={self.inputs}, outputs={self.outputs})"
