@@ -7,8 +7,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._kernels import available, compiled_runner, kernel_of
-
 
 def compiled_for(loop, engine, funcs, variants, finite_bound):
     """The compiled runner and the kernels' parameters, or ``None`` for the numpy path.
@@ -20,6 +18,8 @@ def compiled_for(loop, engine, funcs, variants, finite_bound):
 
     if engine == "numpy" or (engine == "auto" and os.environ.get("CTRL_ANALYSIS_ENGINE") == "numpy"):
         return None
+    # imported here: _kernels re-exports kernels of the estimators, which `import ctrl_analysis` must not load
+    from ._kernels import available, compiled_runner, kernel_of
     
     why = None
     if not available():
