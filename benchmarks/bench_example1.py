@@ -11,8 +11,8 @@ integrated with classical RK4. Compared, on the same equations, the same noise a
 * ``engine B = 1, 100, 1000``: :class:`ctrl_analysis.loop.Loop` with the library blocks
   (:class:`~ctrl_analysis.estimators.differential.DifferentialEstimator` ``(5, 7.0)``,
   :class:`~ctrl_analysis.estimators.eso.ExtendedStateObserver` with Han's fal and the step-size
-  gains) and the plant (19) written here as a small :class:`~ctrl_analysis.blocks.ContinuousBlock`,
-  Monte Carlo runs on the batch axis;
+  gains) and the plant (19) written here as a small kernel-first block (a
+  :class:`~ctrl_analysis.engine.kernels.KernelBlock`, as the docs describe), Monte Carlo runs on the batch axis;
 * ``python-control, discrete``: the loop's ``control.interconnect`` advanced as a discrete-time
   ``control.nlsys`` whose update is one RK4 step (:func:`ctrl_analysis.simulate.rk4_step`), run by
   ``input_output_response``; one run;
@@ -33,8 +33,8 @@ import _common  # noqa: F401  (single-threaded BLAS, repository on sys.path)
 import numpy as np
 from _common import Row, median_time, round_robin
 
-from ctrl_analysis._kernels import BlockKernel
 from ctrl_analysis.blocks import ContinuousBlock, signal_names
+from ctrl_analysis.engine.kernels import KernelBlock, Kernels, Layout
 from ctrl_analysis.estimators.differential import DifferentialEstimator
 from ctrl_analysis.estimators.eso import ExtendedStateObserver
 from ctrl_analysis.loop import Loop, place
@@ -47,12 +47,16 @@ XI, ETA = 0.1, 0.001  # ξ ~ U[-0.1, 0.1], η ~ U[-0.001, 0.001]
 ALPHA = (1.0, 0.5, 0.25)  # fal exponents (α = 1: linear first channel)
 
 
+PLANT19 = Layout("b1", "b2", "w_freq")  # the plant's parameters, by name
+AT = PLANT19.at
+
+
 def plant19_rhs(t, x, u, p, dx):
-    """Eq. (19) on one run (floats) or on columns of a batch (``x.T``): ``p = [b1, b2, ω]``."""
-    c = math.cos(p[2] * t)
+    """Eq. (19) on one run (floats) or on columns of a batch: x1' = x2, x2' = -(b1 x1 + b2 x1² x2) + w + ξ."""
+    c = math.cos(p[AT.w_freq] * t)
     w = 1.0 if c > 0 else (-1.0 if c < 0 else 0.0)  # w = sign(cos(ω t))
     dx[0] = x[1]
-    dx[1] = -(p[0] * x[0] + p[1] * x[0] * x[0] * x[1]) + w + u[0]
+    dx[1] = -(p[AT.b1] * x[0] + p[AT.b2] * x[0] * x[0] * x[1]) + w + u[0]
 
 
 def plant19_output(t, x, u, p, y):
@@ -62,32 +66,20 @@ def plant19_output(t, x, u, p, y):
     y[2] = x[1]
 
 
-class Plant19(ContinuousBlock):
+class Plant19(KernelBlock, ContinuousBlock):
     """Eq. (19): x1' = x2, x2' = -(b1 x1 + b2 x1² x2) + sign(cos(ω t)) + ξ; y = x1 + η.
 
-    The batched methods call the kernel functions on the batch's columns, so the numpy path and the
-    compiled path run one piece of code per equation.
+    Written once, as its kernels: the batched methods (numpy engine, python-control) and the
+    compiled engine run the same two functions.
     """
 
     inputs, outputs, states = ("xi", "eta"), ("y", "x[0]", "x[1]"), ("x[0]", "x[1]")
     feedthrough = True
+    kernels = Kernels(output=plant19_output, rhs=plant19_rhs)
 
     def __init__(self, b1=B1, b2=B2, w_freq=W_FREQ):
         self.b1, self.b2, self.w_freq = float(b1), float(b2), float(w_freq)
-        self.p = np.array([self.b1, self.b2, self.w_freq])
-
-    def rhs(self, t, x, u, params=None):
-        dx = np.empty_like(x)
-        plant19_rhs(t, x.T, u.T, self.p, dx.T)
-        return dx
-
-    def output(self, t, x, u, params=None):
-        y = np.empty((x.shape[0], 3))
-        plant19_output(t, x.T, u.T, self.p, y.T)
-        return y
-
-    def kernel(self):
-        return BlockKernel(output=plant19_output, params=self.p, rhs=plant19_rhs)
+        self.kernel_params = PLANT19.pack(b1=b1, b2=b2, w_freq=w_freq)
 
 
 def han_eso(h=H):

@@ -19,7 +19,7 @@ class ColumnKernels:
     module-level functions ``output(t, x, u, p, y)`` and ``update(t, x, u, p, x_next)`` (discrete)
     or ``rhs(t, x, u, p, dx)`` (continuous) with ``x[i]``-style indexing and no per-value branches.
     Called on one run's vectors they are the compiled engine's kernel
-    (:class:`~ctrl_analysis._kernels.BlockKernel`); called on the transposed batch arrays
+    (:class:`~ctrl_analysis.engine.kernels.BlockKernel`); called on the transposed batch arrays
     (``x.T``, ``u.T``, ``p.T``, ``out.T``) they are the block's numpy methods. A block using the
     mixin lists its functions' names in ``column_kernels`` (keys ``"output"`` and ``"update"`` or
     ``"rhs"``; names looked up in the block's module) and sets ``self._p``: its parameter vector
@@ -100,8 +100,8 @@ class ColumnKernels:
 
         Returns
         -------
-        ctrl_analysis._kernels.BlockKernel
+        ctrl_analysis.engine.kernels.BlockKernel
         """
-        from ._kernels import BlockKernel
+        from .engine.kernels import BlockKernel
 
         return BlockKernel(params=self._p, **self._column_fns())

@@ -9,8 +9,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._kernels import available, compiled_runner, kernel_of
-
 
 def compiled_for(loop, engine, funcs, variants):
     """The compiled runner and the kernels' parameters, or ``None`` for the numpy path.
@@ -28,6 +26,9 @@ def compiled_for(loop, engine, funcs, variants):
 
     if engine == "numpy" or (engine == "auto" and os.environ.get("CTRL_ANALYSIS_ENGINE") == "numpy"):
         return None
+    # imported here: _kernels re-exports kernels of the estimators, which `import ctrl_analysis` must not load
+    from ._kernels import available, compiled_runner, kernel_of
+    
     why = None
     if not available():
         why = "numba is not installed"
@@ -97,6 +98,8 @@ def held_rows(loop, variants, B: int, *, split: bool) -> bool:
     ValueError
         If the rows are not the call's runs, or the call asks for a split.
     """
+    from ._kernels import kernel_of
+
     rows = {}
     for p in loop.placed:
         if p.name in variants:

@@ -19,12 +19,11 @@ no concrete block. When every block of a loop has a kernel, :meth:`Loop.simulate
 function for the whole loop — runs outermost, the same sample/stage order and the same RK4
 arithmetic as the numpy path — and runs it; otherwise it uses the numpy path.
 
-A kernel is the compiled twin of the block's numpy method: ``tests/lib/test_speed_kernels.py``
-holds each pair equal (bit for bit where no ``pow`` is involved, else to 1 ulp-level relative
-error, numpy's vectorised ``power`` and libm's ``pow`` may round differently). A kernel written
-with ``x[i]``-style indexing and no per-element branches serves both: called with ``x.T`` /
-``u.T`` / ``dx.T`` (columns of a batch) it *is* the numpy method (see ``benchmarks/bench_example1.py``,
-``Plant19``), so there is one source per equation.
+A :class:`~ctrl_analysis.engine.kernels.KernelBlock` has no numpy twin of its kernels: its batched
+methods apply the same functions to the batch's columns (or run by run), so both engines run one
+source per equation (``tests/lib/test_kernel_blocks.py`` holds them equal bit for bit for every
+library block). A block that writes its own ``kernel()`` beside numpy methods keeps a test holding
+the pair equal (``tests/lib/test_speed_kernels.py``).
 
 The generated runner is cached in memory per loop structure and process, and on disk (numba's
 cache, :func:`cache_dir`); numba's compile time (a few seconds per structure on a cold cache) is
@@ -36,11 +35,13 @@ from __future__ import annotations
 import os
 import sys
 import time
-from collections.abc import Callable
 from pathlib import Path
-from typing import NamedTuple
 
-import numpy as np
+from .engine.kernels import BlockKernel, copy_output, jitable
+
+# Σ's and the ESO's kernels live with their blocks; analysis/ and arena/ still import them from here
+from .estimators.differential import sigma_rhs
+from .estimators.eso import eso_rhs
 
 __all__ = [
     "BlockKernel",
@@ -49,25 +50,10 @@ __all__ = [
     "compiled_runner",
     "copy_output",
     "eso_rhs",
-    "gain_output",
     "jitable",
     "kernel_of",
     "sigma_rhs",
 ]
-
-
-class BlockKernel(NamedTuple):
-    """A block's per-run kernel functions (plain Python, numba-compilable) and its parameters.
-
-    ``params`` is the block's 1-D parameter vector. (A 2-D ``(B, n_p)`` array, one row per run,
-    ties the block to one batch size: the engine still runs it, whole and in one process, for the
-    adapters of :mod:`ctrl_analysis.arena`; per-run values belong in ``Loop.simulate(params=...)``.)
-    """
-
-    output: Callable
-    params: np.ndarray
-    rhs: Callable | None = None
-    update: Callable | None = None
 
 
 def available() -> bool:
@@ -82,118 +68,6 @@ def available() -> bool:
     except ImportError:  # pragma: no cover - numba is installed in the project's environment
         return False
     return True
-
-
-def jitable(fn=None, **options):
-    """Decorator: ``fn`` unchanged in Python, and callable from numba-compiled kernels.
-
-    ``numba.extending.register_jitable`` (a no-op without numba). A helper written with scalar
-    indexing and ``np`` ufuncs then serves the batch's columns in Python and one run's scalars in a
-    compiled kernel: one source for both engines. Use as ``@jitable`` or ``@jitable(inline="always")``.
-
-    Parameters
-    ----------
-    fn : callable, optional
-        The function (when used without options).
-    **options
-        Passed to ``register_jitable`` (e.g. ``inline="always"``).
-
-    Returns
-    -------
-    callable
-        ``fn`` itself, or a decorator when ``fn`` is omitted.
-    """
-    def wrap(f):
-        try:
-            from numba.extending import register_jitable
-        except ImportError:  # pragma: no cover - numba is optional: the numpy engine needs none of this
-            return f
-        return register_jitable(**options)(f) if options else register_jitable(f)
-
-    return wrap if fn is None else wrap(fn)
-
-
-# ------------------------------------------------------------------ kernels of library blocks
-def copy_output(t, x, u, p, y):
-    """Output = the whole state (``Block.output``'s default).
-
-    Parameters
-    ----------
-    t, x, u, p
-        Time, one run's state, its inputs and the parameters (only ``x`` is read).
-    y : numpy.ndarray
-        The output, overwritten with ``x`` (a compiled kernel returns nothing and allocates nothing).
-    """
-    for i in range(x.shape[0]):
-        y[i] = x[i]
-
-
-def gain_output(t, x, u, p, y):
-    """Static gain ``y = D u`` with ``p = D`` flattened row-major (:class:`~ctrl_analysis.blocks.StaticGain`).
-
-    Parameters
-    ----------
-    t, x, u, p
-        Time and state (unused), one run's input vector and the flattened gain matrix.
-    y : numpy.ndarray
-        The output, written in place (summed left to right, as the block's numpy method).
-    """
-    m = u.shape[0]
-    for i in range(y.shape[0]):
-        acc = 0.0
-        for j in range(m):
-            acc += p[i * m + j] * u[j]
-        y[i] = acc
-
-
-def sigma_rhs(t, z, u, p, dz):
-    """Σ, eq. (2): ``z_i' = a_i (y - z_1) + z_(i+1)``, ``z_n0' = a_n0 (y - z_1)``; ``p = [a_1 .. a_n0]``.
-
-    Parameters
-    ----------
-    t, z, u, p
-        Time (unused), Σ's state of one run, its input ``[y]`` and the gains ``a_i``.
-    dz : numpy.ndarray
-        The derivative ``z'``, written in place.
-    """
-    n = z.shape[0]
-    e = u[0] - z[0]
-    for i in range(n - 1):
-        dz[i] = p[i] * e + z[i + 1]  # (2)
-    dz[n - 1] = p[n - 1] * e
-
-
-@jitable(inline="always")  # also called inside other kernels (meso's ESO with a model term)
-def eso_rhs(t, x, u, p, dx):
-    """(Nonlinear) ESO: ``x̂_i' = L_i g_i(e) + x̂_(i+1)``, ``+ b0 u`` in row n, ``e = y - x̂_1``.
-
-    ``p = [linear, b0, delta, L_1..L_m, alpha_1..alpha_m, delta^(1-alpha_1)..]`` (``m = n + 1``);
-    ``g_i(e) = e`` (linear) or Han's ``fal(e, alpha_i, delta)``.
-
-    Parameters
-    ----------
-    t, x, u, p
-        Time (unused), the observer state ``x̂`` of one run, its inputs ``[y, u]`` and the packed
-        parameters above.
-    dx : numpy.ndarray
-        The derivative ``x̂'``, written in place.
-    """
-    m = x.shape[0]
-    e = u[0] - x[0]
-    ae = abs(e)
-    if p[0] != 0.0:
-        for i in range(m):
-            dx[i] = p[3 + i] * e + 0.0  # linear ESO: g_i(e) = e
-    elif ae <= p[2]:
-        for i in range(m):
-            dx[i] = p[3 + i] * (e / p[3 + 2 * m + i]) + 0.0  # fal, linear zone: e / delta^(1-alpha)
-    else:
-        sgn = 1.0 if e > 0 else (-1.0 if e < 0 else e)  # numpy's sign (NaN stays NaN)
-        for i in range(m):
-            dx[i] = p[3 + i] * (ae ** p[3 + m + i] * sgn) + 0.0  # fal: |e|^alpha sign(e)
-    for i in range(m - 1):
-        dx[i] = dx[i] + x[i + 1]  # chain of integrators
-    dx[m - 2] = dx[m - 2] + p[1] * u[1]  # + b0 u in the n-th equation
 
 
 def kernel_of(block) -> BlockKernel | None:

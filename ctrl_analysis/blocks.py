@@ -34,6 +34,7 @@ from ._validate import (
     check_positive,
     check_str,
 )
+from .engine.kernels import KernelBlock, Kernels, Layout
 
 __all__ = [
     "MAX_SIGNALS",
@@ -434,9 +435,11 @@ class StaticBlock(Block):
 
         ins, outs, _ = self._io_names(inputs, outputs, (), name)
         m = len(ins)
+        output = unchecked(self, "output")
 
         def outfcn(t, x, u, params=None):
-            return np.asarray(self.fn(t, np.asarray(u, dtype=float).reshape(1, m)), dtype=float).reshape(-1)
+            ub = np.asarray(u, dtype=float).reshape(1, m)
+            return np.asarray(output(t, np.empty((1, 0)), ub, params or None), dtype=float).reshape(-1)
 
         return ct.nlsys(None, outfcn, inputs=ins, outputs=outs, name=name, dt=dt)
 
@@ -444,13 +447,27 @@ class StaticBlock(Block):
         return f"StaticBlock(inputs={self.inputs}, outputs={self.outputs})"
 
 
-class StaticGain(StaticBlock):
+def gain_output(t, x, u, p, y):
+    """Static gain ``y = D u``, the kernel of :class:`StaticGain`: ``y_i = Σ_j D_ij u_j`` summed left to right.
+
+    ``u``: the ``m`` inputs of one run (or the batch's columns), ``p``: ``D`` (``p × m``, row-major),
+    ``y``: the ``p`` outputs, written in place; ``t``, ``x`` unused.
+    """
+    m = u.shape[0]
+    for i in range(y.shape[0]):
+        acc = 0.0
+        for j in range(m):
+            acc += p[i * m + j] * u[j]
+        y[i] = acc
+
+
+class StaticGain(KernelBlock, StaticBlock):
     """A static gain ``y = D u`` (sums, differences, scalings, selections), with a compiled kernel.
 
     The common static blocks of a loop (a measurement ``y + v``, an error ``r - y``, a case switch
     that routes one of several signals) are gains; written as one they run in the compiled engine.
-    A gain per run (e.g. which filter a run feeds back) is given to the simulation:
-    ``Loop.simulate(params={"name": {"D": (B, p, m) gains}})``.
+    The kernel is :func:`gain_output`. A gain per run (e.g. which filter a run feeds back) is given to
+    the simulation: ``Loop.simulate(params={"name": {"D": (B, p, m) gains}})``.
 
     Parameters
     ----------
@@ -474,34 +491,26 @@ class StaticGain(StaticBlock):
            [1. ]])
     """
 
+    kernels = Kernels(output=gain_output)
+
     def __init__(self, D, inputs, outputs):
         D = check_finite("D", D)
         ins, outs = check_names("inputs", inputs), check_names("outputs", outputs)
+        if not outs:
+            raise ValueError("outputs must name at least one signal")
         if D.shape != (len(outs), len(ins)):
             raise ValueError(f"D must have shape (p, m) = ({len(outs)}, {len(ins)}) (outputs, inputs), got "
                              f"{D.shape}; a gain per run is given to Loop.simulate(params={{name: {{'D': (B, p, m)}}}})")
         self.D = D
-        super().__init__(self._apply, ins, outs)
+        self.inputs, self.outputs, self.feedthrough = ins, outs, bool(ins)
+        self.kernel_params = Layout(("D", D.shape)).pack(D=D)  # the kernel's parameters: D, row-major
+
+    def output(self, t, x, u, params=None) -> np.ndarray:
+        return (self.with_params(**params) if params else self)._apply(t, u)
 
     def _apply(self, t, u):
-        # y_i = sum_j D_ij u_j, summed left to right as the kernel does (bit-identical engines)
-        D = self.D
-        y = np.zeros((u.shape[0], D.shape[0]))
-        for i in range(D.shape[0]):
-            for j in range(D.shape[1]):
-                y[:, i] += D[i, j] * u[:, j]
-        return y
-
-    def kernel(self):
-        """The compiled kernel: :func:`ctrl_analysis._kernels.gain_output` with ``D`` flattened row-major.
-
-        Returns
-        -------
-        ctrl_analysis._kernels.BlockKernel
-        """
-        from ._kernels import BlockKernel, gain_output
-
-        return BlockKernel(output=gain_output, params=self.D.reshape(-1))
+        """``D u`` of every run, the kernel on the batch's columns (a subclass may gate it: analysis/ckf)."""
+        return self.batched("output", t, None, u, self.kernel_params)
 
     def __repr__(self) -> str:
         return f"StaticGain(D shape {self.D.shape}, inputs={self.inputs}, outputs={self.outputs})"

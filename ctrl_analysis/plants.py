@@ -5,12 +5,87 @@ from __future__ import annotations
 import numpy as np
 
 from ._validate import check_positive, check_vector
-from .blocks import ColumnKernels, DiscreteBlock, signal_names
+from .blocks import DiscreteBlock, signal_names
+from .engine.kernels import KernelBlock, Kernels, Layout, as_int, jitable
 
 __all__ = ["DiscreteLTI"]
 
 
-class DiscreteLTI(ColumnKernels, DiscreteBlock):
+#: The fixed head of a :class:`DiscreteLTI`'s kernel parameters: the order, the feedthrough switch
+#: (1 when ``D != 0``) and ``D``; the arrays follow (:func:`lti_layout`).
+HEAD = Layout("n", "has_D", "D")
+AT = HEAD.at
+_ARRAYS = HEAD.size
+
+
+def lti_layout(n: int) -> Layout:
+    """The kernel parameters of an ``n``-state :class:`DiscreteLTI`: :data:`HEAD`, then ``A`` (row-major), ``B``, ``C``.
+
+    Parameters
+    ----------
+    n : int
+        Number of states.
+
+    Returns
+    -------
+    Layout
+    """
+    return Layout(*zip(HEAD.names, HEAD.shapes), ("A", (n, n)), ("B", n), ("C", n))
+
+
+@jitable
+def _lti_at(p):
+    """``(n, A, B, C)``: the order read from ``p`` and the offsets of :func:`lti_layout` ``(n)``'s arrays."""
+    n = as_int(p[AT.n])
+    return n, _ARRAYS, _ARRAYS + n * n, _ARRAYS + n * n + n
+
+
+def lti_update(t, x, u, p, x_next):
+    """``x(k+1) = A x(k) + B u(k)``, the update of :class:`DiscreteLTI`.
+
+    Written with scalar indexing only, so it is both the compiled kernel of one run (``x`` of shape
+    ``(n,)``) and, on a batch's columns, the block's batched method.
+
+    Parameters
+    ----------
+    t : float
+        Time (unused).
+    x : numpy.ndarray
+        The state ``x(k)``.
+    u : numpy.ndarray
+        The input ``[u(k)]``.
+    p : numpy.ndarray
+        :func:`lti_layout` ``(n)``.
+    x_next : numpy.ndarray
+        ``x(k+1)``, written in place (each row summed left to right, then ``+ B u``).
+    """
+    n, A, B, _ = _lti_at(p)
+    for i in range(n):
+        acc = 0.0
+        for j in range(n):
+            acc = acc + p[A + i * n + j] * x[j]
+        x_next[i] = acc + u[0] * p[B + i]
+
+
+def lti_output(t, x, u, p, y):
+    """``y(k) = C x(k) + D u(k)`` (the ``D u`` term only when ``D != 0``), the output of :class:`DiscreteLTI`.
+
+    Parameters
+    ----------
+    t, x, u, p
+        As :func:`lti_update`.
+    y : numpy.ndarray
+        ``[y(k)]``, written in place.
+    """
+    n, _, _, C = _lti_at(p)
+    acc = 0.0
+    for j in range(n):
+        acc = acc + x[j] * p[C + j]
+    # a conditional expression, not an if statement: numba then prunes the arrays' reference counting
+    y[0] = acc + p[AT.D] * u[0] if as_int(p[AT.has_D]) else acc
+
+
+class DiscreteLTI(KernelBlock, DiscreteBlock):
     """A SISO linear system ``x(k+1) = A x(k) + B u(k)``, ``y(k) = C x(k) + D u(k)`` as a discrete block.
 
     A continuous-time ``control.TransferFunction`` or ``control.StateSpace`` is discretised with
@@ -55,6 +130,7 @@ class DiscreteLTI(ColumnKernels, DiscreteBlock):
 
     inputs = ("u",)
     outputs = ("y",)
+    kernels = Kernels(output=lti_output, update=lti_update)
 
     def __init__(self, sys, dt: float, x0=None):
         import control as ct
@@ -81,58 +157,11 @@ class DiscreteLTI(ColumnKernels, DiscreteBlock):
         self.states = signal_names("x", n)
         self.feedthrough = self.D != 0.0
         self._x0 = np.zeros(n) if x0 is None else check_vector("x0", x0, n, broadcast=False)
-        # kernel parameters: [n, D, A (row-major), B, C]
-        self._p = np.concatenate([[float(n), self.D], self.A.reshape(-1), self.B, self.C])
+        self.kernel_params = lti_layout(n).pack(n=n, has_D=1.0 if self.feedthrough else 0.0, D=self.D, A=self.A,
+                                                B=self.B, C=self.C)
 
     def initial_state(self) -> np.ndarray:
         return self._x0.copy()
 
-    column_kernels = {"output": "lti_output", "update": "lti_update"}  # numpy methods + compiled kernel
-
     def __repr__(self) -> str:
         return f"DiscreteLTI(n={self.A.shape[0]}, dt={self.dt})"
-
-
-def lti_update(t, x, u, p, x_next):
-    """``x(k+1) = A x(k) + B u(k)`` with ``p = [n, D, A (n·n, row-major), B (n), C (n)]``.
-
-    Written with scalar indexing only, so it is both the compiled kernel of one run (``x`` of shape
-    ``(n,)``) and, called on a batch's transposed arrays, :class:`DiscreteLTI`'s numpy method.
-
-    Parameters
-    ----------
-    t : float
-        Time (unused).
-    x : numpy.ndarray
-        The state ``x(k)``.
-    u : numpy.ndarray
-        The input ``[u(k)]``.
-    p : numpy.ndarray
-        Packed ``[n, D, A, B, C]``.
-    x_next : numpy.ndarray
-        ``x(k+1)``, written in place (each row summed left to right, then ``+ B u``).
-    """
-    n = int(p[0])
-    for i in range(n):
-        acc = 0.0
-        for j in range(n):
-            acc = acc + p[2 + i * n + j] * x[j]
-        x_next[i] = acc + u[0] * p[2 + n * n + i]
-
-
-def lti_output(t, x, u, p, y):
-    """``y(k) = C x(k) + D u(k)`` (the ``D u`` term only when ``D != 0``); ``p`` as :func:`lti_update`.
-
-    Parameters
-    ----------
-    t, x, u, p
-        As :func:`lti_update`.
-    y : numpy.ndarray
-        ``[y(k)]``, written in place.
-    """
-    n = int(p[0])
-    acc = 0.0
-    for j in range(n):
-        acc = acc + x[j] * p[2 + n * n + n + j]
-    # a conditional expression, not an if statement: numba then prunes the arrays' reference counting
-    y[0] = acc + p[1] * u[0] if p[1] != 0.0 else acc

@@ -53,7 +53,20 @@ from typing import ClassVar, NamedTuple
 
 import numpy as np
 
-__all__ = ["KernelBlock", "Kernels", "Layout", "copy_output", "jitable"]
+__all__ = ["BlockKernel", "KernelBlock", "Kernels", "Layout", "as_int", "copy_output", "jitable"]
+
+
+class BlockKernel(NamedTuple):
+    """A block's per-run kernel functions (plain Python, numba-compilable) and its parameters.
+
+    What the compiled engine runs (:meth:`KernelBlock.kernel`, or a block's own ``kernel()``).
+    ``params`` is a 1-D vector shared by every run or a 2-D ``(B, n_p)`` array, one row per run.
+    """
+
+    output: Callable
+    params: np.ndarray
+    rhs: Callable | None = None
+    update: Callable | None = None
 
 
 def jitable(fn=None, **options):
@@ -97,6 +110,51 @@ def copy_output(t, x, u, p, y):
     """
     for i in range(x.shape[0]):
         y[i] = x[i]
+
+
+def as_int(v) -> int:
+    """A size or a switch stored in a parameter vector (an order, a count of substeps, a 0/1 flag), as an int.
+
+    A kernel reads ``n = as_int(p[AT.n])``. Compiled, ``p[AT.n]`` is one run's float. In the batched
+    methods on the batch's columns with one parameter row per run, it is the row of the runs'
+    values, which must then all be equal: a size cannot differ between the columns of one call.
+
+    Parameters
+    ----------
+    v : float or numpy.ndarray
+        The stored value, or the runs' values.
+
+    Returns
+    -------
+    int
+
+    Raises
+    ------
+    ValueError
+        If the runs' values differ.
+    """
+    a = np.asarray(v)
+    if a.ndim:
+        if a.size and np.any(a != a.flat[0]):
+            raise ValueError(f"a size or switch of a kernel's parameters differs between runs ({np.unique(a)}): "
+                             f"it cannot vary per run in the batched methods (the compiled engine takes it)")
+        a = a.flat[0]
+    return int(a)
+
+
+def _compiled_as_int():
+    """``as_int`` inside numba-compiled kernels: ``int(v)`` of one run's float."""
+    try:
+        from numba.extending import overload
+    except ImportError:  # pragma: no cover - numba is optional: the numpy engine needs none of this
+        return
+
+    @overload(as_int, inline="always")
+    def _as_int(v):
+        return lambda v: int(v)
+
+
+_compiled_as_int()
 
 
 class Layout:
@@ -263,6 +321,8 @@ class KernelBlock:
         kind : {"output", "update", "rhs"}
         t : float
         x, u : numpy.ndarray
+            ``(B, n)`` and ``(B, m)``; also one run (1-D) or extra leading batch axes (with ``P``
+            shared); ``x`` may be ``None`` for a block without state.
         P : numpy.ndarray
             The parameter vector (every run) or one row per run.
 
@@ -271,6 +331,12 @@ class KernelBlock:
         numpy.ndarray, shape (B, width)
         """
         fn = getattr(self.kernels, kind)
+        u = np.asarray(u, dtype=float)
+        x = np.empty(u.shape[:-1] + (0,)) if x is None else np.asarray(x, dtype=float)
+        if u.ndim != 2:  # one run (1-D) or extra leading batch axes: the runs flattened, shared parameters
+            runs = int(np.prod(u.shape[:-1], dtype=int))
+            out = self.batched(kind, t, x.reshape(runs, x.shape[-1]), u.reshape(runs, u.shape[-1]), P)
+            return out.reshape(u.shape[:-1] + out.shape[-1:])
         B = u.shape[0]
         out = np.empty((B, len(self.outputs) if kind == "output" else x.shape[1]))
         if self.kernels.columns:
@@ -336,9 +402,7 @@ class KernelBlock:
 
         Returns
         -------
-        ctrl_analysis._kernels.BlockKernel
+        BlockKernel
         """
-        from .._kernels import BlockKernel
-
         k = self.kernels
         return BlockKernel(output=k.output, params=self.kernel_params, rhs=k.rhs, update=k.update)

@@ -17,9 +17,14 @@ import control as ct
 import numpy as np
 
 from .._validate import check_array, check_in, check_int, check_positive
-from .._kernels import BlockKernel, copy_output, sigma_rhs
 from ..blocks import ContinuousBlock, signal_names
-from ..symbolic.differential import MAX_ORDER, breakaway_gain, breakaway_point, differential_coefficients
+from ..engine.kernels import KernelBlock, Kernels
+from ..symbolic.differential import (
+    MAX_ORDER,
+    breakaway_gain,
+    breakaway_point,
+    differential_coefficients,
+)
 
 __all__ = ["DifferentialEstimator", "READINGS"]
 
@@ -28,8 +33,48 @@ __all__ = ["DifferentialEstimator", "READINGS"]
 READINGS = ("state", "corrected")
 
 
+def sigma_rhs(t, z, u, p, dz):
+    """Σ, eq. (2): ``z_i' = a_i (y - z_1) + z_(i+1)``, ``z_n0' = a_n0 (y - z_1)``; ``p`` the gains ``a_i``.
+
+    Scalar indexing only: one run in the compiled engine, the batch's columns in the batched methods.
+    The order is the state's length; ``p`` is :attr:`DifferentialEstimator.a_coeffs`.
+
+    Parameters
+    ----------
+    t, z, u, p
+        Time (unused), Σ's state, its input ``[y]`` and the gains ``a_i``.
+    dz : numpy.ndarray
+        The derivative ``z'``, written in place.
+    """
+    n = z.shape[0]
+    e = u[0] - z[0]
+    for i in range(n - 1):
+        dz[i] = p[i] * e + z[i + 1]  # (2)
+    dz[n - 1] = p[n - 1] * e
+
+
+def sigma_corrected_output(t, z, u, p, y):
+    """Eq. (11), the corrected reading: ``x̂_1 = z_1``, ``x̂_i = z_i + a_(i-1) (y - z_1)``; arguments as :func:`sigma_rhs`.
+
+    Parameters
+    ----------
+    t, z, u, p
+        As :func:`sigma_rhs`.
+    y : numpy.ndarray
+        The estimates ``x̂``, written in place.
+    """
+    e = u[0] - z[0]
+    y[0] = z[0]
+    for i in range(1, z.shape[0]):
+        y[i] = z[i] + p[i - 1] * e  # (11)
+
+
+#: Σ's kernels per reading: the state reading outputs the state, the corrected one eq. (11).
+_KERNELS = {"state": Kernels(rhs=sigma_rhs), "corrected": Kernels(output=sigma_corrected_output, rhs=sigma_rhs)}
+
+
 @dataclass(frozen=True)
-class DifferentialEstimator(ContinuousBlock):
+class DifferentialEstimator(KernelBlock, ContinuousBlock):
     """Differential state estimator Σ of order ``n0`` (a chain of integrators with output injection).
 
     Parameters
@@ -46,7 +91,8 @@ class DifferentialEstimator(ContinuousBlock):
         which puts a double closed-loop pole at ``-n0 a``.
     reading : {"state", "corrected"}
         Which estimates the block outputs (see :meth:`estimate_matrices`); ``"corrected"`` has
-        direct feedthrough from ``y``.
+        direct feedthrough from ``y``. The kernels are :func:`sigma_rhs` and, for the corrected
+        reading, :func:`sigma_corrected_output`.
     allow_unstable : bool, keyword
         An explicit ``K`` that puts a closed-loop pole in the closed right half-plane raises
         ``ValueError`` unless this is ``True`` (to study an unstable design on purpose). Same opt-out
@@ -246,64 +292,15 @@ class DifferentialEstimator(ContinuousBlock):
     def feedthrough(self) -> bool:
         return self.reading == "corrected"
 
-    def kernel(self) -> BlockKernel | None:
-        """The compiled engine's kernel: :func:`~ctrl_analysis._kernels.sigma_rhs` with Σ's coefficients.
+    @property
+    def kernels(self) -> Kernels:
+        """The kernels of the block's reading (:func:`sigma_rhs`; the output of the corrected reading)."""
+        return _KERNELS[self.reading]
 
-        Returns
-        -------
-        BlockKernel or None
-            ``None`` for the corrected reading (its output is a matrix product: numpy path).
-        """
-        if self.reading != "state":
-            return None
-        return BlockKernel(output=copy_output, params=np.array(self.a_coeffs, dtype=float), rhs=sigma_rhs)
-
-    def rhs(self, t, z, u, params=None) -> np.ndarray:
-        """Right-hand side of eq. (2), the block protocol's ``rhs(t, x, u, params)``.
-
-        Parameters
-        ----------
-        t : float
-            Time (unused: Σ is time invariant).
-        z : numpy.ndarray, shape (B, n0)
-            States (any leading batch axes are allowed).
-        u : numpy.ndarray, shape (B, 1)
-            The measurement ``y`` as a one-column input (same leading axes as ``z``).
-        params : optional
-            Ignored (accepted for ``control.nlsys``).
-
-        Returns
-        -------
-        numpy.ndarray, shape (B, n0)
-        """
-        dz = self.a_coeffs * (u[..., :1] - z[..., :1])  # a_i (y - z_1)
-        # (2) z_i' = z_(i+1) + a_i (y - z_1), i = 1..n0-1;  z_n0' = a_n0 (y - z_1)
-        dz[..., :-1] += z[..., 1:]
-        return dz
-
-    def output(self, t, z, u, params=None) -> np.ndarray:
-        """Estimates ``x̂ = C z + D y`` of the block's reading.
-
-        Parameters
-        ----------
-        t : float
-            Time (s).
-        z : numpy.ndarray, shape (B, n0)
-            Estimator states.
-        u : numpy.ndarray, shape (B, 1)
-            The measured signal ``y``.
-        params : dict, optional
-            Ignored (parameters are fixed at construction).
-
-        Returns
-        -------
-        numpy.ndarray, shape (B, n0)
-            ``xhat[0..n0-1]``.
-        """
-        if self.reading == "state":
-            return z
-        C, D = self.estimate_matrices(self.reading)
-        return z @ C.T + u[..., :1] * D[:, 0]
+    @property
+    def kernel_params(self) -> np.ndarray:
+        """The kernels' parameters: the gains :attr:`a_coeffs` (a writable copy, as the compiled engine takes it)."""
+        return np.array(self.a_coeffs, dtype=float)
 
     def nlsys(self, name: str | None = None, reading: str | None = None, **names) -> ct.NonlinearIOSystem:
         """Σ as a ``control.nlsys``: input ``y``, states ``z[0..n0-1]``, outputs ``xhat[0..n0-1]``.

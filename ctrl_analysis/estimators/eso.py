@@ -22,9 +22,15 @@ from typing import Callable
 
 import numpy as np
 
-from .._validate import check_array, check_finite, check_hurwitz, check_int, check_positive
-from .._kernels import BlockKernel, copy_output, eso_rhs
+from .._validate import (
+    check_array,
+    check_finite,
+    check_hurwitz,
+    check_int,
+    check_positive,
+)
 from ..blocks import ContinuousBlock, signal_names
+from ..engine.kernels import KernelBlock, Kernels, Layout, as_int, jitable
 from ..polynomials import repeated_pole_coefficients
 
 __all__ = ["fal", "ExtendedStateObserver"]
@@ -69,20 +75,87 @@ def fal(e, alpha, delta):
     """
     delta = check_positive("delta", delta, scalar=True)
     alpha = np.asarray(check_finite("alpha", alpha), dtype=float)
-    out = _fal(check_array("e", e), alpha, delta, np.power(delta, 1.0 - alpha))
+    out = _fal_array(check_array("e", e), alpha, delta, np.power(delta, 1.0 - alpha))
     return float(out) if out.ndim == 0 else out
 
 
-def _fal(e: np.ndarray, alpha: np.ndarray, delta: float, delta_pow: np.ndarray) -> np.ndarray:
-    """fal without argument checks (the per-step path); ``delta_pow = delta**(1 - alpha)``."""
-    abs_e = np.abs(e)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        outer = np.power(abs_e, alpha) * np.sign(e)
-    return np.where(abs_e <= delta, e / delta_pow, outer)
+@jitable(inline="always")
+def _fal(e, alpha, delta, delta_pow):
+    """fal of one value (no checks; ``delta_pow = delta**(1 - alpha)``): the kernel's and :func:`fal`'s one source."""
+    ae = abs(e)
+    if ae <= delta:
+        return e / delta_pow  # linear zone
+    sgn = 1.0 if e > 0 else (-1.0 if e < 0 else e)  # numpy's sign (NaN stays NaN)
+    return ae ** alpha * sgn  # |e|^alpha sign(e)
 
 
-class ExtendedStateObserver(ContinuousBlock):
+#: :func:`_fal` element by element on arrays (broadcast), for :func:`fal` and :meth:`ExtendedStateObserver.correction`.
+_fal_array = np.vectorize(_fal, otypes=[float])
+
+
+#: The fixed head of an ESO's kernel parameters: the switch ``linear`` (1: ``g_i(e) = e``), ``b0`` and
+#: ``delta``; the arrays ``L``, ``alpha``, ``delta_pow`` (``δ^(1-α_i)``) of ``m = n + 1`` entries follow
+#: (:func:`eso_layout`; ones for the linear ESO).
+HEAD = Layout("linear", "b0", "delta")
+AT = HEAD.at
+_ARRAYS = HEAD.size
+
+
+def eso_layout(m: int) -> Layout:
+    """The kernel parameters of an ESO with ``m = n + 1`` states: :data:`HEAD`, then ``L``, ``alpha``, ``delta_pow``.
+
+    Parameters
+    ----------
+    m : int
+        Observer order ``n + 1``.
+
+    Returns
+    -------
+    Layout
+    """
+    return Layout(*zip(HEAD.names, HEAD.shapes), ("L", m), ("alpha", m), ("delta_pow", m))
+
+
+@jitable(inline="always")  # also called inside other kernels (meso's ESO with a model term)
+def eso_rhs(t, x, u, p, dx):
+    """(Nonlinear) ESO: ``x̂_i' = L_i g_i(e) + x̂_(i+1)``, ``+ b0 u`` in row n, ``e = y - x̂_1``; the kernel of :class:`ExtendedStateObserver`.
+
+    ``g_i(e) = e`` (linear) or Han's ``fal(e, alpha_i, delta)``. fal branches on the error (its
+    linear zone), so the batched methods of a fal ESO call it run by run (``Kernels(columns=False)``);
+    the linear ESO's run on the batch's columns.
+
+    Parameters
+    ----------
+    t, x, u, p
+        Time (unused), the observer state ``x̂`` of one run (its length is ``m``), its inputs
+        ``[y, u]`` and :func:`eso_layout` ``(m)``.
+    dx : numpy.ndarray
+        The derivative ``x̂'``, written in place.
+    """
+    m = x.shape[0]
+    L, alpha, dp = _ARRAYS, _ARRAYS + m, _ARRAYS + 2 * m
+    e = u[0] - x[0]
+    if as_int(p[AT.linear]):
+        for i in range(m):
+            dx[i] = p[L + i] * e + 0.0  # linear ESO: g_i(e) = e
+    else:
+        for i in range(m):
+            dx[i] = p[L + i] * _fal(e, p[alpha + i], p[AT.delta], p[dp + i]) + 0.0  # (3) g_i(e) = fal(e, α_i, δ)
+    for i in range(m - 1):
+        dx[i] = dx[i] + x[i + 1]  # chain of integrators
+    dx[m - 2] = dx[m - 2] + p[AT.b0] * u[1]  # + b0 u in the n-th equation
+
+
+#: The ESO's kernels: the linear ESO's run on the batch's columns, fal's branch on the error (run by run).
+_LINEAR_KERNELS = Kernels(rhs=eso_rhs)
+_FAL_KERNELS = Kernels(rhs=eso_rhs, columns=False)
+
+
+class ExtendedStateObserver(KernelBlock, ContinuousBlock):
     """Continuous extended state observer of plant order ``n`` (linear, nonlinear or modified).
+
+    The equations are the kernel :func:`eso_rhs`; a ``known`` term (MESO) is a Python callable, so
+    an observer with one has no compiled kernel and runs on the numpy engine.
 
     Parameters
     ----------
@@ -183,6 +256,21 @@ class ExtendedStateObserver(ContinuousBlock):
             check_hurwitz("gains", np.concatenate([[1.0], small_signal]),
                           polynomial="the error dynamics s^(n+1) + L_1 s^n + ... + L_(n+1)"
                           + ("" if alpha is None else " (linear zone of fal)"))
+        m, linear = self.nstates, alpha is None
+        # the packed parameters (kept as _params: ctrl_analysis/arena/interface.py replaces them per run)
+        self._params = eso_layout(m).pack(linear=1.0 if linear else 0.0, b0=self.b0, delta=1.0 if delta is None else delta,
+                                          L=gains, alpha=np.ones(m) if linear else alpha,
+                                          delta_pow=np.ones(m) if linear else self._delta_pow)
+
+    @property
+    def kernels(self) -> Kernels:
+        """:func:`eso_rhs`; run by run in the batched methods when fal branches on the error."""
+        return _LINEAR_KERNELS if self.alpha is None else _FAL_KERNELS
+
+    @property
+    def kernel_params(self) -> np.ndarray:
+        """The kernel's parameters, :func:`eso_layout` ``(n + 1)`` (one row per run if replaced per run)."""
+        return self._params
 
     # ------------------------------------------------------------------------------------------
     # Constructors
@@ -261,29 +349,22 @@ class ExtendedStateObserver(ContinuousBlock):
         e = np.asarray(e, dtype=float)[..., None]
         if self.alpha is None:
             return self.L * e
-        # arguments were checked once in __init__; the per-step path skips the checks
-        return self.L * _fal(e, self.alpha, self.delta, self._delta_pow)
+        return self.L * _fal_array(e, self.alpha, self.delta, self._delta_pow)
 
-    def kernel(self) -> BlockKernel | None:
-        """The compiled engine's kernel: :func:`~ctrl_analysis._kernels.eso_rhs` with the packed gains.
+    def kernel(self):
+        """The compiled engine's kernel (:func:`eso_rhs`), or ``None`` with a ``known`` term (numpy engine).
 
         Returns
         -------
         BlockKernel or None
-            ``None`` with a known-model term (a Python callable: numpy path).
         """
-        if self.known is not None:
-            return None
-        m = self.nstates
-        linear = self.alpha is None
-        alpha = np.ones(m) if linear else self.alpha
-        dp = np.ones(m) if linear else self._delta_pow
-        delta = 1.0 if self.delta is None else self.delta
-        p = np.concatenate([[1.0 if linear else 0.0, self.b0, delta], self.L, alpha, dp]).astype(float)
-        return BlockKernel(output=copy_output, params=p, rhs=eso_rhs)
+        return None if self.known is not None else KernelBlock.kernel(self)
 
     def rhs(self, t, x_hat, u, params=None) -> np.ndarray:
-        """Observer right-hand side in python-control's order ``(t, x, u, params)``.
+        """Observer right-hand side in python-control's order ``(t, x, u, params)``: the kernel :func:`eso_rhs`.
+
+        With a ``known`` term (MESO) the kernel runs without ``b0 u``, and ``b0 u + f_known`` is then
+        added to the n-th equation.
 
         Parameters
         ----------
@@ -292,29 +373,23 @@ class ExtendedStateObserver(ContinuousBlock):
             Observer states on the last axis.
         u : ndarray, shape (..., 2)
             Observer inputs ``[y, u_control]``.
-        params : object, optional
-            Passed to ``known``.
+        params : dict, optional
+            python-control's ``params``: passed to ``known`` when there is one, else constructor
+            arguments changed by name for this call.
 
         Returns
         -------
         ndarray
-            ``d x_hat / dt``, shape ``broadcast(x_hat, u)[..., n + 1]``.
+            ``d x_hat / dt``, shape ``x_hat.shape``.
         """
-        x_hat = np.asarray(x_hat, dtype=float)
-        u = np.asarray(u, dtype=float)
-        y = u[..., 0]
-        uc = u[..., 1]
-        e = y - x_hat[..., 0]
-        dx = self.correction(e)
-        dx = dx + np.zeros_like(x_hat)  # broadcast to the batch shape
-        n = self.n
-        # (3)/(6) chain of integrators: x_hat_i' = x_hat_{i+1} + L_i g_i(e)
-        dx[..., :n] += x_hat[..., 1:]
-        # (3) n-th equation: + f_known + b0 u  (MESO); (6) without f_known (ESO)
-        drive = self.b0 * uc
-        if self.known is not None:
-            drive = drive + np.asarray(self.known(t, x_hat, u, params), dtype=float)
-        dx[..., n - 1] += drive
+        if self.known is None:
+            return self.batched("rhs", t, x_hat, u, self._vector(params))
+        P = self.kernel_params.copy()
+        P[..., AT.b0] = 0.0
+        dx = self.batched("rhs", t, x_hat, u, P)
+        # (3) n-th equation: + f_known + b0 u  (MESO)
+        dx[..., self.n - 1] += self.b0 * np.asarray(u, dtype=float)[..., 1] + np.asarray(
+            self.known(t, x_hat, u, params), dtype=float)
         return dx
 
     inputs = ("y", "u")

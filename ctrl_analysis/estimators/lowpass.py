@@ -10,13 +10,64 @@ from __future__ import annotations
 import numpy as np
 
 from .._validate import check_array, check_int, check_positive, check_vector
-from ..blocks import ColumnKernels, ContinuousBlock, DiscreteBlock, signal_names
+from ..blocks import ContinuousBlock, DiscreteBlock, signal_names
+from ..engine.kernels import KernelBlock, Kernels, Layout, as_int
 from ..polynomials import repeated_pole_coefficients
 
 __all__ = ["LowPassFilter", "DiscreteLowPass"]
 
 
-class LowPassFilter(ContinuousBlock):
+#: The fixed head of a :class:`LowPassFilter`'s kernel parameters: the order ``m`` and the input gain
+#: ``ω^m``; the coefficients ``c_0 .. c_(m-1)`` of ``(s + ω)^m`` follow (:func:`lowpass_layout`).
+HEAD = Layout("m", "gain")
+AT = HEAD.at
+_COEFFS = HEAD.size
+
+
+def lowpass_layout(m: int) -> Layout:
+    """The kernel parameters of an order-``m`` :class:`LowPassFilter`: :data:`HEAD`, then ``coeffs`` (``m``).
+
+    Parameters
+    ----------
+    m : int
+        Filter order.
+
+    Returns
+    -------
+    Layout
+    """
+    return Layout(*zip(HEAD.names, HEAD.shapes), ("coeffs", m))
+
+
+def lowpass_rhs(t, x, u, p, dx):
+    """``dw/dt`` of :class:`LowPassFilter`'s phase-variable form: ``w_i' = w_(i+1)``, ``w_(m-1)' = ω^m u − Σ c_j w_j``.
+
+    Scalar indexing only: one run in the compiled engine, the batch's columns in the batched methods.
+
+    Parameters
+    ----------
+    t : float
+        Time (unused).
+    x : numpy.ndarray
+        ``w, w', ..., w^(m-1)``.
+    u : numpy.ndarray
+        ``[u]``.
+    p : numpy.ndarray
+        :func:`lowpass_layout` ``(m)``.
+    dx : numpy.ndarray
+        The derivative, written in place.
+    """
+    m = as_int(p[AT.m])
+    c = _COEFFS
+    for i in range(m - 1):
+        dx[i] = x[i + 1]  # w_i' = w_(i+1)
+    top = p[AT.gain] * u[0]
+    for j in range(m):
+        top = top - p[c + j] * x[j]  # w_(m-1)' = ω^m u − Σ c_j w_j
+    dx[m - 1] = top
+
+
+class LowPassFilter(KernelBlock, ContinuousBlock):
     """Continuous low-pass ``W(s) = ω^m / (s + ω)^m`` of order ``m`` (unit DC gain, m-fold pole at ``-ω``).
 
     Phase-variable (controllable canonical) realisation with states ``w = [w_0, w_1, ..., w_(m-1)]``,
@@ -68,6 +119,7 @@ class LowPassFilter(ContinuousBlock):
     """
 
     inputs = ("u",)
+    kernels = Kernels(rhs=lowpass_rhs)
 
     def __init__(self, omega: float, order: int = 2):
         self.omega = float(check_positive("omega", omega, scalar=True))
@@ -86,6 +138,7 @@ class LowPassFilter(ContinuousBlock):
         self.C = np.zeros((1, m))
         self.C[0, 0] = 1.0
         self.states = self.outputs = signal_names("w", m)
+        self.kernel_params = lowpass_layout(m).pack(m=m, gain=self.gain, coeffs=self.coeffs)
 
     @property
     def tf(self):
@@ -121,34 +174,6 @@ class LowPassFilter(ContinuousBlock):
         names = list(self.states)
         return ct.ss(self.A, self.B, np.eye(self.order), np.zeros((self.order, 1)), inputs="u", states=names,
                      outputs=names)
-
-    def rhs(self, t, x, u, params=None) -> np.ndarray:
-        """``dw/dt`` of the phase-variable form (block protocol).
-
-        Parameters
-        ----------
-        t : float
-            Time (s).
-        x : numpy.ndarray, shape (B, m)
-            ``w, w', ..., w^(m-1)``.
-        u : numpy.ndarray, shape (B, 1)
-            Filter input.
-        params : dict, optional
-            Ignored.
-
-        Returns
-        -------
-        numpy.ndarray, shape (B, m)
-        """
-        dx = np.empty_like(x)
-        # w_i' = w_(i+1)
-        dx[..., :-1] = x[..., 1:]
-        # w_(m-1)' = ω^m u − Σ c_j w_j
-        top = self.gain * u[..., 0]
-        for j in range(self.order):
-            top = top - self.coeffs[j] * x[..., j]
-        dx[..., -1] = top
-        return dx
 
     def discretize(self, h: float):
         """Exact zero-order-hold discretisation ``x(k+1) = Ad x(k) + Bd u(k)`` for sample period ``h``.
@@ -191,7 +216,77 @@ class LowPassFilter(ContinuousBlock):
         return f"LowPassFilter(omega={self.omega}, order={self.order})"
 
 
-class DiscreteLowPass(ColumnKernels, DiscreteBlock):
+#: The fixed head of a :class:`DiscreteLowPass`'s kernel parameters: the order ``m``; ``Ad`` (row-major)
+#: and ``Bd`` follow (:func:`digital_layout`).
+DIGITAL_HEAD = Layout("m")
+DIGITAL_AT = DIGITAL_HEAD.at
+_DIGITAL_ARRAYS = DIGITAL_HEAD.size
+
+
+def digital_layout(m: int) -> Layout:
+    """The kernel parameters of an order-``m`` :class:`DiscreteLowPass`: :data:`DIGITAL_HEAD`, then ``Ad``, ``Bd``.
+
+    Parameters
+    ----------
+    m : int
+        Filter order.
+
+    Returns
+    -------
+    Layout
+    """
+    return Layout(*zip(DIGITAL_HEAD.names, DIGITAL_HEAD.shapes), ("Ad", (m, m)), ("Bd", m))
+
+
+def lowpass_update(t, x, u, p, x_next):
+    """Discrete W(s), every channel: ``x(k+1) = Ad x(k) + Bd u(k)`` (exact ZOH), the update of :class:`DiscreteLowPass`.
+
+    Written with scalar indexing only, so it is both the compiled kernel of one run (``x`` of shape
+    ``(channels·m,)``) and, on a batch's columns, the block's batched method.
+
+    Parameters
+    ----------
+    t : float
+        Time (unused).
+    x : numpy.ndarray
+        Filter states, channel-major: ``x[c·m + j]``.
+    u : numpy.ndarray
+        One input per channel.
+    p : numpy.ndarray
+        :func:`digital_layout` ``(m)``: ``m, Ad (m·m, row-major), Bd (m)``.
+    x_next : numpy.ndarray
+        Next states, written in place.
+    """
+    m = as_int(p[DIGITAL_AT.m])
+    Ad, Bd = _DIGITAL_ARRAYS, _DIGITAL_ARRAYS + m * m
+    for c in range(u.shape[0]):
+        for i in range(m):
+            acc = p[Bd + i] * u[c]
+            for j in range(m):
+                acc = acc + p[Ad + i * m + j] * x[c * m + j]
+            x_next[c * m + i] = acc
+
+
+def lowpass_output(t, x, u, p, y):
+    """The filtered value after this sample: the first row of :func:`lowpass_update` (direct feedthrough).
+
+    Parameters
+    ----------
+    t, x, u, p
+        As :func:`lowpass_update`.
+    y : numpy.ndarray
+        One output per channel, written in place.
+    """
+    m = as_int(p[DIGITAL_AT.m])
+    Ad, Bd = _DIGITAL_ARRAYS, _DIGITAL_ARRAYS + m * m
+    for c in range(u.shape[0]):
+        acc = p[Bd] * u[c]
+        for j in range(m):
+            acc = acc + p[Ad + j] * x[c * m + j]
+        y[c] = acc
+
+
+class DiscreteLowPass(KernelBlock, DiscreteBlock):
     """Digital form of a :class:`LowPassFilter` (exact for inputs held over each sample), a discrete block.
 
     Filters ``channels`` signals independently (e.g. a ``p``-parameter vector). The block's state
@@ -226,6 +321,7 @@ class DiscreteLowPass(ColumnKernels, DiscreteBlock):
     """
 
     feedthrough = True
+    kernels = Kernels(output=lowpass_output, update=lowpass_update)
 
     def __init__(self, lowpass: LowPassFilter, h: float, channels: int = 1, initial=None):
         if not isinstance(lowpass, LowPassFilter):
@@ -241,13 +337,15 @@ class DiscreteLowPass(ColumnKernels, DiscreteBlock):
         self.inputs = signal_names("u", self.channels)
         self.outputs = signal_names("w", self.channels)
         self.states = tuple(f"w[{c}][{j}]" for c in range(self.channels) for j in range(m))
-        # kernel parameters: [m, Ad (row-major), Bd]
-        self._p = np.concatenate([[float(m)], self.Ad.reshape(-1), self.Bd])
+        self.kernel_params = digital_layout(m).pack(m=m, Ad=self.Ad, Bd=self.Bd)
 
     def initial_state(self) -> np.ndarray:
         return self._x0.reshape(-1).copy()
 
-    column_kernels = {"output": "lowpass_output", "update": "lowpass_update"}  # numpy methods + compiled kernel
+    @property
+    def _p(self) -> np.ndarray:
+        """The kernel parameters by their former name (``ctrl_analysis/arena/interface.py`` reads it)."""
+        return self.kernel_params
 
     def filter(self, u) -> np.ndarray:
         """Filter a whole record ``u`` of shape ``(N,)``, ``(N, channels)`` or ``(N, B, channels)``.
@@ -271,50 +369,3 @@ class DiscreteLowPass(ColumnKernels, DiscreteBlock):
 
     def __repr__(self) -> str:
         return f"DiscreteLowPass({self.lowpass!r}, h={self.h}, channels={self.channels})"
-
-
-def lowpass_update(t, x, u, p, x_next):
-    """Discrete W(s), every channel: ``x(k+1) = Ad x(k) + Bd u(k)`` (exact ZOH), ``p = [m, Ad, Bd]``.
-
-    Written with scalar indexing only, so it is both the compiled kernel of one run (``x`` of shape
-    ``(channels·m,)``) and, called on a batch's transposed arrays, :class:`DiscreteLowPass`'s numpy
-    method.
-
-    Parameters
-    ----------
-    t : float
-        Time (unused).
-    x : numpy.ndarray
-        Filter states, channel-major: ``x[c·m + j]``.
-    u : numpy.ndarray
-        One input per channel.
-    p : numpy.ndarray
-        ``[m, Ad (m·m, row-major), Bd (m)]``.
-    x_next : numpy.ndarray
-        Next states, written in place.
-    """
-    m = int(p[0])
-    for c in range(u.shape[0]):
-        for i in range(m):
-            acc = p[1 + m * m + i] * u[c]
-            for j in range(m):
-                acc = acc + p[1 + i * m + j] * x[c * m + j]
-            x_next[c * m + i] = acc
-
-
-def lowpass_output(t, x, u, p, y):
-    """The filtered value after this sample: the first row of :func:`lowpass_update` (direct feedthrough).
-
-    Parameters
-    ----------
-    t, x, u, p
-        As :func:`lowpass_update`.
-    y : numpy.ndarray
-        One output per channel, written in place.
-    """
-    m = int(p[0])
-    for c in range(u.shape[0]):
-        acc = p[1 + m * m] * u[c]
-        for j in range(m):
-            acc = acc + p[1 + j] * x[c * m + j]
-        y[c] = acc

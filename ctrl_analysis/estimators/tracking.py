@@ -18,11 +18,11 @@ from __future__ import annotations
 import control as ct
 import numpy as np
 
-from .lowpass import LowPassFilter
 from .._validate import check_array, check_finite, check_in, check_int, check_positive
-from ..blocks import ColumnKernels, DiscreteBlock, StaticBlock
-from .._kernels import jitable
+from ..blocks import DiscreteBlock, StaticBlock
+from ..engine.kernels import KernelBlock, Kernels, Layout, as_int, jitable
 from ..simulate import MAX_SUBSTEPS
+from .lowpass import LowPassFilter
 
 __all__ = [
     "fhan",
@@ -109,12 +109,18 @@ def _td_steps(x1, x2, v, r, h, h0, n):
     return x1, x2, fh
 
 
+#: Kernel parameters of :class:`TrackingDifferentiator` and :class:`TDStep`: ``r``, ``h``, ``h0``, the
+#: number of substeps and the feedthrough switch (0/1).
+LAYOUT = Layout("r", "h", "h0", "substeps", "feedthrough")
+AT = LAYOUT.at
+
+
 @jitable
 def td_update(t, x, u, p, x_next):
-    """Kernel update of :class:`TrackingDifferentiator`: ``substeps`` TD steps, ``p = [r, h, h0, substeps, feedthrough]``.
+    """Kernel update of :class:`TrackingDifferentiator`: ``substeps`` TD steps with ``v`` held.
 
-    Scalar indexing only: one run's vectors in the compiled engine, the batch's transposed arrays
-    as the block's numpy method.
+    Scalar indexing only: one run's vectors in the compiled engine, the batch's columns in the
+    block's batched methods.
 
     Parameters
     ----------
@@ -125,17 +131,17 @@ def td_update(t, x, u, p, x_next):
     u : numpy.ndarray
         Input ``(v,)``.
     p : numpy.ndarray
-        ``[r, h, h0, substeps, feedthrough (0/1)]``.
+        :data:`LAYOUT`: ``r``, ``h``, ``h0``, ``substeps``, ``feedthrough``.
     x_next : numpy.ndarray
         Next state, written in place.
     """
-    x1, x2, _fh = _td_steps(x[0], x[1], u[0], p[0], p[1], p[2], int(p[3]))
+    x1, x2, _fh = _td_steps(x[0], x[1], u[0], p[AT.r], p[AT.h], p[AT.h0], as_int(p[AT.substeps]))
     x_next[0] = x1
     x_next[1] = x2
 
 
 def td_step_output(t, x, u, p, y):
-    """Kernel of :class:`TDStep` and its numpy method: ``y = (x1, x2)`` after the steps, ``u = (v, x1, x2)``.
+    """Kernel output of :class:`TDStep`: ``y = (x1, x2)`` after the steps, ``u = (v, x1, x2)``.
 
     Parameters
     ----------
@@ -148,7 +154,7 @@ def td_step_output(t, x, u, p, y):
     y : numpy.ndarray
         ``(x1, x2)`` after the steps, written in place.
     """
-    x1, x2, _fh = _td_steps(u[1], u[2], u[0], p[0], p[1], p[2], int(p[3]))
+    x1, x2, _fh = _td_steps(u[1], u[2], u[0], p[AT.r], p[AT.h], p[AT.h0], as_int(p[AT.substeps]))
     y[0] = x1
     y[1] = x2
 
@@ -163,14 +169,14 @@ def td_output(t, x, u, p, y):
     y : numpy.ndarray
         Outputs ``(x1, x2)``, written in place.
     """
-    if p[4] != 0.0:
+    if as_int(p[AT.feedthrough]):
         td_update(t, x, u, p, y)
     else:
         y[0] = x[0]
         y[1] = x[1]
 
 
-class TrackingDifferentiator(ColumnKernels, DiscreteBlock):
+class TrackingDifferentiator(KernelBlock, DiscreteBlock):
     """Han's discrete tracking differentiator as a discrete block: ``x1`` tracks ``v``, ``x2`` its derivative.
 
     One sample runs ``substeps`` steps of the discrete TD with integration step ``h``, the input
@@ -234,6 +240,7 @@ class TrackingDifferentiator(ColumnKernels, DiscreteBlock):
     states = ("x[0]", "x[1]")
     outputs = ("x[0]", "x[1]")
     feedthrough = False
+    kernels = Kernels(output=td_output, update=td_update)
 
     def __init__(self, r: float, h: float, h0: float | None = None, substeps: int = 1, x0=None,
                  feedthrough: bool = False):
@@ -246,12 +253,11 @@ class TrackingDifferentiator(ColumnKernels, DiscreteBlock):
         self.substeps = check_int("substeps", substeps, minimum=1, maximum=MAX_SUBSTEPS)
         self.dt = self.h * self.substeps
         self.x0 = np.zeros(2) if x0 is None else check_finite("x0", np.ravel(x0), shape=(2,))
-        self._p = np.array([self.r, self.h, self.h0, float(self.substeps), float(self.feedthrough)])
+        self.kernel_params = LAYOUT.pack(r=self.r, h=self.h, h0=self.h0, substeps=self.substeps,
+                                         feedthrough=float(self.feedthrough))
 
     def initial_state(self) -> np.ndarray:
         return self.x0.copy()
-
-    column_kernels = {"output": "td_output", "update": "td_update"}  # numpy methods + compiled kernel
 
     def step_block(self):
         """The sample's steps as a static block (inputs ``v``, ``x[0]``, ``x[1]``; outputs ``x[0]``, ``x[1]`` after them).
@@ -288,7 +294,7 @@ class TrackingDifferentiator(ColumnKernels, DiscreteBlock):
                 f"substeps={self.substeps})")
 
 
-class TDStep(StaticBlock):
+class TDStep(KernelBlock, StaticBlock):
     """The steps of one sample of a :class:`TrackingDifferentiator`, a static block with a compiled kernel.
 
     Block signals: inputs ``v``, ``x[0]``, ``x[1]`` (the TD state ``x1``, ``x2`` before the steps); outputs
@@ -300,27 +306,15 @@ class TDStep(StaticBlock):
         Whose ``r``, ``h``, ``h0`` and ``substeps`` are used.
     """
 
+    inputs = ("v", "x[0]", "x[1]")
+    outputs = ("x[0]", "x[1]")
+    feedthrough = True
+    kernels = Kernels(output=td_step_output)
+
     def __init__(self, td: "TrackingDifferentiator"):
         if not isinstance(td, TrackingDifferentiator):
             raise TypeError(f"td must be a TrackingDifferentiator, got {type(td).__name__}")
-        self._p = td.kernel().params
-        super().__init__(self._steps, inputs=("v", "x[0]", "x[1]"), outputs=("x[0]", "x[1]"))
-
-    def _steps(self, t, u):
-        y = np.empty((u.shape[0], 2))
-        td_step_output(t, None, u.T, self._p, y.T)  # the kernel on the batch's columns: one source
-        return y
-
-    def kernel(self):
-        """The compiled engine's kernel, :func:`td_step_output` (also the numpy method).
-
-        Returns
-        -------
-        ctrl_analysis._kernels.BlockKernel
-        """
-        from .._kernels import BlockKernel
-
-        return BlockKernel(output=td_step_output, params=self._p)
+        self.kernel_params = td.kernel_params
 
 
 def softened_setpoint(softener, r, h: float, *, method: str = "zoh") -> np.ndarray:

@@ -827,6 +827,7 @@ NOT_FUZZED = {
     integrators.rk4_stage: "per-step integrator helper, unchecked by design",
     integrators.rk4_combine: "per-step integrator helper, unchecked by design",
     pid.pid_update: "per-step kernel, unchecked by design",
+    engine_kernels.as_int: "per-step helper of kernels (a size read from p), unchecked by design",
     engine_kernels.jitable: "decorator: any function is a valid argument",
     engine_params.Variant: "record built by resolve",
     engine_params.resolve: "internal half of Loop.simulate(params=...), whose params are fuzzed",

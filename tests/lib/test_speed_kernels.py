@@ -5,16 +5,10 @@ import pytest
 
 from ctrl_analysis import _kernels
 from ctrl_analysis._compiled import compiled_for
-from ctrl_analysis._kernels import (
-    BlockKernel,
-    copy_output,
-    eso_rhs,
-    kernel_of,
-    sigma_rhs,
-)
+from ctrl_analysis._kernels import BlockKernel, copy_output, kernel_of
 from ctrl_analysis.blocks import ContinuousBlock, DiscreteBlock
-from ctrl_analysis.estimators.differential import DifferentialEstimator
-from ctrl_analysis.estimators.eso import ExtendedStateObserver
+from ctrl_analysis.estimators.differential import DifferentialEstimator, sigma_rhs
+from ctrl_analysis.estimators.eso import ExtendedStateObserver, eso_rhs
 from ctrl_analysis.loop import Loop, place
 from ctrl_analysis.simulate import draw_noise, gaussian_noise, run_seeds
 
@@ -97,7 +91,8 @@ def test_sigma_kernel_equals_the_block_rhs_bit_for_bit(compiled):
     z, u = rng.standard_normal((6, 5)), rng.standard_normal((6, 1))
     fn = _kernels._jit(sigma_rhs) if compiled else sigma_rhs
     assert np.array_equal(per_run(fn, k, z, u), est.rhs(0.3, z, u))
-    assert kernel_of(DifferentialEstimator(3, 2.0, reading="corrected")) is None  # matrix output: numpy path
+    corr = DifferentialEstimator(5, 7.0, reading="corrected")  # eq. (11) as a kernel: equal to the matrix form
+    np.testing.assert_allclose(corr.output(0.3, z, u), corr.estimates(z, u, "corrected"), rtol=1e-13, atol=1e-13)
 
 
 @pytest.mark.parametrize("compiled", [False, True])
@@ -172,11 +167,16 @@ def test_compiled_engine_says_why_it_cannot_run():
     loop = Loop([place(DifferentialEstimator(3, 4.0), "sigma")], dt=0.01)
     with pytest.raises(ValueError, match="callable inputs"):
         loop.simulate(5, inputs={"y": lambda t: 1.0}, engine="compiled")
-    osc = Loop([place(KOsc(), "plant"), place(DifferentialEstimator(3, 2.0, reading="corrected"), "s")], dt=0.1)
+    meso = ExtendedStateObserver([3.0, 2.0], known=_no_model)  # a Python model term: no kernel
+    osc = Loop([place(KOsc(), "plant"), place(meso, "s")], dt=0.1)
     with pytest.raises(ValueError, match="block 's' .* has no kernel"):
-        osc.simulate(5, inputs={"w": 0.0, "v": 0.0}, engine="compiled")
+        osc.simulate(5, inputs={"w": 0.0, "v": 0.0, "u": 0.0}, engine="compiled")
     with pytest.raises(ValueError, match="engine"):
-        osc.simulate(5, inputs={"w": 0.0, "v": 0.0}, engine="fast")
+        osc.simulate(5, inputs={"w": 0.0, "v": 0.0, "u": 0.0}, engine="fast")
+
+
+def _no_model(t, x, u, params=None):
+    return 0.0 * x[..., 0]
 
 
 def _plain_python(v):
@@ -309,8 +309,7 @@ def test_a_block_holding_its_own_per_run_rows_runs_whole():
 
 
 def test_static_gain_kernel_equals_its_numpy_output():
-    from ctrl_analysis._kernels import gain_output
-    from ctrl_analysis.blocks import StaticGain
+    from ctrl_analysis.blocks import StaticGain, gain_output
 
     rng = np.random.default_rng(3)
     u = rng.normal(size=(7, 3))

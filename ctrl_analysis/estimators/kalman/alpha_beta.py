@@ -2,12 +2,11 @@
 
 from __future__ import annotations
 
-
 import numpy as np
 
-from ...blocks import ColumnKernels, DiscreteBlock
 from ..._validate import check_bool, check_finite, check_matrix, check_positive
-
+from ...blocks import DiscreteBlock
+from ...engine.kernels import KernelBlock, Kernels, Layout, as_int, jitable
 
 __all__ = ["alpha_beta_from_gain", "gain_from_alpha_beta", "tracking_index", "tracking_index_from_gains", "kalata_gains", "alpha_beta_stable", "AlphaBetaFilter"]
 
@@ -170,7 +169,68 @@ def alpha_beta_stable(alpha, beta) -> bool:
     return bool(0 < alpha < 2 and 0 < beta < 4 - 2 * alpha)
 
 
-class AlphaBetaFilter(ColumnKernels, DiscreteBlock):
+#: Kernel parameters of :class:`AlphaBetaFilter`: the input switch (1 with ``b``), the filter-form gain
+#: ``[α, β/T]``, ``F`` (row-major) and ``b`` (zeros without it).
+LAYOUT = Layout("has_b", ("K", 2), ("F", (2, 2)), ("b", 2))
+AT = LAYOUT.at
+
+
+@jitable
+def _correct(s, y, p):
+    """``x̂(k|k) = x̂(k|k−1) + [α, β/T] r(k)`` from the prediction ``s[0:2]`` and the measurement ``y``."""
+    r = y - s[0]  # innovation r(k) = y(k) − H x̂(k|k−1)
+    return s[0] + r * p[AT.K], s[1] + r * p[AT.K + 1]
+
+
+def alpha_beta_output(t, x, u, p, y):
+    """α-β correction ``x̂(k|k) = x̂(k|k−1) + [α, β/T] (y(k) − x̂(k|k−1)[0])`` (the output; :class:`AlphaBetaFilter`).
+
+    Scalar-indexed: the kernel of one run and, on a batch's transposed arrays, the block's numpy
+    method. With an empty ``x`` (a static corrector placed after a predictor that holds the
+    state, see ``analysis/pendulum/loops.split_filter``) the prediction is read from ``u[0:2]`` and
+    ``y(k)`` from ``u[2]``.
+
+    Parameters
+    ----------
+    t : float
+        Time (unused).
+    x : numpy.ndarray, shape (2,) or (0,)
+        The prediction ``x̂(k|k−1)``.
+    u : numpy.ndarray
+        ``[y, (u)]``, or ``[x̂(k|k−1), y]`` when ``x`` is empty.
+    p : numpy.ndarray
+        :data:`LAYOUT`: ``has_b``, ``K = [α, β/T]``, ``F`` (row-major), ``b``.
+    y : numpy.ndarray, shape (2,)
+        The estimate ``x̂(k|k)``, written in place.
+    """
+    if x.shape[0] > 0:
+        y[0], y[1] = _correct(x, u[0], p)
+    else:
+        y[0], y[1] = _correct(u, u[2], p)
+
+
+def alpha_beta_update(t, x, u, p, x_next):
+    """α-β prediction ``x̂(k+1|k) = F x̂(k|k) + b u(k)`` (the state update; :class:`AlphaBetaFilter`).
+
+    Written out (2×2), so a run is bit-identical whatever the batch size; scalar-indexed like
+    :func:`alpha_beta_output`.
+
+    Parameters
+    ----------
+    t, x, u, p
+        As :func:`alpha_beta_output` (``x`` the prediction, ``u = [y, (u)]``).
+    x_next : numpy.ndarray, shape (2,)
+        The next prediction, written in place.
+    """
+    xf0, xf1 = _correct(x, u[0], p)  # x̂(k|k), the output
+    x_next[0] = p[AT.F] * xf0 + p[AT.F + 1] * xf1
+    x_next[1] = p[AT.F + 2] * xf0 + p[AT.F + 3] * xf1
+    if as_int(p[AT.has_b]):
+        x_next[0] = x_next[0] + u[1] * p[AT.b]
+        x_next[1] = x_next[1] + u[1] * p[AT.b + 1]
+
+
+class AlphaBetaFilter(KernelBlock, DiscreteBlock):
     """Constant-gain (steady-state) discrete α-β filter, a discrete block batched over runs.
 
     The block's state is the prediction ``x̂(k|k−1)``; at each sample it corrects with the
@@ -222,6 +282,7 @@ class AlphaBetaFilter(ColumnKernels, DiscreteBlock):
     states = ("xpred[0]", "xpred[1]")
     outputs = ("xhat[0]", "xhat[1]")
     feedthrough = True
+    kernels = Kernels(output=alpha_beta_output, update=alpha_beta_update)
 
     def __init__(self, alpha, beta, T, *, F=None, b=None, x0=None, require_stable: bool = True):
         self.alpha = float(check_finite("alpha", alpha, scalar=True))
@@ -240,9 +301,8 @@ class AlphaBetaFilter(ColumnKernels, DiscreteBlock):
                 f"beta={self.beta:g}, spectral radius {np.max(np.abs(self.poles)):.4g}"
             )
         self.x0 = np.zeros(2) if x0 is None else check_finite("x0", np.ravel(x0), shape=(2,))
-        # kernel parameters: [has b, K (2), F (row-major), b]
-        self._p = np.concatenate([[0.0 if self.b is None else 1.0], self.K, self.F.ravel(),
-                                  np.zeros(2) if self.b is None else self.b])
+        self.kernel_params = LAYOUT.pack(has_b=0.0 if self.b is None else 1.0, K=self.K, F=self.F,
+                                         b=np.zeros(2) if self.b is None else self.b)
 
     @property
     def poles(self) -> np.ndarray:
@@ -253,61 +313,8 @@ class AlphaBetaFilter(ColumnKernels, DiscreteBlock):
     def initial_state(self) -> np.ndarray:
         return self.x0.copy()
 
-    column_kernels = {"output": "alpha_beta_output", "update": "alpha_beta_update"}  # numpy methods + compiled kernel
-
     def __repr__(self) -> str:
         return f"AlphaBetaFilter(alpha={self.alpha:g}, beta={self.beta:g}, T={self.T:g})"
-
-
-
-
-def alpha_beta_output(t, x, u, p, y):
-    """α-β correction ``x̂(k|k) = x̂(k|k−1) + [α, β/T] (y(k) − x̂(k|k−1)[0])`` (the output; :class:`AlphaBetaFilter`).
-
-    Scalar-indexed: the kernel of one run and, on a batch's transposed arrays, the block's numpy
-    method. With an empty ``x`` (a static corrector placed after a predictor that holds the
-    state, see ``analysis/pendulum/loops.split_filter``) the prediction is read from ``u[0:2]`` and
-    ``y(k)`` from ``u[2]``.
-
-    Parameters
-    ----------
-    t : float
-        Time (unused).
-    x : numpy.ndarray, shape (2,) or (0,)
-        The prediction ``x̂(k|k−1)``.
-    u : numpy.ndarray
-        ``[y, (u)]``, or ``[x̂(k|k−1), y]`` when ``x`` is empty.
-    p : numpy.ndarray
-        ``[has b, α, β/T, F (row-major), b]``.
-    y : numpy.ndarray, shape (2,)
-        The estimate ``x̂(k|k)``, written in place.
-    """
-    s, o = (x, 0) if x.shape[0] > 0 else (u, 2)
-    r = u[o] - s[0]  # innovation r(k) = y(k) − H x̂(k|k−1)
-    y[0] = s[0] + r * p[1]
-    y[1] = s[1] + r * p[2]
-
-
-def alpha_beta_update(t, x, u, p, x_next):
-    """α-β prediction ``x̂(k+1|k) = F x̂(k|k) + b u(k)`` (the state update; :class:`AlphaBetaFilter`).
-
-    Written out (2×2), so a run is bit-identical whatever the batch size; scalar-indexed like
-    :func:`alpha_beta_output`.
-
-    Parameters
-    ----------
-    t, x, u, p
-        As :func:`alpha_beta_output` (``x`` the prediction, ``u = [y, (u)]``).
-    x_next : numpy.ndarray, shape (2,)
-        The next prediction, written in place.
-    """
-    r = u[0] - x[0]  # the correction of alpha_beta_output, repeated (a compiled kernel cannot call it)
-    xf0, xf1 = x[0] + r * p[1], x[1] + r * p[2]
-    x_next[0] = p[3] * xf0 + p[4] * xf1
-    x_next[1] = p[5] * xf0 + p[6] * xf1
-    if p[0] != 0.0:
-        x_next[0] = x_next[0] + u[1] * p[7]
-        x_next[1] = x_next[1] + u[1] * p[8]
 
 
 # --------------------------------------------------------------------------------------------

@@ -5,9 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..._validate import check_finite, check_matrix, check_positive
-from ...blocks import ColumnKernels, DiscreteBlock, signal_names
-
-from ..._kernels import jitable
+from ...blocks import DiscreteBlock, signal_names
+from ...engine.kernels import KernelBlock, Kernels, Layout, as_int, jitable
 
 __all__ = ["CharacteristicKalmanFilter", "LinearKalmanFilter"]
 
@@ -24,7 +23,87 @@ def _check_covariance(name: str, value, n: int, *, definite: bool) -> np.ndarray
     return 0.5 * (M + M.T)
 
 
-class CharacteristicKalmanFilter(ColumnKernels, DiscreteBlock):
+#: Kernel parameters of :class:`CharacteristicKalmanFilter`: the upper triangle of ``Q``, then ``R``.
+CKF_LAYOUT = Layout("Q00", "Q01", "Q11", "R")
+CKF_AT = CKF_LAYOUT.at
+
+
+@jitable
+def _ckf_step(x, u, p):
+    """One CKF step, eq. (6), (10), (11): ``(X̂(k)[0], X̂(k)[1], P(k)[0][0], P(k)[0][1], P(k)[1][1])``.
+
+    ``x = [X̂(k−1), P00, P01, P11]``, ``u = [y(k), u(k−1), f1, f2, g0]``, ``p`` as :data:`CKF_LAYOUT`;
+    scalar indexing only, so ``x``, ``u`` may be one run's vectors or a batch's columns.
+    """
+    y, u_prev, f1, f2, g0 = u[0], u[1], u[2], u[3], u[4]
+    P00, P01, P11 = x[2], x[3], x[4]
+    R = p[CKF_AT.R]
+    # (11) X̂(k|k−1) = Φ X̂(k−1) + Γ u(k−1)
+    xp0 = f1 * x[0] + f2 * x[1] + g0 * u_prev
+    xp1 = x[0]
+    # (11) P(k|k−1) = Φ P Φᵀ + Q, Φ = [[f1, f2], [1, 0]]
+    a0 = f1 * P00 + f2 * P01
+    a1 = f1 * P01 + f2 * P11
+    Pp00 = a0 * f1 + a1 * f2 + p[CKF_AT.Q00]
+    Pp01 = a0 + p[CKF_AT.Q01]
+    Pp11 = P00 + p[CKF_AT.Q11]
+    # (11) K = P(k|k−1) Cᵀ (C P(k|k−1) Cᵀ + R)⁻¹
+    S = Pp00 + R
+    K0, K1 = Pp00 / S, Pp01 / S
+    # (11) X̂(k) = X̂(k|k−1) + K (y(k) − C X̂(k|k−1))
+    r = y - xp0
+    xf0, xf1 = xp0 + K0 * r, xp1 + K1 * r
+    # (11) P(k) = (I − K C) P(k|k−1) (I − K C)ᵀ + K R Kᵀ, I − K C = [[1 − K0, 0], [−K1, 1]]
+    m0 = 1.0 - K0
+    b10 = Pp01 - K1 * Pp00
+    n00 = m0 * m0 * Pp00 + K0 * K0 * R
+    n01 = m0 * b10 + K0 * K1 * R
+    n11 = b10 * (-K1) + (Pp11 - K1 * Pp01) + K1 * K1 * R
+    return xf0, xf1, n00, n01, n11
+
+
+def ckf_update(t, x, u, p, x_next):
+    """The CKF's next state ``[X̂(k), P(k)]``: the kernel of :class:`CharacteristicKalmanFilter`.
+
+    Scalar indexing only: the compiled kernel of one run and, on a batch's columns, the batched methods.
+
+    Parameters
+    ----------
+    t : float
+        Time (unused).
+    x : numpy.ndarray
+        ``[X̂(k−1)[0], X̂(k−1)[1], P00, P01, P11]``.
+    u : numpy.ndarray
+        ``[y(k), u(k−1), f1, f2, g0]``.
+    p : numpy.ndarray
+        :data:`CKF_LAYOUT`: ``Q00``, ``Q01``, ``Q11`` (the upper triangle of ``Q``), ``R``.
+    x_next : numpy.ndarray
+        Written in place.
+    """
+    xf0, xf1, n00, n01, n11 = _ckf_step(x, u, p)
+    x_next[0] = xf0
+    x_next[1] = xf1
+    x_next[2] = n00
+    x_next[3] = n01
+    x_next[4] = n11
+
+
+def ckf_output(t, x, u, p, y):
+    """The filtered estimate ``X̂(k)`` after this sample (direct feedthrough); arguments as :func:`ckf_update`.
+
+    Parameters
+    ----------
+    t, x, u, p
+        As :func:`ckf_update`.
+    y : numpy.ndarray
+        ``[X̂(k)[0], X̂(k)[1]]``, written in place.
+    """
+    xf0, xf1, _, _, _ = _ckf_step(x, u, p)
+    y[0] = xf0
+    y[1] = xf1
+
+
+class CharacteristicKalmanFilter(KernelBlock, DiscreteBlock):
     """Kalman filter on the 2nd-order characteristic model, its transition built from identified parameters.
 
     Model (characteristic model in state-space form)::
@@ -87,106 +166,168 @@ class CharacteristicKalmanFilter(ColumnKernels, DiscreteBlock):
     outputs = ("xhat[0]", "xhat[1]")
     states = ("xhat[0]", "xhat[1]", "P[0][0]", "P[0][1]", "P[1][1]")
     feedthrough = True
+    kernels = Kernels(output=ckf_output, update=ckf_update)
 
     def __init__(self, Q=1e-4, R=1.0, P0=1.0, x0=None):
         self.Q = _check_covariance("Q", Q, 2, definite=False)
         self.R = float(check_positive("R", R, scalar=True))
         self.P0 = _check_covariance("P0", P0, 2, definite=True)
         self.x0 = np.zeros(2) if x0 is None else check_finite("x0", np.ravel(x0), shape=(2,))
-        # kernel parameters: [Q00, Q01, Q11, R]
-        self._p = np.array([self.Q[0, 0], self.Q[0, 1], self.Q[1, 1], self.R])
+        self.kernel_params = CKF_LAYOUT.pack(Q00=self.Q[0, 0], Q01=self.Q[0, 1], Q11=self.Q[1, 1], R=self.R)
 
     def initial_state(self) -> np.ndarray:
         return np.array([self.x0[0], self.x0[1], self.P0[0, 0], self.P0[0, 1], self.P0[1, 1]])
-
-    column_kernels = {"output": "ckf_output", "update": "ckf_update"}  # numpy methods + compiled kernel
 
     def __repr__(self) -> str:
         return f"CharacteristicKalmanFilter(R={self.R:g})"
 
 
-@jitable
-def _ckf_step(x, u, p):
-    """One CKF step, eq. (6), (10), (11): ``(X̂(k)[0], X̂(k)[1], P(k)[0][0], P(k)[0][1], P(k)[1][1])``.
+#: The fixed head of a :class:`LinearKalmanFilter`'s kernel parameters (its arrays follow: :func:`lkf_layout`).
+LKF_HEAD = Layout("n", "R")
+LKF_AT = LKF_HEAD.at
+_LKF_ARRAYS = LKF_HEAD.size
 
-    ``x = [X̂(k−1), P00, P01, P11]``, ``u = [y(k), u(k−1), f1, f2, g0]``, ``p = [Q00, Q01, Q11, R]``;
-    scalar indexing only, so ``x``, ``u`` may be one run's vectors or a batch's columns.
+
+def lkf_layout(n: int) -> Layout:
+    """The kernel parameters of an ``n``-state :class:`LinearKalmanFilter`: :data:`LKF_HEAD`, then ``F, G, H, Q``.
+
+    The matrices are row-major; a kernel reads ``n`` and finds the arrays with :func:`_lkf_at`.
+
+    Parameters
+    ----------
+    n : int
+        Number of model states.
+
+    Returns
+    -------
+    Layout
     """
-    y, u_prev, f1, f2, g0 = u[0], u[1], u[2], u[3], u[4]
-    P00, P01, P11 = x[2], x[3], x[4]
-    R = p[3]
-    # (11) X̂(k|k−1) = Φ X̂(k−1) + Γ u(k−1)
-    xp0 = f1 * x[0] + f2 * x[1] + g0 * u_prev
-    xp1 = x[0]
-    # (11) P(k|k−1) = Φ P Φᵀ + Q, Φ = [[f1, f2], [1, 0]]
-    a0 = f1 * P00 + f2 * P01
-    a1 = f1 * P01 + f2 * P11
-    Pp00 = a0 * f1 + a1 * f2 + p[0]
-    Pp01 = a0 + p[1]
-    Pp11 = P00 + p[2]
-    # (11) K = P(k|k−1) Cᵀ (C P(k|k−1) Cᵀ + R)⁻¹
-    S = Pp00 + R
-    K0, K1 = Pp00 / S, Pp01 / S
-    # (11) X̂(k) = X̂(k|k−1) + K (y(k) − C X̂(k|k−1))
-    r = y - xp0
-    xf0, xf1 = xp0 + K0 * r, xp1 + K1 * r
-    # (11) P(k) = (I − K C) P(k|k−1) (I − K C)ᵀ + K R Kᵀ, I − K C = [[1 − K0, 0], [−K1, 1]]
-    m0 = 1.0 - K0
-    b10 = Pp01 - K1 * Pp00
-    n00 = m0 * m0 * Pp00 + K0 * K0 * R
-    n01 = m0 * b10 + K0 * K1 * R
-    n11 = b10 * (-K1) + (Pp11 - K1 * Pp01) + K1 * K1 * R
-    return xf0, xf1, n00, n01, n11
+    return Layout(*zip(LKF_HEAD.names, LKF_HEAD.shapes), ("F", (n, n)), ("G", n), ("H", n), ("Q", (n, n)))
 
 
-def ckf_update(t, x, u, p, x_next):
-    """The CKF's next state ``[X̂(k), P(k)]``: the kernel of :class:`CharacteristicKalmanFilter`.
+@jitable
+def _lkf_at(p):
+    """``(n, F, G, H, Q)``: the order ``n`` read from ``p`` and the offsets of :func:`lkf_layout` ``(n)``'s arrays."""
+    n = as_int(p[LKF_AT.n])
+    F = _LKF_ARRAYS
+    return n, F, F + n * n, F + n * n + n, F + n * n + 2 * n
 
-    Scalar indexing only: the compiled kernel of one run and, on a batch's columns, the numpy method.
+
+@jitable
+def _lkf_filter(x, u, p, W):
+    """Prediction, gain and correction of :class:`LinearKalmanFilter` for one run, into the scratch ``W``.
+
+    ``W = [FP or (I − K H) P(k|k−1) (n·n), P(k|k−1) (n·n), K (n), x̂(k) (n)]``; returns nothing.
+    """
+    n, F, G, H, Q = _lkf_at(p)
+    Pp, K, xf = n * n, 2 * n * n, 2 * n * n + n  # offsets in W
+    # x̂(k|k−1) = F x̂(k−1) + G u(k−1)
+    for i in range(n):
+        acc = 0.0
+        for j in range(n):
+            acc += p[F + i * n + j] * x[j]
+        W[xf + i] = acc + u[1] * p[G + i]
+    # P(k|k−1) = F P Fᵀ + Q
+    for i in range(n):
+        for k in range(n):
+            acc = 0.0
+            for j in range(n):
+                acc += p[F + i * n + j] * x[n + j * n + k]
+            W[i * n + k] = acc
+    for i in range(n):
+        for m in range(n):
+            acc = 0.0
+            for k in range(n):
+                acc += W[i * n + k] * p[F + m * n + k]
+            W[Pp + i * n + m] = acc + p[Q + i * n + m]
+    # K = P(k|k−1) Hᵀ / (H P(k|k−1) Hᵀ + R);  x̂(k) = x̂(k|k−1) + K (y − H x̂(k|k−1))
+    S = 0.0
+    yp = 0.0
+    for i in range(n):
+        acc = 0.0
+        for j in range(n):
+            acc += W[Pp + i * n + j] * p[H + j]
+        W[K + i] = acc
+        S += acc * p[H + i]
+        yp += W[xf + i] * p[H + i]
+    for i in range(n):
+        W[K + i] = W[K + i] / (S + p[LKF_AT.R])
+        W[xf + i] = W[xf + i] + W[K + i] * (u[0] - yp)
+
+
+def lkf_update(t, x, u, p, x_next):
+    """The update of :class:`LinearKalmanFilter`: ``[x̂(k), P(k)]``, P(k) in Joseph form.
+
+    Scalar indexing only (one run in the compiled engine, the batch's columns in the batched
+    methods); the scratch ``W`` takes the shape of ``x``'s trailing axes.
 
     Parameters
     ----------
     t : float
         Time (unused).
     x : numpy.ndarray
-        ``[X̂(k−1)[0], X̂(k−1)[1], P00, P01, P11]``.
+        ``[x̂(k−1), P(k−1) row by row]`` of one run.
     u : numpy.ndarray
-        ``[y(k), u(k−1), f1, f2, g0]``.
+        ``[y(k), u(k−1)]``.
     p : numpy.ndarray
-        ``[Q00, Q01, Q11, R]``.
+        :func:`lkf_layout` ``(n)``: ``n, R, F, G, H, Q`` (matrices row-major).
     x_next : numpy.ndarray
         Written in place.
     """
-    xf0, xf1, n00, n01, n11 = _ckf_step(x, u, p)
-    x_next[0] = xf0
-    x_next[1] = xf1
-    x_next[2] = n00
-    x_next[3] = n01
-    x_next[4] = n11
+    n, _, _, H, _ = _lkf_at(p)
+    Pp, K, xf = n * n, 2 * n * n, 2 * n * n + n
+    W = np.empty((2 * n * n + 2 * n,) + x.shape[1:])
+    _lkf_filter(x, u, p, W)
+    # P(k) = (I − K H) P(k|k−1) (I − K H)ᵀ + K R Kᵀ
+    for i in range(n):
+        x_next[i] = W[xf + i]
+        for k in range(n):
+            acc = 0.0
+            for j in range(n):
+                acc += ((1.0 if i == j else 0.0) - W[K + i] * p[H + j]) * W[Pp + j * n + k]
+            W[i * n + k] = acc
+    for i in range(n):
+        for m in range(n):
+            acc = 0.0
+            for k in range(n):
+                acc += W[i * n + k] * ((1.0 if m == k else 0.0) - W[K + m] * p[H + k])
+            x_next[n + i * n + m] = acc + p[LKF_AT.R] * W[K + i] * W[K + m]
 
 
-def ckf_output(t, x, u, p, y):
-    """The filtered estimate ``X̂(k)`` after this sample (direct feedthrough); arguments as :func:`ckf_update`.
+def lkf_output(t, x, u, p, y):
+    """The output of :class:`LinearKalmanFilter`: ``ŷ = H x̂(k)``; arguments as :func:`lkf_update`.
 
     Parameters
     ----------
     t, x, u, p
-        As :func:`ckf_update`.
+        As :func:`lkf_update`.
     y : numpy.ndarray
-        ``[X̂(k)[0], X̂(k)[1]]``, written in place.
+        ``[ŷ]``, written in place.
     """
-    xf0, xf1, _, _, _ = _ckf_step(x, u, p)
-    y[0] = xf0
-    y[1] = xf1
+    n, _, _, H, _ = _lkf_at(p)
+    W = np.empty((2 * n * n + 2 * n,) + x.shape[1:])
+    _lkf_filter(x, u, p, W)
+    acc = 0.0
+    for i in range(n):
+        acc += W[2 * n * n + n + i] * p[H + i]
+    y[0] = acc
 
 
-class LinearKalmanFilter(DiscreteBlock):
+class LinearKalmanFilter(KernelBlock, DiscreteBlock):
     """Time-varying Kalman filter of a known ``n``-state SISO model (Joseph form), a discrete block.
 
     ``x(k) = F x(k−1) + G u(k−1) + w``, ``y(k) = H x(k) + v`` with ``F, G, H`` known and fixed: the
     reference a characteristic-model filter replaces when the plant is unknown. Its cost per step
     grows as ``n³`` (the covariance propagation), against a constant for the 2-state
-    :class:`CharacteristicKalmanFilter`.
+    :class:`CharacteristicKalmanFilter`. One sample (the kernels :func:`lkf_output` /
+    :func:`lkf_update` write the products out element by element)::
+
+        x̂(k|k−1) = F x̂(k−1) + G u(k−1)
+        P(k|k−1) = F P(k−1) Fᵀ + Q
+        K(k)     = P(k|k−1) Hᵀ / (H P(k|k−1) Hᵀ + R)
+        x̂(k)     = x̂(k|k−1) + K(k) (y(k) − H x̂(k|k−1))
+        P(k)     = (I − K H) P(k|k−1) (I − K H)ᵀ + K R Kᵀ       (Joseph form)
+        ŷ(k)     = H x̂(k)                                        output
 
     Parameters
     ----------
@@ -220,6 +361,7 @@ class LinearKalmanFilter(DiscreteBlock):
     inputs = ("y", "u")
     outputs = ("yhat",)
     feedthrough = True
+    kernels = Kernels(output=lkf_output, update=lkf_update)
 
     def __init__(self, F, G, H, Q, R, P0=1.0, x0=None):
         self.F = check_matrix("F", F, square=True)
@@ -233,149 +375,11 @@ class LinearKalmanFilter(DiscreteBlock):
         self.P0 = _check_covariance("P0", P0, n, definite=True)
         self.x0 = np.zeros(n) if x0 is None else check_finite("x0", np.ravel(x0), shape=(n,))
         self.n = n
-        # kernel parameters: [n, R, F (row-major), G, H, Q (row-major)]
-        self._p = np.concatenate([[float(n), self.R], self.F.reshape(-1), self.G, self.H, self.Q.reshape(-1)])
+        self.kernel_params = lkf_layout(n).pack(n=n, R=self.R, F=self.F, G=self.G, H=self.H, Q=self.Q)
         self.states = signal_names("xhat", n) + tuple(f"P[{i}][{j}]" for i in range(n) for j in range(n))
 
     def initial_state(self) -> np.ndarray:
         return np.concatenate([self.x0, self.P0.reshape(-1)])
 
-    def _kernel(self, x, u):
-        n, F, H = self.n, self.F, self.H
-        xh = x[:, :n]
-        P = x[:, n:].reshape(-1, n, n)
-        # x̂(k|k−1) = F x̂(k−1) + G u(k−1);  P(k|k−1) = F P Fᵀ + Q
-        xp = np.einsum("ij,bj->bi", F, xh, optimize=False) + u[:, 1:2] * self.G
-        FP = np.einsum("ij,bjk->bik", F, P, optimize=False)
-        Pp = np.einsum("bik,lk->bil", FP, F, optimize=False) + self.Q
-        # K = P(k|k−1) Hᵀ / (H P(k|k−1) Hᵀ + R)
-        PH = np.einsum("bij,j->bi", Pp, H, optimize=False)
-        K = PH / (np.einsum("bi,i->b", PH, H, optimize=False) + self.R)[:, None]
-        # x̂(k) = x̂(k|k−1) + K (y − H x̂(k|k−1))
-        xf = xp + K * (u[:, 0] - np.einsum("bi,i->b", xp, H, optimize=False))[:, None]
-        # P(k) = (I − K H) P(k|k−1) (I − K H)ᵀ + K R Kᵀ
-        A = np.eye(n) - K[:, :, None] * H[None, None, :]
-        APp = np.einsum("bij,bjk->bik", A, Pp, optimize=False)
-        Pn = np.einsum("bik,blk->bil", APp, A, optimize=False) + self.R * K[:, :, None] * K[:, None, :]
-        return xf, Pn
-
-    def update(self, t, x, u, params=None) -> np.ndarray:
-        xf, Pn = self._kernel(x, u)
-        return np.concatenate([xf, Pn.reshape(x.shape[0], -1)], axis=1)
-
-    def output(self, t, x, u, params=None) -> np.ndarray:
-        xf, _ = self._kernel(x, u)
-        return np.einsum("bi,i->b", xf, self.H, optimize=False)[:, None]
-
-    def kernel(self):
-        """The compiled engine's kernel: :func:`lkf_update`, :func:`lkf_output` (twins of the numpy methods).
-
-        Returns
-        -------
-        ctrl_analysis._kernels.BlockKernel
-        """
-        from ..._kernels import BlockKernel
-
-        return BlockKernel(output=lkf_output, params=self._p, update=lkf_update)
-
     def __repr__(self) -> str:
         return f"LinearKalmanFilter(n={self.n}, R={self.R:g})"
-
-
-@jitable
-def _lkf_filter(x, u, p, W):
-    """Prediction, gain and correction of :class:`LinearKalmanFilter` for one run, into the scratch ``W``.
-
-    ``W = [FP or (I − K H) P(k|k−1) (n·n), P(k|k−1) (n·n), K (n), x̂(k) (n)]``; returns nothing.
-    """
-    n = int(p[0])
-    F, G, H, Q = 2, 2 + n * n, 2 + n * n + n, 2 + n * n + 2 * n  # offsets in p
-    Pp, K, xf = n * n, 2 * n * n, 2 * n * n + n  # offsets in W
-    # x̂(k|k−1) = F x̂(k−1) + G u(k−1)
-    for i in range(n):
-        acc = 0.0
-        for j in range(n):
-            acc += p[F + i * n + j] * x[j]
-        W[xf + i] = acc + u[1] * p[G + i]
-    # P(k|k−1) = F P Fᵀ + Q
-    for i in range(n):
-        for k in range(n):
-            acc = 0.0
-            for j in range(n):
-                acc += p[F + i * n + j] * x[n + j * n + k]
-            W[i * n + k] = acc
-    for i in range(n):
-        for m in range(n):
-            acc = 0.0
-            for k in range(n):
-                acc += W[i * n + k] * p[F + m * n + k]
-            W[Pp + i * n + m] = acc + p[Q + i * n + m]
-    # K = P(k|k−1) Hᵀ / (H P(k|k−1) Hᵀ + R);  x̂(k) = x̂(k|k−1) + K (y − H x̂(k|k−1))
-    S = 0.0
-    yp = 0.0
-    for i in range(n):
-        acc = 0.0
-        for j in range(n):
-            acc += W[Pp + i * n + j] * p[H + j]
-        W[K + i] = acc
-        S += acc * p[H + i]
-        yp += W[xf + i] * p[H + i]
-    for i in range(n):
-        W[K + i] = W[K + i] / (S + p[1])
-        W[xf + i] = W[xf + i] + W[K + i] * (u[0] - yp)
-
-
-def lkf_update(t, x, u, p, x_next):
-    """Compiled twin of :meth:`LinearKalmanFilter.update`: ``[x̂(k), P(k)]``, P(k) in Joseph form.
-
-    Parameters
-    ----------
-    t : float
-        Time (unused).
-    x : numpy.ndarray
-        ``[x̂(k−1), P(k−1) row by row]`` of one run.
-    u : numpy.ndarray
-        ``[y(k), u(k−1)]``.
-    p : numpy.ndarray
-        ``[n, R, F, G, H, Q]`` (matrices row-major).
-    x_next : numpy.ndarray
-        Written in place.
-    """
-    n = int(p[0])
-    H = 2 + n * n + n
-    Pp, K, xf = n * n, 2 * n * n, 2 * n * n + n
-    W = np.empty(2 * n * n + 2 * n)
-    _lkf_filter(x, u, p, W)
-    # P(k) = (I − K H) P(k|k−1) (I − K H)ᵀ + K R Kᵀ
-    for i in range(n):
-        x_next[i] = W[xf + i]
-        for k in range(n):
-            acc = 0.0
-            for j in range(n):
-                acc += ((1.0 if i == j else 0.0) - W[K + i] * p[H + j]) * W[Pp + j * n + k]
-            W[i * n + k] = acc
-    for i in range(n):
-        for m in range(n):
-            acc = 0.0
-            for k in range(n):
-                acc += W[i * n + k] * ((1.0 if m == k else 0.0) - W[K + m] * p[H + k])
-            x_next[n + i * n + m] = acc + p[1] * W[K + i] * W[K + m]
-
-
-def lkf_output(t, x, u, p, y):
-    """Compiled twin of :meth:`LinearKalmanFilter.output`: ``ŷ = H x̂(k)``; arguments as :func:`lkf_update`.
-
-    Parameters
-    ----------
-    t, x, u, p
-        As :func:`lkf_update`.
-    y : numpy.ndarray
-        ``[ŷ]``, written in place.
-    """
-    n = int(p[0])
-    W = np.empty(2 * n * n + 2 * n)
-    _lkf_filter(x, u, p, W)
-    acc = 0.0
-    for i in range(n):
-        acc += W[2 * n * n + n + i] * p[2 + n * n + n + i]
-    y[0] = acc

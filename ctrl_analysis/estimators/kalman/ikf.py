@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..._validate import check_finite, check_nonnegative, check_positive
-from ..._kernels import jitable
-from ...blocks import ColumnKernels, DiscreteBlock
+from ...blocks import DiscreteBlock
+from ...engine.kernels import KernelBlock, Kernels, Layout, jitable
 from .scalar import random_walk_gain
 
 __all__ = ["ImprovedKalmanFilter"]
@@ -33,6 +33,11 @@ def _kernel_params(*values) -> np.ndarray:
     return np.column_stack([np.broadcast_to(np.asarray(v, dtype=float), (B,)) for v in values])
 
 
+#: The kernel parameters: the variances ``Q`` and ``R`` (one row per run when either differs per run).
+LAYOUT = Layout("Q", "R")
+AT = LAYOUT.at
+
+
 @jitable
 def _ikf_step(y_hat, P, y_m, delta, Q, R):
     """One IKF step, eq. (11)-(15): returns ``(ŷ(k|k), K(k), P(k|k))`` (scalars or arrays alike)."""
@@ -44,10 +49,10 @@ def _ikf_step(y_hat, P, y_m, delta, Q, R):
 
 
 def ikf_output(t, x, u, p, y):
-    """Kernel output of :class:`ImprovedKalmanFilter`: ``y = (ŷ(k|k), K(k), P(k|k))``, ``p = [Q, R]``.
+    """Kernel output of :class:`ImprovedKalmanFilter`: ``y = (ŷ(k|k), K(k), P(k|k))``.
 
-    Scalar indexing only: one run's vectors in the compiled engine, the batch's transposed arrays
-    (``x.T``, ``u.T``, ``p.T``, ``y.T``) as the block's numpy method.
+    Scalar indexing only: one run's vectors in the compiled engine, the batch's columns in the
+    block's batched methods.
 
     Parameters
     ----------
@@ -58,11 +63,11 @@ def ikf_output(t, x, u, p, y):
     u : numpy.ndarray
         Inputs ``(y_m(k), δ(k))``.
     p : numpy.ndarray
-        ``[Q, R]``.
+        :data:`LAYOUT`: ``Q``, ``R``.
     y : numpy.ndarray
         Outputs, written in place.
     """
-    y[0], y[1], y[2] = _ikf_step(x[0], x[1], u[0], u[1], p[0], p[1])
+    y[0], y[1], y[2] = _ikf_step(x[0], x[1], u[0], u[1], p[AT.Q], p[AT.R])
 
 
 def ikf_update(t, x, u, p, x_next):
@@ -75,12 +80,12 @@ def ikf_update(t, x, u, p, x_next):
     x_next : numpy.ndarray
         Next state, written in place.
     """
-    y_post, _K, P_post = _ikf_step(x[0], x[1], u[0], u[1], p[0], p[1])
+    y_post, _K, P_post = _ikf_step(x[0], x[1], u[0], u[1], p[AT.Q], p[AT.R])
     x_next[0] = y_post
     x_next[1] = P_post
 
 
-class ImprovedKalmanFilter(ColumnKernels, DiscreteBlock):
+class ImprovedKalmanFilter(KernelBlock, DiscreteBlock):
     """Scalar Kalman filter of an output ``y`` whose one-step prediction comes from any data model.
 
     The model says ``y(k) = y(k−1) + δ(k) + w(k−1)``, ``y_m(k) = y(k) + v(k)``, with ``δ(k)`` a
@@ -150,12 +155,13 @@ class ImprovedKalmanFilter(ColumnKernels, DiscreteBlock):
         self.y0 = float(check_finite("y0", y0, scalar=True))
         self.P0 = float(check_nonnegative("P0", P0, scalar=True))
         self.steady_gain = random_walk_gain(self.Q, self.R)
-        self._p = _kernel_params(self.Q, self.R)
+        values = {"Q": self.Q, "R": self.R}
+        self.kernel_params = _kernel_params(*(values[name] for name in LAYOUT.names))
 
     def initial_state(self) -> np.ndarray:
         return np.array([self.y0, self.P0])
 
-    column_kernels = {"output": "ikf_output", "update": "ikf_update"}  # numpy methods + compiled kernel
+    kernels = Kernels(output=ikf_output, update=ikf_update)
 
     def __repr__(self) -> str:
         return f"ImprovedKalmanFilter(Q={self.Q}, R={self.R}, y0={self.y0:g}, P0={self.P0:g})"

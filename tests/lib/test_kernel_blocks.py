@@ -1,0 +1,177 @@
+"""Every kernel-first library block: its derived batched methods equal the compiled engine bit for bit.
+
+A :class:`~ctrl_analysis.engine.kernels.KernelBlock` writes its equations once, as kernels; the
+numpy methods are those kernels on the batch's columns (or run by run), the compiled engine the same
+functions compiled. Held here for each block of the library: the methods against the compiled
+kernel run by run, and a one-block loop on both engines (with per-run parameters where the block
+has a numeric one), both bit for bit. The Kalman filters are also held to their matrix form (the
+docstrings' equations) to rounding.
+"""
+
+from __future__ import annotations
+
+import control as ct
+import numpy as np
+import pytest
+
+from ctrl_analysis import _kernels
+from ctrl_analysis.blocks import StaticGain
+from ctrl_analysis.engine.kernels import KernelBlock
+from ctrl_analysis.estimators.differential import DifferentialEstimator
+from ctrl_analysis.estimators.eso import ExtendedStateObserver
+from ctrl_analysis.estimators.kalman import (
+    AlphaBetaFilter,
+    CharacteristicKalmanFilter,
+    DiscreteKalmanFilter,
+    ImprovedKalmanFilter,
+    LinearKalmanFilter,
+)
+from ctrl_analysis.estimators.lowpass import LowPassFilter
+from ctrl_analysis.estimators.tracking import TrackingDifferentiator
+from ctrl_analysis.loop import Loop, place
+from ctrl_analysis.plants import DiscreteLTI
+
+B = 4
+F2 = np.array([[1.0, 0.1], [-0.2, 0.95]])
+F3 = np.array([[0.9, 0.1, 0.0], [0.0, 0.8, 0.1], [0.05, 0.0, 0.7]])
+
+
+def _blocks():
+    """``(id, block, per-run parameters or None)`` of every kernel-first library block (and its variants)."""
+    td = TrackingDifferentiator(r=20.0, h=0.01, substeps=2)
+    return [
+        ("kalman", DiscreteKalmanFilter(F2, [1.0, 0.0], np.diag([1e-3, 1e-2]), 0.1), {"R": [0.1, 0.2, 0.3, 0.1]}),
+        ("kalman-b", DiscreteKalmanFilter(F3, [1.0, 0.0, 0.5], 1e-2 * np.eye(3), 0.2, b=[0.0, 0.1, 0.2]), None),
+        ("ckf", CharacteristicKalmanFilter(Q=1e-3, R=0.5, P0=2.0), {"R": [0.5, 1.0, 2.0, 4.0]}),
+        ("lkf", LinearKalmanFilter(F3, [0.1, 0.2, 0.3], [1.0, 0.0, 0.0], 1e-2, 0.3), {"R": [0.3, 0.6, 0.3, 0.9]}),
+        ("ikf", ImprovedKalmanFilter(Q=0.1, R=1.0), {"Q": [0.1, 0.01, 0.3, 0.05]}),
+        ("ikf-rows", ImprovedKalmanFilter(Q=np.array([0.1, 0.2, 0.3, 0.4]), R=1.0), None),
+        ("alpha-beta", AlphaBetaFilter(0.5, 0.2, 0.1), {"alpha": [0.5, 0.6, 0.4, 0.5]}),
+        ("alpha-beta-b", AlphaBetaFilter(0.5, 0.2, 0.1, F=F2, b=[0.01, 0.3]), None),
+        ("lowpass", LowPassFilter(5.0, order=3), {"omega": [5.0, 2.0, 8.0, 1.0]}),
+        ("digital-lowpass", LowPassFilter(5.0, order=2).digital(0.01, channels=2, initial=[1.0, -1.0]),
+         {"h": [0.01, 0.02, 0.05, 0.01]}),
+        ("td", td, {"r": [20.0, 5.0, 50.0, 10.0]}),
+        ("td-feedthrough", TrackingDifferentiator(r=20.0, h=0.01, substeps=3, feedthrough=True), None),
+        ("td-step", td.step_block(), None),
+        ("eso", ExtendedStateObserver.from_bandwidth(2, 10.0, b0=1.5),
+         {"gains": [ExtendedStateObserver.from_bandwidth(2, w).L for w in (10.0, 5.0, 20.0, 10.0)]}),
+        ("eso-fal", ExtendedStateObserver((100.0, 300.0, 1000.0), b0=0.5, alpha=[1.0, 0.5, 0.25], delta=0.01),
+         {"delta": [0.01, 0.02, 0.05, 0.01]}),
+        ("sigma", DifferentialEstimator(3, 2.0), {"a": [2.0, 1.0, 4.0, 2.0]}),
+        ("sigma-corrected", DifferentialEstimator(4, 2.0, reading="corrected"), None),
+        ("lti", DiscreteLTI(ct.tf([2.0, 4.0], [1.0, 3.0, 2.0, 0.5]), 0.05), None),
+        ("lti-feedthrough", DiscreteLTI(ct.tf([1.0, 0.5], [1.0, 2.0]), 0.1), None),
+        ("gain", StaticGain([[1.0, -2.0, 0.5], [0.0, 1.0, 3.0]], ("a", "b", "c"), ("p", "q")),
+         {"D": np.random.default_rng(0).normal(size=(B, 2, 3))}),
+    ]
+
+
+BLOCKS = _blocks()
+IDS = [b[0] for b in BLOCKS]
+
+
+def _state_and_inputs(block, rng, runs=B):
+    x0 = np.asarray(block.initial_state(), dtype=float)
+    x = x0 + 0.5 * rng.standard_normal((runs, x0.size))
+    if any(s.startswith("P") for s in block.states):  # covariance entries stay positive
+        x = np.abs(x) + x0
+    return x, rng.standard_normal((runs, len(block.inputs)))
+
+
+def test_every_library_kernel_block_is_listed():
+    from ctrl_analysis.estimators import tracking
+
+    listed = {type(b) for _, b, _ in BLOCKS}
+    library = {tracking.TDStep, StaticGain}
+    for cls in (DiscreteKalmanFilter, CharacteristicKalmanFilter, LinearKalmanFilter, ImprovedKalmanFilter,
+                AlphaBetaFilter, LowPassFilter, TrackingDifferentiator, ExtendedStateObserver,
+                DifferentialEstimator, DiscreteLTI):
+        library.add(cls)
+    assert all(issubclass(cls, KernelBlock) for cls in library)
+    assert library <= listed
+
+
+@pytest.mark.parametrize(("name", "block", "per_run"), BLOCKS, ids=IDS)
+def test_derived_methods_equal_the_compiled_kernels_run_by_run(name, block, per_run):
+    rng = np.random.default_rng(7)
+    x, u = _state_and_inputs(block, rng)
+    k = block.kernel()
+    P = np.asarray(k.params)
+    rows = P if P.ndim == 2 else np.broadcast_to(P, (B, P.size))
+    step = "update" if k.update is not None else "rhs"
+    for kind, width in (("output", len(block.outputs)), (step, x.shape[1])):
+        fn = getattr(k, kind)
+        if fn is None:
+            continue
+        derived = getattr(block, kind)(0.3, x, u)
+        compiled = np.empty((B, width))
+        jit = _kernels._jit(fn)
+        for b in range(B):
+            jit(0.3, np.ascontiguousarray(x[b]), np.ascontiguousarray(u[b]), np.ascontiguousarray(rows[b]), compiled[b])
+        assert np.array_equal(derived, compiled, equal_nan=True), f"{name}: {kind}"
+        one = getattr(block, kind)(0.3, x[1], u[1]) if P.ndim == 1 else None  # one run, 1-D
+        assert one is None or np.array_equal(one, derived[1], equal_nan=True)
+
+
+@pytest.mark.parametrize(("name", "block", "per_run"), BLOCKS, ids=IDS)
+def test_one_block_loop_numpy_engine_equals_compiled_bit_for_bit(name, block, per_run):
+    rng = np.random.default_rng(3)
+    continuous = block.kernel().rhs is not None
+    loop = loop_with(block, 0.01 if continuous else 1.0)
+    N = 25
+    inputs = {s: rng.standard_normal((N + 1, B)) for s in loop.external}
+    params = None if per_run is None else {"b": {k: np.asarray(v) for k, v in per_run.items()}}
+    res = {e: loop.simulate(N, inputs=inputs, runs=B, params=params, engine=e, bound=np.inf)
+           for e in ("numpy", "compiled")}
+    assert np.array_equal(res["numpy"].x, res["compiled"].x, equal_nan=True)
+    for s in res["numpy"].signals:
+        assert np.array_equal(res["numpy"][s], res["compiled"][s], equal_nan=True), s
+    if per_run is not None:  # run b with per-run values = the block built with run b's values, alone
+        for b in (0, 2):
+            alone = loop_with(block.with_params(**{k: np.asarray(v)[b] for k, v in per_run.items()}), loop.dt)
+            one = alone.simulate(N, inputs={s: v[:, b:b + 1] for s, v in inputs.items()}, runs=1, bound=np.inf)
+            assert np.array_equal(one.x[:, 0], res["compiled"].x[:, b], equal_nan=True)
+
+
+def loop_with(block, dt):
+    """``block`` alone in a loop, its outputs renamed (a TD step's outputs are named as its inputs)."""
+    return Loop([place(block, "b", outputs=[f"out{i}" for i in range(len(block.outputs))])], dt=dt)
+
+
+def test_kalman_kernels_follow_the_matrix_form():
+    """The docstrings' matrix equations, run with numpy matrices, against the kernels (to rounding)."""
+    rng = np.random.default_rng(5)
+    F, h, Qd, R, b = F3, np.array([1.0, 0.0, 0.5]), 1e-2 * np.eye(3), 0.2, np.array([0.0, 0.1, 0.2])
+    kf = DiscreteKalmanFilter(F, h, Qd, R, b=b)
+    x, u = _state_and_inputs(kf, rng, runs=1)
+    xp, P = x[0, :3], x[0, 3:].reshape(3, 3)
+    S = h @ P @ h + R
+    K = P @ h / S
+    xf = xp + K * (u[0, 0] - h @ xp)
+    Pf = P - np.outer(K, K) * S
+    np.testing.assert_allclose(kf.output(0.0, x, u)[0], xf, rtol=1e-12)
+    nxt = kf.update(0.0, x, u)[0]
+    np.testing.assert_allclose(nxt[:3], F @ xf + b * u[0, 1], rtol=1e-12)
+    np.testing.assert_allclose(nxt[3:].reshape(3, 3), F @ Pf @ F.T + Qd, rtol=1e-12)
+
+    G, H = np.array([0.1, 0.2, 0.3]), np.array([1.0, 0.0, 0.0])
+    lkf = LinearKalmanFilter(F, G, H, Qd, R)
+    x, u = _state_and_inputs(lkf, rng, runs=1)
+    xh, P = x[0, :3], x[0, 3:].reshape(3, 3)
+    xp = F @ xh + G * u[0, 1]
+    Pp = F @ P @ F.T + Qd
+    K = Pp @ H / (H @ Pp @ H + R)
+    xf = xp + K * (u[0, 0] - H @ xp)
+    A = np.eye(3) - np.outer(K, H)
+    nxt = lkf.update(0.0, x, u)[0]
+    np.testing.assert_allclose(nxt[:3], xf, rtol=1e-12)
+    np.testing.assert_allclose(nxt[3:].reshape(3, 3), A @ Pp @ A.T + R * np.outer(K, K), rtol=1e-12)
+    np.testing.assert_allclose(lkf.output(0.0, x, u)[0, 0], H @ xf, rtol=1e-12)
+
+
+def test_a_size_cannot_differ_between_columns():
+    td = TrackingDifferentiator(r=20.0, h=0.01)
+    P = np.stack([td.kernel_params, td.with_params(substeps=2).kernel_params])
+    with pytest.raises(ValueError, match="differs between runs"):
+        td.batched("update", 0.0, np.zeros((2, 2)), np.ones((2, 1)), P)
