@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from ctrl_analysis import _kernels
-from ctrl_analysis.controllers import mfac
+from ctrl_analysis.controllers import mfac, pd
 
 pytestmark = pytest.mark.skipif(not _kernels.available(), reason="numba is not installed")
 
@@ -45,6 +45,10 @@ CASES = [
     ("DecreasingGainLaw-no-rearm", lambda: mfac.DecreasingGainLaw(0.5, 2.0, 0.8, rearm=False), 3, 4, _band_states,
      {"lam": lambda r, B: r.uniform(0.5, 3.0, B)}),
     ("CFDLPredictor", lambda: mfac.CFDLPredictor(2.0, 0.5, 0.1), 3, 2, _mfac_inputs, {}),
+    ("PDFeedforward", lambda: pd.PDFeedforward(2.0, omega_c=10.0), 0, 6, _mfac_inputs,
+     {"b0": lambda r, B: r.uniform(1.0, 3.0, B), "omega_c": lambda r, B: r.uniform(5.0, 20.0, B)}),
+    ("PDFeedforward-model-n3", lambda: pd.PDFeedforward(3.0, gains=[6.0, 11.0, 6.0], order=3, model=True),
+     4, 13, _mfac_inputs, {"b0": lambda r, B: r.uniform(1.0, 3.0, B)}),
 ]
 
 
