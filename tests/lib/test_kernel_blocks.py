@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ctrl_analysis import _kernels
+from ctrl_analysis import _kernels, identification
 from ctrl_analysis.controllers import mfac, pd
 
 pytestmark = pytest.mark.skipif(not _kernels.available(), reason="numba is not installed")
@@ -45,6 +45,8 @@ CASES = [
     ("DecreasingGainLaw-no-rearm", lambda: mfac.DecreasingGainLaw(0.5, 2.0, 0.8, rearm=False), 3, 4, _band_states,
      {"lam": lambda r, B: r.uniform(0.5, 3.0, B)}),
     ("CFDLPredictor", lambda: mfac.CFDLPredictor(2.0, 0.5, 0.1), 3, 2, _mfac_inputs, {}),
+    ("ArxRegressor", lambda: identification.ArxRegressor(2, 1, lag=0), 3, 2, _mfac_inputs, {}),
+    ("ArxRegressor-lag2", lambda: identification.ArxRegressor(1, 3, lag=2), 8, 2, _mfac_inputs, {}),
     ("PDFeedforward", lambda: pd.PDFeedforward(2.0, omega_c=10.0), 0, 6, _mfac_inputs,
      {"b0": lambda r, B: r.uniform(1.0, 3.0, B), "omega_c": lambda r, B: r.uniform(5.0, 20.0, B)}),
     ("PDFeedforward-model-n3", lambda: pd.PDFeedforward(3.0, gains=[6.0, 11.0, 6.0], order=3, model=True),
@@ -74,7 +76,7 @@ def test_derived_batched_methods_equal_the_compiled_kernels_bit_for_bit(case):
     for kind in ("update", "rhs"):
         if getattr(block.kernels, kind) is not None:
             kinds.append((kind, n))
-    for P in (block.kernel_params, rows):
+    for P in (block.kernel_params, rows) if per_run else (block.kernel_params,):  # rows: run-time values
         for kind, width in kinds:
             numpy_out = block.batched(kind, t, x, u, P)
             compiled = _compiled_per_run(getattr(block.kernels, kind), t, x, u, P, width)
