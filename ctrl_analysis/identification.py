@@ -20,17 +20,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from . import identification_kernels as kern
 from ._validate import check_bool, check_finite, check_int, check_positive, check_vector
 from .blocks import DiscreteBlock, signal_names
 from .engine.kernels import KernelBlock, Kernels
-from .identification_kernels import (
-    ARX,
-    arx_output,
-    arx_update,
-    rls_hold_output,
-    rls_output,
-    rls_update,
-)
 
 __all__ = [
     "ArxRegressor",
@@ -413,8 +406,8 @@ class RecursiveLeastSquaresBlock(DiscreteBlock):
         """
         from ._kernels import BlockKernel
 
-        output = rls_output if self.feedthrough else rls_hold_output
-        return BlockKernel(output=output, params=self._p, update=rls_update)
+        output = kern.rls_output if self.feedthrough else kern.rls_hold_output
+        return BlockKernel(output=output, params=self._p, update=kern.rls_update)
 
     def __repr__(self) -> str:
         return f"RecursiveLeastSquaresBlock(n_params={self.n_params}, forgetting={self.forgetting})"
@@ -589,7 +582,7 @@ class ArxRegressor(KernelBlock, DiscreteBlock):
     """
 
     inputs = ("s", "u")
-    kernels = Kernels(output=arx_output, update=arx_update)
+    kernels = Kernels(output=kern.arx_output, update=kern.arx_update)
 
     def __init__(self, na: int, nb: int, lag: int = 0):
         self.na = check_int("na", na, minimum=0)
@@ -601,4 +594,4 @@ class ArxRegressor(KernelBlock, DiscreteBlock):
         self.states = signal_names("s_prev", self.ns) + signal_names("u_prev", self.nu)
         self.outputs = ("z",) + signal_names("h", self.na + self.nb)
         self.feedthrough = self.lag == 0
-        self.kernel_params = ARX.pack(na=self.na, nb=self.nb, lag=self.lag)
+        self.kernel_params = kern.ARX.pack(na=self.na, nb=self.nb, lag=self.lag)
