@@ -20,11 +20,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from . import identification_kernels as kern
 from ._validate import check_bool, check_finite, check_int, check_positive, check_vector
-from .blocks import ColumnKernels, DiscreteBlock, signal_names
-from .identification_kernels import (  # noqa: F401 - arx_* are named in ArxRegressor.column_kernels
-    arx_output, arx_update, rls_hold_output, rls_output, rls_update,
-)
+from .blocks import DiscreteBlock, signal_names
+from .engine.kernels import KernelBlock, Kernels
 
 __all__ = [
     "ArxRegressor",
@@ -407,8 +406,8 @@ class RecursiveLeastSquaresBlock(DiscreteBlock):
         """
         from ._kernels import BlockKernel
 
-        output = rls_output if self.feedthrough else rls_hold_output
-        return BlockKernel(output=output, params=self._p, update=rls_update)
+        output = kern.rls_output if self.feedthrough else kern.rls_hold_output
+        return BlockKernel(output=output, params=self._p, update=kern.rls_update)
 
     def __repr__(self) -> str:
         return f"RecursiveLeastSquaresBlock(n_params={self.n_params}, forgetting={self.forgetting})"
@@ -549,7 +548,7 @@ class RecursiveLeastSquares:
         return f"RecursiveLeastSquares({self.block!r}, batch={self.batch})"
 
 
-class ArxRegressor(ColumnKernels, DiscreteBlock):
+class ArxRegressor(KernelBlock, DiscreteBlock):
     """Tapped delay lines forming the ARX regression ``z = s(k−d)``, ``h = [s(k−d−1..k−d−na), u(k−d−1..k−d−nb)]``.
 
     Feeds :class:`RecursiveLeastSquaresBlock` with the model
@@ -583,6 +582,7 @@ class ArxRegressor(ColumnKernels, DiscreteBlock):
     """
 
     inputs = ("s", "u")
+    kernels = Kernels(output=kern.arx_output, update=kern.arx_update)
 
     def __init__(self, na: int, nb: int, lag: int = 0):
         self.na = check_int("na", na, minimum=0)
@@ -594,6 +594,4 @@ class ArxRegressor(ColumnKernels, DiscreteBlock):
         self.states = signal_names("s_prev", self.ns) + signal_names("u_prev", self.nu)
         self.outputs = ("z",) + signal_names("h", self.na + self.nb)
         self.feedthrough = self.lag == 0
-        self._p = np.array([self.na, self.nb, self.lag], dtype=float)
-
-    column_kernels = {"output": "arx_output", "update": "arx_update"}  # numpy methods + compiled kernel
+        self.kernel_params = kern.ARX.pack(na=self.na, nb=self.nb, lag=self.lag)

@@ -1,8 +1,8 @@
 """Per-run kernels of the identification blocks (:mod:`ctrl_analysis.identification`).
 
 * :func:`arx_update` / :func:`arx_output`: the tapped delay lines of
-  :class:`~ctrl_analysis.identification.ArxRegressor`, written with scalar indexing only, so they
-  are both its compiled kernel and, called on a batch's transposed arrays, its numpy methods.
+  :class:`~ctrl_analysis.identification.ArxRegressor` (a kernel-first block, parameters :data:`ARX`),
+  written with scalar indexing only, so they also run on a batch's columns.
 * :func:`rls_update` / :func:`rls_output` (:func:`rls_hold_output` without feedthrough): the compiled twins of
   :class:`~ctrl_analysis.identification.RecursiveLeastSquaresBlock`' numpy step (its projection and
   trace cap branch per value); ``tests/lib/test_identification.py`` holds the two equal bit for bit.
@@ -15,8 +15,13 @@ state ``[θ (n), R row by row (n·n)]``; input ``[z, h (n)]``.
 from __future__ import annotations
 
 from ._kernels import jitable
+from .engine.kernels import Layout
 
 __all__: list = []  # kernels: reached through the blocks' kernel() methods
+
+#: Parameters of :class:`~ctrl_analysis.identification.ArxRegressor` (orders and lag, structural: one value for every run).
+ARX = Layout("na", "nb", "lag")
+ARX_AT = ARX.at  # offsets, a numba constant
 
 
 def arx_update(t, x, u, p, x_next):
@@ -31,11 +36,11 @@ def arx_update(t, x, u, p, x_next):
     u : numpy.ndarray
         ``[s(k), u(k)]``.
     p : numpy.ndarray
-        ``[na, nb, d]``.
+        Packed by :data:`ARX`.
     x_next : numpy.ndarray
         Written in place.
     """
-    ns, nu = int(p[0]) + int(p[2]), int(p[1]) + int(p[2])
+    ns, nu = int(p[ARX_AT.na]) + int(p[ARX_AT.lag]), int(p[ARX_AT.nb]) + int(p[ARX_AT.lag])
     for i in range(ns):
         x_next[i] = u[0] if i == 0 else x[i - 1]
     for i in range(nu):
@@ -52,7 +57,7 @@ def arx_output(t, x, u, p, y):
     y : numpy.ndarray
         ``[z, h]``, written in place.
     """
-    na, nb, d = int(p[0]), int(p[1]), int(p[2])
+    na, nb, d = int(p[ARX_AT.na]), int(p[ARX_AT.nb]), int(p[ARX_AT.lag])
     ns = na + d
     y[0] = u[0]
     for _ in range(min(d, 1)):  # z = s(k−d): the stored s(k−d) when d >= 1 (a loop, not a branch: leaner in numba)

@@ -6,37 +6,17 @@ import math
 
 import numpy as np
 
-from ctrl_analysis.blocks import ColumnKernels, DiscreteBlock
+from ctrl_analysis.blocks import DiscreteBlock
+from ctrl_analysis.engine.kernels import KernelBlock, Kernels, Layout
+
+PLANT = Layout("switch_k")
+AT = PLANT.at  # parameter offsets, a numba constant
 
 __all__ = ["SwitchedPlant", "plant_output", "plant_start_state", "plant_update", "reference", "reference_next"]
 
 
-class SwitchedPlant(ColumnKernels, DiscreteBlock):
-    """Eq. (38) (and (40) with ``switch_k=None``): a SISO plant whose structure changes at ``switch_k``.
-
-    ``y(k+1) = y(k)/(1 + y(k)²) + u(k)³`` for ``k <= switch_k``, and for ``k > switch_k``::
-
-        y(k+1) = (y(k) y(k−1) y(k−2) u(k−1) (y(k−2) − 1) + r(k) u(k)) / (1 + y(k−1)² + y(k−2)²)
-
-    with ``r(k) = 1 + round(k/500)`` (MATLAB ``round``: half away from zero, so r = 2 for
-    501 <= k <= 749 and r = 3 from k = 750). The time ``t`` the loop passes is the paper's ``k``.
-
-    Block signals: input ``u``; states ``y``, ``y[-1]``, ``y[-2]``, ``u[-1]``; output ``y``.
-    """
-
-    inputs = ("u",)
-    states = ("y", "y[-1]", "y[-2]", "u[-1]")
-    outputs = ("y",)
-    feedthrough = False
-
-    def __init__(self, switch_k: int | None = 500):
-        self.switch_k = math.inf if switch_k is None else int(switch_k)
-        self._p = np.array([float(self.switch_k)])
-
-    column_kernels = {"output": "plant_output", "update": "plant_update"}  # numpy methods + compiled kernel
-
 def plant_update(t, x, u, p, x_next):
-    """Eq. (38)/(40) for one run (or, on a batch's transposed arrays, every run); ``p = [switch_k]``.
+    """Eq. (38)/(40) for one run; ``p`` packed by :data:`PLANT`.
 
     Parameters
     ----------
@@ -52,7 +32,7 @@ def plant_update(t, x, u, p, x_next):
         Next state, written in place.
     """
     y, y1, y2, u1, uk = x[0], x[1], x[2], x[3], u[0]
-    if t <= p[0]:
+    if t <= p[AT.switch_k]:
         x_next[0] = y / (1.0 + y * y) + uk * uk * uk                           # (38)/(40), k <= 500
     else:
         r = 1.0 + math.floor(t / 500.0 + 0.5)                                 # r(k) = 1 + round(k/500)
@@ -73,6 +53,30 @@ def plant_output(t, x, u, p, y):
         Output, written in place.
     """
     y[0] = x[0]
+
+
+class SwitchedPlant(KernelBlock, DiscreteBlock):
+    """Eq. (38) (and (40) with ``switch_k=None``): a SISO plant whose structure changes at ``switch_k``.
+
+    ``y(k+1) = y(k)/(1 + y(k)²) + u(k)³`` for ``k <= switch_k``, and for ``k > switch_k``::
+
+        y(k+1) = (y(k) y(k−1) y(k−2) u(k−1) (y(k−2) − 1) + r(k) u(k)) / (1 + y(k−1)² + y(k−2)²)
+
+    with ``r(k) = 1 + round(k/500)`` (MATLAB ``round``: half away from zero, so r = 2 for
+    501 <= k <= 749 and r = 3 from k = 750). The time ``t`` the loop passes is the paper's ``k``.
+
+    Block signals: input ``u``; states ``y``, ``y[-1]``, ``y[-2]``, ``u[-1]``; output ``y``.
+    """
+
+    inputs = ("u",)
+    states = ("y", "y[-1]", "y[-2]", "u[-1]")
+    outputs = ("y",)
+    feedthrough = False
+    kernels = Kernels(output=plant_output, update=plant_update, columns=False)  # branches on k against switch_k
+
+    def __init__(self, switch_k: int | None = 500):
+        self.switch_k = math.inf if switch_k is None else int(switch_k)
+        self.kernel_params = PLANT.pack(switch_k=float(self.switch_k))
 
 
 def reference_next(kind: str, k) -> np.ndarray:

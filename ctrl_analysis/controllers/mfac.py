@@ -23,9 +23,8 @@ from __future__ import annotations
 import numpy as np
 
 from .._validate import check_finite, check_positive, check_str
-from ..blocks import Block, ColumnKernels, DiscreteBlock, StaticBlock
-from .._kernels import copy_output, jitable  # noqa: F401 - copy_output is named in UnitDelay.column_kernels
-from ..estimators.kalman.ikf import _kernel_params, _per_run
+from ..blocks import Block, DiscreteBlock, StaticBlock
+from ..engine.kernels import KernelBlock, Kernels, Layout, jitable
 from ..loop import place
 
 __all__ = [
@@ -38,20 +37,20 @@ __all__ = [
     "mfac_controller",
 ]
 
+NO_PARAMS = Layout()  # UnitDelay, CFDLPredictor
+PPD = Layout("eta", "mu", "epsilon", "phi_reset", "sign0")
+PPD_AT = PPD.at  # parameter offsets, numba constants
+LAW = Layout("rho", "lam")
+LAW_AT = LAW.at
+DGAIN = Layout("rho", "lam", "e_m", "rearm")
+DGAIN_AT = DGAIN.at
 
-def _check_step(name: str, value):
-    """A step size in ``(0, 1]``: a float, or a 1-D array of one value per run (a grid on the batch axis)."""
-    value = _per_run(name, check_finite(name, value))
-    if np.any(value <= 0.0) or np.any(value > 1.0):
+
+def _check_step(name: str, value) -> float:
+    """A step size in ``(0, 1]`` (per-run values: ``Loop.simulate(params=...)``)."""
+    value = float(check_finite(name, value, scalar=True))
+    if not 0.0 < value <= 1.0:
         raise ValueError(f"{name} must be in (0, 1], got {value}")
-    return value
-
-
-def _check_weight(name: str, value):
-    """A weight ``> 0``: a float or one value per run."""
-    value = _per_run(name, check_finite(name, value))
-    if np.any(value <= 0.0):
-        raise ValueError(f"{name} must be > 0, got {value}")
     return value
 
 
@@ -67,26 +66,25 @@ def _ppd_projection(phi_prev, du, dy, eta, mu):
     return phi_prev + eta * du * (dy - phi_prev * du) / (mu + du * du)
 
 
-# ------------------------------------------------------------------ kernels (one run; see ctrl_analysis._kernels)
-# Written with scalar indexing: the blocks without per-value branches call them on the batch's
-# transposed arrays as their numpy methods; PPDEstimator's reset (7) and DecreasingGainLaw's band
-# (36) branch per run, so their numpy methods stay vectorised (np.where) and tests/lib/test_mfac.py
-# holds each kernel equal to its block's numpy method, bit for bit.
+# ------------------------------------------------------------------ kernels (one run; see ctrl_analysis.engine.kernels)
+# Each equation once: the blocks' batched numpy methods and the compiled engine both call these.
+# PPDEstimator's reset (7) and DecreasingGainLaw's band (36) branch per run (columns=False).
 
 def delay_update(t, x, u, p, x_next):
-    """Kernel update of :class:`UnitDelay` and the numpy method: ``u_prev(k+1) = u(k)``."""
+    """Kernel update of :class:`UnitDelay`: ``u_prev(k+1) = u(k)``."""
     x_next[0] = u[0]
 
 
 @jitable
 def ppd_output(t, x, u, p, y):
-    """Kernel output of :class:`PPDEstimator`: ``φ̂(k)`` by (6) with the reset (7); ``p = [η, μ, ε, φ_reset, sign φ̂(1)]``."""
+    """Kernel output of :class:`PPDEstimator`: ``φ̂(k)`` by (6) with the reset (7); ``p`` packed by :data:`PPD`."""
     du = u[1] - x[2]                                     # Δu(k−1) = u(k−1) − u(k−2)
-    phi = _ppd_projection(x[0], du, u[0] - x[1], p[0], p[1])
+    phi = _ppd_projection(x[0], du, u[0] - x[1], p[PPD_AT.eta], p[PPD_AT.mu])  # (6), Δy_f(k) = y_f(k) − y_f(k−1)
     sign = 1.0 if phi > 0.0 else (-1.0 if phi < 0.0 else phi)   # numpy's sign (0 and NaN kept)
+    eps = p[PPD_AT.epsilon]
     # (7) reset if |φ̂(k)| <= ε or |Δu(k−1)| <= ε or sign φ̂(k) ≠ sign φ̂(1)
-    if abs(phi) <= p[2] or abs(du) <= p[2] or sign != p[4]:
-        phi = p[3]
+    if abs(phi) <= eps or abs(du) <= eps or sign != p[PPD_AT.sign0]:
+        phi = p[PPD_AT.phi_reset]
     y[0] = phi
 
 
@@ -98,8 +96,8 @@ def ppd_update(t, x, u, p, x_next):
 
 
 def cfdl_law_output(t, x, u, p, y):
-    """Kernel of :class:`CFDLLaw` and its numpy method: (8) ``u(k) = u(k−1) + Δu(k)``; ``p = [ρ, λ]``."""
-    y[0] = u[3] + _cfdl_increment(u[0], u[2] - u[1], p[0], p[1])
+    """Kernel of :class:`CFDLLaw`: (8) ``u(k) = u(k−1) + Δu(k)``; ``p`` packed by :data:`LAW`."""
+    y[0] = u[3] + _cfdl_increment(u[0], u[2] - u[1], p[LAW_AT.rho], p[LAW_AT.lam])
 
 
 @jitable
@@ -114,38 +112,35 @@ def _band_step(e, in_before, armed_before, age_before, e_m, rearm):
 
 
 def dgain_output(t, x, u, p, y):
-    """Kernel output of :class:`DecreasingGainLaw`: (36); ``p = [ρ, λ, e_m, rearm (0/1)]``."""
+    """Kernel output of :class:`DecreasingGainLaw`: (36); ``p`` packed by :data:`DGAIN`."""
     e = u[2] - u[1]
-    in_band, armed, age = _band_step(e, x[0], x[1], x[2], p[2], p[3])
-    du = _cfdl_increment(u[0], e, p[0], p[1])
+    in_band, armed, age = _band_step(e, x[0], x[1], x[2], p[DGAIN_AT.e_m], p[DGAIN_AT.rearm])
+    du = _cfdl_increment(u[0], e, p[DGAIN_AT.rho], p[DGAIN_AT.lam])
     # (36) Δu(k) / (k − k_m + 1) inside the band
     y[0] = u[3] + (du / (age + 1.0) if in_band and armed else du)
 
 
 def dgain_update(t, x, u, p, x_next):
     """Kernel update of :class:`DecreasingGainLaw`: the band state ``(in_band, armed, age)`` of sample ``k``."""
-    in_band, armed, age = _band_step(u[2] - u[1], x[0], x[1], x[2], p[2], p[3])
+    in_band, armed, age = _band_step(u[2] - u[1], x[0], x[1], x[2], p[DGAIN_AT.e_m], p[DGAIN_AT.rearm])
     x_next[0] = 1.0 if in_band else 0.0
     x_next[1] = 1.0 if armed else 0.0
     x_next[2] = age
 
 
 def predictor_output(t, x, u, p, y):
-    """Kernel of :class:`CFDLPredictor` and its numpy method: (4)/(11) ``δ(k) = φ̂(k−1) (u(k−1) − u(k−2))``."""
+    """Kernel of :class:`CFDLPredictor`: (4)/(11) ``δ(k) = φ̂(k−1) (u(k−1) − u(k−2))``."""
     y[0] = x[0] * (x[1] - x[2])
 
 
 def predictor_update(t, x, u, p, x_next):
-    """Kernel update of :class:`CFDLPredictor` and its numpy method: stores ``(φ̂(k), u(k), u(k−1))``."""
+    """Kernel update of :class:`CFDLPredictor`: stores ``(φ̂(k), u(k), u(k−1))``."""
     x_next[0] = u[0]
     x_next[1] = u[1]
     x_next[2] = x[1]
 
 
-_NO_PARAMS = np.zeros(0)
-
-
-class UnitDelay(ColumnKernels, DiscreteBlock):
+class UnitDelay(KernelBlock, DiscreteBlock):
     """One-sample delay ``u_prev(k) = u(k−1)``: input ``u``, state and output ``u_prev``.
 
     Parameters
@@ -158,21 +153,20 @@ class UnitDelay(ColumnKernels, DiscreteBlock):
     states = ("u_prev",)
     outputs = ("u_prev",)
     feedthrough = False
+    kernels = Kernels(update=delay_update)
 
     def __init__(self, u0: float = 0.0):
         self.u0 = float(check_finite("u0", u0, scalar=True))
+        self.kernel_params = NO_PARAMS.pack()
 
     def initial_state(self) -> np.ndarray:
         return np.array([self.u0])
-
-    column_kernels = {"output": "copy_output", "update": "delay_update"}  # numpy methods + compiled kernel
-    _p = _NO_PARAMS
 
     def __repr__(self) -> str:
         return f"UnitDelay(u0={self.u0:g})"
 
 
-class PPDEstimator(DiscreteBlock):
+class PPDEstimator(KernelBlock, DiscreteBlock):
     """Projection estimate of the pseudo partial derivative (PPD) ``φ̂(k)`` with its reset rule.
 
     From its state ``(φ̂(k−1), y_f(k−1), u(k−2))`` and its inputs ``y_f(k)``, ``u(k−1)``::
@@ -241,6 +235,7 @@ class PPDEstimator(DiscreteBlock):
     states = ("phi_hat", "y_prev", "u_prev_prev")
     outputs = ("phi_hat",)
     feedthrough = True
+    kernels = Kernels(output=ppd_output, update=ppd_update, columns=False)
 
     def __init__(self, eta: float, mu: float, epsilon: float, phi0: float, phi_reset: float | None = None,
                  y0: float = 0.0, u0: float = 0.0):
@@ -256,43 +251,18 @@ class PPDEstimator(DiscreteBlock):
         self.sign0 = float(np.sign(self.phi0))
         self.y0 = float(check_finite("y0", y0, scalar=True))
         self.u0 = float(check_finite("u0", u0, scalar=True))
+        self.kernel_params = PPD.pack(eta=self.eta, mu=self.mu, epsilon=self.epsilon, phi_reset=self.phi_reset,
+                                      sign0=self.sign0)
 
     def initial_state(self) -> np.ndarray:
         return np.array([self.phi0, self.y0, self.u0])
-
-    def output(self, t, x, u, params=None) -> np.ndarray:
-        du = u[:, 1] - x[:, 2]                                        # Δu(k−1) = u(k−1) − u(k−2)
-        # (6), Δy_f(k) = y_f(k) − y_f(k−1)
-        phi = _ppd_projection(x[:, 0], du, u[:, 0] - x[:, 1], self.eta, self.mu)
-        # (7) reset if |φ̂(k)| <= ε or |Δu(k−1)| <= ε or sign φ̂(k) ≠ sign φ̂(1)
-        fire = (np.abs(phi) <= self.epsilon) | (np.abs(du) <= self.epsilon) | (np.sign(phi) != self.sign0)
-        return np.where(fire, self.phi_reset, phi)[:, None]
-
-    def update(self, t, x, u, params=None) -> np.ndarray:
-        x_next = np.empty_like(x)
-        x_next[:, 0] = self.output(t, x, u, params)[:, 0]
-        x_next[:, 1] = u[:, 0]
-        x_next[:, 2] = u[:, 1]
-        return x_next
-
-    def kernel(self):
-        """The compiled engine's kernel (:func:`ppd_output`, :func:`ppd_update`; tested equal to the numpy methods).
-
-        Returns
-        -------
-        ctrl_analysis._kernels.BlockKernel
-        """
-        from .._kernels import BlockKernel
-
-        p = _kernel_params(self.eta, self.mu, self.epsilon, self.phi_reset, self.sign0)
-        return BlockKernel(output=ppd_output, params=p, update=ppd_update)
 
     def __repr__(self) -> str:
         return (f"PPDEstimator(eta={self.eta:g}, mu={self.mu:g}, epsilon={self.epsilon:g}, phi0={self.phi0:g}, "
                 f"phi_reset={self.phi_reset:g})")
 
 
-class CFDLLaw(StaticBlock):
+class CFDLLaw(KernelBlock, StaticBlock):
     """The CFDL-MFAC control law, a static block: ``u(k) = u(k−1) + ρ φ̂(k) (y*(k+1) − y_f(k)) / (λ + φ̂(k)²)``.
 
     Block signals: inputs ``phi_hat``, ``y`` (``y_f(k)``), ``y_ref_next`` (``y*(k+1)``),
@@ -300,11 +270,10 @@ class CFDLLaw(StaticBlock):
 
     Parameters
     ----------
-    rho : float or array_like, shape (B,)
-        Step size ``ρ`` in ``(0, 1]``; an array gives one value per run (a grid on the batch axis;
-        :meth:`nlsys` needs scalars).
-    lam : float or array_like, shape (B,)
-        Weight ``λ > 0`` on the control increment (per run as ``rho``).
+    rho : float
+        Step size ``ρ`` in ``(0, 1]`` (per-run values: ``Loop.simulate(params={"law": {"rho": ...}})``).
+    lam : float
+        Weight ``λ > 0`` on the control increment.
 
     Raises
     ------
@@ -316,34 +285,22 @@ class CFDLLaw(StaticBlock):
     Lu & Hou (2022), eq. (8) and (35); Hou & Jin (2013), §4.2.
     """
 
+    kernels = Kernels(output=cfdl_law_output)
+
     def __init__(self, rho: float, lam: float):
         self.rho = _check_step("rho", rho)
-        self.lam = _check_weight("lam", lam)
-        self._p = _kernel_params(self.rho, self.lam)
+        self.lam = float(check_positive("lam", lam, scalar=True))
+        self.kernel_params = LAW.pack(rho=self.rho, lam=self.lam)
         super().__init__(self._law, inputs=("phi_hat", "y", "y_ref_next", "u_prev"), outputs=("u",))
 
-    def _law(self, t, u):
-        # (8) u(k) = u(k−1) + ρ φ̂(k) (y*(k+1) − y_f(k)) / (λ + φ̂(k)²): the kernel on the batch's columns
-        y = np.empty((u.shape[0], 1))
-        cfdl_law_output(t, None, u.T, self._p.T, y.T)
-        return y
-
-    def kernel(self):
-        """The compiled engine's kernel (:func:`cfdl_law_output`, also the numpy method); per-run ``ρ``, ``λ`` give rows.
-
-        Returns
-        -------
-        ctrl_analysis._kernels.BlockKernel
-        """
-        from .._kernels import BlockKernel
-
-        return BlockKernel(output=cfdl_law_output, params=self._p)
+    def _law(self, t, u):  # StaticBlock's fn (python-control): the kernel on the batch
+        return self.output(t, np.zeros((u.shape[0], 0)), u)
 
     def __repr__(self) -> str:
-        return f"CFDLLaw(rho={self.rho}, lam={self.lam})"
+        return f"CFDLLaw(rho={self.rho:g}, lam={self.lam:g})"
 
 
-class DecreasingGainLaw(DiscreteBlock):
+class DecreasingGainLaw(KernelBlock, DiscreteBlock):
     """CFDL-MFAC law whose increment is divided by ``k − k_m + 1`` inside an error band (D-MFAC).
 
     With ``e(k) = y*(k+1) − y_f(k)`` and ``Δu_0(k) = ρ φ̂(k) e(k) / (λ + φ̂(k)²)`` of (8)::
@@ -385,51 +342,22 @@ class DecreasingGainLaw(DiscreteBlock):
     states = ("in_band", "armed", "age")
     outputs = ("u",)
     feedthrough = True
+    kernels = Kernels(output=dgain_output, update=dgain_update, columns=False)
 
     def __init__(self, rho: float, lam: float, e_m: float, rearm: bool = True):
         self.rho = _check_step("rho", rho)
-        self.lam = _check_weight("lam", lam)
+        self.lam = float(check_positive("lam", lam, scalar=True))
         self.e_m = float(check_positive("e_m", e_m, scalar=True))
         if not isinstance(rearm, (bool, np.bool_)):
             raise TypeError(f"rearm must be a bool, got {type(rearm).__name__}")
         self.rearm = bool(rearm)
-
-    def _band(self, x, u):
-        """``(in_band, armed, age)`` at sample ``k`` (``age = k − k_m``)."""
-        in_band = np.abs(u[:, 2] - u[:, 1]) < self.e_m
-        entering = in_band & (x[:, 0] == 0.0)
-        start = entering if self.rearm else entering & (x[:, 1] == 0.0)
-        armed = (x[:, 1] != 0.0) | entering
-        age = np.where(start, 0.0, x[:, 2] + 1.0)
-        return in_band, armed, age
-
-    def output(self, t, x, u, params=None) -> np.ndarray:
-        in_band, armed, age = self._band(x, u)
-        du = _cfdl_increment(u[:, 0], u[:, 2] - u[:, 1], self.rho, self.lam)
-        # (36) Δu(k) / (k − k_m + 1) inside the band
-        return (u[:, 3] + np.where(in_band & armed, du / (age + 1.0), du))[:, None]
-
-    def update(self, t, x, u, params=None) -> np.ndarray:
-        in_band, armed, age = self._band(x, u)
-        return np.stack((in_band.astype(float), armed.astype(float), age), axis=1)
-
-    def kernel(self):
-        """The compiled engine's kernel (:func:`dgain_output`, :func:`dgain_update`; tested equal to the numpy methods).
-
-        Returns
-        -------
-        ctrl_analysis._kernels.BlockKernel
-        """
-        from .._kernels import BlockKernel
-
-        p = _kernel_params(self.rho, self.lam, self.e_m, 1.0 if self.rearm else 0.0)
-        return BlockKernel(output=dgain_output, params=p, update=dgain_update)
+        self.kernel_params = DGAIN.pack(rho=self.rho, lam=self.lam, e_m=self.e_m, rearm=1.0 if self.rearm else 0.0)
 
     def __repr__(self) -> str:
-        return f"DecreasingGainLaw(rho={self.rho}, lam={self.lam}, e_m={self.e_m:g}, rearm={self.rearm})"
+        return f"DecreasingGainLaw(rho={self.rho:g}, lam={self.lam:g}, e_m={self.e_m:g}, rearm={self.rearm})"
 
 
-class CFDLPredictor(ColumnKernels, DiscreteBlock):
+class CFDLPredictor(KernelBlock, DiscreteBlock):
     """The CFDL data model (4) as a one-step predictor: output ``δ(k) = φ̂(k−1) Δu(k−1)``.
 
     ``y(k) ≈ y(k−1) + φ̂(k−1) Δu(k−1)``; the block stores ``(φ̂(k−1), u(k−1), u(k−2))`` and has
@@ -453,16 +381,15 @@ class CFDLPredictor(ColumnKernels, DiscreteBlock):
     states = ("phi_prev", "u_prev", "u_prev_prev")
     outputs = ("dy_model",)
     feedthrough = False
+    kernels = Kernels(output=predictor_output, update=predictor_update)
 
     def __init__(self, phi0: float = 0.0, u0: float = 0.0, u00: float = 0.0):
         self.x0 = np.array([check_finite(name, value, scalar=True)
                             for name, value in (("phi0", phi0), ("u0", u0), ("u00", u00))])
+        self.kernel_params = NO_PARAMS.pack()
 
     def initial_state(self) -> np.ndarray:
         return self.x0.copy()
-
-    column_kernels = {"output": "predictor_output", "update": "predictor_update"}  # numpy methods + compiled kernel
-    _p = _NO_PARAMS
 
     def __repr__(self) -> str:
         return f"CFDLPredictor(x0={self.x0.tolist()})"

@@ -19,11 +19,26 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validate import check_array, check_finite, check_hurwitz, check_int, check_positive
-from ..blocks import ColumnKernels, DiscreteBlock, signal_names
+from .._validate import (
+    check_array,
+    check_finite,
+    check_hurwitz,
+    check_int,
+    check_positive,
+)
+from ..blocks import DiscreteBlock, signal_names
+from ..engine.kernels import KernelBlock, Kernels, Layout
 from ..polynomials import repeated_pole_coefficients
 
 __all__ = ["PDFeedforward", "bandwidth_gains"]
+
+
+def pd_layout(n: int) -> Layout:
+    """The parameters of :class:`PDFeedforward` of order ``n``: ``b0``, then the gains ``k_1 .. k_{n+1}``."""
+    return Layout("b0", ("k", n + 1))
+
+
+AT = pd_layout(1).at  # offsets (the same for every n: the gains come last), a numba constant
 
 
 def bandwidth_gains(n: int, omega_c: float) -> np.ndarray:
@@ -54,7 +69,55 @@ def bandwidth_gains(n: int, omega_c: float) -> np.ndarray:
     return repeated_pole_coefficients(n, omega_c)[::-1].copy()
 
 
-class PDFeedforward(ColumnKernels, DiscreteBlock):
+def pd_step(t, x, u, p, out):
+    """The law (30)/(12) of one sample, written into the last entry of ``out`` (output or next state).
+
+    ``u = (Σ_{i=1}^{n+1} k_i (ξ^(i-1) − x̂_i) − f̂) / b0`` with, when ``model``, ``f̂ = Σ_l θ_l
+    x̂_l(k−1) + θ_{n+1} u(k−1) + θ_{n+2}`` from the state ``x = [x̂_1(k−1) .. x̂_n(k−1), u(k−1)]``.
+    Called with the block's output (one entry) it writes ``u``; with the next state (``n + 1``
+    entries, ``model`` only) it also stores this sample's ``x̂_1..x̂_n`` before ``u``; with an empty
+    next state (no model) it writes nothing. The order ``n`` and ``model`` are read from the shapes
+    (``model``: the block has a state, ``n + 1`` entries; without it the inputs are ``2 n + 2``), so
+    the kernel has no branch on a value and also runs on a batch's columns.
+
+    Parameters
+    ----------
+    t : float
+        Time (unused).
+    x : numpy.ndarray
+        The block's state (empty without ``model``).
+    u : numpy.ndarray
+        Inputs ``[ξ .. ξ^(n), x̂_1 .. x̂_{n+1}, θ_1 .. θ_{n+2} (model)]``.
+    p : numpy.ndarray
+        Packed by :func:`pd_layout`: ``b0``, ``k_1 .. k_{n+1}``.
+    out : numpy.ndarray
+        The output (1 entry) or the next state (``n + 1`` or 0 entries), written in place.
+    """
+    last = out.shape[0] - 1
+    if last < 0:
+        return
+    model = x.shape[0] > 0
+    n = x.shape[0] - 1 if model else u.shape[0] // 2 - 1
+    # Σ_{i=1}^{n+1} k_i (ξ^(i-1) - x̂_i), summed left to right
+    acc = p[AT.k] * (u[0] - u[n + 1])
+    for i in range(1, n + 1):
+        acc = acc + p[AT.k + i] * (u[i] - u[n + 1 + i])
+    if model:
+        th = 2 * n + 2  # first column of Θ in u
+        # (12) XᵀΘ with the previous sample: Σ_l θ_l x̂_l(k-1) + θ_{n+1} u(k-1) + θ_{n+2}
+        f = u[th] * x[0]
+        for i in range(1, n + 1):
+            f = f + u[th + i] * x[i]
+        f = f + u[th + n + 1]
+        acc = acc - f
+    for i in range(last):
+        # the next state holds this sample's x̂_1..x̂_n for the next sample's model term (12)
+        out[i] = u[n + 1 + i]
+    # (30) u = (Σ k_i (ξ^(i-1) - x̂_i) - XᵀΘ) / b0
+    out[last] = acc / p[AT.b0]
+
+
+class PDFeedforward(KernelBlock, DiscreteBlock):
     """PD (state-feedback) law with feed-forward and model compensation: a discrete block, batched.
 
     ``u(k) = ( Σ_{i=1}^{n+1} k_i (ξ^(i-1)(t_k) − x̂_i(k)) − f̂(k) ) / b0``, held over the sample.
@@ -112,6 +175,7 @@ class PDFeedforward(ColumnKernels, DiscreteBlock):
     """
 
     feedthrough = True
+    kernels = Kernels(output=pd_step, update=pd_step)
 
     def __init__(self, b0: float, omega_c: float | None = None, gains=None, order: int = 2,
                  model: bool = False):
@@ -148,8 +212,7 @@ class PDFeedforward(ColumnKernels, DiscreteBlock):
                        + (signal_names("theta", n + 2) if self.model else ()))
         self.outputs = ("u",)
         self.states = signal_names("xhat_prev", n) + ("u_prev",) if self.model else ()
-        # kernel parameters: [n, b0, model, k_1 .. k_{n+1}]
-        self._p = np.concatenate([[float(n), self.b0, 1.0 if self.model else 0.0], self.k])
+        self.kernel_params = pd_layout(n).pack(b0=self.b0, k=self.k)
 
     def tracking_poly(self) -> np.ndarray:
         """Coefficients of the tracking-error polynomial ``s^n + k_n s^(n-1) + ... + k_1``.
@@ -207,53 +270,5 @@ class PDFeedforward(ColumnKernels, DiscreteBlock):
         # (30) u = (Σ k_i (ξ^(i-1) - x̂_i) - XᵀΘ) / b0
         return (np.sum(self.k * (ref - x_hat), axis=-1) - f_hat) / self.b0
 
-    column_kernels = {"output": "pd_step", "update": "pd_step"}  # numpy methods + compiled kernel
-
     def __repr__(self) -> str:
         return f"PDFeedforward(b0={self.b0}, k={self.k.tolist()}, model={self.model})"
-
-
-def pd_step(t, x, u, p, out):
-    """The law (30)/(12) of one sample, written into the last entry of ``out`` (output or next state).
-
-    ``u = (Σ_{i=1}^{n+1} k_i (ξ^(i-1) − x̂_i) − f̂) / b0`` with, when ``model``, ``f̂ = Σ_l θ_l
-    x̂_l(k−1) + θ_{n+1} u(k−1) + θ_{n+2}`` from the state ``x = [x̂_1(k−1) .. x̂_n(k−1), u(k−1)]``.
-    Called with the block's output (one entry) it writes ``u``; with the next state (``n + 1``
-    entries, ``model`` only) it also stores this sample's ``x̂_1..x̂_n`` before ``u``; with an empty
-    next state (no model) it writes nothing. Scalar indexing only: it is the compiled kernel of one
-    run and, on a batch's transposed arrays, :class:`PDFeedforward`'s numpy method.
-
-    Parameters
-    ----------
-    t : float
-        Time (unused).
-    x : numpy.ndarray
-        The block's state (empty without ``model``).
-    u : numpy.ndarray
-        Inputs ``[ξ .. ξ^(n), x̂_1 .. x̂_{n+1}, θ_1 .. θ_{n+2} (model)]``.
-    p : numpy.ndarray
-        ``[n, b0, model (0/1), k_1 .. k_{n+1}]``.
-    out : numpy.ndarray
-        The output (1 entry) or the next state (``n + 1`` or 0 entries), written in place.
-    """
-    last = out.shape[0] - 1
-    if last < 0:
-        return
-    n = int(p[0])
-    # Σ_{i=1}^{n+1} k_i (ξ^(i-1) - x̂_i), summed left to right
-    acc = p[3] * (u[0] - u[n + 1])
-    for i in range(1, n + 1):
-        acc = acc + p[3 + i] * (u[i] - u[n + 1 + i])
-    if p[2] != 0.0:
-        th = 2 * n + 2  # first column of Θ in u
-        # (12) XᵀΘ with the previous sample: Σ_l θ_l x̂_l(k-1) + θ_{n+1} u(k-1) + θ_{n+2}
-        f = u[th] * x[0]
-        for i in range(1, n + 1):
-            f = f + u[th + i] * x[i]
-        f = f + u[th + n + 1]
-        acc = acc - f
-    for i in range(last):
-        # the next state holds this sample's x̂_1..x̂_n for the next sample's model term (12)
-        out[i] = u[n + 1 + i]
-    # (30) u = (Σ k_i (ξ^(i-1) - x̂_i) - XᵀΘ) / b0
-    out[last] = acc / p[1]

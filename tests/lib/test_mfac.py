@@ -181,10 +181,10 @@ def test_batch_equals_single_runs_and_parameter_grid_on_the_batch():
     for b in range(3):
         one = loop.simulate(199, inputs={"v": v[:, b:b + 1], "y_ref_next": 1.0})
         np.testing.assert_array_equal(batch.x[:, b:b + 1], one.x)
-    # a grid of rho on the batch axis equals the runs with scalar rho
+    # a grid of rho on the batch axis (run-time parameters) equals the runs with scalar rho
     rhos = np.array([0.3, 0.6, 1.0])
-    grid = Loop([place(CubicPlant(), "plant")] + mfac_controller(ppd(), CFDLLaw(rhos, 2.0), measured="y"),
-                        dt=1.0).simulate(100, inputs={"y_ref_next": 0.5}, runs=3)
+    grid = Loop([place(CubicPlant(), "plant")] + mfac_controller(ppd(), CFDLLaw(1.0, 2.0), measured="y"),
+                dt=1.0).simulate(100, inputs={"y_ref_next": 0.5}, params={"law": {"rho": rhos}})
     for b, r in enumerate(rhos):
         one = Loop([place(CubicPlant(), "plant")] + mfac_controller(ppd(), CFDLLaw(r, 2.0), measured="y"),
                            dt=1.0).simulate(100, inputs={"y_ref_next": 0.5})
@@ -195,7 +195,9 @@ def test_errors_name_the_argument():
     with pytest.raises(ValueError, match=r"rho must be in \(0, 1\], got 1.5"):
         CFDLLaw(1.5, 1.0)
     with pytest.raises(ValueError, match="lam must be > 0"):
-        CFDLLaw(1.0, np.array([1.0, -1.0]))
+        CFDLLaw(1.0, -1.0)
+    with pytest.raises(TypeError, match="rho must be a real number"):
+        CFDLLaw(np.array([0.5, 0.6]), 1.0)  # per-run values go to simulate(params=...)
     with pytest.raises(ValueError, match=r"eta must be in \(0, 1\]"):
         PPDEstimator(0.0, 1.0, 1e-5, 2.0)
     with pytest.raises(ValueError, match="phi0 must be non-zero"):
@@ -214,72 +216,25 @@ def test_errors_name_the_argument():
         ikf_mfac(ppd(), CFDLLaw(1.0, 1.0), None)
 
 
-# ------------------------------------------------------------------ compiled kernels
-def _per_run_kernel(fn, x, u, p, width):
-    """Apply a kernel run by run -> (B, width); ``p`` shared (1-D) or per run (2-D)."""
-    out = np.empty((x.shape[0], width))
-    for b in range(x.shape[0]):
-        fn(0.0, x[b], u[b], p if p.ndim == 1 else p[b], out[b])
-    return out
-
-
-def _edge_inputs(rng, B=64):
-    """PPD/law states and inputs with every branch: tiny Δu, sign flips, zeros, a NaN."""
+# ------------------------------------------------------------------ kernels
+# (the derived batched methods equal the compiled kernels bit for bit: tests/lib/test_kernel_blocks.py)
+def test_ppd_reset_rule_fires_and_keeps_on_edge_inputs():
+    """Both branches of (7): tiny Δu, sign flips, a zero and a NaN; per-run η rows equal single blocks."""
+    rng = np.random.default_rng(3)
+    B = 64
     x = rng.standard_normal((B, 3))
-    u = rng.standard_normal((B, 4))
+    u = rng.standard_normal((B, 2))
     u[::7, 1] = x[::7, 2] + 1e-7         # |Δu| <= ε
     x[::5, 0] = -x[::5, 0]               # φ̂(k−1) of the other sign
     x[3, 0], u[3, 1], x[3, 2] = 0.0, 1.0, 0.0
     u[4, 0] = np.nan
-    return x, u
-
-
-@pytest.mark.parametrize("compiled", [False, True])
-def test_ppd_and_decreasing_gain_kernels_equal_their_numpy_methods_bit_for_bit(compiled):
-    from ctrl_analysis import _kernels
-    from ctrl_analysis.controllers.mfac import dgain_output, dgain_update, ppd_output, ppd_update
-
-    jit = _kernels._jit if compiled else (lambda f: f)
-    rng = np.random.default_rng(3)
-    x, u = _edge_inputs(rng)
-    B = x.shape[0]
-    est = PPDEstimator(eta=np.full(B, 0.7), mu=1.0, epsilon=1e-5, phi0=2.0, phi_reset=0.5)
-    p = est.kernel().params
-    assert p.shape == (B, 5)
-    fired = est.output(0.0, x[:, :3], u[:, :2])[:, 0] == 0.5
-    assert 5 < fired.sum() < B - 5  # both branches of (7) are exercised
-    assert np.array_equal(_per_run_kernel(jit(ppd_output), x, u[:, :2], p, 1), est.output(0.0, x, u[:, :2]),
-                          equal_nan=True)
-    assert np.array_equal(_per_run_kernel(jit(ppd_update), x, u[:, :2], p, 3), est.update(0.0, x, u[:, :2]),
-                          equal_nan=True)
-    # D-MFAC band states (in_band, armed) in {0, 1}, errors on both sides of e_m
-    xb = np.column_stack([rng.integers(0, 2, B), rng.integers(0, 2, B), rng.integers(0, 9, B)]).astype(float)
-    for rearm in (True, False):
-        law = DecreasingGainLaw(rng.uniform(0.2, 1.0, B), 2.0, e_m=0.8, rearm=rearm)
-        k = law.kernel()
-        assert np.array_equal(_per_run_kernel(jit(dgain_output), xb, u, k.params, 1), law.output(0.0, xb, u),
-                              equal_nan=True)
-        assert np.array_equal(_per_run_kernel(jit(dgain_update), xb, u, k.params, 3), law.update(0.0, xb, u),
-                              equal_nan=True)
-
-
-@pytest.mark.parametrize("compiled", [False, True])
-def test_law_predictor_and_delay_kernels_are_their_numpy_methods(compiled):
-    from ctrl_analysis import _kernels
-
-    jit = _kernels._jit if compiled else (lambda f: f)
-    rng = np.random.default_rng(4)
-    x, u = rng.standard_normal((9, 3)), rng.standard_normal((9, 4))
-    law = CFDLLaw(rng.uniform(0.1, 1.0, 9), 2.0)
-    k = law.kernel()
-    assert k.params.shape == (9, 2) and CFDLLaw(0.5, 2.0).kernel().params.shape == (2,)
-    assert np.array_equal(_per_run_kernel(jit(k.output), x, u, k.params, 1), law.output(0.0, x[:, :0], u))
-    pred = CFDLPredictor(2.0, 0.5, 0.1)
-    k = pred.kernel()
-    assert np.array_equal(_per_run_kernel(jit(k.output), x, u[:, :2], k.params, 1), pred.output(0.0, x, u[:, :2]))
-    assert np.array_equal(_per_run_kernel(jit(k.update), x, u[:, :2], k.params, 3), pred.update(0.0, x, u[:, :2]))
-    k = UnitDelay().kernel()
-    assert np.array_equal(_per_run_kernel(jit(k.update), x[:, :1], u[:, :1], k.params, 1), u[:, :1])
+    est = PPDEstimator(eta=0.7, mu=1.0, epsilon=1e-5, phi0=2.0, phi_reset=0.5)
+    fired = est.output(0.0, x, u)[:, 0] == 0.5
+    assert 5 < fired.sum() < B - 5
+    etas = rng.uniform(0.2, 1.0, B)
+    rows = np.stack([est.with_params(eta=e).kernel_params for e in etas])
+    one = np.concatenate([est.with_params(eta=e).update(0.0, x[b:b + 1], u[b:b + 1]) for b, e in enumerate(etas)])
+    assert np.array_equal(est.batched("update", 0.0, x, u, rows), one, equal_nan=True)
 
 
 def cubic_update(t, x, u, p, x_next):
@@ -308,19 +263,21 @@ def test_every_mfac_block_in_one_loop_compiled_equals_numpy_engine_bit_for_bit()
     B, n = 6, 300
     rng = np.random.default_rng(5)
     est = PPDEstimator(eta=0.5, mu=1.0, epsilon=1e-5, phi0=2.0, phi_reset=0.5, y0=1.0)
-    law = DecreasingGainLaw(rng.uniform(0.3, 1.0, B), 2.0, e_m=0.2, rearm=False)
+    law = DecreasingGainLaw(0.5, 2.0, e_m=0.2, rearm=False)
     ikf = ImprovedKalmanFilter(rng.uniform(0.01, 0.1, B), 0.05, y0=1.0, P0=0.0)
     blocks = [place(KCubicPlant(), "plant"),
               place(StaticGain([[1.0, 1.0]], inputs=("y", "v"), outputs=("y_m",)), "meas")]
     blocks += ikf_mfac(est, law, ikf)
     blocks += [place(TrackingDifferentiator(300.0, 0.01, 0.02, substeps=3, x0=(1.0, 0.0), feedthrough=True), "td",
                      inputs=["y_m"], outputs=["td_x[0]", "td_x[1]"]),
-               place(CFDLLaw(0.6, rng.uniform(1.0, 3.0, B)), "law2", inputs=["phi_hat", "td_x[0]", "y_ref_next", "u_prev"],
+               place(CFDLLaw(0.6, 2.0), "law2", inputs=["phi_hat", "td_x[0]", "y_ref_next", "u_prev"],
                      outputs=["u_td"])]
     loop = Loop(blocks, dt=1.0)
     v = 0.1 * rng.standard_normal((n, B))
     ref = np.where(np.arange(n + 1) < n // 2, 1.0, -1.0)
-    runs = {e: loop.simulate(n, inputs={"v": v, "y_ref_next": ref}, engine=e, bound=1e4) for e in ("numpy", "compiled")}
+    params = {"law": {"rho": rng.uniform(0.3, 1.0, B)}, "law2": {"lam": rng.uniform(1.0, 3.0, B)}}
+    runs = {e: loop.simulate(n, inputs={"v": v, "y_ref_next": ref}, params=params, engine=e, bound=1e4)
+            for e in ("numpy", "compiled")}
     a, c = runs["numpy"], runs["compiled"]
     assert not a.diverged.any() and np.array_equal(a.diverged, c.diverged)
     assert np.array_equal(a.x, c.x)
