@@ -1,10 +1,10 @@
 """One module per study: the paper's plants, parameters, figures and tables.
 
-Each study module defines ``INFO`` (a :class:`ctrl_analysis.report.StudyInfo`) and
+Each study module defines ``INFO`` (a :class:`ctrl_analysis.reporting.report.StudyInfo`) and
 ``run(ctx, params=None) -> StudyResult``: ``ctx`` the output folder, runs, seed and ``--quick`` from the
-CLI (:class:`ctrl_analysis.report.StudyContext`), ``params`` an optional dict of overrides of the study's
+CLI (:class:`ctrl_analysis.reporting.report.StudyContext`), ``params`` an optional dict of overrides of the study's
 settings, ``{prefix: parameter object or {field: value}}`` under the prefixes of its results.json names
-(:func:`ctrl_analysis.study.study_params`; ``None``: the study's chosen values, what the CLI runs). The
+(:func:`ctrl_analysis.reporting.study.study_params`; ``None``: the study's chosen values, what the CLI runs). The
 CLI finds them through :data:`STUDIES`.
 """
 

@@ -56,7 +56,7 @@ def de_example1(seed: int, dt: float, n: int) -> tuple:
     tuple
         ``x1, x2, x2'`` (arrays, shape (n,)) and ``L = max |x2'|`` over every step of the record.
     """
-    from ctrl_analysis.loop import Loop, place
+    from ctrl_analysis.engine.loop import Loop, place
 
     from .differential_estimator.example1 import draw
     from .differential_estimator.loops import Plant19

@@ -23,7 +23,6 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import argparse
 import dataclasses
-import math
 import sys
 import time
 from pathlib import Path
@@ -145,7 +144,6 @@ def bench_loop(T, repeat, runs=RUNS):
     """
     from _common import round_robin
 
-    from ctrl_analysis import _kernels
 
     p = dataclasses.replace(PAPER, t_end=T)
     n = round(T / p.Ts)

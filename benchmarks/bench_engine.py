@@ -48,7 +48,7 @@ def run(T=2.0, repeat=5, B=1000):
     c = coefficients(loop)
     fn_c, t_compile = compiled_loop()
     xi_c, eta_c = np.ascontiguousarray(noise[:, :, 0].T), np.ascontiguousarray(noise[:, :, 1].T)
-    from ctrl_analysis import _kernels
+    from ctrl_analysis.engine import codegen as _kernels
 
     c0 = _kernels.compile_seconds()
     loop.simulate(2, inputs={"xi": 0.0, "eta": 0.0, "uc": 0.0}, engine="compiled")

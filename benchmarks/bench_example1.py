@@ -8,7 +8,7 @@ integrated with classical RK4. Compared, on the same equations, the same noise a
   samples) accumulated in floats; one run at a time;
 * ``compiled``: the very same function compiled by numba (``njit``, one thread, ``cache=True``);
   its compile time is reported separately;
-* ``engine B = 1, 100, 1000``: :class:`ctrl_analysis.loop.Loop` with the library blocks
+* ``engine B = 1, 100, 1000``: :class:`ctrl_analysis.engine.loop.Loop` with the library blocks
   (:class:`~ctrl_analysis.estimators.differential.DifferentialEstimator` ``(5, 7.0)``,
   :class:`~ctrl_analysis.estimators.eso.ExtendedStateObserver` with Han's fal and the step-size
   gains) and the plant (19) written here as a small kernel-first block (a
@@ -33,11 +33,11 @@ import _common  # noqa: F401  (single-threaded BLAS, repository on sys.path)
 import numpy as np
 from _common import Row, median_time, round_robin
 
-from ctrl_analysis.blocks import ContinuousBlock, signal_names
+from ctrl_analysis.engine.blocks import ContinuousBlock, signal_names
 from ctrl_analysis.engine.kernels import KernelBlock, Kernels, Layout
+from ctrl_analysis.engine.loop import Loop, place
 from ctrl_analysis.estimators.differential import DifferentialEstimator
 from ctrl_analysis.estimators.eso import ExtendedStateObserver
-from ctrl_analysis.loop import Loop, place
 from ctrl_analysis.simulate import draw_noise, rk4_step, run_seeds, uniform_noise
 
 NAME = "Example 1 (10 states, RK4)"
@@ -246,7 +246,7 @@ def run(T=2.0, io_T=0.05, repeat=3, sizes=(1, 100, 1000)):
     c = coefficients(loop)
     rows, notes = [], []
 
-    from ctrl_analysis import _kernels
+    from ctrl_analysis.engine import codegen as _kernels
 
     # float loop, one run at a time (the noise converted to lists once, inside the timing)
     def py(b=0):

@@ -115,7 +115,7 @@ def run(repeat=3, runs=200, float_runs=20, sizes=(1, 100)):
     """
     from _common import Row, round_robin
 
-    from ctrl_analysis import _kernels
+    from ctrl_analysis.engine import codegen as _kernels
 
     seeds = run_seeds(0, runs)
     work = []

@@ -6,7 +6,7 @@ Times, in one process with ``OPENBLAS_NUM_THREADS=1``:
    (:class:`~ctrl_analysis.controllers.fuzzy.FuzzyLookupController`, bilinear) and by direct
    Mamdani inference (:class:`~ctrl_analysis.controllers.fuzzy.FuzzyController`);
 2. the closed loop without filter (cart–pendulum RK4 with 4 substeps, sensor, backward difference,
-   lookup controller) per sample: the engine (:class:`ctrl_analysis.loop.Loop`) with the numpy path
+   lookup controller) per sample: the engine (:class:`ctrl_analysis.engine.loop.Loop`) with the numpy path
    (B = 1, 100) and the compiled path (every block has a kernel: B = 1, 100 = the study's batch, and
    1000) against a straightforward plain-Python float loop of the same equations (one run, same
    noise, same table), and checks that run 0 agrees. The compiled path's one-off compile time
@@ -94,7 +94,7 @@ ENGINES = (("numpy", (1, 100)), ("compiled", (1, 100, 1000)))
 
 def engine_rows(p, a21, seeds, repeat):
     """``{(engine, B): (seconds, ClosedLoopRun)}`` for :data:`ENGINES` and the compile seconds (first call)."""
-    from ctrl_analysis import _kernels
+    from ctrl_analysis.engine import codegen as _kernels
 
     c0 = _kernels.compile_seconds()
     loops.simulate_case(p, a21, seeds[:1], engine="compiled")  # compile (or load from the disk cache) first

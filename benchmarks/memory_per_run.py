@@ -22,7 +22,7 @@ CHILD = """
 import json, resource, sys, tempfile, warnings
 from pathlib import Path
 from analysis import load_study
-from ctrl_analysis.report import StudyContext
+from ctrl_analysis.reporting.report import StudyContext
 name, runs, quick = sys.argv[1], int(sys.argv[2]), sys.argv[3] == "quick"
 study = load_study(name)
 warnings.simplefilter("ignore")

@@ -1,6 +1,6 @@
 """ctrl-analysis: estimators and controllers from five control papers as python-control building blocks.
 
-Here: the block protocol (:mod:`ctrl_analysis.blocks`), :class:`Loop` wiring blocks by signal
+Here: the block protocol (:mod:`ctrl_analysis.engine.blocks`), :class:`Loop` wiring blocks by signal
 names over a batch of Monte Carlo runs, and per-run seeds and noise. The blocks themselves are in
 :mod:`ctrl_analysis.estimators` (and its :mod:`~ctrl_analysis.estimators.kalman`),
 :mod:`ctrl_analysis.controllers`, :mod:`ctrl_analysis.plants` and :mod:`ctrl_analysis.identification`;
@@ -9,7 +9,7 @@ so ``import ctrl_analysis`` (and the command line) does not import them: ``impor
 ctrl_analysis.controllers`` does.
 """
 
-from .blocks import (
+from .engine.blocks import (
     Block,
     ColumnKernels,
     ContinuousBlock,
@@ -19,7 +19,7 @@ from .blocks import (
     StaticGain,
     signal_names,
 )
-from .loop import Loop, LoopResponse, place
+from .engine.loop import Loop, LoopResponse, place
 from .noise import draw_noise, gaussian_noise, run_seeds, uniform_noise
 
 __version__ = "0.1.0"

@@ -11,7 +11,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from .atomic import (
+from .reporting.atomic import (
     LockedError,
     exclusive_lock,
     new_staging,
@@ -19,9 +19,9 @@ from .atomic import (
     remove_tree,
     swap_in,
 )
-from .atomic import _sigint_deferred as sigint_deferred
-from .report import StudyContext, validate_results, write_results_json
-from .report_md import summary_table, write_report_md
+from .reporting.atomic import _sigint_deferred as sigint_deferred
+from .reporting.markdown import summary_table, write_report_md
+from .reporting.report import StudyContext, validate_results, write_results_json
 
 __all__ = ["main"]
 

@@ -9,7 +9,7 @@ Linear regression ``z = H θ + v`` with ``H`` the regression matrix (one row ``h
   SVD-based solver), warns with :class:`IdentifiabilityWarning` when the problem is ill-conditioned
   and, in ``strict`` mode, raises when it is rank-deficient.
 * :class:`RecursiveLeastSquaresBlock`: the recursive form (forgetting, box projection), a discrete
-  block for a :class:`~ctrl_analysis.loop.Loop`, fed by :class:`ArxRegressor`'s delayed signals;
+  block for a :class:`~ctrl_analysis.engine.loop.Loop`, fed by :class:`ArxRegressor`'s delayed signals;
   :class:`RecursiveLeastSquares`: its equations as an estimator object (``step(h, z)``, ``run(H, z)``).
 """
 
@@ -22,7 +22,7 @@ import numpy as np
 
 from . import identification_kernels as kern
 from ._validate import check_bool, check_finite, check_int, check_positive, check_vector
-from .blocks import DiscreteBlock, signal_names
+from .engine.blocks import DiscreteBlock, signal_names
 from .engine.kernels import KernelBlock, Kernels
 
 __all__ = [
@@ -252,7 +252,7 @@ class RecursiveLeastSquaresBlock(DiscreteBlock):
     The gain is called ``D`` and the covariance ``R`` in the characteristic-model literature;
     here (state names, and :class:`RecursiveLeastSquares`' attributes) they are ``K`` and ``P``.
 
-    The block protocol (batched, for :class:`ctrl_analysis.loop.Loop` and
+    The block protocol (batched, for :class:`ctrl_analysis.engine.loop.Loop` and
     ``control.interconnect``): inputs ``z, h[0..p-1]``; states ``theta[0..p-1]`` and the
     covariance row by row ``P[i][j]``; outputs ``theta[0..p-1]`` = ``θ(k)`` *after* the update
     with the current sample (direct feedthrough, as :class:`~ctrl_analysis.estimators.lowpass.DiscreteLowPass`),
@@ -402,9 +402,9 @@ class RecursiveLeastSquaresBlock(DiscreteBlock):
 
         Returns
         -------
-        ctrl_analysis._kernels.BlockKernel
+        ctrl_analysis.engine.codegen.BlockKernel
         """
-        from ._kernels import BlockKernel
+        from .engine.kernels import BlockKernel
 
         output = kern.rls_output if self.feedthrough else kern.rls_hold_output
         return BlockKernel(output=output, params=self._p, update=kern.rls_update)
@@ -417,7 +417,7 @@ class RecursiveLeastSquares:
     """Recursive least squares as an estimator object that keeps its state: :meth:`step` one sample, :meth:`run` a record.
 
     The equations are :class:`RecursiveLeastSquaresBlock`'s, stepped by its own per-sample code:
-    this object holds a block and its state ``[θ, vec R]``. In a :class:`~ctrl_analysis.loop.Loop`,
+    this object holds a block and its state ``[θ, vec R]``. In a :class:`~ctrl_analysis.engine.loop.Loop`,
     place the block.
 
     Parameters

@@ -14,8 +14,7 @@ state ``[θ (n), R row by row (n·n)]``; input ``[z, h (n)]``.
 
 from __future__ import annotations
 
-from ._kernels import jitable
-from .engine.kernels import Layout
+from .engine.kernels import Layout, jitable
 
 __all__: list = []  # kernels: reached through the blocks' kernel() methods
 

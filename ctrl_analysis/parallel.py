@@ -23,7 +23,7 @@ running Dask scheduler (``"tcp://host:8786"``); a ``distributed.Client`` is used
 
 :func:`use_cluster` connects to a cluster once and makes it process-wide: while it is active every
 :func:`map_chunks` call without a ``scheduler`` (or with the one the cluster was made from) and every batch of
-:meth:`Loop.simulate <ctrl_analysis.loop.Loop.simulate>` (two runs or more, no callable input, a
+:meth:`Loop.simulate <ctrl_analysis.engine.loop.Loop.simulate>` (two runs or more, no callable input, a
 picklable loop) runs its chunks there, with the same numbers as on one process. The command line's
 ``--scheduler`` does this, so every study's Monte Carlo batches and sweeps go to the cluster without
 the study knowing.

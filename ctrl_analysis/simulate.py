@@ -19,7 +19,6 @@ Conventions
 
 from __future__ import annotations
 
-import os
 from collections.abc import Callable
 
 import numpy as np
@@ -29,7 +28,6 @@ from ._validate import (
     check_finite,
     check_in,
     check_int,
-    check_nonnegative,
     check_positive,
 )
 from .engine.integrators import (
@@ -39,9 +37,10 @@ from .engine.integrators import (
     euler_step,
     rk4_step,
 )
-from .ivp import simulate_ivp
+from .engine.ivp import simulate_ivp
+from .engine.memory import CHUNK_BYTES, RESULT_BYTES, check_result_memory, chunk_bounds  # noqa: F401
+from .engine.simresult import SimResult, _check_bound, _prepare
 from .noise import _check_seeds, draw_noise, gaussian_noise, run_seeds, uniform_noise  # noqa: F401 (public API)
-from .simresult import SimResult, _check_bound, _prepare
 
 __all__ = [
     "CHUNK_BYTES",
@@ -64,70 +63,8 @@ __all__ = [
 
 
 # ----------------------------------------------------------------------------------------------
-# Memory: chunks of a batch
+# The older runners (a Loop with blocks is the engine's way; these take plain functions)
 # ----------------------------------------------------------------------------------------------
-
-def _physical_memory() -> int:
-    try:
-        return int(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES"))
-    except (ValueError, OSError, AttributeError):  # pragma: no cover - non-POSIX
-        return 8 * 2**30
-
-
-#: Working memory (bytes) one chunk of a batch may use; larger batches are stepped in chunks.
-CHUNK_BYTES = 256 * 2**20
-#: Largest stored result (bytes) a runner allocates: half the machine's physical memory.
-RESULT_BYTES = _physical_memory() // 2
-
-
-def chunk_bounds(runs: int, size: int) -> list[tuple[int, int]]:
-    """``[(lo, hi), ...]`` splitting ``range(runs)`` into consecutive chunks of at most ``size`` runs.
-
-    Parameters
-    ----------
-    runs : int
-        Batch size (>= 1).
-    size : int
-        Largest chunk (>= 1).
-
-    Returns
-    -------
-    list of tuple of int
-    """
-    runs = check_int("runs", runs, minimum=1)
-    size = check_int("size", size, minimum=1)
-    return [(lo, min(lo + size, runs)) for lo in range(0, runs, size)]
-
-
-def check_result_memory(nbytes: float, limit: float, where: str) -> None:
-    """Raise a :class:`MemoryError` that says what to do when a result would not fit in ``limit`` bytes.
-
-    Parameters
-    ----------
-    nbytes : float
-        Bytes the result would take (>= 0).
-    limit : float
-        Bytes allowed (> 0).
-    where : str
-        What would store them, for the message.
-
-    Returns
-    -------
-    None
-
-    Raises
-    ------
-    MemoryError
-        If ``nbytes > limit``.
-    """
-    nbytes = check_nonnegative("nbytes", nbytes, scalar=True)
-    limit = check_positive("limit", limit, scalar=True)
-    if nbytes > limit:
-        raise MemoryError(
-            f"{where} would store {nbytes / 2**30:.1f} GiB of trajectories (limit {limit / 2**30:.1f} GiB, half "
-            f"the physical memory): pass store_states=False and keep fewer signals, or split the runs with "
-            f"ctrl_analysis.parallel.map_chunks and reduce each chunk to the quantities you need")
-
 
 def _store(buf, k, value, n_rows, B):
     """Store ``value`` (reshaped to ``(B, -1)``) as row ``k`` of ``buf``, allocating it on first use."""

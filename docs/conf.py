@@ -88,7 +88,7 @@ def _skip_missing_modules(app, docname, source):
 #: literal markup that fixes them at build time. Remove an entry once the docstring is fixed at
 #: its source (``|a| / |b|`` reads as a substitution reference in reStructuredText).
 DOCSTRING_FIXES = {
-    "ctrl_analysis.report.relative_error": [("|value - paper| / |paper|", "``|value - paper| / |paper|``")],
+    "ctrl_analysis.reporting.report.relative_error": [("|value - paper| / |paper|", "``|value - paper| / |paper|``")],
 }
 
 

@@ -8,10 +8,10 @@ the ranges, two figures. See CONTRIBUTING.md, "Add a study".
 
 from __future__ import annotations
 
-from ctrl_analysis import sensitivity
-from ctrl_analysis.report import StudyContext, StudyInfo, StudyResult
+from ctrl_analysis.reporting import sensitivity
+from ctrl_analysis.reporting.report import StudyContext, StudyInfo, StudyResult
+from ctrl_analysis.reporting.study import record_parameters, study_params
 from ctrl_analysis.simulate import run_seeds
-from ctrl_analysis.study import record_parameters, study_params
 
 from . import figures, loops, quantities
 from .paper import EXAMPLE, QUICK
@@ -34,7 +34,7 @@ def run(ctx: StudyContext, params=None) -> StudyResult:
     ctx : StudyContext
         Output folder, runs, seed and ``quick`` from the CLI (or a test).
     params : dict, optional
-        Overrides of the study's settings (:func:`ctrl_analysis.study.study_params`): ``{"ex": Example}``
+        Overrides of the study's settings (:func:`ctrl_analysis.reporting.study.study_params`): ``{"ex": Example}``
         or ``{"ex": {field: value}}``; default :data:`~.paper.EXAMPLE`, or :data:`~.paper.QUICK`
         with ``ctx.quick``.
 

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from ctrl_analysis.report import new_figure
+from ctrl_analysis.reporting.report import new_figure
 
 __all__ = ["plot_step"]
 

@@ -8,7 +8,7 @@
 
 The plant is a first-order lag, which the library already has as the order-1
 :class:`~ctrl_analysis.estimators.lowpass.LowPassFilter` (``ω/(s + ω)`` with ``ω = 1/τ``): reuse,
-do not re-code. The sum is a :class:`~ctrl_analysis.blocks.StaticGain` (so the loop can compile and go to
+do not re-code. The sum is a :class:`~ctrl_analysis.engine.blocks.StaticGain` (so the loop can compile and go to
 worker processes; a lambda can do neither).
 """
 
@@ -16,9 +16,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ctrl_analysis.blocks import StaticGain
+from ctrl_analysis.engine.blocks import StaticGain
+from ctrl_analysis.engine.loop import Loop, LoopResponse, place
 from ctrl_analysis.estimators.lowpass import LowPassFilter
-from ctrl_analysis.loop import Loop, LoopResponse, place
 from ctrl_analysis.simulate import draw_noise, gaussian_noise
 
 from .paper import Example

@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from ctrl_analysis.study import Claim, fixed, printed, reconstructed, span
+from ctrl_analysis.reporting.study import Claim, fixed, printed, reconstructed, span
 
 __all__ = ["CLAIMS", "EXAMPLE", "QUICK", "Example"]
 

@@ -7,7 +7,7 @@ from the computed numbers, never typed.
 from __future__ import annotations
 
 from ctrl_analysis.metrics import mean_std, rmse
-from ctrl_analysis.report import StudyResult
+from ctrl_analysis.reporting.report import StudyResult
 
 from .loops import steady_window
 from .paper import CLAIMS, Example

@@ -1,7 +1,7 @@
 """Study `ckf`: Gong & Wu 2010, characteristic-model-based Kalman filter with golden-section adaptive control.
 
 Three closed loops (no filter, digital LPF, CKF) on a reconstructed high-order plant, run as one
-batch through :class:`ctrl_analysis.loop.Loop` (:mod:`.loops`), with the characteristic model identified
+batch through :class:`ctrl_analysis.engine.loop.Loop` (:mod:`.loops`), with the characteristic model identified
 online; Table 1 and the paper's claims checked with Monte Carlo numbers, beside the frozen-Φ ablation
 (the identification held at θ0), the identification signal, the projection, the full-order Kalman filter
 and a second plant (:mod:`.quantities`, :mod:`.beyond`); every claim re-judged across the plausible range of
@@ -14,9 +14,9 @@ from __future__ import annotations
 import dataclasses
 import functools
 
-from ctrl_analysis import sensitivity
-from ctrl_analysis.report import StudyContext, StudyInfo, StudyResult
-from ctrl_analysis.study import record_parameters, study_params
+from ctrl_analysis.reporting import sensitivity
+from ctrl_analysis.reporting.report import StudyContext, StudyInfo, StudyResult
+from ctrl_analysis.reporting.study import record_parameters, study_params
 
 from . import beyond, figures
 from . import quantities as qty
@@ -91,7 +91,7 @@ def run(ctx: StudyContext, params=None) -> StudyResult:
     """Reproduce Table 1 and Fig. 2-9 with the live identification, then the ablation and the studies beyond
     the paper (Fig. 10-12), then the sensitivity of every claim to every reconstruction.
 
-    ``params`` overrides the settings (:func:`ctrl_analysis.study.study_params`): ``{"": Paper}`` (the paper's
+    ``params`` overrides the settings (:func:`ctrl_analysis.reporting.study.study_params`): ``{"": Paper}`` (the paper's
     values and reconstructions, :data:`.paper.PAPER`) and ``{"claims": Readings}`` (:data:`.paper.READINGS`),
     each an object or a dict of its fields; ``--quick`` then shortens the horizon and the option and sweep runs.
     """

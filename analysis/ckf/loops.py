@@ -1,4 +1,4 @@
-"""The `ckf` closed loops, built from library blocks through :class:`ctrl_analysis.loop.Loop`.
+"""The `ckf` closed loops, built from library blocks through :class:`ctrl_analysis.engine.loop.Loop`.
 
 One loop holds every case side by side on the batch axis: plant, measurement, the digital LPF,
 the CKF, the identification (regressor + RLS) and the golden-section controller all run in every
@@ -13,13 +13,13 @@ from __future__ import annotations
 import numpy as np
 
 from ctrl_analysis._validate import check_finite
-from ctrl_analysis.blocks import StaticBlock, StaticGain
 from ctrl_analysis.controllers.golden_section import GoldenSectionController
+from ctrl_analysis.engine.blocks import StaticBlock, StaticGain
 from ctrl_analysis.engine.kernels import KernelBlock, Kernels, Layout
+from ctrl_analysis.engine.loop import Loop, place
 from ctrl_analysis.estimators.kalman import CharacteristicKalmanFilter
 from ctrl_analysis.estimators.lowpass import LowPassFilter
 from ctrl_analysis.identification import ArxRegressor, RecursiveLeastSquaresBlock
-from ctrl_analysis.loop import Loop, place
 from ctrl_analysis.plants import DiscreteLTI
 from ctrl_analysis.simulate import draw_noise, gaussian_noise, run_seeds
 

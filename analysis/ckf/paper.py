@@ -5,7 +5,14 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ctrl_analysis.controllers.golden_section import GOLDEN_L1, GOLDEN_L2
-from ctrl_analysis.study import Claim, choices, fixed, printed, reconstructed, span
+from ctrl_analysis.reporting.study import (
+    Claim,
+    choices,
+    fixed,
+    printed,
+    reconstructed,
+    span,
+)
 
 __all__ = ["CLAIMS", "PAPER", "READINGS", "CKFStudy", "Readings", "frozen"]
 

@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from ctrl_analysis.engine.loop import Loop, place
 from ctrl_analysis.estimators.kalman import (
     CharacteristicKalmanFilter,
     LinearKalmanFilter,
 )
 from ctrl_analysis.identification import batch_least_squares
-from ctrl_analysis.loop import Loop, place
 from ctrl_analysis.metrics import mean_std
 from ctrl_analysis.plants import DiscreteLTI
 

@@ -13,10 +13,10 @@ from dataclasses import replace
 import numpy as np
 
 from ctrl_analysis.estimators.differential import DifferentialEstimator
-from ctrl_analysis.report import StudyContext, StudyInfo, StudyResult
+from ctrl_analysis.reporting import sensitivity
+from ctrl_analysis.reporting.report import StudyContext, StudyInfo, StudyResult
+from ctrl_analysis.reporting.study import record_parameters, study_params
 from ctrl_analysis.simulate import run_seeds
-from ctrl_analysis import sensitivity
-from ctrl_analysis.study import record_parameters, study_params
 
 from . import claims, example1, example2, figures, linear_checks
 from .paper import EX1, EX2, LINEAR, READINGS
@@ -43,7 +43,7 @@ MISSING = [
 def run(ctx: StudyContext, params=None) -> StudyResult:
     """Reproduce the study: linear part, Example 1 (+ fair comparison), Example 2 (+ robustness), claims, sensitivity.
 
-    ``params`` overrides the settings (:func:`ctrl_analysis.study.study_params`): ``"linear"``, ``"ex1"``, ``"ex2"``,
+    ``params`` overrides the settings (:func:`ctrl_analysis.reporting.study.study_params`): ``"linear"``, ``"ex1"``, ``"ex2"``,
     ``"claims"`` (defaults :data:`.paper.LINEAR`, :data:`.paper.EX1`, :data:`.paper.EX2`, :data:`.paper.READINGS`;
     with ``--quick`` shorter Examples 1-2 and a coarser Example 2 grid), each an object or a dict of its fields.
     """

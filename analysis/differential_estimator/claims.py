@@ -1,8 +1,8 @@
 """The paper's claims (:data:`.paper.CLAIMS`) judged on computed quantities, and the sensitivity evaluation.
 
 :func:`judge` records every claim from the quantities already in a
-:class:`~ctrl_analysis.report.StudyResult`; the main run and :func:`evaluate` (one evaluation of
-the sensitivity sweep, :mod:`ctrl_analysis.sensitivity`) both call it, and both record the
+:class:`~ctrl_analysis.reporting.report.StudyResult`; the main run and :func:`evaluate` (one evaluation of
+the sensitivity sweep, :mod:`ctrl_analysis.reporting.sensitivity`) both call it, and both record the
 quantities with the same functions of :mod:`.linear_checks`, :mod:`.example1` and :mod:`.example2`,
 so a verdict is computed one way only.
 """
@@ -14,7 +14,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ctrl_analysis.report import StudyResult
+from ctrl_analysis.reporting.report import StudyResult
 from ctrl_analysis.simulate import run_seeds
 
 from . import example1, example2, linear_checks
@@ -207,7 +207,7 @@ def evaluate(params: dict, *, runs: int, seed: int, a_preset: float, grid: dict 
     """One evaluation of the sensitivity sweep: the claims and primary cells at ``params``.
 
     ``params = {"linear": Linear, "ex1": Example1, "ex2": Example2, "claims": Readings}`` (the prefixes of
-    :func:`ctrl_analysis.study.record_parameters`). Example 1 runs ``runs`` Monte Carlo runs on the
+    :func:`ctrl_analysis.reporting.study.record_parameters`). Example 1 runs ``runs`` Monte Carlo runs on the
     seeds of the main run (common random numbers); Example 2 ``runs`` runs and the grid ``grid``
     (default :data:`EVAL_GRID`) with the stable preset's ``a`` fixed at ``a_preset``. Each part is
     computed once per distinct parameter object (cached), so a reconstruction of Example 2 does not

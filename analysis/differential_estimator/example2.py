@@ -16,7 +16,7 @@ from ctrl_analysis.estimators.differential import DifferentialEstimator
 from ctrl_analysis.estimators.lowpass import LowPassFilter
 from ctrl_analysis.estimators.tracking import softened_setpoint
 from ctrl_analysis.metrics import mean_abs_error, rmse
-from ctrl_analysis.report import StudyResult
+from ctrl_analysis.reporting.report import StudyResult
 from ctrl_analysis.simulate import draw_noise, uniform_noise
 
 from . import loops

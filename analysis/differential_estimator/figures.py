@@ -6,7 +6,7 @@ import control as ct
 import numpy as np
 
 from ctrl_analysis.estimators.differential import DifferentialEstimator
-from ctrl_analysis.report import new_figure
+from ctrl_analysis.reporting.report import new_figure
 
 from .linear_checks import min_stable_gain, peak
 

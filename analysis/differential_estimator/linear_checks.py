@@ -1,6 +1,6 @@
 """Linear part of the study: eq. (5)/(9)/(12) checks, Fig. 2's low-pass claim, the design table, controller (18).
 
-Each function records its quantities and findings into a :class:`~ctrl_analysis.report.StudyResult`
+Each function records its quantities and findings into a :class:`~ctrl_analysis.reporting.report.StudyResult`
 and returns the data the figures need; finding texts are generated from the computed numbers.
 """
 
@@ -16,7 +16,7 @@ from scipy.optimize import brentq
 from ctrl_analysis.controllers.differential_feedback import hurwitz_roots
 from ctrl_analysis.estimators.differential import DifferentialEstimator
 from ctrl_analysis.metrics import resonance_peak
-from ctrl_analysis.report import StudyResult
+from ctrl_analysis.reporting.report import StudyResult
 from ctrl_analysis.symbolic import differential as sym
 
 from .paper import Linear, applied_gains, printed_eq5_coefficients, printed_eq9_gain

@@ -1,4 +1,4 @@
-"""The loops of Examples 1 and 2, built from library blocks through :class:`~ctrl_analysis.loop.Loop`.
+"""The loops of Examples 1 and 2, built from library blocks through :class:`~ctrl_analysis.engine.loop.Loop`.
 
 The plants (19) and (20) are study blocks (they are the paper's); Σ, Han's ESO, the low-pass
 softener and the differential feedback (18) come from the library; the sensor is a static sum.
@@ -17,16 +17,26 @@ import math
 import control as ct
 import numpy as np
 
-from ctrl_analysis._kernels import BlockKernel, copy_output
 from ctrl_analysis._validate import check_finite
-from ctrl_analysis.blocks import ContinuousBlock, StaticBlock, StaticGain, signal_names
 from ctrl_analysis.controllers.differential_feedback import (
     HighOrderDifferentialFeedback,
 )
-from ctrl_analysis.engine.kernels import KernelBlock, Kernels, Layout
+from ctrl_analysis.engine.blocks import (
+    ContinuousBlock,
+    StaticBlock,
+    StaticGain,
+    signal_names,
+)
+from ctrl_analysis.engine.kernels import (
+    BlockKernel,
+    KernelBlock,
+    Kernels,
+    Layout,
+    copy_output,
+)
+from ctrl_analysis.engine.loop import Loop, place
 from ctrl_analysis.estimators.differential import DifferentialEstimator
 from ctrl_analysis.estimators.eso import ExtendedStateObserver
-from ctrl_analysis.loop import Loop, place
 
 from .paper import Example1, Example2, han_eso_gains
 
@@ -93,7 +103,7 @@ class Plant19(ContinuousBlock):
         return dX
 
     def kernel(self) -> BlockKernel:
-        """The per-run kernel (:mod:`ctrl_analysis._kernels`): output = state, ``rhs`` = :func:`plant19_rhs`."""
+        """The per-run kernel (:mod:`ctrl_analysis.engine.codegen`): output = state, ``rhs`` = :func:`plant19_rhs`."""
         return BlockKernel(output=copy_output, params=self.p, rhs=plant19_rhs)
 
 
@@ -246,7 +256,7 @@ def _reading_gain(est: DifferentialEstimator, reading: str) -> np.ndarray:
 
 
 def example2_params(p: Example2, a, b, *, sigma_reading=None) -> dict:
-    """Per-run values of :func:`example2_loop`'s blocks for :meth:`Loop.simulate <ctrl_analysis.loop.Loop.simulate>`.
+    """Per-run values of :func:`example2_loop`'s blocks for :meth:`Loop.simulate <ctrl_analysis.engine.loop.Loop.simulate>`.
 
     Parameters
     ----------

@@ -2,8 +2,8 @@
 
 :data:`LINEAR` holds the linear part (eq. 5-9, Fig. 1-2, controller (18)), :data:`EX1` Example 1
 (eq. 19, Fig. 3-4) and :data:`EX2` Example 2 (eq. 20, Fig. 5). Each field is declared with
-:func:`~ctrl_analysis.study.printed` (where the paper prints it) or
-:func:`~ctrl_analysis.study.reconstructed` (why this value); quick settings are
+:func:`~ctrl_analysis.reporting.study.printed` (where the paper prints it) or
+:func:`~ctrl_analysis.reporting.study.reconstructed` (why this value); quick settings are
 ``dataclasses.replace(EX1, T=2.0)``, never module globals.
 """
 
@@ -13,7 +13,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ctrl_analysis.study import Claim, choices, fixed, printed, reconstructed, span
+from ctrl_analysis.reporting.study import (
+    Claim,
+    choices,
+    fixed,
+    printed,
+    reconstructed,
+    span,
+)
 
 __all__ = ["Linear", "Example1", "Example2", "Readings", "LINEAR", "EX1", "EX2", "READINGS", "CLAIMS", "han_eso_gains", "applied_gains",
            "printed_eq9_gain", "printed_eq5_coefficients", "HAN_2008", "setpoint"]

@@ -1,7 +1,7 @@
 """Study `ikf-mfac`: Lu & Hou 2022, model-free adaptive control with disturbance rejection based on a modified Kalman filter (IKF-MFAC).
 
 The paper's values and reconstructions are in :mod:`.paper`, the plants in :mod:`.plants`, the
-closed loops (library blocks wired by :class:`~ctrl_analysis.loop.Loop`) in :mod:`.loops`, the
+closed loops (library blocks wired by :class:`~ctrl_analysis.engine.loop.Loop`) in :mod:`.loops`, the
 Monte Carlo quantities and sweeps in :mod:`.quantities`, Table 1's cells and the paper's claims judged
 in :mod:`.claims`, the study as a function of its parameters for the sensitivity sweep in
 :mod:`.evaluate`, the findings in :mod:`.findings` and the figures in :mod:`.figures`.
@@ -11,10 +11,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ctrl_analysis import sensitivity
-from ctrl_analysis.report import StudyContext, StudyInfo, StudyResult
+from ctrl_analysis.reporting import sensitivity
+from ctrl_analysis.reporting.report import StudyContext, StudyInfo, StudyResult
+from ctrl_analysis.reporting.study import record_parameters, study_params
 from ctrl_analysis.simulate import run_seeds
-from ctrl_analysis.study import record_parameters, study_params
 
 from . import figures as F
 from .claims import judge_claims, record_fig2, record_noise_margin, record_table1
@@ -61,7 +61,7 @@ TD_COUNTS = {"ex1": (1, 2, 4, 8, 12, 16, 17, 18, 19, 20, 24, 32, 48, 64),
 def run(ctx: StudyContext, params=None) -> StudyResult:
     """Reproduce Table 1 and Fig. 2-6 by Monte Carlo, judge the claims, sweep the reconstructions and beyond the paper.
 
-    ``params`` overrides the settings (:func:`ctrl_analysis.study.study_params`): ``"ex1"``, ``"ex2"`` (the examples,
+    ``params`` overrides the settings (:func:`ctrl_analysis.reporting.study.study_params`): ``"ex1"``, ``"ex2"`` (the examples,
     :data:`.paper.EX1`, :data:`.paper.EX2`) and ``"fig2"`` (:data:`.paper.FIG2`), each an object or a dict of its fields.
     """
     result = StudyResult(INFO)

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ctrl_analysis.metrics import mean_std
-from ctrl_analysis.report import StudyInfo, StudyResult
+from ctrl_analysis.reporting.report import StudyInfo, StudyResult
 
 from .claims import (
     fig2_measures,

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ctrl_analysis.report import new_figure
+from ctrl_analysis.reporting.report import new_figure
 
 from .paper import SCHEME_LABELS, SCHEMES, TABLE1
 

@@ -7,16 +7,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ctrl_analysis.blocks import StaticGain
 from ctrl_analysis.controllers.mfac import (
     CFDLLaw,
     DecreasingGainLaw,
     PPDEstimator,
     mfac_controller,
 )
+from ctrl_analysis.engine.blocks import StaticGain
+from ctrl_analysis.engine.loop import Loop, place
 from ctrl_analysis.estimators.kalman import ImprovedKalmanFilter
 from ctrl_analysis.estimators.tracking import TrackingDifferentiator
-from ctrl_analysis.loop import Loop, place
 from ctrl_analysis.simulate import draw_noise, gaussian_noise
 
 from .paper import Example
@@ -43,7 +43,7 @@ def run_params(ex: Example, scheme: str) -> tuple[Example, dict]:
     """``ex`` with one value of each parameter given per run, and the per-run values for ``simulate(params=...)``.
 
     A sweep sets ρ, λ, Q or R of ``ex`` to one value per run (a 1-D array); the loop is built with
-    the first and the values go to :meth:`Loop.simulate <ctrl_analysis.loop.Loop.simulate>` (Q and
+    the first and the values go to :meth:`Loop.simulate <ctrl_analysis.engine.loop.Loop.simulate>` (Q and
     R only where the scheme has the IKF). Every batch therefore runs the same compiled loop.
 
     Parameters
@@ -122,7 +122,7 @@ class SchemeRuns:
 def run_scheme(ex: Example, scheme: str, v: np.ndarray, engine: str = "auto") -> SchemeRuns:
     """Run ``scheme`` for every column of the noise ``v`` (shape ``(N, B)``, ``v[k−1] = v(k)``).
 
-    ``engine`` is :meth:`Loop.simulate <ctrl_analysis.loop.Loop.simulate>`'s (``"auto"``: compiled,
+    ``engine`` is :meth:`Loop.simulate <ctrl_analysis.engine.loop.Loop.simulate>`'s (``"auto"``: compiled,
     every block has a kernel; ``"numpy"``: the blocks' batched methods, the same numbers).
 
     The engine starts at ``k = ex.k_start`` with ``y(k_start)`` from the plant; the given

@@ -4,7 +4,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ctrl_analysis.study import Claim, choices, fixed, printed, reconstructed, span
+from ctrl_analysis.reporting.study import (
+    Claim,
+    choices,
+    fixed,
+    printed,
+    reconstructed,
+    span,
+)
 
 __all__ = ["CLAIMS", "EX1", "EX2", "FIG2", "SCHEMES", "SCHEME_LABELS", "TABLE1", "Example", "Example2", "Fig2Sweep"]
 

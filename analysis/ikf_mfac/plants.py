@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from ctrl_analysis.blocks import DiscreteBlock
+from ctrl_analysis.engine.blocks import DiscreteBlock
 from ctrl_analysis.engine.kernels import KernelBlock, Kernels, Layout
 
 PLANT = Layout("switch_k")

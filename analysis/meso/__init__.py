@@ -14,10 +14,10 @@ from __future__ import annotations
 import warnings
 from dataclasses import asdict
 
-from ctrl_analysis import sensitivity
-from ctrl_analysis.report import StudyContext, StudyInfo, StudyResult
+from ctrl_analysis.reporting import sensitivity
+from ctrl_analysis.reporting.report import StudyContext, StudyInfo, StudyResult
+from ctrl_analysis.reporting.study import record_parameters, study_params
 from ctrl_analysis.simulate import run_seeds
-from ctrl_analysis.study import record_parameters, study_params
 
 from . import claims, figures, findings, linear, quantities
 from .loops import pick, simulate_situation, situation_rows
@@ -37,7 +37,7 @@ INFO = StudyInfo(
 def run(ctx: StudyContext, params=None) -> StudyResult:
     """Reproduce the linear analysis, situations 1 and 2 (Tables 2-3, Fig. 3-6), the claims and the findings.
 
-    ``params`` overrides the settings (:func:`ctrl_analysis.study.study_params`): ``{"analysis": Analysis}`` or a
+    ``params`` overrides the settings (:func:`ctrl_analysis.reporting.study.study_params`): ``{"analysis": Analysis}`` or a
     dict of its fields (default :data:`.paper.ANALYSIS`, or :data:`.paper.QUICK` with --quick: runs, horizons,
     grids, tolerances). The paper's values and reconstructions (:data:`.paper.PAPER`, the situations, the readings)
     are not run-time parameters of this study: its modules read them directly, and the sensitivity sweep varies
@@ -115,7 +115,7 @@ def _sensitivity(ctx, result, sims, an, sweep_seeds, horizons) -> None:
 
 
 def _varied() -> list:
-    from ctrl_analysis.study import reconstructions_of
+    from ctrl_analysis.reporting.study import reconstructions_of
 
     return [("claims." if p is READINGS else "") + r["name"] for p in (PAPER, READINGS)
             for r in reconstructions_of(p) if r.get("plausible") is not None and r["plausible"].varied]

@@ -15,12 +15,21 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ctrl_analysis.report import StudyInfo, StudyResult
-from ctrl_analysis.study import reconstructions_of
+from ctrl_analysis.reporting.report import StudyInfo, StudyResult
+from ctrl_analysis.reporting.study import reconstructions_of
 
 from . import linear, quantities
 from .loops import Row, SituationRun, simulate_situation
-from .paper import CLAIMS, METRICS, PAPER, READINGS, SITUATIONS, Analysis, Paper, Readings
+from .paper import (
+    CLAIMS,
+    METRICS,
+    PAPER,
+    READINGS,
+    SITUATIONS,
+    Analysis,
+    Paper,
+    Readings,
+)
 
 __all__ = ["SweepSettings", "base_rows", "evaluate", "judge", "record", "sweep_rows", "view"]
 

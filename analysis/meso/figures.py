@@ -9,7 +9,7 @@ from __future__ import annotations
 import control as ct
 import numpy as np
 
-from ctrl_analysis.report import new_figure
+from ctrl_analysis.reporting.report import new_figure
 
 from .identification import equivalent_theta
 from .loops import SituationRun, x3_true

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ctrl_analysis.report import StudyResult
+from ctrl_analysis.reporting.report import StudyResult
 
 from .identification import equivalent_theta
 from .loops import SituationRun, pick

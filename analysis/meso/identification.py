@@ -24,10 +24,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ctrl_analysis._kernels import jitable
 from ctrl_analysis._validate import check_finite, check_in, check_int, check_positive
-from ctrl_analysis.blocks import DiscreteBlock, signal_names
-from ctrl_analysis.engine.kernels import KernelBlock, Kernels, Layout
+from ctrl_analysis.engine.blocks import DiscreteBlock, signal_names
+from ctrl_analysis.engine.kernels import KernelBlock, Kernels, Layout, jitable
 from ctrl_analysis.identification import batch_least_squares, identifiability
 
 __all__ = [
@@ -290,7 +289,7 @@ class BatchIdentification(KernelBlock, DiscreteBlock):
     :func:`gram_update`; the batched methods are derived from it). The batch-end solve
     (:meth:`identify`: SVD-based least squares, once per ``N`` samples, each run with its own
     variant and identifiability gate) is applied to the block's state by the caller between
-    batches: the loop is stepped one batch per :meth:`~ctrl_analysis.loop.Loop.simulate` call and
+    batches: the loop is stepped one batch per :meth:`~ctrl_analysis.engine.loop.Loop.simulate` call and
     :meth:`identify` is applied to the final state before the next call (see
     :func:`analysis.meso.loops.simulate_situation`).
 

@@ -1,6 +1,6 @@
 """The closed loops of §4 built from blocks: plant (27), (M)ESO (29), PD law (30)/(12), LSM identification, W(s).
 
-One :class:`~ctrl_analysis.loop.Loop` per situation carries every configuration on the batch axis
+One :class:`~ctrl_analysis.engine.loop.Loop` per situation carries every configuration on the batch axis
 (ESO / MESO, identification variant, noise seed, ε, plant gain, identifiability threshold, W(s)
 bypassed or not). It is stepped one identification batch (N samples) at a time, so memory stays
 bounded over 210 s; after each chunk the identification's batch-end solve is applied to the final
@@ -8,7 +8,7 @@ states (:meth:`~.identification.BatchIdentification.identify`), and the table su
 identification records and the trajectories of a few runs kept for the figures are taken from the
 named signals.
 
-Every block has a compiled kernel, so :meth:`Loop.simulate <ctrl_analysis.loop.Loop.simulate>`
+Every block has a compiled kernel, so :meth:`Loop.simulate <ctrl_analysis.engine.loop.Loop.simulate>`
 runs the whole loop as one numba function; ``CTRL_ANALYSIS_ENGINE=numpy`` gives the same results bit
 for bit. The blocks are built for one configuration; what differs per run (the plant gain b, the
 observer's ε, the W(s) bypass flag) is given to the simulation (:func:`run_params`), and the
@@ -21,14 +21,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ctrl_analysis._kernels import eso_rhs, kernel_of
 from ctrl_analysis._validate import check_bool, check_finite, check_positive
-from ctrl_analysis.blocks import ContinuousBlock, DiscreteBlock, signal_names
 from ctrl_analysis.controllers.pd import PDFeedforward
+from ctrl_analysis.engine.blocks import ContinuousBlock, DiscreteBlock, signal_names
+from ctrl_analysis.engine.codegen import kernel_of
 from ctrl_analysis.engine.kernels import KernelBlock, Kernels, Layout, copy_output
-from ctrl_analysis.estimators.eso import ExtendedStateObserver
+from ctrl_analysis.engine.loop import Loop, place
+from ctrl_analysis.estimators.eso import ExtendedStateObserver, eso_rhs
 from ctrl_analysis.estimators.lowpass import LowPassFilter
-from ctrl_analysis.loop import Loop, place
 from ctrl_analysis.parallel import chunk_slices, map_chunks
 from ctrl_analysis.simulate import draw_noise, uniform_noise
 
@@ -153,7 +153,7 @@ class Plant(KernelBlock, ContinuousBlock):
 
 
 def _eso_vector(paper: Paper, epsilon: float) -> np.ndarray:
-    """The parameter vector of :func:`~ctrl_analysis._kernels.eso_rhs` for the linear ESO (29) at ε, its b0 slot 0."""
+    """The parameter vector of :func:`~ctrl_analysis.engine.codegen.eso_rhs` for the linear ESO (29) at ε, its b0 slot 0."""
     return kernel_of(ExtendedStateObserver.from_epsilon(paper.n, epsilon, paper.beta, b0=0.0)).params
 
 
@@ -163,7 +163,7 @@ AT_OBSERVER = OBSERVER.at
 
 
 def meso_rhs(t, x, u, p, dx):
-    """(29) of one run: the ESO of :func:`ctrl_analysis._kernels.eso_rhs` plus ``b0 u + XᵀΘ`` in row n.
+    """(29) of one run: the ESO of :func:`ctrl_analysis.engine.codegen.eso_rhs` plus ``b0 u + XᵀΘ`` in row n.
 
     ``eso_rhs`` is called with ``b0 = 0`` in its parameters (adding ``0 u`` is exact), and the drive
     ``b0 u + XᵀΘ`` is added afterwards.
@@ -192,7 +192,7 @@ class ModelledESO(KernelBlock, ContinuousBlock):
     """The linear (M)ESO (29) with the identified model XᵀΘ as the known part, Θ an input signal.
 
     The observer of :class:`~ctrl_analysis.estimators.eso.ExtendedStateObserver` (its kernel
-    :func:`~ctrl_analysis._kernels.eso_rhs`, gains ``L_i = β_i / ε^i``) with ``b0 u + XᵀΘ`` in the
+    :func:`~ctrl_analysis.engine.codegen.eso_rhs`, gains ``L_i = β_i / ε^i``) with ``b0 u + XᵀΘ`` in the
     n-th equation (:func:`meso_rhs`); Θ = 0 gives the conventional ESO (6). ``eso_rhs`` branches on
     its parameters, so the batched methods call the kernel run by run.
 
@@ -279,7 +279,7 @@ def build_loop(sit: Situation, paper: Paper = PAPER) -> Loop:
 
     Returns
     -------
-    ctrl_analysis.loop.Loop
+    ctrl_analysis.engine.loop.Loop
         Blocks ``plant`` (27), ``observer`` (29), ``pd`` (30)/(12), ``lsm`` (Table 1), ``W`` (W(s)) and
         ``path``; external inputs ``level`` (θ4), ``v`` (noise), ``r[0..2]`` (ξ, ξ', ξ'').
     """
@@ -298,7 +298,7 @@ def build_loop(sit: Situation, paper: Paper = PAPER) -> Loop:
 
 
 def run_params(rows) -> dict:
-    """The per-run block parameters of ``rows`` for :meth:`Loop.simulate <ctrl_analysis.loop.Loop.simulate>`.
+    """The per-run block parameters of ``rows`` for :meth:`Loop.simulate <ctrl_analysis.engine.loop.Loop.simulate>`.
 
     Parameters
     ----------

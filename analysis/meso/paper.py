@@ -9,7 +9,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ctrl_analysis.study import Claim, choices, fixed, printed, reconstructed, span
+from ctrl_analysis.reporting.study import (
+    Claim,
+    choices,
+    fixed,
+    printed,
+    reconstructed,
+    span,
+)
 
 __all__ = ["ANALYSIS", "CLAIMS", "GATE_GRID", "GATE_RERUNS", "READINGS", "Readings", "METRICS", "PAPER", "SITUATIONS", "TABLES", "TABLE_UNITS", "Analysis", "Paper", "Situation"]
 

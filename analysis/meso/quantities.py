@@ -10,12 +10,24 @@ from __future__ import annotations
 import numpy as np
 
 from ctrl_analysis.metrics import mean_std
-from ctrl_analysis.report import StudyResult
+from ctrl_analysis.reporting.report import StudyResult
 
 from .identification import equivalent_theta
-from .loops import SituationRun, pick
 from .linear import noise_std
-from .paper import GATE_GRID, GATE_RERUNS, METRICS, PAPER, READINGS, SITUATIONS, TABLE_UNITS, TABLES, Analysis, Paper, Readings
+from .loops import SituationRun, pick
+from .paper import (
+    GATE_GRID,
+    GATE_RERUNS,
+    METRICS,
+    PAPER,
+    READINGS,
+    SITUATIONS,
+    TABLE_UNITS,
+    TABLES,
+    Analysis,
+    Paper,
+    Readings,
+)
 
 __all__ = [
     "table_cell",

@@ -19,9 +19,9 @@ from __future__ import annotations
 import dataclasses
 import functools
 
-from ctrl_analysis import sensitivity
-from ctrl_analysis.report import StudyContext, StudyInfo, StudyResult
-from ctrl_analysis.study import record_parameters, study_params
+from ctrl_analysis.reporting import sensitivity
+from ctrl_analysis.reporting.report import StudyContext, StudyInfo, StudyResult
+from ctrl_analysis.reporting.study import record_parameters, study_params
 
 from . import figures, loops, paper, quantities, verify
 
@@ -55,7 +55,7 @@ def run(ctx: StudyContext, params=None) -> StudyResult:
     """Reproduce the study: the verify part (§2, §4), the fuzzy closed loop in both regimes (§3.2, §5), the claims
     and their sensitivity to every reconstruction.
 
-    ``params`` overrides the settings (:func:`ctrl_analysis.study.study_params`): ``"verify"`` (a ``Verify``,
+    ``params`` overrides the settings (:func:`ctrl_analysis.reporting.study.study_params`): ``"verify"`` (a ``Verify``,
     default :data:`.paper.VERIFY`) and ``"loop"`` (a ``ClosedLoop``, default :data:`.paper.LOOP`), each an object or
     a dict of its fields; with ``--quick`` the defaults are :func:`.paper.quick`'s.
     """

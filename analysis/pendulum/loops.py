@@ -1,4 +1,4 @@
-"""The fuzzy closed loop of §5 built from library blocks through :class:`~ctrl_analysis.loop.Loop`.
+"""The fuzzy closed loop of §5 built from library blocks through :class:`~ctrl_analysis.engine.loop.Loop`.
 
 Signals: the cart–pendulum (continuous, linear or ``sin φ``) driven by the cart acceleration
 ``u`` and the process noise ``w`` (held per sample); the measurement ``y = φ + v`` (``v`` held per
@@ -8,7 +8,7 @@ cases).
 
 Every block has a compiled kernel (the plant, :class:`BackwardDifference`, the gains, the fuzzy
 controllers, the filters and the two halves of :func:`split_filter`), so
-:meth:`~ctrl_analysis.loop.Loop.simulate` runs these loops on the compiled engine, bit for bit the
+:meth:`~ctrl_analysis.engine.loop.Loop.simulate` runs these loops on the compiled engine, bit for bit the
 numpy engine's results (``tests/studies/test_pendulum.py``). Three loop structures are compiled:
 without filter (linear and ``sin φ`` plant: a flag parameter), with an α-β filter (every constant
 gain) and with the time-varying Kalman filter.
@@ -22,25 +22,25 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 
-from ctrl_analysis._kernels import BlockKernel, copy_output
-from ctrl_analysis.blocks import (
+from ctrl_analysis.controllers.fuzzy import (
+    FuzzyController,
+    FuzzyLookupController,
+    sum_rule_table,
+)
+from ctrl_analysis.engine.blocks import (
     ColumnKernels,
     ContinuousBlock,
     DiscreteBlock,
     StaticBlock,
     StaticGain,
 )
-from ctrl_analysis.controllers.fuzzy import (
-    FuzzyController,
-    FuzzyLookupController,
-    sum_rule_table,
-)
+from ctrl_analysis.engine.kernels import BlockKernel, copy_output
+from ctrl_analysis.engine.loop import Loop, place
 from ctrl_analysis.estimators.kalman import (
     AlphaBetaFilter,
     DiscreteKalmanFilter,
     discrete_steady_state,
 )
-from ctrl_analysis.loop import Loop, place
 from ctrl_analysis.simulate import draw_noise, gaussian_noise, run_seeds
 
 __all__ = [
@@ -165,7 +165,7 @@ class _Corrector(StaticBlock):
 def split_filter(filt: DiscreteBlock, name: str) -> list:
     """Place a filter whose output needs ``y(k)`` but not ``u(k)`` in a loop where ``u(k)`` depends on that output.
 
-    :class:`~ctrl_analysis.loop.Loop` treats feedthrough per block, so a filter with inputs
+    :class:`~ctrl_analysis.engine.loop.Loop` treats feedthrough per block, so a filter with inputs
     ``(y, u)`` and direct feedthrough closes an algebraic loop with a controller that reads its
     estimate. The filter is placed as two blocks that reuse its own code: a predictor (its state
     and :meth:`update`, output = state, no feedthrough) and a static corrector (its
@@ -266,7 +266,7 @@ def simulate_case(p, a21: float, seeds, *, filter_kind=None, nonlinear=False, ph
                   lookup=True, engine="auto", noise_free_extra=False) -> ClosedLoopRun:
     """Simulate the §5 step (r = ``p.step``) for the runs ``seeds``; same seeds, same noise in every case.
 
-    ``engine`` as :meth:`~ctrl_analysis.loop.Loop.simulate` (every block has a kernel: ``"auto"`` compiles).
+    ``engine`` as :meth:`~ctrl_analysis.engine.loop.Loop.simulate` (every block has a kernel: ``"auto"`` compiles).
     ``noise_free_extra`` appends one run without noise after the noisy ones.
     """
     loop = build_loop(p, a21, filter_kind=filter_kind, nonlinear=nonlinear, lookup=lookup)

@@ -12,7 +12,14 @@ import dataclasses
 import math
 from dataclasses import dataclass
 
-from ctrl_analysis.study import Claim, choices, fixed, printed, reconstructed, span
+from ctrl_analysis.reporting.study import (
+    Claim,
+    choices,
+    fixed,
+    printed,
+    reconstructed,
+    span,
+)
 
 __all__ = ["CLAIMS", "LOOP", "VERIFY", "ClosedLoop", "Verify", "physical_a21", "quick"]
 

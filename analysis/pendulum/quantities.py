@@ -18,9 +18,9 @@ from ctrl_analysis.estimators.kalman import (
     kalata_gains,
     tracking_index_from_gains,
 )
-from ctrl_analysis.report import StudyResult, relative_error
-from ctrl_analysis.study import choices, fixed
-from ctrl_analysis.verdicts import digits_tolerance
+from ctrl_analysis.reporting.report import StudyResult, relative_error
+from ctrl_analysis.reporting.study import choices, fixed
+from ctrl_analysis.reporting.verdicts import digits_tolerance
 
 from . import paper as _paper
 from .verify import NOISE_MODELS, VerifyData, fmt_vec

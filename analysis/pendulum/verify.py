@@ -30,7 +30,7 @@ from ctrl_analysis.estimators.kalman import (
     observability_rank,
     riccati_trajectory,
 )
-from ctrl_analysis.report import relative_error
+from ctrl_analysis.reporting.report import relative_error
 from ctrl_analysis.symbolic.riccati import derive_second_order_gain
 
 from .paper import VERIFY, Verify, physical_a21

@@ -150,7 +150,7 @@ def judge_claims(result, cases, table, setup, checks=None) -> list:
     list of (str, str)
         ``(claim, verdict)`` per check.
     """
-    from ..results import StudyResult
+    from ..reporting.results import StudyResult
     from .tuning import Case, Setup
 
     if not isinstance(result, StudyResult):

@@ -148,8 +148,8 @@ def _user(args, jobs) -> int:
 def _full(args, jobs) -> int:
     from dataclasses import replace
 
-    from ..atomic import staged_directory
-    from ..report import StudyContext, write_results_json
+    from ..reporting.atomic import staged_directory
+    from ..reporting.report import StudyContext, write_results_json
     from .recommend import QUICK, default_settings, run_arena
 
     settings = QUICK if args.quick else default_settings()

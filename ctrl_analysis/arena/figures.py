@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..report import new_figure
+from ..reporting.report import new_figure
 from .interface import estimate, family
 from .tuning import case_records, pareto_front
 

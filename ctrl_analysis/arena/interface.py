@@ -6,7 +6,7 @@ search range around it) and a runner: :func:`estimate` takes one row of paramete
 measured record per run and returns the estimates of the signal and its first derivative (and, where
 the family can, its second) at every sample, from all runs in one batch.
 
-The batch is run by the library's engine (:class:`~ctrl_analysis.loop.Loop`, ``engine="auto"``: the
+The batch is run by the library's engine (:class:`~ctrl_analysis.engine.loop.Loop`, ``engine="auto"``: the
 compiled path with **per-run kernel parameters**), so a tuning grid is one simulation of many runs.
 Where a block's numpy method cannot take per-run parameters as they are, a small adapter here gives it
 the per-run arrays (the equations stay the library's: ``sigma_rhs``/``DifferentialEstimator.rhs``,
@@ -23,11 +23,12 @@ from typing import ClassVar
 
 import numpy as np
 
-from .._kernels import BlockKernel, copy_output, eso_rhs, sigma_rhs
 from .._validate import check_finite, check_in, check_positive
-from ..blocks import ColumnKernels, DiscreteBlock, signal_names
-from ..estimators.differential import DifferentialEstimator
-from ..estimators.eso import ExtendedStateObserver
+from ..engine.blocks import ColumnKernels, DiscreteBlock, signal_names
+from ..engine.kernels import BlockKernel, copy_output
+from ..engine.loop import Loop, place
+from ..estimators.differential import DifferentialEstimator, sigma_rhs
+from ..estimators.eso import ExtendedStateObserver, eso_rhs
 from ..estimators.kalman.alpha_beta import (
     alpha_beta_gamma_gains,
     alpha_beta_gamma_output,
@@ -43,7 +44,6 @@ from ..estimators.lowpass import (
     lowpass_update,
 )
 from ..estimators.tracking import td_output, td_update
-from ..loop import Loop, place
 from ..polynomials import repeated_pole_coefficients
 from .algebraic import algebraic_derivative
 

@@ -3,7 +3,7 @@
 :func:`run_arena` tunes every family (:mod:`.tuning`) on every case (signal class × noise class ×
 noise bound), measures each tuned estimator on the adversarial pair of the bound (:mod:`.bound`),
 and records quantities (units, tolerances), findings generated from the numbers and figures with
-captions in a :class:`~ctrl_analysis.results.StudyResult`. :func:`recommend_for_record` runs the
+captions in a :class:`~ctrl_analysis.reporting.results.StudyResult`. :func:`recommend_for_record` runs the
 same tuning on a user's recorded signal.
 """
 
@@ -16,8 +16,8 @@ import numpy as np
 
 from .._validate import check_in, check_int, check_positive
 from ..noise import run_seeds
-from ..report import StudyContext
-from ..results import StudyInfo, StudyResult
+from ..reporting.report import StudyContext
+from ..reporting.results import StudyInfo, StudyResult
 from .bound import adversarial_error, adversarial_pair, lower_bound
 from .claims import VERDICT_TEXT, judge_claims
 from .interface import FAMILIES, estimate, family

@@ -5,8 +5,8 @@ derivatives ``θ = (v, v', ..., v^(n-1))`` and estimates ``x̂ = (x, x', ..., x^
 output and its derivatives (e.g. from a differential estimator), and feeds back the error vector
 ``ε = θ - x̂`` through ``K = [k_n, ..., k_1]``. On a chain of ``n`` integrators with exact
 derivatives this places the closed-loop poles at the roots of ``s^n + k_1 s^(n-1) + ... + k_n``.
-The controller is a static block (:class:`~ctrl_analysis.blocks.StaticBlock`): no state, direct
-feedthrough, so it runs in :class:`~ctrl_analysis.loop.Loop` and in ``control.interconnect``.
+The controller is a static block (:class:`~ctrl_analysis.engine.blocks.StaticBlock`): no state, direct
+feedthrough, so it runs in :class:`~ctrl_analysis.engine.loop.Loop` and in ``control.interconnect``.
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ import control as ct
 import numpy as np
 
 from .._validate import check_array, check_bool, check_finite
-from ..blocks import StaticBlock, signal_names
+from ..engine.blocks import StaticBlock, signal_names
 
 __all__ = ["HighOrderDifferentialFeedback", "hurwitz_roots", "gains_from_poles"]
 
@@ -200,9 +200,9 @@ class HighOrderDifferentialFeedback(StaticBlock):
 
         Returns
         -------
-        ctrl_analysis._kernels.BlockKernel
+        ctrl_analysis.engine.codegen.BlockKernel
         """
-        from .._kernels import BlockKernel
+        from ..engine.kernels import BlockKernel
 
         return BlockKernel(output=feedback_output, params=np.array(self.K, dtype=float))
 

@@ -7,7 +7,7 @@ Mamdani implication) and ``max`` (aggregation), defuzzified by the centroid of t
 output set on ``[−Y, Y]`` and scaled by ``Ku``. Nothing here is specific to a plant or a paper.
 
 Both controllers are stateless discrete blocks with direct feedthrough (inputs ``e``, ``ec``,
-output ``u``): in a :class:`~ctrl_analysis.loop.Loop` their output is computed at each sample and
+output ``u``): in a :class:`~ctrl_analysis.engine.loop.Loop` their output is computed at each sample and
 held, i.e. the controller is sampled. :class:`FuzzyLookupController` precomputes the control
 surface on a grid (the classical query table) and interpolates it bilinearly.
 """
@@ -19,7 +19,7 @@ import math
 import numpy as np
 
 from .._validate import check_finite, check_int, check_positive
-from ..blocks import DiscreteBlock
+from ..engine.blocks import DiscreteBlock
 
 __all__ = [
     "FuzzyController",
@@ -170,9 +170,9 @@ class _FuzzyBlock(DiscreteBlock):
 
         Returns
         -------
-        ctrl_analysis._kernels.BlockKernel
+        ctrl_analysis.engine.codegen.BlockKernel
         """
-        from .._kernels import BlockKernel
+        from ..engine.kernels import BlockKernel
 
         return BlockKernel(output=self._kernel_output, params=self.kernel_params(), update=_no_update)
 
@@ -183,14 +183,14 @@ _COMPILED_MIN = 2000
 
 
 def _compiled_ok() -> bool:
-    from .._kernels import available
+    from ..engine.codegen import available
 
     return available()
 
 
 def _apply_kernel(fn, p, e, ec, n_out=1) -> np.ndarray:
     """The jitted kernel ``fn`` evaluated at each point ``(e[k], ec[k])``: shape ``(size, n_out)``."""
-    from .._kernels import _jit
+    from ..engine.codegen import _jit
 
     f = _jit(fn)
     x, u = np.empty(0), np.empty(2)

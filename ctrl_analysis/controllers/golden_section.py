@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 from .._validate import check_finite, check_nonnegative, check_positive
-from ..blocks import DiscreteBlock
-from .._kernels import jitable
+from ..engine.blocks import DiscreteBlock
+from ..engine.kernels import jitable
 
 __all__ = ["GOLDEN_L1", "GOLDEN_L2", "GoldenSectionController"]
 
@@ -120,9 +120,9 @@ class GoldenSectionController(DiscreteBlock):
 
         Returns
         -------
-        ctrl_analysis._kernels.BlockKernel
+        ctrl_analysis.engine.codegen.BlockKernel
         """
-        from .._kernels import BlockKernel
+        from ..engine.kernels import BlockKernel
 
         return BlockKernel(output=golden_output, params=self._p, update=golden_update)
 

@@ -1,6 +1,6 @@
 """Model-free adaptive control (compact-form dynamic linearisation): PPD estimator, control laws, and their compositions as discrete blocks.
 
-Blocks (each batched, under the protocol of :mod:`ctrl_analysis.blocks`) for any SISO discrete
+Blocks (each batched, under the protocol of :mod:`ctrl_analysis.engine.blocks`) for any SISO discrete
 plant ``y(k+1) = f(y(k), ..., u(k), ...)`` whose (possibly filtered) output ``y_f`` the controller
 sees:
 
@@ -13,7 +13,7 @@ sees:
   ``φ̂(k−1) Δu(k−1)``, the prediction an
   :class:`~ctrl_analysis.estimators.kalman.ImprovedKalmanFilter` needs.
 
-:func:`mfac_controller` places them in a :class:`~ctrl_analysis.loop.Loop` with standard signal
+:func:`mfac_controller` places them in a :class:`~ctrl_analysis.engine.loop.Loop` with standard signal
 names: plain MFAC, with a tracking differentiator (TD-MFAC), with the decreasing-gain law
 (D-MFAC), or with the improved Kalman filter (IKF-MFAC, :func:`ikf_mfac`).
 """
@@ -23,9 +23,9 @@ from __future__ import annotations
 import numpy as np
 
 from .._validate import check_finite, check_positive, check_str
-from ..blocks import Block, DiscreteBlock, StaticBlock
+from ..engine.blocks import Block, DiscreteBlock, StaticBlock
 from ..engine.kernels import KernelBlock, Kernels, Layout, jitable
-from ..loop import place
+from ..engine.loop import place
 
 __all__ = [
     "CFDLLaw",
@@ -421,8 +421,8 @@ def mfac_controller(estimator: PPDEstimator, law: Block, output_filter: Block | 
 
     Returns
     -------
-    list of ctrl_analysis.loop.Placed
-        To be given to :class:`~ctrl_analysis.loop.Loop` with the plant and the measurement.
+    list of ctrl_analysis.engine.loop.Placed
+        To be given to :class:`~ctrl_analysis.engine.loop.Loop` with the plant and the measurement.
 
     Raises
     ------
@@ -482,7 +482,7 @@ def ikf_mfac(estimator: PPDEstimator, law: CFDLLaw, ikf, **kw) -> list:
 
     Returns
     -------
-    list of ctrl_analysis.loop.Placed
+    list of ctrl_analysis.engine.loop.Placed
     """
     from ..estimators.kalman.ikf import ImprovedKalmanFilter
 

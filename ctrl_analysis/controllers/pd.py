@@ -26,7 +26,7 @@ from .._validate import (
     check_int,
     check_positive,
 )
-from ..blocks import DiscreteBlock, signal_names
+from ..engine.blocks import DiscreteBlock, signal_names
 from ..engine.kernels import KernelBlock, Kernels, Layout
 from ..polynomials import repeated_pole_coefficients
 

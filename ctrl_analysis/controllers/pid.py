@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._validate import check_nonnegative, check_positive, check_real
-from ..blocks import DiscreteBlock
+from ..engine.blocks import DiscreteBlock
 from ..engine.kernels import KernelBlock, Kernels, Layout
 
 __all__ = ["DiscretePID"]

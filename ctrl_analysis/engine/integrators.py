@@ -1,6 +1,6 @@
 """Fixed-step integrators and the divergence test, written once for both engines.
 
-The numpy engine steps a batch ``(B, n)``; the compiled runner (:mod:`ctrl_analysis._kernels`)
+The numpy engine steps a batch ``(B, n)``; the compiled runner (:mod:`ctrl_analysis.engine.codegen`)
 steps one run's vector. Both call the same stage helpers, :func:`rk4_stage` and
 :func:`rk4_combine` (scalar-indexed over the states: on a batch they are called with the
 transposed arrays, so ``x[j]`` is a column of runs), and the same test :func:`is_bad`; so the

@@ -19,9 +19,9 @@ names) and derives from :class:`KernelBlock`; from that the library derives
 * the compiled engine's per-run kernel (:meth:`KernelBlock.kernel`);
 * ``nlsys(dt)`` for python-control (through the batched methods), where python-control's
   ``params`` dict changes the block's parameters by name;
-* per-run parameters: :meth:`ctrl_analysis.loop.Loop.simulate` takes
+* per-run parameters: :meth:`ctrl_analysis.engine.loop.Loop.simulate` takes
   ``params={"block name": {"parameter": value or per-run values}}``; every numeric argument of the
-  block's constructor can be given (:meth:`~ctrl_analysis.blocks.Block.with_params` rebuilds the
+  block's constructor can be given (:meth:`~ctrl_analysis.engine.blocks.Block.with_params` rebuilds the
   block for each distinct value, so the constructor validates it), and the packed rows are sliced
   with chunks and processes like per-run inputs.
 
@@ -30,7 +30,7 @@ Examples
 A first-order low-pass filter ``x(k+1) = x(k) + a (u(k) - x(k))`` as a kernel-first block:
 
 >>> import numpy as np
->>> from ctrl_analysis.blocks import DiscreteBlock
+>>> from ctrl_analysis.engine.blocks import DiscreteBlock
 >>> LAG = Layout("a")
 >>> AT = LAG.at
 >>> def lag_update(t, x, u, p, x_next):

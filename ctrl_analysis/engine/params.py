@@ -1,10 +1,10 @@
 """Run-time block parameters: ``Loop.simulate(params={"block": {"name": value or per-run values}})``.
 
 A block is independent of the batch size. The parameters a simulation changes are given to
-:meth:`~ctrl_analysis.loop.Loop.simulate` by block name and constructor argument; a value with one
+:meth:`~ctrl_analysis.engine.loop.Loop.simulate` by block name and constructor argument; a value with one
 more axis than the block's own value (its first axis the batch's runs) differs per run, any
 other value is shared by every run. :func:`resolve` rebuilds the block once per distinct value with
-:meth:`~ctrl_analysis.blocks.Block.with_params`, so the block's constructor validates every value,
+:meth:`~ctrl_analysis.engine.blocks.Block.with_params`, so the block's constructor validates every value,
 and gives the engines what they run:
 
 * a kernel block: its parameter vector, or the ``(B, n_p)`` rows of per-run values (the compiled
@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._stepcheck import unchecked
+from .stepcheck import unchecked
 
 __all__ = ["Variant", "chunk_functions", "resolve", "runs_of", "split", "take"]
 
@@ -97,7 +97,7 @@ def split(block, values: dict, B: int, where: str) -> tuple[dict, dict]:
 def runs_of(loop, params) -> int | None:
     """The number of runs ``params``' per-run values give (their first axis), or ``None`` if none differs per run.
 
-    Lets :meth:`~ctrl_analysis.loop.Loop.simulate` take the batch size from the parameters, as it
+    Lets :meth:`~ctrl_analysis.engine.loop.Loop.simulate` take the batch size from the parameters, as it
     does from per-run inputs. Malformed ``params`` give ``None`` here and their error in :func:`resolve`.
 
     Parameters
@@ -187,7 +187,7 @@ def resolve(loop, params, B: int) -> dict:
 
 def _kernel_rows(blocks, inverse, per_run, where):
     """One kernel parameter row per run, or ``None`` when the blocks have no kernel with a parameter vector."""
-    from .._kernels import kernel_of
+    from .codegen import kernel_of
 
     try:
         kernels = [kernel_of(b) for b in blocks]
@@ -211,7 +211,7 @@ def take(params, B: int, loop, lo: int, hi: int):
     Parameters
     ----------
     params : dict or None
-        As :meth:`~ctrl_analysis.loop.Loop.simulate` takes it (already checked by :func:`resolve`).
+        As :meth:`~ctrl_analysis.engine.loop.Loop.simulate` takes it (already checked by :func:`resolve`).
     B : int
     loop : Loop
     lo, hi : int

@@ -1,4 +1,4 @@
-"""The execution plan of a :class:`~ctrl_analysis.loop.Loop`: which block runs when, on which signal columns.
+"""The execution plan of a :class:`~ctrl_analysis.engine.loop.Loop`: which block runs when, on which signal columns.
 
 Both engines step the loop from one frozen :class:`Plan`: every signal is a column of one
 ``(B, n_signals)`` array (external inputs first, then every block's outputs); each block is an
@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..blocks import DiscreteBlock
+from .blocks import DiscreteBlock
 
 __all__ = ["Plan", "make_plan"]
 

@@ -1,4 +1,4 @@
-"""A batch of :meth:`Loop.simulate <ctrl_analysis.loop.Loop.simulate>` split over processes or a Dask cluster's workers.
+"""A batch of :meth:`Loop.simulate <ctrl_analysis.engine.loop.Loop.simulate>` split over processes or a Dask cluster's workers.
 
 The chunks' responses are joined into one, equal bit for bit to one process (runs are
 independent); per-run inputs, initial states and run-time parameters are cut with each chunk.
@@ -14,7 +14,7 @@ __all__ = ["simulate_chunks"]
 
 
 def simulate_chunks(loop, jobs: int, n_steps: int, held: dict, x, opts: dict, seeds):
-    """:meth:`Loop.simulate <ctrl_analysis.loop.Loop.simulate>` with its batch split over ``jobs`` processes.
+    """:meth:`Loop.simulate <ctrl_analysis.engine.loop.Loop.simulate>` with its batch split over ``jobs`` processes.
 
     The chunks' responses are joined into one, equal bit for bit to ``jobs=1`` (runs are independent).
 
@@ -37,8 +37,8 @@ def simulate_chunks(loop, jobs: int, n_steps: int, held: dict, x, opts: dict, se
     -------
     LoopResponse
     """
-    from ..response import LoopResponse
     from .params import take
+    from .response import LoopResponse
 
     tasks = []
     chunks = jobs if _CLUSTER["client"] is None else max(jobs, _cluster_workers())

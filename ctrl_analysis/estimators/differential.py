@@ -17,7 +17,7 @@ import control as ct
 import numpy as np
 
 from .._validate import check_array, check_in, check_int, check_positive
-from ..blocks import ContinuousBlock, signal_names
+from ..engine.blocks import ContinuousBlock, signal_names
 from ..engine.kernels import KernelBlock, Kernels
 from ..symbolic.differential import (
     MAX_ORDER,

@@ -29,7 +29,7 @@ from .._validate import (
     check_int,
     check_positive,
 )
-from ..blocks import ContinuousBlock, signal_names
+from ..engine.blocks import ContinuousBlock, signal_names
 from ..engine.kernels import KernelBlock, Kernels, Layout, as_int, jitable
 from ..polynomials import repeated_pole_coefficients
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._validate import check_array, check_int, check_positive, check_vector
-from ..blocks import ContinuousBlock, DiscreteBlock, signal_names
+from ..engine.blocks import ContinuousBlock, DiscreteBlock, signal_names
 from ..engine.kernels import KernelBlock, Kernels, Layout, as_int
 from ..polynomials import repeated_pole_coefficients
 

@@ -19,9 +19,9 @@ import control as ct
 import numpy as np
 
 from .._validate import check_array, check_finite, check_in, check_int, check_positive
-from ..blocks import DiscreteBlock, StaticBlock
+from ..engine.blocks import DiscreteBlock, StaticBlock
+from ..engine.integrators import MAX_SUBSTEPS
 from ..engine.kernels import KernelBlock, Kernels, Layout, as_int, jitable
-from ..simulate import MAX_SUBSTEPS
 from .lowpass import LowPassFilter
 
 __all__ = [

@@ -12,12 +12,12 @@ from ctrl_analysis.arena.signals import (
     make_signal,
 )
 from ctrl_analysis.arena.tuning import Case, Setup, pareto_front, tune_family
+from ctrl_analysis.engine.loop import Loop, place
 from ctrl_analysis.estimators.differential import DifferentialEstimator
 from ctrl_analysis.estimators.eso import ExtendedStateObserver
 from ctrl_analysis.estimators.kalman.alpha_beta import AlphaBetaFilter, kalata_gains
 from ctrl_analysis.estimators.lowpass import DiscreteLowPass, LowPassFilter
 from ctrl_analysis.estimators.tracking import TrackingDifferentiator
-from ctrl_analysis.loop import Loop, place
 
 DT = 0.01
 

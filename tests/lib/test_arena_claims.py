@@ -6,9 +6,9 @@ import pytest
 from ctrl_analysis.arena.claims import ClaimCheck, judge_claims
 from ctrl_analysis.arena.recommend import INFO, arena_claim_links, arena_report_lines
 from ctrl_analysis.arena.tuning import Case, Setup
-from ctrl_analysis.report import StudyInfo, StudyResult
-from ctrl_analysis.report_md import write_report_md
-from ctrl_analysis.study import Claim
+from ctrl_analysis.reporting.markdown import write_report_md
+from ctrl_analysis.reporting.report import StudyInfo, StudyResult
+from ctrl_analysis.reporting.study import Claim
 
 SETUP = Setup(dt=0.01, n=300, transient=1.0)
 CASES = [Case("sines", "uniform", e, 2.0, (5,)) for e in (0.005, 0.01, 0.02)]

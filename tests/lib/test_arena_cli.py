@@ -9,7 +9,11 @@ from ctrl_analysis.arena.cli import read_record
 from ctrl_analysis.arena.recommend import ArenaSettings, arena_report_lines, run_arena
 from ctrl_analysis.arena.tuning import Setup
 from ctrl_analysis.cli import main
-from ctrl_analysis.report import StudyContext, validate_results, write_results_json
+from ctrl_analysis.reporting.report import (
+    StudyContext,
+    validate_results,
+    write_results_json,
+)
 
 
 def _csv(path, rows, header="time,y"):

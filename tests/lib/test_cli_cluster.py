@@ -15,7 +15,6 @@ from pathlib import Path
 
 import pytest
 
-
 REPO = Path(__file__).resolve().parents[2]
 #: The skeleton study (analysis/_skeleton): a real study (Monte Carlo batch on the compiled engine, a
 #: sensitivity sweep through map_chunks) whose one small loop structure compiles in about a second in each

@@ -21,7 +21,7 @@ import pytest
 
 import analysis
 from ctrl_analysis.cli import main
-from ctrl_analysis.report import StudyInfo, StudyResult
+from ctrl_analysis.reporting.report import StudyInfo, StudyResult
 
 REPO = Path(__file__).resolve().parents[2]
 NAMES = ["alpha", "beta", "gamma"]
@@ -29,7 +29,7 @@ NAMES = ["alpha", "beta", "gamma"]
 STUDY = '''
 import os
 import time
-from ctrl_analysis.report import StudyInfo, StudyResult
+from ctrl_analysis.reporting.report import StudyInfo, StudyResult
 from ctrl_analysis.simulate import run_seeds
 
 INFO = StudyInfo(name=__name__.split(".")[-1], seed_file="s.txt", paper="P", reproduces="r")

@@ -12,7 +12,7 @@ import pytest
 
 import analysis
 from ctrl_analysis.cli import main
-from ctrl_analysis.report import StudyInfo, StudyResult
+from ctrl_analysis.reporting.report import StudyInfo, StudyResult
 
 REPO = Path(__file__).resolve().parents[2]
 

@@ -4,13 +4,13 @@ import control as ct
 import numpy as np
 import pytest
 
-from ctrl_analysis.blocks import ContinuousBlock, StaticBlock
 from ctrl_analysis.controllers.differential_feedback import (
     HighOrderDifferentialFeedback,
     gains_from_poles,
     hurwitz_roots,
 )
-from ctrl_analysis.loop import Loop, place
+from ctrl_analysis.engine.blocks import ContinuousBlock, StaticBlock
+from ctrl_analysis.engine.loop import Loop, place
 
 
 class Chain(ContinuousBlock):
@@ -93,8 +93,8 @@ def test_hurwitz_roots_order():
 
 @pytest.mark.parametrize("compiled", [False, True])
 def test_kernel_is_the_numpy_method_run_by_run(compiled):
-    from ctrl_analysis._kernels import _jit
     from ctrl_analysis.controllers.differential_feedback import feedback_output
+    from ctrl_analysis.engine.codegen import _jit
 
     ctrl = HighOrderDifferentialFeedback([2184.0, 506.0, 39.0])
     k = ctrl.kernel()

@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ctrl_analysis.blocks import DiscreteBlock
+from ctrl_analysis.engine.blocks import DiscreteBlock
 from ctrl_analysis.engine.kernels import KernelBlock, Kernels, Layout
+from ctrl_analysis.engine.loop import Loop, place
 from ctrl_analysis.estimators.differential import DifferentialEstimator
-from ctrl_analysis.loop import Loop, place
 
 N = 150
 A = np.array([1.0, 2.0, 3.0, 2.0])  # per-run Σ bandwidths (two runs share one)

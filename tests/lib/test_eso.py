@@ -8,7 +8,6 @@ import pytest
 from ctrl_analysis.estimators.eso import ExtendedStateObserver, fal
 from ctrl_analysis.simulate import simulate_sampled
 
-
 # ---------------------------------------------------------------------------------------------
 # fal
 # ---------------------------------------------------------------------------------------------

@@ -27,26 +27,44 @@ import control as ct
 import numpy as np
 
 import ctrl_analysis
-from ctrl_analysis import _kernels, _stepcheck, _validate, blocks, cli, parallel, plants, polynomials, progress, report
+from ctrl_analysis import (
+    _validate,
+    cli,
+    metrics,
+    parallel,
+    plants,
+    polynomials,
+    progress,
+    simulate,
+)
 from ctrl_analysis import identification as ident
-from ctrl_analysis import loop as loop_mod
-from ctrl_analysis import metrics, report_md, simulate, study
 from ctrl_analysis.arena import claims, signals
 from ctrl_analysis.arena import cli as arena_cli
-from ctrl_analysis.engine import integrators
-from ctrl_analysis.engine import kernels as engine_kernels
-from ctrl_analysis.engine import numpy_engine, plan
-from ctrl_analysis.engine import params as engine_params
-from ctrl_analysis.engine import processes
 from ctrl_analysis.arena import figures as arena_figures
 from ctrl_analysis.arena import interface as arena_interface
 from ctrl_analysis.arena import recommend as arena_recommend
 from ctrl_analysis.controllers import differential_feedback as hodf
 from ctrl_analysis.controllers import fuzzy, golden_section, mfac, pd, pid
+from ctrl_analysis.engine import blocks, integrators, numpy_engine, plan, processes
+from ctrl_analysis.engine import codegen as _kernels
+from ctrl_analysis.engine import kernels as engine_kernels
+from ctrl_analysis.engine import loop as loop_mod
+from ctrl_analysis.engine import params as engine_params
+from ctrl_analysis.engine import stepcheck as _stepcheck
 from ctrl_analysis.estimators import differential as de
 from ctrl_analysis.estimators import eso, lowpass, tracking
-from ctrl_analysis.estimators.kalman import _checks, alpha_beta, ckf, continuous, discrete, ikf, scalar
+from ctrl_analysis.estimators.kalman import (
+    _checks,
+    alpha_beta,
+    ckf,
+    continuous,
+    discrete,
+    ikf,
+    scalar,
+)
 from ctrl_analysis.estimators.kalman import filter as kfilter
+from ctrl_analysis.reporting import markdown as report_md
+from ctrl_analysis.reporting import report, study
 from ctrl_analysis.symbolic import differential as sym_de
 from ctrl_analysis.symbolic import eso as sym_eso
 from ctrl_analysis.symbolic import riccati as sym_ric
@@ -601,9 +619,10 @@ def build_cases(tmp):
 
 def _claim_cases(results):
     """Claims, plausible ranges, the verdict policy and the sensitivity sweep."""
-    from ctrl_analysis import report_claims, sensitivity, verdicts
-    from ctrl_analysis.glossary import glossary_lines
-    from ctrl_analysis.report_format import summarise
+    from ctrl_analysis.reporting import claims as report_claims
+    from ctrl_analysis.reporting import sensitivity, verdicts
+    from ctrl_analysis.reporting.formatting import summarise
+    from ctrl_analysis.reporting.glossary import glossary_lines
 
     claim = study.Claim("c", "§1", "a claim")
     return [
@@ -650,7 +669,7 @@ def _arena_csv(path, rows, header="time,y"):
 
 def _arena_cases(tmp):
     """The estimator arena: bound, signals, the algebraic differentiator, the interface and the tuning."""
-    from ctrl_analysis.arena import algebraic, bound, claims, signals, tuning
+    from ctrl_analysis.arena import algebraic, bound, signals, tuning
 
     interface, recommend = arena_interface, arena_recommend
 
@@ -777,7 +796,7 @@ def _toy_evaluate(params):
 
 
 def _swept():
-    from ctrl_analysis import sensitivity
+    from ctrl_analysis.reporting import sensitivity
 
     res = _toy_evaluate({"p": _ToyParams()})
     sensitivity.apply(res, sensitivity.sweep(_toy_evaluate, {"p": _ToyParams()}))
@@ -817,6 +836,7 @@ NOT_FUZZED = {
     loop_mod.Placed: "record built by place(), which is fuzzed",
     engine_kernels.KernelBlock: "mixin without constructor arguments (the blocks using it are fuzzed)",
     engine_kernels.Layout: "fuzzed through _layout (its fields are variadic) and _layout_pack",
+    engine_kernels.BlockKernel: "record of a block's kernel functions and parameters, checked by check_kernel_reads",
     engine_kernels.Kernels: "record of kernel functions, checked when the block runs (check_kernel_reads)",
     engine_kernels.copy_output: "per-step kernel, unchecked by design",
     pid.pid_output: "per-step kernel, unchecked by design",
@@ -1001,7 +1021,7 @@ def semantic_cases():
          lambda: _engines_agree(rows=1, runs=5, chunk_runs=None), "runs", None),
         ("per-run parameters of 5 runs on a batch of 4 (both engines)",
          lambda: _engines_agree(rows=5, runs=4, chunk_runs=None), "runs", None),
-        ("import ctrl_analysis.ivp as the first import", lambda: _import_first("ctrl_analysis.ivp"), "ivp",
+        ("import ctrl_analysis.engine.ivp as the first import", lambda: _import_first("ctrl_analysis.engine.ivp"), "ivp",
          lambda rc: rc == 0),
     ]
 

@@ -1,4 +1,4 @@
-"""Bad arguments that :class:`ctrl_analysis.results.Quantity` must refuse (issue 20, item 5).
+"""Bad arguments that :class:`ctrl_analysis.reporting.results.Quantity` must refuse (issue 20, item 5).
 
 What ``Quantity.__post_init__`` enforces (each error naming the argument, the value and the rule):
 
@@ -14,7 +14,7 @@ import math
 
 import pytest
 
-from ctrl_analysis.results import Quantity
+from ctrl_analysis.reporting.results import Quantity
 
 VALID = dict(id="q", label="q", value=1.0, paper=1.0, tolerance=0.1, runs=3, unit="rad")
 

@@ -180,8 +180,8 @@ def _fuzzy_inputs(n=400, seed=5):
 
 @pytest.mark.parametrize("compiled", [False, True])
 def test_lookup_kernel_equals_the_block_output_bit_for_bit(compiled):
-    from ctrl_analysis._kernels import _jit
     from ctrl_analysis.controllers.fuzzy import lookup_output
+    from ctrl_analysis.engine.codegen import _jit
 
     table = FuzzyLookupController(_fc(), 41)
     e, ec = _fuzzy_inputs()
@@ -196,8 +196,8 @@ def test_lookup_kernel_equals_the_block_output_bit_for_bit(compiled):
 
 @pytest.mark.parametrize("compiled", [False, True])
 def test_mamdani_kernel_equals_the_block_output(compiled):
-    from ctrl_analysis._kernels import _jit
     from ctrl_analysis.controllers.fuzzy import mamdani_output
+    from ctrl_analysis.engine.codegen import _jit
 
     fc = _fc(n_grid=121)
     e, ec = _fuzzy_inputs()
@@ -231,8 +231,8 @@ def test_fuzzy_and_filter_blocks_in_a_loop_compiled_equal_numpy():
 
     (The Mamdani kernel is held to its numpy method above; a loop of it would only add compile time.)
     """
-    from ctrl_analysis.blocks import StaticGain
-    from ctrl_analysis.loop import Loop, place
+    from ctrl_analysis.engine.blocks import StaticGain
+    from ctrl_analysis.engine.loop import Loop, place
 
     rng = np.random.default_rng(3)
     N, B = 60, 4

@@ -4,9 +4,9 @@ import control as ct
 import numpy as np
 import pytest
 
-from ctrl_analysis.blocks import StaticBlock
 from ctrl_analysis.controllers.golden_section import GoldenSectionController
-from ctrl_analysis.loop import Loop, place
+from ctrl_analysis.engine.blocks import StaticBlock
+from ctrl_analysis.engine.loop import Loop, place
 from ctrl_analysis.plants import DiscreteLTI
 
 F1, F2, G0 = 1.8, -0.85, 0.1  # x(k+1) = f1 x(k) + f2 x(k-1) + g0 u(k): DC gain g0 / (1 - f1 - f2) = 2
@@ -73,7 +73,7 @@ def test_golden_section_loop_runs_in_control_interconnect():
 def test_golden_kernel_equals_the_numpy_methods_bit_for_bit(compiled):
     from test_kalman_ckf import kernel_runs
 
-    from ctrl_analysis import _kernels
+    from ctrl_analysis.engine import codegen as _kernels
 
     ctrl = GoldenSectionController(k_I=0.02, c2=0.9, mu=0.5)
     k = ctrl.kernel()
@@ -97,7 +97,7 @@ def test_adaptive_loop_compiled_equals_numpy_engine_bit_for_bit():
     One loop structure holds every kernel of these library blocks against its numpy method inside the
     engine (one compile on a cold cache, not one per block).
     """
-    from ctrl_analysis.blocks import StaticGain
+    from ctrl_analysis.engine.blocks import StaticGain
     from ctrl_analysis.estimators.kalman import CharacteristicKalmanFilter
     from ctrl_analysis.identification import ArxRegressor, RecursiveLeastSquaresBlock
 

@@ -6,7 +6,8 @@ import control as ct
 import numpy as np
 import pytest
 
-from ctrl_analysis.blocks import DiscreteBlock
+from ctrl_analysis.engine.blocks import DiscreteBlock
+from ctrl_analysis.engine.loop import Loop, place
 from ctrl_analysis.identification import (
     ArxRegressor,
     IdentifiabilityWarning,
@@ -15,7 +16,6 @@ from ctrl_analysis.identification import (
     batch_least_squares,
     identifiability,
 )
-from ctrl_analysis.loop import Loop, place
 from ctrl_analysis.plants import DiscreteLTI
 
 
@@ -241,7 +241,7 @@ def test_rls_loop_runs_in_control_interconnect():
 def test_rls_and_arx_kernels_equal_the_numpy_methods_bit_for_bit(compiled):
     from test_kalman_ckf import kernel_runs
 
-    from ctrl_analysis import _kernels
+    from ctrl_analysis.engine import codegen as _kernels
 
     jit = _kernels._jit if compiled else (lambda f: f)
     rng = np.random.default_rng(9)

@@ -84,7 +84,7 @@ def test_errors(kw, msg):
 
 @pytest.mark.parametrize("compiled", [False, True])
 def test_kernel_is_the_numpy_method_with_per_run_q_and_r(compiled):
-    from ctrl_analysis import _kernels
+    from ctrl_analysis.engine import codegen as _kernels
     from ctrl_analysis.estimators.kalman.ikf import ikf_output, ikf_update
 
     jit = _kernels._jit if compiled else (lambda f: f)

@@ -342,8 +342,12 @@ def _kf_state(rng, B, n):
 @pytest.mark.parametrize("compiled", [False, True])
 @pytest.mark.parametrize("with_b", [False, True])
 def test_kalman_kernel_equals_the_block_methods_bit_for_bit(compiled, with_b):
-    from ctrl_analysis._kernels import _jit
-    from ctrl_analysis.estimators.kalman.filter import DiscreteKalmanFilter, kalman_output, kalman_update
+    from ctrl_analysis.engine.codegen import _jit
+    from ctrl_analysis.estimators.kalman.filter import (
+        DiscreteKalmanFilter,
+        kalman_output,
+        kalman_update,
+    )
 
     rng = np.random.default_rng(11)
     n, B = 3, 7
@@ -362,8 +366,11 @@ def test_kalman_kernel_equals_the_block_methods_bit_for_bit(compiled, with_b):
 
 @pytest.mark.parametrize("compiled", [False, True])
 def test_alpha_beta_kernel_layouts_and_update(compiled):
-    from ctrl_analysis._kernels import _jit
-    from ctrl_analysis.estimators.kalman.alpha_beta import alpha_beta_output, alpha_beta_update
+    from ctrl_analysis.engine.codegen import _jit
+    from ctrl_analysis.estimators.kalman.alpha_beta import (
+        alpha_beta_output,
+        alpha_beta_update,
+    )
 
     rng = np.random.default_rng(12)
     F = [[1.0, 0.1], [0.2, 0.9]]

@@ -100,7 +100,7 @@ def test_discrete_lti_matches_control_c2d_and_checks_siso():
 
 def ckf_loop():
     """Plant, delay, a static sensor (0 states) and the CKF: every block has a kernel."""
-    from ctrl_analysis.loop import Loop, place
+    from ctrl_analysis.engine.loop import Loop, place
 
     plant = DiscreteLTI(ct.tf([G0, 0.0], [1.0, -F1, -F2], True), 0.1)
     delay = DiscreteLTI(ct.tf([1.0], [1.0, 0.0], True), 0.1)
@@ -144,7 +144,7 @@ def random_ckf_inputs(rng, B=40):
 
 @pytest.mark.parametrize("compiled", [False, True])
 def test_ckf_lti_and_full_kf_kernels_equal_the_numpy_methods(compiled):
-    from ctrl_analysis import _kernels
+    from ctrl_analysis.engine import codegen as _kernels
 
     jit = _kernels._jit if compiled else (lambda f: f)
     rng = np.random.default_rng(11)

@@ -14,9 +14,10 @@ import control as ct
 import numpy as np
 import pytest
 
-from ctrl_analysis import _kernels
-from ctrl_analysis.blocks import StaticGain
+from ctrl_analysis.engine import codegen as _kernels
+from ctrl_analysis.engine.blocks import StaticGain
 from ctrl_analysis.engine.kernels import KernelBlock
+from ctrl_analysis.engine.loop import Loop, place
 from ctrl_analysis.estimators.differential import DifferentialEstimator
 from ctrl_analysis.estimators.eso import ExtendedStateObserver
 from ctrl_analysis.estimators.kalman import (
@@ -28,7 +29,6 @@ from ctrl_analysis.estimators.kalman import (
 )
 from ctrl_analysis.estimators.lowpass import LowPassFilter
 from ctrl_analysis.estimators.tracking import TrackingDifferentiator
-from ctrl_analysis.loop import Loop, place
 from ctrl_analysis.plants import DiscreteLTI
 
 B = 4

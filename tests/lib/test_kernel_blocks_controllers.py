@@ -11,8 +11,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ctrl_analysis import _kernels, identification
+from ctrl_analysis import identification
 from ctrl_analysis.controllers import mfac, pd
+from ctrl_analysis.engine import codegen as _kernels
 
 pytestmark = pytest.mark.skipif(not _kernels.available(), reason="numba is not installed")
 

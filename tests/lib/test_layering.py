@@ -2,7 +2,7 @@
 
 * ``ctrl_analysis`` (the library) never imports ``analysis`` (the studies), except the CLI's registry;
 * no paper's printed constant appears as a literal in ``ctrl_analysis``: every value a study declares
-  with :func:`ctrl_analysis.study.printed` (and a few distinctive printed numbers of the papers
+  with :func:`ctrl_analysis.reporting.study.printed` (and a few distinctive printed numbers of the papers
   listed below) is searched for among the library's numeric literals;
 * no function in ``analysis/`` is longer than 80 lines; no module of ``ctrl_analysis`` is longer than
   600 lines.

@@ -1,19 +1,19 @@
-"""Tests of the block protocols (ctrl_analysis.blocks) and the batched interconnect (ctrl_analysis.loop)."""
+"""Tests of the block protocols (ctrl_analysis.engine.blocks) and the batched interconnect (ctrl_analysis.engine.loop)."""
 
 import control as ct
 import numpy as np
 import pytest
 
-from ctrl_analysis.blocks import (
+from ctrl_analysis.engine.blocks import (
     ContinuousBlock,
     DiscreteBlock,
     SampledBlock,
     StaticBlock,
     StaticGain,
 )
+from ctrl_analysis.engine.loop import Loop, place
 from ctrl_analysis.estimators.differential import DifferentialEstimator
 from ctrl_analysis.estimators.kalman import AlphaBetaFilter, kalata_gains
-from ctrl_analysis.loop import Loop, place
 from ctrl_analysis.simulate import draw_noise, gaussian_noise, run_seeds
 
 

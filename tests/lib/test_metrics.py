@@ -2,8 +2,16 @@ import control as ct
 import numpy as np
 import pytest
 
-from ctrl_analysis.metrics import (bandwidth_3db, mean_abs_error, mean_std, overshoot, resonance_peak, rmse,
-                                   settling_time, snr_db)
+from ctrl_analysis.metrics import (
+    bandwidth_3db,
+    mean_abs_error,
+    mean_std,
+    overshoot,
+    resonance_peak,
+    rmse,
+    settling_time,
+    snr_db,
+)
 
 
 def test_error_measures_closed_forms():

@@ -4,7 +4,6 @@ import control as ct
 import numpy as np
 import pytest
 
-from ctrl_analysis.blocks import DiscreteBlock, StaticBlock
 from ctrl_analysis.controllers.mfac import (
     CFDLLaw,
     CFDLPredictor,
@@ -14,9 +13,10 @@ from ctrl_analysis.controllers.mfac import (
     ikf_mfac,
     mfac_controller,
 )
+from ctrl_analysis.engine.blocks import DiscreteBlock, StaticBlock
+from ctrl_analysis.engine.loop import Loop, place
 from ctrl_analysis.estimators.kalman import ImprovedKalmanFilter
 from ctrl_analysis.estimators.tracking import TrackingDifferentiator
-from ctrl_analysis.loop import Loop, place
 from ctrl_analysis.simulate import draw_noise, gaussian_noise, run_seeds
 
 
@@ -251,14 +251,14 @@ class KCubicPlant(CubicPlant):
         return x_next
 
     def kernel(self):
-        from ctrl_analysis._kernels import BlockKernel, copy_output
+        from ctrl_analysis.engine.kernels import BlockKernel, copy_output
 
         return BlockKernel(output=copy_output, params=np.zeros(0), update=cubic_update)
 
 
 def test_every_mfac_block_in_one_loop_compiled_equals_numpy_engine_bit_for_bit():
     """One loop structure (one compile) holds every kernel: IKF-D-MFAC, a TD and a CFDL law beside it."""
-    from ctrl_analysis.blocks import StaticGain
+    from ctrl_analysis.engine.blocks import StaticGain
 
     B, n = 6, 300
     rng = np.random.default_rng(5)

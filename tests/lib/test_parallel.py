@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from ctrl_analysis import parallel, progress
-from ctrl_analysis.blocks import ContinuousBlock
+from ctrl_analysis.engine.blocks import ContinuousBlock
+from ctrl_analysis.engine.loop import Loop, place
 from ctrl_analysis.estimators.differential import DifferentialEstimator
-from ctrl_analysis.loop import Loop, place
 from ctrl_analysis.simulate import (
     check_result_memory,
     chunk_bounds,
@@ -190,8 +190,8 @@ def test_progress_bar_is_silent_off_a_terminal(monkeypatch):
 
 
 def test_long_simulation_shows_its_own_labelled_bar_and_counts_every_run_sample(monkeypatch, capsys):
+    from ctrl_analysis.engine.loop import AUTO_BAR_WORK
     from ctrl_analysis.estimators.lowpass import LowPassFilter
-    from ctrl_analysis.loop import AUTO_BAR_WORK
 
     # the loop of test_speed_kernels' low-pass test (one compiled structure for both tests)
     loop = Loop([place(LowPassFilter(5.0, order=2).digital(0.01, channels=3), "W")], dt=0.01)

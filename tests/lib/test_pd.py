@@ -107,7 +107,7 @@ def test_bad_input(kwargs, exc, match):
 @pytest.mark.parametrize("model", [False, True])
 def test_kernel_is_the_numpy_method_run_by_run(model, compiled):
     """pd_step on one run (plain Python or jitted) equals the block's batched output and update bit for bit."""
-    from ctrl_analysis._kernels import _jit
+    from ctrl_analysis.engine.codegen import _jit
 
     pd = PDFeedforward(b0=3.0, omega_c=10.0, model=model)
     k = pd.kernel()
@@ -132,9 +132,9 @@ def test_kernel_is_the_numpy_method_run_by_run(model, compiled):
 
 def test_compiled_loop_with_the_law_equals_the_numpy_loop():
     """A double integrator under the model-compensated law: compiled engine = numpy engine bit for bit."""
-    from ctrl_analysis.blocks import StaticGain
+    from ctrl_analysis.engine.blocks import StaticGain
+    from ctrl_analysis.engine.loop import Loop, place
     from ctrl_analysis.estimators.lowpass import LowPassFilter
-    from ctrl_analysis.loop import Loop, place
 
     pd = PDFeedforward(b0=2.0, omega_c=5.0, model=True)
     # x̂ = the filtered reference, Θ ∝ ξ: a kernel-only loop that exercises every input of the law

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from ctrl_analysis.controllers.pid import DiscretePID
-from ctrl_analysis.loop import Loop, place
+from ctrl_analysis.engine.loop import Loop, place
 
 T = 0.05
 

@@ -8,10 +8,21 @@ from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 from ctrl_analysis.estimators.differential import DifferentialEstimator
-from ctrl_analysis.estimators.kalman import (care_residual, continuous_steady_state, dare_residual,
-                                             discrete_steady_state, random_walk_gain)
+from ctrl_analysis.estimators.kalman import (
+    care_residual,
+    continuous_steady_state,
+    dare_residual,
+    discrete_steady_state,
+    random_walk_gain,
+)
 from ctrl_analysis.estimators.kalman._checks import check_detectable
-from ctrl_analysis.simulate import draw_noise, gaussian_noise, run_seeds, simulate_sampled, uniform_noise
+from ctrl_analysis.simulate import (
+    draw_noise,
+    gaussian_noise,
+    run_seeds,
+    simulate_sampled,
+    uniform_noise,
+)
 from ctrl_analysis.symbolic.differential import MAX_ORDER
 
 SETTINGS = settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])

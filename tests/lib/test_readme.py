@@ -59,7 +59,7 @@ def test_readme_verdict_overview_is_the_generated_one():
     import json
 
     from analysis import STUDIES
-    from ctrl_analysis.report_md import overview_table
+    from ctrl_analysis.reporting.markdown import overview_table
 
     root = README.parent
     results = [json.loads((root / "figures" / n / "results.json").read_text(encoding="utf-8")) for n in STUDIES]

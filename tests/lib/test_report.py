@@ -6,9 +6,16 @@ import math
 import numpy as np
 import pytest
 
-from ctrl_analysis.report import (Quantity, StudyContext, StudyInfo, StudyResult, compute_verdict, relative_error,
-                                  write_results_json)
-from ctrl_analysis.report_md import write_report_md
+from ctrl_analysis.reporting.markdown import write_report_md
+from ctrl_analysis.reporting.report import (
+    Quantity,
+    StudyContext,
+    StudyInfo,
+    StudyResult,
+    compute_verdict,
+    relative_error,
+    write_results_json,
+)
 
 INFO = StudyInfo(name="demo", seed_file="x.txt", paper="A paper", reproduces="things")
 
@@ -70,7 +77,7 @@ def test_report_md_lists_tables_findings_figures(tmp_path):
 
 
 def test_context_runs_and_save_figure(tmp_path):
-    from ctrl_analysis.report import new_figure
+    from ctrl_analysis.reporting.report import new_figure
 
     assert StudyContext(tmp_path).runs_or(100, 5) == 100
     assert StudyContext(tmp_path, quick=True).runs_or(100, 5) == 5

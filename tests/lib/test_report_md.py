@@ -3,13 +3,18 @@ side-by-side paper tables, generated summaries, summarised evidence, captions an
 
 import re
 
-from ctrl_analysis.report import StudyContext, StudyInfo, StudyResult, count_verdicts
-from ctrl_analysis.report_md import (
+from ctrl_analysis.reporting.markdown import (
     paper_tables,
     study_summary,
     summarise,
     tally,
     write_report_md,
+)
+from ctrl_analysis.reporting.report import (
+    StudyContext,
+    StudyInfo,
+    StudyResult,
+    count_verdicts,
 )
 
 INFO = StudyInfo(name="demo", seed_file="x.txt", paper="A paper", reproduces="things")

@@ -7,9 +7,18 @@ from pathlib import Path
 
 import pytest
 
-from ctrl_analysis.report import (RESULTS_SCHEMA, Quantity, StudyInfo, StudyResult, count_verdicts,
-                                  staged_directory, validate_results, write_results_json, write_text_atomic)
-from ctrl_analysis.report_md import write_report_md
+from ctrl_analysis.reporting.markdown import write_report_md
+from ctrl_analysis.reporting.report import (
+    RESULTS_SCHEMA,
+    Quantity,
+    StudyInfo,
+    StudyResult,
+    count_verdicts,
+    staged_directory,
+    validate_results,
+    write_results_json,
+    write_text_atomic,
+)
 
 INFO = StudyInfo(name="demo", seed_file="x.txt", paper="A paper", reproduces="things")
 REPO = Path(__file__).resolve().parents[2]

@@ -1,15 +1,16 @@
-"""Compiled kernels (ctrl_analysis._kernels) against the blocks' numpy methods, and the compiled Loop engine."""
+"""Compiled kernels (ctrl_analysis.engine.codegen) against the blocks' numpy methods, and the compiled Loop engine."""
 
 import numpy as np
 import pytest
 
-from ctrl_analysis import _kernels
-from ctrl_analysis._compiled import compiled_for
-from ctrl_analysis._kernels import BlockKernel, copy_output, kernel_of
-from ctrl_analysis.blocks import ContinuousBlock, DiscreteBlock
+from ctrl_analysis.engine import codegen as _kernels
+from ctrl_analysis.engine.blocks import ContinuousBlock, DiscreteBlock
+from ctrl_analysis.engine.codegen import kernel_of
+from ctrl_analysis.engine.compiled import compiled_for
+from ctrl_analysis.engine.kernels import BlockKernel, copy_output
+from ctrl_analysis.engine.loop import Loop, place
 from ctrl_analysis.estimators.differential import DifferentialEstimator, sigma_rhs
 from ctrl_analysis.estimators.eso import ExtendedStateObserver, eso_rhs
-from ctrl_analysis.loop import Loop, place
 from ctrl_analysis.simulate import draw_noise, gaussian_noise, run_seeds
 
 
@@ -259,7 +260,7 @@ class KOscPerRun(KOsc):
 def test_per_run_params_follow_their_runs_through_chunks_and_processes():
     """Per-run values given to simulate(params=...): a kernel block (rows) and a static gain (a gain per
     run) equal their runs alone on both engines, through chunks and processes."""
-    from ctrl_analysis.blocks import StaticGain
+    from ctrl_analysis.engine.blocks import StaticGain
 
     k = np.array([1.0, 4.0, 9.0, 16.0, 25.0])
     D = np.zeros((5, 1, 2))
@@ -309,7 +310,7 @@ def test_a_block_holding_its_own_per_run_rows_runs_whole():
 
 
 def test_static_gain_kernel_equals_its_numpy_output():
-    from ctrl_analysis.blocks import StaticGain, gain_output
+    from ctrl_analysis.engine.blocks import StaticGain, gain_output
 
     rng = np.random.default_rng(3)
     u = rng.normal(size=(7, 3))

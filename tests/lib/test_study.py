@@ -1,4 +1,4 @@
-"""ctrl_analysis.study.study_params: the one `params` of every study's run(ctx, params=None)."""
+"""ctrl_analysis.reporting.study.study_params: the one `params` of every study's run(ctx, params=None)."""
 
 import inspect
 from dataclasses import dataclass
@@ -6,8 +6,8 @@ from dataclasses import dataclass
 import pytest
 
 from analysis import STUDIES, load_study
-from ctrl_analysis.report import StudyContext, StudyInfo, StudyResult
-from ctrl_analysis.study import printed, reconstructed, span, study_params
+from ctrl_analysis.reporting.report import StudyContext, StudyInfo, StudyResult
+from ctrl_analysis.reporting.study import printed, reconstructed, span, study_params
 
 
 @dataclass(frozen=True)

@@ -140,7 +140,7 @@ def test_softened_setpoint_with_the_td_and_errors():
 
 @pytest.mark.parametrize("compiled", [False, True])
 def test_td_kernel_is_the_numpy_method_and_fhan_compiles_to_the_same_bits(compiled):
-    from ctrl_analysis import _kernels
+    from ctrl_analysis.engine import codegen as _kernels
     from ctrl_analysis.estimators.tracking import _fhan, td_output, td_update
 
     jit = _kernels._jit if compiled else (lambda f: f)
@@ -169,7 +169,7 @@ def test_td_kernel_is_the_numpy_method_and_fhan_compiles_to_the_same_bits(compil
 
 @pytest.mark.parametrize("compiled", [False, True])
 def test_step_block_is_the_feedthrough_output_run_once(compiled):
-    from ctrl_analysis import _kernels
+    from ctrl_analysis.engine import codegen as _kernels
     from ctrl_analysis.estimators.tracking import td_step_output
 
     fn = _kernels._jit(td_step_output) if compiled else td_step_output

@@ -1,7 +1,14 @@
 import numpy as np
 import pytest
 
-from ctrl_analysis._validate import check_finite, check_in, check_int, check_matrix, check_nonnegative, check_positive
+from ctrl_analysis._validate import (
+    check_finite,
+    check_in,
+    check_int,
+    check_matrix,
+    check_nonnegative,
+    check_positive,
+)
 
 
 def test_messages_name_argument_and_rule():

@@ -10,12 +10,23 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 
-from ctrl_analysis import sensitivity
-from ctrl_analysis.report import StudyInfo, StudyResult, count_verdicts, validate_results
-from ctrl_analysis.report_md import write_report_md
-from ctrl_analysis.report_md import not_reproduced, tally
-from ctrl_analysis.study import Claim, choices, fixed, missing_plausible, reconstructed, span
-from ctrl_analysis.verdicts import central_interval, digits_tolerance
+from ctrl_analysis.reporting import sensitivity
+from ctrl_analysis.reporting.markdown import not_reproduced, tally, write_report_md
+from ctrl_analysis.reporting.report import (
+    StudyInfo,
+    StudyResult,
+    count_verdicts,
+    validate_results,
+)
+from ctrl_analysis.reporting.study import (
+    Claim,
+    choices,
+    fixed,
+    missing_plausible,
+    reconstructed,
+    span,
+)
+from ctrl_analysis.reporting.verdicts import central_interval, digits_tolerance
 
 INFO = StudyInfo("toy", "x.txt", "A paper", "things")
 

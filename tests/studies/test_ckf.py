@@ -9,8 +9,8 @@ from analysis import ckf
 from analysis.ckf import quantities as qty
 from analysis.ckf.loops import CASES, ID_OPTIONS, SIGNALS, simulate_cases
 from analysis.ckf.paper import CLAIMS, PAPER, READINGS, frozen
-from ctrl_analysis.report import StudyContext, write_results_json
-from ctrl_analysis.study import missing_plausible
+from ctrl_analysis.reporting.report import StudyContext, write_results_json
+from ctrl_analysis.reporting.study import missing_plausible
 
 SHORT = dataclasses.replace(PAPER, t_end=12.0, t_steady=8.0, option_t_end=12.0, option_runs=2, sweep_runs=2)
 
@@ -81,7 +81,7 @@ def test_identification_is_live_and_predicts_better_than_the_frozen_ablation():
 
 
 def test_judge_claims_fails_when_the_ckf_is_not_ahead():
-    from ctrl_analysis.report import StudyInfo, StudyResult
+    from ctrl_analysis.reporting.report import StudyInfo, StudyResult
 
     res = StudyResult(StudyInfo("t", "", "", ""))
     for case, v in (("ckf", 2.0), ("lpf", 1.0), ("lpf_half", 0.5)):

@@ -9,14 +9,29 @@ import control as ct
 import numpy as np
 import pytest
 
-from analysis.differential_estimator import INFO, run
-from analysis.differential_estimator import example1, example2, linear_checks, loops
-from analysis.differential_estimator import claims, figures
-from analysis.differential_estimator.paper import (CLAIMS, EX1, EX2, LINEAR, READINGS, applied_gains,
-                                                   han_eso_gains, printed_eq9_gain)
-from ctrl_analysis.study import missing_plausible
+from analysis.differential_estimator import (
+    INFO,
+    claims,
+    example1,
+    example2,
+    figures,
+    linear_checks,
+    loops,
+    run,
+)
+from analysis.differential_estimator.paper import (
+    CLAIMS,
+    EX1,
+    EX2,
+    LINEAR,
+    READINGS,
+    applied_gains,
+    han_eso_gains,
+    printed_eq9_gain,
+)
 from ctrl_analysis.estimators.differential import DifferentialEstimator
-from ctrl_analysis.report import StudyContext, StudyResult, write_results_json
+from ctrl_analysis.reporting.report import StudyContext, StudyResult, write_results_json
+from ctrl_analysis.reporting.study import missing_plausible
 from ctrl_analysis.simulate import run_seeds
 from ctrl_analysis.symbolic.differential import breakaway_gain
 
@@ -139,9 +154,9 @@ def test_stable_preset_is_the_smallest_integer_a_with_the_margin():
 def test_example2_kernels_with_per_run_rows_equal_each_runs_own_block(compiled):
     """Plant (20) and Σ with per-run values: the kernels run by run (plain or jitted), on the rows
     ``simulate(params=...)`` packs, equal the batched methods and each run's own block bit for bit."""
-    from ctrl_analysis._kernels import _jit, kernel_of
-    from ctrl_analysis._stepcheck import unchecked
+    from ctrl_analysis.engine.codegen import _jit, kernel_of
     from ctrl_analysis.engine.params import resolve
+    from ctrl_analysis.engine.stepcheck import unchecked
 
     rng = np.random.default_rng(7)
     B = 6
@@ -190,7 +205,7 @@ def test_example2_loop_compiled_equals_numpy_with_a_grid_and_two_presets():
         np.testing.assert_array_equal(a["traces"][s], b["traces"][s])
     # the re-run traces are the batch's runs
     np.testing.assert_array_equal(b["traces"]["x[0]"], b["sig"]["x[0]"][:, b["pick"]])
-    from ctrl_analysis._kernels import kernel_of
+    from ctrl_analysis.engine.codegen import kernel_of
 
     loop = loops.example2_loop(p)
     assert all(kernel_of(pl.block) is not None for pl in loop.placed)  # "auto" ran the compiled engine
@@ -291,7 +306,7 @@ def test_quick_run_smoke(tmp_path):
     assert result.sensitivity["evaluations"] > 1
     data = json.loads(write_results_json(result, tmp_path).read_text())
     # "Not reproduced" (the report's list) names every printed cell that does not agree, then the study's 2 other items
-    from ctrl_analysis.report_md import not_reproduced
+    from ctrl_analysis.reporting.markdown import not_reproduced
 
     bad = [q for q in data["quantities"] if q.get("primary") and q["verdict"] in ("differs", "diverged")]
     items = not_reproduced(data)

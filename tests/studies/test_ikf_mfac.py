@@ -15,9 +15,9 @@ from analysis.ikf_mfac.plants import (
     reference_next,
 )
 from analysis.ikf_mfac.quantities import metrics_of, table1_consistency
-from ctrl_analysis.report import StudyInfo, StudyResult
+from ctrl_analysis.reporting.report import StudyInfo, StudyResult
+from ctrl_analysis.reporting.study import missing_plausible, record_parameters
 from ctrl_analysis.simulate import run_seeds
-from ctrl_analysis.study import missing_plausible, record_parameters
 
 
 def test_plant_switch_and_r_with_matlab_round():
@@ -94,7 +94,7 @@ def test_plant_kernel_compiled_equals_its_numpy_method():
     # the compiled loop itself is held equal to the numpy engine in tests/lib/test_mfac.py (one
     # structure with every MFAC kernel); here the study's own kernel, on both sides of the switch
     from analysis.ikf_mfac.plants import plant_update
-    from ctrl_analysis._kernels import _jit
+    from ctrl_analysis.engine.codegen import _jit
 
     rng = np.random.default_rng(0)
     x, u = rng.standard_normal((6, 4)), rng.standard_normal((6, 1))
@@ -200,7 +200,7 @@ def test_literal_td_rmse_of_few_survivors_is_diverged_with_its_count():
 
 def test_sweep_figures_never_draw_a_mean_of_few_runs_as_an_ordinary_point():
     from analysis.ikf_mfac.figures import _plot_runs
-    from ctrl_analysis.report import new_figure
+    from ctrl_analysis.reporting.report import new_figure
 
     _, ax = new_figure()
     rows = [(1.0, 0.1, 50, 0), (2.0, 0.1, 35, 15), (3.0, 0.1, 10, 40)]   # 100 %, 70 %, 20 % healthy
@@ -214,7 +214,7 @@ def test_sweep_figures_never_draw_a_mean_of_few_runs_as_an_ordinary_point():
 
 def test_sensitivity_marks_the_fig2_claim_as_depending_on_q():
     from analysis.ikf_mfac.evaluate import MonteCarlo, evaluate
-    from ctrl_analysis import sensitivity
+    from ctrl_analysis.reporting import sensitivity
 
     seeds = tuple(run_seeds(0, 12))
     params = {"ex1": EX1, "ex2": EX2, "fig2": FIG2,

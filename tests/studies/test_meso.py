@@ -5,8 +5,6 @@ import json
 import numpy as np
 import pytest
 
-from ctrl_analysis.simulate import run_seeds
-
 from analysis import meso
 from analysis.meso.identification import (
     BatchIdentification,
@@ -17,9 +15,10 @@ from analysis.meso.identification import (
 )
 from analysis.meso.loops import Row, pick, simulate_situation, situation_rows
 from analysis.meso.paper import CLAIMS, METRICS, PAPER, QUICK, READINGS, SITUATIONS
-from ctrl_analysis.study import missing_plausible
 from ctrl_analysis.identification import batch_least_squares
-from ctrl_analysis.report import StudyContext, write_results_json
+from ctrl_analysis.reporting.report import StudyContext, write_results_json
+from ctrl_analysis.reporting.study import missing_plausible
+from ctrl_analysis.simulate import run_seeds
 
 
 def test_equivalent_theta_is_the_closed_loop_projection():
@@ -176,7 +175,7 @@ def test_short_run_writes_every_quantity_with_unit_and_policy(tmp_path):
     assert data["sensitivity"]["evaluations"] > 10
     # "Not reproduced" (the report's list) names exactly the primary cells that differ, then the study's
     # non-cell items; the study's own list holds no cell
-    from ctrl_analysis.report_md import not_reproduced
+    from ctrl_analysis.reporting.markdown import not_reproduced
 
     bad = meso.findings.differing_cells(result)
     items = not_reproduced(data)
@@ -225,8 +224,8 @@ def test_kernels_with_per_run_rows_equal_the_blocks_built_for_each_run(compiled)
     passes ``params=``) = each run's own block = its kernel run alone (plain or jitted); the (M)ESO
     equals the library's ESO with the model as its known part, bit for bit."""
     from analysis.meso.loops import ModelledESO, ParameterPath, Plant
-    from ctrl_analysis._kernels import _jit
-    from ctrl_analysis._stepcheck import unchecked
+    from ctrl_analysis.engine.codegen import _jit
+    from ctrl_analysis.engine.stepcheck import unchecked
     from ctrl_analysis.estimators.eso import ExtendedStateObserver
 
     rng = np.random.default_rng(7)

@@ -9,8 +9,8 @@ import pytest
 
 from analysis import pendulum as pm
 from analysis.pendulum import loops, paper, quantities, verify
-from ctrl_analysis.report import StudyContext, write_results_json
-from ctrl_analysis.study import missing_plausible
+from ctrl_analysis.reporting.report import StudyContext, write_results_json
+from ctrl_analysis.reporting.study import missing_plausible
 from ctrl_analysis.symbolic.riccati import second_order_gain
 
 V, L = paper.VERIFY, paper.LOOP
@@ -114,7 +114,7 @@ def test_run_smoke(small_run):
     assert result.get("sec5.step_deg").kind == "check"
     assert {f["id"]: f.get("kind") for f in result.findings}["step-degrees"] == "erratum"
     # "Not reproduced" (the report's list) names the differing §4 cell first, then the study's non-cell items
-    from ctrl_analysis.report_md import not_reproduced
+    from ctrl_analysis.reporting.markdown import not_reproduced
 
     items = not_reproduced(result.to_dict())
     assert items[0].startswith("§4 / K = PCᵀR⁻¹ = [0.950, 0.863]") and items[1:] == result.missing
@@ -142,8 +142,8 @@ def test_loop_equals_python_control_interconnect():
     """The no-filter loop with the plant as a SampledBlock runs the same in Loop and in control.interconnect."""
     import control as ct
 
-    from ctrl_analysis.blocks import SampledBlock, StaticBlock
-    from ctrl_analysis.loop import Loop, place
+    from ctrl_analysis.engine.blocks import SampledBlock, StaticBlock
+    from ctrl_analysis.engine.loop import Loop, place
 
     p = dataclasses.replace(L, t_end=0.25, n_lookup=31)
     N = int(round(p.t_end / p.T))

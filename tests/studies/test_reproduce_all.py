@@ -6,7 +6,7 @@ import sys
 from pathlib import Path
 
 from analysis import STUDIES
-from ctrl_analysis.report import validate_results
+from ctrl_analysis.reporting.report import validate_results
 
 REPO = Path(__file__).resolve().parents[2]
 

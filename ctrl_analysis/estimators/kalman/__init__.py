@@ -21,18 +21,43 @@ Continuous model: ``ẋ = A x + B u + G w``, ``y = C x + v``, ``E[w wᵀ] = Q δ
 Discrete model: ``x(k+1) = F x(k) + G w(k)``, ``y(k) = H x(k) + v(k)``, ``cov w = Q``, ``cov v = R``.
 """
 
-from ._checks import (check_controllable, check_detectable, check_observable, controllability_matrix,
-                      controllability_rank, observability_matrix, observability_rank)
-from .alpha_beta import (AlphaBetaFilter, alpha_beta_from_gain, alpha_beta_stable, gain_from_alpha_beta,
-                         kalata_gains, tracking_index, tracking_index_from_gains)
+from ._checks import (
+                      check_controllable,
+                      check_detectable,
+                      check_observable,
+                      controllability_matrix,
+                      controllability_rank,
+                      observability_matrix,
+                      observability_rank,
+)
+from .alpha_beta import (
+                      AlphaBetaFilter,
+                      alpha_beta_from_gain,
+                      alpha_beta_stable,
+                      gain_from_alpha_beta,
+                      kalata_gains,
+                      tracking_index,
+                      tracking_index_from_gains,
+)
 from .ckf import CharacteristicKalmanFilter, LinearKalmanFilter
-from .continuous import (ContinuousSteadyState, care_residual, continuous_steady_state,
-                         continuous_steady_state_gain, riccati_rhs, riccati_trajectory)
-from .discrete import (DiscreteSteadyState, dare_residual, discrete_steady_state, discrete_steady_state_batch,
-                       discretize_noise)
+from .continuous import (
+                      ContinuousSteadyState,
+                      care_residual,
+                      continuous_steady_state,
+                      continuous_steady_state_gain,
+                      riccati_rhs,
+                      riccati_trajectory,
+)
+from .discrete import (
+                      DiscreteSteadyState,
+                      dare_residual,
+                      discrete_steady_state,
+                      discrete_steady_state_batch,
+                      discretize_noise,
+)
 from .filter import DiscreteKalmanFilter
-from .scalar import random_walk_gain
 from .ikf import ImprovedKalmanFilter
+from .scalar import random_walk_gain
 
 __all__ = [
     "controllability_matrix", "observability_matrix", "controllability_rank", "observability_rank",

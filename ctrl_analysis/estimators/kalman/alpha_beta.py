@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..._validate import check_bool, check_finite, check_matrix, check_positive
-from ...blocks import DiscreteBlock
+from ...engine.blocks import DiscreteBlock
 from ...engine.kernels import KernelBlock, Kernels, Layout, as_int, jitable
 
 __all__ = ["alpha_beta_from_gain", "gain_from_alpha_beta", "tracking_index", "tracking_index_from_gains", "kalata_gains", "alpha_beta_stable", "AlphaBetaFilter"]
@@ -381,7 +381,7 @@ def alpha_beta_gamma_output(t, x, u, p, y):
     """α-β-γ correction ``x̂(k|k) = x̂(k|k−1) + K (y(k) − x̂(k|k−1)[0])``, ``K = [α, β/T, γ/(2T²)]``.
 
     Scalar-indexed: the kernel of one run and, on a batch's transposed arrays, a block's numpy
-    method (:class:`~ctrl_analysis.blocks.ColumnKernels`).
+    method (:class:`~ctrl_analysis.engine.blocks.ColumnKernels`).
 
     Parameters
     ----------

@@ -9,8 +9,7 @@ import scipy.integrate
 import scipy.linalg
 
 from ..._validate import check_finite, check_matrix, check_positive
-
-from ._checks import (_system, _sym, _covariance, _prepare, _riccati_solution)
+from ._checks import _covariance, _prepare, _riccati_solution, _sym, _system
 
 __all__ = ["ContinuousSteadyState", "continuous_steady_state", "continuous_steady_state_gain", "care_residual", "riccati_rhs", "riccati_trajectory"]
 

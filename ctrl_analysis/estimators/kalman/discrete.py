@@ -9,8 +9,15 @@ import scipy.integrate
 import scipy.linalg
 
 from ..._validate import check_finite, check_int, check_matrix, check_positive
-
-from ._checks import (_square, _system, _sym, _symb, _covariance, _prepare, _riccati_solution)
+from ._checks import (
+    _covariance,
+    _prepare,
+    _riccati_solution,
+    _square,
+    _sym,
+    _symb,
+    _system,
+)
 
 __all__ = ["DiscreteSteadyState", "discrete_steady_state", "discrete_steady_state_batch", "dare_residual", "discretize_noise"]
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..._validate import check_finite, check_matrix, check_positive
-from ...blocks import DiscreteBlock, signal_names
+from ...engine.blocks import DiscreteBlock, signal_names
 from ...engine.kernels import KernelBlock, Kernels, Layout, as_int, jitable
 
 __all__ = ["DiscreteKalmanFilter"]

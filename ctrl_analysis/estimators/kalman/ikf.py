@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..._validate import check_finite, check_nonnegative, check_positive
-from ...blocks import DiscreteBlock
+from ...engine.blocks import DiscreteBlock
 from ...engine.kernels import KernelBlock, Kernels, Layout, jitable
 from .scalar import random_walk_gain
 

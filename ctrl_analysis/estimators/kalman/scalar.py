@@ -2,11 +2,9 @@
 
 from __future__ import annotations
 
-
 import numpy as np
 
 from ..._validate import check_finite, check_positive
-
 
 __all__ = ["random_walk_gain"]
 

@@ -6,7 +6,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ._validate import check_callable, check_finite, check_in, check_positive
+from .._validate import check_callable, check_finite, check_in, check_positive
 from .simresult import SimResult, _check_bound, _prepare
 
 __all__ = ["simulate_ivp"]

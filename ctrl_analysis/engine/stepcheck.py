@@ -3,7 +3,7 @@
 A block's per-step methods (``output``, ``update``, ``rhs``) check nothing inside the engine, which
 calls them millions of times with arrays it has shaped itself. Called directly by a user, a state
 or input of the wrong width would be read past its columns or broadcast into a wrong answer, so
-:class:`~ctrl_analysis.blocks.Block` wraps every subclass's per-step methods with
+:class:`~ctrl_analysis.engine.blocks.Block` wraps every subclass's per-step methods with
 :func:`checked`: the public method checks the widths, and the engine calls the unwrapped function
 (:func:`unchecked`).
 """

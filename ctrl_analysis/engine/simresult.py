@@ -1,8 +1,8 @@
 """The record every batch runner returns (:class:`SimResult`) and the checks the runners share.
 
 Its own module so that :mod:`ctrl_analysis.simulate` (fixed-step runners) and
-:mod:`ctrl_analysis.ivp` (the adaptive runner, re-exported by ``simulate``) both import it without
-importing each other: ``import ctrl_analysis.ivp`` works as a program's first import.
+:mod:`ctrl_analysis.engine.ivp` (the adaptive runner, re-exported by ``simulate``) both import it without
+importing each other: ``import ctrl_analysis.engine.ivp`` works as a program's first import.
 """
 
 from __future__ import annotations
@@ -11,8 +11,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._validate import check_array, check_real
-from .noise import _check_seeds
+from .._validate import check_array, check_real
+from ..noise import _check_seeds
 
 __all__ = ["SimResult"]
 

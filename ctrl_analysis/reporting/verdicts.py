@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._validate import check_array, check_bool, check_int, check_nonnegative, check_str
+from .._validate import check_array, check_bool, check_int, check_nonnegative, check_str
 from .study import Claim
 
 __all__ = ["VERDICTS", "CLAIM_VERDICTS", "KINDS", "DEFAULT_TOLERANCE", "CENTRAL", "VERDICT_POLICY", "ClaimResult",
@@ -176,13 +176,13 @@ class ClaimResult:
     """A paper's claim judged on computed quantities; its verdict is computed, never typed.
 
     ``holds`` is the study's judgement at the chosen reconstructions (True, False, or None when nothing
-    computed can decide it). A sensitivity sweep (:mod:`ctrl_analysis.sensitivity`) fills ``depends_on``
+    computed can decide it). A sensitivity sweep (:mod:`ctrl_analysis.reporting.sensitivity`) fills ``depends_on``
     with the reconstructions whose plausible range flips the judgement, and ``robust_to`` with those it
     tried without a flip.
 
     Parameters
     ----------
-    claim : ctrl_analysis.study.Claim
+    claim : ctrl_analysis.reporting.study.Claim
     holds : bool or None
     evidence : tuple of str
         Ids of the quantities that decide it.

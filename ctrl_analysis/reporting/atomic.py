@@ -19,7 +19,7 @@ import stat
 import tempfile
 from pathlib import Path
 
-from ._validate import check_path
+from .._validate import check_path
 
 # new_staging, swap_in, remove_tree, recover_staging and exclusive_lock are the CLI's plumbing (not exported)
 __all__ = ["staged_directory", "write_text_atomic"]

@@ -1,7 +1,7 @@
 """The batched interconnect: blocks wired by named signals, stepped together over a batch of runs.
 
 :class:`Loop` is to the engine what :func:`control.interconnect` is to python-control: it takes
-blocks (continuous, discrete or static, see :mod:`ctrl_analysis.blocks`) and connects every input
+blocks (continuous, discrete or static, see :mod:`ctrl_analysis.engine.blocks`) and connects every input
 to the output of the same name; the names no block produces are the loop's external inputs. One
 sample of period ``dt`` at ``t_k = t0 + k dt`` does, in python-control's callback order:
 
@@ -17,7 +17,7 @@ sample of period ``dt`` at ``t_k = t0 + k dt`` does, in python-control's callbac
 The batch axis ``B`` runs Monte Carlo seeds or a parameter grid side by side; run ``b`` of a
 batch equals the same run alone. Two engines step the loop: ``"numpy"`` calls the blocks' batched
 methods; ``"compiled"`` (chosen by ``engine="auto"`` when every block has a per-run kernel, see
-:mod:`ctrl_analysis._kernels`) runs one generated numba function with the same sample and stage
+:mod:`ctrl_analysis.engine.codegen`) runs one generated numba function with the same sample and stage
 order. A batch is stepped in chunks when it is large (results unchanged) and can be split over
 processes (``jobs``, :mod:`ctrl_analysis.parallel`). :meth:`Loop.interconnect` builds the same arrangement as a
 ``control.interconnect`` (all blocks continuous, or all discrete with the loop's ``dt``), and
@@ -31,8 +31,7 @@ from typing import ClassVar
 
 import numpy as np
 
-from ._compiled import compiled_for, held_rows, run_compiled
-from ._validate import (
+from .._validate import (
     check_bool,
     check_callable,
     check_finite,
@@ -44,18 +43,13 @@ from ._validate import (
     check_str,
 )
 from .blocks import Block, ContinuousBlock, DiscreteBlock, check_states_declared
-from .engine.numpy_engine import run_numpy
-from .engine.params import chunk_functions, resolve
-from .engine.plan import Plan, make_plan
+from .compiled import compiled_for, held_rows, run_compiled
+from .integrators import MAX_SUBSTEPS, STEPPERS
+from .memory import CHUNK_BYTES, RESULT_BYTES, check_result_memory, chunk_bounds
+from .numpy_engine import run_numpy
+from .params import chunk_functions, resolve
+from .plan import Plan, make_plan
 from .response import LoopResponse
-from .simulate import (
-    CHUNK_BYTES,
-    MAX_SUBSTEPS,
-    RESULT_BYTES,
-    STEPPERS,
-    check_result_memory,
-    chunk_bounds,
-)
 
 __all__ = ["AUTO_BAR_WORK", "Loop", "LoopResponse", "Placed", "place"]
 
@@ -101,7 +95,7 @@ def place(block: Block, name: str, *, inputs=None, outputs=None) -> Placed:
         The block with its name and signals, for :class:`Loop`.
     """
     if not isinstance(block, Block):
-        raise TypeError(f"block must be a ctrl_analysis.blocks.Block, got {type(block).__name__}")
+        raise TypeError(f"block must be a ctrl_analysis.engine.blocks.Block, got {type(block).__name__}")
     if not isinstance(name, str) or not name:
         raise ValueError(f"name must be a non-empty string, got {name!r}")
     ins = tuple(block.inputs) if inputs is None else check_names(f"inputs of {name!r}", inputs,
@@ -133,14 +127,14 @@ class Loop:
     ValueError
         Two blocks with one name, a signal produced twice, an algebraic loop (a cycle of
         feedthrough blocks), or a continuous or discrete block that declares no ``states``
-        (:func:`~ctrl_analysis.blocks.check_states_declared`).
+        (:func:`~ctrl_analysis.engine.blocks.check_states_declared`).
 
     Examples
     --------
     A discrete integrator driven by a constant external input ``r``:
 
     >>> import numpy as np
-    >>> from ctrl_analysis.blocks import DiscreteBlock
+    >>> from ctrl_analysis.engine.blocks import DiscreteBlock
     >>> class Acc(DiscreteBlock):
     ...     inputs, outputs, states = ("r",), ("s",), ("s",)
     ...     def update(self, t, x, u, params=None):
@@ -310,7 +304,7 @@ class Loop:
             a Monte Carlo that needs a metric need not pay for storing the whole trajectory.
         engine : {"auto", "numpy", "compiled"}
             ``"numpy"``: the blocks' batched methods. ``"compiled"``: one numba function for the whole
-            loop built from the blocks' kernels (:mod:`ctrl_analysis._kernels`); needs a kernel for
+            loop built from the blocks' kernels (:mod:`ctrl_analysis.engine.codegen`); needs a kernel for
             every block and no callable input. ``"auto"``: compiled when possible
             (the environment variable ``CTRL_ANALYSIS_ENGINE=numpy`` makes ``"auto"`` mean numpy).
             The choice depends on the loop only, never on the batch size, so run ``b`` is the same
@@ -395,7 +389,7 @@ class Loop:
         if B == 1 and x0_B > 1:
             B = x0_B
         if B == 1 and runs is None:
-            from .engine.params import runs_of
+            from .params import runs_of
 
             B = runs_of(self, params) or 1  # per-run parameters say how many runs
         x = self._x0(x0, B)
@@ -417,8 +411,8 @@ class Loop:
         size = max(1, min(size, int(limit // work))) if chunk_runs is None else size
         check_in("engine", engine, ("auto", "numpy", "compiled"))
         jobs = check_int("jobs", jobs, minimum=1)
-        from .engine.processes import simulate_chunks
-        from .parallel import active_cluster, picklable
+        from ..parallel import active_cluster, picklable
+        from .processes import simulate_chunks
 
         variants = resolve(self, params, B)  # validated here, before any work
         whole = held_rows(self, variants, B, split=(jobs > 1 and B > 1) or (chunk_runs is not None and size < B))
@@ -439,7 +433,7 @@ class Loop:
         div_step = np.full(B, -1, dtype=int)
         # a callable input returning one value per run is sliced with its chunk
         per_run_funcs = {s for s, f in funcs.items() if np.ndim(f(t[0])) == 1 and np.size(f(t[0])) == B > 1}
-        from .progress import enabled, updater
+        from ..progress import enabled, updater
 
         auto = progress is None and B * n_steps >= AUTO_BAR_WORK and enabled()
         with updater(progress if callable(progress) else auto, B * n_steps,
@@ -513,7 +507,7 @@ class Loop:
         has_c, has_d = bool(self.continuous), bool(self.discrete)
         if has_c and has_d:
             raise ValueError("interconnect needs all blocks continuous or all discrete; wrap continuous blocks "
-                             "in ctrl_analysis.blocks.SampledBlock to get a discrete-time loop")
+                             "in ctrl_analysis.engine.blocks.SampledBlock to get a discrete-time loop")
         syslist = []
         for p in self.placed:
             if isinstance(p.block, DiscreteBlock):

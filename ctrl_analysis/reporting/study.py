@@ -3,13 +3,13 @@
 A study keeps everything it takes from the paper, and every value the paper does not print, in one
 frozen dataclass. Declare each field with :func:`printed` (a value the paper prints, and where) or
 :func:`reconstructed` (a value the paper does not print, or prints wrongly, and why this one);
-:func:`record_parameters` then writes all of them into a :class:`~ctrl_analysis.report.StudyResult`
+:func:`record_parameters` then writes all of them into a :class:`~ctrl_analysis.reporting.report.StudyResult`
 (``settings`` and ``reconstructions``), so the report can never forget a reconstruction.
 
 Examples
 --------
 >>> from dataclasses import dataclass
->>> from ctrl_analysis.report import StudyInfo, StudyResult
+>>> from ctrl_analysis.reporting.report import StudyInfo, StudyResult
 >>> @dataclass(frozen=True)
 ... class Example:
 ...     h: float = printed(0.001, "§4: sampling step 1 ms")
@@ -30,7 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._validate import check_int, check_str
+from .._validate import check_int, check_str
 
 __all__ = ["Claim", "Plausible", "choices", "fixed", "missing_plausible", "printed", "reconstructed",
            "record_parameters", "reconstructions_of", "span", "study_params"]
@@ -42,7 +42,7 @@ _SCALES = ("linear", "log", "int")
 class Claim:
     """A claim the paper makes, declared in the study's ``paper.py`` next to its printed values.
 
-    The study judges it from computed quantities (:meth:`ctrl_analysis.results.StudyResult.claim`);
+    The study judges it from computed quantities (:meth:`ctrl_analysis.reporting.results.StudyResult.claim`);
     the verdict is ``holds``, ``fails``, ``untestable`` or, when it flips inside the plausible range of
     a reconstruction, ``depends``.
 
@@ -332,7 +332,7 @@ def record_parameters(result, params, prefix: str = "") -> None:
 
     Parameters
     ----------
-    result : ctrl_analysis.report.StudyResult
+    result : ctrl_analysis.reporting.report.StudyResult
     params : dataclass instance
         The study's frozen parameter object (possibly changed by ``dataclasses.replace``).
     prefix : str
@@ -363,7 +363,7 @@ def study_params(defaults: dict, params=None, result=None) -> dict:
     Every study's ``run(ctx, params=None)`` calls this once. ``defaults`` are the frozen parameter
     objects the study runs with (the paper's values and its reconstructions, or its ``--quick``
     settings), under the prefixes of their names in results.json (:func:`record_parameters`) —
-    the dict :func:`ctrl_analysis.sensitivity.sweep` and the study's ``evaluate(params)`` take.
+    the dict :func:`ctrl_analysis.reporting.sensitivity.sweep` and the study's ``evaluate(params)`` take.
     ``params`` overrides some of them, each entry either a whole object of the default's class or
     a dict of the fields to change (``{"ex1": {"Q": 0.02}}``).
 
@@ -373,7 +373,7 @@ def study_params(defaults: dict, params=None, result=None) -> dict:
         ``{prefix: dataclass instance}``.
     params : dict, optional
         ``{prefix: dataclass instance or {field: value}}``, prefixes among ``defaults``.
-    result : ctrl_analysis.results.StudyResult, optional
+    result : ctrl_analysis.reporting.results.StudyResult, optional
         When given and ``params`` changes a value, the changed fields are recorded in
         ``result.settings["overridden"]`` (``{prefix: [field, ...]}``), so a results.json made with
         overrides says so beside the reasons recorded for the defaults.

@@ -6,9 +6,9 @@ places them in the study's section (the scorecard first, before any table).
 
 from __future__ import annotations
 
-from .report_format import cell as _cell
-from .report_format import check_results
-from .report_format import fmt as _short
+from .formatting import cell as _cell
+from .formatting import check_results
+from .formatting import fmt as _short
 
 __all__ = ["CLAIM_MARK", "checks_and_errata", "claim_counts", "plausible_text", "scorecard", "sensitivity_lines"]
 

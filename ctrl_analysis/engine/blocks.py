@@ -13,7 +13,7 @@ Python objects beyond the arrays they return, so a hot path can later be compile
 
 A block names its signals (:attr:`Block.inputs`, :attr:`Block.outputs`, :attr:`Block.states`,
 each a tuple of strings, python-control style, e.g. ``"xhat[0]"``) and says whether its output
-depends on its input (:attr:`Block.feedthrough`); :class:`ctrl_analysis.loop.Loop` wires blocks by
+depends on its input (:attr:`Block.feedthrough`); :class:`ctrl_analysis.engine.loop.Loop` wires blocks by
 these names, and :meth:`nlsys` gives the same block as a ``control.nlsys`` (continuous, or discrete
 with ``dt``) for :func:`control.interconnect` and :func:`control.input_output_response`.
 """
@@ -24,9 +24,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ._columns import ColumnKernels
-from ._stepcheck import checked, unchecked, wrap_step_methods
-from ._validate import (
+from .._validate import (
     check_finite,
     check_in,
     check_int,
@@ -34,7 +32,9 @@ from ._validate import (
     check_positive,
     check_str,
 )
-from .engine.kernels import KernelBlock, Kernels, Layout
+from .columns import ColumnKernels
+from .kernels import KernelBlock, Kernels, Layout
+from .stepcheck import checked, unchecked, wrap_step_methods
 
 __all__ = [
     "MAX_SIGNALS",
@@ -92,7 +92,7 @@ class Block:
 
     def __init_subclass__(cls, **kwargs):
         # a direct call of output/update/rhs checks the widths of x and u; the engine calls the
-        # unwrapped methods (ctrl_analysis._stepcheck), so the hot loop checks nothing
+        # unwrapped methods (ctrl_analysis.engine.stepcheck), so the hot loop checks nothing
         super().__init_subclass__(**kwargs)
         wrap_step_methods(cls)
 
@@ -128,7 +128,7 @@ class Block:
     def with_params(self, **changes) -> Block:
         """A new block of the same class built with some constructor arguments changed.
 
-        What :meth:`Loop.simulate(params=...) <ctrl_analysis.loop.Loop.simulate>` and python-control's
+        What :meth:`Loop.simulate(params=...) <ctrl_analysis.engine.loop.Loop.simulate>` and python-control's
         ``params`` use: the constructor validates the new values, so a per-run value obeys the rules
         of the block's own argument.
 
@@ -350,7 +350,7 @@ class DiscreteBlock(Block):
         x : numpy.ndarray, shape (N+1, B, n)
             States ``x(0) .. x(N)``.
         """
-        from ._validate import check_finite
+        from .._validate import check_finite
 
         check_states_declared(self)
         m = len(self.inputs)
@@ -535,7 +535,7 @@ class SampledBlock(DiscreteBlock):
     """
 
     def __init__(self, block: ContinuousBlock, dt: float, method: str = "rk4", substeps: int = 1):
-        from .simulate import MAX_SUBSTEPS, STEPPERS
+        from .integrators import MAX_SUBSTEPS, STEPPERS
 
         if not isinstance(block, ContinuousBlock):
             raise TypeError(f"block must be a ContinuousBlock, got {type(block).__name__}")

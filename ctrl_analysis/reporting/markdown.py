@@ -15,15 +15,21 @@ from pathlib import Path
 
 import numpy as np
 
-from ._validate import check_path
-from .report_format import MAX_LIST, summarise  # noqa: F401 (public API)
-from .report_format import cell as _cell
-from .report_format import check_results as _check_results
-from .report_format import fmt as _fmt
-from .report_format import shorten_lists as _shorten_lists
+from .._validate import check_path
+from .claims import (
+    checks_and_errata,
+    claim_counts,
+    plausible_text,
+    scorecard,
+    sensitivity_lines,
+)
+from .formatting import MAX_LIST, summarise  # noqa: F401 (public API)
+from .formatting import cell as _cell
+from .formatting import check_results as _check_results
+from .formatting import fmt as _fmt
+from .formatting import shorten_lists as _shorten_lists
 from .glossary import GLOSSARY, glossary_lines  # noqa: F401 (GLOSSARY: public API)
 from .report import relative_error, write_text_atomic
-from .report_claims import checks_and_errata, claim_counts, plausible_text, scorecard, sensitivity_lines
 from .verdicts import VERDICT_POLICY
 
 __all__ = ["GLOSSARY", "MAX_LIST", "not_reproduced", "overview_table", "summary_table", "tally", "write_report_md"]
@@ -99,7 +105,7 @@ def _scored(results: dict, uncelled: bool = False) -> dict:
     """``{cell: quantity}``: the quantity that scores each paper cell (primary, else the first).
 
     With ``uncelled``, a quantity with a paper value but no cell is its own cell (named by its label),
-    as :func:`~ctrl_analysis.report.count_verdicts` counts it.
+    as :func:`~ctrl_analysis.reporting.report.count_verdicts` counts it.
     """
     by_cell: dict = {}
     for q in results["quantities"]:

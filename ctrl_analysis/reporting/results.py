@@ -14,11 +14,29 @@ from pathlib import Path
 
 import numpy as np
 
-from ._validate import check_array, check_bool, check_in, check_int, check_nonnegative, check_str
+from .._validate import (
+    check_array,
+    check_bool,
+    check_in,
+    check_int,
+    check_nonnegative,
+    check_str,
+)
 from .study import Claim, Plausible
-from .verdicts import (CENTRAL, CLAIM_VERDICTS, DEFAULT_TOLERANCE, KINDS, VERDICT_POLICY, VERDICTS,
-                       ClaimResult, _check_tolerance, central_interval, compute_verdict, digits_tolerance,
-                       relative_error)
+from .verdicts import (
+    CENTRAL,
+    CLAIM_VERDICTS,
+    DEFAULT_TOLERANCE,
+    KINDS,
+    VERDICT_POLICY,
+    VERDICTS,
+    ClaimResult,
+    _check_tolerance,
+    central_interval,
+    compute_verdict,
+    digits_tolerance,
+    relative_error,
+)
 
 __all__ = ["VERDICTS", "CLAIM_VERDICTS", "KINDS", "RESULTS_SCHEMA", "DEFAULT_TOLERANCE", "CENTRAL",
            "VERDICT_POLICY", "ClaimResult", "Quantity", "StudyInfo", "StudyResult", "compute_verdict",
@@ -113,7 +131,7 @@ class Quantity:
     samples: object = None
     derived_from: str | None = None
     kind: str = "reproduction"
-    #: set by a sensitivity sweep (:mod:`ctrl_analysis.sensitivity`): the cell's values and verdicts across
+    #: set by a sensitivity sweep (:mod:`ctrl_analysis.reporting.sensitivity`): the cell's values and verdicts across
     #: each reconstruction's plausible range
     sensitivity: dict | None = None
 
@@ -314,7 +332,7 @@ class StudyResult:
     runtime_s: float = 0.0
     #: the paper's claims, judged (:meth:`claim`)
     claims: list = field(default_factory=list)
-    #: what a sensitivity sweep tried (:func:`ctrl_analysis.sensitivity.sweep`), written to results.json
+    #: what a sensitivity sweep tried (:func:`ctrl_analysis.reporting.sensitivity.sweep`), written to results.json
     sensitivity: dict = field(default_factory=dict)
 
     def __post_init__(self):
@@ -380,7 +398,7 @@ class StudyResult:
 
         Parameters
         ----------
-        claim : ctrl_analysis.study.Claim
+        claim : ctrl_analysis.reporting.study.Claim
             As declared in the study's ``paper.py``.
         holds : bool or None
             The judgement at the chosen reconstructions; None when nothing computed decides it.
@@ -428,8 +446,8 @@ class StudyResult:
         name : str
         value : object
         why : str
-        plausible : ctrl_analysis.study.Plausible, optional
-            What else a reader could have chosen (:func:`ctrl_analysis.study.span`, ``choices``, ``fixed``).
+        plausible : ctrl_analysis.reporting.study.Plausible, optional
+            What else a reader could have chosen (:func:`ctrl_analysis.reporting.study.span`, ``choices``, ``fixed``).
         """
         item = {"name": check_str("name", name), "value": value, "why": check_str("why", why)}
         if plausible is not None:

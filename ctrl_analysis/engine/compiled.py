@@ -1,6 +1,6 @@
-"""The compiled path of :meth:`Loop.simulate <ctrl_analysis.loop.Loop.simulate>`: choosing it, per-run parameters, running a chunk.
+"""The compiled path of :meth:`Loop.simulate <ctrl_analysis.engine.loop.Loop.simulate>`: choosing it, per-run parameters, running a chunk.
 
-The runner itself is generated and compiled by :mod:`ctrl_analysis._kernels`. Per-run parameters
+The runner itself is generated and compiled by :mod:`ctrl_analysis.engine.codegen`. Per-run parameters
 are run-time values (``Loop.simulate(params=...)``, :mod:`ctrl_analysis.engine.params`): one kernel
 parameter row per run of the call, read at the run's index within the call.
 """
@@ -27,7 +27,7 @@ def compiled_for(loop, engine, funcs, variants):
     if engine == "numpy" or (engine == "auto" and os.environ.get("CTRL_ANALYSIS_ENGINE") == "numpy"):
         return None
     # imported here: _kernels re-exports kernels of the estimators, which `import ctrl_analysis` must not load
-    from ._kernels import available, compiled_runner, kernel_of
+    from .codegen import available, compiled_runner, kernel_of
     
     why = None
     if not available():
@@ -74,7 +74,7 @@ def compiled_for(loop, engine, funcs, variants):
 def held_rows(loop, variants, B: int, *, split: bool) -> bool:
     """Whether a block holds its own kernel parameter rows, one per run; checks that they fit the call.
 
-    Per-run values are given to :meth:`Loop.simulate <ctrl_analysis.loop.Loop.simulate>` as
+    Per-run values are given to :meth:`Loop.simulate <ctrl_analysis.engine.loop.Loop.simulate>` as
     ``params``. A block whose kernel parameters are a ``(B, n_p)`` array it built itself (the
     adapters of :mod:`ctrl_analysis.arena`, or a block given per-run arrays) ties the loop to one
     batch size: the call must have exactly those runs, and is stepped as one chunk in this process.
@@ -98,7 +98,7 @@ def held_rows(loop, variants, B: int, *, split: bool) -> bool:
     ValueError
         If the rows are not the call's runs, or the call asks for a split.
     """
-    from ._kernels import kernel_of
+    from .codegen import kernel_of
 
     rows = {}
     for p in loop.placed:

@@ -1,4 +1,4 @@
-"""Compiled per-run kernels of blocks, and the compiled runner of a :class:`~ctrl_analysis.loop.Loop`.
+"""Compiled per-run kernels of blocks, and the compiled runner of a :class:`~ctrl_analysis.engine.loop.Loop`.
 
 The batched block methods (``rhs``/``update``/``output`` on ``(B, n)`` arrays) pay numpy's call
 overhead on every operation, which dominates at small and medium batches. A block can also offer a
@@ -15,7 +15,7 @@ that differ per run (a plant gain, an observer bandwidth, a case flag) are given
 one parameter row per run and slices the rows with the batch's chunks and processes. A block gives
 its kernel with a method ``kernel() -> BlockKernel`` (or ``None``), which :func:`kernel_of` calls; the engine knows
 no concrete block. When every block of a loop has a kernel, :meth:`Loop.simulate
-<ctrl_analysis.loop.Loop.simulate>` (``engine="auto"`` or ``"compiled"``) generates one numba
+<ctrl_analysis.engine.loop.Loop.simulate>` (``engine="auto"`` or ``"compiled"``) generates one numba
 function for the whole loop — runs outermost, the same sample/stage order and the same RK4
 arithmetic as the numpy path — and runs it; otherwise it uses the numpy path.
 
@@ -37,23 +37,10 @@ import sys
 import time
 from pathlib import Path
 
-from .engine.kernels import BlockKernel, copy_output, jitable
-
 # Σ's and the ESO's kernels live with their blocks; analysis/ and arena/ still import them from here
-from .estimators.differential import sigma_rhs
-from .estimators.eso import eso_rhs
+from .kernels import BlockKernel
 
-__all__ = [
-    "BlockKernel",
-    "available",
-    "compile_seconds",
-    "compiled_runner",
-    "copy_output",
-    "eso_rhs",
-    "jitable",
-    "kernel_of",
-    "sigma_rhs",
-]
+__all__ = ["available", "compile_seconds", "compiled_runner", "kernel_of"]
 
 
 def available() -> bool:
@@ -264,7 +251,7 @@ def compiled_runner(loop, kernels: dict):
     if key not in _RUNNERS:
         t0 = time.perf_counter()
         src = _gen_source(blocks, order, stage, discrete, continuous, loop.n_continuous, loop.method)
-        from .engine.integrators import is_bad, rk4_combine, rk4_stage
+        from .integrators import is_bad, rk4_combine, rk4_stage
 
         fns = {"RK4_STAGE": rk4_stage, "RK4_COMBINE": rk4_combine, "IS_BAD": is_bad}
         for i, n in enumerate(names):

@@ -1,9 +1,9 @@
 """Sensitivity of a study's verdicts to its reconstructions: every plausible value tried, one at a time.
 
 A study declares each value the paper does not print with
-``reconstructed(value, why, plausible=span(low, high, why))`` (:mod:`ctrl_analysis.study`). Its
+``reconstructed(value, why, plausible=span(low, high, why))`` (:mod:`ctrl_analysis.reporting.study`). Its
 claims and primary cells are computed by an ``evaluate(params)`` function that builds a
-:class:`~ctrl_analysis.results.StudyResult` with the same recording code as the study's main run.
+:class:`~ctrl_analysis.reporting.results.StudyResult` with the same recording code as the study's main run.
 :func:`sweep` calls it at the chosen values (the baseline) and once per plausible value of each
 reconstruction, the others held at their chosen values; :func:`apply` then marks every claim whose
 verdict flips inside a plausible range as ``depends`` (naming the reconstruction and the values where
@@ -16,8 +16,8 @@ A toy study whose claim ("the gain is below 2") holds at the chosen ``k = 1`` bu
 ``k`` near the top of its plausible range:
 
 >>> from dataclasses import dataclass
->>> from ctrl_analysis.report import StudyInfo, StudyResult
->>> from ctrl_analysis.study import Claim, reconstructed, span
+>>> from ctrl_analysis.reporting.report import StudyInfo, StudyResult
+>>> from ctrl_analysis.reporting.study import Claim, reconstructed, span
 >>> CLAIM = Claim("small", "§1", "the gain is below 2")
 >>> @dataclass(frozen=True)
 ... class P:
@@ -42,7 +42,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ._validate import check_callable, check_int
+from .._validate import check_callable, check_int
 from .results import StudyResult
 from .study import reconstructions_of
 
@@ -126,7 +126,7 @@ def sweep(evaluate: Callable, params: dict, *, names=None, jobs: int = 1, schedu
         like the argument below. Module-level (picklable) to run over processes.
     params : dict
         ``{prefix: frozen parameter dataclass}``, the prefixes those of
-        :func:`ctrl_analysis.study.record_parameters` (so names match results.json's reconstructions).
+        :func:`ctrl_analysis.reporting.study.record_parameters` (so names match results.json's reconstructions).
     names : collection of str, optional
         Only these reconstructions (``"prefix.field"``); default every varied one.
     jobs : int
@@ -140,7 +140,7 @@ def sweep(evaluate: Callable, params: dict, *, names=None, jobs: int = 1, schedu
     -------
     Sensitivity
     """
-    from .parallel import map_chunks, picklable
+    from ..parallel import map_chunks, picklable
 
     check_callable("evaluate", evaluate, "evaluate(params)")
     if not isinstance(params, dict) or not params or not all(

@@ -1,6 +1,6 @@
 """The :class:`ColumnKernels` mixin: a block's numpy methods are its compiled kernel applied to the batch's columns.
 
-Re-exported as :class:`ctrl_analysis.blocks.ColumnKernels` (where blocks import it from).
+Re-exported as :class:`ctrl_analysis.engine.blocks.ColumnKernels` (where blocks import it from).
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ class ColumnKernels:
     mixin lists its functions' names in ``column_kernels`` (keys ``"output"`` and ``"update"`` or
     ``"rhs"``; names looked up in the block's module) and sets ``self._p``: its parameter vector
     (values per run are given to ``Loop.simulate(params=...)``; a ``(B, n_p)`` array, one row per run,
-    ties the block to one batch size, see :class:`~ctrl_analysis._kernels.BlockKernel`).
+    ties the block to one batch size, see :class:`~ctrl_analysis.engine.codegen.BlockKernel`).
 
     Put the mixin first among the bases (``class F(ColumnKernels, DiscreteBlock)``).
     """
@@ -102,6 +102,6 @@ class ColumnKernels:
         -------
         ctrl_analysis.engine.kernels.BlockKernel
         """
-        from .engine.kernels import BlockKernel
+        from .kernels import BlockKernel
 
         return BlockKernel(params=self._p, **self._column_fns())

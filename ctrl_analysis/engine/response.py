@@ -1,11 +1,11 @@
-"""The result of a :class:`~ctrl_analysis.loop.Loop` simulation: every signal by name, over the batch."""
+"""The result of a :class:`~ctrl_analysis.engine.loop.Loop` simulation: every signal by name, over the batch."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from ._validate import check_int
-from .simulate import SimResult
+from .._validate import check_int
+from .simresult import SimResult
 
 __all__ = ["LoopResponse"]
 

@@ -1,7 +1,7 @@
 """What a study is handed (StudyContext), results.json writing and its schema check, and the figure style.
 
 The result records themselves (:class:`Quantity`, :class:`StudyResult`, computed verdicts) are in
-:mod:`ctrl_analysis.results` and re-exported here; REPORT.md is written by :mod:`ctrl_analysis.report_md`
+:mod:`ctrl_analysis.reporting.results` and re-exported here; REPORT.md is written by :mod:`ctrl_analysis.reporting.markdown`
 (import it from there: this module does not import it, so the two form no import circle).
 """
 
@@ -15,11 +15,21 @@ from typing import Callable
 
 import numpy as np
 
+from .._validate import check_callable, check_int, check_path, check_positive, check_str
 from .atomic import staged_directory, write_text_atomic  # noqa: F401 (public API)
-from .results import (CLAIM_VERDICTS, DEFAULT_TOLERANCE, KINDS, RESULTS_SCHEMA, VERDICTS,  # noqa: F401 (public API)
-                      Quantity, StudyInfo, StudyResult, compute_verdict, relative_error, versions)
-from ._validate import (check_callable, check_int, check_path,
-                        check_positive, check_str)
+from .results import (  # noqa: F401 (public API)
+    CLAIM_VERDICTS,
+    DEFAULT_TOLERANCE,
+    KINDS,
+    RESULTS_SCHEMA,
+    VERDICTS,
+    Quantity,
+    StudyInfo,
+    StudyResult,
+    compute_verdict,
+    relative_error,
+    versions,
+)
 
 __all__ = [
     "Quantity",
