@@ -37,7 +37,7 @@ from bench_example1 import (
 from ctrl_analysis.simulate import draw_noise, run_seeds, uniform_noise
 
 NAME = "Example 1, user block (engine)"
-KEEP = ["x1", "x2", "xhat[0]", "xhat[1]", "xhat1", "xhat2"]
+KEEP = ["x[0]", "x[1]", "xhat[0]", "xhat[1]", "eso_xhat[0]", "eso_xhat[1]"]
 
 
 def run(T=2.0, repeat=5, B=1000):

@@ -183,12 +183,19 @@ def _gen_source(blocks, order, stage, discrete, continuous, nc, method):
         add("            for _ in range(substeps):")
         ind2 = " " * 16
         if method == "rk4":
-            # ctrl_analysis.engine.integrators' rk4_stage / rk4_combine, the numpy engine's RK4 too;
-            # the four stages are one loop, so the kernels are inlined once rather than four times
+            # ctrl_analysis.engine.integrators' rk4_point / rk4_sum (the numpy engine's RK4 too) on each
+            # state value; the four stages are one loop, so the kernels are inlined once, not four times
             add("                for s in range(4):")
-            add("                    ts = tau + RK4_STAGE(xc, KS, s, h, xt)")
+            add("                    if s == 0:")
+            L.extend(f"                        xt[{j}] = xc[{j}]" for j in range(nc))
+            add("                        ts = tau")
+            add("                    else:")
+            add("                        a = h if s == 3 else 0.5 * h")
+            L.extend(f"                        xt[{j}] = RK4_POINT(xc[{j}], KS[s - 1, {j}], a)" for j in range(nc))
+            add("                        ts = tau + a")
             L.extend(stage_lines("ts", "xt", "KS[s]", " " * 20))
-            add("                RK4_COMBINE(xc, KS, h)")
+            L.extend(f"                xc[{j}] = RK4_SUM(xc[{j}], KS[0, {j}], KS[1, {j}], KS[2, {j}], KS[3, {j}], h)"
+                     for j in range(nc))
         else:
             # ctrl_analysis.simulate.euler_step
             L.extend(stage_lines("tau", "xc", "k1", ind2))
@@ -251,9 +258,9 @@ def compiled_runner(loop, kernels: dict):
     if key not in _RUNNERS:
         t0 = time.perf_counter()
         src = _gen_source(blocks, order, stage, discrete, continuous, loop.n_continuous, loop.method)
-        from .integrators import is_bad, rk4_combine, rk4_stage
+        from .integrators import is_bad, rk4_point, rk4_sum
 
-        fns = {"RK4_STAGE": rk4_stage, "RK4_COMBINE": rk4_combine, "IS_BAD": is_bad}
+        fns = {"RK4_POINT": rk4_point, "RK4_SUM": rk4_sum, "IS_BAD": is_bad}
         for i, n in enumerate(names):
             k = kernels[n]
             fns[f"K{i}_out"] = k.output

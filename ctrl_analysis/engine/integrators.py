@@ -1,10 +1,10 @@
 """Fixed-step integrators and the divergence test, written once for both engines.
 
 The numpy engine steps a batch ``(B, n)``; the compiled runner (:mod:`ctrl_analysis.engine.codegen`)
-steps one run's vector. Both call the same stage helpers, :func:`rk4_stage` and
-:func:`rk4_combine` (scalar-indexed over the states: on a batch they are called with the
-transposed arrays, so ``x[j]`` is a column of runs), and the same test :func:`is_bad`; so the
-classical RK4 arithmetic and the divergence rule exist in one place.
+steps one run's vector. Both call the same RK4 formulas, :func:`rk4_point` (a stage's state) and
+:func:`rk4_sum` (the step), numpy on whole arrays and the runner on each state value (inlined,
+so the compiled loop is as fast as hand-unrolled arithmetic), and the same test :func:`is_bad`;
+so the classical RK4 arithmetic and the divergence rule exist in one place.
 """
 
 from __future__ import annotations
@@ -13,53 +13,41 @@ from collections.abc import Callable
 
 import numpy as np
 
-__all__ = ["MAX_SUBSTEPS", "STEPPERS", "euler_step", "is_bad", "rk4_combine", "rk4_stage", "rk4_step"]
+__all__ = ["MAX_SUBSTEPS", "STEPPERS", "euler_step", "is_bad", "rk4_point", "rk4_step", "rk4_sum"]
 
 
-def rk4_stage(xc, K, s, h, xt):
-    """The state at RK4 stage ``s``: ``xt = xc + a_s K[s-1]`` (``a = 0, h/2, h/2, h``); returns ``a_s``.
+def rk4_point(x, k, a):
+    """An RK4 stage's state ``x + a k`` (``a`` = h/2, h/2 or h; arrays or one value).
 
     Parameters
     ----------
-    xc : numpy.ndarray, shape (n,) or (n, B)
-        The state at the start of the step.
-    K : numpy.ndarray, shape (4, n) or (4, n, B)
-        The stage derivatives so far.
-    s : int
-        The stage, 0 to 3.
-    h : float
-        The step.
-    xt : numpy.ndarray
-        Overwritten with the stage's state.
+    x, k : float or numpy.ndarray
+        The state at the start of the step and the previous stage's derivative.
+    a : float
 
     Returns
     -------
-    float
-        The stage's time offset ``a_s`` (the stage time is ``t + a_s``).
+    float or numpy.ndarray
     """
-    if s == 0:
-        for j in range(xc.shape[0]):
-            xt[j] = xc[j]
-        return 0.0
-    a = h if s == 3 else 0.5 * h
-    for j in range(xc.shape[0]):
-        xt[j] = xc[j] + a * K[s - 1, j]
-    return a
+    return x + a * k
 
 
-def rk4_combine(xc, K, h):
-    """The RK4 step in place: ``xc += h/6 (K1 + 2 K2 + 2 K3 + K4)``.
+def rk4_sum(x, k1, k2, k3, k4, h):
+    """The RK4 step ``x + h/6 (k1 + 2 k2 + 2 k3 + k4)`` (arrays or one value).
 
     Parameters
     ----------
-    xc : numpy.ndarray, shape (n,) or (n, B)
-        The state at the start of the step, overwritten with the state at its end.
-    K : numpy.ndarray, shape (4, n) or (4, n, B)
+    x : float or numpy.ndarray
+        The state at the start of the step.
+    k1, k2, k3, k4 : float or numpy.ndarray
         The four stage derivatives.
     h : float
+
+    Returns
+    -------
+    float or numpy.ndarray
     """
-    for j in range(xc.shape[0]):
-        xc[j] = xc[j] + (h / 6.0) * (K[0, j] + 2.0 * K[1, j] + 2.0 * K[2, j] + K[3, j])
+    return x + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
 
 
 def euler_step(rhs: Callable, t: float, x: np.ndarray, u, h: float, params=None) -> np.ndarray:
@@ -97,15 +85,11 @@ def rk4_step(rhs: Callable, t: float, x: np.ndarray, u, h: float, params=None) -
     numpy.ndarray, shape (B, n)
         The state at ``t + h`` (local error O(h⁵)).
     """
-    xc = x.T  # the state's columns: the stage helpers index states, as in the compiled runner
-    K = np.empty((4,) + xc.shape)
-    xt = np.empty(xc.shape)
-    for s in range(4):
-        ts = t + rk4_stage(xc, K, s, h, xt)
-        K[s] = rhs(ts, xt.T, u, params).T
-    out = np.array(x, dtype=float)
-    rk4_combine(out.T, K, h)
-    return out
+    k1 = rhs(t, x, u, params)
+    k2 = rhs(t + 0.5 * h, rk4_point(x, k1, 0.5 * h), u, params)
+    k3 = rhs(t + 0.5 * h, rk4_point(x, k2, 0.5 * h), u, params)
+    k4 = rhs(t + h, rk4_point(x, k3, h), u, params)
+    return rk4_sum(x, k1, k2, k3, k4, h)
 
 
 #: Fixed-step integrators by name.
