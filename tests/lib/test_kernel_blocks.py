@@ -45,7 +45,6 @@ def _blocks():
         ("ckf", CharacteristicKalmanFilter(Q=1e-3, R=0.5, P0=2.0), {"R": [0.5, 1.0, 2.0, 4.0]}),
         ("lkf", LinearKalmanFilter(F3, [0.1, 0.2, 0.3], [1.0, 0.0, 0.0], 1e-2, 0.3), {"R": [0.3, 0.6, 0.3, 0.9]}),
         ("ikf", ImprovedKalmanFilter(Q=0.1, R=1.0), {"Q": [0.1, 0.01, 0.3, 0.05]}),
-        ("ikf-rows", ImprovedKalmanFilter(Q=np.array([0.1, 0.2, 0.3, 0.4]), R=1.0), None),
         ("alpha-beta", AlphaBetaFilter(0.5, 0.2, 0.1), {"alpha": [0.5, 0.6, 0.4, 0.5]}),
         ("alpha-beta-b", AlphaBetaFilter(0.5, 0.2, 0.1, F=F2, b=[0.01, 0.3]), None),
         ("lowpass", LowPassFilter(5.0, order=3), {"omega": [5.0, 2.0, 8.0, 1.0]}),
