@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from ctrl_analysis import identification
-from ctrl_analysis.controllers import mfac, pd
+from ctrl_analysis.controllers import golden_section, mfac, pd
 from ctrl_analysis.engine import codegen as _kernels
 
 pytestmark = pytest.mark.skipif(not _kernels.available(), reason="numba is not installed")
@@ -34,6 +34,15 @@ def _band_states(rng, B, n, m):
     return x, rng.standard_normal((B, m))
 
 
+def _golden_states(rng, B, n, m):
+    """GoldenSectionController: started or not, errors growing and shrinking, ĝ0 away from zero."""
+    x = rng.standard_normal((B, n))
+    x[:, 3] = rng.integers(0, 2, B)
+    u = rng.standard_normal((B, m))
+    u[:, 4] = rng.uniform(0.5, 2.0, B)
+    return x, u
+
+
 # (id, block, n states, n inputs, inputs generator, {parameter: per-run values generator})
 CASES = [
     ("UnitDelay", lambda: mfac.UnitDelay(0.3), 1, 1, _mfac_inputs, {}),
@@ -48,6 +57,8 @@ CASES = [
     ("CFDLPredictor", lambda: mfac.CFDLPredictor(2.0, 0.5, 0.1), 3, 2, _mfac_inputs, {}),
     ("ArxRegressor", lambda: identification.ArxRegressor(2, 1, lag=0), 3, 2, _mfac_inputs, {}),
     ("ArxRegressor-lag2", lambda: identification.ArxRegressor(1, 3, lag=2), 8, 2, _mfac_inputs, {}),
+    ("GoldenSectionController", lambda: golden_section.GoldenSectionController(0.1, 0.9, mu=0.05), 4, 5,
+     _golden_states, {"k_I": lambda r, B: r.uniform(0.0, 0.5, B), "c2": lambda r, B: r.uniform(0.5, 1.0, B)}),
     ("PDFeedforward", lambda: pd.PDFeedforward(2.0, omega_c=10.0), 0, 6, _mfac_inputs,
      {"b0": lambda r, B: r.uniform(1.0, 3.0, B), "omega_c": lambda r, B: r.uniform(5.0, 20.0, B)}),
     ("PDFeedforward-model-n3", lambda: pd.PDFeedforward(3.0, gains=[6.0, 11.0, 6.0], order=3, model=True),
