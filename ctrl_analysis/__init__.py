@@ -11,7 +11,6 @@ ctrl_analysis.controllers`` does.
 
 from .engine.blocks import (
     Block,
-    ColumnKernels,
     ContinuousBlock,
     DiscreteBlock,
     SampledBlock,
@@ -26,7 +25,6 @@ __version__ = "0.1.0"
 
 __all__ = [
     "Block",
-    "ColumnKernels",
     "ContinuousBlock",
     "DiscreteBlock",
     "Loop",

@@ -239,7 +239,7 @@ def batch_least_squares(H, z, *, strict: bool = False, cond_threshold: float = D
     return LeastSquaresResult(theta=theta, residual_rms=float(np.sqrt(np.mean(resid**2))), report=report)
 
 
-class RecursiveLeastSquaresBlock(DiscreteBlock):
+class RecursiveLeastSquaresBlock(KernelBlock, DiscreteBlock):
     """Recursive least squares with exponential forgetting and optional box projection, as a discrete block.
 
     For each new sample ``z(k) = h(k)ᵀ θ + v(k)``::
@@ -350,67 +350,28 @@ class RecursiveLeastSquaresBlock(DiscreteBlock):
         self.inputs = ("z",) + signal_names("h", p)
         self.outputs = signal_names("theta", p)
         self.states = self.outputs + tuple(f"P[{i}][{j}]" for i in range(p) for j in range(p))
-        # kernel parameters (ctrl_analysis.identification_kernels)
-        self._p = np.concatenate([[p, forgetting, self.max_trace or 0.0, float(self.projected)], lower, upper])
+        self.kernel_params = kern.rls_layout(p).pack(n=p, forgetting=forgetting, max_trace=self.max_trace or 0.0,
+                                                     projected=float(self.projected), lower=lower, upper=upper)
 
     # ------------------------------------------------------------------ block protocol
     def initial_state(self) -> np.ndarray:
         return np.concatenate([self.theta0, self.P0.reshape(-1)])
 
-    def _kernel(self, x, u):
-        """One RLS step on the batch: ``x = [θ, vec P]`` (B, p + p²), ``u = [z, h]`` (B, 1 + p).
+    @property
+    def kernels(self) -> Kernels:
+        """The RLS kernels: ``rls_update`` and ``rls_output`` (``rls_hold_output`` without feedthrough).
 
-        Returns ``(θ(k), P(k), D(k))``, written out element by element so a run does not depend on
-        the batch size.
+        In :mod:`ctrl_analysis.identification_kernels`; run by run in the batched methods (the
+        projection and the trace cap branch per value).
         """
-        p, lam = self.n_params, self.forgetting
-        B = x.shape[0]
-        theta = x[:, :p]
-        P = x[:, p:].reshape(B, p, p)
-        z, h = u[:, 0], u[:, 1:]
-        # R(k-1) h(k): row sums of p terms (same order for every run, whatever B)
-        Ph = (P * h[:, None, :]).sum(axis=2)
-        # (9) D(k) = R(k-1) h(k) [hᵀ(k) R(k-1) h(k) + λ]⁻¹
-        D = Ph / (lam + (h * Ph).sum(axis=1))[:, None]
-        # θ(k) = θ(k-1) + D(k) (z(k) − hᵀ(k) θ(k-1)), then the projection onto the box
-        theta_new = theta + D * (z - (h * theta).sum(axis=1))[:, None]
-        if self.projected:
-            np.clip(theta_new, self.lower, self.upper, out=theta_new)
-        # R(k) = [I − D(k) hᵀ(k)] R(k-1) / λ = (R − D (R h)ᵀ) / λ, symmetrised against round-off
-        Pn = (P - D[:, :, None] * Ph[:, None, :]) / lam
-        P_new = (0.5 * (Pn + Pn.transpose(0, 2, 1))).reshape(B, p * p)
-        if self.max_trace is not None:
-            # anti-windup: trace R(k) <= max_trace
-            tr = P_new[:, ::p + 1].sum(axis=1)
-            P_new *= np.minimum(1.0, self.max_trace / tr)[:, None]
-        return theta_new, P_new, D
-
-    def update(self, t, x, u, params=None) -> np.ndarray:
-        theta_new, P_new, _ = self._kernel(x, u)
-        return np.concatenate([theta_new, P_new], axis=1)
-
-    def output(self, t, x, u, params=None) -> np.ndarray:
-        if not self.feedthrough:
-            return x[:, :self.n_params]
-        return self._kernel(x, u)[0]
-
-    def kernel(self):
-        """The compiled engine's kernel: the twins of the numpy step in :mod:`ctrl_analysis.identification_kernels`.
-
-        :func:`~ctrl_analysis.identification_kernels.rls_update` and
-        :func:`~ctrl_analysis.identification_kernels.rls_output` (``rls_hold_output`` without feedthrough).
-
-        Returns
-        -------
-        ctrl_analysis.engine.codegen.BlockKernel
-        """
-        from .engine.kernels import BlockKernel
-
-        output = kern.rls_output if self.feedthrough else kern.rls_hold_output
-        return BlockKernel(output=output, params=self._p, update=kern.rls_update)
+        return _RLS_KERNELS if self.feedthrough else _RLS_HOLD_KERNELS
 
     def __repr__(self) -> str:
         return f"RecursiveLeastSquaresBlock(n_params={self.n_params}, forgetting={self.forgetting})"
+
+
+_RLS_KERNELS = Kernels(output=kern.rls_output, update=kern.rls_update, columns=False)
+_RLS_HOLD_KERNELS = Kernels(output=kern.rls_hold_output, update=kern.rls_update, columns=False)
 
 
 class RecursiveLeastSquares:
@@ -509,8 +470,12 @@ class RecursiveLeastSquares:
         h = np.broadcast_to(h, (B, p))
         z = np.broadcast_to(z.reshape(-1) if z.ndim else z, (B,))
         u = np.concatenate([z[:, None], h], axis=1)
-        theta_new, P_new, D = self.block._kernel(self._x, u)  # the block's equations, one step
-        self._x = np.concatenate([theta_new, P_new], axis=1)
+        P = self.block.kernel_params
+        D = np.empty((B, p))
+        for b in range(B):  # D(k) = R(k-1) h(k) / (hᵀ R(k-1) h + λ), the kernels' own gain
+            den, _ = kern.rls_gain(self._x[b], u[b], P, D[b])
+            D[b] /= den
+        self._x = self.block.batched("update", 0.0, self._x, u, P)  # the block's equations, one step
         self.K = D
         self._sync()
         return self.theta

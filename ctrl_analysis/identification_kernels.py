@@ -4,12 +4,13 @@
   :class:`~ctrl_analysis.identification.ArxRegressor` (a kernel-first block, parameters :data:`ARX`),
   written with scalar indexing only, so they also run on a batch's columns.
 * :func:`rls_update` / :func:`rls_output` (:func:`rls_hold_output` without feedthrough): the compiled twins of
-  :class:`~ctrl_analysis.identification.RecursiveLeastSquaresBlock`' numpy step (its projection and
-  trace cap branch per value); ``tests/lib/test_identification.py`` holds the two equal bit for bit.
+  :class:`~ctrl_analysis.identification.RecursiveLeastSquaresBlock` (a kernel-first block; the projection
+  and the trace cap branch per value, so its batched methods call them run by run).
 
-Parameters ``p`` of the RLS kernels: ``[n, λ, max_trace (0: none), projected (0/1, informative: the kernels
-clip to the bounds always, and infinite bounds make the projection the identity), lower (n), upper (n)]``;
-state ``[θ (n), R row by row (n·n)]``; input ``[z, h (n)]``.
+Parameters ``p`` of the RLS kernels: :func:`rls_layout` (``n``, ``forgetting`` λ, ``max_trace`` (0: none),
+``projected`` (0/1, informative: the kernels clip to the bounds always, and infinite bounds make the
+projection the identity), ``lower`` (n), ``upper`` (n)); state ``[θ (n), R row by row (n·n)]``; input
+``[z, h (n)]``.
 """
 
 from __future__ import annotations
@@ -67,10 +68,30 @@ def arx_output(t, x, u, p, y):
         y[1 + na + j] = x[ns + d + j]
 
 
+#: The fixed head of the RLS kernels' parameters; the bounds follow (:func:`rls_layout`).
+RLS_HEAD = Layout("n", "forgetting", "max_trace", "projected")
+RLS_AT = RLS_HEAD.at  # offsets, a numba constant
+_RLS_BOUNDS = RLS_HEAD.size
+
+
+def rls_layout(n: int) -> Layout:
+    """The parameters of the RLS kernels for ``n`` parameters: :data:`RLS_HEAD`, then ``lower``, ``upper`` (n each).
+
+    Parameters
+    ----------
+    n : int
+
+    Returns
+    -------
+    Layout
+    """
+    return Layout(*zip(RLS_HEAD.names, RLS_HEAD.shapes), ("lower", n), ("upper", n))
+
+
 @jitable
-def _rls_gain(x, u, p, out):
+def rls_gain(x, u, p, out):
     """``R(k−1) h(k)`` into ``out[:n]``; returns ``hᵀ R h + λ`` and the innovation ``z − hᵀ θ(k−1)``."""
-    n = int(p[0])
+    n = int(p[RLS_AT.n])
     for i in range(n):
         acc = 0.0
         for j in range(n):
@@ -81,22 +102,23 @@ def _rls_gain(x, u, p, out):
     for i in range(n):
         hPh = hPh + u[1 + i] * out[i]
         hth = hth + u[1 + i] * x[i]
-    return p[1] + hPh, u[0] - hth
+    return p[RLS_AT.forgetting] + hPh, u[0] - hth
 
 
 @jitable
 def _rls_theta(x, p, out, den, innov):
     """``θ(k) = Π[θ(k−1) + D(k) (z − hᵀ θ(k−1))]``, ``D = R h / den``, from ``R h`` in ``out[:n]`` (overwritten)."""
-    n = int(p[0])
+    n = int(p[RLS_AT.n])
+    lo, hi = _RLS_BOUNDS, _RLS_BOUNDS + n  # the offsets of rls_layout's lower, upper
     for i in range(n):
         v = x[i] + out[i] / den * innov
         # projection onto the box lower <= θ <= upper (NaN stays NaN, as np.clip; infinite bounds: identity)
-        v = p[4 + i] if v < p[4 + i] else v
-        out[i] = p[4 + n + i] if v > p[4 + n + i] else v
+        v = p[lo + i] if v < p[lo + i] else v
+        out[i] = p[hi + i] if v > p[hi + i] else v
 
 
 def rls_update(t, x, u, p, x_next):
-    """One RLS step, eq. (9): ``[θ(k), R(k)]``, compiled twin of ``RecursiveLeastSquaresBlock.update``.
+    """One RLS step, eq. (9): ``[θ(k), R(k)]``, the update kernel of ``RecursiveLeastSquaresBlock``.
 
     Parameters
     ----------
@@ -111,9 +133,9 @@ def rls_update(t, x, u, p, x_next):
     x_next : numpy.ndarray
         Written in place.
     """
-    n = int(p[0])
-    lam = p[1]
-    den, innov = _rls_gain(x, u, p, x_next)  # R h in x_next[:n] until θ(k) overwrites it
+    n = int(p[RLS_AT.n])
+    lam = p[RLS_AT.forgetting]
+    den, innov = rls_gain(x, u, p, x_next)  # R h in x_next[:n] until θ(k) overwrites it
     # R(k) = (R − D (R h)ᵀ) / λ with D = R h / den, then symmetrised: 0.5 (R(k) + R(k)ᵀ)
     for i in range(n):
         d = x_next[i] / den
@@ -129,7 +151,7 @@ def rls_update(t, x, u, p, x_next):
     tr = 0.0
     for i in range(n):
         tr = tr + x_next[n + i * n + i]
-    s = p[2] / tr if p[2] > 0.0 else 1.0
+    s = p[RLS_AT.max_trace] / tr if p[RLS_AT.max_trace] > 0.0 else 1.0
     s = 1.0 if s >= 1.0 else s
     for i in range(n * n):
         x_next[n + i] = x_next[n + i] * s
@@ -146,7 +168,7 @@ def rls_output(t, x, u, p, y):
     y : numpy.ndarray
         ``θ(k)``, written in place.
     """
-    den, innov = _rls_gain(x, u, p, y)
+    den, innov = rls_gain(x, u, p, y)
     _rls_theta(x, p, y, den, innov)
 
 

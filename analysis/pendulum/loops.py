@@ -28,13 +28,19 @@ from ctrl_analysis.controllers.fuzzy import (
     sum_rule_table,
 )
 from ctrl_analysis.engine.blocks import (
-    ColumnKernels,
     ContinuousBlock,
     DiscreteBlock,
     StaticBlock,
     StaticGain,
 )
-from ctrl_analysis.engine.kernels import BlockKernel, copy_output
+from ctrl_analysis.engine.kernels import (
+    BlockKernel,
+    KernelBlock,
+    Kernels,
+    Layout,
+    as_int,
+    copy_output,
+)
 from ctrl_analysis.engine.loop import Loop, place
 from ctrl_analysis.estimators.kalman import (
     AlphaBetaFilter,
@@ -65,7 +71,23 @@ __all__ = [
 ]
 
 
-class CartPendulum(ColumnKernels, ContinuousBlock):
+PENDULUM = Layout("a21", "b", "nonlinear")
+AT = PENDULUM.at  # parameter offsets, a numba constant
+
+
+def pendulum_rhs(t, x, u, p, dx):
+    """``φ'' = a21 φ + b u + w`` (§3.1, ``ẋ = A x + B u + Γ w``) or, flag set, ``a21 sin φ + b cos φ · u + w``.
+
+    The kernel of :class:`CartPendulum`: ``p`` is :data:`PENDULUM`, ``u = [u, w]``.
+    """
+    dx[0] = x[1]
+    if as_int(p[AT.nonlinear]):
+        dx[1] = p[AT.a21] * np.sin(x[0]) + p[AT.b] * np.cos(x[0]) * u[0] + u[1]
+    else:
+        dx[1] = p[AT.a21] * x[0] + p[AT.b] * u[0] + u[1]
+
+
+class CartPendulum(KernelBlock, ContinuousBlock):
     """Pendulum on a cart driven by the cart acceleration (§3.1): ``φ'' = a21 φ + b u + w``.
 
     With ``nonlinear=True``: ``φ'' = a21 sin φ + b cos φ · u + w`` (the model before linearisation,
@@ -77,48 +99,39 @@ class CartPendulum(ColumnKernels, ContinuousBlock):
     inputs = ("u", "w")
     outputs = ("phi", "dphi")
     states = ("phi", "dphi")
+    kernels = Kernels(rhs=pendulum_rhs)
 
     def __init__(self, a21: float, b: float, nonlinear: bool = False):
         self.a21, self.b, self.nonlinear = float(a21), float(b), bool(nonlinear)
-        self._p = np.array([self.a21, self.b, 1.0 if self.nonlinear else 0.0])
-
-    column_kernels = {"output": "copy_output", "rhs": "pendulum_rhs"}  # numpy methods + compiled kernel
-
-def pendulum_rhs(t, x, u, p, dx):
-    """``φ'' = a21 φ + b u + w`` (§3.1, ``ẋ = A x + B u + Γ w``) or, flag set, ``a21 sin φ + b cos φ · u + w``.
-
-    Scalar-indexed: one run's kernel and, on a batch's columns, :meth:`CartPendulum.rhs`;
-    ``p = [a21, b, nonlinear (0/1)]``, ``u = [u, w]``.
-    """
-    dx[0] = x[1]
-    if p[2] != 0.0:
-        dx[1] = p[0] * np.sin(x[0]) + p[1] * np.cos(x[0]) * u[0] + u[1]
-    else:
-        dx[1] = p[0] * x[0] + p[1] * u[0] + u[1]
+        self.kernel_params = PENDULUM.pack(a21=self.a21, b=self.b, nonlinear=1.0 if self.nonlinear else 0.0)
 
 
-class BackwardDifference(ColumnKernels, DiscreteBlock):
+DIFFERENCE = Layout("T")
+DT = DIFFERENCE.at  # parameter offsets, a numba constant
+
+
+def difference_output(t, x, u, p, y):
+    """``ec(k) = (e(k) − e(k−1)) / T``, ``p`` = :data:`DIFFERENCE`."""
+    y[0] = (u[0] - x[0]) / p[DT.T]
+
+
+def difference_update(t, x, u, p, x_next):
+    """``e_prev(k+1) = e(k)``."""
+    x_next[0] = u[0]
+
+
+class BackwardDifference(KernelBlock, DiscreteBlock):
     """``ec(k) = (e(k) − e(k−1)) / T``: the rate the fuzzy controller gets without a filter (state ``e(k−1)``)."""
 
     inputs = ("e",)
     outputs = ("ec",)
     states = ("e_prev",)
     feedthrough = True
+    kernels = Kernels(output=difference_output, update=difference_update)
 
     def __init__(self, T: float):
         self.T = float(T)
-        self._p = np.array([self.T])
-
-    column_kernels = {"output": "difference_output", "update": "difference_update"}  # numpy methods + compiled kernel
-
-def difference_output(t, x, u, p, y):
-    """``ec(k) = (e(k) − e(k−1)) / T``, ``p = [T]`` (scalar-indexed: one run or a batch's columns)."""
-    y[0] = (u[0] - x[0]) / p[0]
-
-
-def difference_update(t, x, u, p, x_next):
-    """``e_prev(k+1) = e(k)``."""
-    x_next[0] = u[0]
+        self.kernel_params = DIFFERENCE.pack(T=self.T)
 
 
 class _Predictor(DiscreteBlock):

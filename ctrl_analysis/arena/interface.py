@@ -7,43 +7,38 @@ measured record per run and returns the estimates of the signal and its first de
 the family can, its second) at every sample, from all runs in one batch.
 
 The batch is run by the library's engine (:class:`~ctrl_analysis.engine.loop.Loop`, ``engine="auto"``: the
-compiled path with **per-run kernel parameters**), so a tuning grid is one simulation of many runs.
-Where a block's numpy method cannot take per-run parameters as they are, a small adapter here gives it
-the per-run arrays (the equations stay the library's: ``sigma_rhs``/``DifferentialEstimator.rhs``,
-``eso_rhs``/``ExtendedStateObserver.rhs``, ``td_output``/``td_update``, ``alpha_beta_output``/``alpha_beta_update``,
-``alpha_beta_gamma_output``/``alpha_beta_gamma_update``, ``lowpass_update``/``lowpass_output``). The algebraic differentiator (:mod:`.algebraic`) is an FIR
+compiled path with **per-run kernel parameters**), so a tuning grid is one simulation of many runs:
+each family is a library block (:class:`~ctrl_analysis.estimators.differential.DifferentialEstimator`,
+:class:`~ctrl_analysis.estimators.eso.ExtendedStateObserver`,
+:class:`~ctrl_analysis.estimators.tracking.TrackingDifferentiator`,
+:class:`~ctrl_analysis.estimators.kalman.alpha_beta.AlphaBetaFilter`,
+:class:`~ctrl_analysis.estimators.lowpass.DiscreteLowPass`, and the α-β-γ kernels
+``alpha_beta_gamma_output``/``_update`` in a small block here) whose per-run values go through
+``Loop.simulate(params={"est": {...}})``. The algebraic differentiator (:mod:`.algebraic`) is an FIR
 filter run with vectorised numpy.
 """
 
 from __future__ import annotations
 
-import functools
 from dataclasses import dataclass, field
-from typing import ClassVar
 
 import numpy as np
 
 from .._validate import check_finite, check_in, check_positive
-from ..engine.blocks import ColumnKernels, DiscreteBlock, signal_names
-from ..engine.kernels import BlockKernel, copy_output
+from ..engine.blocks import DiscreteBlock, signal_names
+from ..engine.kernels import KernelBlock, Kernels
 from ..engine.loop import Loop, place
-from ..estimators.differential import DifferentialEstimator, sigma_rhs
-from ..estimators.eso import ExtendedStateObserver, eso_rhs
+from ..estimators.differential import DifferentialEstimator
+from ..estimators.eso import ExtendedStateObserver
 from ..estimators.kalman.alpha_beta import (
+    AlphaBetaFilter,
     alpha_beta_gamma_gains,
     alpha_beta_gamma_output,
     alpha_beta_gamma_update,
-    alpha_beta_output,
-    alpha_beta_update,
     kalata_gains,
 )
-from ..estimators.lowpass import (
-    DiscreteLowPass,
-    LowPassFilter,
-    lowpass_output,
-    lowpass_update,
-)
-from ..estimators.tracking import td_output, td_update
+from ..estimators.lowpass import DiscreteLowPass, LowPassFilter
+from ..estimators.tracking import TrackingDifferentiator
 from ..polynomials import repeated_pole_coefficients
 from .algebraic import algebraic_derivative
 
@@ -187,132 +182,30 @@ def scales(eps: float, L: float, dt: float) -> dict:
             "lambda3": (omega * dt) ** 3, "window": round(2.0 / omega / dt, 6), "one": 1.0, "dt": dt}
 
 
-# ---------------------------------------------------------------------------------------- adapters
-class _PerRunSigma(DifferentialEstimator):
-    """Σ of order ``n0`` with one gain vector per run (numpy: the class's ``rhs``; compiled: ``sigma_rhs``)."""
+# ---------------------------------------------------------------------------------------- blocks
+class _AlphaBetaGamma(KernelBlock, DiscreteBlock):
+    """Constant-gain α-β-γ filter: the library's kernels ``alpha_beta_gamma_output``/``_update`` with gains ``α, β, γ``.
 
-    def __init__(self, gains):
-        DifferentialEstimator.__init__(self, gains.shape[1], 1.0)
-        object.__setattr__(self, "a_coeffs", gains)  # (B, n0): broadcast by rhs over the batch
-
-    def kernel(self):
-        return BlockKernel(output=copy_output, params=np.ascontiguousarray(self.a_coeffs), rhs=sigma_rhs)
-
-
-class _PerRunESO(ExtendedStateObserver):
-    """An ESO (linear or fal) with per-run gains (numpy: the class's ``rhs``; compiled: ``eso_rhs``)."""
-
-    def __init__(self, gains, alpha=None, delta=None):
-        super().__init__(gains[0], b0=0.0, alpha=alpha, delta=None if delta is None else float(delta[0]),
-                         allow_unstable=True)
-        B, m = gains.shape
-        self.L = gains  # (B, m)
-        if alpha is not None:
-            self.alpha = np.broadcast_to(np.asarray(alpha, float), (B, m))
-            self.delta = delta[:, None]
-            self._delta_pow = np.power(self.delta, 1.0 - self.alpha)
-        linear = alpha is None
-        a = np.ones((B, m)) if linear else self.alpha
-        dp = np.ones((B, m)) if linear else self._delta_pow
-        dl = np.ones(B) if linear else delta
-        self._params = np.ascontiguousarray(np.column_stack(
-            [np.full(B, 1.0 if linear else 0.0), np.zeros(B), dl, gains, a, dp]))
-
-    def kernel(self):
-        return BlockKernel(output=copy_output, params=self._params, rhs=eso_rhs)
-
-
-class _SharedColumns(ColumnKernels, DiscreteBlock):
-    """A library discrete kernel run on the batch's columns with per-run parameter rows ``self._p``.
-
-    The entries listed in ``_shared`` are the same for every run and are passed as scalars (the
-    library kernels branch on them: the α-β "has b" flag, the low-pass order, the TD's substeps).
+    Block signals: input ``y``; states ``xpred[0..2]``; outputs ``xhat[0..2]``.
     """
-
-    _shared: tuple = ()
-
-    def _on_columns(self, kind, t, x, u, width):
-        cols = list(self._p.T)
-        for i in self._shared:
-            cols[i] = float(self._p[0, i])
-        out = np.empty((x.shape[0], width))
-        self._column_fns()[kind](t, x.T, u.T, cols, out.T)
-        return out
-
-
-class _PerRunTD(_SharedColumns):
-    """Han's TD (:class:`~ctrl_analysis.estimators.tracking.TrackingDifferentiator`) with per-run ``r`` and ``h0``: its kernels ``td_output``/``td_update``."""
-
-    inputs, states, outputs, feedthrough = ("v",), ("x[0]", "x[1]"), ("x[0]", "x[1]"), False
-    _shared = (1, 3, 4)  # h, substeps (1), feedthrough (0)
-    column_kernels: ClassVar[dict] = {"output": "td_output", "update": "td_update"}
-
-    def __init__(self, r, h0, h):
-        B = r.size
-        self._p = np.ascontiguousarray(np.column_stack([r, np.full(B, h), h0, np.ones(B), np.zeros(B)]))
-
-    def initial_state(self):
-        return np.zeros(2)
-
-
-class _PerRunAlphaBeta(_SharedColumns):
-    """α-β filter with per-run gains ``[α, β/T]``: the library's kernels (``alpha_beta_output``/``_update``)."""
-
-    inputs, states, outputs, feedthrough = ("y",), ("xpred[0]", "xpred[1]"), ("xhat[0]", "xhat[1]"), True
-    _shared = (0, 3, 4, 5, 6, 7, 8)  # has-b flag, F, b
-    column_kernels: ClassVar[dict] = {"output": "alpha_beta_output", "update": "alpha_beta_update"}
-
-    def __init__(self, K, T):
-        B = K.shape[0]
-        F = np.array([1.0, T, 0.0, 1.0])
-        self._p = np.ascontiguousarray(np.column_stack([np.zeros(B), K, np.tile(F, (B, 1)), np.zeros((B, 2))]))
-
-    def initial_state(self):
-        return np.zeros(2)
-
-
-class _PerRunAlphaBetaGamma(_SharedColumns):
-    """Constant-gain α-β-γ filter with per-run gains ``[α, β/T, γ/(2T²)]``: the library's kernels ``alpha_beta_gamma_output``/``_update``."""
 
     inputs, states, outputs = ("y",), ("xpred[0]", "xpred[1]", "xpred[2]"), ("xhat[0]", "xhat[1]", "xhat[2]")
     feedthrough = True
-    _shared = (3,)  # the sample period T
-    column_kernels: ClassVar[dict] = {"output": "alpha_beta_gamma_output", "update": "alpha_beta_gamma_update"}
+    kernels = Kernels(output=alpha_beta_gamma_output, update=alpha_beta_gamma_update)
 
-    def __init__(self, alpha, beta, gamma, T):
-        self._p = np.ascontiguousarray(np.column_stack([alpha, beta / T, gamma / (2.0 * T * T), np.full(alpha.size, T)]))
+    def __init__(self, alpha: float, beta: float, gamma: float, T: float):
+        T = float(check_positive("T", T, scalar=True))
+        self.kernel_params = np.array([alpha, beta / T, gamma / (2.0 * T * T), T], dtype=float)
 
     def initial_state(self):
         return np.zeros(3)
 
 
-class _PerRunLowPass(_SharedColumns):
-    """:class:`~ctrl_analysis.estimators.lowpass.DiscreteLowPass` of order 2 on two channels, one corner frequency per run."""
+class _LowPass(DiscreteLowPass):
+    """:class:`~ctrl_analysis.estimators.lowpass.DiscreteLowPass` built from its corner frequency ``omega`` (a number, so it can differ per run)."""
 
-    feedthrough = True
-    _shared = (0,)  # the order m
-    column_kernels: ClassVar[dict] = {"output": "lowpass_output", "update": "lowpass_update"}
-
-    def __init__(self, omegas, dt, order=2):
-        self._p = np.ascontiguousarray(np.array([_lowpass_params(float(w), dt, order) for w in omegas]))
-        self.order = order
-        self.inputs, self.outputs = ("u[0]", "u[1]"), ("w[0]", "w[1]")
-        self.states = tuple(f"w[{c}][{j}]" for c in range(2) for j in range(order))
-
-    def initial_state(self):
-        return np.zeros(2 * self.order)
-
-
-@functools.lru_cache(maxsize=4096)
-def _lowpass_params(omega: float, dt: float, order: int) -> np.ndarray:
-    """The kernel parameters ``[m, Ad, Bd]`` of the library's :class:`DiscreteLowPass` (2 channels), cached per ``ω``."""
-    return DiscreteLowPass(LowPassFilter(omega, order), dt, channels=2)._p
-
-
-@functools.lru_cache(maxsize=4096)
-def _sigma_gains(a: float) -> np.ndarray:
-    """Σ's gains (n0 = 3, breakaway design) from the library's :class:`DifferentialEstimator`, cached per ``a``."""
-    return DifferentialEstimator(3, a).a_coeffs
+    def __init__(self, omega: float, h: float, order: int = 2, channels: int = 2):
+        super().__init__(LowPassFilter(omega, order), h, channels=channels)
 
 
 def _abg_gains(lam: np.ndarray) -> tuple:
@@ -329,36 +222,40 @@ def _abg_gains(lam: np.ndarray) -> tuple:
 _ABG_CACHE: dict = {}
 
 
-# the library kernels the adapters name in column_kernels (ColumnKernels looks them up in this module)
-_KERNELS = (td_output, td_update, alpha_beta_output, alpha_beta_update, alpha_beta_gamma_output,
-            alpha_beta_gamma_update, lowpass_output, lowpass_update)
-
-
 # ---------------------------------------------------------------------------------------- running
 def _build(fam: Family, P: np.ndarray, dt: float):
-    """``(block, input names, output names)`` for the family with per-run parameter rows ``P``."""
+    """``(block, input names, output names, per-run values)`` for the family with per-run parameter rows ``P``.
+
+    The block is built with the first run's values; the per-run values (``Loop.simulate(params=...)``)
+    rebuild it per distinct value, one kernel parameter row per run.
+    """
     if fam.name == "sigma":
-        gains = np.array([_sigma_gains(float(a)) for a in P[:, 0]])
-        return _PerRunSigma(gains), ("y",), ("xhat[0]", "xhat[1]", "xhat[2]")
+        a = P[:, 0]
+        return DifferentialEstimator(3, a[0]), ("y",), ("xhat[0]", "xhat[1]", "xhat[2]"), {"a": a}
     if fam.name in ("leso2", "leso3", "neso"):
         m = 2 if fam.name == "leso2" else 3
         gains = np.array([repeated_pole_coefficients(m, w)[1:] for w in P[:, 0]])
         if fam.name != "neso":
-            return _PerRunESO(gains), ("y", "u"), signal_names("xhat", m)
+            eso = ExtendedStateObserver(gains[0], allow_unstable=True)
+            return eso, ("y", "u"), signal_names("xhat", m), {"gains": gains}
         alpha = np.array(fam.fixed["alpha"])
         delta = P[:, 1]
         # linear zone (|e| <= δ) equal to the linear ESO of bandwidth ω_o: L_i δ^(α_i - 1) = C(3, i) ω_o^i
         gains = gains * np.power(delta[:, None], 1.0 - alpha)
-        return _PerRunESO(gains, alpha, delta), ("y", "u"), signal_names("xhat", 3)
+        eso = ExtendedStateObserver(gains[0], alpha=alpha, delta=delta[0], allow_unstable=True)
+        return eso, ("y", "u"), signal_names("xhat", 3), {"gains": gains, "delta": delta}
     if fam.name == "td":
-        return _PerRunTD(P[:, 0], P[:, 1], dt), ("v",), ("x[0]", "x[1]")
+        td = TrackingDifferentiator(P[0, 0], dt, P[0, 1])
+        return td, ("v",), ("x[0]", "x[1]"), {"r": P[:, 0], "h0": P[:, 1]}
     if fam.name == "kalman":
         alpha, beta = kalata_gains(P[:, 0])
-        return _PerRunAlphaBeta(np.column_stack([alpha, beta / dt]), dt), ("y",), ("xhat[0]", "xhat[1]")
+        return AlphaBetaFilter(alpha[0], beta[0], dt), ("y",), ("xhat[0]", "xhat[1]"), {"alpha": alpha, "beta": beta}
     if fam.name == "abg":
-        return _PerRunAlphaBetaGamma(*_abg_gains(P[:, 0]), dt), ("y",), ("xhat[0]", "xhat[1]", "xhat[2]")
+        alpha, beta, gamma = _abg_gains(P[:, 0])
+        block = _AlphaBetaGamma(alpha[0], beta[0], gamma[0], dt)
+        return block, ("y",), ("xhat[0]", "xhat[1]", "xhat[2]"), {"alpha": alpha, "beta": beta, "gamma": gamma}
     if fam.name == "difflp":
-        return _PerRunLowPass(P[:, 0], dt), ("u[0]", "u[1]"), ("w[0]", "w[1]")
+        return _LowPass(P[0, 0], dt), ("u[0]", "u[1]"), ("w[0]", "w[1]"), {"omega": P[:, 0]}
     raise ValueError(f"family {fam.name!r} has no loop")  # pragma: no cover
 
 
@@ -428,7 +325,7 @@ def estimate(fam, P, y, dt: float, *, engine: str = "auto") -> np.ndarray:
     k = 3 if fam.second else 2
     if fam.name == "algebraic":
         return algebraic_derivative(y, P[:, 0].astype(int), P[:, 1].astype(int), dt)
-    block, ins, outs = _build(fam, P, dt)
+    block, ins, outs, per_run = _build(fam, P, dt)
     continuous = fam.name in ("sigma", "leso2", "leso3", "neso")
     loop = Loop([place(block, "est", inputs=[f"_{s}" for s in block.inputs], outputs=list(outs))], dt,
                 substeps=SUBSTEPS if continuous else 1)
@@ -440,7 +337,7 @@ def estimate(fam, P, y, dt: float, *, engine: str = "auto") -> np.ndarray:
         dy[1:] = np.diff(y, axis=0) / dt  # backward difference (y_k - y_(k-1)) / dt
         inputs = {"_u[0]": y, "_u[1]": dy}
     res = loop.simulate(N, inputs=inputs, store_states=False, store_signals=list(outs[:k]), chunk_runs=B,
-                        engine=engine, progress=False, bound=np.inf)
+                        engine=engine, progress=False, bound=np.inf, params={"est": per_run})
     out = np.empty((N, B, k))
     for j, s in enumerate(outs[:k]):
         out[:, :, j] = res.signals[s][:N]

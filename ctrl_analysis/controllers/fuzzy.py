@@ -20,6 +20,7 @@ import numpy as np
 
 from .._validate import check_finite, check_int, check_positive
 from ..engine.blocks import DiscreteBlock
+from ..engine.kernels import Layout
 
 __all__ = [
     "FuzzyController",
@@ -205,6 +206,52 @@ def _no_update(t, x, u, p, x_next):
     """A stateless block's update: nothing to write."""
 
 
+#: The fixed head of :func:`mamdani_output`'s parameters: factors, universes, sizes, term widths;
+#: the arrays of :func:`mamdani_layout` follow.
+MAMDANI = Layout("Ke", "Kec", "Ku", "X_e", "X_ec", "n_e", "n_ec", "n_u", "n_grid", "w_e", "w_ec")
+AT = MAMDANI.at  # parameter offsets, a numba constant
+_M_ARRAYS = MAMDANI.size
+
+
+def mamdani_layout(n_e: int, n_ec: int, n_u: int, n_grid: int) -> Layout:
+    """The parameters of :func:`mamdani_output`: :data:`MAMDANI`, then the term centres ``c_e``, ``c_ec``, the
+    rule table (row-major), the output grid ``z`` and the output memberships ``mu_u`` (``n_grid × n_u``).
+
+    Parameters
+    ----------
+    n_e, n_ec, n_u, n_grid : int
+        Terms of ``e``, of ``ec``, of ``u``; points of the output grid.
+
+    Returns
+    -------
+    Layout
+    """
+    return Layout(*zip(MAMDANI.names, MAMDANI.shapes), ("c_e", n_e), ("c_ec", n_ec), ("rules", (n_e, n_ec)),
+                  ("z", n_grid), ("mu_u", (n_grid, n_u)))
+
+
+#: The fixed head of :func:`lookup_output`'s parameters: factors, universes, grid sizes, first points and
+#: steps; the table ``U`` (``n_e × n_ec``, row-major) follows (:func:`lookup_layout`).
+LOOKUP = Layout("Ke", "Kec", "Ku", "X_e", "X_ec", "n_e", "n_ec", "E0", "EC0", "dE", "dEC")
+LT = LOOKUP.at  # parameter offsets, a numba constant
+_L_ARRAYS = LOOKUP.size
+
+
+def lookup_layout(n_e: int, n_ec: int) -> Layout:
+    """The parameters of :func:`lookup_output`: :data:`LOOKUP`, then the table ``U`` (``n_e × n_ec``).
+
+    Parameters
+    ----------
+    n_e, n_ec : int
+        Grid points of the two universes.
+
+    Returns
+    -------
+    Layout
+    """
+    return Layout(*zip(LOOKUP.names, LOOKUP.shapes), ("U", (n_e, n_ec)))
+
+
 def mamdani_output(t, x, u, p, y):
     """Compiled twin of :meth:`FuzzyController.output` for one run: ``y[0] = Ku · centroid(...)`` of ``u = [e, ec]``.
 
@@ -219,31 +266,30 @@ def mamdani_output(t, x, u, p, y):
     u : numpy.ndarray, shape (2,)
         ``[e, ec]`` in physical units.
     p : numpy.ndarray
-        :meth:`FuzzyController.kernel_params`: ``[Ke, Kec, Ku, X_e, X_ec, n_e, n_ec, n_u, n_grid,
-        w_e, w_ec, c_e, c_ec, rules (row-major), z, mu_u (row-major, n_grid × n_u)]``.
+        :meth:`FuzzyController.kernel_params`, laid out by :func:`mamdani_layout`.
     y : numpy.ndarray, shape (1,) or (n_grid,)
         ``u`` of the controller, written in place; given ``n_grid`` entries, the aggregated output
         set on ``z`` instead (no centroid: numpy's :func:`piecewise_linear_centroid` then gives
         :meth:`FuzzyController.infer` bit for bit, see :meth:`FuzzyController.control_surface`).
     """
-    n_e, n_ec, n_u, n_g = int(p[5]), int(p[6]), int(p[7]), int(p[8])
-    E, EC = p[0] * u[0], p[1] * u[1]  # quantised: sat(Ke e, ±X_e), sat(Kec ec, ±X_ec)
+    n_e, n_ec, n_u, n_g = int(p[AT.n_e]), int(p[AT.n_ec]), int(p[AT.n_u]), int(p[AT.n_grid])
+    E, EC = p[AT.Ke] * u[0], p[AT.Kec] * u[1]  # quantised: sat(Ke e, ±X_e), sat(Kec ec, ±X_ec)
     if E != E or EC != EC:
         for g in range(y.shape[0]):
             y[g] = E + EC
         return
-    E, EC = min(max(E, -p[3]), p[3]), min(max(EC, -p[4]), p[4])
-    o_ce = 11
+    E, EC = min(max(E, -p[AT.X_e]), p[AT.X_e]), min(max(EC, -p[AT.X_ec]), p[AT.X_ec])
+    o_ce = _M_ARRAYS  # the offsets of mamdani_layout's arrays
     o_cec, o_r = o_ce + n_e, o_ce + n_e + n_ec
     o_z = o_r + n_e * n_ec
     o_mu = o_z + n_g
     act = np.zeros(n_u)  # per output term: max over its rules of min(μ_Ei(E), μ_ECj(EC))
     for i in range(n_e):
-        me = max(0.0, 1.0 - abs(E - p[o_ce + i]) / p[9])
+        me = max(0.0, 1.0 - abs(E - p[o_ce + i]) / p[AT.w_e])
         if me == 0.0:
             continue
         for j in range(n_ec):
-            w = min(me, max(0.0, 1.0 - abs(EC - p[o_cec + j]) / p[10]))
+            w = min(me, max(0.0, 1.0 - abs(EC - p[o_cec + j]) / p[AT.w_ec]))
             k = int(p[o_r + i * n_ec + j])
             act[k] = max(act[k], w)
     dz = p[o_z + 1] - p[o_z]
@@ -260,7 +306,7 @@ def mamdani_output(t, x, u, p, y):
             den += area
         prev = agg
     if y.shape[0] == 1:
-        y[0] = p[2] * (num / den)
+        y[0] = p[AT.Ku] * (num / den)
 
 
 def lookup_output(t, x, u, p, y):
@@ -275,22 +321,21 @@ def lookup_output(t, x, u, p, y):
     t, x, u
         As :func:`mamdani_output`: ``u = [e, ec]`` (physical units), no state.
     p : numpy.ndarray
-        :meth:`FuzzyLookupController.kernel_params`: ``[Ke, Kec, Ku, X_e, X_ec, n_e, n_ec, E0, EC0,
-        dE, dEC, U (row-major)]``.
+        :meth:`FuzzyLookupController.kernel_params`, laid out by :func:`lookup_layout`.
     y : numpy.ndarray, shape (1,)
         ``u`` of the controller, written in place.
     """
-    n_e, n_ec = int(p[5]), int(p[6])
-    E, EC = p[0] * u[0], p[1] * u[1]  # quantised: sat(Ke e, ±X_e), sat(Kec ec, ±X_ec) (NaN stays NaN)
-    E = E if E != E else min(max(E, -p[3]), p[3])
-    EC = EC if EC != EC else min(max(EC, -p[4]), p[4])
-    fe = (E - p[7]) / p[9]
-    fc = (EC - p[8]) / p[10]
+    n_e, n_ec = int(p[LT.n_e]), int(p[LT.n_ec])
+    E, EC = p[LT.Ke] * u[0], p[LT.Kec] * u[1]  # quantised: sat(Ke e, ±X_e), sat(Kec ec, ±X_ec) (NaN stays NaN)
+    E = E if E != E else min(max(E, -p[LT.X_e]), p[LT.X_e])
+    EC = EC if EC != EC else min(max(EC, -p[LT.X_ec]), p[LT.X_ec])
+    fe = (E - p[LT.E0]) / p[LT.dE]
+    fc = (EC - p[LT.EC0]) / p[LT.dEC]
     i = min(max(int(math.floor(fe)), 0), n_e - 2) if fe == fe else 0  # a NaN input: any cell, NaN output
     j = min(max(int(math.floor(fc)), 0), n_ec - 2) if fc == fc else 0
     a, b = fe - i, fc - j
-    o = 11 + i * n_ec + j
-    y[0] = p[2] * ((1.0 - a) * ((1.0 - b) * p[o] + b * p[o + 1])
+    o = _L_ARRAYS + i * n_ec + j  # U[i, j] in lookup_layout
+    y[0] = p[LT.Ku] * ((1.0 - a) * ((1.0 - b) * p[o] + b * p[o + 1])
                    + a * ((1.0 - b) * p[o + n_ec] + b * p[o + n_ec + 1]))
 
 
@@ -466,8 +511,11 @@ class FuzzyController(_FuzzyBlock):
         """
         f = [getattr(self, name) if value is None else check_positive(name, value, scalar=True)
              for name, value in (("Ke", Ke), ("Kec", Kec), ("Ku", Ku))]
-        head = f + [self.X_e, self.X_ec, *self.rules.shape, self.n_u, self.n_grid, self.w_e, self.w_ec]
-        return np.concatenate([head, self.c_e, self.c_ec, self.rules.ravel(), self.z, self.mu_u.ravel()]).astype(float)
+        n_e, n_ec = self.rules.shape
+        return mamdani_layout(n_e, n_ec, self.n_u, self.n_grid).pack(
+            Ke=f[0], Kec=f[1], Ku=f[2], X_e=self.X_e, X_ec=self.X_ec, n_e=n_e, n_ec=n_ec, n_u=self.n_u,
+            n_grid=self.n_grid, w_e=self.w_e, w_ec=self.w_ec, c_e=self.c_e, c_ec=self.c_ec, rules=self.rules,
+            z=self.z, mu_u=self.mu_u)
 
     def __repr__(self) -> str:
         return (f"FuzzyController({self.rules.shape[0]}×{self.rules.shape[1]} rules, {self.n_u} output terms, "
@@ -538,9 +586,9 @@ class FuzzyLookupController(_FuzzyBlock):
         numpy.ndarray
         """
         fc = self.controller
-        head = [fc.Ke, fc.Kec, fc.Ku, fc.X_e, fc.X_ec, self.E.size, self.EC.size, self.E[0], self.EC[0],
-                self.dE, self.dEC]
-        return np.concatenate([head, self.U.ravel()]).astype(float)
+        return lookup_layout(self.E.size, self.EC.size).pack(
+            Ke=fc.Ke, Kec=fc.Kec, Ku=fc.Ku, X_e=fc.X_e, X_ec=fc.X_ec, n_e=self.E.size, n_ec=self.EC.size,
+            E0=self.E[0], EC0=self.EC[0], dE=self.dE, dEC=self.dEC, U=self.U)
 
     def _scaling(self):
         return self.controller

@@ -6,7 +6,7 @@ import numpy as np
 
 from .._validate import check_finite, check_nonnegative, check_positive
 from ..engine.blocks import DiscreteBlock
-from ..engine.kernels import jitable
+from ..engine.kernels import KernelBlock, Kernels, Layout, jitable
 
 __all__ = ["GOLDEN_L1", "GOLDEN_L2", "GoldenSectionController"]
 
@@ -14,8 +14,63 @@ __all__ = ["GOLDEN_L1", "GOLDEN_L2", "GoldenSectionController"]
 GOLDEN_L1 = 0.382
 GOLDEN_L2 = 0.618
 
+#: The kernel parameters of :class:`GoldenSectionController`.
+LAYOUT = Layout("k_I", "c1", "c2", "mu", "l1", "l2")
+AT = LAYOUT.at  # parameter offsets, a numba constant
 
-class GoldenSectionController(DiscreteBlock):
+
+@jitable
+def _golden_step(x, u, p):
+    """One run of the law with scalar branches: ``(u(k), e(k), u_i(k))``."""
+    y, r, f1, f2, g0 = u[0], u[1], u[2], u[3], u[4]
+    e = y - r
+    e_prev, r_prev = (x[0], x[1]) if x[3] > 0.0 else (e, r)  # before the first sample: e(k−1) := e(k), r(k−1) := r(k)
+    # (17) golden section u_l(k) = −(l1 f̂1 e(k) + l2 f̂2 e(k−1)) / (ĝ0 + μ)
+    ul = -(p[AT.l1] * f1 * e + p[AT.l2] * f2 * e_prev) * (1.0 / (g0 + p[AT.mu]))
+    # (18) maintaining tracking u_0(k) = (r(k+1) − f̂1 r(k) − f̂2 r(k−1)) / ĝ0, r(k+1) := r(k)
+    u0 = (r - f1 * r - f2 * r_prev) / g0
+    # (19) logic integral u_i(k) = c u_i(k−1) − k_I e(k), c = c1 if e (e − e(k−1)) > 0 else c2
+    ui = (p[AT.c1] if e * (e - e_prev) > 0.0 else p[AT.c2]) * x[2] - p[AT.k_I] * e
+    return u0 + ul + ui, e, ui  # (20) u = u_0 + u_l + u_i
+
+
+def golden_output(t, x, u, p, y):
+    """The output kernel of :class:`GoldenSectionController`: ``y = [u(k)]``, eq. (17)-(20).
+
+    Parameters
+    ----------
+    t : float
+        Time (unused).
+    x : numpy.ndarray
+        ``[e(k−1), r(k−1), u_i(k−1), started]`` of one run.
+    u : numpy.ndarray
+        ``[y, r, f1, f2, g0]``.
+    p : numpy.ndarray
+        :data:`LAYOUT`.
+    y : numpy.ndarray
+        Written in place.
+    """
+    y[0] = _golden_step(x, u, p)[0]
+
+
+def golden_update(t, x, u, p, x_next):
+    """The update kernel of :class:`GoldenSectionController`: ``[e(k), r(k), u_i(k), 1]``.
+
+    Parameters
+    ----------
+    t, x, u, p
+        As :func:`golden_output`.
+    x_next : numpy.ndarray
+        Written in place.
+    """
+    _, e, ui = _golden_step(x, u, p)
+    x_next[0] = e
+    x_next[1] = u[1]
+    x_next[2] = ui
+    x_next[3] = 1.0
+
+
+class GoldenSectionController(KernelBlock, DiscreteBlock):
     """``u = u_0 + u_l + u_i`` for the characteristic model ``x(k+1) = f1 x(k) + f2 x(k−1) + g0 u(k)``.
 
     With ``e(k) = y(k) − r(k)`` and the current estimates ``f̂1, f̂2, ĝ0`` (inputs)::
@@ -73,6 +128,7 @@ class GoldenSectionController(DiscreteBlock):
     outputs = ("u",)
     states = ("e_prev", "r_prev", "ui_prev", "started")
     feedthrough = True
+    kernels = Kernels(output=golden_output, update=golden_update, columns=False)  # branches per value
 
     def __init__(self, k_I: float = 0.0, c2: float = 0.9, c1: float = 1.0, mu: float = 0.0,
                  l1: float = GOLDEN_L1, l2: float = GOLDEN_L2):
@@ -84,97 +140,11 @@ class GoldenSectionController(DiscreteBlock):
         self.mu = float(check_nonnegative("mu", mu, scalar=True))
         self.l1 = float(check_positive("l1", l1, scalar=True))
         self.l2 = float(check_positive("l2", l2, scalar=True))
-        # kernel parameters
-        self._p = np.array([self.k_I, self.c1, self.c2, self.mu, self.l1, self.l2])
+        self.kernel_params = LAYOUT.pack(k_I=self.k_I, c1=self.c1, c2=self.c2, mu=self.mu, l1=self.l1, l2=self.l2)
 
     def initial_state(self) -> np.ndarray:
         return np.zeros(4)
 
-    def _kernel(self, x, u):
-        y, r, f1, f2, g0 = u[:, 0], u[:, 1], u[:, 2], u[:, 3], u[:, 4]
-        started = x[:, 3] > 0.0
-        e = y - r
-        e_prev = np.where(started, x[:, 0], e)
-        r_prev = np.where(started, x[:, 1], r)
-        ui_prev = x[:, 2]
-        inv_gl = 1.0 / (g0 + self.mu)
-        # (17) golden section u_l(k) = −(l1 f̂1 e(k) + l2 f̂2 e(k−1)) / ĝ0
-        ul = -(self.l1 * f1 * e + self.l2 * f2 * e_prev) * inv_gl
-        # (18) maintaining tracking u_0(k) = (r(k+1) − f̂1 r(k) − f̂2 r(k−1)) / ĝ0, r(k+1) := r(k)
-        u0 = (r - f1 * r - f2 * r_prev) / g0
-        # (19) logic integral u_i(k) = c u_i(k−1) − k_I e(k), c = c1 if e (e − e(k−1)) > 0 else c2
-        c = np.where(e * (e - e_prev) > 0.0, self.c1, self.c2)
-        ui = c * ui_prev - self.k_I * e
-        # (20) u = u_0 + u_l + u_i
-        return u0 + ul + ui, e, ui
-
-    def update(self, t, x, u, params=None) -> np.ndarray:
-        _, e, ui = self._kernel(x, u)
-        return np.stack([e, u[:, 1], ui, np.ones_like(e)], axis=1)
-
-    def output(self, t, x, u, params=None) -> np.ndarray:
-        return self._kernel(x, u)[0][:, None]
-
-    def kernel(self):
-        """The compiled engine's kernel: :func:`golden_update`, :func:`golden_output` (twins of the numpy methods).
-
-        Returns
-        -------
-        ctrl_analysis.engine.codegen.BlockKernel
-        """
-        from ..engine.kernels import BlockKernel
-
-        return BlockKernel(output=golden_output, params=self._p, update=golden_update)
-
     def __repr__(self) -> str:
         return f"GoldenSectionController(k_I={self.k_I:g}, c2={self.c2:g}, mu={self.mu:g})"
 
-
-@jitable
-def _golden_step(x, u, p):
-    """One run of :meth:`GoldenSectionController._kernel` with scalar branches: ``(u(k), e(k), u_i(k))``."""
-    y, r, f1, f2, g0 = u[0], u[1], u[2], u[3], u[4]
-    e = y - r
-    e_prev, r_prev = (x[0], x[1]) if x[3] > 0.0 else (e, r)
-    # (17) golden section, (18) maintaining tracking with r(k+1) := r(k)
-    ul = -(p[4] * f1 * e + p[5] * f2 * e_prev) * (1.0 / (g0 + p[3]))
-    u0 = (r - f1 * r - f2 * r_prev) / g0
-    # (19) logic integral: c = c1 if e (e − e(k−1)) > 0 else c2
-    ui = (p[1] if e * (e - e_prev) > 0.0 else p[2]) * x[2] - p[0] * e
-    return u0 + ul + ui, e, ui  # (20)
-
-
-def golden_output(t, x, u, p, y):
-    """Compiled twin of :meth:`GoldenSectionController.output`: ``y = [u(k)]``, eq. (17)-(20).
-
-    Parameters
-    ----------
-    t : float
-        Time (unused).
-    x : numpy.ndarray
-        ``[e(k−1), r(k−1), u_i(k−1), started]`` of one run.
-    u : numpy.ndarray
-        ``[y, r, f1, f2, g0]``.
-    p : numpy.ndarray
-        ``[k_I, c1, c2, mu, l1, l2]``.
-    y : numpy.ndarray
-        Written in place.
-    """
-    y[0] = _golden_step(x, u, p)[0]
-
-
-def golden_update(t, x, u, p, x_next):
-    """Compiled twin of :meth:`GoldenSectionController.update`: ``[e(k), r(k), u_i(k), 1]``.
-
-    Parameters
-    ----------
-    t, x, u, p
-        As :func:`golden_output`.
-    x_next : numpy.ndarray
-        Written in place.
-    """
-    _, e, ui = _golden_step(x, u, p)
-    x_next[0] = e
-    x_next[1] = u[1]
-    x_next[2] = ui
-    x_next[3] = 1.0

@@ -32,14 +32,12 @@ from .._validate import (
     check_positive,
     check_str,
 )
-from .columns import ColumnKernels
 from .kernels import KernelBlock, Kernels, Layout
 from .stepcheck import checked, unchecked, wrap_step_methods
 
 __all__ = [
     "MAX_SIGNALS",
     "Block",
-    "ColumnKernels",
     "ContinuousBlock",
     "DiscreteBlock",
     "SampledBlock",

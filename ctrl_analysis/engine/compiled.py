@@ -48,6 +48,10 @@ def compiled_for(loop, engine, funcs, variants):
                 break
             if v is not None and v.rows is not None:
                 k = k._replace(params=v.rows)
+            elif np.ndim(k.params) != 1:
+                raise ValueError(f"block {p.name!r} ({type(p.block).__name__}): its kernel parameters must be one "
+                                 f"vector shared by every run, got shape {np.shape(k.params)}; give per-run values "
+                                 f"to Loop.simulate(params={{block: {{parameter: values}}}})")
             kernels[p.name] = k
     if why is not None:
         if engine == "compiled":
@@ -69,55 +73,6 @@ def compiled_for(loop, engine, funcs, variants):
         return None
     P = [_params_2d(p.name, kernels[p.name].params) for p in loop.placed]
     return run, P, [np.ndim(kernels[p.name].params) == 2 for p in loop.placed]
-
-
-def held_rows(loop, variants, B: int, *, split: bool) -> bool:
-    """Whether a block holds its own kernel parameter rows, one per run; checks that they fit the call.
-
-    Per-run values are given to :meth:`Loop.simulate <ctrl_analysis.engine.loop.Loop.simulate>` as
-    ``params``. A block whose kernel parameters are a ``(B, n_p)`` array it built itself (the
-    adapters of :mod:`ctrl_analysis.arena`, or a block given per-run arrays) ties the loop to one
-    batch size: the call must have exactly those runs, and is stepped as one chunk in this process.
-
-    Parameters
-    ----------
-    loop : Loop
-    variants : dict of block name -> Variant
-        Blocks under run-time parameters (their own parameters are not consulted).
-    B : int
-        Runs of the call.
-    split : bool
-        Whether the caller asked to split the batch (``jobs > 1`` or ``chunk_runs < B``).
-
-    Returns
-    -------
-    bool
-
-    Raises
-    ------
-    ValueError
-        If the rows are not the call's runs, or the call asks for a split.
-    """
-    from .codegen import kernel_of
-
-    rows = {}
-    for p in loop.placed:
-        if p.name in variants:
-            continue
-        try:
-            k = kernel_of(p.block)
-        except Exception:  # noqa: BLE001, S112 - a block the compiled engine cannot take has no rows here
-            continue
-        if k is not None and np.ndim(k.params) == 2:
-            rows[p.name] = int(np.shape(k.params)[0])
-    if any(n != B for n in rows.values()):
-        raise ValueError(f"blocks {rows} hold kernel parameters for that many runs, but the batch has {B}: give "
-                         f"per-run values to Loop.simulate(params={{block: {{parameter: values}}}}) instead")
-    if rows and split:
-        raise ValueError(f"blocks {sorted(rows)} hold one kernel parameter row per run themselves, so the batch "
-                         f"is stepped whole (no chunk_runs < B, no jobs > 1): give per-run values to "
-                         f"Loop.simulate(params=...) to split it")
-    return bool(rows)
 
 
 def check_kernel_reads(loop, kernels: dict) -> None:

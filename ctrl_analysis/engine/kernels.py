@@ -60,7 +60,8 @@ class BlockKernel(NamedTuple):
     """A block's per-run kernel functions (plain Python, numba-compilable) and its parameters.
 
     What the compiled engine runs (:meth:`KernelBlock.kernel`, or a block's own ``kernel()``).
-    ``params`` is a 1-D vector shared by every run or a 2-D ``(B, n_p)`` array, one row per run.
+    ``params`` is the block's 1-D parameter vector; values that differ per run are given to
+    ``Loop.simulate(params=...)``, which gives the engine one row per run.
     """
 
     output: Callable

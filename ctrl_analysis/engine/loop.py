@@ -43,7 +43,7 @@ from .._validate import (
     check_str,
 )
 from .blocks import Block, ContinuousBlock, DiscreteBlock, check_states_declared
-from .compiled import compiled_for, held_rows, run_compiled
+from .compiled import compiled_for, run_compiled
 from .integrators import MAX_SUBSTEPS, STEPPERS
 from .memory import CHUNK_BYTES, RESULT_BYTES, check_result_memory, chunk_bounds
 from .numpy_engine import run_numpy
@@ -415,11 +415,9 @@ class Loop:
         from .processes import simulate_chunks
 
         variants = resolve(self, params, B)  # validated here, before any work
-        whole = held_rows(self, variants, B, split=(jobs > 1 and B > 1) or (chunk_runs is not None and size < B))
-        size = B if whole else size  # a block built for this batch's runs: stepped whole, in this process
 
         # over processes, or a process-wide Dask cluster's workers (per-run parameters follow the chunk)
-        on_cluster = not whole and jobs == 1 and B > 1 and not funcs and active_cluster() is not None \
+        on_cluster = jobs == 1 and B > 1 and not funcs and active_cluster() is not None \
             and compiled_for(self, engine, funcs, variants) is not None
         if B > 1 and not funcs and (jobs > 1 or on_cluster) and picklable(self):
             opts = {"t0": t0, "params": params, "bound": bound, "store_states": store_states, "store_signals": keep,

@@ -257,20 +257,14 @@ class ExtendedStateObserver(KernelBlock, ContinuousBlock):
                           polynomial="the error dynamics s^(n+1) + L_1 s^n + ... + L_(n+1)"
                           + ("" if alpha is None else " (linear zone of fal)"))
         m, linear = self.nstates, alpha is None
-        # the packed parameters (kept as _params: ctrl_analysis/arena/interface.py replaces them per run)
-        self._params = eso_layout(m).pack(linear=1.0 if linear else 0.0, b0=self.b0, delta=1.0 if delta is None else delta,
-                                          L=gains, alpha=np.ones(m) if linear else alpha,
-                                          delta_pow=np.ones(m) if linear else self._delta_pow)
+        self.kernel_params = eso_layout(m).pack(
+            linear=1.0 if linear else 0.0, b0=self.b0, delta=1.0 if delta is None else delta, L=gains,
+            alpha=np.ones(m) if linear else alpha, delta_pow=np.ones(m) if linear else self._delta_pow)
 
     @property
     def kernels(self) -> Kernels:
         """:func:`eso_rhs`; run by run in the batched methods when fal branches on the error."""
         return _LINEAR_KERNELS if self.alpha is None else _FAL_KERNELS
-
-    @property
-    def kernel_params(self) -> np.ndarray:
-        """The kernel's parameters, :func:`eso_layout` ``(n + 1)`` (one row per run if replaced per run)."""
-        return self._params
 
     # ------------------------------------------------------------------------------------------
     # Constructors

@@ -342,11 +342,6 @@ class DiscreteLowPass(KernelBlock, DiscreteBlock):
     def initial_state(self) -> np.ndarray:
         return self._x0.reshape(-1).copy()
 
-    @property
-    def _p(self) -> np.ndarray:
-        """The kernel parameters by their former name (``ctrl_analysis/arena/interface.py`` reads it)."""
-        return self.kernel_params
-
     def filter(self, u) -> np.ndarray:
         """Filter a whole record ``u`` of shape ``(N,)``, ``(N, channels)`` or ``(N, B, channels)``.
 

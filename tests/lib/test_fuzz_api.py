@@ -832,7 +832,6 @@ NOT_FUZZED = {
     blocks.Block: "abstract base class without constructor arguments",
     blocks.ContinuousBlock: "abstract base class without constructor arguments",
     blocks.DiscreteBlock: "abstract base class without constructor arguments (run/nlsys are fuzzed above)",
-    blocks.ColumnKernels: "mixin without constructor arguments (the blocks using it are fuzzed)",
     loop_mod.Placed: "record built by place(), which is fuzzed",
     engine_kernels.KernelBlock: "mixin without constructor arguments (the blocks using it are fuzzed)",
     engine_kernels.Layout: "fuzzed through _layout (its fields are variadic) and _layout_pack",
@@ -937,22 +936,22 @@ def test_every_public_callable_is_fuzzed_or_excused(tmp_path):
 
 
 # -- cases that are not one bad argument of a valid call ---------------------------------------------
-class _ReadsUnfilledSlot(blocks.ColumnKernels, blocks.DiscreteBlock):
-    """A user's block whose kernel reads ``p[2]`` while its parameters have two entries."""
-
-    inputs, outputs, states = ("u",), ("y",), ("x",)
-    column_kernels = {"output": "_copy_output", "update": "_unfilled_update"}
-
-    def __init__(self):
-        self._p = np.array([0.5, 0.0])
-
-
 def _copy_output(t, x, u, p, y):
     y[0] = x[0]
 
 
 def _unfilled_update(t, x, u, p, x_next):
     x_next[0] = x[0] + p[0] * u[0] + p[2]  # p[2]: a slot the block never filled
+
+
+class _ReadsUnfilledSlot(engine_kernels.KernelBlock, blocks.DiscreteBlock):
+    """A user's block whose kernel reads ``p[2]`` while its parameters have two entries."""
+
+    inputs, outputs, states = ("u",), ("y",), ("x",)
+    kernels = engine_kernels.Kernels(output=_copy_output, update=_unfilled_update)
+
+    def __init__(self):
+        self.kernel_params = np.array([0.5, 0.0])
 
 
 def _engines_agree(rows, runs, chunk_runs):

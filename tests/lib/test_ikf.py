@@ -57,13 +57,20 @@ def test_prediction_adds_the_data_model_increment():
 
 
 def test_per_run_q_on_the_batch_axis_equals_single_runs():
+    """Q per run is a run-time value (Loop.simulate(params=...)); each run equals the filter built with its Q."""
+    from ctrl_analysis.engine.loop import Loop, place
+
     rng = np.random.default_rng(2)
-    u = rng.standard_normal((60, 3, 2))
+    N, u = 60, rng.standard_normal((61, 3, 2))
     Qs = np.array([0.01, 0.1, 1.0])
-    grid, _ = ImprovedKalmanFilter(Qs, 0.5).run(u)
+    loop = Loop([place(ImprovedKalmanFilter(Qs[0], 0.5), "f", outputs=["yh", "K", "P"])], dt=1.0)
+    grid = loop.simulate(N, inputs={"y_m": u[:, :, 0], "dy_model": u[:, :, 1]}, params={"f": {"Q": Qs}},
+                         bound=np.inf)
     for b, q in enumerate(Qs):
-        one, _ = ImprovedKalmanFilter(q, 0.5).run(u[:, b:b + 1])
-        np.testing.assert_array_equal(grid[:, b:b + 1], one)
+        one, _ = ImprovedKalmanFilter(q, 0.5).run(u[:N, b:b + 1])
+        np.testing.assert_array_equal(grid["yh"][:N, b], one[:, 0, 0])
+    with pytest.raises(TypeError, match="Q must be a real number"):
+        ImprovedKalmanFilter(Qs, 0.5)
 
 
 def test_nlsys_equals_the_block():
@@ -76,7 +83,7 @@ def test_nlsys_equals_the_block():
 
 @pytest.mark.parametrize("kw, msg", [({"Q": -1.0, "R": 1.0}, "Q must be >= 0"), ({"Q": 1.0, "R": 0.0}, "R must be > 0"),
                                      ({"Q": 1.0, "R": 1.0, "P0": -1.0}, "P0 must be >= 0"),
-                                     ({"Q": np.ones((2, 2)), "R": 1.0}, "Q must be a scalar or a 1-D array")])
+                                     ({"Q": 1.0, "R": np.nan}, "R must be")])
 def test_errors(kw, msg):
     with pytest.raises(ValueError, match=msg):
         ImprovedKalmanFilter(**kw)
@@ -90,11 +97,13 @@ def test_kernel_is_the_numpy_method_with_per_run_q_and_r(compiled):
     jit = _kernels._jit if compiled else (lambda f: f)
     rng = np.random.default_rng(2)
     x, u = np.abs(rng.standard_normal((8, 2))), rng.standard_normal((8, 2))
-    f = ImprovedKalmanFilter(rng.uniform(0.0, 1.0, 8), 0.3, y0=1.0, P0=0.5)
-    k = f.kernel()
-    assert k.params.shape == (8, 2) and ImprovedKalmanFilter(0.1, 0.3).kernel().params.shape == (2,)
-    for fn, ref, width in ((jit(ikf_output), f.output(0.0, x, u), 3), (jit(ikf_update), f.update(0.0, x, u), 2)):
+    Qs = rng.uniform(0.0, 1.0, 8)
+    f = ImprovedKalmanFilter(Qs[0], 0.3, y0=1.0, P0=0.5)
+    P = np.stack([f.with_params(Q=q).kernel_params for q in Qs])  # the rows Loop.simulate(params=...) gives
+    assert P.shape == (8, 2)
+    for fn, ref, width in ((jit(ikf_output), f.batched("output", 0.0, x, u, P), 3),
+                           (jit(ikf_update), f.batched("update", 0.0, x, u, P), 2)):
         out = np.empty((8, width))
         for b in range(8):
-            fn(0.0, x[b], u[b], k.params[b], out[b])
+            fn(0.0, x[b], u[b], P[b], out[b])
         assert np.array_equal(out, ref)

@@ -14,6 +14,8 @@ import control as ct
 import numpy as np
 import pytest
 
+from analysis.pendulum.loops import BackwardDifference, CartPendulum
+from ctrl_analysis.arena.interface import _AlphaBetaGamma, _LowPass
 from ctrl_analysis.engine import codegen as _kernels
 from ctrl_analysis.engine.blocks import StaticGain
 from ctrl_analysis.engine.kernels import KernelBlock
@@ -45,7 +47,6 @@ def _blocks():
         ("ckf", CharacteristicKalmanFilter(Q=1e-3, R=0.5, P0=2.0), {"R": [0.5, 1.0, 2.0, 4.0]}),
         ("lkf", LinearKalmanFilter(F3, [0.1, 0.2, 0.3], [1.0, 0.0, 0.0], 1e-2, 0.3), {"R": [0.3, 0.6, 0.3, 0.9]}),
         ("ikf", ImprovedKalmanFilter(Q=0.1, R=1.0), {"Q": [0.1, 0.01, 0.3, 0.05]}),
-        ("ikf-rows", ImprovedKalmanFilter(Q=np.array([0.1, 0.2, 0.3, 0.4]), R=1.0), None),
         ("alpha-beta", AlphaBetaFilter(0.5, 0.2, 0.1), {"alpha": [0.5, 0.6, 0.4, 0.5]}),
         ("alpha-beta-b", AlphaBetaFilter(0.5, 0.2, 0.1, F=F2, b=[0.01, 0.3]), None),
         ("lowpass", LowPassFilter(5.0, order=3), {"omega": [5.0, 2.0, 8.0, 1.0]}),
@@ -62,6 +63,11 @@ def _blocks():
         ("sigma-corrected", DifferentialEstimator(4, 2.0, reading="corrected"), None),
         ("lti", DiscreteLTI(ct.tf([2.0, 4.0], [1.0, 3.0, 2.0, 0.5]), 0.05), None),
         ("lti-feedthrough", DiscreteLTI(ct.tf([1.0, 0.5], [1.0, 2.0]), 0.1), None),
+        ("cart-pendulum", CartPendulum(14.7, 1.5), {"a21": [14.7, 10.0, 20.0, 14.7]}),
+        ("cart-pendulum-nonlinear", CartPendulum(14.7, 1.5, nonlinear=True), {"b": [1.5, 1.0, 2.0, 1.5]}),
+        ("backward-difference", BackwardDifference(0.01), {"T": [0.01, 0.02, 0.05, 0.01]}),
+        ("arena-abg", _AlphaBetaGamma(0.5, 0.2, 0.02, 0.01), {"alpha": [0.5, 0.4, 0.6, 0.5]}),
+        ("arena-lowpass", _LowPass(20.0, 0.002), {"omega": [20.0, 10.0, 40.0, 20.0]}),
         ("gain", StaticGain([[1.0, -2.0, 0.5], [0.0, 1.0, 3.0]], ("a", "b", "c"), ("p", "q")),
          {"D": np.random.default_rng(0).normal(size=(B, 2, 3))}),
     ]

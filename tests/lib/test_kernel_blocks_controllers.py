@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from ctrl_analysis import identification
-from ctrl_analysis.controllers import mfac, pd
+from ctrl_analysis.controllers import golden_section, mfac, pd
 from ctrl_analysis.engine import codegen as _kernels
 
 pytestmark = pytest.mark.skipif(not _kernels.available(), reason="numba is not installed")
@@ -34,6 +34,23 @@ def _band_states(rng, B, n, m):
     return x, rng.standard_normal((B, m))
 
 
+def _rls_states(rng, B, n, m):
+    """RecursiveLeastSquaresBlock (3 parameters): θ near the box, R symmetric positive definite."""
+    M = rng.normal(size=(B, 3, 3))
+    R = M @ M.transpose(0, 2, 1) + 0.1 * np.eye(3)
+    x = np.concatenate([rng.uniform(-1.2, 1.2, (B, 3)), R.reshape(B, 9)], axis=1)
+    return x, rng.normal(size=(B, m)) * [3.0, 1.0, 1.0, 1.0]
+
+
+def _golden_states(rng, B, n, m):
+    """GoldenSectionController: started or not, errors growing and shrinking, ĝ0 away from zero."""
+    x = rng.standard_normal((B, n))
+    x[:, 3] = rng.integers(0, 2, B)
+    u = rng.standard_normal((B, m))
+    u[:, 4] = rng.uniform(0.5, 2.0, B)
+    return x, u
+
+
 # (id, block, n states, n inputs, inputs generator, {parameter: per-run values generator})
 CASES = [
     ("UnitDelay", lambda: mfac.UnitDelay(0.3), 1, 1, _mfac_inputs, {}),
@@ -48,6 +65,13 @@ CASES = [
     ("CFDLPredictor", lambda: mfac.CFDLPredictor(2.0, 0.5, 0.1), 3, 2, _mfac_inputs, {}),
     ("ArxRegressor", lambda: identification.ArxRegressor(2, 1, lag=0), 3, 2, _mfac_inputs, {}),
     ("ArxRegressor-lag2", lambda: identification.ArxRegressor(1, 3, lag=2), 8, 2, _mfac_inputs, {}),
+    ("RecursiveLeastSquaresBlock", lambda: identification.RecursiveLeastSquaresBlock(
+        3, 0.98, lower=[-1, -1, -1], upper=[1, 1, 1], max_trace=4.0), 12, 4, _rls_states,
+     {"forgetting": lambda r, B: r.uniform(0.9, 1.0, B), "max_trace": lambda r, B: r.uniform(1.0, 10.0, B)}),
+    ("RecursiveLeastSquaresBlock-hold", lambda: identification.RecursiveLeastSquaresBlock(3, 1.0, feedthrough=False),
+     12, 4, _rls_states, {}),
+    ("GoldenSectionController", lambda: golden_section.GoldenSectionController(0.1, 0.9, mu=0.05), 4, 5,
+     _golden_states, {"k_I": lambda r, B: r.uniform(0.0, 0.5, B), "c2": lambda r, B: r.uniform(0.5, 1.0, B)}),
     ("PDFeedforward", lambda: pd.PDFeedforward(2.0, omega_c=10.0), 0, 6, _mfac_inputs,
      {"b0": lambda r, B: r.uniform(1.0, 3.0, B), "omega_c": lambda r, B: r.uniform(5.0, 20.0, B)}),
     ("PDFeedforward-model-n3", lambda: pd.PDFeedforward(3.0, gains=[6.0, 11.0, 6.0], order=3, model=True),

@@ -264,7 +264,8 @@ def test_every_mfac_block_in_one_loop_compiled_equals_numpy_engine_bit_for_bit()
     rng = np.random.default_rng(5)
     est = PPDEstimator(eta=0.5, mu=1.0, epsilon=1e-5, phi0=2.0, phi_reset=0.5, y0=1.0)
     law = DecreasingGainLaw(0.5, 2.0, e_m=0.2, rearm=False)
-    ikf = ImprovedKalmanFilter(rng.uniform(0.01, 0.1, B), 0.05, y0=1.0, P0=0.0)
+    Qs = rng.uniform(0.01, 0.1, B)
+    ikf = ImprovedKalmanFilter(Qs[0], 0.05, y0=1.0, P0=0.0)
     blocks = [place(KCubicPlant(), "plant"),
               place(StaticGain([[1.0, 1.0]], inputs=("y", "v"), outputs=("y_m",)), "meas")]
     blocks += ikf_mfac(est, law, ikf)
@@ -275,7 +276,8 @@ def test_every_mfac_block_in_one_loop_compiled_equals_numpy_engine_bit_for_bit()
     loop = Loop(blocks, dt=1.0)
     v = 0.1 * rng.standard_normal((n, B))
     ref = np.where(np.arange(n + 1) < n // 2, 1.0, -1.0)
-    params = {"law": {"rho": rng.uniform(0.3, 1.0, B)}, "law2": {"lam": rng.uniform(1.0, 3.0, B)}}
+    params = {"law": {"rho": rng.uniform(0.3, 1.0, B)}, "law2": {"lam": rng.uniform(1.0, 3.0, B)},
+              "filter": {"Q": Qs}}
     runs = {e: loop.simulate(n, inputs={"v": v, "y_ref_next": ref}, params=params, engine=e, bound=1e4)
             for e in ("numpy", "compiled")}
     a, c = runs["numpy"], runs["compiled"]

@@ -237,26 +237,6 @@ def test_study_kernels_are_the_numpy_methods():
     assert np.array_equal(y[:, 0], u2[:, 0] + u2[:, 1])
 
 
-class KOscPerRun(KOsc):
-    """KOsc with a stiffness per run: the kernel's params are (B, 2), the numpy methods use each run's row."""
-
-    def __init__(self, k):
-        self.P = np.column_stack([np.asarray(k, dtype=float), np.full(len(k), 0.4)])
-
-    def rhs(self, t, x, u, params=None):
-        dx = np.empty_like(x)
-        osc_rhs(t, x.T, u.T, self.P.T, dx.T)  # p[0], p[1] are the per-run columns here
-        return dx
-
-    def output(self, t, x, u, params=None):
-        y = np.empty((x.shape[0], 1))
-        osc_output(t, x.T, u.T, self.P.T, y.T)
-        return y
-
-    def kernel(self):
-        return BlockKernel(output=osc_output, params=self.P, rhs=osc_rhs)
-
-
 def test_per_run_params_follow_their_runs_through_chunks_and_processes():
     """Per-run values given to simulate(params=...): a kernel block (rows) and a static gain (a gain per
     run) equal their runs alone on both engines, through chunks and processes."""
@@ -289,24 +269,6 @@ def test_per_run_params_follow_their_runs_through_chunks_and_processes():
     for runs in (4, 6):  # values for 5 runs: a batch of another size is refused, not silently cut
         with pytest.raises(ValueError, match=f"the batch's {runs} runs"):
             loop.simulate(300, inputs={"w": 0.0, "v": 0.0}, runs=runs, params=params, engine="compiled")
-
-
-def test_a_block_holding_its_own_per_run_rows_runs_whole():
-    """A block whose kernel parameters are (B, n_p) rows it built itself (the arena's adapters) runs on
-    both engines for exactly B runs, as one chunk in one process; anything else is refused."""
-    k = np.array([1.0, 4.0, 9.0])
-    loop = Loop([place(KOscPerRun(k), "plant"), place(KAcc(0.01), "acc")], dt=0.01)
-    inputs = {"w": 0.0, "v": 0.0}
-    a = loop.simulate(200, inputs=inputs, runs=3, engine="numpy", max_bytes=1.0)  # memory chunks: stepped whole
-    b = loop.simulate(200, inputs=inputs, runs=3, engine="compiled")
-    assert np.array_equal(a.x, b.x)
-    alone = Loop([place(KOsc(9.0), "plant"), place(KAcc(0.01), "acc")], dt=0.01).simulate(200, inputs=inputs)
-    assert np.array_equal(alone.x[:, 0], b.x[:, 2])
-    with pytest.raises(ValueError, match="hold kernel parameters for that many runs, but the batch has 4"):
-        loop.simulate(200, inputs=inputs, runs=4)
-    for kw in ({"chunk_runs": 2}, {"jobs": 2}):
-        with pytest.raises(ValueError, match="stepped whole"):
-            loop.simulate(200, inputs=inputs, runs=3, **kw)
 
 
 def test_static_gain_kernel_equals_its_numpy_output():

@@ -381,7 +381,7 @@ def alpha_beta_gamma_output(t, x, u, p, y):
     """α-β-γ correction ``x̂(k|k) = x̂(k|k−1) + K (y(k) − x̂(k|k−1)[0])``, ``K = [α, β/T, γ/(2T²)]``.
 
     Scalar-indexed: the kernel of one run and, on a batch's transposed arrays, a block's numpy
-    method (:class:`~ctrl_analysis.engine.blocks.ColumnKernels`).
+    method (:class:`~ctrl_analysis.engine.kernels.KernelBlock`'s batched methods).
 
     Parameters
     ----------

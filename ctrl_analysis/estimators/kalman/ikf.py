@@ -12,27 +12,6 @@ from .scalar import random_walk_gain
 __all__ = ["ImprovedKalmanFilter"]
 
 
-def _per_run(name: str, value):
-    """A checked parameter as a float, or a 1-D array of one value per run."""
-    arr = np.asarray(value, dtype=float)
-    if arr.ndim == 0:
-        return float(arr)
-    if arr.ndim != 1:
-        raise ValueError(f"{name} must be a scalar or a 1-D array of one value per run, got shape {arr.shape}")
-    return arr
-
-
-def _kernel_params(*values) -> np.ndarray:
-    """Kernel parameters ``[v_0, v_1, ...]``: a 1-D vector, or ``(B, n_p)`` rows when any value is per run."""
-    sizes = {np.size(v) for v in values if np.ndim(v) == 1}
-    if not sizes:
-        return np.array(values, dtype=float)
-    if len(sizes) > 1:
-        raise ValueError(f"per-run parameters must all have one length, got lengths {sorted(sizes)}")
-    B = sizes.pop()
-    return np.column_stack([np.broadcast_to(np.asarray(v, dtype=float), (B,)) for v in values])
-
-
 #: The kernel parameters: the variances ``Q`` and ``R`` (one row per run when either differs per run).
 LAYOUT = Layout("Q", "R")
 AT = LAYOUT.at
@@ -109,10 +88,10 @@ class ImprovedKalmanFilter(KernelBlock, DiscreteBlock):
 
     Parameters
     ----------
-    Q : float or array_like, shape (B,)
-        Process-noise variance of the data model, ``>= 0``; an array gives one value per run (a
-        grid on the batch axis; :meth:`nlsys` needs scalars).
-    R : float or array_like, shape (B,)
+    Q : float
+        Process-noise variance of the data model, ``>= 0``. Values per run (a grid on the batch
+        axis) are given to ``Loop.simulate(params={name: {"Q": values}})``.
+    R : float
         Measurement-noise variance, ``> 0`` (per run as ``Q``).
     y0 : float
         Initial estimate ``ŷ(0|0)`` (the state before the first sample).
@@ -121,7 +100,7 @@ class ImprovedKalmanFilter(KernelBlock, DiscreteBlock):
 
     Attributes
     ----------
-    steady_gain : float or numpy.ndarray
+    steady_gain : float
         ``K∞(Q/R)``, the limit of ``K(k)``.
 
     Raises
@@ -150,13 +129,12 @@ class ImprovedKalmanFilter(KernelBlock, DiscreteBlock):
     feedthrough = True
 
     def __init__(self, Q: float, R: float, y0: float = 0.0, P0: float = 1.0):
-        self.Q = _per_run("Q", check_nonnegative("Q", Q))
-        self.R = _per_run("R", check_positive("R", R))
+        self.Q = float(check_nonnegative("Q", Q, scalar=True))
+        self.R = float(check_positive("R", R, scalar=True))
         self.y0 = float(check_finite("y0", y0, scalar=True))
         self.P0 = float(check_nonnegative("P0", P0, scalar=True))
         self.steady_gain = random_walk_gain(self.Q, self.R)
-        values = {"Q": self.Q, "R": self.R}
-        self.kernel_params = _kernel_params(*(values[name] for name in LAYOUT.names))
+        self.kernel_params = LAYOUT.pack(Q=self.Q, R=self.R)
 
     def initial_state(self) -> np.ndarray:
         return np.array([self.y0, self.P0])
