@@ -576,16 +576,24 @@ def versions() -> dict:
     -------
     dict of str -> str
     """
-    import control
-    import matplotlib
-    import scipy
-    import sympy
+    return {"python": platform.python_version(),
+            **{name: _version(name) for name in ("control", "numpy", "scipy", "sympy", "matplotlib")}}
 
-    return {
-        "python": platform.python_version(),
-        "control": control.__version__,
-        "numpy": np.__version__,
-        "scipy": scipy.__version__,
-        "sympy": sympy.__version__,
-        "matplotlib": matplotlib.__version__,
-    }
+
+def _version(name: str) -> str:
+    """``name.__version__`` when the package is imported, else its installed version (without importing it).
+
+    A study that never imported python-control, sympy or matplotlib (a small or stand-in study) does not
+    pay about 1.3 s of CPU to import them for their version strings (results.json is written in every worker
+    process); the installed distribution's version is what that process would import.
+    """
+    import sys
+    from importlib.metadata import PackageNotFoundError, version
+
+    module = sys.modules.get(name)
+    if module is not None and isinstance(getattr(module, "__version__", None), str):
+        return module.__version__
+    try:
+        return version(name)
+    except PackageNotFoundError:  # importable but not installed as a distribution (e.g. on PYTHONPATH)
+        return __import__(name).__version__

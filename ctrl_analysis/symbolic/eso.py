@@ -223,7 +223,11 @@ def _error_transfer_functions(n: int, high_gain: bool) -> tuple:
     A, E, _ = observer_matrices(n, high_gain)
     m = n + 1
     sol = (S * sp.eye(m) - A).LUsolve(E)
-    return tuple(sp.factor(sp.cancel(sp.together(e))) for e in sol)
+    # factor_terms, not factor: numerator and denominator are irreducible apart from a power of eps, so both
+    # give the same expressions for every n <= MAX_TRANSFER_ORDER; factor's multivariate (Wang) algorithm
+    # draws random evaluation points from sympy's process-wide generator and, for about 2 % of its states,
+    # ran for many minutes at n = 4 (a suite once hung on it)
+    return tuple(sp.factor_terms(sp.cancel(sp.together(e))) for e in sol)
 
 
 def error_dc_gains(n: int) -> tuple:

@@ -44,9 +44,24 @@ def _cli(*argv, env):
                           cwd=env["PYTHONPATH"].split(os.pathsep)[0], timeout=240, env=env, check=False)
 
 
+#: Run as ``python -c DIE_WITH_PARENT parent_pid program args...``: on Linux, arrange to be killed when the
+#: test process dies (even by SIGKILL, when the fixture's ``finally`` cannot run; a ``dask worker`` whose
+#: scheduler is gone otherwise waits to reconnect for ever), then become ``program`` (the setting survives exec).
+DIE_WITH_PARENT = """
+import os, signal, sys
+if sys.platform.startswith("linux"):
+    import ctypes
+    ctypes.CDLL(None).prctl(1, int(signal.SIGKILL), 0, 0, 0)  # 1 = PR_SET_PDEATHSIG
+    if os.getppid() != int(sys.argv[1]):  # the test process died before that
+        sys.exit(1)
+os.execv(sys.argv[2], sys.argv[2:])
+"""
+
+
 def _dask(*argv, log, env):
     dask = shutil.which("dask", path=os.path.dirname(sys.executable)) or shutil.which("dask")
-    return subprocess.Popen([dask, *argv], cwd=REPO, env=env, stdout=log, stderr=subprocess.STDOUT)
+    return subprocess.Popen([sys.executable, "-c", DIE_WITH_PARENT, str(os.getpid()), dask, *argv], cwd=REPO, env=env,
+                            stdout=log, stderr=subprocess.STDOUT)
 
 
 def _free_port() -> int:

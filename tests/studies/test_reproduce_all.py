@@ -5,12 +5,15 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 from analysis import STUDIES
 from ctrl_analysis.reporting.report import validate_results
 
 REPO = Path(__file__).resolve().parents[2]
 
 
+@pytest.mark.timeout(330)  # the run itself may take up to its 300 s subprocess timeout (a loaded machine)
 def test_reproduce_all_quick_writes_valid_results(tmp_path):
     proc = subprocess.run([sys.executable, "-m", "ctrl_analysis.cli", "reproduce", "all", "--quick", "--out",
                            str(tmp_path)], capture_output=True, text=True, cwd=REPO, timeout=300)
