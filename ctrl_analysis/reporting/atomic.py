@@ -27,16 +27,34 @@ __all__ = ["staged_directory", "write_text_atomic"]
 
 @contextlib.contextmanager
 def _sigint_deferred():
-    """Hold SIGINT and SIGTERM (main thread only) while a few renames complete, so they happen together."""
+    """Hold SIGINT and SIGTERM (main thread only) while a few renames complete, so they happen together.
+
+    Blocking the signals in the main thread is not enough: the kernel then delivers a signal sent to the
+    process to another thread (OpenBLAS's, a process pool's manager thread), and Python still runs its
+    handler in the main thread, inside the block. So the Python-level handlers are replaced for the block by
+    one that notes the signal, which is raised again (to the restored handler) when the block ends.
+    """
     try:
         old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
     except (AttributeError, ValueError, OSError):  # not POSIX / not the main thread
         old = None
+    held: list[int] = []
+    handlers = {}
+    try:
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            if signal.getsignal(sig) is not None:  # None: a handler not set from Python, left alone
+                handlers[sig] = signal.signal(sig, lambda signum, frame: held.append(signum))
+    except ValueError:  # not the main thread: no Python handler runs here anyway
+        pass
     try:
         yield
     finally:
+        for sig, handler in handlers.items():
+            signal.signal(sig, handler)
         if old is not None:
             signal.pthread_sigmask(signal.SIG_SETMASK, old)
+        if held:
+            signal.raise_signal(held[0])
 
 
 def _umask() -> int:
@@ -120,7 +138,7 @@ def _exchange(a: Path, b: Path) -> bool:
     raise OSError(err, os.strerror(err), str(a), None, str(b))
 
 
-def swap_in(staged: Path, target: Path) -> None:
+def swap_in(staged: Path, target: Path, *, keep_old: bool = False) -> Path | None:
     """Make the complete directory ``staged`` the new ``target``; the old one (if any) is removed.
 
     The staged files are flushed to disk first. Then ``staged`` and ``target`` are exchanged in one
@@ -134,6 +152,14 @@ def swap_in(staged: Path, target: Path) -> None:
         A directory from :func:`new_staging`.
     target : str or os.PathLike
         The directory to replace (or create).
+    keep_old : bool
+        Leave the previous contents in a hidden folder beside ``target`` and return it, for the caller to
+        remove (with :func:`remove_tree`) once it has done what must follow the swap at once.
+
+    Returns
+    -------
+    Path or None
+        With ``keep_old``, the folder holding the previous contents (``None`` if there were none).
 
     Raises
     ------
@@ -157,8 +183,11 @@ def swap_in(staged: Path, target: Path) -> None:
             old = Path(tempfile.mkdtemp(dir=target.parent, prefix=f".{target.name}.old-"))
             os.replace(target, old / "dir")
             os.replace(staged, target)
+    if keep_old:
+        return old
     if old is not None:
         remove_tree(old)
+    return None
 
 
 def _writable_and_retry(func, path, exc_info):
