@@ -27,16 +27,34 @@ __all__ = ["staged_directory", "write_text_atomic"]
 
 @contextlib.contextmanager
 def _sigint_deferred():
-    """Hold SIGINT and SIGTERM (main thread only) while a few renames complete, so they happen together."""
+    """Hold SIGINT and SIGTERM (main thread only) while a few renames complete, so they happen together.
+
+    Blocking the signals in the main thread is not enough: the kernel then delivers a signal sent to the
+    process to another thread (OpenBLAS's, a process pool's manager thread), and Python still runs its
+    handler in the main thread, inside the block. So the Python-level handlers are replaced for the block by
+    one that notes the signal, which is raised again (to the restored handler) when the block ends.
+    """
     try:
         old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
     except (AttributeError, ValueError, OSError):  # not POSIX / not the main thread
         old = None
+    held: list[int] = []
+    handlers = {}
+    try:
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            if signal.getsignal(sig) is not None:  # None: a handler not set from Python, left alone
+                handlers[sig] = signal.signal(sig, lambda signum, frame: held.append(signum))
+    except ValueError:  # not the main thread: no Python handler runs here anyway
+        pass
     try:
         yield
     finally:
+        for sig, handler in handlers.items():
+            signal.signal(sig, handler)
         if old is not None:
             signal.pthread_sigmask(signal.SIG_SETMASK, old)
+        if held:
+            signal.raise_signal(held[0])
 
 
 def _umask() -> int:
