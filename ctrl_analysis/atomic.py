@@ -138,7 +138,7 @@ def _exchange(a: Path, b: Path) -> bool:
     raise OSError(err, os.strerror(err), str(a), None, str(b))
 
 
-def swap_in(staged: Path, target: Path) -> None:
+def swap_in(staged: Path, target: Path, *, keep_old: bool = False) -> Path | None:
     """Make the complete directory ``staged`` the new ``target``; the old one (if any) is removed.
 
     The staged files are flushed to disk first. Then ``staged`` and ``target`` are exchanged in one
@@ -152,6 +152,14 @@ def swap_in(staged: Path, target: Path) -> None:
         A directory from :func:`new_staging`.
     target : str or os.PathLike
         The directory to replace (or create).
+    keep_old : bool
+        Leave the previous contents in a hidden folder beside ``target`` and return it, for the caller to
+        remove (with :func:`remove_tree`) once it has done what must follow the swap at once.
+
+    Returns
+    -------
+    Path or None
+        With ``keep_old``, the folder holding the previous contents (``None`` if there were none).
 
     Raises
     ------
@@ -175,8 +183,11 @@ def swap_in(staged: Path, target: Path) -> None:
             old = Path(tempfile.mkdtemp(dir=target.parent, prefix=f".{target.name}.old-"))
             os.replace(target, old / "dir")
             os.replace(staged, target)
+    if keep_old:
+        return old
     if old is not None:
         remove_tree(old)
+    return None
 
 
 def _writable_and_retry(func, path, exc_info):

@@ -272,7 +272,8 @@ class _Run:
 
         The report is rendered first (with the staged results in place of the old ones), then the
         folder and the report are swapped in back to back with SIGINT and SIGTERM held, so REPORT.md
-        and every results.json agree before and after.
+        and every results.json agree before and after. Nothing runs between the two renames (the old
+        folder is removed after both): a kill -9 can still fall between them, but only within microseconds.
         """
         tmp = None
         if self.report:
@@ -282,10 +283,12 @@ class _Run:
             except OSError as exc:  # e.g. a full disk: the study is still committed, the old report stays
                 self.failed["REPORT.md"] = _one_line(exc)
         with sigint_deferred():
-            swap_in(staged, self.out / name)
+            old = swap_in(staged, self.out / name, keep_old=True)
+            self._publish(tmp)
             self.committed.append(name)
             self.failed.pop(name, None)
-            self._publish(tmp)
+        if old is not None:
+            remove_tree(old)
 
     def finish(self) -> None:
         """Rebuild REPORT.md from the files on disk once more (with every failure of the run)."""
