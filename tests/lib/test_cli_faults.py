@@ -43,7 +43,8 @@ def run(ctx, params=None):
     result.quantity("base_seed", "base seed seen by the study", float(ctx.seed), runs=len(seeds), unit="")
     (ctx.out_dir / "marker.txt").write_text(str(ctx.seed))
     end = time.monotonic() + SECONDS
-    while time.monotonic() < end:
+    hold = os.environ.get("FAKE_HOLD")  # a file: the study also runs until it exists (60 s at most)
+    while time.monotonic() < end or (hold and not os.path.exists(hold) and time.monotonic() < end + 60):
         if os.environ.get("FAKE_BUSY"):  # busy in exec() of a string, where a caught Ctrl-C used to end as -2
             exec("x = sum(range(2000))")
         else:
@@ -198,10 +199,14 @@ def test_interrupts_and_kills_at_several_points_leave_report_and_results_in_agre
 
 def test_two_runs_into_one_folder_do_not_interleave(tmp_path, fake):
     out = tmp_path / "out"
-    a = _start(fake, out, 11)
+    release = tmp_path / "release"
+    # a's studies run until b has been refused: on a loaded machine b's start-up alone may outlast a's
+    # 0.6 s, and b then (rightly) finds no lock
+    a = _start({**fake, "FAKE_HOLD": str(release)}, out, 11)
     assert a.stderr.readline().startswith("[")  # a holds the lock
     b = _start(fake, out, 12)
     _, err_b = b.communicate(timeout=60)
+    release.write_text("")
     _, err_a = a.communicate(timeout=60)
     assert a.returncode == 0, err_a
     assert b.returncode == 2 and err_b.strip().splitlines() == [
