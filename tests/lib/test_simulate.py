@@ -269,3 +269,11 @@ def test_discrete_runner_observes_k_0_to_n_minus_1_with_noise_and_params():
     np.testing.assert_array_equal(res.x[1:], 0.5 * res.x[:-1] + noise + np.arange(8.0)[:, None, None])
     np.testing.assert_array_equal(res.t, np.arange(9.0))
 
+
+def test_runners_refuse_non_finite_noise():
+    noise = np.zeros((5, 1, 1))
+    noise[2] = np.nan
+    with pytest.raises(ValueError, match="noise must be finite"):
+        simulate_sampled(linear_rhs, [1.0, 0.0], 0.1, 5, noise=noise)
+    with pytest.raises(ValueError, match="noise must be finite"):
+        simulate_discrete(lambda k, x, w, p: x, [1.0], 5, noise=noise)
