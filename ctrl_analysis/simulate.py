@@ -1,4 +1,10 @@
-"""The simulation engine: discrete loops, sampled-data loops and smooth ODE loops, over a batch of runs.
+"""Runners that take plain functions (sampled-data, discrete, adaptive ODE), over a batch of runs.
+
+:func:`simulate_sampled` and :func:`simulate_discrete` are thin wrappers: they put the caller's
+functions (``rhs``, ``controller``, ``observe``, ``step``) into a :class:`~ctrl_analysis.engine.loop.Loop`
+as blocks, and the loop does the time loop, the RK4/Euler steps, the chunks, the storage and the
+divergence test. :func:`simulate_ivp` (from :mod:`ctrl_analysis.engine.ivp`) integrates with an
+adaptive solver. Seeds and noise are re-exported from :mod:`ctrl_analysis.noise`.
 
 Conventions
 -----------
@@ -30,17 +36,13 @@ from ._validate import (
     check_int,
     check_positive,
 )
-from .engine.integrators import (
-    MAX_SUBSTEPS,
-    STEPPERS,
-    _flag_divergence,
-    euler_step,
-    rk4_step,
-)
+from .engine.blocks import ContinuousBlock, DiscreteBlock, signal_names
+from .engine.integrators import MAX_SUBSTEPS, STEPPERS, euler_step, rk4_step
 from .engine.ivp import simulate_ivp
-from .engine.memory import CHUNK_BYTES, RESULT_BYTES, check_result_memory, chunk_bounds  # noqa: F401
+from .engine.loop import Loop, place
+from .engine.memory import CHUNK_BYTES, RESULT_BYTES, check_result_memory, chunk_bounds  # noqa: F401 (public API)
 from .engine.simresult import SimResult, _check_bound, _prepare
-from .noise import _check_seeds, draw_noise, gaussian_noise, run_seeds, uniform_noise  # noqa: F401 (public API)
+from .noise import draw_noise, gaussian_noise, run_seeds, uniform_noise
 
 __all__ = [
     "CHUNK_BYTES",
@@ -63,21 +65,98 @@ __all__ = [
 
 
 # ----------------------------------------------------------------------------------------------
-# The older runners (a Loop with blocks is the engine's way; these take plain functions)
+# The older runners: plain functions run as blocks of a Loop (a Loop of blocks is the engine's way)
 # ----------------------------------------------------------------------------------------------
 
-def _store(buf, k, value, n_rows, B):
-    """Store ``value`` (reshaped to ``(B, -1)``) as row ``k`` of ``buf``, allocating it on first use."""
-    arr = np.asarray(value, dtype=float).reshape(B, -1)
-    if buf is None:
-        buf = np.empty((n_rows, B, arr.shape[1]))
-    buf[k] = arr
-    return buf
+class _FromFunction:
+    """A block whose per-step method is ``fn(t, x, u)`` and whose outputs are its states."""
+
+    def __init__(self, fn, states, inputs):
+        self.fn, self.states, self.inputs, self.outputs = fn, states, inputs, states
 
 
-# ----------------------------------------------------------------------------------------------
-# Runners
-# ----------------------------------------------------------------------------------------------
+class _Plant(_FromFunction, ContinuousBlock):
+    """``dx/dt = fn(t, x, u)``."""
+
+    def rhs(self, t, x, u, params=None):
+        return self.fn(t, x, u)
+
+
+class _Step(_FromFunction, DiscreteBlock):
+    """``x(k+1) = fn(t_k, x(k), u(k))``."""
+
+    def update(self, t, x, u, params=None):
+        return self.fn(t, x, u)
+
+
+class _PerSample(DiscreteBlock):
+    """``fn(t, u)`` evaluated once at every sample instant and held over the sample (no state).
+
+    A :class:`~ctrl_analysis.engine.blocks.StaticBlock` feeding a continuous block is re-evaluated at
+    every integration stage; this block runs once per instant, so ``fn`` may keep state of its own
+    between calls, as a runner's ``controller`` and ``observe`` may.
+    """
+
+    states = ()
+    feedthrough = True
+
+    def __init__(self, fn, inputs, outputs):
+        self.fn, self.inputs, self.outputs = fn, inputs, outputs
+
+    def update(self, t, x, u, params=None):
+        return x
+
+    def output(self, t, x, u, params=None):
+        return self.fn(t, u)
+
+
+def _rows(value, B):
+    """A callback's result as a ``(B, p)`` float array, as the runners store it."""
+    return np.asarray(value, dtype=float).reshape(B, -1)
+
+
+def _split(s, n_a, n_b):
+    """``k``, ``a`` and ``b`` (``None`` without columns) from a per-sample block's input columns ``[a | b | k]``."""
+    return int(s[0, -1]), s[:, :n_a].copy(), (s[:, n_a:n_a + n_b].copy() if n_b else None)
+
+
+def _loop_inputs(noise, n_steps, base, k):
+    """The noise channels' signal names, and the loop's external inputs: the channels and the sample index ``k``."""
+    names = ()
+    if noise is not None:
+        if noise.shape[0] < n_steps:
+            raise ValueError(f"noise must have at least n_steps={n_steps} rows, got {noise.shape[0]}")
+        if not np.all(np.isfinite(noise[:n_steps])):
+            raise ValueError("noise must be finite (no NaN or inf)")
+        names = signal_names(base, noise.shape[2])
+    inputs = {s: noise[:n_steps, :, j] for j, s in enumerate(names)}
+    if k:
+        inputs["k"] = np.arange(n_steps + 1, dtype=float)
+    return names, inputs
+
+
+def _recorder(observe, inputs, n_a, rows):
+    """A placed block appending ``observe(k, t, a, b)`` to ``rows[k]`` for ``k < len(rows)``.
+
+    ``observe``'s width is known only from its results, so they are kept here, not as signals;
+    chunks of runs are stepped in order, so ``rows[k]`` joined holds every run's row ``k``.
+    """
+    def record(t, s):
+        k, a, b = _split(s, n_a, len(inputs) - n_a - 1)
+        if k < len(rows):
+            rows[k].append(_rows(observe(k, t, a, b), len(s)))
+        return np.empty((len(s), 0))
+
+    return place(_PerSample(record, inputs, ()), "observe")
+
+
+def _result(res, u_sig, rows, seeds, bound) -> SimResult:
+    """The runners' :class:`SimResult` from the loop's response: ``u`` from signals ``u_sig``, ``y`` from ``rows``."""
+    n = len(res.t) - 1
+    return SimResult(t=res.t, x=res.x, u=np.stack([res[s][:n] for s in u_sig], axis=-1) if u_sig else None,
+                     y=None if rows is None else np.stack([np.concatenate(r) for r in rows]), diverged=res.diverged,
+                     diverged_step=res.diverged_step, seeds=None if seeds is None else list(seeds), bound=bound)
+
 
 def simulate_sampled(
     rhs: Callable,
@@ -105,10 +184,16 @@ def simulate_sampled(
     part ``x' = rhs(t, x, u_k, params)`` is integrated over ``[t_k, t_k + h]`` with ``substeps``
     fixed steps of ``method`` (``"rk4"`` or ``"euler"``), ``u_k`` and the noise ``w_k`` held.
 
+    A thin wrapper over :class:`~ctrl_analysis.engine.loop.Loop` (numpy engine), which steps,
+    chunks, stores and tests for divergence: ``rhs`` becomes a continuous block whose outputs are
+    its states, ``controller`` and ``observe`` blocks run once per sample, the noise channels
+    external inputs. New code can build such a loop from blocks directly.
+
     Parameters
     ----------
     rhs : callable
-        ``rhs(t, x, u, params)`` with ``x`` of shape ``(B, n)``; returns the same shape.
+        ``rhs(t, x, u, params)`` with ``x`` of shape ``(B, n)``; returns the same shape. ``u`` is
+        ``None`` without a controller and without noise.
     x0 : array_like, shape (n,) or (B, n)
         Initial state (broadcast over the runs of ``noise`` when 1-D).
     h : float
@@ -116,9 +201,11 @@ def simulate_sampled(
     n_steps : int
         Number of samples N; states are returned at N+1 instants.
     controller : callable, optional
-        ``controller(k, t, x, w) -> u`` of shape ``(B, m)``; may keep its own state.
+        ``controller(k, t, x, w) -> u`` of shape ``(B, m)``, called once per sample ``k = 0..N-1``
+        with the whole plant state; may keep its own state. The call at ``k = 0`` is made before
+        the loop is built (it tells ``m``).
     noise : ndarray, shape (n_steps, B, m), optional
-        Held noise, e.g. from :func:`draw_noise`.
+        Held noise, e.g. from :func:`draw_noise` (finite; rows after ``n_steps`` are not used).
     observe : callable, optional
         ``observe(k, t, x, u) -> (B, p)`` stored at every instant (``u`` is ``None`` at the last).
     store_states : bool
@@ -142,7 +229,7 @@ def simulate_sampled(
     Raises
     ------
     MemoryError
-        If the stored states of the whole batch would exceed half the physical memory.
+        If the stored trajectories of the whole batch would exceed half the physical memory.
     """
     check_callable("rhs", rhs, "rhs(t, x, u, params)")
     check_callable("controller", controller, "controller(k, t, x, w)", optional=True)
@@ -153,68 +240,40 @@ def simulate_sampled(
     check_in("method", method, STEPPERS)
     bound = _check_bound(bound)
     t0 = check_finite("t0", t0, scalar=True)
-    step = STEPPERS[method]
     x, noise, B = _prepare(x0, noise, seeds)
-    if noise is not None and noise.shape[0] < n_steps:
-        raise ValueError(f"noise must have at least n_steps={n_steps} rows, got {noise.shape[0]}")
-
-    if store_states:
-        check_result_memory(8.0 * (n_steps + 1) * B * x.shape[1], RESULT_BYTES, "simulate_sampled")
+    w_sig, inputs = _loop_inputs(noise, n_steps, "w" if controller is not None else "u",
+                                 controller is not None or observe is not None)
+    # when to chunk: the legacy rule (working arrays of the whole batch), so a batch stepped whole
+    # before still is; the loop steps the chunks
     limit = CHUNK_BYTES if max_bytes is None else check_positive("max_bytes", max_bytes)
     size = B if chunk_runs is None else check_int("chunk_runs", chunk_runs, minimum=1)
     if chunk_runs is None and 8 * 16 * x.shape[1] * B > limit:
         size = max(1, int(limit // (8 * 16 * x.shape[1])))
-    if size < B:
-        if controller is not None:
-            raise ValueError("chunk_runs must be None (or >= the batch size) with a controller: a controller "
-                             f"may keep state across calls, got chunk_runs={chunk_runs}")
-        parts = [simulate_sampled(rhs, x[lo:hi], h, n_steps, noise=None if noise is None else noise[:, lo:hi],
-                                  method=method, substeps=substeps, t0=t0, params=params, observe=observe,
-                                  store_states=store_states, bound=bound, chunk_runs=hi - lo)
-                 for lo, hi in chunk_bounds(B, size)]
-        return _join(parts, seeds)
+    if size < B and controller is not None:
+        raise ValueError("chunk_runs must be None (or >= the batch size) with a controller: a controller "
+                         f"may keep state across calls, got chunk_runs={chunk_runs}")
 
-    t = t0 + h * np.arange(n_steps + 1)
-    xs = np.empty((n_steps + 1, B, x.shape[1])) if store_states else None
-    us = None
-    ys = None
-    diverged = np.zeros(B, dtype=bool)
-    div_step = np.full(B, -1, dtype=int)
-    dt = h / substeps
-    with np.errstate(all="ignore"):
-        for k in range(n_steps):
-            if xs is not None:
-                xs[k] = x
-            w = None if noise is None else noise[k]
-            u = controller(k, t[k], x, w) if controller is not None else w
-            if observe is not None:
-                ys = _store(ys, k, observe(k, t[k], x, u), n_steps + 1, B)
-            if u is not None:
-                us = _store(us, k, u, n_steps, B)
-            tk = t[k]
-            for _ in range(substeps):
-                x = step(rhs, tk, x, u, dt, params)
-                tk += dt
-            x = _flag_divergence(x, bound, diverged, div_step, k + 1)
-        if xs is not None:
-            xs[n_steps] = x
-        if observe is not None:
-            ys = _store(ys, n_steps, observe(n_steps, t[n_steps], x, None), n_steps + 1, B)
-    return SimResult(t=t, x=xs, u=us, y=ys, diverged=diverged, diverged_step=div_step,
-                     seeds=None if seeds is None else list(seeds), bound=bound)
+    x_sig, u_sig, blocks, rows = signal_names("x", x.shape[1]), w_sig, [], None
+    if controller is not None:
+        u0 = _rows(controller(0, np.float64(t0), x, None if noise is None else noise[0]), B)
+        u_sig = signal_names("u", u0.shape[1])  # sized by the first call, which the block returns at k = 0
 
+        def discrete_part(t, s):
+            k, xk, wk = _split(s, len(x_sig), len(w_sig))
+            if k == 0:
+                return u0
+            return np.full_like(u0, np.nan) if k == n_steps else _rows(controller(k, t, xk, wk), len(s))
 
-def _join(parts: list, seeds) -> SimResult:
-    """One :class:`SimResult` from results of consecutive chunks of a batch (runs on axis 1)."""
-
-    def cat(name, axis):
-        arrays = [getattr(p, name) for p in parts]
-        return None if arrays[0] is None else np.concatenate(arrays, axis=axis)
-
-    first = parts[0]
-    return SimResult(t=first.t, x=cat("x", 1), u=cat("u", 1), y=cat("y", 1), diverged=cat("diverged", 0),
-                     diverged_step=cat("diverged_step", 0), seeds=None if seeds is None else list(seeds),
-                     bound=first.bound)
+        blocks.append(place(_PerSample(discrete_part, x_sig + w_sig + ("k",), u_sig), "controller"))
+    blocks.insert(0, place(_Plant(lambda t, xx, u: rhs(t, xx, u if u_sig else None, params), x_sig, u_sig), "plant"))
+    if observe is not None:
+        rows = [[] for _ in range(n_steps + 1)]
+        blocks.append(_recorder(lambda k, t, xk, uk: observe(k, t, xk, uk if k < n_steps else None),
+                                x_sig + u_sig + ("k",), len(x_sig), rows))
+    res = Loop(blocks, h, method=method, substeps=substeps).simulate(
+        n_steps, inputs=inputs, x0={"plant": x}, runs=B, keep=u_sig, engine="numpy", t0=t0, bound=bound,
+        store_states=store_states, chunk_runs=size, progress=False)
+    return _result(res, u_sig, rows, seeds, bound)
 
 
 def simulate_discrete(
@@ -235,6 +294,9 @@ def simulate_discrete(
     (``None`` without noise). Divergence is detected as in :func:`simulate_sampled`.
     ``observe(k, x, w) -> (B, p)`` is stored for ``k = 0..N-1``.
 
+    A thin wrapper over :class:`~ctrl_analysis.engine.loop.Loop` (numpy engine, ``dt = 1``): ``step``
+    becomes a discrete block, ``observe`` a block run once per sample.
+
     Parameters
     ----------
     step : callable
@@ -254,27 +316,20 @@ def simulate_discrete(
     n_steps = check_int("n_steps", n_steps, minimum=1)
     bound = _check_bound(bound)
     x, noise, B = _prepare(x0, noise, seeds)
-    if noise is not None and noise.shape[0] < n_steps:
-        raise ValueError(f"noise must have at least n_steps={n_steps} rows, got {noise.shape[0]}")
-    xs = np.empty((n_steps + 1, B, x.shape[1])) if store_states else None
-    ys = None
-    diverged = np.zeros(B, dtype=bool)
-    div_step = np.full(B, -1, dtype=int)
-    with np.errstate(all="ignore"):
-        for k in range(n_steps):
-            if xs is not None:
-                xs[k] = x
-            w = None if noise is None else noise[k]
-            if observe is not None:
-                ys = _store(ys, k, observe(k, x, w), n_steps, B)
-            x = np.asarray(step(k, x, w, params), dtype=float).reshape(B, -1)
-            x = _flag_divergence(x, bound, diverged, div_step, k + 1)
-        if xs is not None:
-            xs[n_steps] = x
-    return SimResult(t=np.arange(n_steps + 1, dtype=float), x=xs, u=None, y=ys, diverged=diverged,
-                     diverged_step=div_step, seeds=None if seeds is None else list(seeds), bound=bound)
+    w_sig, inputs = _loop_inputs(noise, n_steps, "w", True)
+    x_sig, rows = signal_names("x", x.shape[1]), None
 
+    def update(t, xk, s):
+        k, _, wk = _split(s, 0, len(w_sig))
+        return _rows(step(k, xk, wk, params), len(xk))
 
+    blocks = [place(_Step(update, x_sig, w_sig + ("k",)), "step")]
+    if observe is not None:
+        rows = [[] for _ in range(n_steps)]
+        blocks.append(_recorder(lambda k, t, xk, wk: observe(k, xk, wk), x_sig + w_sig + ("k",), len(x_sig), rows))
+    res = Loop(blocks, 1.0).simulate(n_steps, inputs=inputs, x0={"step": x}, runs=B, keep=(), engine="numpy",
+                                     bound=bound, store_states=store_states, chunk_runs=B, progress=False)
+    return _result(res, (), rows, seeds, bound)
 
 
 # ----------------------------------------------------------------------------------------------

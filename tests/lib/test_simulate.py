@@ -207,3 +207,73 @@ def test_run_seeds_equal_numpy_seedsequence_children(base_seed):
     expected = [int(c.generate_state(1)[0]) for c in np.random.SeedSequence(base_seed).spawn(2000)]
     assert run_seeds(base_seed, 2000) == expected
     assert all(type(s) is int for s in run_seeds(base_seed, 3))
+
+
+def test_sampled_runner_calls_controller_and_observe_once_per_sample_in_order():
+    # the wrapper over Loop keeps the runner's callback order: controller(k) then observe(k), k = 0..N-1,
+    # then observe(N) with u None; the controller sees the whole plant state and may keep state
+    calls, h, t0, n = [], 0.1, 0.5, 6
+    noise = draw_noise(run_seeds(2, 3), n, gaussian_noise(1.0))
+
+    class Integrating:
+        z = 0.0
+
+        def __call__(self, k, t, x, w):
+            calls.append(("controller", k, t))
+            self.z = self.z + x[:, :1]
+            return np.hstack([-self.z, w])
+
+    ctrl = Integrating()
+
+    def observe(k, t, x, u):
+        calls.append(("observe", k, t, u is None))
+        return np.hstack([x, ctrl.z + 0 * x[:, :1]])
+
+    res = simulate_sampled(linear_rhs, [1.0, 0.0], h, n, controller=ctrl, noise=noise, observe=observe, t0=t0)
+    expected = []
+    for k in range(n):
+        expected += [("controller", k, t0 + k * h), ("observe", k, t0 + k * h, False)]
+    expected.append(("observe", n, t0 + n * h, True))
+    assert [c[:2] for c in calls] == [c[:2] for c in expected]
+    np.testing.assert_allclose([c[2] for c in calls], [c[2] for c in expected], rtol=0, atol=1e-15)
+    assert [c[3] for c in calls if c[0] == "observe"] == [c[3] for c in expected if c[0] == "observe"]
+    assert res.u.shape == (n, 3, 2) and res.y.shape == (n + 1, 3, 3)
+    np.testing.assert_array_equal(res.u[:, :, 1], noise[:, :, 0])
+    np.testing.assert_array_equal(res.y[:, :, :2], res.x)
+    np.testing.assert_array_equal(res.y[:n, :, 2], np.cumsum(res.x[:n, :, 0], axis=0))  # the controller's z
+
+
+def test_sampled_runner_observe_in_chunks_equals_whole_batch():
+    noise = draw_noise(run_seeds(4, 5), 30, uniform_noise(-1.0, 1.0))
+
+    def observe(k, t, x, u):
+        return x[:, :1] * (1.0 if u is None else u)
+
+    whole = simulate_sampled(linear_rhs, [1.0, 0.0], 0.05, 30, noise=noise, observe=observe)
+    chunked = simulate_sampled(linear_rhs, [1.0, 0.0], 0.05, 30, noise=noise, observe=observe, chunk_runs=2)
+    for name in ("x", "u", "y"):
+        np.testing.assert_array_equal(getattr(chunked, name), getattr(whole, name))
+
+
+def test_discrete_runner_observes_k_0_to_n_minus_1_with_noise_and_params():
+    noise = draw_noise(run_seeds(1, 2), 8, gaussian_noise(1.0))
+    ks = []
+
+    def observe(k, x, w):
+        ks.append(k)
+        return x + w
+
+    res = simulate_discrete(lambda k, x, w, p: p * x + w + k, [1.0], 8, noise=noise, params=0.5, observe=observe)
+    assert ks == list(range(8)) and res.y.shape == (8, 2, 1) and res.u is None
+    np.testing.assert_array_equal(res.y, res.x[:-1] + noise)
+    np.testing.assert_array_equal(res.x[1:], 0.5 * res.x[:-1] + noise + np.arange(8.0)[:, None, None])
+    np.testing.assert_array_equal(res.t, np.arange(9.0))
+
+
+def test_runners_refuse_non_finite_noise():
+    noise = np.zeros((5, 1, 1))
+    noise[2] = np.nan
+    with pytest.raises(ValueError, match="noise must be finite"):
+        simulate_sampled(linear_rhs, [1.0, 0.0], 0.1, 5, noise=noise)
+    with pytest.raises(ValueError, match="noise must be finite"):
+        simulate_discrete(lambda k, x, w, p: x, [1.0], 5, noise=noise)
