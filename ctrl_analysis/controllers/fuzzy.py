@@ -363,14 +363,10 @@ def lookup_output(t, x, u, p, y):
 
     Parameters
     ----------
-    t, x
-        As :func:`mamdani_output` (no state).
-    u : numpy.ndarray, shape (2,)
-        ``[e, ec]`` in physical units.
+    t, x, u, y
+        As :func:`mamdani_output`: no state, ``u = [e, ec]`` in physical units, the control written into ``y[0]``.
     p : numpy.ndarray
         :attr:`FuzzyLookupController.kernel_params`, laid out by :func:`lookup_layout`.
-    y : numpy.ndarray, shape (1,)
-        ``u`` of the controller, written in place.
     """
     n_e, n_ec = as_int(p[LT.n_e]), as_int(p[LT.n_ec])
     E, EC = _quantise(u, p)  # sat(Ke e, ±X_e), sat(Kec ec, ±X_ec)
