@@ -18,7 +18,7 @@ from ctrl_analysis.estimators.kalman import (
 
 
 def _fc(**kw):
-    args = dict(Ke=2.0, Kec=0.5, Ku=3.0, input_range=6.0, output_range=7.0)
+    args = {"Ke": 2.0, "Kec": 0.5, "Ku": 3.0, "input_range": 6.0, "output_range": 7.0}
     args.update(kw)
     return FuzzyController(sum_rule_table(7), **args)
 
@@ -59,7 +59,9 @@ def test_equals_hand_computation():
     # E = 1: ZO and PS at 0.5 each; two equal clipped triangles centred at 0 and 2: centroid 1 by symmetry
     assert fc.evaluate(np.array([1.0]), np.array([0.0]))[0] == pytest.approx(1.0, abs=1e-12)
     # E = 0.5: ZO at 0.75, PS at 0.25: centroid of max(min(0.75, ZO), min(0.25, PS)) by quadrature
-    agg = lambda z: max(min(0.75, max(0.0, 1 - abs(z) / 2)), min(0.25, max(0.0, 1 - abs(z - 2) / 2)))
+    def agg(z):
+        return max(min(0.75, max(0.0, 1 - abs(z) / 2)), min(0.25, max(0.0, 1 - abs(z - 2) / 2)))
+
     pts = [-2, -0.5, 0, 1.5, 2, 4]
     num = scipy.integrate.quad(lambda z: z * agg(z), -2, 4, points=pts, epsabs=1e-13)[0]
     den = scipy.integrate.quad(agg, -2, 4, points=pts, epsabs=1e-13)[0]
