@@ -12,13 +12,9 @@ Both controllers are stateless discrete kernel-first blocks
 each sample and held, i.e. the controller is sampled. :class:`FuzzyLookupController` precomputes
 the control surface on a grid (the classical query table) and interpolates it bilinearly.
 
-Each equation is written once, in the kernels :func:`mamdani_output` and :func:`lookup_output`
-and the helpers they call (the quantisation, the triangular membership, the min–max inference,
-the centroid); the batched methods, :meth:`FuzzyController.infer`, :meth:`~FuzzyController.evaluate`,
-:meth:`~FuzzyController.control_surface`, :func:`piecewise_linear_centroid` and the compiled engine
-all run them. The kernels have no branch on a value, so the batched methods apply them to the
-batch's columns. The centroid's two sums are taken in the order of numpy's ``np.sum`` along a row
-(pairwise, :func:`_centroid`), so the compiled kernel gives the numpy path's results bit for bit.
+Each equation is written once, in the kernels :func:`mamdani_output`, :func:`lookup_output` and
+their helpers, which every method runs (on the batch's columns: the kernels do not branch on a
+value) as does the compiled engine; the centroid sums in ``np.sum``'s order (:func:`_centroid`).
 """
 
 from __future__ import annotations
@@ -27,7 +23,15 @@ import numpy as np
 
 from .._validate import check_finite, check_int, check_positive
 from ..engine.blocks import DiscreteBlock
-from ..engine.kernels import KernelBlock, Kernels, Layout, as_int, jitable
+from ..engine.kernels import (
+    KernelBlock,
+    Kernels,
+    Layout,
+    as_int,
+    gather,
+    jitable,
+    scratch,
+)
 
 __all__ = [
     "FuzzyController",
@@ -36,39 +40,6 @@ __all__ = [
     "sum_rule_table",
     "triangular_memberships",
 ]
-
-
-# ------------------------------------------------------------ helpers for one run or the batch's columns
-def _columns(n, like):
-    """``n`` zeros to work in: numbers in a compiled kernel (one run), rows shaped like ``like`` on the batch's columns."""
-    return np.zeros((n,) + np.shape(like))
-
-
-def _entry(p, k):
-    """``p[k]`` at a computed index ``k``; on the batch's columns ``k`` holds one index per run and ``p`` is the
-    shared vector or one column per run (its entry ``k[b]`` of run ``b`` is taken)."""
-    if np.ndim(p) == 2 and np.ndim(k):
-        return p[k, np.arange(p.shape[1])]
-    return p[k]
-
-
-def _compiled_helpers():
-    """:func:`_columns` and :func:`_entry` inside numba-compiled kernels (one run: numbers, a plain index)."""
-    try:
-        from numba.extending import overload
-    except ImportError:  # pragma: no cover - numba is optional: the numpy engine needs none of this
-        return
-
-    @overload(_columns, inline="always")
-    def _columns_compiled(n, like):
-        return lambda n, like: np.zeros(n)
-
-    @overload(_entry, inline="always")
-    def _entry_compiled(p, k):
-        return lambda p, k: p[k]
-
-
-_compiled_helpers()
 
 
 # ------------------------------------------------------------ the equations, once
@@ -97,19 +68,15 @@ def triangular_memberships(x, centers, width):
     return _triangle(x[:, None], centers[None, :], width)
 
 
-#: numpy's pairwise summation (``np.sum`` along a contiguous row): a range of at most this many terms
-#: is summed with 8 interleaved accumulators, a longer one is halved (at a multiple of 8) and its halves
-#: summed so, recursively. :func:`_centroid` repeats that order.
+#: numpy's pairwise summation (``np.sum`` along a row), which :func:`_centroid` repeats: a range of at most this
+#: many terms is summed with 8 interleaved accumulators, a longer one halved (at a multiple of 8), recursively.
 _PW_BLOCK = 128
 
 
 @jitable
 def _segment(z, oz, dz, mu, g):
-    """Segment ``g`` of the piecewise-linear set ``mu`` on the grid ``z[oz:]``: its moment and area over ``dz``.
-
-    ``μ`` linear from ``a = mu[g]`` to ``b = mu[g + 1]`` on ``[z_g, z_g + dz]``: ``∫ μ = dz (a + b)/2``,
-    ``∫ z μ = dz [z_g (a + b)/2 + dz (a + 2b)/6]`` (the common factor ``dz`` cancels in the centroid).
-    """
+    """Moment and area over ``dz`` of segment ``g`` of ``mu`` on the grid ``z[oz:]``, ``μ`` linear from ``a = mu[g]`` to
+    ``b = mu[g + 1]``: ``∫ μ = dz (a + b)/2``, ``∫ z μ = dz [z_g (a + b)/2 + dz (a + 2b)/6]`` (``dz`` cancels)."""
     a, b = mu[g], mu[g + 1]
     area = 0.5 * (a + b)
     return z[oz + g] * area + dz * (a + 2.0 * b) / 6.0, area
@@ -117,29 +84,22 @@ def _segment(z, oz, dz, mu, g):
 
 @jitable
 def _block_sums(z, oz, dz, mu, lo, m, acc):
-    """Moment and area summed over the segments ``lo .. lo + m − 1`` (``m <= _PW_BLOCK``) as numpy sums a block.
-
-    Fewer than 8 terms (only a whole sum that short): left to right from 0. Otherwise 8 accumulators
-    (``acc[0:8]`` moments, ``acc[8:16]`` areas) take every 8th term, are added pairwise, and the
-    remaining ``m % 8`` terms are added left to right.
-    """
-    if m < 8:
-        num, den = 0.0, 0.0
-        for g in range(lo, lo + m):
-            mo, ar = _segment(z, oz, dz, mu, g)
-            num, den = num + mo, den + ar
-        return num, den
-    for r in range(8):
-        acc[r], acc[8 + r] = _segment(z, oz, dz, mu, lo + r)
-    i = 8
-    while i < m - m % 8:
+    """Moment and area summed over the segments ``lo .. lo + m − 1`` (``m <= _PW_BLOCK``) as numpy sums a block:
+    8 accumulators (``acc[0:8]`` moments, ``acc[8:16]`` areas) take every 8th term and are added pairwise,
+    the last ``m % 8`` terms (all of them when ``m < 8``, only a whole sum that short) left to right."""
+    num, den, i = 0.0, 0.0, 0
+    if m >= 8:
         for r in range(8):
-            mo, ar = _segment(z, oz, dz, mu, lo + i + r)
-            acc[r] = acc[r] + mo
-            acc[8 + r] = acc[8 + r] + ar
-        i += 8
-    num = ((acc[0] + acc[1]) + (acc[2] + acc[3])) + ((acc[4] + acc[5]) + (acc[6] + acc[7]))
-    den = ((acc[8] + acc[9]) + (acc[10] + acc[11])) + ((acc[12] + acc[13]) + (acc[14] + acc[15]))
+            acc[r], acc[8 + r] = _segment(z, oz, dz, mu, lo + r)
+        i = 8
+        while i < m - m % 8:
+            for r in range(8):
+                mo, ar = _segment(z, oz, dz, mu, lo + i + r)
+                acc[r] = acc[r] + mo
+                acc[8 + r] = acc[8 + r] + ar
+            i += 8
+        num = ((acc[0] + acc[1]) + (acc[2] + acc[3])) + ((acc[4] + acc[5]) + (acc[6] + acc[7]))
+        den = ((acc[8] + acc[9]) + (acc[10] + acc[11])) + ((acc[12] + acc[13]) + (acc[14] + acc[15]))
     for g in range(lo + i, lo + m):
         mo, ar = _segment(z, oz, dz, mu, g)
         num, den = num + mo, den + ar
@@ -150,19 +110,18 @@ def _block_sums(z, oz, dz, mu, lo, m, acc):
 def _centroid(z, oz, mu, n):
     """Centroid ``∫ z μ dz / ∫ μ dz`` of the piecewise-linear set ``mu[0 .. n − 1]`` on the uniform grid ``z[oz:oz + n]``.
 
-    The one source of the centroid (the kernel, :func:`piecewise_linear_centroid`). ``mu[g]`` is a
-    number (one run) or a row of the batch's columns. The two sums over the ``n − 1`` segments are
-    taken exactly as numpy's ``np.sum`` takes them along a row: pairwise (:data:`_PW_BLOCK`,
-    :func:`_block_sums`), here without recursion (numba's jitable helpers cannot recurse): a stack of
-    ranges still to sum and one of the sums of ranges done.
+    The one source of the centroid; ``mu[g]`` is a number (one run) or a row of the batch's columns. Its
+    two sums over the ``n − 1`` segments are taken as ``np.sum`` takes them along a row (:data:`_PW_BLOCK`,
+    :func:`_block_sums`), without recursion (a jitable helper cannot recurse): a stack of ranges to sum,
+    one of sums done.
     """
     dz = z[oz + 1] - z[oz]
     depth, m = 1, n - 1  # how deep the halving goes (the longer, right half first)
     while m > _PW_BLOCK:
         m -= m // 2 - (m // 2) % 8
         depth += 1
-    acc = _columns(16, mu[0])
-    sums = _columns(2 * depth + 2, mu[0])  # (moment, area) of each range summed and not yet added to its sibling
+    acc = scratch(16, mu[0])
+    sums = scratch(2 * depth + 2, mu[0])  # (moment, area) of each range summed and not yet added to its sibling
     lo_s, m_s, split = (np.empty(2 * depth + 1, np.int64), np.empty(2 * depth + 1, np.int64),
                         np.zeros(2 * depth + 1, np.int64))
     lo_s[0], m_s[0] = 0, n - 1
@@ -277,8 +236,7 @@ def mamdani_layout(n_e: int, n_ec: int, n_u: int, n_grid: int) -> Layout:
 
 @jitable
 def _mamdani_at(p):
-    """The sizes read from ``p`` and the offsets of :func:`mamdani_layout`'s arrays:
-    ``(n_e, n_ec, n_u, n_grid, c_e, c_ec, rules, z, mu_u)``."""
+    """Sizes read from ``p``, offsets of :func:`mamdani_layout`'s arrays: ``(n_e, n_ec, n_u, n_grid, c_e, c_ec, rules, z, mu_u)``."""
     n_e, n_ec, n_u, n_g = as_int(p[AT.n_e]), as_int(p[AT.n_ec]), as_int(p[AT.n_u]), as_int(p[AT.n_grid])
     o_r = _M_ARRAYS + n_e + n_ec
     o_z = o_r + n_e * n_ec
@@ -287,15 +245,13 @@ def _mamdani_at(p):
 
 @jitable
 def _aggregate(E, EC, p, agg):
-    """The aggregated output set ``agg[g] = max_{i,j} min(μ_Ei(E), μ_ECj(EC), μ_U[rule[i,j]](z_g))``, written in place.
-
-    Min–max inference: rule firing ``min`` (AND), Mamdani implication ``min``, aggregation ``max``.
-    """
+    """The aggregated output set ``agg[g] = max_{i,j} min(μ_Ei(E), μ_ECj(EC), μ_U[rule[i,j]](z_g))``, written in place
+    (min–max inference: rule firing ``min`` (AND), Mamdani implication ``min``, aggregation ``max``)."""
     n_e, n_ec, n_u, n_g, o_ce, o_cec, o_r, _, o_mu = _mamdani_at(p)
-    mu_ec = _columns(n_ec, EC)
+    mu_ec = scratch(n_ec, EC)
     for j in range(n_ec):
         mu_ec[j] = _triangle(EC, p[o_cec + j], p[AT.w_ec])  # μ_ECj(EC)
-    act = _columns(n_u, E)  # per output term: max over its rules of min(μ_Ei(E), μ_ECj(EC))
+    act = scratch(n_u, E)  # per output term: max over its rules of min(μ_Ei(E), μ_ECj(EC))
     for i in range(n_e):
         mu_e = _triangle(E, p[o_ce + i], p[AT.w_e])  # μ_Ei(E)
         for j in range(n_ec):
@@ -327,7 +283,7 @@ def mamdani_output(t, x, u, p, y):
     """
     E, EC = _quantise(u, p)  # sat(Ke e, ±X_e), sat(Kec ec, ±X_ec)
     _, _, _, n_g, _, _, _, o_z, _ = _mamdani_at(p)
-    agg = _columns(n_g, E)
+    agg = scratch(n_g, E)
     _aggregate(E, EC, p, agg)
     y[0] = p[AT.Ku] * _centroid(p, o_z, agg, n_g)  # centre of gravity on the output grid z
 
@@ -376,13 +332,12 @@ def lookup_output(t, x, u, p, y):
     j = np.fmin(np.fmax(np.floor(fc), 0.0), n_ec - 2.0)
     a, b = fe - i, fc - j
     o = _L_ARRAYS + np.int64(i) * n_ec + np.int64(j)  # U[i, j] in lookup_layout
-    y[0] = p[LT.Ku] * ((1.0 - a) * ((1.0 - b) * _entry(p, o) + b * _entry(p, o + 1))
-                       + a * ((1.0 - b) * _entry(p, o + n_ec) + b * _entry(p, o + n_ec + 1)))
+    y[0] = p[LT.Ku] * ((1.0 - a) * ((1.0 - b) * gather(p, o) + b * gather(p, o + 1))
+                       + a * ((1.0 - b) * gather(p, o + n_ec) + b * gather(p, o + n_ec + 1)))
 
 
 class _FuzzyBlock(KernelBlock, DiscreteBlock):
-    """What both fuzzy blocks share: signals (inputs ``e``, ``ec``; output ``u``; no state), the
-    quantisation and the evaluation of the block's kernel at many points."""
+    """What both fuzzy blocks share: signals (``e``, ``ec`` in, ``u`` out, no state), quantisation, evaluation."""
 
     inputs = ("e", "ec")
     outputs = ("u",)
@@ -407,7 +362,7 @@ class _FuzzyBlock(KernelBlock, DiscreteBlock):
         return _quantise((np.asarray(e, dtype=float), np.asarray(ec, dtype=float)), self.kernel_params)
 
     def evaluate(self, e, ec):
-        """Control ``u`` for physical inputs.
+        """Control ``u`` for physical inputs: the output kernel at each point (:meth:`_at_points`).
 
         Parameters
         ----------
@@ -423,49 +378,31 @@ class _FuzzyBlock(KernelBlock, DiscreteBlock):
         ------
         ValueError
             If ``e`` or ``ec`` holds NaN or inf, or their sizes differ.
-
-        Notes
-        -----
-        The block's output kernel at each point: from ``_COMPILED_MIN`` points on, and when numba is
-        available, compiled; otherwise on the points as the batch's columns. Both give the same
-        numbers bit for bit (``tests/lib/test_fuzzy.py``).
         """
         e = np.asarray(check_finite("e", e), dtype=float)
         ec = np.asarray(check_finite("ec", ec), dtype=float).reshape(-1)
         if ec.size != e.size:
             raise ValueError(f"e and ec must have the same number of points, got {e.size} and {ec.size}")
-        return self._at_points(self.kernel_params, e.reshape(-1), ec).reshape(e.shape)
+        return self._at_points(self.kernel_params, e, ec).reshape(e.shape)
 
     def _at_points(self, p, e, ec):
-        """The output kernel with parameters ``p`` at the points ``(e[k], ec[k])`` (1-D arrays): shape ``(size,)``."""
-        if e.size >= _COMPILED_MIN and _compiled_ok():  # many points: compiled
-            return _apply_kernel(self.kernels.output, p, e, ec)[:, 0]
-        return self.batched("output", 0.0, None, np.stack([e, ec], axis=1), p)[:, 0]
+        """The output kernel with parameters ``p`` at the points ``(e[k], ec[k])``, flattened: compiled from
+        ``_COMPILED_MIN`` points on (numba available), else on the points as the batch's columns; bit for bit alike."""
+        from ..engine.codegen import _jit, available
+
+        e, ec = np.asarray(e, dtype=float).reshape(-1), np.asarray(ec, dtype=float).reshape(-1)
+        if e.size < _COMPILED_MIN or not available():
+            return self.batched("output", 0.0, None, np.stack([e, ec], axis=1), p)[:, 0]
+        f, x, u, out = _jit(self.kernels.output), np.empty(0), np.empty(2), np.empty((e.size, 1))
+        for k in range(e.size):
+            u[0], u[1] = e[k], ec[k]
+            f(0.0, x, u, p, out[k])
+        return out[:, 0]
 
 
-#: From this many points on, :meth:`_FuzzyBlock.evaluate`, :meth:`FuzzyController.infer` (and so
-#: :meth:`FuzzyController.control_surface`) and :meth:`FuzzyLookupController.lookup` use the compiled
-#: kernel (compiling it costs more than the numpy path saves on fewer points).
+#: From this many points on, :meth:`_FuzzyBlock._at_points` (evaluate, infer, control_surface, lookup) runs
+#: the compiled kernel (compiling it costs more than the numpy path saves on fewer points).
 _COMPILED_MIN = 2000
-
-
-def _compiled_ok() -> bool:
-    from ..engine.codegen import available
-
-    return available()
-
-
-def _apply_kernel(fn, p, e, ec, n_out=1) -> np.ndarray:
-    """The jitted kernel ``fn`` evaluated at each point ``(e[k], ec[k])``: shape ``(size, n_out)``."""
-    from ..engine.codegen import _jit
-
-    f = _jit(fn)
-    x, u = np.empty(0), np.empty(2)
-    out = np.empty((e.size, n_out))
-    for k in range(e.size):
-        u[0], u[1] = e[k], ec[k]
-        f(0.0, x, u, p, out[k])
-    return out
 
 
 class FuzzyController(_FuzzyBlock):
@@ -572,8 +509,7 @@ class FuzzyController(_FuzzyBlock):
         ndarray, shape (B,)
             Centroid of ``max_{i,j} min(min(μ_Ei(E), μ_ECj(EC)), μ_U[rule[i,j]])``.
         """
-        return self._at_points(self._unit_params, np.asarray(E, dtype=float).reshape(-1),
-                               np.asarray(EC, dtype=float).reshape(-1))
+        return self._at_points(self._unit_params, E, EC)
 
     def control_surface(self, n_e: int = 121, n_ec: int = 121):
         """The surface ``U(E, EC)`` on a uniform grid of the quantised universes (the query table).
@@ -653,8 +589,7 @@ class FuzzyLookupController(_FuzzyBlock):
         -------
         ndarray, shape (B,)
         """
-        return self._at_points(self._unit_params, np.asarray(E, dtype=float).reshape(-1),
-                               np.asarray(EC, dtype=float).reshape(-1))
+        return self._at_points(self._unit_params, E, EC)
 
     def __repr__(self) -> str:
         return f"FuzzyLookupController({self.controller!r}, {self.E.size}×{self.EC.size} grid)"

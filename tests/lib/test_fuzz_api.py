@@ -847,6 +847,8 @@ NOT_FUZZED = {
     integrators.rk4_sum: "per-step integrator formula, unchecked by design",
     pid.pid_update: "per-step kernel, unchecked by design",
     engine_kernels.as_int: "per-step helper of kernels (a size read from p), unchecked by design",
+    engine_kernels.scratch: "per-step helper of kernels (space to work in), unchecked by design",
+    engine_kernels.gather: "per-step helper of kernels (a table entry at a computed index), unchecked by design",
     engine_kernels.jitable: "decorator: any function is a valid argument",
     engine_params.Variant: "record built by resolve",
     engine_params.resolve: "internal half of Loop.simulate(params=...), whose params are fuzzed",
