@@ -1,18 +1,17 @@
 """The loops of Examples 1 and 2, built from library blocks through :class:`~ctrl_analysis.engine.loop.Loop`.
 
-The plants (19) and (20) are study blocks (they are the paper's); Σ, Han's ESO, the low-pass
-softener and the differential feedback (18) come from the library; the sensor is a static sum.
-Every block of the simulated loops has a compiled kernel (the plants' kernels are also their numpy
-methods; Example 2's parameter grid and Σ presets are per-run values given to the simulation,
-:func:`example2_params`), so each loop runs as one numba function, and the study needs three loop
-structures: Example 1 with RK4 and with Euler (always Σ beside :data:`OBSERVERS` observers) and
-Example 2. The same loops give, through
+The plants (19) and (20) are study blocks (they are the paper's), kernel-first
+(:class:`~ctrl_analysis.engine.kernels.KernelBlock`); Σ, Han's ESO, the low-pass softener and the
+differential feedback (18) come from the library; the sensor is a static sum (a
+:class:`~ctrl_analysis.engine.blocks.StaticGain`). Every block of the simulated loops has a compiled
+kernel, from which its batched methods are derived (Example 2's parameter grid and Σ presets are
+per-run values given to the simulation, :func:`example2_params`), so each loop runs as one numba
+function, and the study needs three loop structures: Example 1 with RK4 and with Euler (always Σ
+beside :data:`OBSERVERS` observers) and Example 2. The same loops give, through
 :meth:`Loop.interconnect` and :func:`control.linearize`, the linearisation of Example 2.
 """
 
 from __future__ import annotations
-
-import math
 
 import control as ct
 import numpy as np
@@ -23,16 +22,13 @@ from ctrl_analysis.controllers.differential_feedback import (
 )
 from ctrl_analysis.engine.blocks import (
     ContinuousBlock,
-    StaticBlock,
     StaticGain,
     signal_names,
 )
 from ctrl_analysis.engine.kernels import (
-    BlockKernel,
     KernelBlock,
     Kernels,
     Layout,
-    copy_output,
 )
 from ctrl_analysis.engine.loop import Loop, place
 from ctrl_analysis.estimators.differential import DifferentialEstimator
@@ -41,11 +37,12 @@ from ctrl_analysis.estimators.eso import ExtendedStateObserver
 from .paper import Example1, Example2, han_eso_gains
 
 __all__ = [
+    "OBSERVERS",
+    "PLANT19",
     "PLANT20",
     "LinearPath",
     "Plant19",
     "Plant20",
-    "Sensor",
     "example1_loop",
     "example2_linear",
     "example2_loop",
@@ -53,37 +50,38 @@ __all__ = [
     "han_eso",
     "impulse_response",
     "max_real_eig",
+    "pad_observers",
     "plant19_rhs",
     "plant20_rhs",
     "sensor",
-    "sensor_output",
     "simulate_example1",
-    "pad_observers",
-    "OBSERVERS",
     "simulate_signals",
 ]
 
 
+#: Plant (19)'s kernel parameters.
+PLANT19 = Layout("b1", "b2", "w_freq")
+AT19 = PLANT19.at
+
+
 def plant19_rhs(t, x, u, p, dx):
-    """Kernel of :class:`Plant19` (one run; on a batch's columns it is the numpy method); ``p = [b1, b2, ω_w]``."""
-    c = math.cos(p[2] * t)
-    w = 1.0 if c > 0 else (-1.0 if c < 0 else 0.0)  # w = sign(cos(ω_w t))
+    """Kernel of :class:`Plant19` (one run; on a batch's columns it is the batched method); ``p``: :data:`PLANT19`.
+
+    Branch-free (the sign of ``cos`` as a difference of comparisons) so that ``p`` may also hold one
+    row per run, transposed: ``p[k]`` is then a column of the batch.
+    """
+    c = np.cos(p[AT19.w_freq] * t)
+    w = 1.0 * (c > 0) - 1.0 * (c < 0)  # w = sign(cos(ω_w t))
     dx[0] = x[1]  # (19) x1' = x2
     # (19) x2' = -(b1 x1 + b2 x1² x2) + w + ξ
-    dx[1] = (w + u[0]) - x[0] * (p[0] + p[1] * x[0] * x[1])
+    dx[1] = (w + u[0]) - x[0] * (p[AT19.b1] + p[AT19.b2] * x[0] * x[1])
 
 
-def sensor_output(t, x, u, p, y):
-    """Kernel of :func:`sensor`: ``y = x1 + η`` (19)/(20)."""
-    y[0] = u[0] + u[1]
-
-
-class Plant19(ContinuousBlock):
+class Plant19(KernelBlock, ContinuousBlock):
     """Plant (19) of Example 1: ``x1' = x2``, ``x2' = -(b1 x1 + b2 x1² x2) + w + ξ``, ``w = sign(cos(ω_w t))``.
 
-    Input ``xi`` (the process noise ξ, held per step); states and outputs ``x[0]``, ``x[1]`` (``x1``, ``x2``). The batched
-    ``rhs`` applies the kernel :func:`plant19_rhs` to the batch's columns (one piece of code for the
-    numpy and the compiled engine).
+    Input ``xi`` (the process noise ξ, held per step); states and outputs ``x[0]``, ``x[1]`` (``x1``, ``x2``). Kernel
+    :func:`plant19_rhs` (the batched methods are derived from it).
 
     Parameters
     ----------
@@ -92,36 +90,11 @@ class Plant19(ContinuousBlock):
     """
 
     inputs, outputs, states = ("xi",), ("x[0]", "x[1]"), ("x[0]", "x[1]")
+    kernels = Kernels(rhs=plant19_rhs)
 
     def __init__(self, p: Example1):
         self.b1, self.b2, self.w_freq = float(p.b1), float(p.b2), float(p.w_freq)
-        self.p = np.array([self.b1, self.b2, self.w_freq])
-
-    def rhs(self, t, X, U, params=None):
-        dX = np.empty_like(X)
-        plant19_rhs(t, X.T, U.T, self.p, dX.T)
-        return dX
-
-    def kernel(self) -> BlockKernel:
-        """The per-run kernel (:mod:`ctrl_analysis.engine.codegen`): output = state, ``rhs`` = :func:`plant19_rhs`."""
-        return BlockKernel(output=copy_output, params=self.p, rhs=plant19_rhs)
-
-
-class Sensor(StaticBlock):
-    """``y = x1 + η`` (19)/(20), a static sum block with a kernel (:func:`sensor_output`)."""
-
-    def __init__(self, signal: str = "x[0]"):
-        super().__init__(self._sum, inputs=(signal, "eta"), outputs=("y",))
-
-    @staticmethod
-    def _sum(t, u):
-        y = np.empty((u.shape[0], 1))
-        sensor_output(t, None, u.T, None, y.T)
-        return y
-
-    def kernel(self) -> BlockKernel:
-        """The per-run kernel: :func:`sensor_output`."""
-        return BlockKernel(output=sensor_output, params=np.zeros(1))
+        self.kernel_params = PLANT19.pack(b1=self.b1, b2=self.b2, w_freq=self.w_freq)
 
 
 #: Plant (20)'s kernel parameters.
@@ -171,9 +144,9 @@ class Plant20(KernelBlock, ContinuousBlock):
         self.kernel_params = PLANT20.pack(b1=self.b1, b2=self.b2, b3=self.b3, w_amp=self.w_amp, w_freq=self.w_freq)
 
 
-def sensor(signal: str = "x[0]") -> Sensor:
-    """``y = x1 + η`` (19)/(20), a static sum block (:class:`Sensor`)."""
-    return Sensor(signal)
+def sensor(signal: str = "x[0]") -> StaticGain:
+    """``y = x1 + η`` (19)/(20), a static sum: a :class:`~ctrl_analysis.engine.blocks.StaticGain` ``[1, 1]``."""
+    return StaticGain([[1.0, 1.0]], inputs=(signal, "eta"), outputs=("y",))
 
 
 def han_eso(p: Example1, tuning_h: float | None = None) -> ExtendedStateObserver:

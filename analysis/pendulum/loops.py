@@ -34,7 +34,6 @@ from ctrl_analysis.engine.blocks import (
     StaticGain,
 )
 from ctrl_analysis.engine.kernels import (
-    BlockKernel,
     KernelBlock,
     Kernels,
     Layout,
@@ -134,45 +133,44 @@ class BackwardDifference(KernelBlock, DiscreteBlock):
         self.kernel_params = DIFFERENCE.pack(T=self.T)
 
 
-class _Predictor(DiscreteBlock):
-    """A filter block's prediction half: same state and update, output = its state (no feedthrough)."""
+class _Predictor(KernelBlock, DiscreteBlock):
+    """A filter block's prediction half: the filter's state and update kernel, output = its state (no feedthrough)."""
 
     feedthrough = False
 
-    def __init__(self, filt: DiscreteBlock, prefix: str):
+    def __init__(self, filt: KernelBlock, prefix: str):
         self.filt = filt
         self.inputs, self.states = filt.inputs, filt.states
         self.outputs = tuple(f"{prefix}.{s}" for s in filt.states)
+        self.kernel_params = filt.kernel_params
+
+    @property
+    def kernels(self) -> Kernels:
+        """The filter's update kernel; output = state (:func:`~ctrl_analysis.engine.kernels.copy_output`)."""
+        k = self.filt.kernels
+        return Kernels(output=copy_output, update=k.update, columns=k.columns)
 
     def initial_state(self):
         return self.filt.initial_state()
 
-    def update(self, t, x, u, params=None):
-        return self.filt.update(t, x, u, params)
 
-    def kernel(self):
-        """The filter's update kernel; output = state."""
-        k = self.filt.kernel()
-        return BlockKernel(output=copy_output, params=k.params, update=k.update)
+class _Corrector(KernelBlock, StaticBlock):
+    """A filter block's correction half: its output kernel on ``(predictor state, y)``, a static block.
 
-
-class _Corrector(StaticBlock):
-    """A filter block's correction half: its :meth:`output` on ``(predictor state, y)``, a static block.
-
-    Its kernel is the filter's output kernel, which reads the state from its inputs when the
-    block has no state (the filters' kernels document this layout).
+    The filter's output kernel reads the state from its inputs when the block has no state (the
+    filters' kernels document this layout), on the batch's columns as in the compiled engine.
     """
 
-    def __init__(self, filt: DiscreteBlock, pred: _Predictor):
-        n = len(filt.states)
+    def __init__(self, filt: KernelBlock, pred: _Predictor):
         self.filt = filt
-        super().__init__(lambda t, u: filt.output(t, u[:, :n], u[:, n:]), inputs=pred.outputs + ("y",),
-                         outputs=tuple(filt.outputs))
+        self.inputs, self.outputs = pred.outputs + ("y",), tuple(filt.outputs)
+        self.kernel_params = filt.kernel_params
 
-    def kernel(self):
+    @property
+    def kernels(self) -> Kernels:
         """The filter's output kernel (state read from the inputs)."""
-        k = self.filt.kernel()
-        return BlockKernel(output=k.output, params=k.params)
+        k = self.filt.kernels
+        return Kernels(output=k.output, columns=k.columns)
 
 
 def split_filter(filt: DiscreteBlock, name: str) -> list:
@@ -180,10 +178,12 @@ def split_filter(filt: DiscreteBlock, name: str) -> list:
 
     :class:`~ctrl_analysis.engine.loop.Loop` treats feedthrough per block, so a filter with inputs
     ``(y, u)`` and direct feedthrough closes an algebraic loop with a controller that reads its
-    estimate. The filter is placed as two blocks that reuse its own code: a predictor (its state
-    and :meth:`update`, output = state, no feedthrough) and a static corrector (its
-    :meth:`output` evaluated on the predictor's state and ``y``).
+    estimate. The filter (a :class:`~ctrl_analysis.engine.kernels.KernelBlock`) is placed as two
+    blocks that reuse its own kernels: a predictor (its state and update kernel, output = state, no
+    feedthrough) and a static corrector (its output kernel evaluated on the predictor's state and ``y``).
     """
+    if not isinstance(filt, KernelBlock):
+        raise TypeError(f"filt must be a kernel-first filter block (KernelBlock), got {type(filt).__name__}")
     pred = _Predictor(filt, name)
     corr = _Corrector(filt, pred)
     return [place(pred, f"{name}.pred"), place(corr, f"{name}.corr")]

@@ -5,8 +5,10 @@ derivatives ``θ = (v, v', ..., v^(n-1))`` and estimates ``x̂ = (x, x', ..., x^
 output and its derivatives (e.g. from a differential estimator), and feeds back the error vector
 ``ε = θ - x̂`` through ``K = [k_n, ..., k_1]``. On a chain of ``n`` integrators with exact
 derivatives this places the closed-loop poles at the roots of ``s^n + k_1 s^(n-1) + ... + k_n``.
-The controller is a static block (:class:`~ctrl_analysis.engine.blocks.StaticBlock`): no state, direct
-feedthrough, so it runs in :class:`~ctrl_analysis.engine.loop.Loop` and in ``control.interconnect``.
+The controller is a static kernel-first block (:class:`~ctrl_analysis.engine.kernels.KernelBlock`,
+:class:`~ctrl_analysis.engine.blocks.StaticBlock`): no state, direct feedthrough; its kernel
+:func:`feedback_output` is the batched method (on the batch's columns) and the compiled engine's
+kernel, so it runs in :class:`~ctrl_analysis.engine.loop.Loop` and in ``control.interconnect``.
 """
 
 from __future__ import annotations
@@ -16,16 +18,36 @@ import numpy as np
 
 from .._validate import check_array, check_bool, check_finite
 from ..engine.blocks import StaticBlock, signal_names
+from ..engine.kernels import KernelBlock, Kernels, Layout
 
-__all__ = ["HighOrderDifferentialFeedback", "hurwitz_roots", "gains_from_poles"]
+__all__ = ["HighOrderDifferentialFeedback", "gains_from_poles", "hurwitz_roots"]
+
+
+def feedback_layout(n: int) -> Layout:
+    """The parameters of :func:`feedback_output` for plant order ``n``: the gains ``K = [k_n, ..., k_1]``.
+
+    Parameters
+    ----------
+    n : int
+        Plant order (the number of gains).
+
+    Returns
+    -------
+    Layout
+    """
+    return Layout(("K", n))
+
+
+AT = feedback_layout(1).at  # offsets (the same for every n), a numba constant
 
 
 def feedback_output(t, x, u, p, y):
-    """Eq. (18) ``u = Σ k_i (θ_i - x̂_i)`` for one run, or for a batch's columns; ``p = K = [k_n, ..., k_1]``.
+    """Eq. (18) ``u = Σ k_i (θ_i - x̂_i)`` for one run, or for a batch's columns; ``p`` = :func:`feedback_layout`.
 
     Written with scalar indexing only: it is the compiled kernel of one run (``u`` of shape ``(2n,)``)
     and, called on a batch's transposed arrays (``u.T`` of shape ``(2n, B)``, ``y.T``), the block's
-    numpy method, so both engines evaluate the same expression in the same order.
+    batched method (:class:`~ctrl_analysis.engine.kernels.KernelBlock`), so both engines evaluate the
+    same expression in the same order. The order ``n`` is the length of ``p``.
 
     Parameters
     ----------
@@ -35,22 +57,22 @@ def feedback_output(t, x, u, p, y):
         State (unused: the block is static).
     u : numpy.ndarray, shape (2n,) or (2n, B)
         ``[θ_1..θ_n, x̂_1..x̂_n]``.
-    p : numpy.ndarray, shape (n,)
-        The gains ``K``.
+    p : numpy.ndarray, shape (n,) or (n, B)
+        The gains ``K`` (one column per run on the batch's columns with per-run gains).
     y : numpy.ndarray, shape (1,) or (1, B)
         The control, written in place.
     """
     n = p.shape[0]
     # (18) u = K ε,  ε_i = θ_i - x̂_i,  K = [k_n, ..., k_1], summed left to right
-    acc = p[0] * (u[0] - u[n])
+    acc = p[AT.K] * (u[0] - u[n])
     for i in range(1, n):
-        acc = acc + p[i] * (u[i] - u[n + i])
+        acc = acc + p[AT.K + i] * (u[i] - u[n + i])
     y[0] = acc
 
 
 def _poly_text(n: int) -> str:
     return "s^n + k_1 s^(n-1) + ... + k_n" if n > 3 else " + ".join(
-        ["s^%d" % n] + [f"k_{i} s^{n - i}" if n - i > 1 else (f"k_{i} s" if n - i == 1 else f"k_{i}")
+        [f"s^{n}"] + [f"k_{i} s^{n - i}" if n - i > 1 else (f"k_{i} s" if n - i == 1 else f"k_{i}")
                         for i in range(1, n + 1)])
 
 
@@ -122,12 +144,13 @@ def gains_from_poles(poles, *, allow_unstable: bool = False) -> np.ndarray:
     return coeffs.real[1:][::-1].copy()
 
 
-class HighOrderDifferentialFeedback(StaticBlock):
+class HighOrderDifferentialFeedback(KernelBlock, StaticBlock):
     """Model-free high-order differential feedback ``u = K ε``, ``ε_i = θ_i - x̂_i``: a static block.
 
     Stateless with direct feedthrough; inputs ``theta[0..n-1]`` (the setpoint and its first
     ``n - 1`` derivatives) then ``xhat[0..n-1]`` (estimates of the output and its derivatives),
-    output ``u``.
+    output ``u``. Kernel :func:`feedback_output`; gains per run are given to the simulation:
+    ``Loop.simulate(params={"ctrl": {"K": (B, n) gains}})``.
 
     Parameters
     ----------
@@ -172,6 +195,8 @@ class HighOrderDifferentialFeedback(StaticBlock):
     6.0
     """
 
+    kernels = Kernels(output=feedback_output)
+
     def __init__(self, K):
         K = np.atleast_1d(check_finite("K", K)).astype(float)
         if K.ndim != 1:
@@ -187,24 +212,8 @@ class HighOrderDifferentialFeedback(StaticBlock):
         self.K = K
         self.n = n
         self.poles = poles
-        super().__init__(self._law, inputs=signal_names("theta", n) + signal_names("xhat", n), outputs=("u",))
-
-    def _law(self, t, u):
-        """The numpy method: :func:`feedback_output` on the batch's columns; ``u`` ``(B, 2n)`` -> ``(B, 1)``."""
-        y = np.empty((u.shape[0], 1))
-        feedback_output(t, None, u.T, self.K, y.T)
-        return y
-
-    def kernel(self):
-        """The compiled engine's kernel: :func:`feedback_output` with ``p = K`` (the numpy method calls it too).
-
-        Returns
-        -------
-        ctrl_analysis.engine.codegen.BlockKernel
-        """
-        from ..engine.kernels import BlockKernel
-
-        return BlockKernel(output=feedback_output, params=np.array(self.K, dtype=float))
+        self.inputs, self.outputs = signal_names("theta", n) + signal_names("xhat", n), ("u",)
+        self.kernel_params = feedback_layout(n).pack(K=K)
 
     @property
     def characteristic_polynomial(self) -> np.ndarray:
@@ -246,7 +255,7 @@ class HighOrderDifferentialFeedback(StaticBlock):
         lead = np.broadcast_shapes(theta.shape[:-1], x_hat.shape[:-1])
         th = np.broadcast_to(theta, lead + (self.n,)).reshape(-1, self.n)
         xh = np.broadcast_to(x_hat[..., : self.n], lead + (self.n,)).reshape(-1, self.n)
-        return self._law(0.0, np.concatenate([th, xh], axis=1))[:, 0].reshape(lead)
+        return self.batched("output", 0.0, None, np.concatenate([th, xh], axis=1), self.kernel_params)[:, 0].reshape(lead)
 
     def closed_loop_chain(self) -> ct.StateSpace:
         """Closed loop of the chain of ``n`` integrators ``x^(n) = u`` under exact state feedback.

@@ -6,21 +6,32 @@ ends), fuzzified with evenly spaced triangular terms, combined by a rule table w
 Mamdani implication) and ``max`` (aggregation), defuzzified by the centroid of the aggregated
 output set on ``[−Y, Y]`` and scaled by ``Ku``. Nothing here is specific to a plant or a paper.
 
-Both controllers are stateless discrete blocks with direct feedthrough (inputs ``e``, ``ec``,
-output ``u``): in a :class:`~ctrl_analysis.engine.loop.Loop` their output is computed at each sample and
-held, i.e. the controller is sampled. :class:`FuzzyLookupController` precomputes the control
-surface on a grid (the classical query table) and interpolates it bilinearly.
+Both controllers are stateless discrete kernel-first blocks
+(:class:`~ctrl_analysis.engine.kernels.KernelBlock`) with direct feedthrough (inputs ``e``,
+``ec``, output ``u``): in a :class:`~ctrl_analysis.engine.loop.Loop` their output is computed at
+each sample and held, i.e. the controller is sampled. :class:`FuzzyLookupController` precomputes
+the control surface on a grid (the classical query table) and interpolates it bilinearly.
+
+Each equation is written once, in the kernels :func:`mamdani_output`, :func:`lookup_output` and
+their helpers, which every method runs (on the batch's columns: the kernels do not branch on a
+value) as does the compiled engine; the centroid sums in ``np.sum``'s order (:func:`_centroid`).
 """
 
 from __future__ import annotations
-
-import math
 
 import numpy as np
 
 from .._validate import check_finite, check_int, check_positive
 from ..engine.blocks import DiscreteBlock
-from ..engine.kernels import Layout
+from ..engine.kernels import (
+    KernelBlock,
+    Kernels,
+    Layout,
+    as_int,
+    gather,
+    jitable,
+    scratch,
+)
 
 __all__ = [
     "FuzzyController",
@@ -29,6 +40,13 @@ __all__ = [
     "sum_rule_table",
     "triangular_memberships",
 ]
+
+
+# ------------------------------------------------------------ the equations, once
+@jitable
+def _triangle(x, c, w):
+    """Triangular membership ``μ(x) = max(0, 1 − |x − c| / w)`` (centre ``c``, half-support ``w``)."""
+    return np.maximum(0.0, 1.0 - np.abs(x - c) / w)
 
 
 def triangular_memberships(x, centers, width):
@@ -47,7 +65,85 @@ def triangular_memberships(x, centers, width):
     -------
     ndarray, shape (B, n)
     """
-    return np.maximum(0.0, 1.0 - np.abs(x[:, None] - centers[None, :]) / width)
+    return _triangle(x[:, None], centers[None, :], width)
+
+
+#: numpy's pairwise summation (``np.sum`` along a row), which :func:`_centroid` repeats: a range of at most this
+#: many terms is summed with 8 interleaved accumulators, a longer one halved (at a multiple of 8), recursively.
+_PW_BLOCK = 128
+
+
+@jitable
+def _segment(z, oz, dz, mu, g):
+    """Moment and area over ``dz`` of segment ``g`` of ``mu`` on the grid ``z[oz:]``, ``μ`` linear from ``a = mu[g]`` to
+    ``b = mu[g + 1]``: ``∫ μ = dz (a + b)/2``, ``∫ z μ = dz [z_g (a + b)/2 + dz (a + 2b)/6]`` (``dz`` cancels)."""
+    a, b = mu[g], mu[g + 1]
+    area = 0.5 * (a + b)
+    return z[oz + g] * area + dz * (a + 2.0 * b) / 6.0, area
+
+
+@jitable
+def _block_sums(z, oz, dz, mu, lo, m, acc):
+    """Moment and area summed over the segments ``lo .. lo + m − 1`` (``m <= _PW_BLOCK``) as numpy sums a block:
+    8 accumulators (``acc[0:8]`` moments, ``acc[8:16]`` areas) take every 8th term and are added pairwise,
+    the last ``m % 8`` terms (all of them when ``m < 8``, only a whole sum that short) left to right."""
+    num, den, i = 0.0, 0.0, 0
+    if m >= 8:
+        for r in range(8):
+            acc[r], acc[8 + r] = _segment(z, oz, dz, mu, lo + r)
+        i = 8
+        while i < m - m % 8:
+            for r in range(8):
+                mo, ar = _segment(z, oz, dz, mu, lo + i + r)
+                acc[r] = acc[r] + mo
+                acc[8 + r] = acc[8 + r] + ar
+            i += 8
+        num = ((acc[0] + acc[1]) + (acc[2] + acc[3])) + ((acc[4] + acc[5]) + (acc[6] + acc[7]))
+        den = ((acc[8] + acc[9]) + (acc[10] + acc[11])) + ((acc[12] + acc[13]) + (acc[14] + acc[15]))
+    for g in range(lo + i, lo + m):
+        mo, ar = _segment(z, oz, dz, mu, g)
+        num, den = num + mo, den + ar
+    return num, den
+
+
+@jitable
+def _centroid(z, oz, mu, n):
+    """Centroid ``∫ z μ dz / ∫ μ dz`` of the piecewise-linear set ``mu[0 .. n − 1]`` on the uniform grid ``z[oz:oz + n]``.
+
+    The one source of the centroid; ``mu[g]`` is a number (one run) or a row of the batch's columns. Its
+    two sums over the ``n − 1`` segments are taken as ``np.sum`` takes them along a row (:data:`_PW_BLOCK`,
+    :func:`_block_sums`), without recursion (a jitable helper cannot recurse): a stack of ranges to sum,
+    one of sums done.
+    """
+    dz = z[oz + 1] - z[oz]
+    depth, m = 1, n - 1  # how deep the halving goes (the longer, right half first)
+    while m > _PW_BLOCK:
+        m -= m // 2 - (m // 2) % 8
+        depth += 1
+    acc = scratch(16, mu[0])
+    sums = scratch(2 * depth + 2, mu[0])  # (moment, area) of each range summed and not yet added to its sibling
+    lo_s, m_s, split = (np.empty(2 * depth + 1, np.int64), np.empty(2 * depth + 1, np.int64),
+                        np.zeros(2 * depth + 1, np.int64))
+    lo_s[0], m_s[0] = 0, n - 1
+    top, sp = 0, 0
+    while top >= 0:
+        lo, m = lo_s[top], m_s[top]
+        if m <= _PW_BLOCK:  # a block: its sums onto the stack
+            sums[sp], sums[sp + 1] = _block_sums(z, oz, dz, mu, lo, m, acc)
+            sp += 2
+            top -= 1
+        elif split[top] == 0:  # halve: the right half and the left half still to sum (the left first)
+            split[top] = 1
+            h = m // 2 - (m // 2) % 8
+            lo_s[top + 1], m_s[top + 1], split[top + 1] = lo + h, m - h, 0
+            lo_s[top + 2], m_s[top + 2], split[top + 2] = lo, h, 0
+            top += 2
+        else:  # both halves summed: left + right
+            sp -= 2
+            sums[sp - 2] = sums[sp - 2] + sums[sp]
+            sums[sp - 1] = sums[sp - 1] + sums[sp + 1]
+            top -= 1
+    return (0.0 + sums[0]) / (0.0 + sums[1])  # np.sum starts from 0.0
 
 
 def piecewise_linear_centroid(z, mu):
@@ -55,6 +151,7 @@ def piecewise_linear_centroid(z, mu):
 
     Exact for a piecewise-linear membership whose kinks lie on the grid (the integral of each
     segment's trapezoid is summed); this is what :func:`skfuzzy.defuzz` (``'centroid'``) computes.
+    The same code as the controller's kernel (the segments summed in numpy's pairwise order).
 
     Parameters
     ----------
@@ -67,12 +164,8 @@ def piecewise_linear_centroid(z, mu):
     -------
     ndarray, shape (B,)
     """
-    dz = z[1] - z[0]
-    a, b = mu[:, :-1], mu[:, 1:]
-    # segment [z0, z0 + dz], μ linear from a to b: ∫ μ = dz (a + b)/2, ∫ z μ = dz [z0 (a + b)/2 + dz (a + 2b)/6]
-    area = 0.5 * (a + b)
-    moment = z[None, :-1] * area + dz * (a + 2.0 * b) / 6.0
-    return np.sum(moment, axis=1) / np.sum(area, axis=1)
+    z = np.asarray(z, dtype=float)
+    return _centroid(z, 0, np.asarray(mu, dtype=float).T, z.size)
 
 
 def sum_rule_table(n_terms: int = 7, sign: int = 1) -> np.ndarray:
@@ -101,114 +194,25 @@ def sum_rule_table(n_terms: int = 7, sign: int = 1) -> np.ndarray:
     return (m + np.clip(sign * (i[:, None] + i[None, :]), -m, m)).astype(int)
 
 
-class _FuzzyBlock(DiscreteBlock):
-    """What both fuzzy blocks share: signals (inputs ``e``, ``ec``; output ``u``; no state) and the
-    physical-units path ``u = Ku · surface(quantise(e, ec))``; subclasses define :meth:`_surface`."""
-
-    inputs = ("e", "ec")
-    outputs = ("u",)
-    states = ()
-    feedthrough = True
-
-    def _surface(self, E, EC):  # pragma: no cover - abstract
-        raise NotImplementedError
-
-    def _scaling(self):
-        """The :class:`FuzzyController` whose factors apply."""
-        return self
-
-    def evaluate(self, e, ec):
-        """Control ``u`` for physical inputs.
-
-        Parameters
-        ----------
-        e, ec : array_like
-            Error and error rate, finite arrays of equal shape.
-
-        Returns
-        -------
-        ndarray
-            ``u``, same shape as ``e``.
-
-        Raises
-        ------
-        ValueError
-            If ``e`` or ``ec`` holds NaN or inf, or their sizes differ.
-
-        Notes
-        -----
-        From ``_COMPILED_MIN`` points on, and when numba is available, the block's compiled kernel
-        (:meth:`kernel`) is applied point by point (the Mamdani controller's kernel gives the
-        aggregated set and numpy takes its centroid); bit for bit the numpy method's result
-        (``tests/lib/test_fuzzy.py``).
-        """
-        e = np.asarray(check_finite("e", e), dtype=float)
-        ec = np.asarray(check_finite("ec", ec), dtype=float).reshape(-1)
-        if ec.size != e.size:
-            raise ValueError(f"e and ec must have the same number of points, got {e.size} and {ec.size}")
-        if e.size >= _COMPILED_MIN and _compiled_ok():  # many points: the compiled twin of output()
-            return self._evaluate_compiled(e.reshape(-1), ec).reshape(e.shape)
-        fc = self._scaling()
-        E, EC = fc.quantise(e.reshape(-1), ec)
-        return (fc.Ku * self._surface(E, EC)).reshape(e.shape)
-
-    def output(self, t, x, u, params=None) -> np.ndarray:
-        fc = self._scaling()
-        E, EC = fc.quantise(u[:, 0], u[:, 1])
-        return (fc.Ku * self._surface(E, EC))[:, None]
-
-    def update(self, t, x, u, params=None) -> np.ndarray:
-        return x
-
-    def kernel_params(self, Ke=None, Kec=None, Ku=None) -> np.ndarray:  # pragma: no cover - abstract
-        raise NotImplementedError
-
-    def _evaluate_compiled(self, e, ec):  # pragma: no cover - abstract
-        raise NotImplementedError
-
-    def kernel(self):
-        """The compiled engine's kernel (the compiled twin of :meth:`output`; stateless, no update).
-
-        Returns
-        -------
-        ctrl_analysis.engine.codegen.BlockKernel
-        """
-        from ..engine.kernels import BlockKernel
-
-        return BlockKernel(output=self._kernel_output, params=self.kernel_params(), update=_no_update)
+#: The head both controllers' kernel parameters start with: the factors and the input universes.
+SCALING = Layout("Ke", "Kec", "Ku", "X_e", "X_ec")
+SC = SCALING.at  # parameter offsets, a numba constant
 
 
-#: From this many points on, :meth:`_FuzzyBlock.evaluate` and :meth:`FuzzyController.control_surface`
-#: use the compiled kernel (compiling it costs more than the numpy path saves on fewer points).
-_COMPILED_MIN = 2000
-
-
-def _compiled_ok() -> bool:
-    from ..engine.codegen import available
-
-    return available()
-
-
-def _apply_kernel(fn, p, e, ec, n_out=1) -> np.ndarray:
-    """The jitted kernel ``fn`` evaluated at each point ``(e[k], ec[k])``: shape ``(size, n_out)``."""
-    from ..engine.codegen import _jit
-
-    f = _jit(fn)
-    x, u = np.empty(0), np.empty(2)
-    out = np.empty((e.size, n_out))
-    for k in range(e.size):
-        u[0], u[1] = e[k], ec[k]
-        f(0.0, x, u, p, out[k])
-    return out
+@jitable
+def _quantise(u, p):
+    """``(E, EC) = (sat(Ke·e, ±X_e), sat(Kec·ec, ±X_ec))`` of ``u = [e, ec]``, ``p`` headed by :data:`SCALING`."""
+    return (np.minimum(np.maximum(p[SC.Ke] * u[0], -p[SC.X_e]), p[SC.X_e]),
+            np.minimum(np.maximum(p[SC.Kec] * u[1], -p[SC.X_ec]), p[SC.X_ec]))
 
 
 def _no_update(t, x, u, p, x_next):
     """A stateless block's update: nothing to write."""
 
 
-#: The fixed head of :func:`mamdani_output`'s parameters: factors, universes, sizes, term widths;
-#: the arrays of :func:`mamdani_layout` follow.
-MAMDANI = Layout("Ke", "Kec", "Ku", "X_e", "X_ec", "n_e", "n_ec", "n_u", "n_grid", "w_e", "w_ec")
+#: The fixed head of :func:`mamdani_output`'s parameters: :data:`SCALING`, sizes, term widths; the
+#: arrays of :func:`mamdani_layout` follow.
+MAMDANI = Layout(*zip(SCALING.names, SCALING.shapes), "n_e", "n_ec", "n_u", "n_grid", "w_e", "w_ec")
 AT = MAMDANI.at  # parameter offsets, a numba constant
 _M_ARRAYS = MAMDANI.size
 
@@ -230,9 +234,63 @@ def mamdani_layout(n_e: int, n_ec: int, n_u: int, n_grid: int) -> Layout:
                   ("z", n_grid), ("mu_u", (n_grid, n_u)))
 
 
-#: The fixed head of :func:`lookup_output`'s parameters: factors, universes, grid sizes, first points and
+@jitable
+def _mamdani_at(p):
+    """Sizes read from ``p``, offsets of :func:`mamdani_layout`'s arrays: ``(n_e, n_ec, n_u, n_grid, c_e, c_ec, rules, z, mu_u)``."""
+    n_e, n_ec, n_u, n_g = as_int(p[AT.n_e]), as_int(p[AT.n_ec]), as_int(p[AT.n_u]), as_int(p[AT.n_grid])
+    o_r = _M_ARRAYS + n_e + n_ec
+    o_z = o_r + n_e * n_ec
+    return n_e, n_ec, n_u, n_g, _M_ARRAYS, _M_ARRAYS + n_e, o_r, o_z, o_z + n_g
+
+
+@jitable
+def _aggregate(E, EC, p, agg):
+    """The aggregated output set ``agg[g] = max_{i,j} min(μ_Ei(E), μ_ECj(EC), μ_U[rule[i,j]](z_g))``, written in place
+    (min–max inference: rule firing ``min`` (AND), Mamdani implication ``min``, aggregation ``max``)."""
+    n_e, n_ec, n_u, n_g, o_ce, o_cec, o_r, _, o_mu = _mamdani_at(p)
+    mu_ec = scratch(n_ec, EC)
+    for j in range(n_ec):
+        mu_ec[j] = _triangle(EC, p[o_cec + j], p[AT.w_ec])  # μ_ECj(EC)
+    act = scratch(n_u, E)  # per output term: max over its rules of min(μ_Ei(E), μ_ECj(EC))
+    for i in range(n_e):
+        mu_e = _triangle(E, p[o_ce + i], p[AT.w_e])  # μ_Ei(E)
+        for j in range(n_ec):
+            k = as_int(p[o_r + i * n_ec + j])  # the output term of rule (i, j)
+            act[k] = np.maximum(act[k], np.minimum(mu_e, mu_ec[j]))
+    for g in range(n_g):  # implication min, aggregation max
+        a = 0.0
+        for k in range(n_u):
+            a = np.maximum(a, np.minimum(act[k], p[o_mu + g * n_u + k]))
+        agg[g] = a
+
+
+def mamdani_output(t, x, u, p, y):
+    """The kernel of :class:`FuzzyController`: ``y[0] = Ku · centroid(aggregated set)`` of ``u = [e, ec]``.
+
+    Scalar indexing and no branch on a value: one run in the compiled engine, the batch's columns in
+    the block's batched methods (NaN in, NaN out).
+
+    Parameters
+    ----------
+    t, x : float, numpy.ndarray
+        Time and state (unused; the block is stateless).
+    u : numpy.ndarray, shape (2,)
+        ``[e, ec]`` in physical units.
+    p : numpy.ndarray
+        :attr:`FuzzyController.kernel_params`, laid out by :func:`mamdani_layout`.
+    y : numpy.ndarray, shape (1,)
+        ``u`` of the controller, written in place.
+    """
+    E, EC = _quantise(u, p)  # sat(Ke e, ±X_e), sat(Kec ec, ±X_ec)
+    _, _, _, n_g, _, _, _, o_z, _ = _mamdani_at(p)
+    agg = scratch(n_g, E)
+    _aggregate(E, EC, p, agg)
+    y[0] = p[AT.Ku] * _centroid(p, o_z, agg, n_g)  # centre of gravity on the output grid z
+
+
+#: The fixed head of :func:`lookup_output`'s parameters: :data:`SCALING`, grid sizes, first points and
 #: steps; the table ``U`` (``n_e × n_ec``, row-major) follows (:func:`lookup_layout`).
-LOOKUP = Layout("Ke", "Kec", "Ku", "X_e", "X_ec", "n_e", "n_ec", "E0", "EC0", "dE", "dEC")
+LOOKUP = Layout(*zip(SCALING.names, SCALING.shapes), "n_e", "n_ec", "E0", "EC0", "dE", "dEC")
 LT = LOOKUP.at  # parameter offsets, a numba constant
 _L_ARRAYS = LOOKUP.size
 
@@ -252,91 +310,99 @@ def lookup_layout(n_e: int, n_ec: int) -> Layout:
     return Layout(*zip(LOOKUP.names, LOOKUP.shapes), ("U", (n_e, n_ec)))
 
 
-def mamdani_output(t, x, u, p, y):
-    """Compiled twin of :meth:`FuzzyController.output` for one run: ``y[0] = Ku · centroid(...)`` of ``u = [e, ec]``.
-
-    Per-value branches (saturation, the ``min``/``max`` of the inference) make a scalar kernel
-    differ from the branch-free numpy method; ``tests/lib/test_fuzzy.py`` holds the two equal
-    (to rounding: the centroid's sums are taken in a different order).
-
-    Parameters
-    ----------
-    t, x : float, numpy.ndarray
-        Time and state (unused; the block is stateless).
-    u : numpy.ndarray, shape (2,)
-        ``[e, ec]`` in physical units.
-    p : numpy.ndarray
-        :meth:`FuzzyController.kernel_params`, laid out by :func:`mamdani_layout`.
-    y : numpy.ndarray, shape (1,) or (n_grid,)
-        ``u`` of the controller, written in place; given ``n_grid`` entries, the aggregated output
-        set on ``z`` instead (no centroid: numpy's :func:`piecewise_linear_centroid` then gives
-        :meth:`FuzzyController.infer` bit for bit, see :meth:`FuzzyController.control_surface`).
-    """
-    n_e, n_ec, n_u, n_g = int(p[AT.n_e]), int(p[AT.n_ec]), int(p[AT.n_u]), int(p[AT.n_grid])
-    E, EC = p[AT.Ke] * u[0], p[AT.Kec] * u[1]  # quantised: sat(Ke e, ±X_e), sat(Kec ec, ±X_ec)
-    if E != E or EC != EC:
-        for g in range(y.shape[0]):
-            y[g] = E + EC
-        return
-    E, EC = min(max(E, -p[AT.X_e]), p[AT.X_e]), min(max(EC, -p[AT.X_ec]), p[AT.X_ec])
-    o_ce = _M_ARRAYS  # the offsets of mamdani_layout's arrays
-    o_cec, o_r = o_ce + n_e, o_ce + n_e + n_ec
-    o_z = o_r + n_e * n_ec
-    o_mu = o_z + n_g
-    act = np.zeros(n_u)  # per output term: max over its rules of min(μ_Ei(E), μ_ECj(EC))
-    for i in range(n_e):
-        me = max(0.0, 1.0 - abs(E - p[o_ce + i]) / p[AT.w_e])
-        if me == 0.0:
-            continue
-        for j in range(n_ec):
-            w = min(me, max(0.0, 1.0 - abs(EC - p[o_cec + j]) / p[AT.w_ec]))
-            k = int(p[o_r + i * n_ec + j])
-            act[k] = max(act[k], w)
-    dz = p[o_z + 1] - p[o_z]
-    num, den, prev = 0.0, 0.0, 0.0
-    for g in range(n_g):  # implication min, aggregation max, centroid of the piecewise-linear set
-        agg = 0.0
-        for k in range(n_u):
-            agg = max(agg, min(act[k], p[o_mu + g * n_u + k]))
-        if y.shape[0] > 1:
-            y[g] = agg
-        elif g > 0:
-            area = 0.5 * (prev + agg)
-            num += p[o_z + g - 1] * area + dz * (prev + 2.0 * agg) / 6.0
-            den += area
-        prev = agg
-    if y.shape[0] == 1:
-        y[0] = p[AT.Ku] * (num / den)
-
-
 def lookup_output(t, x, u, p, y):
-    """Compiled twin of :meth:`FuzzyLookupController.output` for one run: bilinear query table, ``u = [e, ec]``.
+    """The kernel of :class:`FuzzyLookupController`: ``y[0] = Ku · bilinear(U, E, EC)`` of ``u = [e, ec]``.
 
-    The same arithmetic as :meth:`FuzzyLookupController.lookup` (bit for bit; the cell index is a
-    per-value branch, so the numpy method stays branch-free and ``tests/lib/test_fuzzy.py`` holds
-    the two equal).
+    Scalar indexing and no branch on a value (the cell is clipped with ``fmax``/``fmin``, so a NaN
+    input takes cell 0 and gives NaN): one run in the compiled engine, the batch's columns in the
+    block's batched methods.
 
     Parameters
     ----------
-    t, x, u
-        As :func:`mamdani_output`: ``u = [e, ec]`` (physical units), no state.
+    t, x, u, y
+        As :func:`mamdani_output`: no state, ``u = [e, ec]`` in physical units, the control written into ``y[0]``.
     p : numpy.ndarray
-        :meth:`FuzzyLookupController.kernel_params`, laid out by :func:`lookup_layout`.
-    y : numpy.ndarray, shape (1,)
-        ``u`` of the controller, written in place.
+        :attr:`FuzzyLookupController.kernel_params`, laid out by :func:`lookup_layout`.
     """
-    n_e, n_ec = int(p[LT.n_e]), int(p[LT.n_ec])
-    E, EC = p[LT.Ke] * u[0], p[LT.Kec] * u[1]  # quantised: sat(Ke e, ±X_e), sat(Kec ec, ±X_ec) (NaN stays NaN)
-    E = E if E != E else min(max(E, -p[LT.X_e]), p[LT.X_e])
-    EC = EC if EC != EC else min(max(EC, -p[LT.X_ec]), p[LT.X_ec])
-    fe = (E - p[LT.E0]) / p[LT.dE]
+    n_e, n_ec = as_int(p[LT.n_e]), as_int(p[LT.n_ec])
+    E, EC = _quantise(u, p)  # sat(Ke e, ±X_e), sat(Kec ec, ±X_ec)
+    fe = (E - p[LT.E0]) / p[LT.dE]  # grid coordinates
     fc = (EC - p[LT.EC0]) / p[LT.dEC]
-    i = min(max(int(math.floor(fe)), 0), n_e - 2) if fe == fe else 0  # a NaN input: any cell, NaN output
-    j = min(max(int(math.floor(fc)), 0), n_ec - 2) if fc == fc else 0
+    i = np.fmin(np.fmax(np.floor(fe), 0.0), n_e - 2.0)  # the cell [i, i + 1] × [j, j + 1]
+    j = np.fmin(np.fmax(np.floor(fc), 0.0), n_ec - 2.0)
     a, b = fe - i, fc - j
-    o = _L_ARRAYS + i * n_ec + j  # U[i, j] in lookup_layout
-    y[0] = p[LT.Ku] * ((1.0 - a) * ((1.0 - b) * p[o] + b * p[o + 1])
-                   + a * ((1.0 - b) * p[o + n_ec] + b * p[o + n_ec + 1]))
+    o = _L_ARRAYS + np.int64(i) * n_ec + np.int64(j)  # U[i, j] in lookup_layout
+    y[0] = p[LT.Ku] * ((1.0 - a) * ((1.0 - b) * gather(p, o) + b * gather(p, o + 1))
+                       + a * ((1.0 - b) * gather(p, o + n_ec) + b * gather(p, o + n_ec + 1)))
+
+
+class _FuzzyBlock(KernelBlock, DiscreteBlock):
+    """What both fuzzy blocks share: signals (``e``, ``ec`` in, ``u`` out, no state), quantisation, evaluation."""
+
+    inputs = ("e", "ec")
+    outputs = ("u",)
+    states = ()
+    feedthrough = True
+    #: Parameters of the kernel with unit factors ``Ke = Kec = Ku = 1`` (inputs already quantised).
+    _unit_params: np.ndarray
+
+    def quantise(self, e, ec):
+        """Quantise the inputs: ``(E, EC) = (sat(Ke·e, ±X_e), sat(Kec·ec, ±X_ec))``.
+
+        Parameters
+        ----------
+        e, ec : ndarray
+            Physical error and error rate.
+
+        Returns
+        -------
+        E, EC : ndarray
+            Quantised inputs on the universes.
+        """
+        return _quantise((np.asarray(e, dtype=float), np.asarray(ec, dtype=float)), self.kernel_params)
+
+    def evaluate(self, e, ec):
+        """Control ``u`` for physical inputs: the output kernel at each point (:meth:`_at_points`).
+
+        Parameters
+        ----------
+        e, ec : array_like
+            Error and error rate, finite arrays of equal shape.
+
+        Returns
+        -------
+        ndarray
+            ``u``, same shape as ``e``.
+
+        Raises
+        ------
+        ValueError
+            If ``e`` or ``ec`` holds NaN or inf, or their sizes differ.
+        """
+        e = np.asarray(check_finite("e", e), dtype=float)
+        ec = np.asarray(check_finite("ec", ec), dtype=float).reshape(-1)
+        if ec.size != e.size:
+            raise ValueError(f"e and ec must have the same number of points, got {e.size} and {ec.size}")
+        return self._at_points(self.kernel_params, e, ec).reshape(e.shape)
+
+    def _at_points(self, p, e, ec):
+        """The output kernel with parameters ``p`` at the points ``(e[k], ec[k])``, flattened: compiled from
+        ``_COMPILED_MIN`` points on (numba available), else on the points as the batch's columns; bit for bit alike."""
+        from ..engine.codegen import _jit, available
+
+        e, ec = np.asarray(e, dtype=float).reshape(-1), np.asarray(ec, dtype=float).reshape(-1)
+        if e.size < _COMPILED_MIN or not available():
+            return self.batched("output", 0.0, None, np.stack([e, ec], axis=1), p)[:, 0]
+        f, x, u, out = _jit(self.kernels.output), np.empty(0), np.empty(2), np.empty((e.size, 1))
+        for k in range(e.size):
+            u[0], u[1] = e[k], ec[k]
+            f(0.0, x, u, p, out[k])
+        return out[:, 0]
+
+
+#: From this many points on, :meth:`_FuzzyBlock._at_points` (evaluate, infer, control_surface, lookup) runs
+#: the compiled kernel (compiling it costs more than the numpy path saves on fewer points).
+_COMPILED_MIN = 2000
 
 
 class FuzzyController(_FuzzyBlock):
@@ -348,7 +414,8 @@ class FuzzyController(_FuzzyBlock):
     output universe ``[−Y, Y]`` is sampled on ``n_grid`` points and the centroid is that of the
     piecewise-linear aggregated set (:func:`piecewise_linear_centroid`).
 
-    A stateless discrete block with direct feedthrough: inputs ``e``, ``ec``; output ``u``.
+    A stateless discrete block with direct feedthrough: inputs ``e``, ``ec``; output ``u``. Its
+    kernel is :func:`mamdani_output`; the batched methods apply it to the batch's columns.
 
     Parameters
     ----------
@@ -384,6 +451,8 @@ class FuzzyController(_FuzzyBlock):
     array([0., 2., 1.])
     """
 
+    kernels = Kernels(output=mamdani_output, update=_no_update)
+
     def __init__(self, rules, *, Ke, Kec, Ku, input_range=6.0, output_range=7.0, n_output_terms=None,
                  n_grid: int = 281):
         rules = np.asarray(rules)
@@ -414,44 +483,33 @@ class FuzzyController(_FuzzyBlock):
                                          self.c_u[1] - self.c_u[0])
         self.z = np.linspace(-self.Y, self.Y, self.n_grid)
         self.mu_u = triangular_memberships(self.z, self.c_u, self.w_u)  # (N, n_u)
-        self.masks = np.stack([rules == k for k in range(n_u)])  # (n_u, n_e, n_ec)
+        self.kernel_params = self._pack(self.Ke, self.Kec, self.Ku)
+        self._unit_params = self._pack(1.0, 1.0, 1.0)
 
-    def quantise(self, e, ec):
-        """Quantise the inputs: ``(E, EC) = (sat(Ke·e, ±X_e), sat(Kec·ec, ±X_ec))``.
-
-        Parameters
-        ----------
-        e, ec : ndarray
-            Physical error and error rate.
-
-        Returns
-        -------
-        E, EC : ndarray
-            Quantised inputs on the universes.
-        """
-        return np.clip(self.Ke * e, -self.X_e, self.X_e), np.clip(self.Kec * ec, -self.X_ec, self.X_ec)
+    def _pack(self, Ke, Kec, Ku) -> np.ndarray:
+        """The parameter vector of :func:`mamdani_output` with the factors ``Ke``, ``Kec``, ``Ku``."""
+        n_e, n_ec = self.rules.shape
+        return mamdani_layout(n_e, n_ec, self.n_u, self.n_grid).pack(
+            Ke=Ke, Kec=Kec, Ku=Ku, X_e=self.X_e, X_ec=self.X_ec, n_e=n_e, n_ec=n_ec, n_u=self.n_u,
+            n_grid=self.n_grid, w_e=self.w_e, w_ec=self.w_ec, c_e=self.c_e, c_ec=self.c_ec, rules=self.rules,
+            z=self.z, mu_u=self.mu_u)
 
     def infer(self, E, EC):
         """Defuzzified output on the output universe (before ``Ku``) for quantised inputs.
 
+        The kernel :func:`mamdani_output` with unit factors (``Ke = Kec = Ku = 1``).
+
         Parameters
         ----------
         E, EC : ndarray, shape (B,)
-            Quantised inputs (inside the universes).
+            Quantised inputs (inside the universes; values outside are saturated at its ends).
 
         Returns
         -------
         ndarray, shape (B,)
             Centroid of ``max_{i,j} min(min(μ_Ei(E), μ_ECj(EC)), μ_U[rule[i,j]])``.
         """
-        mu_e = triangular_memberships(E, self.c_e, self.w_e)  # (B, n_e)
-        mu_ec = triangular_memberships(EC, self.c_ec, self.w_ec)  # (B, n_ec)
-        w = np.minimum(mu_e[:, :, None], mu_ec[:, None, :])  # rule firing: AND = min
-        act = np.max(np.where(self.masks[None], w[:, None], 0.0), axis=(2, 3))  # per output term: max
-        agg = np.max(np.minimum(act[:, None, :], self.mu_u[None]), axis=2)  # implication min, aggregation max
-        return piecewise_linear_centroid(self.z, agg)
-
-    _surface = infer
+        return self._at_points(self._unit_params, E, EC)
 
     def control_surface(self, n_e: int = 121, n_ec: int = 121):
         """The surface ``U(E, EC)`` on a uniform grid of the quantised universes (the query table).
@@ -466,56 +524,12 @@ class FuzzyController(_FuzzyBlock):
         E : ndarray, shape (n_e,)
         EC : ndarray, shape (n_ec,)
         U : ndarray, shape (n_e, n_ec)
-            Output on the output universe (multiply by ``Ku`` for physical units); from
-            ``_COMPILED_MIN`` points on (numba available) the aggregation is compiled
-            (:func:`mamdani_output`), the centroid numpy's: :meth:`infer` bit for bit.
+            Output on the output universe (multiply by ``Ku`` for physical units): :meth:`infer` on the grid.
         """
         E = np.linspace(-self.X_e, self.X_e, check_int("n_e", n_e, minimum=2))
         EC = np.linspace(-self.X_ec, self.X_ec, check_int("n_ec", n_ec, minimum=2))
         EE, CC = np.meshgrid(E, EC, indexing="ij")
-        if EE.size >= _COMPILED_MIN and _compiled_ok():  # the compiled twin of infer, unit factors
-            U = self._infer_compiled(EE.ravel(), CC.ravel(), 1.0, 1.0)
-        else:
-            U = self.infer(EE.ravel(), CC.ravel())
-        return E, EC, U.reshape(E.size, EC.size)
-
-    _kernel_output = staticmethod(mamdani_output)
-
-    def _infer_compiled(self, e, ec, Ke, Kec):
-        """:meth:`infer` of ``quantise(e, ec)`` (factors ``Ke``, ``Kec``): compiled aggregation, numpy centroid."""
-        p, out, n = self.kernel_params(Ke, Kec, 1.0), np.empty(e.size), 64  # in blocks: the sets stay in cache
-        for lo in range(0, e.size, n):
-            agg = _apply_kernel(mamdani_output, p, e[lo:lo + n], ec[lo:lo + n], self.n_grid)
-            out[lo:lo + n] = piecewise_linear_centroid(self.z, agg)  # row by row: the same sums as infer's
-        return out
-
-    def _evaluate_compiled(self, e, ec):
-        return self.Ku * self._infer_compiled(e, ec, self.Ke, self.Kec)
-
-    def kernel_params(self, Ke=None, Kec=None, Ku=None) -> np.ndarray:
-        """The parameter vector of :func:`mamdani_output` (factors overridable, e.g. 1 for the surface).
-
-        Parameters
-        ----------
-        Ke, Kec, Ku : float, optional
-            Factors (finite, > 0) to use instead of the controller's.
-
-        Returns
-        -------
-        numpy.ndarray
-
-        Raises
-        ------
-        ValueError
-            If a factor given is not finite and > 0.
-        """
-        f = [getattr(self, name) if value is None else check_positive(name, value, scalar=True)
-             for name, value in (("Ke", Ke), ("Kec", Kec), ("Ku", Ku))]
-        n_e, n_ec = self.rules.shape
-        return mamdani_layout(n_e, n_ec, self.n_u, self.n_grid).pack(
-            Ke=f[0], Kec=f[1], Ku=f[2], X_e=self.X_e, X_ec=self.X_ec, n_e=n_e, n_ec=n_ec, n_u=self.n_u,
-            n_grid=self.n_grid, w_e=self.w_e, w_ec=self.w_ec, c_e=self.c_e, c_ec=self.c_ec, rules=self.rules,
-            z=self.z, mu_u=self.mu_u)
+        return E, EC, self.infer(EE.ravel(), CC.ravel()).reshape(E.size, EC.size)
 
     def __repr__(self) -> str:
         return (f"FuzzyController({self.rules.shape[0]}×{self.rules.shape[1]} rules, {self.n_u} output terms, "
@@ -526,9 +540,9 @@ class FuzzyLookupController(_FuzzyBlock):
     """A fuzzy controller's control surface precomputed on a grid and interpolated bilinearly.
 
     The classical query table: :meth:`FuzzyController.control_surface` on an ``n × n`` grid of the
-    quantised universes, then ``u = Ku · bilinear(U, E, EC)`` per sample. Between grid points the
-    error against direct inference is bounded by the surface's curvature (tested in
-    ``tests/lib/test_fuzzy.py``); at grid points it is exact.
+    quantised universes, then ``u = Ku · bilinear(U, E, EC)`` per sample (kernel
+    :func:`lookup_output`). Between grid points the error against direct inference is bounded by
+    the surface's curvature (tested in ``tests/lib/test_fuzzy.py``); at grid points it is exact.
 
     Parameters
     ----------
@@ -538,6 +552,8 @@ class FuzzyLookupController(_FuzzyBlock):
 
     Block signals as :class:`FuzzyController` (inputs ``e``, ``ec``; output ``u``; no state).
     """
+
+    kernels = Kernels(output=lookup_output, update=_no_update)
 
     def __init__(self, controller: FuzzyController, n_points=121):
         if not isinstance(controller, FuzzyController):
@@ -549,49 +565,31 @@ class FuzzyLookupController(_FuzzyBlock):
         self.controller = controller
         self.E, self.EC, self.U = controller.control_surface(n_e, n_ec)
         self.dE, self.dEC = self.E[1] - self.E[0], self.EC[1] - self.EC[0]
+        self.kernel_params = self._pack(controller.Ke, controller.Kec, controller.Ku)
+        self._unit_params = self._pack(1.0, 1.0, 1.0)
+
+    def _pack(self, Ke, Kec, Ku) -> np.ndarray:
+        """The parameter vector of :func:`lookup_output` with the factors ``Ke``, ``Kec``, ``Ku``: the grid and the table."""
+        fc = self.controller
+        return lookup_layout(self.E.size, self.EC.size).pack(
+            Ke=Ke, Kec=Kec, Ku=Ku, X_e=fc.X_e, X_ec=fc.X_ec, n_e=self.E.size, n_ec=self.EC.size,
+            E0=self.E[0], EC0=self.EC[0], dE=self.dE, dEC=self.dEC, U=self.U)
 
     def lookup(self, E, EC):
         """Bilinear interpolation of the table at quantised inputs, before ``Ku``.
 
+        The kernel :func:`lookup_output` with unit factors (``Ke = Kec = Ku = 1``).
+
         Parameters
         ----------
         E, EC : ndarray, shape (B,)
-            Quantised inputs (inside the universes; NaN gives NaN).
+            Quantised inputs (inside the universes; values outside are saturated at its ends; NaN gives NaN).
 
         Returns
         -------
         ndarray, shape (B,)
         """
-        fe = (E - self.E[0]) / self.dE
-        fc = (EC - self.EC[0]) / self.dEC
-        # clipped after the cast so that a non-finite input gives a valid cell (and a NaN output)
-        i = np.clip(np.floor(fe).astype(int), 0, self.E.size - 2)
-        j = np.clip(np.floor(fc).astype(int), 0, self.EC.size - 2)
-        a, b = fe - i, fc - j
-        U = self.U
-        return ((1.0 - a) * ((1.0 - b) * U[i, j] + b * U[i, j + 1])
-                + a * ((1.0 - b) * U[i + 1, j] + b * U[i + 1, j + 1]))
-
-    _surface = lookup
-    _kernel_output = staticmethod(lookup_output)
-
-    def _evaluate_compiled(self, e, ec):
-        return _apply_kernel(lookup_output, self.kernel_params(), e, ec)[:, 0]
-
-    def kernel_params(self) -> np.ndarray:
-        """The parameter vector of :func:`lookup_output`: the factors, the grid and the table.
-
-        Returns
-        -------
-        numpy.ndarray
-        """
-        fc = self.controller
-        return lookup_layout(self.E.size, self.EC.size).pack(
-            Ke=fc.Ke, Kec=fc.Kec, Ku=fc.Ku, X_e=fc.X_e, X_ec=fc.X_ec, n_e=self.E.size, n_ec=self.EC.size,
-            E0=self.E[0], EC0=self.EC[0], dE=self.dE, dEC=self.dEC, U=self.U)
-
-    def _scaling(self):
-        return self.controller
+        return self._at_points(self._unit_params, E, EC)
 
     def __repr__(self) -> str:
         return f"FuzzyLookupController({self.controller!r}, {self.E.size}×{self.EC.size} grid)"

@@ -53,7 +53,7 @@ from typing import ClassVar, NamedTuple
 
 import numpy as np
 
-__all__ = ["BlockKernel", "KernelBlock", "Kernels", "Layout", "as_int", "copy_output", "jitable"]
+__all__ = ["BlockKernel", "KernelBlock", "Kernels", "Layout", "as_int", "copy_output", "gather", "jitable", "scratch"]
 
 
 class BlockKernel(NamedTuple):
@@ -156,6 +156,70 @@ def _compiled_as_int():
 
 
 _compiled_as_int()
+
+
+def scratch(n: int, like):
+    """``n`` zeros for a kernel to work in: numbers for one run, rows of the batch's columns on the columns.
+
+    A kernel that needs space (an aggregated set, per-term activations) writes ``w = scratch(n, x0)``
+    with ``x0`` one of its per-run values (``u[0]``, a quantity computed from it): compiled, and for
+    one run, ``np.zeros(n)``; on the batch's columns ``x0`` is a row of ``B`` values and ``w[i]`` is a
+    row like it. Writing ``w[i] = ...`` and reading ``w[i]`` then serve both.
+
+    Parameters
+    ----------
+    n : int
+        Number of entries.
+    like : float or numpy.ndarray
+        A per-run value of the kernel (a number, or the runs' values on the batch's columns).
+
+    Returns
+    -------
+    numpy.ndarray, shape (n,) + shape of ``like``
+    """
+    return np.zeros((n,) + np.shape(like))
+
+
+def gather(p, k):
+    """``p[k]`` at a computed index ``k`` (a table lookup in a kernel), for one run or on the batch's columns.
+
+    On the columns ``k`` holds one index per run and ``p`` is the shared parameter vector or one
+    column per run (``Loop.simulate(params=...)``); run ``b`` gets its own entry ``k[b]``. Compiled, and
+    for one run, ``p[k]``.
+
+    Parameters
+    ----------
+    p : numpy.ndarray, shape (n_p,) or (n_p, B)
+        The parameters.
+    k : int or numpy.ndarray of int, shape (B,)
+        The index, or one per run.
+
+    Returns
+    -------
+    float or numpy.ndarray, shape (B,)
+    """
+    if np.ndim(p) == 2 and np.ndim(k):
+        return p[k, np.arange(p.shape[1])]
+    return p[k]
+
+
+def _compiled_scratch_gather():
+    """:func:`scratch` and :func:`gather` inside numba-compiled kernels: one run's numbers, a plain index."""
+    try:
+        from numba.extending import overload
+    except ImportError:  # pragma: no cover - numba is optional: the numpy engine needs none of this
+        return
+
+    @overload(scratch, inline="always")
+    def _scratch(n, like):
+        return lambda n, like: np.zeros(n)
+
+    @overload(gather, inline="always")
+    def _gather(p, k):
+        return lambda p, k: p[k]
+
+
+_compiled_scratch_gather()
 
 
 class Layout:

@@ -106,3 +106,19 @@ def test_kernel_is_the_numpy_method_run_by_run(compiled):
         fn(0.0, np.empty(0), u[b], k.params, y[b])
     assert np.array_equal(y, ctrl.output(0.0, np.zeros((9, 0)), u))  # bit for bit
     np.testing.assert_allclose(y[:, 0], (u[:, :3] - u[:, 3:]) @ ctrl.K, rtol=1e-12)
+
+
+def test_per_run_gains_equal_single_blocks():
+    """Gains per run (``Loop.simulate(params={"ctrl": {"K": ...}})``) give each run the loop of its own block."""
+    Ks = np.array([[6.0, 11.0, 6.0], [24.0, 26.0, 9.0], [6.0, 11.0, 6.0]])  # poles -1,-2,-3 and -2,-3,-4
+    loop = Loop([place(Chain(), "plant"),
+                 place(HighOrderDifferentialFeedback(Ks[0]), "ctrl", inputs=["v", "dv", "ddv", "x[0]", "x[1]", "x[2]"])],
+                dt=1e-2, outputs=["x[0]", "u"])
+    ins = {"v": 1.0, "dv": 0.0, "ddv": 0.0}
+    runs = loop.simulate(300, inputs=ins, runs=3, params={"ctrl": {"K": Ks}}, engine="numpy")
+    for b, K in enumerate(Ks):
+        alone = Loop([place(Chain(), "plant"), place(HighOrderDifferentialFeedback(K), "ctrl",
+                                                     inputs=["v", "dv", "ddv", "x[0]", "x[1]", "x[2]"])],
+                     dt=1e-2, outputs=["x[0]", "u"]).simulate(300, inputs=ins, runs=1, engine="numpy")
+        assert np.array_equal(runs["u"][:, b], alone["u"][:, 0])
+    assert not np.array_equal(runs["u"][:, 0], runs["u"][:, 1])

@@ -18,7 +18,7 @@ from ctrl_analysis.estimators.kalman import (
 
 
 def _fc(**kw):
-    args = dict(Ke=2.0, Kec=0.5, Ku=3.0, input_range=6.0, output_range=7.0)
+    args = {"Ke": 2.0, "Kec": 0.5, "Ku": 3.0, "input_range": 6.0, "output_range": 7.0}
     args.update(kw)
     return FuzzyController(sum_rule_table(7), **args)
 
@@ -59,7 +59,9 @@ def test_equals_hand_computation():
     # E = 1: ZO and PS at 0.5 each; two equal clipped triangles centred at 0 and 2: centroid 1 by symmetry
     assert fc.evaluate(np.array([1.0]), np.array([0.0]))[0] == pytest.approx(1.0, abs=1e-12)
     # E = 0.5: ZO at 0.75, PS at 0.25: centroid of max(min(0.75, ZO), min(0.25, PS)) by quadrature
-    agg = lambda z: max(min(0.75, max(0.0, 1 - abs(z) / 2)), min(0.25, max(0.0, 1 - abs(z - 2) / 2)))
+    def agg(z):
+        return max(min(0.75, max(0.0, 1 - abs(z) / 2)), min(0.25, max(0.0, 1 - abs(z - 2) / 2)))
+
     pts = [-2, -0.5, 0, 1.5, 2, 4]
     num = scipy.integrate.quad(lambda z: z * agg(z), -2, 4, points=pts, epsabs=1e-13)[0]
     den = scipy.integrate.quad(agg, -2, 4, points=pts, epsabs=1e-13)[0]
@@ -195,42 +197,63 @@ def test_lookup_kernel_equals_the_block_output_bit_for_bit(compiled):
 
 
 @pytest.mark.parametrize("compiled", [False, True])
-def test_mamdani_kernel_equals_the_block_output(compiled):
+def test_mamdani_kernel_equals_the_block_output_bit_for_bit(compiled):
     from ctrl_analysis.controllers.fuzzy import mamdani_output
     from ctrl_analysis.engine.codegen import _jit
 
     fc = _fc(n_grid=121)
     e, ec = _fuzzy_inputs()
     k = fc.kernel()
+    assert k.output is mamdani_output and k.update is not None and k.params is fc.kernel_params
     fn = _jit(mamdani_output) if compiled else mamdani_output
-    ref = fc.output(0.0, np.zeros((e.size, 0)), np.stack([e, ec], 1))
-    # the centroid's sums run in another order than numpy's pairwise sums: equal to rounding
-    y = _per_point(fn, k.params, e, ec)
-    assert np.isnan(y[:2]).all()
-    np.testing.assert_allclose(y[2:], ref[2:], rtol=0, atol=1e-12 * fc.Ku * fc.Y)
-    # the aggregated set (n_grid outputs) + numpy's centroid: the numpy method bit for bit
-    agg = _per_point(fn, fc.kernel_params(), e[2:], ec[2:], fc.n_grid)
-    assert np.array_equal(fc.Ku * piecewise_linear_centroid(fc.z, agg), ref[2:, 0])
+    ref = fc.output(0.0, np.zeros((e.size, 0)), np.stack([e, ec], 1))  # the kernel on the batch's columns
+    y = _per_point(fn, k.params, e, ec)  # one run at a time
+    # one centroid (summed in numpy's pairwise order), one inference: bit for bit, NaN in, NaN out
+    assert np.array_equal(y, ref, equal_nan=True) and np.isnan(y[:2]).all() and np.isfinite(y[2:]).all()
 
 
-def test_compiled_surface_and_evaluate_equal_numpy_inference_bit_for_bit():
+def test_centroid_sums_in_numpys_order():
+    """The kernel's centroid takes its sums as ``np.sum`` along a row does (pairwise: blocks of 128, 8 accumulators)."""
+    rng = np.random.default_rng(8)
+    for n in (3, 8, 9, 17, 129, 130, 281, 300, 1201, 5000):
+        z = np.linspace(-7.0, 7.0, n)
+        mu = rng.random((4, n)) ** 3
+        a, b = mu[:, :-1], mu[:, 1:]
+        area = 0.5 * (a + b)
+        moment = z[None, :-1] * area + (z[1] - z[0]) * (a + 2.0 * b) / 6.0
+        assert np.array_equal(piecewise_linear_centroid(z, mu), np.sum(moment, axis=1) / np.sum(area, axis=1)), n
+
+
+def test_compiled_surface_and_evaluate_equal_the_numpy_path_bit_for_bit():
     fc = _fc(n_grid=121)
-    E, EC, U = fc.control_surface(51, 49)  # 2499 points: the compiled path
+    E, EC, U = fc.control_surface(51, 49)  # 2499 points: the compiled kernel
     EE, CC = np.meshgrid(E, EC, indexing="ij")
-    assert np.array_equal(U, fc.infer(EE.ravel(), CC.ravel()).reshape(U.shape))
+    u = np.stack([EE.ravel(), CC.ravel()], 1)
+    assert np.array_equal(U.ravel(), fc.batched("output", 0.0, None, u, fc._unit_params)[:, 0])
     table = FuzzyLookupController(fc, 21)
     e, ec = _fuzzy_inputs(2500, seed=7)
     e, ec = e[2:], ec[2:]
     for blk in (fc, table):
-        ref = blk._scaling().Ku * blk._surface(*blk._scaling().quantise(e, ec))
-        assert np.array_equal(blk.evaluate(e, ec), ref)
+        ref = blk.output(0.0, np.zeros((e.size, 0)), np.stack([e, ec], 1))[:, 0]  # numpy, on the batch's columns
+        assert np.array_equal(blk.evaluate(e, ec), ref)  # compiled, point by point
+    assert np.array_equal(table.lookup(*fc.quantise(e, ec)) * fc.Ku, table.evaluate(e, ec))
+
+
+def test_per_run_parameters_equal_single_blocks():
+    """Parameter rows per run on the batch's columns (the numpy engine's per-run path) equal each block alone."""
+    u = np.random.default_rng(9).normal(size=(6, 2)) * [3.0, 10.0]
+    Ke = np.array([0.5, 1.0, 2.0, 0.5, 4.0, 2.0])
+    blocks = [_fc(Ke=k, n_grid=41) for k in Ke]
+    tables = [FuzzyLookupController(b, 11) for b in blocks]  # a table per run: the cells differ per run
+    for group in (blocks, tables):
+        P = np.stack([b.kernel_params for b in group])
+        rows = group[0].batched("output", 0.0, None, u, P)
+        single = np.concatenate([b.output(0.0, np.zeros((1, 0)), u[i:i + 1]) for i, b in enumerate(group)])
+        assert np.array_equal(rows, single)
 
 
 def test_fuzzy_and_filter_blocks_in_a_loop_compiled_equal_numpy():
-    """One loop (one compiled structure): Kalman and α-β filters, an error gain and the lookup controller.
-
-    (The Mamdani kernel is held to its numpy method above; a loop of it would only add compile time.)
-    """
+    """One loop (one compiled structure): Kalman and α-β filters, an error gain, the lookup and the Mamdani controllers."""
     from ctrl_analysis.engine.blocks import StaticGain
     from ctrl_analysis.engine.loop import Loop, place
 
@@ -242,9 +265,10 @@ def test_fuzzy_and_filter_blocks_in_a_loop_compiled_equal_numpy():
     err = StaticGain([[-1.0, 0.0], [0.0, -1.0]], ("xhat[0]", "xhat[1]"), ("e", "ec"))
     # the filters' u is an input (their output has feedthrough from u: fed back it would be an algebraic loop)
     loop = Loop([place(kf, "kf"), place(ab, "ab", outputs=("ab0", "ab1")), place(err, "err"),
-                 place(FuzzyLookupController(_fc(), 31), "table", outputs=("u_table",))], 0.1)
+                 place(FuzzyLookupController(_fc(), 31), "table", outputs=("u_table",)),
+                 place(_fc(n_grid=41), "mamdani", outputs=("u_mamdani",))], 0.1)
     res = {eng: loop.simulate(N, inputs={"y": y, "u": np.sin(y)}, runs=B, engine=eng) for eng in ("numpy", "compiled")}
     a, b = res["numpy"], res["compiled"]
-    for s in ("xhat[0]", "xhat[1]", "ab0", "ab1", "u_table"):
+    for s in ("xhat[0]", "xhat[1]", "ab0", "ab1", "u_table", "u_mamdani"):
         assert np.array_equal(a[s], b[s]), s
-    assert np.ptp(a["u_table"]) > 0.1 and np.ptp(a["ab1"]) > 0.1
+    assert np.ptp(a["u_table"]) > 0.1 and np.ptp(a["ab1"]) > 0.1 and np.ptp(a["u_mamdani"]) > 0.1

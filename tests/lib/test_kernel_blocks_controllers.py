@@ -12,7 +12,13 @@ import numpy as np
 import pytest
 
 from ctrl_analysis import identification
-from ctrl_analysis.controllers import golden_section, mfac, pd
+from ctrl_analysis.controllers import (
+    differential_feedback,
+    fuzzy,
+    golden_section,
+    mfac,
+    pd,
+)
 from ctrl_analysis.engine import codegen as _kernels
 
 pytestmark = pytest.mark.skipif(not _kernels.available(), reason="numba is not installed")
@@ -51,6 +57,21 @@ def _golden_states(rng, B, n, m):
     return x, u
 
 
+def _fuzzy_inputs(rng, B, n, m):
+    """(e, ec) inside and beyond the universes of :func:`_mamdani` (saturation), one NaN run."""
+    u = rng.standard_normal((B, m)) * [4.0, 15.0]
+    u[3, 0] = np.nan
+    return np.zeros((B, n)), u
+
+
+def _mamdani(Ke=2.0):
+    return fuzzy.FuzzyController(fuzzy.sum_rule_table(7), Ke=Ke, Kec=0.5, Ku=3.0, n_grid=41)
+
+
+def _hurwitz_gains(r, B):
+    return [differential_feedback.gains_from_poles(-r.uniform(1.0, 5.0, 3)) for _ in range(B)]
+
+
 # (id, block, n states, n inputs, inputs generator, {parameter: per-run values generator})
 CASES = [
     ("UnitDelay", lambda: mfac.UnitDelay(0.3), 1, 1, _mfac_inputs, {}),
@@ -76,6 +97,12 @@ CASES = [
      {"b0": lambda r, B: r.uniform(1.0, 3.0, B), "omega_c": lambda r, B: r.uniform(5.0, 20.0, B)}),
     ("PDFeedforward-model-n3", lambda: pd.PDFeedforward(3.0, gains=[6.0, 11.0, 6.0], order=3, model=True),
      4, 13, _mfac_inputs, {"b0": lambda r, B: r.uniform(1.0, 3.0, B)}),
+    ("HighOrderDifferentialFeedback", lambda: differential_feedback.HighOrderDifferentialFeedback([6.0, 11.0, 6.0]),
+     0, 6, _mfac_inputs, {"K": _hurwitz_gains}),
+    ("FuzzyController", _mamdani, 0, 2, _fuzzy_inputs,
+     {"Ke": lambda r, B: r.uniform(0.5, 4.0, B), "Ku": lambda r, B: r.uniform(1.0, 3.0, B)}),
+    ("FuzzyLookupController", lambda: fuzzy.FuzzyLookupController(_mamdani(), 11), 0, 2, _fuzzy_inputs,
+     {"controller": lambda r, B: [_mamdani(Ke) for Ke in r.uniform(0.5, 4.0, B)]}),
 ]
 
 
