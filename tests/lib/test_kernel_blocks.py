@@ -3,8 +3,8 @@
 A :class:`~ctrl_analysis.engine.kernels.KernelBlock` writes its equations once, as kernels; the
 numpy methods are those kernels on the batch's columns (or run by run), the compiled engine the same
 functions compiled. Held here for each block of the library: the methods against the compiled
-kernel run by run, and a one-block loop on both engines (with per-run parameters where the block
-has a numeric one), both bit for bit. The Kalman filters are also held to their matrix form (the
+kernel run by run, and the blocks side by side in a loop on both engines (with per-run parameters
+where the block has a numeric one), both bit for bit. The Kalman filters are also held to their matrix form (the
 docstrings' equations) to rounding.
 """
 
@@ -120,29 +120,58 @@ def test_derived_methods_equal_the_compiled_kernels_run_by_run(name, block, per_
         assert one is None or np.array_equal(one, derived[1], equal_nan=True)
 
 
-@pytest.mark.parametrize(("name", "block", "per_run"), BLOCKS, ids=IDS)
-def test_one_block_loop_numpy_engine_equals_compiled_bit_for_bit(name, block, per_run):
+def _side_by_side(continuous: bool):
+    """Every block of :data:`BLOCKS` with (without) a ``rhs`` in one loop, unconnected, each on inputs of its own.
+
+    One loop of ``k`` blocks is one compiled structure instead of ``k`` (numba spends about half a
+    second on the runner around the blocks, whatever they are): the suite compiles two here, not 25.
+    Block ``i`` is named ``b{i}``; its inputs are ``in{i}_{j}``, its outputs ``out{i}_{j}``.
+    """
+    placed, per_run = [], {}
+    for i, (name, block, pr) in enumerate(BLOCKS):
+        if (block.kernel().rhs is not None) != continuous:
+            continue
+        placed.append(place(block, f"b{i}", inputs=[f"in{i}_{j}" for j in range(len(block.inputs))],
+                            outputs=[f"out{i}_{j}" for j in range(len(block.outputs))]))
+        if pr is not None:
+            per_run[f"b{i}"] = {k: np.asarray(v) for k, v in pr.items()}
+    return Loop(placed, dt=0.01 if continuous else 1.0), per_run
+
+
+@pytest.mark.parametrize("continuous", [False, True], ids=["discrete-and-static", "continuous"])
+def test_every_block_in_a_loop_numpy_engine_equals_compiled_bit_for_bit(continuous):
+    """Each block's states and outputs on both engines, with per-run parameters where it has them; and run
+    ``b`` of a per-run block equals the block built with run ``b``'s values, alone in a loop."""
     rng = np.random.default_rng(3)
-    continuous = block.kernel().rhs is not None
-    loop = loop_with(block, 0.01 if continuous else 1.0)
+    loop, per_run = _side_by_side(continuous)
     N = 25
     inputs = {s: rng.standard_normal((N + 1, B)) for s in loop.external}
-    params = None if per_run is None else {"b": {k: np.asarray(v) for k, v in per_run.items()}}
-    res = {e: loop.simulate(N, inputs=inputs, runs=B, params=params, engine=e, bound=np.inf)
+    res = {e: loop.simulate(N, inputs=inputs, runs=B, params=per_run, engine=e, bound=np.inf)
            for e in ("numpy", "compiled")}
-    assert np.array_equal(res["numpy"].x, res["compiled"].x, equal_nan=True)
-    for s in res["numpy"].signals:
-        assert np.array_equal(res["numpy"][s], res["compiled"][s], equal_nan=True), s
-    if per_run is not None:  # run b with per-run values = the block built with run b's values, alone
-        for b in (0, 2):
-            alone = loop_with(block.with_params(**{k: np.asarray(v)[b] for k, v in per_run.items()}), loop.dt)
-            one = alone.simulate(N, inputs={s: v[:, b:b + 1] for s, v in inputs.items()}, runs=1, bound=np.inf)
-            assert np.array_equal(one.x[:, 0], res["compiled"].x[:, b], equal_nan=True)
+    differ = []
+    for p in loop.placed:
+        i = int(p.name[1:])
+        sl = loop.slices.get(p.name, slice(0, 0))
+        same = np.array_equal(res["numpy"].x[:, :, sl], res["compiled"].x[:, :, sl], equal_nan=True) and all(
+            np.array_equal(res["numpy"][s], res["compiled"][s], equal_nan=True) for s in p.outputs)
+        if not same:
+            differ.append(BLOCKS[i][0])
+        if p.name in per_run:  # on the numpy engine: numpy = compiled is what this test holds
+            for b in (0, 2):
+                one_block = p.block.with_params(**{k: v[b] for k, v in per_run[p.name].items()})
+                alone = loop_with(one_block, loop.dt)
+                one = alone.simulate(N, inputs={f"in{j}": inputs[s][:, b:b + 1] for j, s in enumerate(p.inputs)},
+                                     runs=1, bound=np.inf, engine="numpy")
+                if not np.array_equal(one.x[:, 0], res["compiled"].x[:, b, sl], equal_nan=True):
+                    differ.append(f"{BLOCKS[i][0]} run {b} alone")
+    assert differ == []
 
 
 def loop_with(block, dt):
-    """``block`` alone in a loop, its outputs renamed (a TD step's outputs are named as its inputs)."""
-    return Loop([place(block, "b", outputs=[f"out{i}" for i in range(len(block.outputs))])], dt=dt)
+    """``block`` alone in a loop, its inputs named ``in{j}`` and its outputs ``out{j}`` (a TD step's outputs are
+    named as its inputs)."""
+    return Loop([place(block, "b", inputs=[f"in{j}" for j in range(len(block.inputs))],
+                       outputs=[f"out{j}" for j in range(len(block.outputs))])], dt=dt)
 
 
 def test_kalman_kernels_follow_the_matrix_form():
