@@ -152,25 +152,29 @@ def _gen_source(blocks, order, stage, discrete, continuous, nc, method, n_signal
     Runs are stepped side by side (steps outermost, so the result rows are written in memory
     order; runs outermost was measured 1.5x slower at B = 1000, its strided stores miss the TLB).
     The kernels are compiled with ``inline="always"`` so the whole loop is one function (measured
-    2.2x faster than calls at B = 1000). What the code around the kernels does, and why (Example 1,
-    B = 1000, times relative to the hand-written compiled loop of ``benchmarks/bench_example1.py``,
-    2.05x before these choices, 1.50x after; nothing of the arithmetic changed):
+    2.2x faster than calls at B = 1000). The code around the kernels is shaped so that LLVM keeps
+    the run's values in registers from one kernel to the next; each choice was measured on
+    Example 1 at B = 1000 (times relative to the hand-written compiled loop of
+    ``benchmarks/bench_example1.py``, keep=[]: 2.17x before, 1.45x after; the arithmetic is
+    unchanged, the results equal bit for bit):
 
-    * every scratch vector (the signals ``S``, the run's state ``x``, a stage's state ``xt``, the
-      stage derivatives ``K0``..``K3``) lives on the stack (:func:`_scratch_vector`): LLVM then
-      knows they alias no argument and keeps their values in registers across the kernels
-      (2.4x -> 1.7x measured against the same code on heap vectors);
+    * every scratch vector (the signals ``S``, the run's state ``x``, a stage's state ``xt`` and
+      derivative ``dx``, the RK4 sum ``acc``) lives on the stack (:func:`_scratch_vector`), so
+      LLVM knows that it aliases no argument: 2.4x -> 1.7x against the same code on ``np.empty``
+      vectors, whose every store forced the values around it to be reloaded;
     * every vector has a length known to the compiler, and so has every view a kernel receives:
-      a kernel's loops over its state are unrolled and its indices unchecked (the state is read
-      from ``X[b]`` into ``x`` once per step, not viewed in ``X``, whose width is a run-time value);
+      a kernel's loops over its state are unrolled and its indices unchecked. The state is read
+      from ``X[b]`` into ``x`` once per step, not viewed in ``X``, whose width is a run-time value;
     * a block's inputs are a view of ``S`` when they are consecutive signals (gathered into a
-      small vector otherwise), its outputs always a view of ``S`` (a block's outputs are
-      consecutive): no copies in and out;
-    * RK4 steps ``x`` in place: stage 0 reads ``x`` itself, the others ``xt``; the stage
-      derivative is selected among four vectors rather than sliced from one by the stage index
-      (a slice with a run-time start has a run-time length); a copy of ``x`` into ``xt`` was
-      vectorised by LLVM into wide loads of values just stored one by one, which stalls store
-      forwarding (6 % of the run time on its own);
+      small vector otherwise), its outputs always a view of ``S`` (they are consecutive): no
+      copies in and out;
+    * RK4 steps ``x`` in place and adds each stage's term of ``rk4_sum`` as soon as the stage
+      ends (``rk4_acc``: the same operations in the same order), so one derivative vector is
+      reused and every scratch index is a constant once LLVM unrolls the per-element loops: the
+      stage vectors become registers (1.50x -> 1.45x against four derivative vectors picked by
+      the stage index, which must stay in memory). A copy vectorised by LLVM into wide loads of
+      values just stored one by one stalls store forwarding: 6 % of the run time in an earlier
+      version, so stages read the stack vectors themselves;
     * the four stages are one loop, so each kernel is inlined once: unrolling them in the source
       gained 2 % for twice the compile time. The per-element loops (RK4 formulas, the divergence
       test) are loops in the source too: generated line by line they inlined ``rk4_point`` and
@@ -182,9 +186,8 @@ def _gen_source(blocks, order, stage, discrete, continuous, nc, method, n_signal
     add = L.append
     n = max([b["sl"][1] for b in blocks] + [0])  # states: the continuous ones first, x[:nc]
     rk4 = method == "rk4"
-    n_k = (4 if rk4 else 1) if nc else 0
     gathered = [i for i, b in enumerate(blocks) if not _consecutive(b["ic"])]
-    values = n_signals + n + (n if discrete else 0) + (n + n_k * nc if nc else 0) + sum(
+    values = n_signals + n + (n if discrete else 0) + 3 * nc + sum(
         len(blocks[i]["ic"]) for i in gathered)
     new = "SCRATCH" if values <= STACK_VALUES else "np.empty"
 
@@ -219,9 +222,10 @@ def _gen_source(blocks, order, stage, discrete, continuous, nc, method, n_signal
     if discrete:
         add(f"    xn = {new}({n})  # the discrete states at t_k+1, xn[{nc}:]")
     if nc:
-        add(f"    xt = {new}({n})  # a stage's state, xt[:{nc}] (as long as x: a stage reads one or the other)")
-        for s in range(n_k):
-            add(f"    K{s} = {new}({nc})  # stage {s + 1}'s derivative")
+        add(f"    dx = {new}({nc})  # a stage's derivative")
+        if rk4:
+            add(f"    xt = {new}({nc})  # a stage's state")
+            add(f"    acc = {new}({nc})  # the weighted sum of the stage derivatives")
     add("    X = X0  # stepped in place: the caller reads the final state from it")
     add("    for k in range(n_steps + 1):")
     add("        tk = t[k]")
@@ -253,34 +257,41 @@ def _gen_source(blocks, order, stage, discrete, continuous, nc, method, n_signal
         add("            tau = tk")
         add("            for _ in range(substeps):")
         if rk4:
-            # ctrl_analysis.engine.integrators' rk4_point / rk4_sum (the numpy engine's RK4 too) on each
-            # state value; the four stages are one loop, so the kernels are inlined once, not four times
-            add("                for s in range(4):")
-            add("                    if s == 0:")
-            add("                        ts = tau")
-            add("                        xv = x")
-            add("                    else:")
-            add("                        a = h if s == 3 else 0.5 * h")
-            add("                        kp = K0 if s == 1 else (K1 if s == 2 else K2)")
-            add(f"                        for j in range({nc}):")
-            add("                            xt[j] = RK4_POINT(x[j], kp[j], a)")
-            add("                        ts = tau + a")
-            add("                        xv = xt")
-            add("                    dx = K0 if s == 0 else (K1 if s == 1 else (K2 if s == 2 else K3))")
-            for i in stage:
-                L.extend(call(i, "out", "ts", "xv", None, " " * 20))
-            for i in continuous:
-                L.extend(call(i, "rhs", "ts", "xv", "dx", " " * 20))
+            # ctrl_analysis.engine.integrators' rk4_point and rk4_sum (the numpy engine's RK4 too) on each
+            # state value, rk4_sum's terms added as the stages end; the four stages are one loop, so
+            # the kernels are inlined once, not four times
             add(f"                for j in range({nc}):")
-            add("                    x[j] = RK4_SUM(x[j], K0[j], K1[j], K2[j], K3[j], h)")
+            add("                    xt[j] = x[j]")
+            add("                ts = tau")
+            add("                for s in range(4):")
+            for i in stage:
+                L.extend(call(i, "out", "ts", "xt", None, " " * 20))
+            for i in continuous:
+                L.extend(call(i, "rhs", "ts", "xt", "dx", " " * 20))
+            add("                    if s == 0:")
+            add(f"                        for j in range({nc}):")
+            add("                            acc[j] = dx[j]")
+            add("                    elif s < 3:")
+            add(f"                        for j in range({nc}):")
+            add("                            acc[j] = RK4_ACC(acc[j], dx[j], 2.0)")
+            add("                    else:")
+            add(f"                        for j in range({nc}):")
+            add("                            acc[j] = acc[j] + dx[j]  # rk4_sum's last term")
+            add("                    if s < 3:  # the next stage's time and state")
+            add("                        a = h if s == 2 else 0.5 * h")
+            add(f"                        for j in range({nc}):")
+            add("                            xt[j] = RK4_POINT(x[j], dx[j], a)")
+            add("                        ts = tau + a")
+            add(f"                for j in range({nc}):")
+            add("                    x[j] = RK4_END(x[j], acc[j], h)")
         else:
             # ctrl_analysis.simulate.euler_step
             for i in stage:
                 L.extend(call(i, "out", "tau", "x", None, " " * 16))
             for i in continuous:
-                L.extend(call(i, "rhs", "tau", "x", "K0", " " * 16))
+                L.extend(call(i, "rhs", "tau", "x", "dx", " " * 16))
             add(f"                for j in range({nc}):")
-            add("                    x[j] = x[j] + h * K0[j]")
+            add("                    x[j] = x[j] + h * dx[j]")
         add("                tau += h")
     # divergence: ctrl_analysis.engine.integrators.is_bad, the numpy engine's test too
     add("            bad = False")
@@ -349,9 +360,9 @@ def compiled_runner(loop, kernels: dict):
     if key not in _RUNNERS:
         t0 = time.perf_counter()
         src = _gen_source(blocks, order, stage, discrete, continuous, loop.n_continuous, loop.method, len(plan.names))
-        from .integrators import is_bad, rk4_point, rk4_sum
+        from .integrators import is_bad, rk4_acc, rk4_end, rk4_point
 
-        fns = {"RK4_POINT": rk4_point, "RK4_SUM": rk4_sum, "IS_BAD": is_bad}
+        fns = {"RK4_POINT": rk4_point, "RK4_ACC": rk4_acc, "RK4_END": rk4_end, "IS_BAD": is_bad}
         for i, n in enumerate(names):
             k = kernels[n]
             fns[f"K{i}_out"] = k.output
