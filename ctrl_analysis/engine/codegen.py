@@ -379,10 +379,42 @@ def compiled_runner(loop, kernels: dict):
                          numba.intp[::1], f64[::1],
                          numba.intp[::1], i64, f64[:, :, :], f64[:, :, :], f64, numba.boolean[:], i64[:], numba.intp[::1],
                          *[f64[:, ::1] for b in blocks])
-        run = numba.njit(sig, cache=True, error_model="numpy")(module.run)
+        run = _compile(module.run, sig)
         _RUNNERS[key] = (run, time.perf_counter() - t0)
         _COMPILE["seconds"] += _RUNNERS[key][1]
     return _RUNNERS[key][0]
+
+
+#: LLVM's loop-unrolling budget while a runner compiles (``-unroll-threshold-aggressive``; LLVM's own
+#: value at -O3, 300, is restored right after). With it LLVM unrolls the four RK4 stages of a typical
+#: loop (Example 1 needs about 800), removing the stage loop's branches and keeping the stages'
+#: values in registers across them: Example 1 at B = 1000, keep=[], 1.44x -> 1.32x of the compiled
+#: reference, with no measurable change of compile time (the stages are unrolled in LLVM's IR,
+#: not in numba's, whose passes are most of the compile time). 0: leave LLVM's setting alone.
+UNROLL_BUDGET = 2000
+_LLVM_UNROLL_DEFAULT = 300
+
+
+def _compile(fn, sig):
+    """``numba.njit(sig)`` of the generated runner, with LLVM's unrolling budget raised to :data:`UNROLL_BUDGET`.
+
+    LLVM's options are global to the process: they are changed and restored under numba's compiler
+    lock, so no other numba compilation runs with the raised budget (a runner loaded from numba's
+    disk cache is not compiled at all).
+    """
+    import numba
+
+    if not UNROLL_BUDGET:
+        return numba.njit(sig, cache=True, error_model="numpy")(fn)
+    import llvmlite.binding as llvm
+    from numba.core.compiler_lock import global_compiler_lock
+
+    with global_compiler_lock:
+        llvm.set_option("", f"-unroll-threshold-aggressive={UNROLL_BUDGET}")
+        try:
+            return numba.njit(sig, cache=True, error_model="numpy")(fn)
+        finally:
+            llvm.set_option("", f"-unroll-threshold-aggressive={_LLVM_UNROLL_DEFAULT}")
 
 
 def cache_dir() -> Path:
