@@ -155,7 +155,7 @@ def _gen_source(blocks, order, stage, discrete, continuous, nc, method, n_signal
     2.2x faster than calls at B = 1000). The code around the kernels is shaped so that LLVM keeps
     the run's values in registers from one kernel to the next; each choice was measured on
     Example 1 at B = 1000 (times relative to the hand-written compiled loop of
-    ``benchmarks/bench_example1.py``, keep=[]: 2.17x before, 1.45x after; the arithmetic is
+    ``benchmarks/bench_example1.py``, keep=[]: 2.17x before, 1.32x after; the arithmetic is
     unchanged, the results equal bit for bit):
 
     * every scratch vector (the signals ``S``, the run's state ``x``, a stage's state ``xt`` and
@@ -175,10 +175,12 @@ def _gen_source(blocks, order, stage, discrete, continuous, nc, method, n_signal
       the stage index, which must stay in memory). A copy vectorised by LLVM into wide loads of
       values just stored one by one stalls store forwarding: 6 % of the run time in an earlier
       version, so stages read the stack vectors themselves;
-    * the four stages are one loop, so each kernel is inlined once: unrolling them in the source
-      gained 2 % for twice the compile time. The per-element loops (RK4 formulas, the divergence
-      test) are loops in the source too: generated line by line they inlined ``rk4_point`` and
-      friends once per state value, a third of the compile time;
+    * the four stages are one loop, so each kernel is inlined once by numba (unrolling them in the
+      source gained 2 % for twice the compile time); LLVM unrolls that loop instead, allowed a
+      larger budget while the runner compiles (:data:`UNROLL_BUDGET`: 1.44x -> 1.32x, no
+      measurable compile time). The per-element loops (RK4 formulas, the divergence test) are
+      loops in the source too: generated line by line they inlined ``rk4_point`` and friends once
+      per state value, a third of the compile time;
     * per run, each block's parameter row index is computed once per step, and per step the
       decimation test once for all runs.
     """
@@ -432,6 +434,7 @@ def _runner_module(src: str, fns: dict):
 
     digest = hashlib.sha1(src.encode())
     digest.update(inspect.getsource(_scratch_vector).encode())  # the generated code's SCRATCH
+    digest.update(f"unroll budget {UNROLL_BUDGET}".encode())  # compiled with it (numba's cache does not know)
     for name in sorted(fns):
         try:
             digest.update(inspect.getsource(fns[name]).encode())
