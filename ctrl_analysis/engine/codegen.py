@@ -154,9 +154,9 @@ def _gen_source(blocks, order, stage, discrete, continuous, nc, method, n_signal
     The kernels are compiled with ``inline="always"`` so the whole loop is one function (measured
     2.2x faster than calls at B = 1000). The code around the kernels is shaped so that LLVM keeps
     the run's values in registers from one kernel to the next; each choice was measured on
-    Example 1 at B = 1000 (times relative to the hand-written compiled loop of
-    ``benchmarks/bench_example1.py``, keep=[]: 2.17x before, 1.32x after; the arithmetic is
-    unchanged, the results equal bit for bit):
+    Example 1 at B = 1000 when it was made, interleaved with the code before it (times relative
+    to the hand-written compiled loop of ``benchmarks/bench_example1.py``, keep=[]: 2.17x before,
+    1.32x after all of them; the arithmetic is unchanged, the results equal bit for bit):
 
     * every scratch vector (the signals ``S``, the run's state ``x``, a stage's state ``xt`` and
       derivative ``dx``, the RK4 sum ``acc``) lives on the stack (:func:`_scratch_vector`), so
@@ -172,9 +172,10 @@ def _gen_source(blocks, order, stage, discrete, continuous, nc, method, n_signal
       ends (``rk4_acc``: the same operations in the same order), so one derivative vector is
       reused and every scratch index is a constant once LLVM unrolls the per-element loops: the
       stage vectors become registers (1.50x -> 1.45x against four derivative vectors picked by
-      the stage index, which must stay in memory). A copy vectorised by LLVM into wide loads of
-      values just stored one by one stalls store forwarding: 6 % of the run time in an earlier
-      version, so stages read the stack vectors themselves;
+      the stage index, which must stay in memory). Copies between vectors in memory are avoided
+      too: LLVM vectorised one (``xt = xc``) into wide loads of values just stored one by one,
+      which stalls store forwarding (6 % of the run time in an earlier version); between stack
+      vectors at constant indices a copy is register moves;
     * the four stages are one loop, so each kernel is inlined once by numba (unrolling them in the
       source gained 2 % for twice the compile time); LLVM unrolls that loop instead, allowed a
       larger budget while the runner compiles (:data:`UNROLL_BUDGET`: 1.44x -> 1.32x, no
