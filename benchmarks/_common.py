@@ -30,19 +30,25 @@ def median_time(fn, repeat: int) -> tuple[float, object]:
     return statistics.median(times), out
 
 
-def round_robin(fns: dict, repeat: int) -> dict:
+def round_robin(fns: dict, repeat: int, warmup: int = 0) -> dict:
     """Median wall time of each ``fns[name]()`` over ``repeat`` rounds, the methods interleaved in every round.
 
     Interleaving makes a change in the machine's load (a shared machine) hit every method alike, so
-    ratios stay meaningful when absolute times drift. Returns ``name -> (median seconds, last result)``.
+    ratios stay meaningful when absolute times drift. ``warmup`` untimed rounds come first. A
+    method's previous result is dropped before it runs again, so a large result's memory is
+    returned and reused, as in a loop that reduces each result and lets it go (otherwise every
+    call faults in fresh pages, and the kernel may have to compact memory for its huge pages).
+    Returns ``name -> (median seconds, last result)``.
     """
     times = {name: [] for name in fns}
     out = {}
-    for _ in range(repeat):
+    for r in range(warmup + repeat):
         for name, fn in fns.items():
+            out.pop(name, None)
             t0 = time.perf_counter()
             out[name] = fn()
-            times[name].append(time.perf_counter() - t0)
+            if r >= warmup:
+                times[name].append(time.perf_counter() - t0)
     return {name: (statistics.median(times[name]), out[name]) for name in fns}
 
 

@@ -76,11 +76,13 @@ def compiled_for(loop, engine, funcs, variants):
 
 
 def check_kernel_reads(loop, kernels: dict) -> None:
-    """Call every kernel once in Python on vectors of the engine's sizes: an out-of-range index is an error.
+    """Call every kernel once in Python on vectors of the engine's sizes: an out-of-range index, or a write into the inputs, is an error.
 
     Compiled code does not check bounds, so a kernel reading a parameter slot its block did not
     fill (or a state, input or output beyond the block's) would return garbage; the same function
-    run by Python raises ``IndexError``. Each kernel is tried at the block's initial state with
+    run by Python raises ``IndexError``. The compiled runner hands a block its inputs as a view of
+    the loop's signals (no copy), so a kernel that wrote into ``u`` would change other blocks'
+    inputs: that is an error too. Each kernel is tried at the block's initial state with
     inputs 0, 1 and -1, with the first and last row of per-run parameters (other exceptions, e.g. a
     division by zero at those values, are not this check's concern).
 
@@ -92,7 +94,8 @@ def check_kernel_reads(loop, kernels: dict) -> None:
     Raises
     ------
     ValueError
-        Naming the block, the kernel function, the sizes it was given and the index it read.
+        Naming the block, the kernel function, the sizes it was given and the index it read (or
+        saying that it wrote into its inputs).
     """
     import warnings
 
@@ -121,6 +124,11 @@ def check_kernel_reads(loop, kernels: dict) -> None:
                             f"compiled engine would return garbage") from None
                     except Exception:  # noqa: BLE001, S112 - only out-of-range indices are checked here
                         continue
+                    if np.any(args[2] != level):
+                        raise ValueError(
+                            f"block {p.name!r} ({type(p.block).__name__}): its kernel {kind} "
+                            f"{getattr(fn, '__name__', fn)!r} writes into its inputs u; the compiled engine "
+                            f"passes them as a view of the loop's signals (write into the last argument only)")
 
 
 def _params_2d(name, params):

@@ -2,7 +2,8 @@
 
 The numpy engine steps a batch ``(B, n)``; the compiled runner (:mod:`ctrl_analysis.engine.codegen`)
 steps one run's vector. Both call the same RK4 formulas, :func:`rk4_point` (a stage's state) and
-:func:`rk4_sum` (the step), numpy on whole arrays and the runner on each state value (inlined,
+:func:`rk4_sum` (the step, itself :func:`rk4_acc` term by term and :func:`rk4_end`, which the
+runner calls stage by stage), numpy on whole arrays and the runner on each state value (inlined,
 so the compiled loop is as fast as hand-unrolled arithmetic), and the same test :func:`is_bad`;
 so the classical RK4 arithmetic and the divergence rule exist in one place.
 """
@@ -13,7 +14,8 @@ from collections.abc import Callable
 
 import numpy as np
 
-__all__ = ["MAX_SUBSTEPS", "STEPPERS", "euler_step", "is_bad", "rk4_point", "rk4_step", "rk4_sum"]
+__all__ = ["MAX_SUBSTEPS", "STEPPERS", "euler_step", "is_bad", "rk4_acc", "rk4_end", "rk4_point", "rk4_step",
+           "rk4_sum"]
 
 
 def rk4_point(x, k, a):
@@ -35,6 +37,10 @@ def rk4_point(x, k, a):
 def rk4_sum(x, k1, k2, k3, k4, h):
     """The RK4 step ``x + h/6 (k1 + 2 k2 + 2 k3 + k4)`` (arrays or one value).
 
+    The sum is taken from the left, term by term (:func:`rk4_acc`, then :func:`rk4_end`): the
+    compiled runner adds each stage's term as soon as the stage is done, the same operations in
+    the same order, so it keeps one running sum instead of four derivatives.
+
     Parameters
     ----------
     x : float or numpy.ndarray
@@ -47,7 +53,38 @@ def rk4_sum(x, k1, k2, k3, k4, h):
     -------
     float or numpy.ndarray
     """
-    return x + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+    return rk4_end(x, rk4_acc(rk4_acc(k1, k2, 2.0), k3, 2.0) + k4, h)
+
+
+def rk4_acc(acc, k, w):
+    """A term of RK4's weighted sum of stage derivatives: ``acc + w k`` (``w = 2`` for the two middle stages).
+
+    Parameters
+    ----------
+    acc, k : float or numpy.ndarray
+        The sum so far and the stage's derivative.
+    w : float
+
+    Returns
+    -------
+    float or numpy.ndarray
+    """
+    return acc + w * k
+
+
+def rk4_end(x, acc, h):
+    """The RK4 step from the weighted sum ``acc = k1 + 2 k2 + 2 k3 + k4``: ``x + h/6 acc``.
+
+    Parameters
+    ----------
+    x, acc : float or numpy.ndarray
+    h : float
+
+    Returns
+    -------
+    float or numpy.ndarray
+    """
+    return x + (h / 6.0) * acc
 
 
 def euler_step(rhs: Callable, t: float, x: np.ndarray, u, h: float, params=None) -> np.ndarray:

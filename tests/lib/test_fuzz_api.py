@@ -846,6 +846,8 @@ NOT_FUZZED = {
     plan.make_plan: "built from a Loop, whose constructor is fuzzed",
     integrators.rk4_point: "per-step integrator formula, unchecked by design",
     integrators.rk4_sum: "per-step integrator formula, unchecked by design",
+    integrators.rk4_acc: "per-step integrator formula, unchecked by design",
+    integrators.rk4_end: "per-step integrator formula, unchecked by design",
     pid.pid_update: "per-step kernel, unchecked by design",
     engine_kernels.as_int: "per-step helper of kernels (a size read from p), unchecked by design",
     engine_kernels.scratch: "per-step helper of kernels (space to work in), unchecked by design",

@@ -307,3 +307,55 @@ def test_discrete_lowpass_kernel_runs_the_compiled_engine_like_numpy():
     # unit DC gain: a constant input is reached (ZOH of W(s) is exact for a held input)
     c = loop.simulate(400, inputs={f"u[{i}]": 1.0 for i in range(3)}, runs=1, engine="compiled")
     np.testing.assert_allclose(c["w[1]"][-1], 1.0, atol=1e-6)
+
+
+def sloppy_rhs(t, x, u, p, dx):
+    dx[0] = -x[0] + u[0]
+    u[0] = 0.0  # writes into its inputs: in the compiled runner they are a view of the loop's signals
+
+
+def overreaching_rhs(t, x, u, p, dx):
+    dx[0] = -x[0] + u[0] + p[3]  # its parameter vector has one entry
+
+
+class CheckedKernel(ContinuousBlock):
+    inputs, outputs, states = ("f",), ("y",), ("y",)
+
+    def __init__(self, rhs):
+        self._rhs = rhs
+
+    def rhs(self, t, x, u, params=None):
+        return -x + u
+
+    def kernel(self):
+        return BlockKernel(output=copy_output, params=np.zeros(1), rhs=self._rhs)
+
+
+@pytest.mark.parametrize("rhs,message", [(sloppy_rhs, "writes into its inputs u"),
+                                         (overreaching_rhs, "reads or writes outside its vectors")])
+def test_kernels_are_checked_in_python_before_they_run_compiled(rhs, message):
+    loop = Loop([place(CheckedKernel(rhs), "b")], dt=0.1)
+    with pytest.raises(ValueError, match=message):
+        loop.simulate(5, inputs={"f": 1.0}, engine="compiled")
+
+
+@pytest.mark.parametrize("method", ["rk4", "euler"])
+def test_heap_scratch_and_euler_give_the_numpy_numbers(monkeypatch, method):
+    # a loop too large for stack scratch gets heap vectors: the same code, the same numbers
+    seeds = run_seeds(7, 3)
+    noise = draw_noise(seeds, 120, gaussian_noise([0.3, 0.01]))
+    inputs = {"w": noise[:, :, 0], "v": noise[:, :, 1]}
+
+    def mk():
+        return Loop([place(KOsc(), "plant"), place(DifferentialEstimator(3, 4.0), "sigma"),
+                     place(KAcc(0.01), "acc", inputs=["xhat[0]"])], dt=0.01, method=method, substeps=2)
+
+    a = mk().simulate(120, inputs=inputs, engine="numpy")
+    b = mk().simulate(120, inputs=inputs, engine="compiled")
+    monkeypatch.setattr(_kernels, "STACK_VALUES", 0)
+    monkeypatch.setattr(_kernels, "_RUNNERS", {})
+    c = mk().simulate(120, inputs=inputs, engine="compiled")
+    for r in (b, c):
+        assert np.array_equal(a.x, r.x)
+        for s in a.signals:
+            assert np.array_equal(a[s], r[s]), s
