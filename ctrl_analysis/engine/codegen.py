@@ -420,6 +420,70 @@ def _compile(fn, sig):
             llvm.set_option("", f"-unroll-threshold-aggressive={_LLVM_UNROLL_DEFAULT}")
 
 
+def source_key(fn) -> str:
+    """What a compiled kernel depends on, as text: its source, and that of everything it reads by name.
+
+    The runner inlines each kernel and, through it, the helpers the kernel calls and the constants
+    it reads (``AT`` offsets of a :class:`~ctrl_analysis.engine.kernels.Layout`, module-level numbers,
+    ``@jitable`` functions, numba's own dispatchers): a change in any of them must give another
+    runner file, or numba's disk cache would hand back the runner compiled with the old ones. So
+    the key is the kernel's source followed by, for every global name its code (and the code of
+    functions nested in it) reads, that value's source if it is a function, recursively, or its
+    ``repr`` if it is a number, a string or a tuple of them; modules (``np``, ``math``) are keyed by
+    name only.
+
+    Parameters
+    ----------
+    fn : callable
+        A kernel (plain Python function, or a numba dispatcher of one).
+
+    Returns
+    -------
+    str
+    """
+    import inspect
+    import types
+
+    parts, seen = [], set()
+
+    def code_names(code):
+        names = list(code.co_names)
+        for c in code.co_consts:
+            if isinstance(c, types.CodeType):
+                names += code_names(c)
+        return names
+
+    def visit(f):
+        f = getattr(f, "py_func", f)  # a numba dispatcher: the Python function it compiles
+        if id(f) in seen:
+            return
+        seen.add(id(f))
+        try:
+            parts.append(inspect.getsource(f))
+        except (OSError, TypeError):  # source unavailable (a builtin, exec'd code): key on the identity
+            parts.append(repr(f))
+            return
+        code, env = getattr(f, "__code__", None), getattr(f, "__globals__", {})
+        if code is None:
+            return
+        for name in sorted(set(code_names(code))):
+            if name not in env:
+                continue  # a builtin or an attribute name
+            v = env[name]
+            if isinstance(v, types.ModuleType):
+                parts.append(f"{name}: module {v.__name__}")
+            elif isinstance(v, (int, float, complex, str, bool, tuple)) or v is None:
+                parts.append(f"{name} = {v!r}")
+            elif callable(v) and (inspect.isfunction(getattr(v, "py_func", v))):
+                parts.append(f"{name}:")
+                visit(v)
+            else:  # anything else (a class, an array): its type, so that a rename still changes the key
+                parts.append(f"{name}: {type(v).__module__}.{type(v).__qualname__}")
+
+    visit(fn)
+    return "\n".join(parts)
+
+
 def cache_dir() -> Path:
     """Where generated loop runners (and numba's cache of them) live: ``$CTRL_ANALYSIS_CACHE`` or ``~/.cache``."""
     base = os.environ.get("CTRL_ANALYSIS_CACHE") or os.path.join(
@@ -437,10 +501,8 @@ def _runner_module(src: str, fns: dict):
     digest.update(inspect.getsource(_scratch_vector).encode())  # the generated code's SCRATCH
     digest.update(f"unroll budget {UNROLL_BUDGET}".encode())  # compiled with it (numba's cache does not know)
     for name in sorted(fns):
-        try:
-            digest.update(inspect.getsource(fns[name]).encode())
-        except (OSError, TypeError):  # pragma: no cover - source unavailable: key on the identity
-            digest.update(repr(fns[name]).encode())
+        digest.update(name.encode())
+        digest.update(source_key(fns[name]).encode())
     d = cache_dir()
     try:
         d.mkdir(parents=True, exist_ok=True)
