@@ -80,6 +80,7 @@ def float_loop(p, v, n):
     Ad, Bd = LowPassFilter(p.lpf_omega, p.lpf_order).discretize(p.Ts)
     ad, bd = float(Ad[0, 0]), float(Bd[0])
     Q, R, lam, mt = p.Q, p.R, p.forgetting, p.max_trace
+    Q00, Q01, Q11 = (Q, 0.0, Q) if np.ndim(Q) == 0 else (Q[0][0], Q[0][1], Q[1][1])  # the study's Q = q I
     x, w, u1, s1, s2 = [0.0] * nx, 0.0, 0.0, 0.0, 0.0
     xh0 = xh1 = 0.0
     P00, P01, P11 = p.P0_ckf, 0.0, p.P0_ckf
@@ -96,7 +97,7 @@ def float_loop(p, v, n):
         # CKF (11), Joseph form
         xp0, xp1 = f1 * xh0 + f2 * xh1 + g0 * u1, xh0
         a0, a1 = f1 * P00 + f2 * P01, f1 * P01 + f2 * P11
-        Pp00, Pp01, Pp11 = a0 * f1 + a1 * f2 + Q[0][0], a0 + Q[0][1], P00 + Q[1][1]
+        Pp00, Pp01, Pp11 = a0 * f1 + a1 * f2 + Q00, a0 + Q01, P00 + Q11
         S = Pp00 + R
         K0, K1 = Pp00 / S, Pp01 / S
         rr = ym - xp0

@@ -29,18 +29,16 @@ library block). A block that writes its own ``kernel()`` beside numpy methods ke
 the pair equal (``tests/lib/test_speed_kernels.py``).
 
 The generated runner is cached in memory per loop structure and process, and on disk (numba's
-cache, :func:`cache_dir`); numba's compile time (a few seconds per structure on a cold cache) is
+cache, :func:`~ctrl_analysis.engine.jit.cache_dir`); numba's compile time (a few seconds per structure on a cold cache) is
 reported by :func:`compile_seconds`.
 """
 
 from __future__ import annotations
 
-import os
-import sys
+import inspect
 import time
-from pathlib import Path
 
-# Σ's and the ESO's kernels live with their blocks; analysis/ and arena/ still import them from here
+from .jit import _JIT, _jit, _runner_module
 from .kernels import BlockKernel
 
 __all__ = ["available", "compile_seconds", "compiled_runner", "kernel_of"]
@@ -78,7 +76,6 @@ def kernel_of(block) -> BlockKernel | None:
 
 
 # ------------------------------------------------------------------ the compiled loop runner
-_JIT: dict = {}
 _RUNNERS: dict = {}
 _COMPILE = {"seconds": 0.0}
 
@@ -91,17 +88,6 @@ def compile_seconds() -> float:
     float
     """
     return _COMPILE["seconds"]
-
-
-def _jit(fn):
-    import numba
-
-    if fn not in _JIT:
-        try:
-            _JIT[fn] = numba.njit(cache=True, error_model="numpy", inline="always")(fn)
-        except RuntimeError:  # no file to cache against (a notebook cell, exec'd code): compile, don't cache
-            _JIT[fn] = numba.njit(cache=False, error_model="numpy", inline="always")(fn)
-    return _JIT[fn]
 
 
 def _scratch_vector():
@@ -373,7 +359,9 @@ def compiled_runner(loop, kernels: dict):
                 fns[f"K{i}_rhs"] = k.rhs
             if k.update is not None:
                 fns[f"K{i}_upd"] = k.update
-        module = _runner_module(src, fns)
+        # the generated code's SCRATCH and the unrolling budget it is compiled with are in the key too
+        # (numba's cache knows neither)
+        module = _runner_module(src, fns, extra=inspect.getsource(_scratch_vector) + f"unroll budget {UNROLL_BUDGET}")
         for name, fn in fns.items():
             setattr(module, name, _jit(fn))
         module.SCRATCH = _scratch_vector()
@@ -420,104 +408,3 @@ def _compile(fn, sig):
             llvm.set_option("", f"-unroll-threshold-aggressive={_LLVM_UNROLL_DEFAULT}")
 
 
-def source_key(fn) -> str:
-    """What a compiled kernel depends on, as text: its source, and that of everything it reads by name.
-
-    The runner inlines each kernel and, through it, the helpers the kernel calls and the constants
-    it reads (``AT`` offsets of a :class:`~ctrl_analysis.engine.kernels.Layout`, module-level numbers,
-    ``@jitable`` functions, numba's own dispatchers): a change in any of them must give another
-    runner file, or numba's disk cache would hand back the runner compiled with the old ones. So
-    the key is the kernel's source followed by, for every global name its code (and the code of
-    functions nested in it) reads, that value's source if it is a function, recursively, or its
-    ``repr`` if it is a number, a string or a tuple of them; modules (``np``, ``math``) are keyed by
-    name only.
-
-    Parameters
-    ----------
-    fn : callable
-        A kernel (plain Python function, or a numba dispatcher of one).
-
-    Returns
-    -------
-    str
-    """
-    import inspect
-    import types
-
-    parts, seen = [], set()
-
-    def code_names(code):
-        names = list(code.co_names)
-        for c in code.co_consts:
-            if isinstance(c, types.CodeType):
-                names += code_names(c)
-        return names
-
-    def visit(f):
-        f = getattr(f, "py_func", f)  # a numba dispatcher: the Python function it compiles
-        if id(f) in seen:
-            return
-        seen.add(id(f))
-        try:
-            parts.append(inspect.getsource(f))
-        except (OSError, TypeError):  # source unavailable (a builtin, exec'd code): key on the identity
-            parts.append(repr(f))
-            return
-        code, env = getattr(f, "__code__", None), getattr(f, "__globals__", {})
-        if code is None:
-            return
-        for name in sorted(set(code_names(code))):
-            if name not in env:
-                continue  # a builtin or an attribute name
-            v = env[name]
-            if isinstance(v, types.ModuleType):
-                parts.append(f"{name}: module {v.__name__}")
-            elif isinstance(v, (int, float, complex, str, bool, tuple)) or v is None:
-                parts.append(f"{name} = {v!r}")
-            elif callable(v) and (inspect.isfunction(getattr(v, "py_func", v))):
-                parts.append(f"{name}:")
-                visit(v)
-            else:  # anything else (a class, an array): its type, so that a rename still changes the key
-                parts.append(f"{name}: {type(v).__module__}.{type(v).__qualname__}")
-
-    visit(fn)
-    return "\n".join(parts)
-
-
-def cache_dir() -> Path:
-    """Where generated loop runners (and numba's cache of them) live: ``$CTRL_ANALYSIS_CACHE`` or ``~/.cache``."""
-    base = os.environ.get("CTRL_ANALYSIS_CACHE") or os.path.join(
-        os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"), "ctrl_analysis")
-    return Path(base) / "kernels"
-
-
-def _runner_module(src: str, fns: dict):
-    """Import the generated source from a file named by its hash (and the kernels' sources), so numba can cache it."""
-    import hashlib
-    import importlib.util
-    import inspect
-
-    digest = hashlib.sha1(src.encode())
-    digest.update(inspect.getsource(_scratch_vector).encode())  # the generated code's SCRATCH
-    digest.update(f"unroll budget {UNROLL_BUDGET}".encode())  # compiled with it (numba's cache does not know)
-    for name in sorted(fns):
-        digest.update(name.encode())
-        digest.update(source_key(fns[name]).encode())
-    d = cache_dir()
-    try:
-        d.mkdir(parents=True, exist_ok=True)
-    except OSError:  # read-only home: a per-user temporary directory still caches within the machine
-        import tempfile
-
-        d = Path(tempfile.gettempdir()) / f"ctrl_analysis-{os.getuid() if hasattr(os, 'getuid') else 0}" / "kernels"
-        d.mkdir(parents=True, exist_ok=True)
-    path = d / f"loop_{digest.hexdigest()[:20]}.py"
-    if not path.exists():
-        tmp = path.with_suffix(f".{os.getpid()}.tmp")
-        tmp.write_text("import numpy as np\n\n\n" + src, encoding="utf-8")
-        os.replace(tmp, path)
-    spec = importlib.util.spec_from_file_location(f"_ctrl_analysis_{path.stem}", path)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module  # numba's cache re-imports the module by name
-    spec.loader.exec_module(module)
-    return module

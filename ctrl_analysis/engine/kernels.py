@@ -363,6 +363,39 @@ class Kernels(NamedTuple):
     columns: bool = True
 
 
+#: From this many runs on, a kernel that branches per value (``Kernels(columns=False)``) runs compiled
+#: over the batch's rows (:func:`ctrl_analysis.engine.jit.compiled_rows`), not row by row in Python: the
+#: numpy engine then steps a fal ESO, an MFAC estimator or an RLS block at numba's speed. Below it,
+#: compiling the kernel (once per machine, then from the disk cache) is not worth it.
+ROWS_COMPILED_MIN = 64
+
+
+def _compiled_rows(fn, t, x, u, P, out) -> bool:
+    """Kernel ``fn`` on every row of the batch, compiled, into ``out``; ``False`` (nothing written) if it cannot be.
+
+    The same arithmetic as the Python loop over the rows (the compiled engine inlines the same
+    compiled kernel; ``tests/lib/test_kernel_blocks.py`` holds the two equal bit for bit).
+    """
+    from .jit import compiled_rows
+
+    rows = compiled_rows(fn)
+    if rows is None:
+        return False
+    P2 = np.ascontiguousarray(P[None, :] if P.ndim == 1 else P, dtype=float)
+    try:
+        rows(float(t), np.ascontiguousarray(x), np.ascontiguousarray(u), P2, 0 if P.ndim == 1 else 1, out)
+    except Exception as exc:  # noqa: BLE001 - numba cannot compile this kernel: the Python loop runs it
+        from .jit import _JIT
+
+        _JIT[("rows", fn)] = None
+        import warnings
+
+        warnings.warn(f"kernel {getattr(fn, '__name__', fn)!r} runs row by row in Python on the numpy engine: numba "
+                      f"could not compile it ({type(exc).__name__})", RuntimeWarning, stacklevel=4)
+        return False
+    return True
+
+
 class KernelBlock:
     """Mixin (first among the bases): the block's batched methods and compiled kernel from its :class:`Kernels`.
 
@@ -406,6 +439,8 @@ class KernelBlock:
         out = np.empty((B, len(self.outputs) if kind == "output" else x.shape[1]))
         if self.kernels.columns:
             fn(t, x.T, u.T, P if P.ndim == 1 else P.T, out.T)
+            return out
+        if B >= ROWS_COMPILED_MIN and _compiled_rows(fn, t, x, u, P, out):
             return out
         for b in range(B):
             fn(t, x[b], u[b], P if P.ndim == 1 else P[b], out[b])

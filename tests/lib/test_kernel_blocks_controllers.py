@@ -20,6 +20,7 @@ from ctrl_analysis.controllers import (
     pd,
 )
 from ctrl_analysis.engine import codegen as _kernels
+from ctrl_analysis.engine.kernels import ROWS_COMPILED_MIN
 
 pytestmark = pytest.mark.skipif(not _kernels.available(), reason="numba is not installed")
 
@@ -114,12 +115,14 @@ def _compiled_per_run(fn, t, x, u, P, width):
     return out
 
 
+# 40 runs: a kernel that branches per value runs row by row in Python; from ROWS_COMPILED_MIN on, compiled
+@pytest.mark.parametrize("B", [40, ROWS_COMPILED_MIN + 6], ids=["python-rows", "compiled-rows"])
 @pytest.mark.parametrize("case", CASES, ids=[c[0] for c in CASES])
-def test_derived_batched_methods_equal_the_compiled_kernels_bit_for_bit(case):
+def test_derived_batched_methods_equal_the_compiled_kernels_bit_for_bit(case, B):
     _, make, n, m, draw, per_run = case
     block = make()
     rng = np.random.default_rng(11)
-    B, t = 40, 3.0
+    t = 3.0
     x, u = draw(rng, B, n, m)
     assert block.kernel_params.ndim == 1 and x.shape[1] == block.n_states and u.shape[1] == len(block.inputs)
     rows = np.stack([block.with_params(**{k: g(rng, 1)[0] for k, g in per_run.items()}).kernel_params

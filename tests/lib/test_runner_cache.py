@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from ctrl_analysis.engine.blocks import DiscreteBlock
-from ctrl_analysis.engine.codegen import source_key
+from ctrl_analysis.engine.jit import source_key
 from ctrl_analysis.engine.kernels import KernelBlock, Kernels
 from ctrl_analysis.engine.loop import Loop, place
 

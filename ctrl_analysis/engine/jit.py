@@ -1,0 +1,179 @@
+"""numba plumbing shared by the compiled engine and the kernel-first blocks: jitted kernels, generated modules, their cache.
+
+* :func:`_jit` compiles a kernel (``inline="always"``, so it disappears into whatever calls it);
+* :func:`_runner_module` imports generated source from a file in :func:`cache_dir` named by a hash
+  of everything the compiled code depends on (:func:`source_key`), so numba's disk cache can keep
+  what it compiles from it across processes and never hands back code compiled from other sources;
+* :func:`compiled_rows` runs a kernel over the rows of a batch, compiled: what
+  :meth:`KernelBlock.batched <ctrl_analysis.engine.kernels.KernelBlock.batched>` uses for a kernel
+  that branches per value (``Kernels(columns=False)``) on a large batch.
+
+Nothing here knows a block, a loop or a kernel's meaning; numba is imported only when used.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from pathlib import Path
+
+__all__ = ["cache_dir", "compiled_rows", "source_key"]
+
+_JIT: dict = {}
+
+
+def _jit(fn):
+    """``fn`` compiled by numba as a kernel (``inline="always"``, cached on disk next to its source when it has one), once per process."""
+    import numba
+
+    if fn not in _JIT:
+        try:
+            _JIT[fn] = numba.njit(cache=True, error_model="numpy", inline="always")(fn)
+        except RuntimeError:  # no file to cache against (a notebook cell, exec'd code): compile, don't cache
+            _JIT[fn] = numba.njit(cache=False, error_model="numpy", inline="always")(fn)
+    return _JIT[fn]
+
+
+def source_key(fn) -> str:
+    """What a compiled kernel depends on, as text: its source, and that of everything it reads by name.
+
+    The runner inlines each kernel and, through it, the helpers the kernel calls and the constants
+    it reads (``AT`` offsets of a :class:`~ctrl_analysis.engine.kernels.Layout`, module-level numbers,
+    ``@jitable`` functions, numba's own dispatchers): a change in any of them must give another
+    runner file, or numba's disk cache would hand back the runner compiled with the old ones. So
+    the key is the kernel's source followed by, for every global name its code (and the code of
+    functions nested in it) reads, that value's source if it is a function, recursively, or its
+    ``repr`` if it is a number, a string or a tuple of them; modules (``np``, ``math``) are keyed by
+    name only.
+
+    Parameters
+    ----------
+    fn : callable
+        A kernel (plain Python function, or a numba dispatcher of one).
+
+    Returns
+    -------
+    str
+    """
+    import inspect
+    import types
+
+    parts, seen = [], set()
+
+    def code_names(code):
+        names = list(code.co_names)
+        for c in code.co_consts:
+            if isinstance(c, types.CodeType):
+                names += code_names(c)
+        return names
+
+    def visit(f):
+        f = getattr(f, "py_func", f)  # a numba dispatcher: the Python function it compiles
+        if id(f) in seen:
+            return
+        seen.add(id(f))
+        try:
+            parts.append(inspect.getsource(f))
+        except (OSError, TypeError):  # source unavailable (a builtin, exec'd code): key on the identity
+            parts.append(repr(f))
+            return
+        code, env = getattr(f, "__code__", None), getattr(f, "__globals__", {})
+        if code is None:
+            return
+        for name in sorted(set(code_names(code))):
+            if name not in env:
+                continue  # a builtin or an attribute name
+            v = env[name]
+            if isinstance(v, types.ModuleType):
+                parts.append(f"{name}: module {v.__name__}")
+            elif isinstance(v, (int, float, complex, str, bool, tuple)) or v is None:
+                parts.append(f"{name} = {v!r}")
+            elif callable(v) and (inspect.isfunction(getattr(v, "py_func", v))):
+                parts.append(f"{name}:")
+                visit(v)
+            else:  # anything else (a class, an array): its type, so that a rename still changes the key
+                parts.append(f"{name}: {type(v).__module__}.{type(v).__qualname__}")
+
+    visit(fn)
+    return "\n".join(parts)
+
+
+def cache_dir() -> Path:
+    """Where generated code (loop runners, row appliers) and numba's cache of it live: ``$CTRL_ANALYSIS_CACHE`` or ``~/.cache``."""
+    base = os.environ.get("CTRL_ANALYSIS_CACHE") or os.path.join(
+        os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"), "ctrl_analysis")
+    return Path(base) / "kernels"
+
+
+def _runner_module(src: str, fns: dict, prefix: str = "loop", extra: str = ""):
+    """Import generated source from a file named by its hash, so numba can cache what it compiles from it.
+
+    The hash covers the source, ``extra`` (whatever else the compiled code depends on) and, for
+    every global ``fns`` will provide (set on the module by the caller), its :func:`source_key`.
+    """
+    import hashlib
+    import importlib.util
+
+    digest = hashlib.sha1(src.encode())
+    digest.update(extra.encode())
+    for name in sorted(fns):
+        digest.update(name.encode())
+        digest.update(source_key(fns[name]).encode())
+    d = cache_dir()
+    try:
+        d.mkdir(parents=True, exist_ok=True)
+    except OSError:  # read-only home: a per-user temporary directory still caches within the machine
+        import tempfile
+
+        d = Path(tempfile.gettempdir()) / f"ctrl_analysis-{os.getuid() if hasattr(os, 'getuid') else 0}" / "kernels"
+        d.mkdir(parents=True, exist_ok=True)
+    path = d / f"{prefix}_{digest.hexdigest()[:20]}.py"
+    if not path.exists():
+        tmp = path.with_suffix(f".{os.getpid()}.tmp")
+        tmp.write_text("import numpy as np\n\n\n" + src, encoding="utf-8")
+        os.replace(tmp, path)
+    spec = importlib.util.spec_from_file_location(f"_ctrl_analysis_{path.stem}", path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module  # numba's cache re-imports the module by name
+    spec.loader.exec_module(module)
+    return module
+
+
+_ROWS_SOURCE = """
+def rows(t, X, U, P, stride, Y):
+    for b in range(X.shape[0]):
+        FN(t, X[b], U[b], P[b * stride], Y[b])
+"""
+
+
+def compiled_rows(fn):
+    """``rows(t, X, U, P, stride, Y)``: kernel ``fn`` on each row ``b`` of a batch, compiled; ``None`` without numba.
+
+    ``X``, ``U``, ``Y`` are C-contiguous ``(B, .)`` float arrays, ``P`` the parameter rows, run
+    ``b`` reading row ``b * stride`` (``stride`` 0: one row shared by every run). The same
+    arithmetic as calling ``fn`` on each row from Python (the compiled engine inlines the same
+    compiled kernel), without the interpreter's cost per call. Compiled once per kernel and cached
+    on disk (:func:`_runner_module`); a kernel numba cannot compile gives ``None`` too, and the
+    caller keeps its Python loop.
+
+    Parameters
+    ----------
+    fn : callable
+        A kernel ``fn(t, x, u, p, out)``.
+
+    Returns
+    -------
+    callable or None
+    """
+    key = ("rows", fn)
+    if key not in _JIT:
+        try:
+            import numba
+        except ImportError:  # pragma: no cover - numba is a dependency
+            _JIT[key] = None
+            return None
+        module = _runner_module(_ROWS_SOURCE, {"FN": fn}, prefix="rows")
+        module.FN = _jit(fn)
+        rows = numba.njit(cache=True, error_model="numpy")(module.rows)
+        _JIT[key] = rows
+    return _JIT[key]
