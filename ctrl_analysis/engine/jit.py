@@ -99,7 +99,13 @@ def source_key(fn) -> str:
 
 
 def cache_dir() -> Path:
-    """Where generated code (loop runners, row appliers) and numba's cache of it live: ``$CTRL_ANALYSIS_CACHE`` or ``~/.cache``."""
+    """Where generated code (loop runners, row appliers) and numba's cache of it live.
+
+    Returns
+    -------
+    pathlib.Path
+        ``$CTRL_ANALYSIS_CACHE/kernels``, or ``ctrl_analysis/kernels`` under ``$XDG_CACHE_HOME`` (``~/.cache``).
+    """
     base = os.environ.get("CTRL_ANALYSIS_CACHE") or os.path.join(
         os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"), "ctrl_analysis")
     return Path(base) / "kernels"

@@ -47,6 +47,7 @@ from ctrl_analysis.controllers import differential_feedback as hodf
 from ctrl_analysis.controllers import fuzzy, golden_section, mfac, pd, pid
 from ctrl_analysis.engine import blocks, integrators, numpy_engine, plan, processes
 from ctrl_analysis.engine import codegen as _kernels
+from ctrl_analysis.engine import jit as engine_jit
 from ctrl_analysis.engine import kernels as engine_kernels
 from ctrl_analysis.engine import loop as loop_mod
 from ctrl_analysis.engine import params as engine_params
@@ -839,6 +840,9 @@ NOT_FUZZED = {
     engine_kernels.BlockKernel: "record of a block's kernel functions and parameters, checked by check_kernel_reads",
     engine_kernels.Kernels: "record of kernel functions, checked when the block runs (check_kernel_reads)",
     engine_kernels.copy_output: "per-step kernel, unchecked by design",
+    engine_jit.cache_dir: "takes no arguments (reads $CTRL_ANALYSIS_CACHE)",
+    engine_jit.compiled_rows: "engine plumbing: KernelBlock.batched gives it the block's own kernel",
+    engine_jit.source_key: "engine plumbing: the runner cache gives it the loop's kernels",
     pid.pid_output: "per-step kernel, unchecked by design",
     integrators.is_bad: "per-step divergence test, unchecked by design",
     numpy_engine.run_numpy: "internal half of Loop.simulate(engine='numpy'), whose arguments are fuzzed",
