@@ -30,6 +30,7 @@ from ..engine.kernels import (
     as_int,
     gather,
     jitable,
+    rows_compiled,
     scratch,
 )
 
@@ -388,16 +389,11 @@ class _FuzzyBlock(KernelBlock, DiscreteBlock):
     def _at_points(self, p, e, ec):
         """The output kernel with parameters ``p`` at the points ``(e[k], ec[k])``, flattened: compiled from
         ``_COMPILED_MIN`` points on (numba available), else on the points as the batch's columns; bit for bit alike."""
-        from ..engine.codegen import _jit, available
-
-        e, ec = np.asarray(e, dtype=float).reshape(-1), np.asarray(ec, dtype=float).reshape(-1)
-        if e.size < _COMPILED_MIN or not available():
-            return self.batched("output", 0.0, None, np.stack([e, ec], axis=1), p)[:, 0]
-        f, x, u, out = _jit(self.kernels.output), np.empty(0), np.empty(2), np.empty((e.size, 1))
-        for k in range(e.size):
-            u[0], u[1] = e[k], ec[k]
-            f(0.0, x, u, p, out[k])
-        return out[:, 0]
+        u = np.stack([np.asarray(e, dtype=float).reshape(-1), np.asarray(ec, dtype=float).reshape(-1)], axis=1)
+        out = np.empty((len(u), 1))
+        if len(u) >= _COMPILED_MIN and rows_compiled(self.kernels.output, 0.0, np.empty((len(u), 0)), u, p, out):
+            return out[:, 0]
+        return self.batched("output", 0.0, None, u, p)[:, 0]
 
 
 #: From this many points on, :meth:`_FuzzyBlock._at_points` (evaluate, infer, control_surface, lookup) runs

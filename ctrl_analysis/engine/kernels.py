@@ -370,11 +370,11 @@ class Kernels(NamedTuple):
 ROWS_COMPILED_MIN = 64
 
 
-def _compiled_rows(fn, t, x, u, P, out) -> bool:
+def rows_compiled(fn, t, x, u, P, out) -> bool:
     """Kernel ``fn`` on every row of the batch, compiled, into ``out``; ``False`` (nothing written) if it cannot be.
 
     The same arithmetic as the Python loop over the rows (the compiled engine inlines the same
-    compiled kernel; ``tests/lib/test_kernel_blocks.py`` holds the two equal bit for bit).
+    compiled kernel; ``tests/lib/test_kernel_blocks_controllers.py`` holds the two equal bit for bit).
     """
     from .jit import compiled_rows
 
@@ -440,7 +440,7 @@ class KernelBlock:
         if self.kernels.columns:
             fn(t, x.T, u.T, P if P.ndim == 1 else P.T, out.T)
             return out
-        if B >= ROWS_COMPILED_MIN and _compiled_rows(fn, t, x, u, P, out):
+        if B >= ROWS_COMPILED_MIN and rows_compiled(fn, t, x, u, P, out):
             return out
         for b in range(B):
             fn(t, x[b], u[b], P if P.ndim == 1 else P[b], out[b])
