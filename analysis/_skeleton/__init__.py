@@ -55,11 +55,11 @@ def run(ctx: StudyContext, params=None) -> StudyResult:
     fig = figures.plot_step(res.t, res["y"][:, 0], res["y_meas"][:, 0], res["y_hat"][:, 0], tau=p.tau)
     ctx.save_figure(result, fig, "fig1_step_response.png")
     ctx.progress("sensitivity: each reconstruction across its plausible range")
-    sens = sensitivity.sweep(evaluate, {"ex": p}, jobs=ctx.jobs, note="20 runs per evaluation, same seeds")
+    sens = sensitivity.explore(evaluate, {"ex": p}, jobs=ctx.jobs, **(sensitivity.QUICK if ctx.quick else {}),
+                               note="20 runs per evaluation, same seeds")
     sensitivity.apply(result, sens)
     ctx.save_figure(result, sensitivity.plot_sensitivity(result), "sensitivity.png",
-                    caption="How far each reconstruction moves the paper cells, and which claims flip, across its "
-                            "plausible range (one reconstruction at a time).")
+                    caption=sensitivity.caption(result, "20 runs per evaluation, same seeds"))
     return result
 
 

@@ -123,12 +123,10 @@ def run(ctx: StudyContext, params=None) -> StudyResult:
 
 def _sensitivity(ctx, result, p, r):
     """Sweep every plausible range one at a time (quick: :data:`QUICK_SWEEP` only) and mark the claims."""
-    sens = sensitivity.sweep(evaluate, {"": p, "claims": r, "run": SweepRun(ctx.seed)}, jobs=ctx.jobs,
-                             names=QUICK_SWEEP if ctx.quick else None,
-                             note=f"each evaluation: the three cases over {p.sweep_runs} runs of {p.t_end:g} s "
-                                  f"on the main run's first seeds (common random numbers)")
+    note = (f"each evaluation: the three cases over {p.sweep_runs} runs of {p.t_end:g} s on the main run's first "
+            "seeds (common random numbers)")
+    sens = sensitivity.explore(evaluate, {"": p, "claims": r, "run": SweepRun(ctx.seed)}, jobs=ctx.jobs,
+                               names=QUICK_SWEEP if ctx.quick else None, **(sensitivity.QUICK if ctx.quick else {}), note=note)
     sensitivity.apply(result, sens)
     ctx.save_figure(result, sensitivity.plot_sensitivity(result), "sensitivity.png",
-                    caption="Sensitivity of the verdicts: for each reconstruction (one at a time across its plausible "
-                            f"range, {p.sweep_runs} runs per evaluation), the largest change of the paper's one printed "
-                            "number (the control RMS without a filter) and which claims flip (orange).")
+                    caption=sensitivity.caption(result, note))

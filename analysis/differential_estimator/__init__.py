@@ -73,18 +73,14 @@ def _sensitivity(ctx, result, chosen, a_preset):
     evaluate = functools.partial(claims.evaluate, runs=runs, seed=ctx.seed, a_preset=a_preset,
                                  grid=None if not ctx.quick else {"sweep_b1": (1.0,), "sweep_b2": (2.0,),
                                                                   "sweep_b3": (1.0,)})
-    sens = sensitivity.sweep(evaluate, chosen, names=names, jobs=ctx.jobs,
-                             scheduler=ctx.scheduler,
-                             note=f"{runs} Monte Carlo runs per evaluation (the main run's first seeds); Example 2's "
-                                  f"robustness grid reduced to b1 ∈ {claims.EVAL_GRID['sweep_b1']}, b2 ∈ "
-                                  f"{claims.EVAL_GRID['sweep_b2']}, b3 ∈ {claims.EVAL_GRID['sweep_b3']}, the stable "
-                                  f"preset's a fixed at {a_preset:g}")
+    note = (f"{runs} Monte Carlo runs per evaluation (the main run's first seeds); Example 2's robustness grid "
+            f"reduced to b1 ∈ {claims.EVAL_GRID['sweep_b1']}, b2 ∈ {claims.EVAL_GRID['sweep_b2']}, b3 ∈ "
+            f"{claims.EVAL_GRID['sweep_b3']}, the stable preset's a fixed at {a_preset:g}")
+    sens = sensitivity.explore(evaluate, chosen, names=names, jobs=ctx.jobs, scheduler=ctx.scheduler,
+                               **(sensitivity.QUICK if ctx.quick else {}), note=note)
     sensitivity.apply(result, sens)
     ctx.save_figure(result, sensitivity.plot_sensitivity(result), "sensitivity.png",
-                    caption="Sensitivity of the verdicts: for each reconstruction (a value the paper does not print), "
-                            "left the largest change of a printed paper cell across its plausible range (red where a "
-                            "cell's verdict flips), right which claims flip (orange) or stay (green), one "
-                            "reconstruction at a time.")
+                    caption=sensitivity.caption(result, note))
 
 
 def _linear(ctx, result, lin):

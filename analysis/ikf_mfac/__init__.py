@@ -121,8 +121,8 @@ def _sensitivity(ctx, result, seeds, chosen) -> None:
                     SWEEPS["ex1"]["noise"], SWEEPS["ex2"]["noise"])
     names = ("ex1.Q", "ex2.rearm") if ctx.quick else None
     ctx.progress("ikf-mfac: sensitivity of the claims and cells to every reconstruction")
-    sens = sensitivity.sweep(evaluate, {**chosen, "mc": mc}, names=names, jobs=ctx.jobs,
-                             scheduler=ctx.scheduler,
+    sens = sensitivity.explore(evaluate, {**chosen, "mc": mc}, names=names, jobs=ctx.jobs,
+                               scheduler=ctx.scheduler, **(sensitivity.QUICK if ctx.quick else {}),
                              note=f"each evaluation: Table 1's cells on the first {len(mc.table)} recorded seeds, "
                                   f"{len(mc.noise)} runs per noise level, {len(mc.fig2)} runs per Fig. 2 R"
                                   + (" (--quick: two reconstructions only)" if ctx.quick else ""))
@@ -194,7 +194,4 @@ def _figures(ctx, result, chosen, all_runs, per_run, sweeps, ratio, seeds, fig2_
                        "advantage depends on the tuning; a mean over at least 80 % of the runs is a filled point, over "
                        "50-80 % a hollow annotated one, at least half diverged is left out; counts in the panel titles.")
     ctx.save_figure(result, sensitivity.plot_sensitivity(result), "sensitivity.png", dpi=dpi,
-                    caption="Sensitivity of Table 1's cells and of the paper's claims to each reconstruction, one at "
-                            "a time across its plausible range (results.json 'sensitivity' says how many runs each "
-                            "evaluation used): left, the largest change of a paper cell (red: some cell's verdict "
-                            "flips); right, the claims whose verdict flips (orange) or holds (green) across the range.")
+                    caption=sensitivity.caption(result, result.sensitivity.get("note", "")))

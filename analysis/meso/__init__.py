@@ -102,16 +102,12 @@ def _sensitivity(ctx, result, sims, an, sweep_seeds, horizons) -> None:
     params = {"": PAPER, "claims": READINGS,
               "sweep": claims.SweepSettings(sweep_seeds, tuple(horizons.items()), an)}
     names = None if not ctx.quick else [n for n in _varied() if n != "integrator"]
-    sens = sensitivity.sweep(claims.evaluate, params, names=names, note=(
-        f"{len(sweep_seeds)} noise runs per evaluation (the main run's first seeds, common random numbers) and the "
-        "noise-free runs; each reconstruction varied alone" + (" (quick: the Euler integrator not tried)" if names
-                                                               else "")))
+    note = (f"{len(sweep_seeds)} noise runs per evaluation (the main run's first seeds, common random numbers) and "
+            "the noise-free runs" + (" (quick: the Euler integrator not tried)" if names else ""))
+    sens = sensitivity.explore(claims.evaluate, params, names=names, **(sensitivity.QUICK if ctx.quick else {}), note=note)
     sensitivity.apply(result, sens)
     ctx.save_figure(result, sensitivity.plot_sensitivity(result), "sensitivity.png",
-                    caption="Sensitivity of the verdicts to each reconstruction, varied alone across its plausible "
-                            "range (results.json `reconstructions[*].plausible`): left, the largest change of a "
-                            "Table 2/3 cell (primary reading, noise on, the sweep's runs) and how many cells' "
-                            "verdicts flip; right, which claims keep (green) or flip (orange) their verdict.")
+                    caption=sensitivity.caption(result, note))
 
 
 def _varied() -> list:

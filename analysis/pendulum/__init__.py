@@ -83,16 +83,15 @@ def run(ctx: StudyContext, params=None) -> StudyResult:
 
     n = SWEEP_RUNS_QUICK if ctx.quick else SWEEP_RUNS
     ctx.progress("sensitivity sweep over every reconstruction's plausible range")
-    sens = sensitivity.sweep(functools.partial(evaluate, seeds=tuple(seeds[:n])),
-                             {"verify": P, "loop": dataclasses.replace(L, runs=n)},
-                             names=QUICK_SWEEP if ctx.quick else None, jobs=1 if ctx.quick else ctx.jobs,
-                             note=f"each evaluation: both regimes, {n} Monte Carlo runs on the first seeds of the main "
-                                  "run (common random numbers), the §4 gain cells recomputed")
+    note = (f"each evaluation: both regimes, {n} Monte Carlo runs on the first seeds of the main run (common random "
+            "numbers), the §4 gain cells recomputed")
+    sens = sensitivity.explore(functools.partial(evaluate, seeds=tuple(seeds[:n])),
+                               {"verify": P, "loop": dataclasses.replace(L, runs=n)},
+                               names=QUICK_SWEEP if ctx.quick else None, jobs=1 if ctx.quick else ctx.jobs,
+                               **(sensitivity.QUICK if ctx.quick else {}), note=note)
     sensitivity.apply(result, sens)
     ctx.save_figure(result, sensitivity.plot_sensitivity(result), "sensitivity.png",
-                    caption="Sensitivity of the verdicts to each reconstruction, one at a time across its plausible "
-                            f"range ({n} Monte Carlo runs per evaluation): left, the largest change of a paper cell; "
-                            "right, which claim's verdict flips (orange) or holds (green) across the range.")
+                    caption=sensitivity.caption(result, note))
     return result
 
 

@@ -20,8 +20,12 @@ def _check(results) -> None:
     check_results("results", results)
 
 
+def _paper_claims(results: dict) -> list:
+    return [c for c in results.get("claims") or [] if not c.get("beyond")]
+
+
 def claim_counts(results: dict) -> dict:
-    """``{verdict: n}`` over the study's judged claims (holds, fails, depends, untestable).
+    """``{verdict: n}`` over the study's judged claims of the paper (not the project's own tests beyond it).
 
     Parameters
     ----------
@@ -31,28 +35,96 @@ def claim_counts(results: dict) -> dict:
     Returns
     -------
     dict
+        ``holds``, ``fails``, ``depends``, ``untestable``, and ``beyond`` (the project's own tests) and
+        ``one_algorithm`` (paper claims whose verdict differs between the printed and the corrected algorithm).
     """
     _check(results)
     counts = dict.fromkeys(CLAIM_MARK, 0)
-    for c in results.get("claims") or []:
+    for c in _paper_claims(results):
         counts[c["verdict"]] = counts.get(c["verdict"], 0) + 1
+    counts["beyond"] = sum(bool(c.get("beyond")) for c in results.get("claims") or [])
+    counts["one_algorithm"] = sum(_algorithm_text(c) != "" for c in _paper_claims(results))
     return counts
 
 
-def _depends_text(c: dict) -> str:
+def _pct(x) -> str:
+    return "—" if x is None else f"{100 * x:.0f} %"
+
+
+def _support_text(c: dict) -> str:
+    s = c.get("support")
+    if not s:
+        return "not explored"
+    if s.get("holds") is None:
+        return f"untestable at all {s.get('untestable', 0)} points"
+    text = f"{_pct(s['holds'])} ± {100 * (s.get('stderr') or 0):.0f} % of {s['samples']} points"
+    if s.get("untestable"):
+        text += f" ({s['untestable']} untestable)"
+    return text
+
+
+def _algorithm_text(c: dict) -> str:
+    """'holds only with the corrected algorithm (printed: fails, 0 %)' where the two algorithms disagree."""
+    by = c.get("by_algorithm") or {}
+    if len(by) != 2:
+        return ""
+    verdicts = {a: v["verdict"] for a, v in by.items()}
+    if len(set(verdicts.values())) == 1:
+        return ""
+    for a, v in verdicts.items():
+        other = "printed" if a == "corrected" else "corrected"
+        if v == "holds" and verdicts[other] != "holds":
+            return (f"holds only with the {a} algorithm ({other}: {verdicts[other]}, "
+                    f"{_pct(by[other]['support']['holds'])})")
+    parts = [f"{a}: {v} ({_pct(by[a]['support']['holds'])})" for a, v in verdicts.items()]
+    return "differs between the algorithms — " + ", ".join(parts)
+
+
+def _rests_on(c: dict, labels: dict, max_evidence: int) -> str:
     parts = []
-    for d in c.get("depends_on") or []:
-        there = sorted(set(d.get("verdict_there") or []))
-        parts.append(f"`{d['reconstruction']}` (chosen {_short(d['chosen'])}): {'/'.join(there) or 'flips'} at "
-                     f"{', '.join(_short(v) for v in d['flips_at'])}")
-    return "; ".join(parts)
+    drivers = [d for d in c.get("drivers") or [] if d["S1"] >= 0.05]
+    if drivers:
+        parts.append("driven by " + ", ".join(f"`{d['reconstruction']}` (S1 {d['S1']:.2f})" for d in drivers[:3]))
+    flip = c.get("nearest_flip")
+    if flip:
+        where = ", ".join(f"`{k}` = {_short(v)}" for k, v in list(flip["point"].items())[:4]) or "the chosen values"
+        parts.append(f"nearest flip ({flip['verdict_there']}) at {where}")
+    elif c.get("support") and c["support"].get("holds") is not None and c["verdict"] in ("holds", "fails"):
+        parts.append("no flip anywhere in the box" if c["support"]["holds"] in (0, 1) else "")
+    ev = [labels.get(e, e) for e in c.get("evidence") or []]
+    if ev:
+        parts.append("on " + "; ".join(ev[:max_evidence]) + (f"; and {len(ev) - max_evidence} more"
+                                                              if len(ev) > max_evidence else ""))
+    return " — ".join(p for p in parts if p)
+
+
+def _claim_rows(results: dict, claims: list, max_evidence: int, links: dict | None) -> list[str]:
+    labels = {q["id"]: q["label"] for q in results["quantities"]}
+    rows = ["| claim | where | verdict | support over the box | what it rests on |", "|---|---|---|---|---|"]
+    for c in claims:
+        verdict = CLAIM_MARK.get(c["verdict"], c["verdict"])
+        if c["verdict"] != c["base_verdict"]:
+            verdict += f" ({c['base_verdict']} at the chosen values)"
+        alg = _algorithm_text(c)
+        if alg:
+            verdict += f"; {alg}"
+        rests = _rests_on(c, labels, max_evidence)
+        if c["verdict"] == "untestable" and c.get("note"):
+            rests = c["note"] + (f" — {rests}" if rests else "")
+        extra = (links or {}).get(f"{results['study']}/{c['id']}")
+        if extra:
+            rests = f"{rests} — {extra}" if rests else extra
+        rows.append(f"| {_cell(c['statement'])} | {_cell(c['section'])} | {verdict} | {_support_text(c)} "
+                    f"| {_cell(rests) or '—'} |")
+    return rows
 
 
 def scorecard(results: dict, max_evidence: int = 3, links: dict | None = None) -> list[str]:
-    """The study's claims: statement, section, verdict, and what the verdict rests on.
+    """The paper's claims judged over the plausible box, then the project's own tests beyond the paper.
 
-    A ``depends`` verdict names its base verdict (at the chosen reconstructions) and each reconstruction
-    that flips it, with the values where it flips; otherwise the quantities that decide it (by label).
+    Each row: statement, section, verdict (with the verdict at the chosen values where it differs, and the
+    algorithm under which it holds where the printed and the corrected algorithm disagree), the support
+    over the box, and what it rests on (the driving reconstructions, the nearest flip, the quantities).
 
     Parameters
     ----------
@@ -73,26 +145,17 @@ def scorecard(results: dict, max_evidence: int = 3, links: dict | None = None) -
     claims = results.get("claims") or []
     if not claims:
         return []
-    labels = {q["id"]: q["label"] for q in results["quantities"]}
-    lines = ["**The paper's claims** (verdict at the chosen reconstructions; *depends*: flips inside a plausible "
-             "range):", "", "| claim | where | verdict | rests on |", "|---|---|---|---|"]
-    for c in claims:
-        verdict = CLAIM_MARK.get(c["verdict"], c["verdict"])
-        if c["verdict"] == "depends":
-            verdict += f" ({c['base_verdict']} as chosen)"
-            rests = _depends_text(c)
-        else:
-            ev = [labels.get(e, e) for e in c.get("evidence") or []]
-            rests = "; ".join(ev[:max_evidence]) + (f"; and {len(ev) - max_evidence} more" if len(ev) > max_evidence
-                                                    else "")
-            robust = c.get("robust_to") or []
-            if robust and c["verdict"] in ("holds", "fails"):
-                rests += f" — robust to {len(robust)} reconstruction{'s' if len(robust) != 1 else ''}"
-        extra = (links or {}).get(f"{results['study']}/{c['id']}")
-        if extra:
-            rests = f"{rests} — {extra}" if rests else extra
-        lines.append(f"| {_cell(c['statement'])} | {_cell(c['section'])} | {verdict} | {_cell(rests) or '—'} |")
-    return lines + [""]
+    paper = [c for c in claims if not c.get("beyond")]
+    beyond = [c for c in claims if c.get("beyond")]
+    lines = []
+    if paper:
+        lines += ["**The paper's claims**, each judged over the plausible box (support: the share of the box where "
+                  "it holds; the policy's thresholds decide the verdict):", ""]
+        lines += _claim_rows(results, paper, max_evidence, links) + [""]
+    if beyond:
+        lines += ["**Beyond the paper** — the project's own tests, not claims of the paper (not counted above):", ""]
+        lines += _claim_rows(results, beyond, max_evidence, links) + [""]
+    return lines
 
 
 def checks_and_errata(results: dict) -> list[str]:
@@ -125,7 +188,7 @@ def checks_and_errata(results: dict) -> list[str]:
 
 
 def sensitivity_lines(results: dict) -> list[str]:
-    """What the sensitivity sweep tried and which reconstructions flip a claim or a paper cell's verdict.
+    """How the plausible box was explored, what drives the verdicts, and where the printed cells are reached.
 
     Parameters
     ----------
@@ -135,39 +198,54 @@ def sensitivity_lines(results: dict) -> list[str]:
     Returns
     -------
     list of str
-        Markdown lines (empty when the study ran no sweep).
+        Markdown lines (empty when the study explored no box).
     """
     _check(results)
     sens = results.get("sensitivity") or {}
     if not sens:
         return []
     ranges = sens.get("ranges") or {}
-    claim_flips: dict = {}
+    alg = sens.get("algorithm")
+    lines = ["### The plausible box", "",
+             f"{sens.get('samples', 0)} quasi-random points (scrambled Sobol') of the box spanned by "
+             f"{len(ranges)} reconstructions, all varied jointly"
+             + (f", under the paper's printed and the corrected algorithm (`{'`, `'.join(alg['fields'])}`)"
+                if alg else "")
+             + f"; {sens.get('evaluations', 0)} evaluations in all with the bisections and the cell search"
+             + (f"; each evaluation: {sens['note']}" if sens.get("note") else "") + ".", ""]
+    drives: dict = {}
     for c in results.get("claims") or []:
-        for d in c.get("depends_on") or []:
-            claim_flips.setdefault(d["reconstruction"], []).append(f"“{c['statement']}”")
-    cell_flips: dict = {}
-    for q in results["quantities"]:
-        for name, s in ((q.get("sensitivity") or {}).get("by") or {}).items():
-            if s.get("verdict_flips_at"):
-                cell_flips.setdefault(name, []).append(q["label"])
-    lines = ["### Sensitivity to the reconstructions", "",
-             f"{sens.get('evaluations', 0)} evaluations, each reconstruction varied alone across its plausible "
-             f"range ({len(ranges)} varied){'; ' + sens['note'] if sens.get('note') else ''}.", ""]
+        for d in c.get("drivers") or []:
+            if d["S1"] >= 0.1:
+                drives.setdefault(d["reconstruction"], []).append(f"“{c['id']}” ({d['S1']:.2f})")
     for name in ranges:
-        if name in claim_flips or name in cell_flips:
-            what = []
-            if name in claim_flips:
-                what.append(f"flips the claim{'s' if len(claim_flips[name]) > 1 else ''} "
-                            + "; ".join(claim_flips[name]))
-            if name in cell_flips:
-                n = len(cell_flips[name])
-                what.append(f"flips the verdict of {n} paper cell{'s' if n > 1 else ''}"
-                            + (f" ({'; '.join(cell_flips[name][:3])}{'; …' if n > 3 else ''})"))
-            lines.append(f"- `{name}` ({plausible_text(ranges[name])}): {'; '.join(what)}")
-    robust = [n for n in ranges if n not in claim_flips and n not in cell_flips]
-    if robust:
-        lines.append(f"- No claim or cell verdict flips across the ranges of: {', '.join(f'`{n}`' for n in robust)}")
+        if name in drives:
+            lines.append(f"- `{name}` ({plausible_text(ranges[name])}) drives " + "; ".join(drives[name]))
+    quiet = [n for n in ranges if n not in drives]
+    if quiet:
+        lines.append(f"- No claim's verdict has a first-order Sobol' index of 0.1 or more on: "
+                     f"{', '.join(f'`{n}`' for n in quiet)}")
+    reached = [q for q in results["quantities"] if q.get("verdict") == "reachable"]
+    if reached:
+        lines += ["", "Printed cells outside their band at the chosen values but reached inside the box:", ""]
+        for q in reached:
+            b = q["box"]
+            where = ", ".join(f"`{k}` = {_short(v)}" for k, v in (b.get("reached_at") or {}).items()) or "the chosen values"
+            how = {"sample": "a sample", "bisection": "bisection between samples on either side",
+                   "search": "the local search"}.get(b.get("how"), b.get("how"))
+            lines.append(f"- {_cell(q['label'])}: at {where}" + (f" ({b['algorithm']} algorithm)" if b.get("algorithm")
+                                                                 else "") + f", found by {how}")
+    far = [q for q in results["quantities"] if q.get("verdict") == "differs" and q.get("box")]
+    if far:
+        lines += ["", "Printed cells no plausible point reaches (closest point found):", ""]
+        for q in far:
+            b = q["box"]
+            close = b.get("closest") or {}
+            where = ", ".join(f"`{k}` = {_short(v)}" for k, v in (close.get("point") or {}).items()) or "the chosen values"
+            rng = b.get("range")
+            lines.append(f"- {_cell(q['label'])}: paper {_short(q['paper'])}"
+                         + (f", box range {_short(rng[0])} … {_short(rng[1])}" if rng else "")
+                         + (f"; closest {_short(close.get('value'))} at {where}" if close else ""))
     return lines + [""]
 
 
@@ -187,6 +265,8 @@ def plausible_text(p: dict | None) -> str:
         raise TypeError(f"p must be a plausible-range dict or None, got {type(p).__name__}")
     if not p:
         return "no plausible range stated"
+    if p.get("axis") == "algorithm":
+        return f"algorithm axis: printed {_short(p['printed'])}, corrected {_short(p['corrected'])}"
     if "options" in p:
         return "one of " + ", ".join(_short(v) for v in p["options"])
     if p.get("fixed"):

@@ -8,10 +8,13 @@ __all__ = ["GLOSSARY", "glossary_lines"]
 
 #: Terms the report uses; a term is listed when it occurs in the report.
 GLOSSARY = {
-    "agrees / differs": "the reproduced value agrees with / differs from the paper's under the verdict policy: "
-                        "inside / outside the central 95 % of the Monte Carlo runs for a number from one noisy "
-                        "simulation, within / outside the relative tolerance shown (|value − paper| / |paper|, "
-                        "element-wise maximum for vectors) for a deterministic one.",
+    "agrees / differs": "the paper's value lies inside / outside the reproduced band: the central 95 % of the Monte "
+                        "Carlo runs for a number from one noisy simulation, half a unit of the last printed digit "
+                        "(the relative tolerance shown; |value − paper| / |paper|, element-wise maximum for vectors) "
+                        "for a deterministic one. *Differs* means no point of the plausible box reaches it.",
+    "reachable": "the paper's value lies outside the band at the chosen reconstructions but inside it at some other "
+                 "point of the plausible box (the point is recorded): the paper's number is consistent with a value "
+                 "it does not print.",
     "new": "a quantity the paper does not print (a sweep, an ablation, a claim put into numbers).",
     "diverged": "at least half the runs of that quantity diverged (a state left the divergence bound); the "
                 "count is shown.",
@@ -21,12 +24,24 @@ GLOSSARY = {
                           "text from its PDF; reproduced without a verdict.",
     "check": "an algebraic identity or a check of the paper's own arithmetic, listed apart from the reproduced "
              "cells and never counted as a reproduction.",
-    "claim": "a statement the paper makes (a comparison, a ranking, a property), judged on computed quantities: "
-             "holds, fails, untestable, or depends (its verdict flips inside the plausible range of a "
-             "reconstruction).",
-    "plausible range": "the values of a reconstruction a reader of the paper could reasonably have chosen; the "
-                       "sensitivity sweep re-evaluates every claim and paper cell across it, one reconstruction "
-                       "at a time.",
+    "claim": "a statement the paper makes (a comparison, a ranking, a property), judged on computed quantities "
+             "over the plausible box: holds, fails, depends (its support lies between the policy's thresholds), "
+             "or untestable (the measure is below its own noise floor, or the method cannot run as printed).",
+    "support": "the share of the plausible box (quasi-random samples, all reconstructions varied jointly) where a "
+               "claim holds, with its binomial standard error.",
+    "plausible box": "the product of the plausible ranges of a study's reconstructions, printed values fixed; "
+                     "every claim and printed cell is judged over it.",
+    "Sobol' index": "first-order variance-based sensitivity index: the share of the variance of a claim's verdict "
+                    "(1 holds, 0 fails) over the box explained by one reconstruction alone (SALib's RBD-FAST on "
+                    "the box sample).",
+    "nearest flip": "the point of the plausible box nearest the chosen values where a claim's verdict changes, "
+                    "located by bisection between the chosen point and the nearest sample of the other verdict.",
+    "algorithm axis": "the paper's printed algorithm against the project's correction of it; each claim is "
+                      "judged under both, and the scorecard says when it holds only with one.",
+    "beyond the paper": "a test the project adds (e.g. a tuning-fair comparison the paper never made), judged like "
+                        "a claim but not counted among the paper's.",
+    "plausible range": "the values of a reconstruction a reader of the paper could reasonably have chosen; "
+                       "together they span the plausible box.",
     "paper text": "the text extracted from the paper's PDF (shared/seeds/), from which the study was built.",
     "paper cell": "one number printed in the paper (a table entry or a value in the text). A cell may be "
                   "reproduced under several readings; the headline counts score it once, by its primary reading.",

@@ -37,7 +37,7 @@ __all__ = ["GLOSSARY", "MAX_LIST", "not_reproduced", "overview_table", "summary_
 #: Longest evidence text before it is cut (the full evidence stays in results.json).
 MAX_EVIDENCE = 700
 #: Marks of the verdicts in the side-by-side tables.
-MARK = {"agrees": "✓", "differs": "✗", "diverged": "diverged", "new": ""}
+MARK = {"agrees": "✓", "reachable": "≈", "differs": "✗", "diverged": "diverged", "new": ""}
 
 def _digits(q: dict) -> int:
     """Significant digits that show a difference the tolerance can resolve (4, or 6 for tight tolerances)."""
@@ -140,8 +140,9 @@ def tally(results: dict) -> dict:
     Returns
     -------
     dict
-        ``agrees``, ``differs``, ``diverged``, ``printed``, ``lost``, ``new``, ``new_diverged``, ``checks``
-        (checks are never counted as cells or new quantities).
+        ``agrees``, ``reachable``, ``differs``, ``diverged``, ``printed``, ``lost``, ``new``, ``new_diverged``,
+        ``checks``, ``errata`` and ``findings`` (findings without the errata; checks and errata are never counted
+        as cells, new quantities or findings).
 
     Raises
     ------
@@ -153,10 +154,12 @@ def tally(results: dict) -> dict:
     printed = [q for q in scored.values() if q["paper"] is not None]
     new = [q for q in results["quantities"] if q.get("cell") is None and q["paper"] is None
            and q.get("kind") != "check"]
-    out = {v: sum(q["verdict"] == v for q in printed) for v in ("agrees", "differs", "diverged")}
+    out = {v: sum(q["verdict"] == v for q in printed) for v in ("agrees", "reachable", "differs", "diverged")}
     out.update(printed=len(printed), lost=len(scored) - len(printed), new=len(new),
                new_diverged=sum(q["verdict"] == "diverged" for q in new),
-               checks=sum(q.get("kind") == "check" for q in results["quantities"]))
+               checks=sum(q.get("kind") == "check" for q in results["quantities"]),
+               errata=sum(f.get("kind") == "erratum" for f in results.get("findings") or []),
+               findings=sum(f.get("kind") != "erratum" for f in results.get("findings") or []))
     return out
 
 
@@ -209,8 +212,9 @@ def paper_tables(results: dict) -> list[str]:
     lines = []
     for name, g in grids.items():
         cols = list(g["cols"])
-        lines += [f"**{name}** (paper | reproduced; ✓ agrees, ✗ differs under the verdict policy; p = the paper "
-                  "value's percentile among the Monte Carlo runs, else the relative error):", "",
+        lines += [f"**{name}** (paper | reproduced; ✓ agrees, ≈ reachable inside the plausible box, ✗ differs "
+                  "under the verdict policy; p = the paper value's percentile among the Monte Carlo runs, else the "
+                  "relative error):", "",
                   "| | " + " | ".join(f"{_cell(c)} (paper) | {_cell(c)} (here)" for c in cols) + " |",
                   "|---|" + "---|---|" * len(cols)]
         for row, entries in g["rows"].items():
@@ -279,6 +283,7 @@ def study_summary(results: dict, n_findings: int = 3) -> list[str]:
     lost, n_printed, n_agree = t["lost"], t["printed"], t["agrees"]
     line1 = (f"**Agrees:** {n_agree} of {n_printed} printed paper cells under the verdict policy"
              + (f" ({'; '.join(agree)})" if agree else "")
+             + (f"; {t['reachable']} more are reachable inside the plausible box" if t["reachable"] else "")
              + (f"; {lost} cells whose printed values were lost in extraction are reproduced without verdict"
                 if lost else "") + ".")
     bad = [(c, q) for c, q in scored.items() if q["verdict"] in ("differs", "diverged")]
@@ -292,7 +297,8 @@ def study_summary(results: dict, n_findings: int = 3) -> list[str]:
             parts.append(f"{c} ({_fmt(q['value'], digits=_digits(q))} vs {_fmt(q['paper'], digits=_digits(q))}{pct})")
     if len(bad) > 6:
         parts.append(f"and {len(bad) - 6} more")
-    line2 = "**Does not agree:** " + ("; ".join(parts) if parts else "no printed cell differs") + "."
+    line2 = ("**Differs (no plausible point reaches it):** " + ("; ".join(parts) if parts else "no printed cell")
+             + ".")
     findings = results.get("findings") or []
     findings = [f for f in findings if f.get("kind") != "erratum"]
     quoted = " ".join(_first_sentence(f["text"]).rstrip(".") + "." for f in findings[:n_findings])
@@ -330,8 +336,9 @@ def overview_table(results: list[dict], this_run: dict) -> list[str]:
     if not isinstance(this_run, dict):
         raise TypeError(f"this_run must be a dict of study -> run settings, got {type(this_run).__name__}")
     rows = [("| study | paper | from this run | claims hold | claims fail | claims depend | claims untestable "
-             "| cells agree | cells differ | cells diverged | cells lost in extraction | checks | new quantities "
-             "| findings | figures |"), "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+             "| beyond the paper | cells agree | cells reachable | cells differ | cells diverged "
+             "| cells lost in extraction | checks, errata | new quantities | findings | figures |"),
+            "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in results:
         c = tally(r)
         k = claim_counts(r)
@@ -339,9 +346,9 @@ def overview_table(results: list[dict], this_run: dict) -> list[str]:
         fresh = "no (stale)" if run is None else ("yes (quick)" if run.get("quick") else "yes")
         new = f"{c['new']}" + (f" ({c['new_diverged']} diverged)" if c["new_diverged"] else "")
         rows.append(f"| [{r['study']}](#{_anchor(r['study'])}) | {_cell(r['paper'])} | {fresh} | {k['holds']} "
-                    f"| {k['fails']} | {k['depends']} | {k['untestable']} | {c['agrees']} | {c['differs']} "
-                    f"| {c['diverged']} | {c['lost']} | {c['checks']} | {new} | {len(r.get('findings') or [])} "
-                    f"| {len(r.get('figures') or [])} |")
+                    f"| {k['fails']} | {k['depends']} | {k['untestable']} | {k['beyond']} | {c['agrees']} "
+                    f"| {c['reachable']} | {c['differs']} | {c['diverged']} | {c['lost']} "
+                    f"| {c['checks']}, {c['errata']} | {new} | {c['findings']} | {len(r.get('figures') or [])} |")
     return rows
 
 
@@ -415,9 +422,10 @@ def _study_section(r: dict, this_run: dict, failed: dict, claim_links: dict | No
         lines += [f"> **Stale:** these results are not from this run; they were written by an earlier run.{why}", ""]
     lines += [f"*{r['paper']}* — paper text `{r['seed_file']}`.", ""]
     lines += scorecard(r, links=claim_links)
-    lines += [f"Paper cells: {c['agrees']} agree, {c['differs']} differ, {c['diverged']} diverged"
+    lines += [f"Paper cells: {c['agrees']} agree, {c['reachable']} reachable inside the plausible box, "
+              f"{c['differs']} differ, {c['diverged']} diverged"
               + (f", {c['lost']} lost in extraction" if c["lost"] else "")
-              + (f"; {c['checks']} checks and errata apart" if c["checks"] else "")
+              + (f"; {c['checks']} checks and {c['errata']} errata apart" if c["checks"] or c["errata"] else "")
               + f"; {c['new']} new quantities" + (f" ({c['new_diverged']} diverged)" if c["new_diverged"] else "")
               + f"; runtime {r['runtime_s']:.1f} s.", ""]
     if r["quantities"]:
@@ -425,9 +433,9 @@ def _study_section(r: dict, this_run: dict, failed: dict, claim_links: dict | No
     missing = not_reproduced(r)
     if missing:
         n_cells = len(missing) - len(r.get("missing") or [])
-        lines += [f"**Not reproduced ({len(missing)}: {n_cells} printed cell{'s' if n_cells != 1 else ''} outside the "
-                  f"verdict policy, {len(missing) - n_cells} part{'s' if len(missing) - n_cells != 1 else ''} of the "
-                  "paper):**", ""]
+        lines += [f"**Not reproduced ({len(missing)}: {n_cells} printed cell{'s' if n_cells != 1 else ''} that "
+                  f"differ{'' if n_cells != 1 else 's'} or diverged, {len(missing) - n_cells} "
+                  f"part{'s' if len(missing) - n_cells != 1 else ''} of the paper):**", ""]
         lines += [f"{i}. {_cell(_shorten_lists(m))}" for i, m in enumerate(missing, 1)] + [""]
     tables = paper_tables(r)
     if tables:

@@ -30,6 +30,7 @@ from .results import (  # noqa: F401 (public API)
     relative_error,
     versions,
 )
+from .verdicts import claim_verdict
 
 __all__ = [
     "Quantity",
@@ -211,7 +212,7 @@ def validate_results(data: dict) -> dict:
     verdict recomputed from the record, ``paper`` None for ``new``, ``value`` None for ``diverged``;
     ids are unique and a paper cell has at most one primary quantity; ``captions``, when present, map
     figures of the study to non-empty strings; ``claims``, when present, have a verdict in
-    :data:`CLAIM_VERDICTS` that follows from their base verdict and ``depends_on``, and cite recorded
+    :data:`CLAIM_VERDICTS` that follows from their base verdict and ``support`` (the policy's thresholds), and cite recorded
     quantities. Verdicts are recomputed under the stated policy (``percentile`` from ``interval``,
     ``derived`` from the quantity named by ``derived_from``, else ``tolerance``).
 
@@ -273,6 +274,8 @@ def validate_results(data: dict) -> dict:
         else:
             recomputed = compute_verdict(q["value"], q["paper"], tol, diverged=diverged,
                                          interval=q.get("interval") if q.get("policy") == "percentile" else None)
+            if recomputed == "differs" and (q.get("box") or {}).get("verdict") == "reachable":
+                recomputed = "reachable"
         if recomputed != verdict:
             raise ValueError(f"{where}: verdict {verdict!r} does not follow from value, paper and the "
                              f"{q.get('policy') or 'tolerance'} policy ({recomputed!r})")
@@ -294,7 +297,7 @@ def validate_results(data: dict) -> dict:
 
 
 def _validate_claims(study: str, claims, ids: set) -> None:
-    """The ``claims`` list: keys, verdicts that follow from base verdict and ``depends_on``, cited ids recorded."""
+    """The ``claims`` list: keys, verdicts that follow from base verdict and support, cited ids recorded."""
     if not isinstance(claims, list):
         raise ValueError(f"{study}: claims must be a list")
     seen = set()
@@ -307,10 +310,13 @@ def _validate_claims(study: str, claims, ids: set) -> None:
         seen.add(c["id"])
         if c["verdict"] not in CLAIM_VERDICTS or c["base_verdict"] not in ("holds", "fails", "untestable"):
             raise ValueError(f"{where}: verdict must be one of {list(CLAIM_VERDICTS)}, got {c['verdict']!r}")
-        expected = "depends" if c["depends_on"] and c["base_verdict"] != "untestable" else c["base_verdict"]
+        support = c.get("support")
+        if support is not None and not (isinstance(support, dict) and "holds" in support):
+            raise ValueError(f"{where}: support must be a dict with 'holds', got {support!r}")
+        expected = claim_verdict((support or {}).get("holds"), c["base_verdict"])
         if c["verdict"] != expected:
             raise ValueError(f"{where}: verdict {c['verdict']!r} does not follow from base verdict "
-                             f"{c['base_verdict']!r} and depends_on ({expected!r})")
+                             f"{c['base_verdict']!r} and support {(support or {}).get('holds')!r} ({expected!r})")
         unknown = [e for e in c["evidence"] if e not in ids]
         if unknown:
             raise ValueError(f"{where} cites quantities that are not recorded: {unknown}")

@@ -10,18 +10,14 @@ from __future__ import annotations
 import math
 import platform
 from dataclasses import dataclass, field
-from pathlib import Path
 
-import numpy as np
 
 from .._validate import (
-    check_array,
-    check_bool,
     check_in,
-    check_int,
     check_nonnegative,
     check_str,
 )
+from .quantity import Quantity, _to_jsonable
 from .study import Claim, Plausible
 from .verdicts import (
     CENTRAL,
@@ -31,7 +27,6 @@ from .verdicts import (
     VERDICT_POLICY,
     VERDICTS,
     ClaimResult,
-    _check_tolerance,
     central_interval,
     compute_verdict,
     digits_tolerance,
@@ -45,239 +40,10 @@ __all__ = ["VERDICTS", "CLAIM_VERDICTS", "KINDS", "RESULTS_SCHEMA", "DEFAULT_TOL
 #: Version of the results.json layout: 2 adds ``unit`` and ``tolerance`` on every quantity, the
 #: ``diverged`` verdict, paper ``cell`` / ``primary`` and ``settings["cli"]``; 3 adds ``claims``,
 #: ``sensitivity``, the verdict ``policy`` of each quantity (``percentile`` with ``interval``,
-#: ``tolerance`` or ``derived`` with ``derived_from``), ``kind`` and plausible ranges of reconstructions.
-RESULTS_SCHEMA = 3
-
-
-def _to_jsonable(value):
-    """numpy → plain Python; non-finite floats → None (JSON has no NaN)."""
-    if isinstance(value, dict):
-        return {str(k): _to_jsonable(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_to_jsonable(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return _to_jsonable(value.tolist())
-    if isinstance(value, (np.bool_, bool)):
-        return bool(value)
-    if isinstance(value, (np.integer,)):
-        return int(value)
-    if isinstance(value, (float, np.floating)):
-        value = float(value)
-        return value if math.isfinite(value) else None
-    if isinstance(value, complex):
-        return [_to_jsonable(value.real), _to_jsonable(value.imag)]
-    if isinstance(value, Path):
-        return str(value)
-    return value
-
-
-@dataclass
-class Quantity:
-    """One reproduced number (or vector) beside the paper's.
-
-    ``verdict`` is computed, never set by hand, by the verdict policy (:data:`VERDICT_POLICY`):
-
-    - ``samples`` (one value per healthy Monte Carlo run) with a scalar ``paper``: the *percentile*
-      policy, the paper's value agrees when it lies within the central 95 % of the runs
-      (:func:`central_interval`); its percentile among the runs is recorded;
-    - ``derived_from`` (the id of another quantity): the *derived* policy, the verdict of that quantity
-      (an SNR computed from an RMSE); resolved by :meth:`StudyResult.to_dict`;
-    - otherwise the *tolerance* policy, a relative ``tolerance`` (default :data:`DEFAULT_TOLERANCE`).
-
-    A quantity is ``diverged`` when ``diverged=True`` (every run diverged, ``value`` None) or when at
-    least half of its ``runs`` diverged (``runs_diverged``); the value of the healthy runs is kept.
-    ``unit`` is always written ("" = dimensionless). ``cell`` names the paper cell the quantity scores
-    (e.g. ``"Table 2 / x1 ESO"``); quantities sharing a cell are counted once, by the one with
-    ``primary=True`` (default: the first recorded). ``kind="check"`` marks an algebraic identity or a
-    check of the paper's own arithmetic: listed under checks and errata, never counted as a reproduction.
-
-    Parameters
-    ----------
-    id, label : str
-        Stable id (e.g. ``ex1.mfac.rmse``) and a label for readers.
-    value, paper, std : float, array_like or None
-        Reproduced value, printed value (only what the paper prints) and the Monte Carlo std.
-    runs, runs_diverged : int, optional
-        Runs asked for and how many of them diverged.
-    tolerance : float, optional
-        Relative tolerance of the tolerance policy.
-    note, unit : str
-        Free note; unit ("" = dimensionless).
-    cell : str, optional
-        The paper cell the quantity scores.
-    primary, diverged : bool
-        The cell's primary reading; every run diverged.
-    samples : array_like, optional
-        One value per healthy run (percentile policy); not written whole to results.json.
-    derived_from : str, optional
-        Id of the quantity whose verdict this one takes.
-    kind : {"reproduction", "check"}
-        A reproduced cell, or a check / erratum.
-    """
-
-    id: str
-    label: str
-    value: object
-    paper: object = None
-    std: object = None
-    runs: int | None = None
-    tolerance: float | None = None
-    note: str = ""
-    unit: str = ""
-    cell: str | None = None
-    primary: bool = False
-    diverged: bool = False
-    runs_diverged: int | None = None
-    samples: object = None
-    derived_from: str | None = None
-    kind: str = "reproduction"
-    #: set by a sensitivity sweep (:mod:`ctrl_analysis.reporting.sensitivity`): the cell's values and verdicts across
-    #: each reconstruction's plausible range
-    sensitivity: dict | None = None
-
-    def __post_init__(self):
-        for name in ("id", "label"):
-            if not isinstance(getattr(self, name), str) or (name == "id" and not self.id):
-                raise TypeError(f"{name} must be a non-empty string, got {getattr(self, name)!r}")
-        if not isinstance(self.unit, str):
-            raise TypeError(f"unit must be a string ('' for dimensionless), got {self.unit!r}")
-        if self.cell is not None and (not isinstance(self.cell, str) or not self.cell.strip()):
-            raise ValueError(f"cell must be a non-empty string naming the paper cell, got {self.cell!r}")
-        if self.kind not in KINDS:
-            raise ValueError(f"kind must be one of {KINDS}, got {self.kind!r}")
-        if self.tolerance is not None:
-            self.tolerance = _check_tolerance(self.tolerance)
-        self.primary = check_bool("primary", self.primary)
-        self.diverged = check_bool("diverged", self.diverged)
-        if self.runs is not None:
-            self.runs = check_int("runs", self.runs, minimum=0)
-        if self.runs_diverged is not None and self.runs is None:
-            raise ValueError(f"quantity {self.id!r}: runs_diverged={self.runs_diverged!r} needs runs (the total it "
-                             "counts from)")
-        if self.runs == 0 and self.value is not None:
-            raise ValueError(f"quantity {self.id!r}: runs is 0 (no run contributed), so value must be None, "
-                             f"got {self.value!r}")
-        if self.std is not None and self.value is not None:
-            check_nonnegative("std", self.std)
-        if self.runs_diverged is not None:
-            self.runs_diverged = check_int("runs_diverged", self.runs_diverged, minimum=0,
-                                           maximum=self.runs)
-            if self.runs and self.runs_diverged == self.runs:
-                self.diverged = True
-        if self.runs == 0 and self.value is None:  # no run contributed a value: every run diverged
-            self.diverged = True
-        if self.diverged and self.value is not None:
-            raise ValueError(f"quantity {self.id!r}: a diverged quantity has no value (value must be None), "
-                             f"got {self.value!r}")
-        if self.derived_from is not None:
-            check_str("derived_from", self.derived_from)
-            if self.samples is not None:
-                raise ValueError(f"quantity {self.id!r}: give samples or derived_from, not both")
-        self._interval = self._percentile = None
-        if self.samples is not None:
-            v = np.asarray(check_array("samples", self.samples), dtype=float).ravel()
-            v = v[np.isfinite(v)]
-            self.samples = v
-            if self.paper is not None and v.size:
-                if np.size(self.paper) != 1:
-                    raise ValueError(f"quantity {self.id!r}: the percentile policy (samples) needs a scalar paper "
-                                     f"value, got {self.paper!r}")
-                p = float(np.asarray(self.paper, dtype=float).ravel()[0])
-                self._interval = central_interval(v)
-                self._percentile = float(100.0 * (np.mean(v < p) + 0.5 * np.mean(v == p)))
-
-    @property
-    def policy(self) -> str:
-        """``percentile``, ``derived`` or ``tolerance`` (which rule decides the verdict).
-
-        Returns
-        -------
-        str
-        """
-        if self.derived_from is not None:
-            return "derived"
-        return "percentile" if self._interval is not None else "tolerance"
-
-    @property
-    def percentile(self) -> float | None:
-        """Percentage of the healthy runs below the paper's value (percentile policy), else None.
-
-        Returns
-        -------
-        float or None
-        """
-        return self._percentile
-
-    @property
-    def is_diverged(self) -> bool:
-        """Every run, or at least half of the runs, diverged.
-
-        Returns
-        -------
-        bool
-        """
-        return self.diverged or bool(self.runs and self.runs_diverged and 2 * self.runs_diverged >= self.runs)
-
-    @property
-    def verdict(self) -> str:
-        """The computed verdict (:func:`compute_verdict`); for a derived quantity, see :meth:`StudyResult.to_dict`.
-
-        Returns
-        -------
-        str
-        """
-        return compute_verdict(self.value, self.paper, self.tolerance, diverged=self.is_diverged,
-                               interval=self._interval)
-
-    def to_dict(self, derived_verdict: str | None = None) -> dict:
-        """The quantity as results.json writes it (numpy converted, non-finite numbers as null).
-
-        Parameters
-        ----------
-        derived_verdict : str, optional
-            The verdict of the quantity named by ``derived_from`` (derived policy).
-
-        Returns
-        -------
-        dict
-        """
-        verdict = self.verdict
-        if self.derived_from is not None and verdict not in ("new", "diverged"):
-            if derived_verdict not in VERDICTS:
-                raise ValueError(f"quantity {self.id!r} derives from {self.derived_from!r}, whose verdict is unknown")
-            verdict = derived_verdict
-        d = {
-            "id": self.id,
-            "label": self.label,
-            "paper": self.paper,
-            "value": self.value,
-            # one run has no spread: record none rather than a misleading 0
-            "std": self.std if (self.runs is None or self.runs > 1) and not self.diverged else None,
-            "runs": self.runs,
-            "unit": self.unit,
-            "tolerance": (DEFAULT_TOLERANCE if self.tolerance is None else self.tolerance)
-            if self.paper is not None
-            else None,
-            "verdict": verdict,
-            "policy": self.policy if self.paper is not None else None,
-            "kind": self.kind,
-            "note": self.note,
-        }
-        if self._interval is not None:
-            d["interval"] = list(self._interval)
-            d["percentile"] = round(self._percentile, 2)
-        if self.derived_from is not None:
-            d["derived_from"] = self.derived_from
-        if self.cell is not None:
-            d["cell"] = self.cell
-            d["primary"] = bool(self.primary)
-        if self.runs_diverged is not None:
-            d["runs_diverged"] = self.runs_diverged
-        if self.sensitivity is not None:
-            d["sensitivity"] = self.sensitivity
-        if self.value is not None and not np.all(np.isfinite(np.asarray(self.value, dtype=float))):
-            d["note"] = (self.note + " " if self.note else "") + "value is not finite (diverged run?)"
-        return _to_jsonable(d)
+#: ``tolerance`` or ``derived`` with ``derived_from``), ``kind`` and plausible ranges of reconstructions; 4 judges
+#: over the plausible box: a claim's ``support``, ``drivers``, ``nearest_flip`` and ``by_algorithm``, a cell's
+#: ``box`` and the ``reachable`` verdict, ``beyond`` claims, and deterministic tolerances from the printed digits.
+RESULTS_SCHEMA = 4
 
 
 @dataclass(frozen=True)
@@ -332,7 +98,7 @@ class StudyResult:
     runtime_s: float = 0.0
     #: the paper's claims, judged (:meth:`claim`)
     claims: list = field(default_factory=list)
-    #: what a sensitivity sweep tried (:func:`ctrl_analysis.reporting.sensitivity.sweep`), written to results.json
+    #: how the plausible box was explored (:func:`ctrl_analysis.reporting.sensitivity.apply`), written to results.json
     sensitivity: dict = field(default_factory=dict)
 
     def __post_init__(self):
@@ -344,8 +110,8 @@ class StudyResult:
 
         Keywords are the fields of :class:`Quantity`:
 
-        - ``unit`` (str, "" = dimensionless) and ``tolerance`` (relative; default
-          :data:`DEFAULT_TOLERANCE` when ``paper`` is given) are written to results.json and REPORT.md.
+        - ``unit`` (str, "" = dimensionless) and ``tolerance`` (relative; default half a unit of the last
+          digit the paper value is recorded with) are written to results.json and REPORT.md.
         - ``std`` and ``runs`` for Monte Carlo values (no std is written for a single run).
         - ``cell="Table 2 / x1 ESO"`` names the paper cell the quantity scores; quantities sharing a
           cell are counted once in the headline counts, by the one with ``primary=True`` (default: the
@@ -393,7 +159,8 @@ class StudyResult:
         """
         return self.quantity(id, label, value, paper, kind="check", **kw)
 
-    def claim(self, claim: Claim, holds, evidence=(), note: str = "") -> ClaimResult:
+    def claim(self, claim: Claim, holds, evidence=(), note: str = "", *, measure=None,
+              noise_floor=None) -> ClaimResult:
         """Judge one of the paper's claims on computed quantities (a claim may be judged once).
 
         Parameters
@@ -406,6 +173,10 @@ class StudyResult:
             Ids of the quantities that decide it (each must be recorded by the time results.json is written).
         note : str
             How it was judged, generated from the numbers.
+        measure, noise_floor : float, optional
+            The effect the claim is judged on (e.g. the change of the overshoot) and the smallest effect the
+            runs can resolve (e.g. twice its standard error): when ``|measure| < noise_floor`` the claim is
+            ``untestable`` (holds None) with that reason, never ``fails``.
 
         Returns
         -------
@@ -413,6 +184,14 @@ class StudyResult:
         """
         if any(c.claim.id == getattr(claim, "id", None) for c in self.claims):
             raise ValueError(f"claim {claim.id!r} is already judged in study {self.info.name!r}")
+        if (measure is None) != (noise_floor is None):
+            raise ValueError("give measure and noise_floor together (the effect and the smallest effect resolved)")
+        if measure is not None:
+            m, f = float(measure), float(check_nonnegative("noise_floor", noise_floor, scalar=True))
+            if not math.isfinite(m) or abs(m) < f:
+                holds = None
+                note = (note + " " if note else "") + (
+                    f"Untestable: the measure ({m:.3g}) is below its own noise floor ({f:.3g}).")
         c = ClaimResult(claim, None if holds is None else bool(holds), tuple(evidence), note)
         self.claims.append(c)
         return c

@@ -1,94 +1,92 @@
-"""Sensitivity of a study's verdicts to its reconstructions: every plausible value tried, one at a time.
+"""Every verdict judged over the plausible box: all reconstructions varied jointly, flips located, cells searched.
 
 A study declares each value the paper does not print with
-``reconstructed(value, why, plausible=span(low, high, why))`` (:mod:`ctrl_analysis.reporting.study`). Its
-claims and primary cells are computed by an ``evaluate(params)`` function that builds a
+``reconstructed(value, why, plausible=span(low, high, why))`` or ``choices(...)``
+(:mod:`ctrl_analysis.reporting.study`); together those ranges span the study's *plausible box* (printed values
+fixed). Its claims and primary cells are computed by an ``evaluate(params)`` function that builds a
 :class:`~ctrl_analysis.reporting.results.StudyResult` with the same recording code as the study's main run.
-:func:`sweep` calls it at the chosen values (the baseline) and once per plausible value of each
-reconstruction, the others held at their chosen values; :func:`apply` then marks every claim whose
-verdict flips inside a plausible range as ``depends`` (naming the reconstruction and the values where
-it flips) and records, per primary cell, its spread and verdict flips; :func:`plot_sensitivity`
-draws the most influential reconstructions.
+
+:func:`explore` evaluates the study at the chosen values and at a scrambled Sobol' sample of the box
+(``scipy.stats.qmc``, at least 64 points), then refines, every round one batch over processes:
+
+* **claims** — where the claim's verdict differs between the chosen point and a sample, or between two
+  neighbouring samples, the boundary is located by bisection along the segment, so a flip between samples
+  cannot hide; the nearest located flip is the claim's ``nearest_flip``;
+* **cells** — a printed number outside its band at the chosen point is searched for: a sample whose band
+  holds it, else bisection between two samples on either side of it, else a local compass search from the
+  closest sample over the reconstructions that move the cell most.
+
+Where the study declares an :func:`~ctrl_analysis.reporting.study.algorithm` axis (the paper's printed
+algorithm against the project's correction) the box is sampled under each, and each claim is judged under
+both. :func:`apply` writes the outcome into the study's result: per claim its ``support`` (the share of the
+box where it holds, with its standard error), its ``drivers`` (first-order Sobol' indices of the claim's
+verdict, SALib's RBD-FAST on the same sample) and its nearest flip; per cell ``agrees`` / ``reachable`` (with
+the point) / ``differs``. :func:`plot_sensitivity` draws the supports and the drivers.
 
 Examples
 --------
-A toy study whose claim ("the gain is below 2") holds at the chosen ``k = 1`` but fails for
-``k`` near the top of its plausible range:
+A toy study whose claim ("the gain is below 2") holds at the chosen ``k = 1`` but fails for ``k > 2``: it holds
+on 60 % of the box, and the flip nearest the chosen value is located at ``k = 2``:
 
 >>> from dataclasses import dataclass
->>> from ctrl_analysis.reporting.report import StudyInfo, StudyResult
+>>> from ctrl_analysis.reporting.results import StudyInfo, StudyResult
 >>> from ctrl_analysis.reporting.study import Claim, reconstructed, span
 >>> CLAIM = Claim("small", "§1", "the gain is below 2")
 >>> @dataclass(frozen=True)
 ... class P:
-...     k: float = reconstructed(1.0, "not printed", plausible=span(0.5, 3.0, "typical gains", points=3))
+...     k: float = reconstructed(1.0, "not printed", plausible=span(0.5, 3.0, "typical gains"))
 >>> def evaluate(params):
 ...     res = StudyResult(StudyInfo("toy", "", "", ""))
 ...     res.quantity("gain", "gain", params["p"].k, unit="")
 ...     res.claim(CLAIM, params["p"].k < 2, evidence=["gain"])
 ...     return res
 >>> result = evaluate({"p": P()})
->>> apply(result, sweep(evaluate, {"p": P()}))
+>>> apply(result, explore(evaluate, {"p": P()}))
 >>> c = result.get_claim("small")
->>> c.verdict, c.depends_on[0]["reconstruction"], c.depends_on[0]["flips_at"]
-('depends', 'p.k', [3.0])
+>>> c.verdict, round(c.support, 1), c.depends_on[0]["reconstruction"], round(c.depends_on[0]["flips_at"], 1)
+('depends', 0.6, 'p.k', 2.0)
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
+import warnings
+import zlib
 from collections.abc import Callable
 
 import numpy as np
 
 from .._validate import check_callable, check_int
+from .box import Box, Dimension, _json
+from .box_cells import cell_state, search_cells
 from .results import StudyResult
-from .study import reconstructions_of
+from .support_figure import plot_sensitivity
+from .verdicts import SUPPORT_HIGH, SUPPORT_LOW, claim_verdict
 
-__all__ = ["Sensitivity", "apply", "plot_sensitivity", "sweep"]
+__all__ = ["QUICK", "SAMPLES", "Box", "Dimension", "Exploration", "apply", "caption", "explore", "plot_sensitivity"]
+
+#: Default number of quasi-random samples of the box (a power of two: Sobol' points are balanced there).
+SAMPLES = 64
+#: :func:`explore`'s settings for a smoke test (``--quick``): a few points, short bisections; never for a verdict.
+QUICK = {"samples": 8, "refine": 2, "cell_steps": 3, "search_rounds": 1}
 
 
-@dataclasses.dataclass
-class Sensitivity:
-    """What :func:`sweep` tried and what each evaluation judged.
-
-    Parameters
-    ----------
-    baseline : dict
-        The outcome at the chosen values: ``{"claims": {id: True/False/None}, "cells": {id: (value, verdict)}}``.
-    rows : list of dict
-        One per tried value: ``{"reconstruction", "chosen", "value", "claims", "cells"}``.
-    ranges : dict
-        ``{reconstruction name: plausible range as results.json records it}``.
-    note : str
-        How the sweep was run (e.g. the number of Monte Carlo runs of each evaluation).
-    """
-
-    baseline: dict
-    rows: list
-    ranges: dict
-    note: str = ""
+# ---------------------------------------------------------------------------------------------------------------
+# outcomes of one evaluation
 
 
 def _outcome(result) -> dict:
-    """``{"claims": {id: holds}, "cells": {id: (value, verdict)}}`` of a StudyResult or an outcome dict."""
-    if isinstance(result, StudyResult):
-        cells = {}
-        for q in result.to_dict()["quantities"]:
-            if q["paper"] is not None and q.get("kind", "reproduction") == "reproduction":
-                cells[q["id"]] = (q["value"], q["verdict"])
-        return {"claims": {c.claim.id: c.holds for c in result.claims}, "cells": cells}
-    if isinstance(result, dict) and set(result) <= {"claims", "cells"}:
-        return {"claims": dict(result.get("claims", {})), "cells": dict(result.get("cells", {}))}
-    raise TypeError(f"evaluate must return a StudyResult or a dict with 'claims' and 'cells', got {type(result).__name__}")
-
-
-def _same(a, b) -> bool:
-    try:
-        return bool(np.all(np.isclose(np.asarray(a, dtype=float), np.asarray(b, dtype=float), rtol=1e-9, atol=0)))
-    except (TypeError, ValueError):
-        return a == b
+    """``{"claims": {id: holds}, "cells": {id: state}}`` of one evaluation."""
+    if not isinstance(result, StudyResult):
+        raise TypeError(f"evaluate must return a StudyResult, got {type(result).__name__}")
+    cells = {}
+    for q in result.quantities:
+        if q.paper is not None and q.kind == "reproduction" and q.derived_from is None:
+            state = cell_state(q)
+            if state is not None:
+                cells[q.id] = state
+    return {"claims": {c.claim.id: c.holds for c in result.claims}, "cells": cells}
 
 
 def _evaluate_task(task):
@@ -96,238 +94,353 @@ def _evaluate_task(task):
     return _outcome(evaluate(variant))
 
 
-def _variants(params: dict, names) -> list:
-    """``[(name, chosen, value, variant params)]`` for every tried value of every varied reconstruction."""
-    out, ranges = [], {}
-    for prefix, obj in params.items():
-        for rec in reconstructions_of(obj):
-            name = f"{prefix}.{rec['name']}" if prefix else rec["name"]
-            plaus = rec.get("plausible")
-            if plaus is None or not plaus.varied or (names is not None and name not in names):
-                continue
-            ranges[name] = plaus.to_dict()
-            for v in plaus.values():
-                if _same(v, rec["value"]):
-                    continue
-                variant = dict(params)
-                variant[prefix] = dataclasses.replace(obj, **{rec["name"]: v})
-                out.append((name, rec["value"], v, variant))
-    return out, ranges
+# ---------------------------------------------------------------------------------------------------------------
+# the exploration
 
 
-def sweep(evaluate: Callable, params: dict, *, names=None, jobs: int = 1, scheduler=None,
-          note: str = "") -> Sensitivity:
-    """Evaluate the study at its chosen values and at each plausible value of each reconstruction, one at a time.
+@dataclasses.dataclass
+class Exploration:
+    """What :func:`explore` found: per claim and per cell, judged over the box; :func:`apply` writes it.
+
+    Parameters
+    ----------
+    box : Box
+    claims : dict
+        ``{claim id: dict}``: ``support``, ``drivers``, ``nearest_flip``, ``boundary``, ``depends_on``,
+        ``by_algorithm``, ``baseline``.
+    cells : dict
+        ``{quantity id: dict}``: ``verdict`` over the box, ``reached_at`` / ``how``, ``closest``, ``range``.
+    summary : dict
+        ``samples``, ``evaluations``, ``dimensions``, ``algorithms``, ``note`` (written as results.json's
+        ``sensitivity``).
+    """
+
+    box: Box
+    claims: dict
+    cells: dict
+    summary: dict
+
+
+class _Runner:
+    """Evaluates points in rounds (one batch over processes per round) and keeps every outcome."""
+
+    def __init__(self, evaluate, box, jobs, scheduler):
+        from ..parallel import picklable
+
+        self.evaluate, self.box, self.jobs, self.scheduler = evaluate, box, jobs, scheduler
+        self.parallel = (jobs > 1 or scheduler is not None) and picklable(evaluate)
+        self.count = 0
+
+    def run(self, points) -> list:
+        """Outcomes at ``[(u, algorithm)]``, in order."""
+        from ..parallel import map_chunks
+
+        if not points:
+            return []
+        tasks = [(self.evaluate, self.box.params_at(u, a)) for u, a in points]
+        self.count += len(tasks)
+        if self.parallel and len(tasks) > 1:
+            return map_chunks(_evaluate_task, tasks, jobs=self.jobs, scheduler=self.scheduler, desc="plausible box")
+        return [_evaluate_task(t) for t in tasks]
+
+
+def _indicator(outcomes, claim_id) -> np.ndarray:
+    """1 / 0 / nan (holds, fails, untestable) of a claim over outcomes."""
+    return np.array([math.nan if o["claims"].get(claim_id) is None else float(o["claims"][claim_id])
+                     for o in outcomes])
+
+
+def _support(y) -> dict:
+    ok = y[np.isfinite(y)]
+    n = int(ok.size)
+    if n == 0:
+        return {"holds": None, "samples": 0, "stderr": None, "untestable": int(y.size)}
+    s = float(ok.mean())
+    # binomial standard error; for a scrambled Sobol' sample an upper bound of the sampling error
+    return {"holds": round(s, 4), "samples": n, "stderr": round(math.sqrt(max(s * (1 - s), 0.25 / n) / n), 4),
+            "untestable": int(y.size - n)}
+
+
+def _first_order(box, U, y) -> list:
+    """First-order Sobol' indices of ``y`` over the sample ``U`` (SALib's RBD-FAST on given data), largest first."""
+    ok = np.isfinite(y)
+    if ok.sum() < 16 or np.ptp(y[ok]) == 0 or not box.dims:
+        return []
+    from SALib.analyze import rbd_fast
+
+    problem = {"num_vars": len(box.dims), "names": [d.name for d in box.dims], "bounds": [[0.0, 1.0]] * len(box.dims)}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        # M harmonics: 4 from 64 points on; fewer on a smoke test's small sample (the bias correction divides
+        # by 1 - 2M/N, on the bootstrap's resamples too)
+        m = max(1, min(4, int(ok.sum()) // 16))
+        res = rbd_fast.analyze(problem, U[ok], y[ok].astype(float), M=m, num_resamples=50, seed=1)
+    rows = [{"reconstruction": d.name, "S1": round(float(s), 3), "conf": round(float(c), 3)}
+            for d, s, c in zip(box.dims, res["S1"], res["S1_conf"]) if math.isfinite(float(s))]
+    return sorted(rows, key=lambda r: -r["S1"])
+
+
+def _bisect(runner, segments, steps, decide) -> list:
+    """Bisect every segment ``steps`` times, all segments' midpoints evaluated as one batch per round.
+
+    ``segments``: dicts with ``a``, ``b`` (coordinates), ``algorithm``, ``key``; ``decide(seg, outcome)`` returns
+    ``"a"`` (the midpoint is like end a), ``"b"``, or ``"done"`` (stop, the midpoint is the answer).
+    """
+    active = list(segments)
+    for _ in range(steps):
+        if not active:
+            break
+        mids = [runner.box.interpolate(s["a"], s["b"], 0.5) for s in active]
+        outs = runner.run([(m, s["algorithm"]) for m, s in zip(mids, active)])
+        still = []
+        for s, m, o in zip(active, mids, outs):
+            side = decide(s, o)
+            if side == "done":
+                s["hit"], s["hit_outcome"] = m, o
+            else:
+                s[side] = m
+                s.setdefault("rounds", 0)
+                s["rounds"] += 1
+                still.append(s)
+        active = still
+    return segments
+
+
+def explore(evaluate: Callable, params: dict, *, samples: int = SAMPLES, seed: int | None = None,
+            names=None, jobs: int = 1, scheduler=None, refine: int = 6, cell_steps: int = 10,
+            search_rounds: int = 3, note: str = "") -> Exploration:
+    """Judge the study's claims and cells over its plausible box (module docstring).
 
     Parameters
     ----------
     evaluate : callable
-        ``evaluate(params) -> StudyResult`` (or ``{"claims": ..., "cells": ...}``), with ``params`` shaped
-        like the argument below. Module-level (picklable) to run over processes.
+        ``evaluate(params) -> StudyResult`` with ``params`` shaped like the argument below. Module-level
+        (picklable) to run over processes.
     params : dict
         ``{prefix: frozen parameter dataclass}``, the prefixes those of
-        :func:`ctrl_analysis.reporting.study.record_parameters` (so names match results.json's reconstructions).
+        :func:`ctrl_analysis.reporting.study.record_parameters`.
+    samples : int
+        Quasi-random points of the box per algorithm (rounded up to a power of two; at least 64 for a verdict
+        the report calls robust — fewer only for smoke tests).
+    seed : int, optional
+        Scrambling seed of the Sobol' sample (default: from the reconstructions' names, so a study's sample
+        is the same on every run).
     names : collection of str, optional
-        Only these reconstructions (``"prefix.field"``); default every varied one.
+        Vary only these reconstructions.
     jobs : int
         Processes (:func:`ctrl_analysis.parallel.map_chunks`).
     scheduler : str, optional
         A Dask scheduler address.
+    refine : int
+        Bisection steps per claim segment (the boundary is located to ``2**-refine`` of the segment).
+    cell_steps : int
+        Bisection steps per cell segment (stops early once the band holds the paper's value).
+    search_rounds : int
+        Rounds of the local compass search for a cell no sample straddles.
     note : str
-        How the evaluations were run, recorded in results.json.
+        How each evaluation is run (runs, seeds), recorded in results.json.
 
     Returns
     -------
-    Sensitivity
+    Exploration
     """
-    from ..parallel import map_chunks, picklable
-
     check_callable("evaluate", evaluate, "evaluate(params)")
-    if not isinstance(params, dict) or not params or not all(
-            dataclasses.is_dataclass(p) and not isinstance(p, type) for p in params.values()):
-        raise TypeError("params must be a non-empty dict {prefix: dataclass instance}")
+    samples = check_int("samples", samples, minimum=2, maximum=1 << 14)
     jobs = check_int("jobs", jobs, minimum=1)
-    variants, ranges = _variants(params, None if names is None else set(names))
-    if names is not None and set(names) - set(ranges):
-        raise ValueError(f"names {sorted(set(names) - set(ranges))} are not varied reconstructions of params")
-    tasks = [(evaluate, params)] + [(evaluate, v[3]) for v in variants]
-    if (jobs > 1 or scheduler is not None) and picklable(evaluate):
-        outcomes = map_chunks(_evaluate_task, tasks, jobs=jobs, scheduler=scheduler, desc="sensitivity")
-    else:
-        outcomes = [_evaluate_task(t) for t in tasks]
-    rows = [{"reconstruction": name, "chosen": chosen, "value": value, **o}
-            for (name, chosen, value, _), o in zip(variants, outcomes[1:])]
-    return Sensitivity(outcomes[0], rows, ranges, note)
+    refine = check_int("refine", refine, minimum=0, maximum=30)
+    cell_steps = check_int("cell_steps", cell_steps, minimum=0, maximum=40)
+    search_rounds = check_int("search_rounds", search_rounds, minimum=0, maximum=20)
+    box = Box(params, None if names is None else set(names))
+    if seed is None:
+        seed = zlib.crc32(",".join(d.name for d in box.dims).encode())
+    runner = _Runner(evaluate, box, jobs, scheduler)
+    chosen = box.chosen
+    U = box.sample(samples, seed)
+    # round 0: the chosen point and the sample, under each algorithm
+    points = []
+    for a in box.algorithms:
+        points += [(chosen, a)] + [(u, a) for u in U]
+    outs = runner.run(points)
+    per = {a: outs[i * (len(U) + 1):(i + 1) * (len(U) + 1)] for i, a in enumerate(box.algorithms)}
+    base = per[box.algorithms[0]][0]
+    claims = _claims(runner, box, U, per, refine)
+    cells = search_cells(runner, box, U, per, cell_steps, search_rounds, _bisect)
+    summary = {"samples": len(U), "evaluations": runner.count, "dimensions": len(box.dims),
+               "ranges": {d.name: d.plausible.to_dict() for d in box.dims},
+               "algorithm": ({"chosen": box.algorithm, "fields": [d.name for d in box.algorithm_dims]}
+                             if box.algorithm else None),
+               "thresholds": [SUPPORT_LOW, SUPPORT_HIGH], "seed": int(seed), "note": note,
+               "baseline_claims": base["claims"]}
+    return Exploration(box, claims, cells, summary)
 
 
-def _jsonable_value(v):
-    if isinstance(v, (float, np.floating)):
-        return float(f"{float(v):.6g}") if math.isfinite(float(v)) else None
-    return v
+def _claims(runner, box, U, per, refine) -> dict:
+    main = box.algorithms[0]
+    base = per[main][0]
+    outs = per[main][1:]
+    out = {}
+    segments = []
+    for cid, holds0 in base["claims"].items():
+        y = _indicator(outs, cid)
+        entry = {"support": _support(y), "baseline": None if holds0 is None else ("holds" if holds0 else "fails"),
+                 "drivers": _first_order(box, U, y) if len(U) else [], "nearest_flip": None, "boundary": [],
+                 "depends_on": []}
+        if len(box.algorithms) > 1:
+            entry["by_algorithm"] = {}
+            for a in box.algorithms:
+                s = _support(_indicator(per[a][1:], cid))
+                b0 = per[a][0]["claims"].get(cid)
+                base_a = "untestable" if b0 is None else ("holds" if b0 else "fails")
+                entry["by_algorithm"][a] = {"support": s, "verdict": claim_verdict(s["holds"], base_a),
+                                            "at_chosen": base_a}
+        out[cid] = entry
+        if holds0 is None or not len(U):
+            continue
+        # the nearest sample where the claim takes the other definite verdict: bisect chosen -> it
+        other = [i for i in range(len(U)) if np.isfinite(y[i]) and bool(y[i]) != holds0]
+        if other:
+            j = min(other, key=lambda i: box.distance(box.chosen, U[i]))
+            segments.append({"claim": cid, "kind": "nearest", "a": box.chosen.copy(), "b": U[j].copy(),
+                             "va": holds0, "algorithm": main})
+        # neighbouring samples with different verdicts: the closest such pair
+        pairs = []
+        for i in range(len(U)):
+            if not np.isfinite(y[i]):
+                continue
+            js = [j for j in range(len(U)) if j != i and np.isfinite(y[j])]
+            if not js:
+                continue
+            j = min(js, key=lambda k: box.distance(U[i], U[k]))
+            if y[j] != y[i] and i < j:
+                pairs.append((box.distance(U[i], U[j]), i, j))
+        for _, i, j in sorted(pairs)[:1]:
+            segments.append({"claim": cid, "kind": "pair", "a": U[i].copy(), "b": U[j].copy(), "va": bool(y[i]),
+                             "algorithm": main})
+
+    def decide(seg, o):
+        v = o["claims"].get(seg["claim"])
+        return "a" if v is None or v == seg["va"] else "b"
+
+    _bisect(runner, segments, refine, decide)
+    _prune(runner, box, out, segments, refine, decide)
+    for seg in segments:
+        entry = out[seg["claim"]]
+        point = box.changed(seg["b"])  # the first point past the boundary
+        flipped = "fails" if seg["va"] else "holds"
+        if seg["kind"] == "nearest":
+            entry["nearest_flip"] = {"point": point, "distance": round(box.distance(box.chosen, seg["b"]), 4),
+                                     "verdict_there": flipped,
+                                     "bracket": round(box.distance(seg["a"], seg["b"]), 4)}
+            entry["depends_on"] = [{"reconstruction": name, "chosen": _json(_dim(box, name).chosen),
+                                    "flips_at": value, "verdict_there": flipped}
+                                   for name, value in sorted(point.items(),
+                                                             key=lambda kv: -_moved(box, seg["b"], kv[0]))]
+        entry["boundary"].append({"kind": seg["kind"],
+                                  "at": box.changed(box.interpolate(seg["a"], seg["b"], 0.5)),
+                                  "bracket": round(box.distance(seg["a"], seg["b"]), 4)})
+    return out
 
 
-def apply(result: StudyResult, sens: Sensitivity) -> None:
-    """Write a sweep into ``result``: claims that flip become ``depends``; cells get their spread.
+def _prune(runner, box, out, segments, refine, decide) -> None:
+    """Bring each nearest flip closer: keep only the claim's driving reconstructions away from their chosen values.
 
-    A claim flips when its judgement at a tried value is the opposite definite verdict of the sweep's
-    baseline (evaluated with the same settings, so Monte Carlo noise does not pass for a flip); a value
-    where the claim cannot be judged (``None``, e.g. the method breaks down there) is recorded as
-    ``untestable_at``, not as a flip. Where the baseline itself differs from the main run's judgement
-    the claim's note says so.
+    A bisection from the chosen point towards a sample moves every reconstruction at once. Where the point just
+    past the boundary still flips with every non-driver (first-order index below 0.05) back at its chosen value,
+    the boundary is located again along the drivers alone (one batch for the check, then the bisection).
+    """
+    tries = []
+    for seg in segments:
+        if seg["kind"] != "nearest":
+            continue
+        drivers = {d["reconstruction"] for d in out[seg["claim"]]["drivers"] if d["S1"] >= 0.05}
+        if not drivers:
+            continue
+        c = np.array([b if d.name in drivers else a for d, a, b in zip(box.dims, box.chosen, seg["b"])])
+        if box.distance(c, seg["b"]) > 0:
+            tries.append((seg, c))
+    outs = runner.run([(c, seg["algorithm"]) for seg, c in tries])
+    again = []
+    for (seg, c), o in zip(tries, outs):
+        v = o["claims"].get(seg["claim"])
+        if v is not None and v != seg["va"]:
+            again.append({**seg, "a": box.chosen.copy(), "b": c})
+    _bisect(runner, again, refine, decide)
+    for new in again:
+        old = next(s for s in segments if s["claim"] == new["claim"] and s["kind"] == "nearest")
+        old.update(a=new["a"], b=new["b"])
+
+
+def _dim(box, name) -> Dimension:
+    return next(d for d in box.dims if d.name == name)
+
+
+def _moved(box, u, name) -> float:
+    """How far dimension ``name`` moved from the chosen value at ``u`` (coordinates; an alternative 1/2)."""
+    i = [d.name for d in box.dims].index(name)
+    d, c = box.dims[i], box.chosen[i]
+    if d.continuous and math.isfinite(c) and math.isfinite(u[i]):
+        return abs(u[i] - c)
+    return 0.5
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# writing it into the result
+
+
+def apply(result: StudyResult, exploration: Exploration) -> None:
+    """Write an exploration into ``result``: each claim's support, drivers and nearest flip; each cell's box verdict.
+
+    A claim's verdict then follows from its support by the policy's thresholds
+    (:func:`~ctrl_analysis.reporting.verdicts.claim_verdict`). Where the exploration's own baseline (evaluated
+    with its own, usually fewer, runs) judges the claim differently from the main run, the claim's note says so.
 
     Parameters
     ----------
     result : StudyResult
         The study's main result, its claims already judged.
-    sens : Sensitivity
-        From :func:`sweep`.
+    exploration : Exploration
+        From :func:`explore`.
     """
-    if not isinstance(result, StudyResult) or not isinstance(sens, Sensitivity):
-        raise TypeError("apply(result, sens) takes a StudyResult and a Sensitivity")
-    by_name: dict = {}
-    for row in sens.rows:
-        by_name.setdefault(row["reconstruction"], []).append(row)
+    if not isinstance(result, StudyResult) or not isinstance(exploration, Exploration):
+        raise TypeError("apply(result, exploration) takes a StudyResult and an Exploration")
     for c in result.claims:
-        base = sens.baseline["claims"].get(c.claim.id, c.holds)
-        c.depends_on, c.robust_to = [], []
-        if base != c.holds:
-            c.note = (c.note + " " if c.note else "") + (
-                f"The sensitivity sweep's baseline ({sens.note or 'its own settings'}) judges it "
-                f"{'untestable' if base is None else ('holds' if base else 'fails')}.")
-        for name, rows in by_name.items():
-            if c.claim.id not in rows[0]["claims"]:
-                continue
-            # a flip is the opposite definite verdict; a value where the claim cannot be judged (None) is no flip
-            flips = [r for r in rows if r["claims"].get(c.claim.id) is not None and r["claims"][c.claim.id] != base]
-            blind = [_jsonable_value(r["value"]) for r in rows
-                     if r["claims"].get(c.claim.id) is None and base is not None]
-            if flips and base is not None:
-                c.depends_on.append({
-                    "reconstruction": name, "chosen": _jsonable_value(rows[0]["chosen"]),
-                    "flips_at": [_jsonable_value(r["value"]) for r in flips],
-                    "verdict_there": ["holds" if r["claims"][c.claim.id] else "fails" for r in flips],
-                    "untestable_at": blind, "tried": [_jsonable_value(r["value"]) for r in rows]})
-            else:
-                c.robust_to.append(name)
-                if blind:
-                    c.note = (c.note + " " if c.note else "") + (
-                        f"Untestable at {name} = {', '.join(str(v) for v in blind)} (no flip).")
-    for q in result.quantities:
-        if q.id not in sens.baseline["cells"]:
+        entry = exploration.claims.get(c.claim.id)
+        if entry is None:
             continue
-        base_value, base_verdict = sens.baseline["cells"][q.id]
-        spread = {}
-        for name, rows in by_name.items():
-            vals = [r["cells"][q.id] for r in rows if q.id in r["cells"]]
-            if not vals:
-                continue
-            numeric = [np.asarray(v, dtype=float).ravel()[0] for v, _ in vals
-                       if v is not None and np.size(v) >= 1 and np.all(np.isfinite(np.asarray(v, dtype=float)))]
-            spread[name] = {"min": _jsonable_value(min(numeric)) if numeric else None,
-                            "max": _jsonable_value(max(numeric)) if numeric else None,
-                            "verdict_flips_at": [_jsonable_value(r["value"]) for r, (_, vd) in zip(rows, vals)
-                                                 if vd != base_verdict]}
-        q.sensitivity = {"baseline": {"value": base_value, "verdict": base_verdict}, "by": spread}
-    result.sensitivity = {"note": sens.note, "evaluations": 1 + len(sens.rows), "ranges": sens.ranges,
-                          "baseline_claims": sens.baseline["claims"]}
+        c.box = {k: v for k, v in entry.items()}
+        b = entry["baseline"]
+        if b != (None if c.holds is None else ("holds" if c.holds else "fails")):
+            c.note = (c.note + " " if c.note else "") + (
+                f"The box exploration's own evaluation at the chosen values ({exploration.summary['note'] or 'its own settings'}) "
+                f"judges it {b or 'untestable'}.")
+    for q in result.quantities:
+        entry = exploration.cells.get(q.id)
+        if entry is not None:
+            q.box = dict(entry)
+    result.sensitivity = dict(exploration.summary)
 
 
-def _short_value(v) -> str:
-    """A tried value in a grid cell: numbers to 3 digits, vectors as (a, b, …)."""
-    if isinstance(v, (list, tuple)):
-        return "(" + ", ".join(_short_value(x) for x in v) + ")"
-    return f"{v:.3g}" if isinstance(v, float) else str(v)[:10]
-
-
-def _influence(result: StudyResult) -> list:
-    """``[(name, largest relative cell change, claim flips, cell verdict flips)]``, most influential first."""
-    names = list(result.sensitivity.get("ranges", {}))
-    rows = []
-    for name in names:
-        change, cell_flips = 0.0, 0
-        for q in result.quantities:
-            s = (q.sensitivity or {}).get("by", {}).get(name)
-            if not s:
-                continue
-            base = q.sensitivity["baseline"]["value"]
-            b = np.asarray(base, dtype=float).ravel()[0] if base is not None and np.size(base) >= 1 else math.nan
-            for ext in (s["min"], s["max"]):
-                if ext is not None and math.isfinite(b) and b != 0:
-                    change = max(change, abs(ext - b) / abs(b))
-            cell_flips += bool(s["verdict_flips_at"])
-        claim_flips = sum(any(d["reconstruction"] == name for d in c.depends_on) for c in result.claims)
-        rows.append((name, change, claim_flips, cell_flips))
-    rows.sort(key=lambda r: (r[2], r[3], r[1]), reverse=True)
-    return rows
-
-
-def plot_sensitivity(result: StudyResult, top: int = 12):
-    """The most influential reconstructions: cell spread and claim flips across each plausible range.
-
-    Left: the largest relative change of any paper cell across the range (bars), with the number of
-    cells whose verdict flips. Right: claims × reconstructions, marked where the claim's verdict flips.
+def caption(result: StudyResult, detail: str = "") -> str:
+    """The caption of :func:`plot_sensitivity`'s figure for ``result`` (after :func:`apply`).
 
     Parameters
     ----------
     result : StudyResult
-        After :func:`apply`.
-    top : int
-        Reconstructions shown.
+    detail : str
+        How each evaluation was run (runs, seeds), added to the caption.
 
     Returns
     -------
-    matplotlib.figure.Figure
+    str
     """
-    from .report import new_figure
-
-    top = check_int("top", top, minimum=1)
     if not isinstance(result, StudyResult):
         raise TypeError(f"result must be a StudyResult, got {type(result).__name__}")
-    if not result.sensitivity:
-        raise ValueError("result has no sensitivity sweep: call apply(result, sweep(...)) first")
-    rows = _influence(result)[:top]
-    claims = [c for c in result.claims if c.holds is not None]
-    n = max(len(rows), 1)
-    width = max(12.0, 6.0 + 1.0 * len(claims))
-    fig, (ax, bx) = new_figure(1, 2, size=(width, 2.6 + 0.5 * n), gridspec_kw={"width_ratios": [1.0, max(1.0, len(claims) / 5)]},
-                               title=f"{result.info.name}: sensitivity of the verdicts to each reconstruction "
-                                     "(one at a time, across its plausible range)")
-    labels = [r[0] for r in rows]
-    y = np.arange(len(rows))[::-1]
-    change = [100 * r[1] for r in rows]
-    ax.barh(y, change, color=["tab:red" if r[3] else "tab:blue" for r in rows], alpha=0.8)
-    for yi, r, ch in zip(y, rows, change):
-        if r[3]:  # inside the bar's end when the bar is long, else after it
-            inside = ch > 0.6 * max(change)
-            ax.text(ch, yi, f"{r[3]} cell verdict(s) flip " if inside else f"  {r[3]} cell verdict(s) flip",
-                    va="center", ha="right" if inside else "left", fontsize=8, color="white" if inside else "black")
-        elif ch == 0:
-            ax.text(0, yi, "  no paper cell moves", va="center", fontsize=7, color="0.4")
-    ax.set_yticks(y, labels, fontsize=8)
-    ax.set_xlabel("largest change of a paper cell across the range\n(% of its value at the chosen reconstruction)")
-    ax.set_title("Paper cells (red: some cell's verdict flips)", fontsize=10)
-    if claims:
-        grid = np.zeros((len(rows), len(claims)))
-        for i, r in enumerate(rows):
-            for j, c in enumerate(claims):
-                tried = r[0] in c.robust_to or any(d["reconstruction"] == r[0] for d in c.depends_on)
-                grid[i, j] = 2 if any(d["reconstruction"] == r[0] for d in c.depends_on) else (1 if tried else 0)
-        from matplotlib.colors import ListedColormap
-
-        bx.imshow(grid, cmap=ListedColormap(["#eeeeee", "#9fd49f", "#e8743b"]), vmin=0, vmax=2, aspect="auto")
-        for i, r in enumerate(rows):
-            for j, c in enumerate(claims):
-                dep = next((d for d in c.depends_on if d["reconstruction"] == r[0]), None)
-                if dep is not None:
-                    there = "/".join(sorted(set(dep["verdict_there"])))
-                    at = ", ".join(_short_value(v) for v in dep["flips_at"][:2])
-                    bx.text(j, i, f"{there}\nat {at}{'…' if len(dep['flips_at']) > 2 else ''}", ha="center",
-                            va="center", fontsize=6.5)
-        bx.set_yticks(np.arange(len(rows)), labels, fontsize=8)
-        bx.set_xticks(np.arange(len(claims)), [c.claim.id for c in claims], rotation=40, ha="right", fontsize=8)
-        bx.set_title("Claims: green robust, orange verdict flips, grey not affected", fontsize=10)
-        bx.grid(False)
-    else:
-        bx.text(0.5, 0.5, "no testable claim", ha="center", va="center", transform=bx.transAxes)
-        bx.set_axis_off()
-    return fig
+    if not isinstance(detail, str):
+        raise TypeError(f"detail must be a string, got {type(detail).__name__}")
+    s = result.sensitivity or {}
+    return (f"Each claim judged over the plausible box ({s.get('samples', 0)} quasi-random points, all "
+            f"{s.get('dimensions', 0)} reconstructions with a plausible range varied jointly"
+            + (f"; {detail}" if detail else "") + "): left, its support (the share of the box where it holds, "
+            f"± standard error) against the policy's thresholds ({100 * SUPPORT_LOW:.0f} % and "
+            f"{100 * SUPPORT_HIGH:.0f} %), coloured by verdict; right, the first-order Sobol' index of the "
+            "reconstructions that drive it (blank where the claim does not flip anywhere in the box).")

@@ -33,9 +33,12 @@ import numpy as np
 from .._validate import check_int, check_str
 
 __all__ = ["Claim", "Plausible", "choices", "fixed", "missing_plausible", "printed", "reconstructed",
-           "record_parameters", "reconstructions_of", "span", "study_params"]
+           "record_parameters", "reconstructions_of", "span", "study_params", "algorithm"]
 
 _SCALES = ("linear", "log", "int")
+#: ``box``: a value the paper leaves open, one dimension of the plausible box; ``algorithm``: the paper's printed
+#: algorithm against the project's correction, judged apart (never folded into ``depends``)
+_AXES = ("box", "algorithm")
 
 
 @dataclass(frozen=True)
@@ -54,6 +57,9 @@ class Claim:
         Where the paper makes it (``"§4, Fig. 6-7"``).
     statement : str
         The claim in one sentence, as the paper makes it (English).
+    beyond : bool
+        True for a test the project adds (e.g. a tuning-fair comparison the paper never made): it is
+        judged like a claim but listed under "beyond the paper", never in the paper's scorecard or counts.
 
     Examples
     --------
@@ -64,10 +70,14 @@ class Claim:
     id: str
     section: str
     statement: str
+    beyond: bool = False
 
     def __post_init__(self):
         for name in ("id", "section", "statement"):
             check_str(name, getattr(self, name))
+        if not isinstance(self.beyond, bool):
+            raise TypeError(f"beyond must be a bool (True: the project's own test, not the paper's claim), "
+                            f"got {self.beyond!r}")
 
 
 @dataclass(frozen=True)
@@ -88,7 +98,11 @@ class Plausible:
     scale : {"linear", "log", "int"}
         Spacing of the interior points of an interval.
     points : int
-        Values tried across an interval, ends included (>= 2).
+        Values of an interval shown on one-at-a-time plots, ends included (>= 2).
+    axis : {"box", "algorithm"}
+        ``"box"``: a dimension of the study's plausible box (:mod:`ctrl_analysis.reporting.sensitivity`);
+        ``"algorithm"``: ``options`` are the paper's printed algorithm and the project's corrected one
+        (:func:`algorithm`), each judged on its own.
     """
 
     why: str
@@ -97,9 +111,14 @@ class Plausible:
     options: tuple | None = None
     scale: str = "linear"
     points: int = 5
+    axis: str = "box"
 
     def __post_init__(self):
         check_str("why", self.why)
+        if self.axis not in _AXES:
+            raise ValueError(f"axis must be one of {_AXES}, got {self.axis!r}")
+        if self.axis == "algorithm" and (self.options is None or len(self.options) != 2):
+            raise ValueError("an algorithm axis has exactly two options: (printed, corrected)")
         if self.scale not in _SCALES:
             raise ValueError(f"scale must be one of {_SCALES}, got {self.scale!r}")
         check_int("points", self.points, minimum=2, maximum=50)
@@ -154,6 +173,9 @@ class Plausible:
         -------
         dict
         """
+        if self.axis == "algorithm":
+            return {"options": list(self.options), "axis": "algorithm", "printed": self.options[0],
+                    "corrected": self.options[1], "why": self.why}
         if self.options is not None:
             return {"options": list(self.options), "why": self.why}
         if self.low is None:
@@ -208,6 +230,35 @@ def choices(options, why: str) -> Plausible:
     ('raw', 'filtered')
     """
     return Plausible(why=why, options=tuple(options))
+
+
+def algorithm(printed, corrected, why: str) -> Plausible:
+    """The paper's printed algorithm and the project's corrected one: an axis judged apart, not a plausible value.
+
+    A claim is judged over the plausible box with each of the two (:func:`ctrl_analysis.reporting.sensitivity.explore`);
+    where the verdicts differ the scorecard says "holds only with the corrected algorithm" (or the printed
+    one), rather than folding the choice into ``depends``.
+
+    Parameters
+    ----------
+    printed, corrected : object
+        The field's value for the algorithm as printed and for the project's correction (immutable, different).
+    why : str
+        What the printed algorithm gets wrong and what the correction changes.
+
+    Returns
+    -------
+    Plausible
+
+    Examples
+    --------
+    >>> a = algorithm("literal", "wellposed", "the printed accumulation is singular")
+    >>> a.axis, a.values()
+    ('algorithm', ('literal', 'wellposed'))
+    """
+    if printed == corrected:
+        raise ValueError(f"printed and corrected must differ, got {printed!r} twice")
+    return Plausible(why=why, options=(printed, corrected), axis="algorithm")
 
 
 def fixed(why: str) -> Plausible:

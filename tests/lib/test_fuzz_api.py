@@ -66,6 +66,10 @@ from ctrl_analysis.estimators.kalman import (
 from ctrl_analysis.estimators.kalman import filter as kfilter
 from ctrl_analysis.reporting import markdown as report_md
 from ctrl_analysis.reporting import report, study
+from ctrl_analysis.reporting import sensitivity as sensitivity_module
+from ctrl_analysis.reporting.box import Box, Dimension
+from ctrl_analysis.reporting.study import algorithm as study_algorithm
+from ctrl_analysis.reporting.verdicts import claim_verdict, printed_tolerance
 from ctrl_analysis.symbolic import differential as sym_de
 from ctrl_analysis.symbolic import eso as sym_eso
 from ctrl_analysis.symbolic import riccati as sym_ric
@@ -644,14 +648,21 @@ def _claim_cases(results):
          dict(paper=[0.0, NAN, INF], decimals=INT + [-1])),
         ("ClaimResult", verdicts.ClaimResult, dict(claim=claim, holds=True, evidence=("x",)),
          dict(claim=[None, "c"], holds=[3, "yes"], evidence=[(3,), ("",)], note=[3])),
-        ("sweep", sensitivity.sweep, dict(evaluate=_toy_evaluate, params={"p": _ToyParams()}),
-         dict(evaluate=[None, 3], params=[None, {}, {"p": 3}], jobs=INT + [0], names=[["p.nope"]])),
+        ("explore", sensitivity.explore, dict(evaluate=_toy_evaluate, params={"p": _ToyParams()}, samples=8),
+         dict(evaluate=[None, 3], params=[None, {}, {"p": 3}], jobs=INT + [0], names=[["p.nope"]],
+              samples=INT + [0, 1, 10 ** 9], refine=[-1, 31, 1.5], cell_steps=[-1, 41], search_rounds=[-1, 21])),
         ("apply", sensitivity.apply, dict(result=_toy_evaluate({"p": _ToyParams()}),
-                                          sens=sensitivity.sweep(_toy_evaluate, {"p": _ToyParams()})),
-         dict(result=[None, 3], sens=[None, 3])),
+                                          exploration=sensitivity.explore(_toy_evaluate, {"p": _ToyParams()},
+                                                                          samples=8)),
+         dict(result=[None, 3], exploration=[None, 3])),
         ("plot_sensitivity", sensitivity.plot_sensitivity, dict(result=_swept(), top=3),
          dict(result=[None, 3, _toy_evaluate({"p": _ToyParams()})], top=INT + [0])),
-        ("Sensitivity", sensitivity.Sensitivity, dict(baseline={}, rows=[], ranges={}), {}),
+        ("caption", sensitivity.caption, dict(result=_swept(), detail="x"), dict(result=[None, 3], detail=[3])),
+        ("Box", Box, dict(params={"p": _ToyParams()}), dict(params=[None, {}, {"p": 3}], names=[["p.nope"]])),
+        ("claim_verdict", claim_verdict, dict(support=0.5, base="holds"), dict(base=["maybe", None, 3])),
+        ("printed_tolerance", printed_tolerance, dict(paper=1.25), dict(paper=[None, "x", [], [[1.0]] * 0])),
+        ("algorithm", study_algorithm, dict(printed="a", corrected="b", why="w"),
+         dict(corrected=["a"], why=["", None])),
         ("scorecard", report_claims.scorecard, dict(results=results), dict(results=[None, 3])),
         ("claim_counts", report_claims.claim_counts, dict(results=results), dict(results=[None, 3])),
         ("checks_and_errata", report_claims.checks_and_errata, dict(results=results), dict(results=[None, 3])),
@@ -801,7 +812,7 @@ def _swept():
     from ctrl_analysis.reporting import sensitivity
 
     res = _toy_evaluate({"p": _ToyParams()})
-    sensitivity.apply(res, sensitivity.sweep(_toy_evaluate, {"p": _ToyParams()}))
+    sensitivity.apply(res, sensitivity.explore(_toy_evaluate, {"p": _ToyParams()}, samples=8))
     return res
 
 
@@ -831,6 +842,8 @@ _PARAMS = _Params()
 
 #: Public classes and functions deliberately not in the table, with the reason.
 NOT_FUZZED = {
+    Dimension: "a record Box builds from a study's reconstructions (Box is fuzzed)",
+    sensitivity_module.Exploration: "the record explore() returns (explore and apply are fuzzed)",
     blocks.Block: "abstract base class without constructor arguments",
     blocks.ContinuousBlock: "abstract base class without constructor arguments",
     blocks.DiscreteBlock: "abstract base class without constructor arguments (run/nlsys are fuzzed above)",

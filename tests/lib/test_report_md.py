@@ -61,13 +61,14 @@ def test_overview_counts_each_cell_once_and_diverged(tmp_path):
     counts = count_verdicts(data)
     # 5 cells: ESO x1 scored by its primary (differs), not by the agreeing first reading; MESO x1 diverged;
     # the §5 step differs (5.7296 against the printed 5.7325 at 1e-4)
-    assert counts == {"agrees": 2, "differs": 2, "diverged": 1, "new": 1}
+    assert counts == {"agrees": 2, "reachable": 0, "differs": 2, "diverged": 1, "new": 1}
     overview = text.split("## Overview")[1].split("###")[0]
-    # claims hold / fail / depend / untestable, cells agree / differ / diverged / lost, checks, new, findings, figures
-    assert "| [demo](#demo) | A paper | yes | 0 | 0 | 0 | 0 | 2 | 2 | 1 | 0 | 0 | 1 | 2 | 2 |" in overview
+    # claims hold / fail / depend / untestable / beyond the paper, cells agree / reachable / differ / diverged / lost,
+    # checks and errata, new, findings, figures
+    assert "| [demo](#demo) | A paper | yes | 0 | 0 | 0 | 0 | 0 | 2 | 0 | 2 | 1 | 0 | 0, 0 | 1 | 2 | 2 |" in overview
     assert text.index("## Overview") < text.index("## demo")
-    assert tally(data) == {"agrees": 2, "differs": 2, "diverged": 1, "printed": 5, "lost": 0, "new": 1,
-                           "new_diverged": 0, "checks": 0}
+    assert tally(data) == {"agrees": 2, "reachable": 0, "differs": 2, "diverged": 1, "printed": 5, "lost": 0,
+                           "new": 1, "new_diverged": 0, "checks": 0, "errata": 0, "findings": 2}
     # a new quantity whose runs all diverged is not a diverged paper cell
     r = _result()
     r.quantity("beyond", "beyond the paper, all runs diverged", None, runs=3, runs_diverged=3, unit="")
@@ -129,7 +130,7 @@ def test_built_studies_come_first(tmp_path):
     built = _result().to_dict()
     text = write_report_md([empty, built], tmp_path).read_text()
     assert text.index("## demo") < text.index("## empty")
-    assert re.search(r"\*\*Not reproduced \(1: 0 printed cells outside the verdict policy, 1 part of the paper\):\*\*"
+    assert re.search(r"\*\*Not reproduced \(1: 0 printed cells that differ or diverged, 1 part of the paper\):\*\*"
                      r"\n\n1\. everything", text)
 
 

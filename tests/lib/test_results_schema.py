@@ -43,7 +43,8 @@ def test_every_quantity_has_unit_and_tolerance_and_validates():
     q = {d["id"]: d for d in data["quantities"]}
     assert all("unit" in d and "tolerance" in d for d in data["quantities"])
     assert q["t2.x1.eso"]["unit"] == "rad" and q["t2.x1.eso"]["tolerance"] == 0.1
-    assert q["t2.x1.eso.literal"]["tolerance"] == 0.1  # default, written because a paper value exists
+    # default: half a unit of the last printed digit (1.05: 0.005), written because a paper value exists
+    assert q["t2.x1.eso.literal"]["tolerance"] == pytest.approx(0.005 / 1.05)
     assert q["extra"]["tolerance"] is None and q["extra"]["verdict"] == "new"
 
 
@@ -68,7 +69,7 @@ def test_counts_score_each_paper_cell_once_with_its_primary():
     counts = count_verdicts(_result().to_dict())
     # cell x1: first quantity (agrees) counts; cell x2: the primary (agrees) counts, not the first (differs);
     # the diverged quantity and the new one count individually
-    assert counts == {"agrees": 2, "differs": 0, "new": 1, "diverged": 1}
+    assert counts == {"agrees": 2, "reachable": 0, "differs": 0, "new": 1, "diverged": 1}
 
 
 def test_two_primaries_in_one_cell_are_rejected():
@@ -143,7 +144,7 @@ def test_report_shows_unit_tolerance_counts_and_marks_stale(tmp_path):
                            failed={"old-study": "ValueError: boom", "never-ran": "KeyError: x"}).read_text()
     assert "| never-ran | **no — failed**, and no earlier results |" in text
     assert "| `t2.x1.eso` | x1 ESO | Table 2 / x1 ESO | 1.05 | 1 | rad | 10 % | agrees |" in text
-    assert "Paper cells: 2 agree, 0 differ, 1 diverged; 1 new quantities;" in text
+    assert "Paper cells: 2 agree, 0 reachable inside the plausible box, 0 differ, 1 diverged; 1 new quantities;" in text
     assert "| demo | yes | 7 | 4 |" in text
     assert "| old-study | **no — stale**" in text
     stale_section = text.split("## old-study")[1]
