@@ -122,13 +122,14 @@ class Exploration:
 
 
 class _Runner:
-    """Evaluates points in rounds (one batch over processes per round) and keeps every outcome."""
+    """Evaluates points in rounds (one batch over processes per round) and keeps count."""
 
-    def __init__(self, evaluate, box, jobs, scheduler):
+    def __init__(self, evaluate, box, jobs, scheduler, batch=None):
         from ..parallel import picklable
 
-        self.evaluate, self.box, self.jobs, self.scheduler = evaluate, box, jobs, scheduler
-        self.parallel = (jobs > 1 or scheduler is not None) and picklable(evaluate)
+        self.evaluate, self.box, self.jobs, self.scheduler, self.batch = evaluate, box, jobs, scheduler, batch
+        fn = evaluate if batch is None else batch
+        self.parallel = (jobs > 1 or scheduler is not None) and picklable(fn)
         self.count = 0
 
     def run(self, points) -> list:
@@ -137,11 +138,33 @@ class _Runner:
 
         if not points:
             return []
-        tasks = [(self.evaluate, self.box.params_at(u, a)) for u, a in points]
-        self.count += len(tasks)
+        variants = [self.box.params_at(u, a) for u, a in points]
+        self.count += len(variants)
+        if self.batch is not None:
+            # the study evaluates several points at once (e.g. on the batch axis of one simulation): one call per
+            # process, each on a contiguous share of the points
+            n = min(self.jobs if self.parallel else 1, len(variants))
+            cuts = np.linspace(0, len(variants), n + 1).round().astype(int)
+            chunks = [(self.batch, variants[a:b]) for a, b in zip(cuts[:-1], cuts[1:]) if b > a]
+            if self.parallel and len(chunks) > 1:
+                parts = map_chunks(_batch_task, chunks, jobs=self.jobs, scheduler=self.scheduler,
+                                   desc="plausible box")
+            else:
+                parts = [_batch_task(c) for c in chunks]
+            return [o for part in parts for o in part]
+        tasks = [(self.evaluate, v) for v in variants]
         if self.parallel and len(tasks) > 1:
             return map_chunks(_evaluate_task, tasks, jobs=self.jobs, scheduler=self.scheduler, desc="plausible box")
         return [_evaluate_task(t) for t in tasks]
+
+
+def _batch_task(task):
+    batch, variants = task
+    results = batch(variants)
+    if not isinstance(results, (list, tuple)) or len(results) != len(variants):
+        raise ValueError(f"batch must return one StudyResult per parameter set ({len(variants)}), got "
+                         f"{type(results).__name__} of length {len(results) if hasattr(results, '__len__') else '?'}")
+    return [_outcome(r) for r in results]
 
 
 def _indicator(outcomes, claim_id) -> np.ndarray:
@@ -175,7 +198,8 @@ def _first_order(box, U, y) -> list:
         # by 1 - 2M/N, on the bootstrap's resamples too)
         m = max(1, min(4, int(ok.sum()) // 16))
         res = rbd_fast.analyze(problem, U[ok], y[ok].astype(float), M=m, num_resamples=50, seed=1)
-    rows = [{"reconstruction": d.name, "S1": round(float(s), 3), "conf": round(float(c), 3)}
+    rows = [{"reconstruction": d.name, "S1": round(float(s), 3),
+             "conf": round(float(c), 3) if math.isfinite(float(c)) else None}
             for d, s, c in zip(box.dims, res["S1"], res["S1_conf"]) if math.isfinite(float(s))]
     return sorted(rows, key=lambda r: -r["S1"])
 
@@ -208,7 +232,7 @@ def _bisect(runner, segments, steps, decide) -> list:
 
 def explore(evaluate: Callable, params: dict, *, samples: int = SAMPLES, seed: int | None = None,
             names=None, jobs: int = 1, scheduler=None, refine: int = 6, cell_steps: int = 10,
-            search_rounds: int = 3, note: str = "") -> Exploration:
+            search_rounds: int = 3, batch: Callable | None = None, note: str = "") -> Exploration:
     """Judge the study's claims and cells over its plausible box (module docstring).
 
     Parameters
@@ -237,6 +261,10 @@ def explore(evaluate: Callable, params: dict, *, samples: int = SAMPLES, seed: i
         Bisection steps per cell segment (stops early once the band holds the paper's value).
     search_rounds : int
         Rounds of the local compass search for a cell no sample straddles.
+    batch : callable, optional
+        ``batch([params, ...]) -> [StudyResult, ...]``: the study evaluates many points at once (e.g. every
+        point's Monte Carlo runs side by side on the batch axis of one simulation), with the same results as
+        ``evaluate`` point by point. Each round then makes one call per process. Module-level (picklable).
     note : str
         How each evaluation is run (runs, seeds), recorded in results.json.
 
@@ -253,7 +281,9 @@ def explore(evaluate: Callable, params: dict, *, samples: int = SAMPLES, seed: i
     box = Box(params, None if names is None else set(names))
     if seed is None:
         seed = zlib.crc32(",".join(d.name for d in box.dims).encode())
-    runner = _Runner(evaluate, box, jobs, scheduler)
+    if batch is not None:
+        check_callable("batch", batch, "batch([params, ...])")
+    runner = _Runner(evaluate, box, jobs, scheduler, batch)
     chosen = box.chosen
     U = box.sample(samples, seed)
     # round 0: the chosen point and the sample, under each algorithm

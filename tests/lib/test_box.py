@@ -218,3 +218,17 @@ def test_the_policy_thresholds_and_printed_digits():
     assert printed_tolerance([0.95, 0.863]) == pytest.approx(0.0005 / 0.863)
     with pytest.raises(ValueError, match="printed and corrected"):
         algorithm("a", "a", "same")
+
+
+def _batch(variants):
+    """Every point at once, as a study would on the batch axis: the same results as point by point."""
+    return [_evaluate(v) for v in variants]
+
+
+def test_a_batch_evaluator_gives_the_same_exploration_as_point_by_point():
+    one = sensitivity.explore(_evaluate, {"toy": Toy()}, samples=16)
+    many = sensitivity.explore(_evaluate, {"toy": Toy()}, samples=16, batch=_batch)
+    assert one.claims == many.claims and one.cells == many.cells
+    assert one.summary["evaluations"] == many.summary["evaluations"]
+    with pytest.raises(ValueError, match="one StudyResult per parameter set"):
+        sensitivity.explore(_evaluate, {"toy": Toy()}, samples=4, batch=lambda v: v[:1])
