@@ -7,6 +7,7 @@ import pickle
 
 import control as ct
 import numpy as np
+import pytest
 
 from analysis import STUDIES
 from analysis._skeleton import INFO, run
@@ -75,12 +76,22 @@ def test_run_writes_results_json(tmp_path):
     assert data["findings"][0]["id"] == "noise-reduction"
     claims = {c["id"]: c for c in data["claims"]}
     # the filter divides the noise by 4.5 at ω_f = 10 rad/s but only by 2.6 at 30 rad/s: the claim depends on ω_f
+    # (the closed form puts the flip at ω_f = −ln(0.8)/h = 22.3 rad/s; the runs' std over a short window of
+    # correlated filtered noise is biased low, which moves the measured flip up)
     noise = claims["filter-reduces-noise"]
     assert noise["base_verdict"] == "holds" and noise["verdict"] == "depends"
-    (dep,) = noise["depends_on"]
-    assert dep["reconstruction"] == "ex.omega_f" and dep["flips_at"] == [30.0]
-    assert claims["step-unaffected"]["verdict"] == "holds"
-    assert sorted(claims["step-unaffected"]["robust_to"]) == ["ex.omega_f", "ex.t_settle"]
+    assert 0.5 < noise["support"]["holds"] < 0.95 and noise["drivers"][0]["reconstruction"] == "ex.omega_f"
+    dep = noise["depends_on"][0]
+    assert dep["reconstruction"] == "ex.omega_f" and 20.0 < dep["flips_at"] < 30.0
+    # the located flip is real: just below it the claim holds, just above it fails (same other coordinates)
+    from analysis._skeleton import evaluate
+
+    at = {k.split(".", 1)[1]: v for k, v in noise["nearest_flip"]["point"].items()}
+    below = evaluate({"ex": dataclasses.replace(SMALL, **dict(at, omega_f=dep["flips_at"] - 1.0))})
+    above = evaluate({"ex": dataclasses.replace(SMALL, **dict(at, omega_f=dep["flips_at"] + 1.0))})
+    assert below.get_claim("filter-reduces-noise").holds and not above.get_claim("filter-reduces-noise").holds
+    step = claims["step-unaffected"]
+    assert step["verdict"] == "holds" and step["support"]["holds"] == 1.0 and step["nearest_flip"] is None
 
 
 def test_every_reconstruction_has_a_plausible_range():
