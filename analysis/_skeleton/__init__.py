@@ -2,8 +2,8 @@
 
 A first-order lag driven by a unit step, measured in white noise and smoothed by a digital
 low-pass: one printed value per quantity (textbook closed forms), three reconstructions with their
-plausible ranges, two claims judged on the quantities, a sensitivity sweep that re-judges them across
-the ranges, two figures. See CONTRIBUTING.md, "Add a study".
+plausible ranges, two claims judged on the quantities and re-judged jointly over the
+plausible box those ranges span, two figures. See CONTRIBUTING.md, "Add a study".
 """
 
 from __future__ import annotations
