@@ -15,7 +15,7 @@ import warnings
 
 import numpy as np
 
-from .box import _json
+from .box import _json, first_order
 from .verdicts import relative_error
 
 __all__ = ["cell_state", "search_cells"]
@@ -149,7 +149,37 @@ def search_cells(runner, box, U, per, cell_steps, search_rounds, bisect) -> dict
     for entry in out.values():
         if entry["verdict"] is None:
             entry["verdict"] = "differs"
+    _prune(runner, box, U, per, out)
     return out
+
+
+def _prune(runner, box, U, per, out) -> None:
+    """Name what moves each cell: its drivers (Sobol' indices of its gap over the sample), and for a reached cell
+    the point with every other reconstruction back at its chosen value, where that still reaches it (one batch)."""
+    main = box.algorithms[0]
+    tries = []
+    for qid, entry in out.items():
+        gaps = np.array([(o["cells"].get(qid) or {}).get("dist", math.nan) for o in per[main][1:]], dtype=float)
+        gaps[~np.isfinite(gaps)] = math.nan
+        entry["drivers"] = [d for d in first_order(box, U, gaps) if d["S1"] >= 0.05][:4] if len(U) else []
+        if entry["verdict"] != "reachable" or not entry["drivers"]:
+            continue
+        keep = {d["reconstruction"] for d in entry["drivers"]}
+        u = np.array([box.dims[i].coordinate(_value(box, entry["reached_at"], i)) if box.dims[i].name in keep
+                      else box.chosen[i] for i in range(len(box.dims))])
+        if box.changed(u) != entry["reached_at"]:
+            tries.append((qid, u, entry["algorithm"]))
+    outs = runner.run([(u, a) for _, u, a in tries])
+    for (qid, u, _), o in zip(tries, outs):
+        s = o["cells"].get(qid)
+        if s is not None and s["in_band"]:
+            out[qid]["reached_at"] = box.changed(u)
+
+
+def _value(box, point, i):
+    """The value of dimension ``i`` in a ``{name: value}`` point (its chosen value where the point omits it)."""
+    d = box.dims[i]
+    return point.get(d.name, d.chosen)
 
 
 def _search(runner, box, U, per, out, searches, rounds) -> None:

@@ -241,7 +241,12 @@ def sensitivity_lines(results: dict) -> list[str]:
         for q in far:
             b = q["box"]
             close = b.get("closest") or {}
-            where = ", ".join(f"`{k}` = {_short(v)}" for k, v in (close.get("point") or {}).items()) or "the chosen values"
+            drivers = [d["reconstruction"] for d in b.get("drivers") or []]
+            point = close.get("point") or {}
+            shown = [k for k in drivers if k in point] or list(point)[:4]
+            where = ", ".join(f"`{k}` = {_short(point[k])}" for k in shown) or "the chosen values"
+            if len(point) > len(shown):
+                where += f" (and {len(point) - len(shown)} more reconstructions that barely move it)"
             rng = b.get("range")
             lines.append(f"- {_cell(q['label'])}: paper {_short(q['paper'])}"
                          + (f", box range {_short(rng[0])} … {_short(rng[1])}" if rng else "")

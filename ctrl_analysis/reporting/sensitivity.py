@@ -51,14 +51,13 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import warnings
 import zlib
 from collections.abc import Callable
 
 import numpy as np
 
 from .._validate import check_callable, check_int
-from .box import Box, Dimension, _json
+from .box import Box, Dimension, _json, first_order
 from .box_cells import cell_state, search_cells
 from .results import StudyResult
 from .support_figure import plot_sensitivity
@@ -184,26 +183,6 @@ def _support(y) -> dict:
             "untestable": int(y.size - n)}
 
 
-def _first_order(box, U, y) -> list:
-    """First-order Sobol' indices of ``y`` over the sample ``U`` (SALib's RBD-FAST on given data), largest first."""
-    ok = np.isfinite(y)
-    if ok.sum() < 16 or np.ptp(y[ok]) == 0 or not box.dims:
-        return []
-    from SALib.analyze import rbd_fast
-
-    problem = {"num_vars": len(box.dims), "names": [d.name for d in box.dims], "bounds": [[0.0, 1.0]] * len(box.dims)}
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        # M harmonics: 4 from 64 points on; fewer on a smoke test's small sample (the bias correction divides
-        # by 1 - 2M/N, on the bootstrap's resamples too)
-        m = max(1, min(4, int(ok.sum()) // 16))
-        res = rbd_fast.analyze(problem, U[ok], y[ok].astype(float), M=m, num_resamples=50, seed=1)
-    rows = [{"reconstruction": d.name, "S1": round(float(s), 3),
-             "conf": round(float(c), 3) if math.isfinite(float(c)) else None}
-            for d, s, c in zip(box.dims, res["S1"], res["S1_conf"]) if math.isfinite(float(s))]
-    return sorted(rows, key=lambda r: -r["S1"])
-
-
 def _bisect(runner, segments, steps, decide) -> list:
     """Bisect every segment ``steps`` times, all segments' midpoints evaluated as one batch per round.
 
@@ -313,7 +292,7 @@ def _claims(runner, box, U, per, refine) -> dict:
     for cid, holds0 in base["claims"].items():
         y = _indicator(outs, cid)
         entry = {"support": _support(y), "baseline": None if holds0 is None else ("holds" if holds0 else "fails"),
-                 "drivers": _first_order(box, U, y) if len(U) else [], "nearest_flip": None, "boundary": [],
+                 "drivers": first_order(box, U, y) if len(U) else [], "nearest_flip": None, "boundary": [],
                  "depends_on": []}
         if len(box.algorithms) > 1:
             entry["by_algorithm"] = {}

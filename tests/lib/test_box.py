@@ -109,6 +109,7 @@ def test_a_cell_reachable_only_at_an_interior_point_of_its_range(explored):
     q = result.get("curve")
     assert q.paper == 1.02 and q.effective_tolerance == pytest.approx(0.005 / 1.02)
     assert q.verdict == "reachable" and q.box["verdict"] == "reachable"
+    assert set(q.box["reached_at"]) == {"toy.k"} and q.box["drivers"][0]["reconstruction"] == "toy.k"
     k = q.box["reached_at"]["toy.k"]
     assert abs(1.0 + (k - 1.7) ** 2 - 1.02) <= 0.0051 and 1.5 < k < 1.9
     # neither end of k's range is anywhere near the printed value
