@@ -79,6 +79,9 @@ def _build_parser() -> argparse.ArgumentParser:
     rep.add_argument("--quick", action="store_true", help="fewer runs / shorter horizons, for smoke tests")
     rep.add_argument("--jobs", type=_positive_int, default=None,
                      help="processes: studies run side by side, Monte Carlo chunks split (default: all cores)")
+    rep.add_argument("--verbose", "-v", action="store_true",
+                     help="print every study's progress messages and its table of quantities (default: one line "
+                          "per study; the tables are in REPORT.md and results.json)")
     rep.add_argument("--scheduler", default=None, metavar="ADDRESS",
                      help="run every Monte Carlo batch and sweep on a Dask cluster: 'local' starts one on this "
                           "machine, or the address of a running scheduler, tcp://host:8786 (same numbers as a "
@@ -90,13 +93,13 @@ def _build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _progress(study: str):
+def _progress(study: str, verbose: bool = True):
     from .progress import write
 
     def emit(msg: str) -> None:
         write(f"[{study}] {msg}")  # through tqdm when bars are drawn, so they stay intact
 
-    return emit
+    return emit if verbose else (lambda msg: None)
 
 
 def _check_out(text: str) -> Path:
@@ -136,22 +139,22 @@ def _run_study(task) -> dict:
     """
     from .progress import set_context
 
-    name, out, runs, seed, quick, jobs, scheduler, position = task
+    name, out, runs, seed, quick, jobs, scheduler, position, verbose = task
     set_context(name, position)  # the study's own bars (long simulations) carry its name, on their own line
     try:
-        return _run_study_here(name, Path(out), runs, seed, quick, jobs, scheduler)
+        return _run_study_here(name, Path(out), runs, seed, quick, jobs, scheduler, verbose)
     finally:
         set_context()
 
 
-def _run_study_here(name, out, runs, seed, quick, jobs, scheduler) -> dict:
+def _run_study_here(name, out, runs, seed, quick, jobs, scheduler, verbose=True) -> dict:
     from analysis import load_study
 
     record = {"name": name, "error": None, "text": "", "staged": None,
               "run": {"seed": seed, "runs": runs, "quick": bool(quick)}}
     staged = new_staging(out / name)
     try:
-        ctx = StudyContext(out_dir=staged, runs=runs, seed=seed, quick=quick, progress=_progress(name),
+        ctx = StudyContext(out_dir=staged, runs=runs, seed=seed, quick=quick, progress=_progress(name, verbose),
                            jobs=jobs, scheduler=scheduler)
         t0 = time.perf_counter()
         result = load_study(name).run(ctx, params=None)  # the study's chosen values (analysis/__init__.py)
@@ -168,13 +171,28 @@ def _run_study_here(name, out, runs, seed, quick, jobs, scheduler) -> dict:
         remove_tree(staged)
         raise
     record["staged"] = str(staged)
-    lines = [f"\n== {name}: {out / name / 'results.json'} ({len(result.figures)} figures, {result.runtime_s:.1f} s)"]
+    record["text"] = _study_lines(name, out, data, result.runtime_s, verbose)
+    return record
+
+
+def _study_lines(name: str, out: Path, data: dict, runtime: float, verbose: bool) -> str:
+    """What a finished study prints: one line of verdict counts (with --verbose also its quantities and gaps)."""
+    from .reporting.claims import claim_counts
+    from .reporting.markdown import not_reproduced, tally
+
+    c, k = tally(data), claim_counts(data)
+    line = (f"== {name}: {out / name / 'results.json'} ({len(data['figures'])} figures, {runtime:.1f} s): "
+            f"claims {k['holds']} hold, {k['fails']} fail, {k['depends']} depend, {k['untestable']} untestable; "
+            f"cells {c['agrees']} agree, {c['reachable']} reachable, {c['differs']} differ, {c['diverged']} diverged")
+    gaps = not_reproduced(data)
+    if not verbose:
+        return line + (f"; not reproduced: {len(gaps)} (listed in REPORT.md)" if gaps else "")
+    lines = ["", line]
     if data["quantities"]:
         lines.append(summary_table(data))
-    if result.missing:
-        lines.append("not reproduced: " + "; ".join(result.missing))
-    record["text"] = "\n".join(lines)
-    return record
+    if gaps:
+        lines.append("not reproduced: " + "; ".join(gaps))
+    return "\n".join(lines)
 
 
 def _arena_links(out: Path) -> dict:
@@ -192,11 +210,11 @@ def _arena_links(out: Path) -> dict:
 
 
 def _previous_runtime(study_dir: Path) -> float:
-    """``runtime_s`` of the results.json already in ``study_dir`` (``inf`` when there is none)."""
-    try:
-        return float(json.loads((study_dir / "results.json").read_text(encoding="utf-8"))["runtime_s"])
-    except (OSError, ValueError, KeyError, TypeError):
-        return float("inf")
+    """The wall time of the study already in ``study_dir`` (its timing.json; ``inf`` when unknown)."""
+    from .reporting.report import read_runtime
+
+    value = read_runtime(study_dir)
+    return float("inf") if value is None else value
 
 
 def _arena_section(out: Path) -> list[str] | None:
@@ -454,7 +472,7 @@ def _reproduce(args) -> int:
         for name, why in run.failed.items():
             if name not in todo and name != "REPORT.md":  # another study's results.json, left out of the report
                 sys.stderr.write(f"ctrl-analysis: error: REPORT.md leaves out {name}: {why}\n")
-        if run.report_path is not None:
+        if run.report_path is not None and args.verbose:
             print(f"\nreport: {run.report_path}")
         if dask:
             print(dask)
@@ -480,7 +498,7 @@ def _run_studies(args, todo, out, jobs, side_by_side, run, load_study, map_chunk
     # then ends with the longest study instead of starting it last; summaries print in the asked order
     start = sorted(todo, key=lambda name: -_previous_runtime(out / name))
     tasks = [(name, str(out), args.runs, args.seed, args.quick, max(1, jobs // side_by_side), args.scheduler,
-              1 + i % side_by_side if side_by_side > 1 else None) for i, name in enumerate(start)]
+              1 + i % side_by_side if side_by_side > 1 else None, args.verbose) for i, name in enumerate(start)]
     if side_by_side > 1:  # import the studies (numpy, scipy, control, matplotlib) once, before the workers fork
         for name in todo:
             load_study(name)

@@ -86,7 +86,8 @@ def sigint_default():
 
 
 def _start(env, out, seed, jobs=2):
-    argv = [sys.executable, "-m", "ctrl_analysis.cli", "reproduce", "all", "--quick", "--jobs", str(jobs),
+    # --verbose: the studies' progress lines on stderr tell the test when a study has started
+    argv = [sys.executable, "-m", "ctrl_analysis.cli", "reproduce", "all", "--quick", "--verbose", "--jobs", str(jobs),
             "--out", str(out), "--seed", str(seed)]
     _STARTED.append(subprocess.Popen(argv, cwd=env["FAKE_CWD"], env=env, stdout=subprocess.PIPE,
                                      stderr=subprocess.PIPE, text=True, preexec_fn=sigint_default))
