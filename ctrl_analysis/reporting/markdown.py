@@ -427,7 +427,7 @@ def _study_section(r: dict, this_run: dict, failed: dict, claim_links: dict | No
               + (f", {c['lost']} lost in extraction" if c["lost"] else "")
               + (f"; {c['checks']} checks and {c['errata']} errata apart" if c["checks"] or c["errata"] else "")
               + f"; {c['new']} new quantities" + (f" ({c['new_diverged']} diverged)" if c["new_diverged"] else "")
-              + f"; runtime {r['runtime_s']:.1f} s.", ""]
+              + ".", ""]
     if r["quantities"]:
         lines += study_summary(r) + [""]
     missing = not_reproduced(r)

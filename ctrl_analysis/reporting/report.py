@@ -42,6 +42,7 @@ __all__ = [
     "compute_verdict",
     "count_verdicts",
     "relative_error",
+    "read_runtime",
     "validate_results",
     "versions",
     "write_text_atomic",
@@ -193,14 +194,40 @@ def write_results_json(result: StudyResult, out_dir: Path) -> Path:
     out_dir = check_path("out_dir", out_dir)
     data = result.to_dict()
     validate_results(data)
+    # what differs from run to run (the wall time) goes beside results.json, not into it: a results.json
+    # (tracked in the repository's figures/) is reproduced byte for byte by the command that wrote it
+    write_text_atomic(out_dir / TIMING, json.dumps({"runtime_s": round(result.runtime_s, 3)}) + "\n")
     return write_text_atomic(out_dir / "results.json",
                              json.dumps(data, indent=2, ensure_ascii=False) + "\n")
+
+
+def read_runtime(study_dir) -> float | None:
+    """The wall time of the study written into ``study_dir`` (its ``timing.json``), or None when unknown.
+
+    Parameters
+    ----------
+    study_dir : str or Path
+
+    Returns
+    -------
+    float or None
+    """
+    study_dir = check_path("study_dir", study_dir)
+    try:
+        value = float(json.loads((study_dir / TIMING).read_text(encoding="utf-8"))["runtime_s"])
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+    return value if math.isfinite(value) and value >= 0 else None
+
+
+#: The file beside results.json holding what varies between identical runs (the wall time); not tracked.
+TIMING = "timing.json"
 
 
 _QUANTITY_KEYS = ("id", "label", "paper", "value", "std", "runs", "unit", "tolerance", "verdict", "note")
 _CLAIM_KEYS = ("id", "section", "statement", "verdict", "base_verdict", "evidence", "depends_on")
 _RESULTS_KEYS = ("study", "seed_file", "settings", "reconstructions", "quantities", "findings", "figures",
-                 "runtime_s", "versions")
+                 "versions")
 
 
 def validate_results(data: dict) -> dict:

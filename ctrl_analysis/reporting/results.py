@@ -327,7 +327,6 @@ class StudyResult:
                 "missing": self.missing,
                 "seeds": self.seeds,
                 "sensitivity": self.sensitivity,
-                "runtime_s": round(self.runtime_s, 3),
                 "versions": versions(),
             }
         )

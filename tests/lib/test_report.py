@@ -13,6 +13,7 @@ from ctrl_analysis.reporting.report import (
     StudyInfo,
     StudyResult,
     compute_verdict,
+    read_runtime,
     relative_error,
     write_results_json,
 )
@@ -53,9 +54,13 @@ def test_results_json_contract(tmp_path):
     r.finding("eq9-typo", "text", evidence={"x": 1})
     with pytest.raises(ValueError, match="a.b"):
         r.quantity("a.b", "dup", 1.0)
+    r.runtime_s = 1.25
     data = json.loads(write_results_json(r, tmp_path).read_text())
     assert set(data) >= {"study", "seed_file", "settings", "reconstructions", "quantities", "findings", "figures",
-                         "runtime_s", "versions"}
+                         "versions"}
+    # the wall time varies between identical runs: beside results.json (untracked), not in it
+    assert "runtime_s" not in data and read_runtime(tmp_path) == 1.25
+    assert read_runtime(tmp_path / "nowhere") is None
     q = {d["id"]: d for d in data["quantities"]}
     assert q["a.b"]["verdict"] == "agrees" and q["a.b"]["runs"] == 20 and q["a.b"]["tolerance"] == 0.25
     assert q["a.c"]["value"] is None and q["a.c"]["verdict"] == "differs" and "not finite" in q["a.c"]["note"]

@@ -144,7 +144,7 @@ def test_report_shows_unit_tolerance_counts_and_marks_stale(tmp_path):
                            failed={"old-study": "ValueError: boom", "never-ran": "KeyError: x"}).read_text()
     assert "| never-ran | **no — failed**, and no earlier results |" in text
     assert "| `t2.x1.eso` | x1 ESO | Table 2 / x1 ESO | 1.05 | 1 | rad | 10 % | agrees |" in text
-    assert "Paper cells: 2 agree, 0 reachable inside the plausible box, 0 differ, 1 diverged; 1 new quantities;" in text
+    assert "Paper cells: 2 agree, 0 reachable inside the plausible box, 0 differ, 1 diverged; 1 new quantities." in text
     assert "| demo | yes | 7 | 4 |" in text
     assert "| old-study | **no — stale**" in text
     stale_section = text.split("## old-study")[1]
