@@ -14,6 +14,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from hang import limit
 
 REPO = Path(__file__).resolve().parents[2]
 #: The skeleton study (analysis/_skeleton): a real study (Monte Carlo batch on the compiled engine, a
@@ -41,7 +42,7 @@ def _registry(tmp_path: Path) -> dict:
 
 def _cli(*argv, env):
     return subprocess.run([sys.executable, "-m", "ctrl_analysis.cli", *argv], capture_output=True, text=True,
-                          cwd=env["PYTHONPATH"].split(os.pathsep)[0], timeout=240, env=env, check=False)
+                          cwd=env["PYTHONPATH"].split(os.pathsep)[0], timeout=limit(600), env=env, check=False)
 
 
 #: Run as ``python -c DIE_WITH_PARENT parent_pid program args...``: on Linux, arrange to be killed when the
@@ -86,16 +87,16 @@ def cluster(tmp_path):
         from distributed import Client
 
         with Client(address, timeout="60s") as client:
-            client.wait_for_workers(2, timeout=90)
+            client.wait_for_workers(2, timeout=limit(180))
             yield address, client, env
     finally:
         for p in procs[::-1]:  # the workers first (a worker whose scheduler is gone waits to reconnect)
             p.kill()
             try:
-                p.wait(timeout=10)
+                p.wait(timeout=limit(30))
             except subprocess.TimeoutExpired:
                 p.kill()
-                p.wait(timeout=10)
+                p.wait(timeout=limit(30))
         log.close()
     assert all(p.poll() is not None for p in procs)
 

@@ -18,6 +18,7 @@ import time
 from pathlib import Path
 
 import pytest
+from hang import limit
 
 import analysis
 from ctrl_analysis.cli import main
@@ -72,7 +73,7 @@ def fake(tmp_path):
     for proc in _STARTED:  # a failed test leaves no run behind
         if proc.poll() is None:
             proc.kill()
-            proc.wait(timeout=10)
+            proc.wait(timeout=limit(30))
     _STARTED.clear()
 
 
@@ -116,16 +117,16 @@ def _alive(pid: int) -> bool:
     return state not in ("Z", "X")  # a zombie is dead, only not yet reaped by its new parent
 
 
-def _wait_gone(pids, timeout=10.0) -> list[int]:
-    end = time.monotonic() + timeout
+def _wait_gone(pids, timeout=30.0) -> list[int]:
+    end = time.monotonic() + limit(timeout)
     while time.monotonic() < end and any(_alive(p) for p in pids):
         time.sleep(0.02)
     return [p for p in pids if _alive(p)]
 
 
-def _wait_committed(out: Path, seed: int, timeout=30.0) -> str:
+def _wait_committed(out: Path, seed: int, timeout=120.0) -> str:
     """The first study whose results.json on disk comes from the run with ``seed``."""
-    end = time.monotonic() + timeout
+    end = time.monotonic() + limit(timeout)
     while time.monotonic() < end:
         for name in NAMES:
             try:
@@ -168,7 +169,7 @@ def _interrupt(env, out, seed, sig, when):
         _wait_committed(out, seed)
     kids = _children(proc.pid)
     proc.send_signal(sig)
-    _, err = proc.communicate(timeout=60)
+    _, err = proc.communicate(timeout=limit(300))
     assert _wait_gone(kids) == [], "worker processes outlived the run"
     if sig == signal.SIGINT:
         assert proc.returncode == 130 and "Traceback" not in err
@@ -182,7 +183,7 @@ def _interrupt(env, out, seed, sig, when):
 def test_interrupts_and_kills_at_several_points_leave_report_and_results_in_agreement(tmp_path, fake):
     out = tmp_path / "out"
     first = _start(fake, out, 1)
-    assert first.wait(timeout=60) == 0, first.stderr.read()
+    assert first.wait(timeout=limit(300)) == 0, first.stderr.read()
     _consistent(out, committed_by=1)
     _interrupt(fake, out, 2, signal.SIGINT, "start")
     _interrupt(fake, out, 3, signal.SIGINT, "commit")
@@ -190,7 +191,7 @@ def test_interrupts_and_kills_at_several_points_leave_report_and_results_in_agre
     _interrupt(fake, out, 5, signal.SIGKILL, "commit")
     # the next run takes the lock a killed run held, cleans its staging folders and agrees with the files
     last = _start(fake, out, 6)
-    stdout, err = last.communicate(timeout=60)
+    stdout, err = last.communicate(timeout=limit(300))
     assert last.returncode == 0, err
     assert stdout.strip().splitlines()[-1].startswith(f"ctrl-analysis: {len(NAMES)} of {len(NAMES)} studies OK, "
                                                       f"0 failed, ")
@@ -206,9 +207,9 @@ def test_two_runs_into_one_folder_do_not_interleave(tmp_path, fake):
     a = _start({**fake, "FAKE_HOLD": str(release)}, out, 11)
     assert a.stderr.readline().startswith("[")  # a holds the lock
     b = _start(fake, out, 12)
-    _, err_b = b.communicate(timeout=60)
+    _, err_b = b.communicate(timeout=limit(300))
     release.write_text("")
-    _, err_a = a.communicate(timeout=60)
+    _, err_a = a.communicate(timeout=limit(300))
     assert a.returncode == 0, err_a
     assert b.returncode == 2 and err_b.strip().splitlines() == [
         (f"ctrl-analysis: error: another ctrl-analysis run (pid {a.pid}) is writing into --out {str(out)!r}; "
@@ -227,7 +228,7 @@ def test_ctrl_c_exits_130_every_time(tmp_path, fake):
         assert proc.stderr.readline().startswith("[")
         time.sleep(0.05 * i)
         proc.send_signal(signal.SIGINT)
-        _, err = proc.communicate(timeout=60)
+        _, err = proc.communicate(timeout=limit(300))
         assert proc.returncode == 130, (i, err)
 
 

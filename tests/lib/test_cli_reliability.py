@@ -9,6 +9,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from hang import limit
 
 import analysis
 from ctrl_analysis.cli import main
@@ -19,7 +20,7 @@ REPO = Path(__file__).resolve().parents[2]
 
 def _cli(*argv, **kw):
     return subprocess.run([sys.executable, "-m", "ctrl_analysis.cli", *argv], capture_output=True, text=True,
-                          cwd=REPO, timeout=120, **kw)
+                          cwd=REPO, timeout=limit(300), **kw)
 
 
 @pytest.mark.parametrize("kind", ["file", "empty", "unwritable"])
@@ -47,7 +48,7 @@ def test_sigint_leaves_previous_output_intact(tmp_path):
     first = proc.stderr.readline()  # the study has started once it reports progress
     assert first.startswith("[meso]")
     proc.send_signal(signal.SIGINT)
-    _, err = proc.communicate(timeout=120)
+    _, err = proc.communicate(timeout=limit(300))
     assert proc.returncode == 130
     assert "Traceback" not in err and err.strip().splitlines()[-1].startswith("ctrl-analysis: interrupted")
     assert sorted(p.name for p in old.iterdir()) == sorted(files)
@@ -121,7 +122,7 @@ def test_nan_tolerance_does_not_hang():
     for call in NAN_TOLERANCE_CALLS:
         lines += ["try:", f"    {call}", "    print('returned')", "except ValueError as exc:", "    print(exc)"]
     proc = subprocess.run([sys.executable, "-c", "\n".join(lines)], capture_output=True, text=True, cwd=REPO,
-                          timeout=30, env={**os.environ, "OPENBLAS_NUM_THREADS": "1"})
+                          timeout=limit(90), env={**os.environ, "OPENBLAS_NUM_THREADS": "1"})
     out = proc.stdout.strip().splitlines()
     assert len(out) == len(NAN_TOLERANCE_CALLS), proc.stderr
     assert all("tol must be finite" in line for line in out), out

@@ -6,6 +6,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from hang import limit
 
 from analysis import STUDIES
 from ctrl_analysis.reporting.report import validate_results
@@ -13,10 +14,10 @@ from ctrl_analysis.reporting.report import validate_results
 REPO = Path(__file__).resolve().parents[2]
 
 
-@pytest.mark.timeout(330)  # the run itself may take up to its 300 s subprocess timeout (a loaded machine)
+@pytest.mark.timeout(660)  # the run itself may take up to its subprocess limit (conftest scales both)
 def test_reproduce_all_quick_writes_valid_results(tmp_path):
     proc = subprocess.run([sys.executable, "-m", "ctrl_analysis.cli", "reproduce", "all", "--quick", "--out",
-                           str(tmp_path)], capture_output=True, text=True, cwd=REPO, timeout=300)
+                           str(tmp_path)], capture_output=True, text=True, cwd=REPO, timeout=limit(600))
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert "Traceback" not in proc.stderr
     # studies run side by side (default --jobs) but their summaries print in the registry's order

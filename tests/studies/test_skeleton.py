@@ -7,7 +7,6 @@ import pickle
 
 import control as ct
 import numpy as np
-import pytest
 
 from analysis import STUDIES
 from analysis._skeleton import INFO, run
