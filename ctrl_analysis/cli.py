@@ -11,6 +11,7 @@ import tempfile
 import time
 from pathlib import Path
 
+from .arena.report_section import arena_links, arena_section
 from .reporting.atomic import (
     LockedError,
     exclusive_lock,
@@ -195,39 +196,12 @@ def _study_lines(name: str, out: Path, data: dict, runtime: float, verbose: bool
     return "\n".join(lines)
 
 
-def _arena_links(out: Path) -> dict:
-    """The arena's verdicts on the studies' claims, ``{"<study>/<claim id>": text}``, linked to its section."""
-    path = out / "arena" / "results.json"
-    if not path.exists():
-        return {}
-    from .arena.recommend import arena_claim_links
-
-    try:
-        links = arena_claim_links(json.loads(path.read_text(encoding="utf-8")))
-    except (ValueError, TypeError):
-        return {}
-    return {k: f"[{v}](#estimator-arena)" for k, v in links.items()}
-
-
 def _previous_runtime(study_dir: Path) -> float:
     """The wall time of the study already in ``study_dir`` (its timing.json; ``inf`` when unknown)."""
     from .reporting.report import read_runtime
 
     value = read_runtime(study_dir)
     return float("inf") if value is None else value
-
-
-def _arena_section(out: Path) -> list[str] | None:
-    """The arena's REPORT.md section from ``out/arena/results.json`` (written by ``ctrl-analysis arena``), if any."""
-    path = out / "arena" / "results.json"
-    if not path.exists():
-        return None
-    from .arena.recommend import arena_report_lines
-
-    try:
-        return arena_report_lines(json.loads(path.read_text(encoding="utf-8")))
-    except (ValueError, TypeError) as exc:
-        return ["## Estimator arena", "", f"The arena's results.json could not be read: {_one_line(exc)}"]
 
 
 def _read_results(path: Path, name: str) -> dict:
@@ -286,8 +260,8 @@ class _Run:
                     if r["study"] in committed}
         tmp = Path(tempfile.mkdtemp(dir=self.out, prefix=".REPORT.md.new-"))
         try:
-            write_report_md(results, tmp, this_run=this_run, failed=dict(self.failed), extra=_arena_section(self.out),
-                            claim_links=_arena_links(self.out))
+            write_report_md(results, tmp, this_run=this_run, failed=dict(self.failed), extra=arena_section(self.out),
+                            claim_links=arena_links(self.out))
         except BaseException:
             remove_tree(tmp)
             raise
@@ -554,14 +528,21 @@ def main(argv: list[str] | None = None) -> int:
             for name in STUDIES:
                 info = load_study(name).INFO
                 print(f"{name:24s} {info.reproduces}")
+            print(f"\n{'arena':24s} (ctrl-analysis arena [--signal F.csv]) which derivative estimator for a signal: "
+                  "every family tuned fairly and ranked against the proven bound 2√(εL)")
             return 0
         if args.command == "arena":
-            from analysis import arena_hooks
-
+            from .arena.cli import check_args
             from .arena.cli import main as arena_main
 
+            try:
+                checked = check_args(args)  # every argument, before the studies' heavy imports
+            except ValueError as exc:
+                raise _UsageError(" ".join(str(exc).split())) from None
+            from analysis import arena_hooks
+
             arena_hooks.register()  # the studies' plant signals and the paper claims the arena judges
-            return arena_main(args)
+            return arena_main(args, checked)
         return _reproduce(args)
     except _UsageError as exc:
         sys.stderr.write(f"ctrl-analysis: error: {exc}\n")

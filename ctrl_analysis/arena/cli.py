@@ -3,15 +3,18 @@
 from __future__ import annotations
 
 import argparse
+import math
 import sys
+import tempfile
 import time
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 
 from .._validate import check_path
 
-__all__ = ["add_parser", "main", "read_record"]
+__all__ = ["add_parser", "check_args", "main", "read_record"]
 
 
 def add_parser(sub) -> argparse.ArgumentParser:
@@ -25,12 +28,21 @@ def add_parser(sub) -> argparse.ArgumentParser:
     -------
     argparse.ArgumentParser
     """
-    p = sub.add_parser("arena", help="every estimator tuned fairly, scored against the bound")
+    p = sub.add_parser("arena", help="every estimator tuned fairly, scored against the bound",
+                       description="Which derivative estimator for my signal? Without --signal: the benchmark (every "
+                                   "family tuned on the arena's signal classes and noises, the papers' claims judged) "
+                                   "into OUT/arena. With --signal F.csv: every family tuned on your record, ranked by "
+                                   "worst-case error against the bound 2√(εL), written to OUT/arena (results.json, "
+                                   "REPORT.md, estimate.csv, figures).")
     p.add_argument("--signal", default=None, metavar="F.csv",
                    help="tune on a recorded signal: CSV columns time, measurement[, true derivative]")
-    p.add_argument("--noise-bound", type=float, default=None, metavar="E", help="noise bound ε of the record")
-    p.add_argument("--accel-bound", type=float, default=None, metavar="L", help="bound L on |f''| of the record")
-    p.add_argument("--out", default="figures", help="output directory (default: figures)")
+    p.add_argument("--noise-bound", type=float, default=None, metavar="E",
+                   help="bound ε on |noise| of the record (with --signal)")
+    p.add_argument("--accel-bound", type=float, default=None, metavar="L",
+                   help="bound L on |f''| of the record (with --signal)")
+    p.add_argument("--out", default=None,
+                   help="output directory; the results go to OUT/arena (default: figures, or arena-out with --signal, "
+                        "so a record run never replaces the committed benchmark)")
     p.add_argument("--runs", type=int, default=None, help="records per case (default 3; 1 with --quick)")
     p.add_argument("--seed", type=int, default=0, help="base seed (default: 0)")
     p.add_argument("--quick", action="store_true", help="2 signal classes, 1 noise class, short records")
@@ -99,8 +111,8 @@ def _numeric(s: str) -> bool:
         return False
 
 
-def main(args) -> int:
-    """Run ``ctrl-analysis arena`` with parsed ``args``; returns the exit status.
+def check_args(args) -> SimpleNamespace:
+    """Every argument of ``ctrl-analysis arena`` checked before any heavy import; the resolved values.
 
     Parameters
     ----------
@@ -108,44 +120,110 @@ def main(args) -> int:
 
     Returns
     -------
+    types.SimpleNamespace
+        ``jobs``, ``out`` (created, writable), ``record`` (``(t, y, d1)`` of ``--signal`` or None).
+
+    Raises
+    ------
+    ValueError
+        Naming the argument and the rule.
+    """
+    from ..parallel import check_scheduler_address, default_jobs
+
+    jobs = default_jobs() if args.jobs is None else int(args.jobs)
+    if jobs < 1:
+        raise ValueError(f"--jobs must be >= 1, got {jobs}")
+    if args.runs is not None and args.runs < 1:
+        raise ValueError(f"--runs must be >= 1, got {args.runs}")
+    if args.seed < 0:
+        raise ValueError(f"--seed must be >= 0, got {args.seed}")
+    if args.scheduler is not None:
+        check_scheduler_address(args.scheduler)
+    bounds = (("--noise-bound", args.noise_bound), ("--accel-bound", args.accel_bound))
+    if args.signal is None:
+        given = [name for name, v in bounds if v is not None]
+        if given:
+            raise ValueError(f"{' and '.join(given)} describe a record: give them with --signal F.csv")
+    else:
+        for name, v in bounds:
+            if v is None or not math.isfinite(v) or v <= 0:
+                raise ValueError(f"{name} must be given, finite and > 0 with --signal, got {v}")
+    record = read_record(args.signal) if args.signal is not None else None
+    out = _check_out(args.out if args.out is not None else ("figures" if args.signal is None else "arena-out"))
+    return SimpleNamespace(jobs=jobs, out=out, record=record)
+
+
+def _check_out(text: str) -> Path:
+    """The --out directory, created if needed; ValueError when it cannot hold results."""
+    if not text or not text.strip():
+        raise ValueError("--out must name a directory, got an empty string")
+    out = Path(text)
+    if out.exists() and not out.is_dir():
+        raise ValueError(f"--out must be a directory, got the file {text!r}")
+    if (out / "arena").exists() and not (out / "arena").is_dir():
+        raise ValueError(f"--out {text!r} holds a file named arena where the arena's folder goes")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=out):
+            pass
+    except OSError as exc:
+        raise ValueError(f"--out {text!r} is not a writable directory ({exc.strerror or exc})") from None
+    return out
+
+
+def main(args, checked: SimpleNamespace | None = None) -> int:
+    """Run ``ctrl-analysis arena`` with parsed ``args``; returns the exit status.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+    checked : types.SimpleNamespace, optional
+        :func:`check_args`' result (checked here when not given).
+
+    Returns
+    -------
     int
         0 on success, 2 on bad input (one line on stderr).
     """
-    from ..parallel import default_jobs
-
     try:
-        jobs = default_jobs() if args.jobs is None else int(args.jobs)
-        if jobs < 1:
-            raise ValueError(f"--jobs must be >= 1, got {jobs}")
-        if args.signal is not None:
-            return _user(args, jobs)
-        return _full(args, jobs)
+        checked = check_args(args) if checked is None else checked
+        if checked.record is not None:
+            return _user(args, checked)
+        return _full(args, checked)
     except ValueError as exc:
         sys.stderr.write(f"ctrl-analysis: error: {' '.join(str(exc).split())}\n")
         return 2
 
 
-def _user(args, jobs) -> int:
-    from .bound import lower_bound
-    from .recommend import recommend_for_record
+def _user(args, checked) -> int:
+    from ..progress import write
+    from ..reporting.atomic import staged_directory, write_text_atomic
+    from ..reporting.report import StudyContext, write_results_json
+    from .record import report_lines, run_record
 
-    for name, v in (("--noise-bound", args.noise_bound), ("--accel-bound", args.accel_bound)):
-        if v is None or not np.isfinite(v) or v <= 0:
-            raise ValueError(f"{name} must be given and > 0 with --signal, got {v}")
-    t, y, d1 = read_record(args.signal)
-    ranking = recommend_for_record(t, y, d1, args.noise_bound, args.accel_bound, jobs=jobs)
-    b = lower_bound(args.noise_bound, args.accel_bound)
-    print(f"bound 2√(εL) = {b:.4g}; " + ("scored on the given derivative" if d1 is not None else
-                                         "no derivative given: scored on a zero-phase fit of the record plus uniform noise"))
+    t, y, d1 = checked.record
+    out = checked.out
+    t0 = time.perf_counter()
+    with staged_directory(out / "arena") as staged:
+        ctx = StudyContext(out_dir=staged, jobs=checked.jobs, progress=lambda m: write(f"[arena] {m}"))
+        result, ranking = run_record(ctx, t, y, d1, args.noise_bound, args.accel_bound, source=str(args.signal))
+        result.runtime_s = time.perf_counter() - t0
+        write_results_json(result, staged)
+        write_text_atomic(staged / "REPORT.md", "\n".join(report_lines(result.to_dict())) + "\n")
+    s = result.settings
+    print(f"bound 2√(εL) = {result.get('bound').value:.4g}; errors after a start-up window of "
+          f"{s['startup_window_s']:.4g} s, scored on {s['scored_on']}")
     for i, r in enumerate(ranking, 1):
         params = ", ".join(f"{k} = {v:.4g}" for k, v in r["params"].items())
         print(f"{i}. {r['family']:10s} worst |f̂' - f'| = {r['worst']:.4g} ({r['ratio']:.2f}× bound)  {params}")
     w = ranking[0]
     print(f"recommendation: {w['label']} with {w['params']}: the smallest worst-case derivative error on this record.")
+    print(f"arena: {out / 'arena'} (results.json, REPORT.md, estimate.csv, {len(result.figures)} figures; "
+          f"{result.runtime_s:.1f} s)")
     return 0
 
 
-def _full(args, jobs) -> int:
+def _full(args, checked) -> int:
     from dataclasses import replace
 
     from ..reporting.atomic import staged_directory
@@ -154,20 +232,17 @@ def _full(args, jobs) -> int:
 
     settings = QUICK if args.quick else default_settings()
     if args.runs is not None:
-        if args.runs < 1:
-            raise ValueError(f"--runs must be >= 1, got {args.runs}")
         settings = replace(settings, records=args.runs)
-    if args.seed < 0:
-        raise ValueError(f"--seed must be >= 0, got {args.seed}")
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    out = checked.out
     t0 = time.perf_counter()
     with staged_directory(out / "arena") as staged:
         from ..progress import write
 
-        ctx = StudyContext(out_dir=staged, seed=args.seed, quick=args.quick, jobs=jobs, scheduler=args.scheduler,
-                           progress=lambda m: write(f"[arena] {m}"))
+        ctx = StudyContext(out_dir=staged, seed=args.seed, quick=args.quick, jobs=checked.jobs,
+                           scheduler=args.scheduler, progress=lambda m: write(f"[arena] {m}"))
         result, raw = run_arena(ctx, settings)
+        result.settings.update({"mode": "benchmark", "cli": {"seed": args.seed, "quick": bool(args.quick),
+                                                              "runs": args.runs}})
         result.runtime_s = time.perf_counter() - t0
         write_results_json(result, staged)
     print(f"arena: {out / 'arena' / 'results.json'} ({raw['tunings']} tunings, {result.runtime_s:.1f} s)")

@@ -43,6 +43,8 @@ from ctrl_analysis.arena import cli as arena_cli
 from ctrl_analysis.arena import figures as arena_figures
 from ctrl_analysis.arena import interface as arena_interface
 from ctrl_analysis.arena import recommend as arena_recommend
+from ctrl_analysis.arena import record as arena_record
+from ctrl_analysis.arena import report_section as arena_report_section
 from ctrl_analysis.controllers import differential_feedback as hodf
 from ctrl_analysis.controllers import fuzzy, golden_section, mfac, pd, pid
 from ctrl_analysis.engine import blocks, integrators, numpy_engine, plan, processes
@@ -843,6 +845,11 @@ _PARAMS = _Params()
 
 #: Public classes and functions deliberately not in the table, with the reason.
 NOT_FUZZED = {
+    arena_cli.check_args: "takes argparse's parsed Namespace; the CLI's arena tests feed it every bad argument",
+    arena_report_section.arena_section: "reads OUT/arena/results.json; the arena CLI tests write both kinds",
+    arena_report_section.arena_links: "reads OUT/arena/results.json for REPORT.md; covered with the section",
+    arena_record.run_record: "the arena's record run on a checked record (read_record and check_args are fuzzed)",
+    arena_record.report_lines: "renders the results.json run_record writes; the CLI's arena tests check it",
     first_order: "a step of explore() on its own sample (explore is fuzzed); SALib checks its arrays",
     box_cells.cell_state: "a step of explore() on the study's own Quantity objects (explore is fuzzed)",
     box_cells.search_cells: "a step of explore() on its own runner and sample (explore is fuzzed)",

@@ -1,0 +1,156 @@
+"""The arena on a user's record (``ctrl-analysis arena --signal F.csv``): the ranking, written where it can be kept.
+
+:func:`run_record` tunes every estimator family on the record (:func:`.recommend.recommend_for_record`), and
+writes into its output folder ``results.json`` (the ranking as quantities, the settings, the recommendation),
+``estimate.csv`` (the recommended estimator's f̂' at every sample), two figures and a short ``REPORT.md``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ..reporting.report import StudyContext, StudyInfo, StudyResult
+from .bound import lower_bound
+
+__all__ = ["INFO", "report_lines", "run_record"]
+
+INFO = StudyInfo(name="arena", seed_file="", paper="",
+                 reproduces="the estimator families tuned fairly on a user's record, ranked against the bound 2√(εL)")
+
+
+def run_record(ctx: StudyContext, t, y, d1, eps: float, L: float, source: str = "") -> tuple:
+    """Rank every family on one record and save the outputs into ``ctx.out_dir``.
+
+    Parameters
+    ----------
+    ctx : StudyContext
+        Output folder, jobs, progress.
+    t, y : numpy.ndarray, shape (N,)
+        Time (uniform steps) and measurement.
+    d1 : numpy.ndarray or None
+        The true derivative, when the record has it (its errors are then exact).
+    eps, L : float
+        Noise bound and bound on |f''|.
+    source : str
+        Where the record came from (the CSV's path), recorded in results.json.
+
+    Returns
+    -------
+    (StudyResult, list)
+        The record for results.json and the ranking (best first).
+    """
+    from .interface import estimate, family
+    from .recommend import recommend_for_record, record_case
+
+    if not isinstance(ctx, StudyContext):
+        raise TypeError(f"ctx must be a StudyContext, got {ctx!r:.80}")
+    ctx.progress("tuning every family on the record")
+    ranking = recommend_for_record(t, y, d1, eps, L, jobs=ctx.jobs)
+    setup, (ref, _, fit) = record_case(t, y, d1, eps, L)
+    bound = lower_bound(eps, L)
+    win = ranking[0]
+    fam = family(win["family"])
+    est = estimate(fam, [[win["params"][p.name] for p in fam.params]], y[:, None], setup.dt)[:, 0, 1]
+    result = StudyResult(INFO)
+    scored = ("the record's own derivative column" if d1 is not None else
+              "a surrogate: a zero-phase Savitzky-Golay fit of the record plus uniform noise of bound ε "
+              "(no derivative given; the errors are estimates)")
+    result.settings.update({"mode": "record", "signal": source, "noise_bound": float(eps), "accel_bound": float(L),
+                            "dt": setup.dt, "samples": int(y.size), "startup_window_s": setup.transient,
+                            "scored_on": scored})
+    result.quantity("bound", "lower bound 2√(εL) on the worst-case error of any causal estimator", bound,
+                    unit="signal unit/s")
+    for r in ranking:
+        result.quantity(f"{r['family']}.worst", f"{r['label']}: tuned worst-case |f̂' - f'| after the start-up window",
+                        r["worst"], unit="signal unit/s",
+                        note=", ".join(f"{k} = {v:.4g}" for k, v in r["params"].items()))
+        result.quantity(f"{r['family']}.ratio", f"{r['label']}: worst-case error / 2√(εL)", r["ratio"], unit="")
+    result.finding("recommendation",
+                   f"Recommended: {win['label']} ({', '.join(f'{k} = {v:.4g}' for k, v in win['params'].items())}), "
+                   f"the smallest worst-case derivative error on this record: {win['worst']:.4g} signal unit/s, "
+                   f"{win['ratio']:.2f}× the bound 2√(εL) = {bound:.4g}. Errors are scored on {scored}, after a "
+                   f"start-up window of {setup.transient:.4g} s (the first {int(round(setup.transient / setup.dt))} "
+                   "samples, left out of every family's error).")
+    np.savetxt(ctx.out_dir / "estimate.csv", np.column_stack([t, y, est]), delimiter=",", fmt="%.10g",
+               header=f"time,measurement,derivative estimate ({win['family']})", comments="")
+    _figures(ctx, result, t, y, est, ref[:, 0], fit[:, 0], setup, ranking, bound, d1 is not None)
+    return result, ranking
+
+
+def _figures(ctx, result, t, y, est, ref, fit, setup, ranking, bound, exact) -> None:
+    from ..reporting.report import new_figure
+
+    fig, (ax, bx) = new_figure(2, 1, size=(9.0, 6.5), sharex=True,
+                               title=f"Record and the recommended estimator ({ranking[0]['label']})")
+    ax.plot(t, y, lw=0.8, color="0.5", label="measurement")
+    if not exact:
+        ax.plot(t, fit, lw=1.2, color="tab:blue", label="zero-phase fit (the surrogate's signal)")
+    ax.set_ylabel("signal (signal unit)")
+    ax.legend(fontsize=8)
+    what = "true derivative (from the record)" if exact else "surrogate derivative (zero-phase fit)"
+    bx.plot(t, ref, lw=1.2, color="k", label=what)
+    bx.plot(t, est, lw=0.9, color="tab:orange", label=f"f̂' of {ranking[0]['family']} (causal)")
+    bx.axvspan(t[0], t[0] + setup.transient, color="0.85", label="start-up window (not scored)")
+    span = np.ptp(ref) if np.ptp(ref) > 0 else 1.0
+    bx.set_ylim(ref.min() - 0.5 * span, ref.max() + 0.5 * span)
+    bx.set_xlabel("time (s)")
+    bx.set_ylabel("derivative (signal unit/s)")
+    bx.legend(fontsize=8)
+    ctx.save_figure(result, fig, "record_estimate.png",
+                    caption=f"Top: the record. Bottom: the recommended estimator's causal derivative estimate against "
+                            f"the {what}; the grey start-up window ({setup.transient:.3g} s) is left out of every "
+                            "family's error.")
+    fams = [r["family"] for r in ranking][::-1]
+    ratios = [r["ratio"] for r in ranking][::-1]
+    fig, ax = new_figure(size=(8.0, 0.45 * len(fams) + 2.0),
+                         title="Every family tuned on the record: worst-case derivative error")
+    ax.barh(range(len(fams)), ratios, color=["tab:orange" if f == ranking[0]["family"] else "tab:blue"
+                                             for f in fams])
+    ax.axvline(1.0, color="k", ls="--", lw=1,
+               label="2√(εL): no causal estimator stays below it on every signal with |f''| ≤ L and noise ≤ ε\n"
+                     "(one record is one such signal: an error below it proves nothing by itself)")
+    ax.set_xlim(0.7 * min(ratios), 1.5 * max(1.0, max(ratios)))
+    ax.set_yticks(range(len(fams)), fams)
+    ax.set_xscale("log")
+    ax.set_xlabel(f"worst-case |f̂' - f'| / 2√(εL)   (2√(εL) = {bound:.3g} signal unit/s)")
+    ax.legend(fontsize=8, loc="lower right")
+    ctx.save_figure(result, fig, "ranking.png",
+                    caption="Each family at its best tuning on this record: worst-case derivative error after the "
+                            "start-up window, relative to the lower bound (dashed); the recommended one in orange.")
+
+
+def report_lines(results: dict, out_dir: Path | str = ".") -> list[str]:
+    """A short REPORT.md for a record run, from its results.json dict.
+
+    Parameters
+    ----------
+    results : dict
+        The results.json of :func:`run_record`.
+    out_dir : str or Path
+        Where the figures are, relative to the report (default: beside it).
+
+    Returns
+    -------
+    list of str
+    """
+    if not isinstance(results, dict) or (results.get("settings") or {}).get("mode") != "record":
+        raise ValueError("results must be the results.json of an arena run on a record (settings.mode 'record')")
+    s = results["settings"]
+    q = {x["id"]: x for x in results["quantities"]}
+    fams = [x["id"][:-len(".worst")] for x in results["quantities"] if x["id"].endswith(".worst")]
+    lines = ["# Estimator arena on a record", "",
+             f"Record `{s['signal']}`: {s['samples']} samples at dt = {s['dt']:.4g} s; noise bound ε = "
+             f"{s['noise_bound']:.4g}, bound L = {s['accel_bound']:.4g} on |f''|; lower bound 2√(εL) = "
+             f"{q['bound']['value']:.4g}. Errors are scored on {s['scored_on']}, after a start-up window of "
+             f"{s['startup_window_s']:.4g} s.", "",
+             "| rank | family | worst-case error | × bound | tuning |", "|---|---|---|---|---|"]
+    for i, f in enumerate(fams, 1):
+        lines.append(f"| {i} | {q[f + '.worst']['label'].split(':')[0]} | {q[f + '.worst']['value']:.4g} "
+                     f"| {q[f + '.ratio']['value']:.3g} | {q[f + '.worst']['note']} |")
+    lines += ["", *[f"- {f['text']}" for f in results.get("findings") or []], "",
+              "The recommended estimator's f̂' at every sample: `estimate.csv` (time, measurement, estimate).", ""]
+    for fig in results.get("figures") or []:
+        lines += [f"![{fig}]({Path(out_dir) / fig})", "", (results.get("captions") or {}).get(fig, ""), ""]
+    return lines
