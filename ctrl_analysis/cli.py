@@ -314,7 +314,11 @@ def _resolve_names(studies: list[str], registry) -> list[str]:
     """The studies asked for, in order, without repeats; ``all`` is every registered one."""
     unknown = [n for n in studies if n != "all" and n not in registry]
     if unknown:
-        raise _UsageError(f"unknown study {unknown[0]!r}; choose from {', '.join(registry)} or all")
+        import difflib
+
+        close = difflib.get_close_matches(unknown[0].lower().replace("_", "-"), [*registry, "all"], n=1, cutoff=0.6)
+        hint = f"did you mean {close[0]!r}? " if close else ""
+        raise _UsageError(f"unknown study {unknown[0]!r}; {hint}choose from {', '.join(registry)} or all")
     return list(registry) if "all" in studies else list(dict.fromkeys(studies))
 
 
