@@ -396,6 +396,41 @@ def rows_compiled(fn, t, x, u, P, out) -> bool:
     return True
 
 
+#: (kernel, kind, sizes) already checked by :func:`_check_row_kernel`
+_ROWS_CHECKED: set = set()
+
+
+def _outside(block, kind, fn, x, u, P, width, exc) -> ValueError:
+    return ValueError(
+        f"block ({type(block).__name__}): its kernel {kind} {getattr(fn, '__name__', fn)!r} reads or writes outside "
+        f"its vectors (state {x.shape[-1]}, inputs {u.shape[-1]}, parameters {P.shape[-1]} as laid out by its "
+        f"Layout, result {width}): {exc}")
+
+
+def _check_row_kernel(block, kind, fn, t, x, u, P, width) -> None:
+    """Run ``fn`` in Python on the batch's first and last rows (and at inputs 0, ±1): an index outside a vector is a
+    clear error naming the block, never a crash or garbage from the compiled rows. Once per kernel and sizes."""
+    key = (fn, kind, x.shape[-1], u.shape[-1], P.shape[-1], P.ndim, width)
+    if key in _ROWS_CHECKED:
+        return
+    import warnings
+
+    rows = [0, x.shape[0] - 1]
+    for b in rows:
+        p = P if P.ndim == 1 else P[b]
+        for level in (None, 0.0, 1.0, -1.0):
+            uu = u[b].copy() if level is None else np.full(u.shape[-1], level)
+            try:
+                with np.errstate(all="ignore"), warnings.catch_warnings():
+                    warnings.simplefilter("ignore")
+                    fn(t, x[b].copy(), uu, p.copy(), np.zeros(width))
+            except IndexError as exc:
+                raise _outside(block, kind, fn, x, u, P, width, exc) from None
+            except Exception:  # noqa: BLE001, S112 - only indices outside the vectors are this check's concern
+                continue
+    _ROWS_CHECKED.add(key)
+
+
 class KernelBlock:
     """Mixin (first among the bases): the block's batched methods and compiled kernel from its :class:`Kernels`.
 
@@ -440,10 +475,17 @@ class KernelBlock:
         if self.kernels.columns:
             fn(t, x.T, u.T, P if P.ndim == 1 else P.T, out.T)
             return out
-        if B >= ROWS_COMPILED_MIN and rows_compiled(fn, t, x, u, P, out):
-            return out
-        for b in range(B):
-            fn(t, x[b], u[b], P if P.ndim == 1 else P[b], out[b])
+        if B >= ROWS_COMPILED_MIN:
+            # compiled code does not check bounds: a kernel that reads or writes outside its vectors would
+            # corrupt memory or return garbage, so it is first run in Python on the real first and last rows
+            _check_row_kernel(self, kind, fn, t, x, u, P, out.shape[1])
+            if rows_compiled(fn, t, x, u, P, out):
+                return out
+        try:
+            for b in range(B):
+                fn(t, x[b], u[b], P if P.ndim == 1 else P[b], out[b])
+        except IndexError as exc:
+            raise _outside(self, kind, fn, x, u, P, out.shape[1], exc) from None
         return out
 
     def _vector(self, params):

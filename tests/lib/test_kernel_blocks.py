@@ -210,3 +210,43 @@ def test_a_size_cannot_differ_between_columns():
     P = np.stack([td.kernel_params, td.with_params(substeps=2).kernel_params])
     with pytest.raises(ValueError, match="differs between runs"):
         td.batched("update", 0.0, np.zeros((2, 2)), np.ones((2, 1)), P)
+
+
+def _outside_block(read: bool):
+    """A branching row kernel (columns=False) that reads, or writes, one slot past its vectors when u > 0."""
+    from ctrl_analysis.engine.blocks import DiscreteBlock
+    from ctrl_analysis.engine.kernels import Kernels, Layout
+
+    layout = Layout("k")
+
+    def out(t, x, u, p, y):
+        y[0] = x[0]
+
+    def upd(t, x, u, p, xn):
+        if u[0] > 0:
+            if read:
+                xn[0] = x[0] + p[3]  # the layout has one slot
+            else:
+                xn[2] = 1.0  # the state has one entry
+        else:
+            xn[0] = x[0]
+
+    class Outside(KernelBlock, DiscreteBlock):
+        inputs, outputs, states = ("u",), ("y",), ("x",)
+        kernels = Kernels(output=out, update=upd, columns=False)
+
+        def __init__(self):
+            self.kernel_params = layout.pack(k=1.0)
+
+    return Outside()
+
+
+@pytest.mark.parametrize("runs", [10, 100], ids=["python-rows", "compiled-rows"])
+@pytest.mark.parametrize("read", [True, False], ids=["reads-outside", "writes-outside"])
+def test_a_row_kernel_outside_its_vectors_is_a_clear_error_on_every_path(runs, read):
+    # issue 28: from 64 runs on the numpy engine runs such a kernel compiled over the rows, where an index
+    # outside the vectors used to corrupt memory ("double free or corruption") or return garbage (5e-321)
+    loop = Loop([place(_outside_block(read), "blk")], dt=1.0)
+    for engine in ("numpy", "auto"):
+        with pytest.raises(ValueError, match=r"\(Outside\): its kernel update 'upd' reads or writes outside its vectors"):
+            loop.simulate(5, inputs={"u": np.ones((6, runs))}, engine=engine)
