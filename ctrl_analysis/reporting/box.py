@@ -24,6 +24,7 @@ P(k=10.0, rule='b')
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import warnings
 
@@ -90,7 +91,7 @@ class Dimension:
         """
         return self.plausible.low is not None
 
-    @property
+    @functools.cached_property
     def levels(self) -> tuple:
         """The alternatives of a discrete dimension, the chosen value first.
 
@@ -311,16 +312,55 @@ class Box:
         -------
         float
         """
-        total = 0.0
-        for d, a, b in zip(self.dims, np.asarray(u0, dtype=float), np.asarray(u1, dtype=float)):
-            if not (math.isfinite(a) and math.isfinite(b)):
-                diff = 0.0 if (math.isfinite(a) == math.isfinite(b) or _same(d.value(a), d.value(b))) else 0.5
-            elif d.continuous:
-                diff = abs(a - b)
+        return float(self.distances(np.asarray(u0, dtype=float)[None], np.asarray(u1, dtype=float)[None])[0, 0])
+
+    def distances(self, A, B) -> np.ndarray:
+        """:meth:`distance` between every row of ``A`` and every row of ``B`` (vectorised), shape ``(len(A), len(B))``.
+
+        Parameters
+        ----------
+        A, B : array_like, shape (n, dims)
+
+        Returns
+        -------
+        numpy.ndarray
+        """
+        A, B = np.atleast_2d(np.asarray(A, dtype=float)), np.atleast_2d(np.asarray(B, dtype=float))
+        total = np.zeros((A.shape[0], B.shape[0]))
+        for i, d in enumerate(self.dims):
+            a, b = A[:, i][:, None], B[:, i][None, :]
+            if d.continuous:
+                fa, fb = np.isfinite(a), np.isfinite(b)
+                with np.errstate(invalid="ignore"):
+                    diff = np.where(fa & fb, np.abs(a - b), np.where(fa == fb, 0.0, 0.5))
             else:
-                diff = 0.0 if _same(d.value(a), d.value(b)) else 0.5
+                diff = np.where(self._level(d, a) == self._level(d, b), 0.0, 0.5)
             total += diff * diff
-        return math.sqrt(total)
+        return np.sqrt(total)
+
+    @staticmethod
+    def _level(d, u) -> np.ndarray:
+        """Index in ``d.levels`` of the alternative at coordinates ``u`` (``nan``: 0, the chosen value)."""
+        n = len(d.levels)
+        with np.errstate(invalid="ignore"):
+            idx = np.minimum(np.floor(np.clip(u, 0.0, 1.0) * n), n - 1)
+        return np.where(np.isfinite(u), idx, 0.0)
+
+    def discrete_keys(self, U) -> list:
+        """:meth:`discrete_key` of every row of ``U`` (the alternatives' indexes; equal keys differ only along
+        intervals).
+
+        Parameters
+        ----------
+        U : array_like, shape (n, dims)
+
+        Returns
+        -------
+        list of tuple
+        """
+        U = np.atleast_2d(np.asarray(U, dtype=float))
+        cols = [self._level(d, U[:, i]) for i, d in enumerate(self.dims) if not d.continuous]
+        return [tuple(c[k] for c in cols) for k in range(U.shape[0])]
 
     def discrete_key(self, u) -> tuple:
         """The alternatives taken at ``u`` (points with equal keys differ only along intervals).
@@ -333,7 +373,7 @@ class Box:
         -------
         tuple
         """
-        return tuple(repr(d.value(x)) for d, x in zip(self.dims, np.asarray(u, dtype=float)) if not d.continuous)
+        return self.discrete_keys(np.asarray(u, dtype=float)[None])[0]
 
     def changed(self, u) -> dict:
         """``{name: value}`` of the dimensions whose value at ``u`` differs from the chosen one.

@@ -108,18 +108,13 @@ def search_cells(runner, box, U, per, cell_steps, search_rounds, bisect) -> dict
         if entry["chosen_in_band"]:
             entry["verdict"], entry["how"] = "agrees", "chosen"
             continue
-        hits = [(box.distance(box.chosen, u), u, a) for u, a, s in states if s["in_band"]]
+        hits = [(box.distance(box.chosen, u), u, a) for u, a, s in states if s["in_band"]]  # usually few
         if hits:
             _, u, a = min(hits, key=lambda t: t[0])
             entry.update(verdict="reachable", reached_at=box.changed(u), how="sample", algorithm=a)
             continue
         # two points on either side of the paper's value, differing only along intervals: bisect between them
-        straddles = []
-        for i, (u, a, s) in enumerate(states):
-            for v, b, t in states[i + 1:]:
-                if (a == b and s["gap"] is not None and t["gap"] is not None and s["gap"] * t["gap"] < 0
-                        and box.discrete_key(u) == box.discrete_key(v)):
-                    straddles.append((box.distance(u, v), u, v, a, s["gap"]))
+        straddles = _straddles(box, states)
         if straddles:
             _, u, v, a, g = min(straddles, key=lambda t: t[0])
             segments.append({"cell": qid, "a": np.asarray(u, float).copy(), "b": np.asarray(v, float).copy(),
@@ -180,6 +175,29 @@ def _value(box, point, i):
     """The value of dimension ``i`` in a ``{name: value}`` point (its chosen value where the point omits it)."""
     d = box.dims[i]
     return point.get(d.name, d.chosen)
+
+
+def _straddles(box, states) -> list:
+    """``[(distance, u, v, algorithm, gap at u)]``: the closest pair of points on either side of the paper's value
+    (opposite signed gaps) under the same algorithm and alternatives, so that only intervals change between them
+    (empty when there is none)."""
+    gaps = np.array([np.nan if s["gap"] is None else s["gap"] for _, _, s in states])
+    ok = np.flatnonzero(np.isfinite(gaps))
+    if ok.size < 2:
+        return []
+    pts = np.array([np.asarray(states[i][0], dtype=float) for i in ok])
+    keys = box.discrete_keys(pts)
+    algs = [states[i][1] for i in ok]
+    g = gaps[ok]
+    group = {k: i for i, k in enumerate(dict.fromkeys(zip(algs, keys)))}
+    code = np.array([group[k] for k in zip(algs, keys)])
+    mask = (g[:, None] * g[None, :] < 0) & (code[:, None] == code[None, :])
+    mask = np.triu(mask, 1)
+    if not mask.any():
+        return []
+    D = np.where(mask, box.distances(pts, pts), np.inf)
+    a, b = np.unravel_index(int(np.argmin(D)), D.shape)
+    return [(D[a, b], pts[a], pts[b], algs[a], g[a])]
 
 
 def _search(runner, box, U, per, out, searches, rounds) -> None:

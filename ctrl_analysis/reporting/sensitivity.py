@@ -289,6 +289,9 @@ def _claims(runner, box, U, per, refine) -> dict:
     outs = per[main][1:]
     out = {}
     segments = []
+    D = box.distances(U, U)  # every pair of samples, and the chosen point to each, computed once
+    Dc = box.distances(box.chosen[None], U)[0]
+    np.fill_diagonal(D, np.inf)
     for cid, holds0 in base["claims"].items():
         y = _indicator(outs, cid)
         entry = {"support": _support(y), "baseline": None if holds0 is None else ("holds" if holds0 else "fails"),
@@ -308,20 +311,17 @@ def _claims(runner, box, U, per, refine) -> dict:
         # the nearest sample where the claim takes the other definite verdict: bisect chosen -> it
         other = [i for i in range(len(U)) if np.isfinite(y[i]) and bool(y[i]) != holds0]
         if other:
-            j = min(other, key=lambda i: box.distance(box.chosen, U[i]))
+            j = min(other, key=lambda i: Dc[i])
             segments.append({"claim": cid, "kind": "nearest", "a": box.chosen.copy(), "b": U[j].copy(),
                              "va": holds0, "algorithm": main})
         # neighbouring samples with different verdicts: the closest such pair
         pairs = []
-        for i in range(len(U)):
-            if not np.isfinite(y[i]):
-                continue
-            js = [j for j in range(len(U)) if j != i and np.isfinite(y[j])]
-            if not js:
-                continue
-            j = min(js, key=lambda k: box.distance(U[i], U[k]))
-            if y[j] != y[i] and i < j:
-                pairs.append((box.distance(U[i], U[j]), i, j))
+        ok = np.isfinite(y)
+        Dy = np.where(ok[None, :], D, np.inf)
+        for i in np.flatnonzero(ok):
+            j = int(np.argmin(Dy[i]))
+            if np.isfinite(Dy[i, j]) and y[j] != y[i] and i < j:
+                pairs.append((D[i, j], i, j))
         for _, i, j in sorted(pairs)[:1]:
             segments.append({"claim": cid, "kind": "pair", "a": U[i].copy(), "b": U[j].copy(), "va": bool(y[i]),
                              "algorithm": main})
