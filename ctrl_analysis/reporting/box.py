@@ -422,7 +422,8 @@ def first_order(box, U, y) -> list:
         # M harmonics: 4 from 64 points on; fewer on a smoke test's small sample (the bias correction divides
         # by 1 - 2M/N, on the bootstrap's resamples too)
         m = max(1, min(4, int(ok.sum()) // 16))
-        res = rbd_fast.analyze(problem, U[ok], y[ok].astype(float), M=m, num_resamples=10, seed=1)  # the bootstrap is the cost: 10 resamples
+        # the bootstrap of the confidence is most of the cost: 10 resamples
+        res = rbd_fast.analyze(problem, U[ok], y[ok].astype(float), M=m, num_resamples=10, seed=1)
     rows = [{"reconstruction": d.name, "S1": round(float(s), 3),
              "conf": round(float(c), 3) if math.isfinite(float(c)) else None}
             for d, s, c in zip(box.dims, res["S1"], res["S1_conf"]) if math.isfinite(float(s))]
