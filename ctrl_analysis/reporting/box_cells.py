@@ -156,7 +156,7 @@ def _prune(runner, box, U, per, out) -> None:
     for qid, entry in out.items():
         gaps = np.array([(o["cells"].get(qid) or {}).get("dist", math.nan) for o in per[main][1:]], dtype=float)
         gaps[~np.isfinite(gaps)] = math.nan
-        entry["drivers"] = [d for d in first_order(box, U, gaps) if d["S1"] >= 0.05][:4] if len(U) else []
+        entry["drivers"] = [d for d in first_order(box, U, gaps) if d["significant"]][:4] if len(U) else []
         if entry["verdict"] != "reachable" or not entry["drivers"]:
             continue
         keep = {d["reconstruction"] for d in entry["drivers"]}

@@ -82,7 +82,7 @@ def _algorithm_text(c: dict) -> str:
 
 def _rests_on(c: dict, labels: dict, max_evidence: int) -> str:
     parts = []
-    drivers = [d for d in c.get("drivers") or [] if d["S1"] >= 0.05]
+    drivers = [d for d in c.get("drivers") or [] if d.get("significant", d["S1"] >= 0.05)]
     if drivers:
         parts.append("driven by " + ", ".join(f"`{d['reconstruction']}` (S1 {d['S1']:.2f})" for d in drivers[:3]))
     flip = c.get("nearest_flip")
@@ -216,7 +216,7 @@ def sensitivity_lines(results: dict) -> list[str]:
     drives: dict = {}
     for c in results.get("claims") or []:
         for d in c.get("drivers") or []:
-            if d["S1"] >= 0.1:
+            if d["S1"] >= 0.1 and d.get("significant", True):
                 drives.setdefault(d["reconstruction"], []).append(f"“{c['id']}” ({d['S1']:.2f})")
     for name in ranges:
         if name in drives:

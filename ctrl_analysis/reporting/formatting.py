@@ -18,8 +18,8 @@ def fmt(value, std=None, digits: int = 4) -> str:
         if len(flat) > MAX_LIST and _numeric(flat):
             return _array_summary(flat)
         return "[" + ", ".join(fmt(v, digits=digits) for v in flat) + "]"
-    if isinstance(value, bool):
-        return str(int(value))
+    if isinstance(value, (bool, np.bool_)):
+        return str(value)  # True / False, as the reconstruction reads (not 1 / 0)
     if isinstance(value, (int, np.integer)):
         return str(value)
     try:

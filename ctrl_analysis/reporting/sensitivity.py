@@ -361,7 +361,7 @@ def _prune(runner, box, out, segments, refine, decide) -> None:
     for seg in segments:
         if seg["kind"] != "nearest":
             continue
-        drivers = {d["reconstruction"] for d in out[seg["claim"]]["drivers"] if d["S1"] >= 0.05}
+        drivers = {d["reconstruction"] for d in out[seg["claim"]]["drivers"] if d["significant"]}
         if not drivers:
             continue
         c = np.array([b if d.name in drivers else a for d, a, b in zip(box.dims, box.chosen, seg["b"])])
