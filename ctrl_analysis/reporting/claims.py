@@ -85,6 +85,8 @@ def _rests_on(c: dict, labels: dict, max_evidence: int) -> str:
     drivers = [d for d in c.get("drivers") or [] if d.get("significant", d["S1"] >= 0.05)]
     if drivers:
         parts.append("driven by " + ", ".join(f"`{d['reconstruction']}` (S1 {d['S1']:.2f})" for d in drivers[:3]))
+    elif c.get("drivers"):
+        parts.append("no reconstruction drives it alone (no first-order index above its noise: interactions)")
     flip = c.get("nearest_flip")
     if flip:
         where = ", ".join(f"`{k}` = {_short(v)}" for k, v in list(flip["point"].items())[:4]) or "the chosen values"

@@ -351,32 +351,35 @@ def _claims(runner, box, U, per, refine) -> dict:
 
 
 def _prune(runner, box, out, segments, refine, decide) -> None:
-    """Bring each nearest flip closer: keep only the claim's driving reconstructions away from their chosen values.
+    """Bring each nearest flip closer: move only the reconstructions that matter away from their chosen values.
 
-    A bisection from the chosen point towards a sample moves every reconstruction at once. Where the point just
-    past the boundary still flips with every non-driver (first-order index below 0.05) back at its chosen value,
-    the boundary is located again along the drivers alone (one batch for the check, then the bisection).
+    A bisection from the chosen point towards a sample moves every reconstruction at once. Keeping only the
+    ``k`` reconstructions with the largest first-order indices (k = 1, 2, 3, 5, 8) moved to the point just
+    past the boundary, the smallest ``k`` that still flips the claim is found (one batch over every claim),
+    and the boundary is located again along those alone. A flip that needs two reconstructions together
+    (each with a small first-order index) keeps both.
     """
     tries = []
     for seg in segments:
         if seg["kind"] != "nearest":
             continue
-        drivers = {d["reconstruction"] for d in out[seg["claim"]]["drivers"] if d["significant"]}
-        if not drivers:
-            continue
-        c = np.array([b if d.name in drivers else a for d, a, b in zip(box.dims, box.chosen, seg["b"])])
-        if box.distance(c, seg["b"]) > 0:
-            tries.append((seg, c))
-    outs = runner.run([(c, seg["algorithm"]) for seg, c in tries])
-    again = []
-    for (seg, c), o in zip(tries, outs):
+        moved = set(box.changed(seg["b"]))
+        ranked = [d["reconstruction"] for d in out[seg["claim"]]["drivers"] if d["reconstruction"] in moved]
+        ranked += [name for name in moved if name not in ranked]
+        for k in sorted({k for k in (1, 2, 3, 5, 8) if k < len(ranked)}):
+            keep = set(ranked[:k])
+            c = np.array([b if d.name in keep else a for d, a, b in zip(box.dims, box.chosen, seg["b"])])
+            tries.append((seg, k, c))
+    outs = runner.run([(c, seg["algorithm"]) for seg, _, c in tries])
+    best: dict = {}
+    for (seg, k, c), o in zip(tries, outs):
         v = o["claims"].get(seg["claim"])
-        if v is not None and v != seg["va"]:
-            again.append({**seg, "a": box.chosen.copy(), "b": c})
+        if v is not None and v != seg["va"] and (id(seg) not in best or k < best[id(seg)][0]):
+            best[id(seg)] = (k, c, seg)
+    again = [{**seg, "a": box.chosen.copy(), "b": c, "_of": seg} for _, c, seg in best.values()]
     _bisect(runner, again, refine, decide)
     for new in again:
-        old = next(s for s in segments if s["claim"] == new["claim"] and s["kind"] == "nearest")
-        old.update(a=new["a"], b=new["b"])
+        new["_of"].update(a=new["a"], b=new["b"])
 
 
 def _dim(box, name) -> Dimension:
