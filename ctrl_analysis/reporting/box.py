@@ -24,6 +24,7 @@ P(k=10.0, rule='b')
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 
 import numpy as np
@@ -89,15 +90,28 @@ class Dimension:
         """
         return self.plausible.low is not None
 
-    @property
+    @functools.cached_property
     def levels(self) -> tuple:
-        """The alternatives of a discrete dimension, the chosen value first.
+        """The alternatives of a discrete dimension, the chosen value first (computed once).
 
         Returns
         -------
         tuple
         """
         return (self.chosen,) + tuple(o for o in self.plausible.options if not _same(o, self.chosen))
+
+    @functools.cached_property
+    def _level_same(self) -> np.ndarray:
+        """``[i, j]``: levels i and j are the same value (computed once; :meth:`Box.distance` reads it)."""
+        lv = self.levels
+        return np.array([[_same(a, b) for b in lv] for a in lv], dtype=bool)
+
+    def level_index(self, u: float) -> int:
+        """The index in :attr:`levels` of a discrete dimension's value at ``u`` (``nan``: 0, the chosen value)."""
+        if not math.isfinite(u):
+            return 0
+        n = len(self.levels)
+        return min(int(min(max(float(u), 0.0), 1.0) * n), n - 1)
 
     def value(self, u: float):
         """The value at coordinate ``u`` (``nan``: the chosen value).
@@ -114,8 +128,7 @@ class Dimension:
             return self.chosen
         u = min(max(float(u), 0.0), 1.0)
         if not self.continuous:
-            levels = self.levels
-            return levels[min(int(u * len(levels)), len(levels) - 1)]
+            return self.levels[self.level_index(u)]
         lo, hi = float(self.plausible.low), float(self.plausible.high)
         if self.plausible.scale == "log":
             return float(lo * (hi / lo) ** u)
@@ -311,13 +324,13 @@ class Box:
         float
         """
         total = 0.0
-        for d, a, b in zip(self.dims, np.asarray(u0, dtype=float), np.asarray(u1, dtype=float)):
-            if not (math.isfinite(a) and math.isfinite(b)):
-                diff = 0.0 if (math.isfinite(a) == math.isfinite(b) or _same(d.value(a), d.value(b))) else 0.5
-            elif d.continuous:
+        for d, a, b in zip(self.dims, np.asarray(u0, dtype=float).tolist(), np.asarray(u1, dtype=float).tolist()):
+            if d.continuous and math.isfinite(a) and math.isfinite(b):
                 diff = abs(a - b)
-            else:
-                diff = 0.0 if _same(d.value(a), d.value(b)) else 0.5
+            elif d.continuous:
+                diff = 0.0 if (math.isfinite(a) == math.isfinite(b) or _same(d.value(a), d.value(b))) else 0.5
+            else:  # an alternative: compare the levels taken (a table computed once, not the values each time)
+                diff = 0.0 if d._level_same[d.level_index(a), d.level_index(b)] else 0.5
             total += diff * diff
         return math.sqrt(total)
 
