@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 from ctrl_analysis.reporting.study import (
     Claim,
+    algorithm,
     choices,
     fixed,
     printed,
@@ -102,6 +103,14 @@ class Example:
         plausible=span(19, 64, "from the smallest count with no diverged run (fewer steps lose runs, which the "
                                "paper's smooth figures do not show) to 64, where x1 has long settled within a "
                                "sample and TD-MFAC's RMSE equals plain MFAC's to 1 %", scale="int", points=4))
+    td_reading: str = reconstructed(
+        "substeps", "eq. (37) indexes the TD by the control sample k: one step of h per sample, and x1(k) in "
+                    "e(k) = y*(k+1) - x1 is the state before the step driven by y_m(k); read so, TD-MFAC diverges "
+                    "in (almost) every run (quantities ex*.td_mfac_literal.*), so the study runs td_substeps steps "
+                    "per sample with x1 after them",
+        plausible=algorithm("literal", "substeps",
+                            "the printed TD (one step of h per control sample, x1 before it) against the project's "
+                            "correction (td_substeps steps per sample, x1 after them): the printed one diverges"))
     td_feedthrough: bool = reconstructed(True, "eq. (37) does not say whether e(k) = y*(k+1) - x1 uses x1 before "
                                                "or after the TD steps driven by y_m(k); before (a one-sample lag) "
                                                "diverges in Example 2 at any step count, so after",

@@ -212,23 +212,6 @@ def test_sweep_figures_never_draw_a_mean_of_few_runs_as_an_ordinary_point():
     assert note == "TD-MFAC 15/50 at 2, 40/50 at 3 (left out)"
 
 
-def test_sensitivity_marks_the_fig2_claim_as_depending_on_q():
-    from analysis.ikf_mfac.evaluate import MonteCarlo, evaluate
-    from ctrl_analysis.reporting import sensitivity
-
-    seeds = tuple(run_seeds(0, 12))
-    params = {"ex1": EX1, "ex2": EX2, "fig2": FIG2,
-              "mc": MonteCarlo(seeds, seeds[:4], seeds[:8], (0.02, 0.1, 0.4), (0.5, 1.0, 2.0))}
-    res = evaluate(params)
-    sensitivity.apply(res, sensitivity.sweep(evaluate, params, names=("ex1.Q", "ex2.rearm")))
-    c = res.get_claim("fig2-larger-r")
-    # at Q = 0.1 the grid's largest R = 1 is Q/R = 0.1, where no run diverges: the claim holds there
-    assert c.verdict == "depends" and c.depends_on[0]["reconstruction"] == "ex1.Q"
-    assert c.depends_on[0]["flips_at"] == [0.1] and c.depends_on[0]["verdict_there"] == ["holds"]
-    assert res.get_claim("ikf-best-varying").verdict == "holds"
-    assert set(res.get_claim("ikf-best-varying").robust_to) == {"ex1.Q", "ex2.rearm"}
-
-
 @pytest.mark.parametrize("scheme, name, values", [("ikf_mfac", "R", (0.01, 0.1)), ("d_mfac", "rho", (0.5, 1.0))])
 def test_per_run_sweep_values_equal_the_runs_alone(scheme, name, values):
     """A sweep's per-run ρ, λ, Q or R go to simulate(params=...): each run equals the loop built with its value."""
@@ -239,3 +222,40 @@ def test_per_run_sweep_values_equal_the_runs_alone(scheme, name, values):
         alone = run_scheme(dataclasses.replace(EX1, **{name: value}), scheme, v, engine="numpy")
         np.testing.assert_array_equal(batch.y[:, 2 * i:2 * i + 2], alone.y)
     assert not np.array_equal(batch.y[:, :2], batch.y[:, 2:])
+
+
+def test_many_parameter_sets_in_one_batch_equal_each_run_alone():
+    """run_batch: per-run estimator, law and filter arguments and the initial states they set (φ̂(1), P(0|0))."""
+    from analysis.ikf_mfac.loops import run_batch
+
+    for base in (EX1, EX2):
+        exs = [base, dataclasses.replace(base, eta=0.3, mu=1.7, phi0=3.1, phi_reset=2.0, rho=0.7, lam=3.3, Q=0.05,
+                                         R=0.02, P0=0.6, rearm=False),
+               dataclasses.replace(base, phi0=1.2, P0=0.2)]
+        vs = [noise_draws(base, [i, i + 10]) for i in range(3)]
+        for scheme in SCHEMES:
+            batch = run_batch(exs, scheme, vs, engine="numpy")
+            for i, (ex, v) in enumerate(zip(exs, vs)):
+                alone = run_scheme(ex, scheme, v, engine="numpy")
+                np.testing.assert_array_equal(batch.y[:, 2 * i:2 * i + 2], alone.y)
+            assert not np.array_equal(batch.y[:, :2], batch.y[:, 2:4])
+    with pytest.raises(ValueError, match="one loop structure"):
+        run_batch([EX1, dataclasses.replace(EX1, td_substeps=20)], "td_mfac", [noise_draws(EX1, [0])] * 2)
+
+
+def test_the_printed_td_is_the_algorithm_axis_and_diverges():
+    from analysis.ikf_mfac.loops import effective
+    from ctrl_analysis.reporting.box import Box
+
+    box = Box({"ex1": EX1, "ex2": EX2, "fig2": FIG2})
+    assert box.algorithm == "corrected" and box.algorithms == ("corrected", "printed")
+    assert [d.name for d in box.algorithm_dims] == ["ex1.td_reading", "ex2.td_reading"]
+    names = {d.name for d in box.dims}
+    # the unprinted choices stay in the box; the feedthrough reading that diverges is not plausible
+    assert {"ex1.phi_reset", "ex1.rearm", "ex1.td_substeps", "ex2.phi_reset", "ex2.rearm"} <= names
+    assert "ex1.td_feedthrough" not in names
+    lit = effective(box.params_at(box.chosen, "printed")["ex1"])
+    assert (lit.td_substeps, lit.td_feedthrough) == (1, False)
+    runs = run_scheme(dataclasses.replace(EX1, td_reading="literal"), "td_mfac", noise_draws(EX1, [0, 1]),
+                      engine="numpy")
+    assert runs.diverged.all()
