@@ -98,7 +98,7 @@ def record_rearm(result, key: str, ex, variant: tuple) -> None:
                    f"every entry into the band and {m:.4f} with k_m {'set at the first entry only' if ex.rearm else 're-armed'}, "
                    f"against Table 1's {paper} (the rule '{closer}' is closer; Table 1's value lies above "
                    f"{q.percentile:.1f} % of that rule's runs). Eq. (36) does not say which; the study uses "
-                   f"'{'re-armed at every entry' if ex.rearm else 'first entry only'}', and the sensitivity sweep "
+                   f"'{'re-armed at every entry' if ex.rearm else 'first entry only'}', and the plausible box "
                    "tries the other.")
 
 
