@@ -24,6 +24,7 @@ from .findings import (
     record_consistency,
     record_ranking,
     record_rearm,
+    record_reset_erratum,
     record_steady_gain,
     record_td_scan,
     record_where_ikf_wins,
@@ -116,6 +117,7 @@ def run(ctx: StudyContext, params=None) -> StudyResult:
     ratio = {key: ratio_rows(points[key]["ikf_mfac"], SWEEPS[key], ex) for key, ex in examples.items()}
     record_where_ikf_wins(result, sweeps, ratio, SWEEPS)
     _sensitivity(ctx, result, seeds, chosen)
+    record_reset_erratum(result, examples["ex1"])
     result.missing = missing(result)
     _figures(ctx, result, chosen, all_runs, per_run, sweeps, ratio, seeds, fig2_first, td_scan)
     return result
@@ -183,11 +185,7 @@ def _figures(ctx, result, chosen, all_runs, per_run, sweeps, ratio, seeds, fig2_
     ctx.save_figure(result, F.plot_td_scan(td_scan, {k: e.td_substeps for k, e in examples.items()},
                                            {k: result.get(f"{k}.mfac.rmse").value for k in examples}),
                     "td_substeps_scan.png", dpi=dpi,
-                    caption="TD-MFAC's mean RMSE (left axis) and its diverged runs (bars, right axis) against the "
-                            "number of TD steps per control sample, which the paper does not print, on Table 1's "
-                            "seeds; the count used (dashed), plain MFAC's RMSE and Table 1's TD-MFAC value are "
-                            "marked. Too few steps lose runs; more steps bring TD-MFAC to plain MFAC, never below it "
-                            "(finding td-steps-per-sample).")
+                    caption=F.td_scan_caption(td_scan, {k: result.get(f"{k}.mfac.rmse").value for k in examples}))
     ctx.save_figure(result, F.plot_noise_sweep({k: SWEEPS[k]["noise"] for k in examples}, sweeps, {"ex1": ex1.noise_std, "ex2": ex2.noise_std}),
                "beyond_rmse_vs_noise.png", dpi=dpi,
                caption="Beyond the paper: mean RMSE of the four schemes against the measurement-noise std in "
