@@ -309,8 +309,8 @@ def judge_claims(result, table: dict, noise: dict, fig2: list, skipped: str = ""
                                             ("Example 2: D-MFAC the largest of the four", largest)],
            [f"{k}.{s}.rmse" for k in ("ex1", "ex2") for s in SCHEMES],
            f"Mean RMSE: Example 1 D-MFAC {_fmt(r[('ex1', 'd_mfac')])} against MFAC {_fmt(r[('ex1', 'mfac')])}; "
-           f"Example 2: the largest is {L[worst2]}'s ({_fmt(r[('ex2', worst2)])}; D-MFAC "
-           f"{_fmt(r[('ex2', 'd_mfac')])}).")
+           f"Example 2: the largest is {L[worst2]}'s ({_fmt(r[('ex2', worst2)])}"
+           + (")." if worst2 == "d_mfac" else f"; D-MFAC {_fmt(r[('ex2', 'd_mfac')])})."))
     both = (t[("ex2", "td_mfac")] < t[("ex2", "d_mfac")]) & (t[("ex2", "ikf_mfac")] < t[("ex2", "d_mfac")])
     _judge(result, "filters-beat-d-mfac-varying", [("Example 2: TD-MFAC and IKF-MFAC both below D-MFAC", both)],
            ["ex2.td_mfac.rmse", "ex2.ikf_mfac.rmse", "ex2.d_mfac.rmse"],
