@@ -75,11 +75,17 @@ def ranking(per_run: dict) -> tuple[list, dict]:
     return order, frac
 
 
-def td_step_scan(ex: Example, seeds, counts, feedthrough_options=(False, True), engine: str = "auto") -> dict:
-    """TD-MFAC over TD step counts per sample: {(feedthrough, count): per-run RMSE (NaN where a run diverged)}."""
+def td_step_scan(ex: Example, seeds, counts, feedthrough_options=(False, True), engine: str = "auto",
+                 known: dict | None = None) -> dict:
+    """TD-MFAC over TD step counts per sample: {(feedthrough, count): per-run RMSE (NaN where a run diverged)}.
+
+    ``known`` holds rows already run on the same seeds (e.g. Table 1's TD-MFAC at the count used), taken as they are.
+    """
     v = noise_draws(ex, seeds)
-    return {(ft, n): metrics_of(run_scheme(dataclasses.replace(ex, td_substeps=n, td_feedthrough=ft), "td_mfac", v,
-                                           engine=engine))[0]
+    known = known or {}
+    return {(ft, n): known[(ft, n)] if (ft, n) in known else
+            metrics_of(run_scheme(dataclasses.replace(ex, td_substeps=n, td_feedthrough=ft, td_reading="substeps"),
+                                  "td_mfac", v, engine=engine))[0]
             for ft in feedthrough_options for n in counts}
 
 
@@ -106,6 +112,8 @@ def run_with_sweeps(ex: Example, scheme: str, seeds, sweep_seeds, sweeps: dict):
         Table 1's runs.
     points : dict
         ``{(name, value): (mean RMSE, std, runs, diverged runs)}`` for every sweep point.
+    per_run : dict
+        ``{(name, value): RMSE per run}`` (NaN: diverged) for every sweep point.
     """
     segs = _segments(ex, scheme, seeds, sweep_seeds, sweeps)
     v = np.concatenate([noise_draws(ex, sd, std) for _, _, sd, _, std in segs], axis=1)
@@ -117,12 +125,13 @@ def run_with_sweeps(ex: Example, scheme: str, seeds, sweep_seeds, sweeps: dict):
     n0 = len(seeds)
     table = dataclasses.replace(runs, y=runs.y[:, :n0], y_m=runs.y_m[:, :n0], u=runs.u[:, :n0], y_f=runs.y_f[:, :n0],
                                 diverged=runs.diverged[:n0], diverged_step=runs.diverged_step[:n0])
-    points, start = {}, n0
+    points, per_run, start = {}, {}, n0
     for name, val, sd, _, _ in segs[1:]:
         row = e[start:start + len(sd)]
         points[(name, val)] = mean_std(row, np.isfinite(row)) + (int(np.sum(~np.isfinite(row))),)
+        per_run[(name, val)] = row
         start += len(sd)
-    return table, points
+    return table, points, per_run
 
 
 def sweep_table(points: dict, sweeps: dict) -> dict:

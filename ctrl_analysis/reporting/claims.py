@@ -227,7 +227,8 @@ def sensitivity_lines(results: dict) -> list[str]:
     if quiet:
         lines.append(f"- No claim's verdict has a first-order Sobol' index of 0.1 or more on: "
                      f"{', '.join(f'`{n}`' for n in quiet)}")
-    reached = [q for q in results["quantities"] if q.get("verdict") == "reachable"]
+    # a derived cell (SNR from RMSE) takes its source's verdict and has no box of its own: its source is listed
+    reached = [q for q in results["quantities"] if q.get("verdict") == "reachable" and q.get("box")]
     if reached:
         lines += ["", "Printed cells outside their band at the chosen values but reached inside the box:", ""]
         for q in reached:

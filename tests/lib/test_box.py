@@ -235,3 +235,21 @@ def test_a_batch_evaluator_gives_the_same_exploration_as_point_by_point():
     assert one.summary["evaluations"] == many.summary["evaluations"]
     with pytest.raises(ValueError, match="one StudyResult per parameter set"):
         sensitivity.explore(_evaluate, {"toy": Toy()}, samples=4, batch=lambda v: v[:1])
+
+
+def _evaluate_derived(params):
+    r = _evaluate(params)
+    # a derived cell (e.g. SNR from RMSE) takes the verdict of its source and has no box of its own
+    r.quantity("curve_db", "the curve in dB", 20 * np.log10(r.get("curve").value), paper=0.172, unit="dB",
+               cell="Table 1 / c dB", derived_from="curve")
+    return r
+
+
+def test_a_derived_cell_takes_its_sources_reachable_verdict_and_the_report_lists_the_source(tmp_path):
+    result = _evaluate_derived({"toy": Toy()})
+    sensitivity.apply(result, sensitivity.explore(_evaluate_derived, {"toy": Toy()}, names=["toy.k"], samples=16))
+    d = {q["id"]: q for q in result.to_dict()["quantities"]}
+    assert d["curve"]["verdict"] == "reachable" and d["curve_db"]["verdict"] == "reachable"
+    assert "box" not in d["curve_db"]
+    text = write_report_md([result.to_dict()], tmp_path).read_text()
+    assert "a printed curve value: at `toy.k`" in text and "the curve in dB: at" not in text
