@@ -32,7 +32,11 @@ import numpy as np
 
 from .study import Plausible, reconstructions_of
 
-__all__ = ["Box", "Dimension", "first_order"]
+__all__ = ["PERMUTATIONS", "Box", "Dimension", "first_order"]
+
+#: Shuffles of the verdicts behind :func:`first_order`'s chance level (a permutation test).
+PERMUTATIONS = 20
+PERMUTATION_SEED = 20261127
 
 
 def _same(a, b) -> bool:
@@ -408,8 +412,10 @@ def first_order(box, U, y) -> list:
     Returns
     -------
     list of dict
-        ``{"reconstruction", "S1", "conf", "significant"}`` per dimension (``significant``: S1 >= 0.05 and above
-        its bootstrap half-width ``conf``); empty when fewer than 16 finite values or ``y`` is constant.
+        ``{"reconstruction", "S1", "noise", "significant"}`` per dimension: ``noise`` is what chance reaches (the
+        95th percentile of the largest index over all reconstructions when ``y`` is shuffled against the points,
+        :data:`PERMUTATIONS` times), ``significant`` an index of at least 0.05 above it; empty when fewer than
+        16 finite values or ``y`` is constant.
     """
     ok = np.isfinite(y)
     if ok.sum() < 16 or np.ptp(y[ok]) == 0 or not box.dims:
@@ -417,17 +423,23 @@ def first_order(box, U, y) -> list:
     from SALib.analyze import rbd_fast
 
     problem = {"num_vars": len(box.dims), "names": [d.name for d in box.dims], "bounds": [[0.0, 1.0]] * len(box.dims)}
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        # M harmonics: 4 from 64 points on; fewer on a smoke test's small sample (the bias correction divides
-        # by 1 - 2M/N, on the bootstrap's resamples too)
-        m = max(1, min(4, int(ok.sum()) // 16))
-        # the bootstrap of the confidence is most of the cost: 10 resamples
-        res = rbd_fast.analyze(problem, U[ok], y[ok].astype(float), M=m, num_resamples=10, seed=1)
-    # significant: at least 0.05 and above its bootstrap half-width (at 64 points RBD-FAST gives a dimension that
-    # does not act at all an index of 0.1 or more now and then; the half-width says how far to trust it)
-    rows = [{"reconstruction": d.name, "S1": round(float(s), 3),
-             "conf": round(float(c), 3) if math.isfinite(float(c)) else None,
-             "significant": bool(float(s) >= 0.05 and (not math.isfinite(float(c)) or float(s) > float(c)))}
-            for d, s, c in zip(box.dims, res["S1"], res["S1_conf"]) if math.isfinite(float(s))]
+    X, Y = U[ok], y[ok].astype(float)
+    # M harmonics: 4 from 64 points on; fewer on a smoke test's small sample (the bias correction divides by 1 - 2M/N)
+    m = max(1, min(4, int(ok.sum()) // 16))
+
+    def indices(values):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return np.asarray(rbd_fast.analyze(problem, X, values, M=m, num_resamples=0, seed=1)["S1"], dtype=float)
+
+    s1 = indices(Y)
+    # what chance alone reaches: the largest index over every reconstruction when the verdicts are shuffled
+    # against the points (a permutation test, family-wise over the reconstructions); at 64 points RBD-FAST gives a
+    # reconstruction that cannot act an index of 0.1-0.16 now and then
+    rng = np.random.default_rng(PERMUTATION_SEED)
+    null = [np.nanmax(indices(rng.permutation(Y))) for _ in range(PERMUTATIONS)]
+    noise = float(np.quantile(null, 0.95))
+    rows = [{"reconstruction": d.name, "S1": round(float(v), 3), "noise": round(noise, 3),
+             "significant": bool(v >= 0.05 and v > noise)}
+            for d, v in zip(box.dims, s1) if math.isfinite(float(v))]
     return sorted(rows, key=lambda r: -r["S1"])

@@ -33,7 +33,8 @@ GLOSSARY = {
                      "every claim and printed cell is judged over it.",
     "Sobol' index": "first-order variance-based sensitivity index: the share of the variance of a claim's verdict "
                     "(1 holds, 0 fails) over the box explained by one reconstruction alone (SALib's RBD-FAST on "
-                    "the box sample).",
+                    "the box sample); a reconstruction drives a verdict when its index is at least 0.05 and above "
+                    "what chance reaches (the largest index when the verdicts are shuffled, 95th percentile).",
     "nearest flip": "the point of the plausible box nearest the chosen values where a claim's verdict changes, "
                     "located by bisection between the chosen point and the nearest sample of the other verdict.",
     "algorithm axis": "the paper's printed algorithm against the project's correction of it; each claim is "

@@ -71,7 +71,7 @@ def plot_sensitivity(result: StudyResult, top: int = 8):
         grid = np.full((len(claims), len(names)), np.nan)
         for i, c in enumerate(claims):
             for d in c.box.get("drivers") or []:
-                if d["reconstruction"] in names:  # an index not above its bootstrap half-width shows as 0
+                if d["reconstruction"] in names:  # an index not above chance shows as 0
                     grid[i, names.index(d["reconstruction"])] = max(d["S1"], 0.0) if d.get("significant", True) else 0.0
         im = bx.imshow(grid, aspect="auto", cmap="Oranges", vmin=0, vmax=max(0.3, float(np.nanmax(grid))))
         for i in range(grid.shape[0]):
@@ -81,7 +81,7 @@ def plot_sensitivity(result: StudyResult, top: int = 8):
         bx.set_xticks(range(len(names)), names, rotation=35, ha="right", fontsize=8)
         bx.set_yticks(range(len(claims)), labels, fontsize=8)
         bx.grid(False)
-        fig.colorbar(im, ax=bx, label="first-order Sobol' index of the verdict\n(shown where above its bootstrap half-width)")
+        fig.colorbar(im, ax=bx, label="first-order Sobol' index of the verdict\n(shown where above what chance reaches)")
         bx.set_title("What drives each verdict (blank: the claim does not flip)", fontsize=10)
     else:
         bx.text(0.5, 0.5, "no claim flips anywhere in the box:\nno reconstruction drives a verdict",
