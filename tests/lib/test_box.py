@@ -280,3 +280,16 @@ def test_a_cell_reached_by_switching_one_alternative_of_the_chosen_values():
     sensitivity.apply(result, ex)
     q = result.get("cell")
     assert q.verdict == "reachable" and q.box["how"] == "neighbour" and q.box["reached_at"] == {"near.rule": "y"}
+
+
+@dataclass(frozen=True)
+class Unset:
+    delta: object = reconstructed(None, "None: follows another setting",
+                                  plausible=choices((5e-3, 1e-2), "two fixed values"))
+
+
+def test_a_chosen_none_is_a_level_of_its_own():
+    box = Box({"u": Unset()})
+    assert box.chosen[0] == pytest.approx(1 / 6) and box.changed(box.chosen) == {}
+    assert box.params_at([0.1])["u"].delta is None and box.params_at([0.5])["u"].delta == 5e-3
+    assert box.distance(box.chosen, [0.1]) == 0.0 and box.distance(box.chosen, [0.9]) == 0.5
