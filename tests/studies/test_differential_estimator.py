@@ -270,6 +270,74 @@ def test_evaluate_flips_the_fair_claim_with_the_fal_exponents():
     assert lax.get_claim("sigma-beats-eso-fair").holds and "at least 0.9 " in lax.get_claim("sigma-beats-eso-fair").note
 
 
+def test_the_closed_form_softener_equals_the_libraries_zero_order_hold():
+    from ctrl_analysis.estimators.lowpass import LowPassFilter
+    from ctrl_analysis.estimators.tracking import softened_setpoint
+
+    from analysis.differential_estimator.paper import setpoint
+
+    for omega, h, T in ((2.0, 1e-3, 30.0), (0.5, 2e-3, 50.0), (5.0, 5e-4, 25.0)):
+        p = replace(EX2, omega=omega, h=h, T=T)
+        r = setpoint(p, int(round(T / h)))
+        ref = softened_setpoint(LowPassFilter(omega, 3), r, h)
+        got = example2.softened_square_wave(omega, r, h)
+        assert np.all(np.abs(got - ref).max(axis=0) <= 1e-12 * np.abs(ref).max(axis=0))
+    assert example2.softened_square_wave(2.0, np.ones(5), 1e-3)[0].tolist() == [0.0, 0.0, 0.0]
+
+
+def test_a_sweep_discretised_together_and_cut_kernels_equal_each_system_alone():
+    from scipy import fft
+
+    p = replace(EX1, T=6.0)
+    seeds = run_seeds(1, 3)
+    noise = example1.draw(p, seeds)
+    sig, _, _ = loops.simulate_example1(p, seeds, noise, [])
+    path = loops.LinearPath(sig["x[0]"][:-1], noise[:, :, 1], p.h)
+    systems = [DifferentialEstimator(n0, 7.0).ss for n0 in (2, 5, 8)]
+    n = path.n
+    nfft = fft.next_fast_len(2 * n - 1, real=True)
+    for sys, got in zip(systems, path.estimates_many(systems)):
+        for o in (0, 1):  # the full-length convolution of each output alone, its own discretisations
+            spec = 0
+            for method, u in (("foh", sig["x[0]"][:-1]), ("zoh", noise[:, :, 1])):
+                g = loops.impulse_response(ct.c2d(sys[o, 0], p.h, method=method), n)
+                spec = spec + fft.rfft(u, nfft, axis=0) * fft.rfft(g, nfft)[:, None]
+            ref = fft.irfft(spec, nfft, axis=0)[:n]
+            np.testing.assert_allclose(got[o], ref, rtol=0, atol=1e-5 * np.abs(ref).max())
+    assert max(path._spectra) < nfft  # the kernels were cut: a shorter transform than 2N - 1
+
+
+def test_the_corrected_reading_of_x2_reads_z1_z2_and_y():
+    est = DifferentialEstimator(EX1.n0, EX1.a)
+    rng = np.random.default_rng(3)
+    z, y = rng.normal(size=(4, EX1.n0)), rng.normal(size=4)
+    C, D = est.estimate_matrices("corrected")
+    np.testing.assert_allclose(est.estimates(z, y, reading="corrected")[:, 1],
+                               z[:, 1] + est.a_coeffs[0] * (y - z[:, 0]), rtol=1e-12)
+    assert not C[1, 2:].any() and D[1, 0] == pytest.approx(est.a_coeffs[0])
+
+
+def test_a_box_evaluation_skips_what_no_claim_or_cell_reads():
+    base = {"linear": LINEAR, "ex1": replace(EX1, T=2.0), "ex2": replace(EX2, T=2.0)}
+    r = claims.evaluate(base, runs=4, seed=0, a_preset=34.0)
+    ids = {q.id for q in r.quantities}
+    assert not any(i.startswith("ex2.fast_estimator") for i in ids) and "ex2.sweep.fraction_stable" not in ids
+    assert "ex1.fair.linear_path_check_x1" not in ids and not any(i.startswith("ex1.tradeoff") for i in ids)
+    assert [c.claim.id for c in r.claims] == [c.id for c in CLAIMS]
+
+
+def test_another_plausible_integrator_lands_on_sigmas_printed_x2_error():
+    """Issue 26: Σ's |ε̄2| = 5.4e-3 is outside the band of RK4 at the chosen values, inside it with forward Euler."""
+    from ctrl_analysis.reporting.box_cells import cell_state
+
+    base = {"linear": LINEAR, "ex1": EX1, "ex2": replace(EX2, T=1.0)}
+    grid = {"sweep_b1": (1.0,), "sweep_b2": (2.0,), "sweep_b3": (1.0,)}
+    states = {m: cell_state(claims.evaluate(dict(base, ex1=replace(EX1, method=m)), runs=8, seed=0, a_preset=34.0,
+                                            grid=grid).get("ex1.sigma.mean_abs_err_x2")) for m in ("rk4", "euler")}
+    assert not states["rk4"]["in_band"] and states["rk4"]["gap"] < 0
+    assert states["euler"]["in_band"]
+
+
 def test_quick_run_smoke(tmp_path):
     ctx = StudyContext(out_dir=tmp_path, quick=True, runs=2, seed=5)
     ex2 = replace(EX2, T=1.0, sweep_b1=(-10.0, 0.0, 10.0), sweep_b2=(2.0,), sweep_b3=(1.0,))
