@@ -81,21 +81,33 @@ def _larger_n0(result, _p):
 
 
 def _sigma_beats_eso(result, p):
-    ids = ["ex1.sigma.mean_abs_err_x1", "ex1.sigma.mean_abs_err_x2", "ex1.eso.mean_abs_err_x1",
-           "ex1.eso.mean_abs_err_x2", "ex1.eso_over_sigma_x1", "ex1.eso_over_sigma_x2"]
-    r1, r2 = value_of(result, ids[4]), value_of(result, ids[5])
-    if r1 is None or r2 is None:  # the ESO diverged in at least half the runs: it is not the more accurate one
-        holds, how = True, "Han's ESO diverged in at least half the runs"
-    else:
-        holds = r1 > 1 and r2 > 1
-        how = (f"Han's ESO's mean error is {r1:.2f}× Σ's for x1 and {r2:.1f}× for x2 (the paper's printed errors give "
-               f"{p.eso_err[0] / p.sigma_err[0]:.2f}× and {p.eso_err[1] / p.sigma_err[1]:.1f}×)")
-    tuning = f"h = {p.h * 1e3:g} ms" if p.eso_tuning_h is None else f"{p.eso_tuning_h * 1e3:g} ms"
+    ids = ["ex1.sigma_beats_eso.share_of_runs", "ex1.eso_over_sigma.median_run", "ex1.sigma.mean_abs_err_x1",
+           "ex1.sigma.mean_abs_err_x2", "ex1.eso.mean_abs_err_x1", "ex1.eso.mean_abs_err_x2",
+           "ex1.eso_over_sigma_x1", "ex1.eso_over_sigma_x2"]
+    share = value_of(result, ids[0])
+    med = value_of(result, ids[1])
+    # the paper read one run of each observer: the claim holds where Σ beats the ESO in a typical run (the median)
+    holds = share > 0.5
+    runs = result.get(ids[0]).runs
+    how = (f"Σ's mean errors are below the ESO's on both states in {share:.0%} of {runs} runs (median ratio ESO ÷ Σ "
+           + (f"{med[0]:.2f} for x1, {med[1]:.1f} for x2" if med is not None and np.all(np.isfinite(med)) else
+              "— (the ESO diverged in most runs)")
+           + f"; the paper's printed errors give {p.eso_err[0] / p.sigma_err[0]:.2f} and "
+             f"{p.eso_err[1] / p.sigma_err[1]:.1f})")
+    tuning = (f"h' = h = {p.h * 1e3:g} ms" if p.eso_tuning_ratio == 1.0 else
+              f"h' = {p.eso_tuning_ratio:.3g} h = {p.eso_tuning_ratio * p.h * 1e3:.3g} ms")
+    delta = "h'" if p.eso_delta is None else f"{p.eso_delta * 1e3:g} ms"
     wide = value_of(result, "ex1.fair.textbook_eso_bandwidth") / value_of(result, "ex1.fair.sigma_bandwidth")
+    corr, eso2 = value_of(result, "ex1.sigma.corrected.mean_abs_err_x2"), value_of(result, "ex1.eso.mean_abs_err_x2")
+    other = ("" if corr is None or eso2 is None else
+             f" Under eq. (11)'s corrected reading, which remark (1) sets aside with noise, Σ's mean x2 error would "
+             f"be {corr:.3g} against the ESO's {eso2:.3g} ({'still below' if corr < eso2 else 'above'} it).")
     result.claim(_BY_ID["sigma-beats-eso"], holds, ids,
-                 note=f"At the paper's tuning as reconstructed (Han's step-size rule for h' = {tuning}; the ESO's "
-                      f"linearised bandwidth is {wide:.0f}× Σ's): {how}. Tuning-fair version: claim "
-                      "sigma-beats-eso-fair.")
+                 note=f"Judged run by run, as the paper compared one run of each (Fig. 3-4): holds where Σ is more "
+                      f"accurate on both states in more than half the runs. At the paper's tuning as reconstructed "
+                      f"(Han's step-size rule for {tuning}, δ = {delta}; "
+                      f"the ESO's linearised bandwidth is {wide:.0f}× Σ's): {how}.{other} Tuning-fair version "
+                      "(beyond the paper): claim sigma-beats-eso-fair.")
 
 
 def _sigma_beats_eso_fair(result, r):
@@ -136,16 +148,20 @@ def _recorded(result, id_):
 
 
 def _ex2_tracks(result, p):
-    ids = ["ex2.literal.max_real_eig", "ex2.literal.tail_amplitude", "ex2.literal.mean_abs_tracking_error"]
-    max_re, amp, err = (value_of(result, i) for i in ids)
-    holds = max_re < 0 and amp is not None and amp < p.ripple_tol
+    ids = ["ex2.literal.max_real_eig", "ex2.literal.share_settled", "ex2.literal.tail_amplitude",
+           "ex2.literal.mean_abs_tracking_error"]
+    max_re, share, amp, err = (value_of(result, i) for i in ids)
+    # Fig. 5 shows one run: tracking holds where the typical run settles (more than half of them), on a stable loop
+    holds = max_re < 0 and share > 0.5
     fast = _recorded(result, "ex2.fast_estimator.tail_amplitude")
+    runs = result.get(ids[1]).runs
     result.claim(_BY_ID["ex2-tracks"], holds, ids + (["ex2.fast_estimator.tail_amplitude"] if fast is not None else []),
                  note=f"As printed (Σ a = {p.a:g}; b = ({p.b1:g}, {p.b2:g}, {p.b3:g}) reconstructed) the loop "
-                      f"linearised at the origin has max Re λ = {max_re:+.3g} 1/s and in simulation x1 - v keeps a "
-                      + (f"half peak-to-peak ripple of {amp:.3g} over the last quarter" if amp is not None else
-                         "diverging error")
-                      + f" (settled means below {p.ripple_tol:g}); the claim needs both."
+                      f"linearised at the origin has max Re λ = {max_re:+.3g} 1/s, and in simulation {share:.0%} of "
+                      f"{runs} runs settle (half peak-to-peak of x1 - v over the last quarter below {p.ripple_tol:g}; "
+                      + (f"mean {amp:.3g}" if amp is not None else "the runs diverge")
+                      + "). Judged run by run, as Fig. 5 shows one run: the claim needs a stable linearisation and more "
+                        "than half the runs settled."
                       + ("" if fast is None else " The study's stable preset (Σ a raised until every eigenvalue has "
                          f"Re <= -1) leaves a ripple of {fast:.3g}."))
 

@@ -219,6 +219,10 @@ def quantities(result: StudyResult, p: Example2, d: dict, lin: dict | None) -> d
                     err[mc], ok[mc], note="includes the transients after the setpoint steps")
         quantity_ms(result, f"ex2.{name}.tail_amplitude", f"Example 2, {label}, half peak-to-peak of x1 - v over the "
                     f"last {p.T / 4:g} s", amp[mc], ok[mc], note="a limit cycle shows here; noise alone gives ~1e-3")
+        result.quantity(f"ex2.{name}.share_settled", f"Example 2, {label}: share of the runs whose half peak-to-peak "
+                        f"of x1 - v over the last {p.T / 4:g} s is below {p.ripple_tol:g} (diverged runs count as not "
+                        "settled)", float(np.mean(stable[mc])), runs=runs, unit="",
+                        note="the paper shows one run (Fig. 5): the claim is judged run by run")
         quantity_ms(result, f"ex2.{name}.rms_control", f"Example 2, {label}, RMS of u", rmse(sig["u"][:-1, mc], 0.0),
                     ok[mc])
         result.quantity(f"ex2.{name}.diverged_fraction", f"Example 2, {label}: fraction of runs flagged as diverged "

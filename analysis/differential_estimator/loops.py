@@ -150,14 +150,14 @@ def sensor(signal: str = "x[0]") -> StaticGain:
 
 
 def han_eso(p: Example1, tuning_h: float | None = None) -> ExtendedStateObserver:
-    """Han's third-order nonlinear ESO with the step-size gains for ``tuning_h`` (default ``p.eso_tuning_h``, else ``p.h``).
+    """Han's third-order nonlinear ESO with the step-size gains for ``tuning_h`` (default ``p.eso_tuning_ratio · p.h``).
 
     ``δ = tuning_h`` when a ``tuning_h`` is given, else ``p.eso_delta`` (``None``: the design step).
     Han's form with ``e = z1 - y`` and minus signs equals the library's ``e = y - z1`` with plus signs
     (fal is odd).
     """
     if tuning_h is None:
-        h_t = p.h if p.eso_tuning_h is None else p.eso_tuning_h
+        h_t = p.eso_tuning_ratio * p.h
         delta = h_t if p.eso_delta is None else p.eso_delta
     else:
         h_t = delta = tuning_h
