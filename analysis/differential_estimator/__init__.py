@@ -58,9 +58,9 @@ def run(ctx: StudyContext, params=None) -> StudyResult:
         record_parameters(result, obj, prefix)
     _linear(ctx, result, lin)
     _example1(ctx, result, p1, runs)
-    a_preset = _example2(ctx, result, p2, runs)
+    _example2(ctx, result, p2, runs)
     claims.judge(result, p1, p2, r)
-    _sensitivity(ctx, result, chosen, a_preset)
+    _sensitivity(ctx, result, chosen)
     result.missing = list(MISSING)  # the differing cells are listed by the report, from their verdicts
     return result
 
@@ -69,7 +69,7 @@ def run(ctx: StudyContext, params=None) -> StudyResult:
 BOX_RUNS = 8
 
 
-def _sensitivity(ctx, result, chosen, a_preset):
+def _sensitivity(ctx, result, chosen):
     """Every claim and printed cell judged over the plausible box (:func:`.claims.evaluate`); figure sensitivity.png.
 
     The box's points differ in the simulation step, the horizon and the integrator of both examples, so no two
@@ -79,7 +79,7 @@ def _sensitivity(ctx, result, chosen, a_preset):
     runs = 3 if ctx.quick else BOX_RUNS
     names = None if not ctx.quick else ["ex1.eso_tuning_ratio", "ex2.b1", "claims.fair_margin"]
     ctx.progress(f"plausible box: every claim and cell over the reconstructions' ranges ({runs} runs per evaluation)")
-    evaluate = functools.partial(claims.evaluate, runs=runs, seed=ctx.seed, a_preset=a_preset,
+    evaluate = functools.partial(claims.evaluate, runs=runs, seed=ctx.seed,
                                  grid=None if not ctx.quick else {"sweep_b1": (1.0,), "sweep_b2": (2.0,),
                                                                   "sweep_b3": (1.0,)})
     note = (f"{runs} Monte Carlo runs per evaluation (the main run's first {runs} seeds at every point: common random "

@@ -1,8 +1,8 @@
-"""The paper's claims (:data:`.paper.CLAIMS`) judged on computed quantities, and the sensitivity evaluation.
+"""The paper's claims (:data:`.paper.CLAIMS`) judged on computed quantities, and one evaluation of the plausible box.
 
 :func:`judge` records every claim from the quantities already in a
-:class:`~ctrl_analysis.reporting.report.StudyResult`; the main run and :func:`evaluate` (one evaluation of
-the sensitivity sweep, :mod:`ctrl_analysis.reporting.sensitivity`) both call it, and both record the
+:class:`~ctrl_analysis.reporting.report.StudyResult`; the main run and :func:`evaluate` (one point of the
+plausible box, :func:`ctrl_analysis.reporting.sensitivity.explore`) both call it, and both record the
 quantities with the same functions of :mod:`.linear_checks`, :mod:`.example1` and :mod:`.example2`,
 so a verdict is computed one way only.
 """
@@ -10,6 +10,7 @@ so a verdict is computed one way only.
 from __future__ import annotations
 
 import functools
+import math
 from dataclasses import replace
 
 import numpy as np
@@ -23,7 +24,7 @@ from .paper import CLAIMS, READINGS, Example1, Example2, Linear, Readings
 __all__ = ["judge", "evaluate", "EVAL_GRID", "value_of"]
 
 _BY_ID = {c.id: c for c in CLAIMS}
-#: The (b1, b2, b3) grid of an evaluation of the sensitivity sweep (the main run maps the full grid).
+#: The (b1, b2, b3) grid of an evaluation of the plausible box (the main run maps the full grid).
 EVAL_GRID = {"sweep_b1": (-10.0, 1.0, 10.0), "sweep_b2": (2.0, 10.0), "sweep_b3": (1.0,)}
 
 
@@ -150,7 +151,7 @@ def _recorded(result, id_):
 def _ex2_tracks(result, p):
     ids = ["ex2.literal.max_real_eig", "ex2.literal.share_settled", "ex2.literal.tail_amplitude",
            "ex2.literal.mean_abs_tracking_error"]
-    max_re, share, amp, err = (value_of(result, i) for i in ids)
+    max_re, share, amp = (value_of(result, i) for i in ids[:3])
     # Fig. 5 shows one run: tracking holds where the typical run settles (more than half of them), on a stable loop
     holds = max_re < 0 and share > 0.5
     fast = _recorded(result, "ex2.fast_estimator.tail_amplitude")
@@ -212,12 +213,13 @@ def _ex1_part(p: Example1, runs: int, seed: int) -> tuple:
 
 
 @functools.lru_cache(maxsize=4)
-def _ex2_part(p: Example2, runs: int, seed: int, a_preset: float) -> tuple:
+def _ex2_part(p: Example2, runs: int, seed: int) -> tuple:
     res = StudyResult(_info())
     example2.literal_eigenvalues(res, p)
     example2.nonminimum_phase(res, p)
     n_grid = len(p.sweep_b1) * len(p.sweep_b2) * len(p.sweep_b3)
-    d = example2.simulate(p, run_seeds(seed, runs + n_grid), a_preset, runs, traces=False, presets=("literal",))
+    # the printed configuration only: the stable preset's numbers appear in notes, never in a verdict
+    d = example2.simulate(p, run_seeds(seed, runs + n_grid), math.nan, runs, traces=False, presets=("literal",))
     example2.quantities(res, p, d, None)
     return tuple(res.quantities)
 
@@ -228,20 +230,19 @@ def _info():
     return INFO
 
 
-def evaluate(params: dict, *, runs: int, seed: int, a_preset: float, grid: dict | None = None) -> StudyResult:
-    """One evaluation of the sensitivity sweep: the claims and primary cells at ``params``.
+def evaluate(params: dict, *, runs: int, seed: int, grid: dict | None = None) -> StudyResult:
+    """One evaluation of the plausible box: the claims and primary cells at ``params``.
 
     ``params = {"linear": Linear, "ex1": Example1, "ex2": Example2, "claims": Readings}`` (the prefixes of
     :func:`ctrl_analysis.reporting.study.record_parameters`). Example 1 runs ``runs`` Monte Carlo runs on the
-    seeds of the main run (common random numbers); Example 2 ``runs`` runs and the grid ``grid``
-    (default :data:`EVAL_GRID`) with the stable preset's ``a`` fixed at ``a_preset``. Each part is
-    computed once per distinct parameter object (cached), so a reconstruction of Example 2 does not
-    re-run Example 1: its cells and claims are the baseline's.
+    first seeds of the main run (common random numbers at every point); Example 2 ``runs`` runs and the grid
+    ``grid`` (default :data:`EVAL_GRID`) of the printed configuration. What no claim or cell reads is skipped
+    (figure traces, the stability map, the stable preset, the linear path's check). Each part is computed once
+    per distinct parameter object (cached), so a point that moves only the readings re-runs nothing.
     """
     p1, p2 = params["ex1"], replace(params["ex2"], **(EVAL_GRID if grid is None else grid))
     readings = params.get("claims", READINGS)
     res = StudyResult(_info())
-    res.quantities = list(_linear_part(params["linear"]) + _ex1_part(p1, runs, seed)
-                          + _ex2_part(p2, runs, seed, a_preset))
+    res.quantities = list(_linear_part(params["linear"]) + _ex1_part(p1, runs, seed) + _ex2_part(p2, runs, seed))
     judge(res, p1, p2, readings)
     return res

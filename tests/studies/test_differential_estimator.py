@@ -257,7 +257,7 @@ def test_stability_map_legend_shows_every_outcome():
 def test_evaluate_flips_the_fair_claim_with_the_fal_exponents():
     """The sensitivity evaluation: at equal bandwidth the fal ESO ties Σ (fair claim fails); the linear form loses."""
     base = {"linear": LINEAR, "ex1": EX1, "ex2": replace(EX2, T=1.0)}
-    kw = dict(runs=10, seed=0, a_preset=34.0, grid={"sweep_b1": (1.0,), "sweep_b2": (2.0,), "sweep_b3": (1.0,)})
+    kw = dict(runs=10, seed=0, grid={"sweep_b1": (1.0,), "sweep_b2": (2.0,), "sweep_b3": (1.0,)})
     at = {a: claims.evaluate(dict(base, ex1=replace(EX1, eso_alpha=a)), **kw) for a in ((1.0, 0.5, 0.25),
                                                                                        (1.0, 1.0, 1.0))}
     fair = [r.get_claim("sigma-beats-eso-fair") for r in at.values()]
@@ -271,14 +271,13 @@ def test_evaluate_flips_the_fair_claim_with_the_fal_exponents():
 
 
 def test_the_closed_form_softener_equals_the_libraries_zero_order_hold():
+    from analysis.differential_estimator.paper import setpoint
     from ctrl_analysis.estimators.lowpass import LowPassFilter
     from ctrl_analysis.estimators.tracking import softened_setpoint
 
-    from analysis.differential_estimator.paper import setpoint
-
     for omega, h, T in ((2.0, 1e-3, 30.0), (0.5, 2e-3, 50.0), (5.0, 5e-4, 25.0)):
         p = replace(EX2, omega=omega, h=h, T=T)
-        r = setpoint(p, int(round(T / h)))
+        r = setpoint(p, round(T / h))
         ref = softened_setpoint(LowPassFilter(omega, 3), r, h)
         got = example2.softened_square_wave(omega, r, h)
         assert np.all(np.abs(got - ref).max(axis=0) <= 1e-12 * np.abs(ref).max(axis=0))
@@ -344,10 +343,10 @@ def _claim_result(**values):
 
 
 def test_sigma_beats_eso_is_judged_run_by_run():
-    base = dict(ex1__sigma__mean_abs_err_x1=1e-4, ex1__sigma__mean_abs_err_x2=5e-3, ex1__eso__mean_abs_err_x1=4e-4,
-                ex1__eso__mean_abs_err_x2=0.2, ex1__eso_over_sigma_x1=4.0, ex1__eso_over_sigma_x2=40.0,
-                ex1__fair__textbook_eso_bandwidth=400.0, ex1__fair__sigma_bandwidth=13.0,
-                ex1__sigma__corrected__mean_abs_err_x2=0.05)
+    base = {"ex1__sigma__mean_abs_err_x1": 1e-4, "ex1__sigma__mean_abs_err_x2": 5e-3,
+            "ex1__eso__mean_abs_err_x1": 4e-4, "ex1__eso__mean_abs_err_x2": 0.2, "ex1__eso_over_sigma_x1": 4.0,
+            "ex1__eso_over_sigma_x2": 40.0, "ex1__fair__textbook_eso_bandwidth": 400.0,
+            "ex1__fair__sigma_bandwidth": 13.0, "ex1__sigma__corrected__mean_abs_err_x2": 0.05}
     # mean ratios above 1 do not decide it: Σ must be the more accurate in the typical run
     for share, holds in ((0.4, False), (0.5, False), (0.6, True)):
         r = _claim_result(**base, ex1__sigma_beats_eso__share_of_runs=share)
@@ -370,7 +369,7 @@ def test_ex2_tracks_is_judged_run_by_run_on_a_stable_loop():
 
 def test_a_box_evaluation_skips_what_no_claim_or_cell_reads():
     base = {"linear": LINEAR, "ex1": replace(EX1, T=2.0), "ex2": replace(EX2, T=2.0)}
-    r = claims.evaluate(base, runs=4, seed=0, a_preset=34.0)
+    r = claims.evaluate(base, runs=4, seed=0)
     ids = {q.id for q in r.quantities}
     assert "ex2.literal.share_settled" in ids and "ex1.sigma_beats_eso.share_of_runs" in ids
     assert not any(i.startswith("ex2.fast_estimator") for i in ids) and "ex2.sweep.fraction_stable" not in ids
@@ -384,7 +383,7 @@ def test_another_plausible_integrator_lands_on_sigmas_printed_x2_error():
 
     base = {"linear": LINEAR, "ex1": EX1, "ex2": replace(EX2, T=1.0)}
     grid = {"sweep_b1": (1.0,), "sweep_b2": (2.0,), "sweep_b3": (1.0,)}
-    states = {m: cell_state(claims.evaluate(dict(base, ex1=replace(EX1, method=m)), runs=8, seed=0, a_preset=34.0,
+    states = {m: cell_state(claims.evaluate(dict(base, ex1=replace(EX1, method=m)), runs=8, seed=0,
                                             grid=grid).get("ex1.sigma.mean_abs_err_x2")) for m in ("rk4", "euler")}
     assert not states["rk4"]["in_band"] and states["rk4"]["gap"] < 0
     assert states["euler"]["in_band"]
