@@ -1,8 +1,8 @@
-"""The paper's claims (:data:`.paper.CLAIMS`) judged on computed quantities, and the sensitivity evaluation.
+"""The paper's claims (:data:`.paper.CLAIMS`) judged on computed quantities, and one evaluation of the plausible box.
 
 :func:`judge` records every claim from the quantities already in a
-:class:`~ctrl_analysis.reporting.report.StudyResult`; the main run and :func:`evaluate` (one evaluation of
-the sensitivity sweep, :mod:`ctrl_analysis.reporting.sensitivity`) both call it, and both record the
+:class:`~ctrl_analysis.reporting.report.StudyResult`; the main run and :func:`evaluate` (one point of the
+plausible box, :func:`ctrl_analysis.reporting.sensitivity.explore`) both call it, and both record the
 quantities with the same functions of :mod:`.linear_checks`, :mod:`.example1` and :mod:`.example2`,
 so a verdict is computed one way only.
 """
@@ -10,6 +10,7 @@ so a verdict is computed one way only.
 from __future__ import annotations
 
 import functools
+import math
 from dataclasses import replace
 
 import numpy as np
@@ -23,7 +24,7 @@ from .paper import CLAIMS, READINGS, Example1, Example2, Linear, Readings
 __all__ = ["judge", "evaluate", "EVAL_GRID", "value_of"]
 
 _BY_ID = {c.id: c for c in CLAIMS}
-#: The (b1, b2, b3) grid of an evaluation of the sensitivity sweep (the main run maps the full grid).
+#: The (b1, b2, b3) grid of an evaluation of the plausible box (the main run maps the full grid).
 EVAL_GRID = {"sweep_b1": (-10.0, 1.0, 10.0), "sweep_b2": (2.0, 10.0), "sweep_b3": (1.0,)}
 
 
@@ -81,21 +82,33 @@ def _larger_n0(result, _p):
 
 
 def _sigma_beats_eso(result, p):
-    ids = ["ex1.sigma.mean_abs_err_x1", "ex1.sigma.mean_abs_err_x2", "ex1.eso.mean_abs_err_x1",
-           "ex1.eso.mean_abs_err_x2", "ex1.eso_over_sigma_x1", "ex1.eso_over_sigma_x2"]
-    r1, r2 = value_of(result, ids[4]), value_of(result, ids[5])
-    if r1 is None or r2 is None:  # the ESO diverged in at least half the runs: it is not the more accurate one
-        holds, how = True, "Han's ESO diverged in at least half the runs"
-    else:
-        holds = r1 > 1 and r2 > 1
-        how = (f"Han's ESO's mean error is {r1:.2f}× Σ's for x1 and {r2:.1f}× for x2 (the paper's printed errors give "
-               f"{p.eso_err[0] / p.sigma_err[0]:.2f}× and {p.eso_err[1] / p.sigma_err[1]:.1f}×)")
-    tuning = f"h = {p.h * 1e3:g} ms" if p.eso_tuning_h is None else f"{p.eso_tuning_h * 1e3:g} ms"
+    ids = ["ex1.sigma_beats_eso.share_of_runs", "ex1.eso_over_sigma.median_run", "ex1.sigma.mean_abs_err_x1",
+           "ex1.sigma.mean_abs_err_x2", "ex1.eso.mean_abs_err_x1", "ex1.eso.mean_abs_err_x2",
+           "ex1.eso_over_sigma_x1", "ex1.eso_over_sigma_x2"]
+    share = value_of(result, ids[0])
+    med = value_of(result, ids[1])
+    # the paper read one run of each observer: the claim holds where Σ beats the ESO in a typical run (the median)
+    holds = share > 0.5
+    runs = result.get(ids[0]).runs
+    how = (f"Σ's mean errors are below the ESO's on both states in {share:.0%} of {runs} runs (median ratio ESO ÷ Σ "
+           + (f"{med[0]:.2f} for x1, {med[1]:.1f} for x2" if med is not None and np.all(np.isfinite(med)) else
+              "— (the ESO diverged in most runs)")
+           + f"; the paper's printed errors give {p.eso_err[0] / p.sigma_err[0]:.2f} and "
+             f"{p.eso_err[1] / p.sigma_err[1]:.1f})")
+    tuning = (f"h' = h = {p.h * 1e3:g} ms" if p.eso_tuning_ratio == 1.0 else
+              f"h' = {p.eso_tuning_ratio:.3g} h = {p.eso_tuning_ratio * p.h * 1e3:.3g} ms")
+    delta = "h'" if p.eso_delta is None else f"{p.eso_delta * 1e3:g} ms"
     wide = value_of(result, "ex1.fair.textbook_eso_bandwidth") / value_of(result, "ex1.fair.sigma_bandwidth")
+    corr, eso2 = value_of(result, "ex1.sigma.corrected.mean_abs_err_x2"), value_of(result, "ex1.eso.mean_abs_err_x2")
+    other = ("" if corr is None or eso2 is None else
+             f" Under eq. (11)'s corrected reading, which remark (1) sets aside with noise, Σ's mean x2 error would "
+             f"be {corr:.3g} against the ESO's {eso2:.3g} ({'still below' if corr < eso2 else 'above'} it).")
     result.claim(_BY_ID["sigma-beats-eso"], holds, ids,
-                 note=f"At the paper's tuning as reconstructed (Han's step-size rule for h' = {tuning}; the ESO's "
-                      f"linearised bandwidth is {wide:.0f}× Σ's): {how}. Tuning-fair version: claim "
-                      "sigma-beats-eso-fair.")
+                 note=f"Judged run by run, as the paper compared one run of each (Fig. 3-4): holds where Σ is more "
+                      f"accurate on both states in more than half the runs. At the paper's tuning as reconstructed "
+                      f"(Han's step-size rule for {tuning}, δ = {delta}; "
+                      f"the ESO's linearised bandwidth is {wide:.0f}× Σ's): {how}.{other} Tuning-fair version "
+                      "(beyond the paper): claim sigma-beats-eso-fair.")
 
 
 def _sigma_beats_eso_fair(result, r):
@@ -127,30 +140,43 @@ def _eso_diverges(result, p):
                       "unstable (finding ex1-eso-divergence).")
 
 
+def _recorded(result, id_):
+    """The value of quantity ``id_``, None when it is diverged or not computed (a box evaluation skips the stable preset)."""
+    try:
+        return value_of(result, id_)
+    except KeyError:
+        return None
+
+
 def _ex2_tracks(result, p):
-    ids = ["ex2.literal.max_real_eig", "ex2.literal.tail_amplitude", "ex2.literal.mean_abs_tracking_error"]
-    max_re, amp, err = (value_of(result, i) for i in ids)
-    holds = max_re < 0 and amp is not None and amp < p.ripple_tol
-    fast = value_of(result, "ex2.fast_estimator.tail_amplitude")
-    result.claim(_BY_ID["ex2-tracks"], holds, ids + ["ex2.fast_estimator.tail_amplitude"],
+    ids = ["ex2.literal.max_real_eig", "ex2.literal.share_settled", "ex2.literal.tail_amplitude",
+           "ex2.literal.mean_abs_tracking_error"]
+    max_re, share, amp = (value_of(result, i) for i in ids[:3])
+    # Fig. 5 shows one run: tracking holds where the typical run settles (more than half of them), on a stable loop
+    holds = max_re < 0 and share > 0.5
+    fast = _recorded(result, "ex2.fast_estimator.tail_amplitude")
+    runs = result.get(ids[1]).runs
+    result.claim(_BY_ID["ex2-tracks"], holds, ids + (["ex2.fast_estimator.tail_amplitude"] if fast is not None else []),
                  note=f"As printed (Σ a = {p.a:g}; b = ({p.b1:g}, {p.b2:g}, {p.b3:g}) reconstructed) the loop "
-                      f"linearised at the origin has max Re λ = {max_re:+.3g} 1/s and in simulation x1 - v keeps a "
-                      + (f"half peak-to-peak ripple of {amp:.3g} over the last quarter" if amp is not None else
-                         "diverging error")
-                      + f" (settled means below {p.ripple_tol:g}); the claim needs both. The study's stable preset "
-                        "(Σ a raised until every eigenvalue has Re <= -1) leaves a ripple of "
-                      + (f"{fast:.3g}." if fast is not None else "— (diverged)."))
+                      f"linearised at the origin has max Re λ = {max_re:+.3g} 1/s, and in simulation {share:.0%} of "
+                      f"{runs} runs settle (half peak-to-peak of x1 - v over the last quarter below {p.ripple_tol:g}; "
+                      + (f"mean {amp:.3g}" if amp is not None else "the runs diverge")
+                      + "). Judged run by run, as Fig. 5 shows one run: the claim needs a stable linearisation and more "
+                        "than half the runs settled."
+                      + ("" if fast is None else " The study's stable preset (Σ a raised until every eigenvalue has "
+                         f"Re <= -1) leaves a ripple of {fast:.3g}."))
 
 
 def _ex2_robust(result, p):
     ids = ["ex2.sweep.literal.fraction_stable", "ex2.sweep.literal.fraction_oscillates",
-           "ex2.sweep.literal.fraction_diverges", "ex2.sweep.fraction_stable"]
-    st, osc, div, fast = (value_of(result, i) for i in ids)
+           "ex2.sweep.literal.fraction_diverges"]
+    st, osc, div = (value_of(result, i) for i in ids)
+    fast = _recorded(result, "ex2.sweep.fraction_stable")
     n = result.get(ids[0]).runs
-    result.claim(_BY_ID["ex2-robust"], st == 1.0, ids,
+    result.claim(_BY_ID["ex2-robust"], st == 1.0, ids + (["ex2.sweep.fraction_stable"] if fast is not None else []),
                  note=f"Over the {n}-point (b1, b2, b3) grid with the printed controller and Σ a = {p.a:g}: "
                       f"{st:.0%} settle, {osc:.0%} oscillate, {div:.0%} diverge; the claim needs every point to "
-                      f"settle. With the study's stable preset {fast:.0%} settle.")
+                      "settle." + ("" if fast is None else f" With the study's stable preset {fast:.0%} settle."))
 
 
 def _nonminimum_phase(result, p):
@@ -180,19 +206,20 @@ def _ex1_part(p: Example1, runs: int, seed: int) -> tuple:
     seeds = run_seeds(seed, runs)
     d = example1.simulate(p, seeds)
     example1.main_quantities(res, p, d)
-    example1.fair_comparison(res, p, d, tradeoff=False)
+    example1.fair_comparison(res, p, d, tradeoff=False, check=False)
     example1.n0_sweep(res, p, d, modes=("fixed_a",))  # the claim reads the fixed-a sweep only
     example1.eso_divergence(res, p, seeds)
     return tuple(res.quantities)
 
 
 @functools.lru_cache(maxsize=4)
-def _ex2_part(p: Example2, runs: int, seed: int, a_preset: float) -> tuple:
+def _ex2_part(p: Example2, runs: int, seed: int) -> tuple:
     res = StudyResult(_info())
     example2.literal_eigenvalues(res, p)
     example2.nonminimum_phase(res, p)
     n_grid = len(p.sweep_b1) * len(p.sweep_b2) * len(p.sweep_b3)
-    d = example2.simulate(p, run_seeds(seed, runs + n_grid), a_preset, runs)
+    # the printed configuration only: the stable preset's numbers appear in notes, never in a verdict
+    d = example2.simulate(p, run_seeds(seed, runs + n_grid), math.nan, runs, traces=False, presets=("literal",))
     example2.quantities(res, p, d, None)
     return tuple(res.quantities)
 
@@ -203,20 +230,19 @@ def _info():
     return INFO
 
 
-def evaluate(params: dict, *, runs: int, seed: int, a_preset: float, grid: dict | None = None) -> StudyResult:
-    """One evaluation of the sensitivity sweep: the claims and primary cells at ``params``.
+def evaluate(params: dict, *, runs: int, seed: int, grid: dict | None = None) -> StudyResult:
+    """One evaluation of the plausible box: the claims and primary cells at ``params``.
 
     ``params = {"linear": Linear, "ex1": Example1, "ex2": Example2, "claims": Readings}`` (the prefixes of
     :func:`ctrl_analysis.reporting.study.record_parameters`). Example 1 runs ``runs`` Monte Carlo runs on the
-    seeds of the main run (common random numbers); Example 2 ``runs`` runs and the grid ``grid``
-    (default :data:`EVAL_GRID`) with the stable preset's ``a`` fixed at ``a_preset``. Each part is
-    computed once per distinct parameter object (cached), so a reconstruction of Example 2 does not
-    re-run Example 1: its cells and claims are the baseline's.
+    first seeds of the main run (common random numbers at every point); Example 2 ``runs`` runs and the grid
+    ``grid`` (default :data:`EVAL_GRID`) of the printed configuration. What no claim or cell reads is skipped
+    (figure traces, the stability map, the stable preset, the linear path's check). Each part is computed once
+    per distinct parameter object (cached), so a point that moves only the readings re-runs nothing.
     """
     p1, p2 = params["ex1"], replace(params["ex2"], **(EVAL_GRID if grid is None else grid))
     readings = params.get("claims", READINGS)
     res = StudyResult(_info())
-    res.quantities = list(_linear_part(params["linear"]) + _ex1_part(p1, runs, seed)
-                          + _ex2_part(p2, runs, seed, a_preset))
+    res.quantities = list(_linear_part(params["linear"]) + _ex1_part(p1, runs, seed) + _ex2_part(p2, runs, seed))
     judge(res, p1, p2, readings)
     return res

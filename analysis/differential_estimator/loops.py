@@ -150,14 +150,14 @@ def sensor(signal: str = "x[0]") -> StaticGain:
 
 
 def han_eso(p: Example1, tuning_h: float | None = None) -> ExtendedStateObserver:
-    """Han's third-order nonlinear ESO with the step-size gains for ``tuning_h`` (default ``p.eso_tuning_h``, else ``p.h``).
+    """Han's third-order nonlinear ESO with the step-size gains for ``tuning_h`` (default ``p.eso_tuning_ratio · p.h``).
 
     ``δ = tuning_h`` when a ``tuning_h`` is given, else ``p.eso_delta`` (``None``: the design step).
     Han's form with ``e = z1 - y`` and minus signs equals the library's ``e = y - z1`` with plus signs
     (fal is odd).
     """
     if tuning_h is None:
-        h_t = p.h if p.eso_tuning_h is None else p.eso_tuning_h
+        h_t = p.eso_tuning_ratio * p.h
         delta = h_t if p.eso_delta is None else p.eso_delta
     else:
         h_t = delta = tuning_h
@@ -255,12 +255,18 @@ def example2_params(p: Example2, a, b, *, sigma_reading=None) -> dict:
     return params
 
 
-def simulate_signals(loop: Loop, n_steps: int, keep, *, inputs, runs: int, chunk: int = 2000, bound: float = 1e8,
-                     seeds=None, params=None):
+#: Samples (steps × runs) per signal per chunk of :func:`simulate_signals`: about 4 MB a signal.
+CHUNK_SAMPLES = 500_000
+
+
+def simulate_signals(loop: Loop, n_steps: int, keep, *, inputs, runs: int, chunk: int | None = None,
+                     bound: float = 1e8, seeds=None, params=None):
     """Run ``loop`` in time chunks (to bound memory), keeping only the signals ``keep``.
 
     The state is carried exactly from chunk to chunk, so the result equals one long run; ``params``
-    (per-run block parameters) are passed to every chunk's :meth:`Loop.simulate`.
+    (per-run block parameters) are passed to every chunk's :meth:`Loop.simulate`. ``chunk`` (steps)
+    defaults to :data:`CHUNK_SAMPLES` samples per signal, at least 2000 steps: a small batch (a box
+    evaluation's few runs) runs in one or two calls, a large one in bounded pieces.
 
     Returns
     -------
@@ -269,6 +275,8 @@ def simulate_signals(loop: Loop, n_steps: int, keep, *, inputs, runs: int, chunk
     diverged_step : ndarray of int, shape (B,)
         First step at which the run left ``|x| <= bound`` (-1 if never).
     """
+    if chunk is None:
+        chunk = max(2000, CHUNK_SAMPLES // max(int(runs), 1))
     out = {s: np.empty((n_steps + 1, runs)) for s in keep}
     diverged = np.zeros(runs, dtype=bool)
     step = np.full(runs, -1)
@@ -328,7 +336,7 @@ def pad_observers(esos) -> list:
     return esos + [ExtendedStateObserver.from_bandwidth(2, 10.0)] * max(0, OBSERVERS - len(esos))
 
 
-def simulate_example1(p: Example1, seeds, noise, esos=None, *, method: str | None = None, chunk: int = 2000):
+def simulate_example1(p: Example1, seeds, noise, esos=None, *, method: str | None = None, chunk: int | None = None):
     """Example 1 over ``seeds`` (one batch row each) with the held noise ``[ξ, η]`` of shape ``(N, B, 2)``.
 
     The loop carries :func:`pad_observers` ``(esos)``; only the observers ``esos`` are kept.
@@ -345,27 +353,39 @@ def simulate_example1(p: Example1, seeds, noise, esos=None, *, method: str | Non
                             seeds=seeds)
 
 
-def impulse_response(sysd, n: int, block: int = 128) -> np.ndarray:
-    """First ``n`` samples of a discrete SISO system's impulse response, ``D, CB, CAB, CA²B, ...``.
+def impulse_response(sysd, n: int, block: int = 128, outputs=None) -> np.ndarray:
+    """First ``n`` samples of a discrete system's impulse response from input 0, ``D, CB, CAB, CA²B, ...``.
 
     Powers of ``A`` in blocks of ``block`` (a few hundred small products for any ``n``), so no
     polynomial (transfer-function or zero-pole) form is ever formed: those are ill-conditioned for
     Σ's clustered poles near z = 1.
+
+    Parameters
+    ----------
+    sysd : control.StateSpace
+        Discrete-time system.
+    n : int
+        Samples.
+    block : int
+        Powers of ``A`` per block.
+    outputs : sequence of int, optional
+        Outputs to return, shape ``(n, len(outputs))`` (the powers of ``A`` shared); default output 0, shape ``(n,)``.
     """
-    A, b, c = np.asarray(sysd.A), np.asarray(sysd.B)[:, 0], np.asarray(sysd.C)[0]
+    rows = [0] if outputs is None else list(outputs)
+    A, b = np.asarray(sysd.A), np.asarray(sysd.B)[:, 0]
     G = np.empty((A.shape[0], block))
     for j in range(block):  # A^j B
         G[:, j] = b
         b = A @ b
     A_block = np.linalg.matrix_power(A, block)
-    h = np.empty(n)
-    h[0] = float(np.asarray(sysd.D)[0, 0])
-    row = c
+    h = np.empty((n, len(rows)))
+    h[0] = np.asarray(sysd.D)[rows, 0]
+    row = np.asarray(sysd.C)[rows]
     for k in range(1, n, block):  # h_k = C A^(k-1) B
         seg = row @ G
-        h[k:k + block] = seg[:min(block, n - k)]
+        h[k:k + block] = seg[:, :min(block, n - k)].T
         row = row @ A_block
-    return h
+    return h[:, 0] if outputs is None else h
 
 
 class LinearPath:
@@ -374,9 +394,9 @@ class LinearPath:
     The plant output ``x1`` is smooth: its part of the response uses the first-order-hold
     discretisation (exact for ``x1`` linear between samples); the held noise ``η`` uses the
     zero-order hold (exact). Both by :func:`control.c2d`; the responses are convolutions with the
-    discrete impulse responses (:func:`impulse_response`) done by FFT over the whole batch, the
-    input spectra computed once: parameter sweeps of linear estimators cost a few FFTs each.
-    Zero initial state.
+    discrete impulse responses (:func:`impulse_response`, cut where they have decayed below
+    :attr:`TAIL` of their peak) done by FFT over the whole batch, the input spectra computed once
+    per FFT length: parameter sweeps of linear estimators cost a few FFTs each. Zero initial state.
 
     Parameters
     ----------
@@ -388,25 +408,76 @@ class LinearPath:
         Sampling step.
     """
 
+    #: An impulse response is cut where it has decayed below this fraction of its peak (for every output and
+    #: hold): far below the single-precision FFT's resolution, so the convolution is unchanged.
+    TAIL = 1e-10
+
     def __init__(self, x1, eta, h: float):
         self.n = x1.shape[0]
         self.h = float(h)
         from scipy import fft
 
         self._fft = fft
-        self.nfft = fft.next_fast_len(2 * self.n - 1, real=True)
         # single precision: ~1e-7 relative per sample, far below the Monte Carlo spread, half the memory traffic
-        self.spectra = {m: fft.rfft(np.asarray(u, dtype=np.float32), self.nfft, axis=0)
-                        for m, u in (("foh", x1), ("zoh", eta))}
+        self._inputs = {m: np.asarray(u, dtype=np.float32) for m, u in (("foh", x1), ("zoh", eta))}
+        self._spectra = {}
+
+    def spectra(self, nfft: int) -> dict:
+        """The inputs' spectra (``foh``: x1, ``zoh``: η) on ``nfft`` points, computed once per length."""
+        if nfft not in self._spectra:
+            self._spectra[nfft] = {m: self._fft.rfft(u, nfft, axis=0) for m, u in self._inputs.items()}
+        return self._spectra[nfft]
 
     def estimates(self, sys, outputs=(0, 1)) -> list:
         """Outputs ``outputs`` of ``sys`` (a ``control.StateSpace`` whose input 0 is ``y``), each ``(N, B)``."""
-        out = []
-        for o in outputs:
-            spec = None
-            for method, U in self.spectra.items():
-                g = impulse_response(ct.c2d(sys[o, 0], self.h, method=method), self.n)
-                term = U * self._fft.rfft(g.astype(np.float32), self.nfft)[:, None]
-                spec = term if spec is None else np.add(spec, term, out=spec)  # in place: no extra temporaries
-            out.append(self._fft.irfft(spec, self.nfft, axis=0, overwrite_x=True)[: self.n])
-        return out
+        return next(self.estimates_many([sys], outputs))
+
+    def estimates_many(self, systems, outputs=(0, 1)):
+        """:meth:`estimates` of several systems, discretised together: yields each system's list of outputs.
+
+        The systems are stacked block-diagonally (input 0 of each driven by ``y``) and discretised once per
+        hold: one matrix exponential per hold for a whole parameter sweep, each block the system's own
+        discretisation (the exponential of a block-diagonal matrix is block-diagonal). The responses are
+        computed system by system as the iterator advances (memory of one system's outputs at a time).
+        """
+        outputs = list(outputs)
+        systems = list(systems)
+        A = _block_diag([np.asarray(s.A) for s in systems])
+        B = np.concatenate([np.asarray(s.B)[:, :1] for s in systems])
+        C = _block_diag([np.asarray(s.C)[outputs] for s in systems])
+        D = np.concatenate([np.asarray(s.D)[outputs, :1] for s in systems])
+        stacked = ct.ss(A, B, C, D)
+        rows = list(range(C.shape[0]))
+        g = {method: impulse_response(ct.c2d(stacked, self.h, method=method), self.n, outputs=rows)
+             for method in self._inputs}
+        # a stable estimator's response decays: a convolution of N samples with a kernel of L needs N + L - 1 points
+        big = np.zeros(self.n, dtype=bool)
+        for v in g.values():
+            a = np.abs(v)
+            big |= np.any(a > self.TAIL * a.max(axis=0), axis=1)
+        length = int(np.flatnonzero(big)[-1]) + 1 if big.any() else 1
+        nfft = self._fft.next_fast_len(self.n + length - 1, real=True)
+        return self._responses({m: v[:length] for m, v in g.items()}, nfft, len(systems), len(outputs))
+
+    def _responses(self, g, nfft, n_systems, m):
+        spectra = self.spectra(nfft)
+        for j in range(n_systems):
+            out = []
+            for k in range(j * m, (j + 1) * m):
+                spec = None
+                for method, U in spectra.items():
+                    term = U * self._fft.rfft(g[method][:, k].astype(np.float32), nfft)[:, None]
+                    spec = term if spec is None else np.add(spec, term, out=spec)  # in place: no extra temporaries
+                out.append(self._fft.irfft(spec, nfft, axis=0, overwrite_x=True)[: self.n])
+            yield out
+
+
+def _block_diag(blocks) -> np.ndarray:
+    rows = sum(b.shape[0] for b in blocks)
+    cols = sum(b.shape[1] for b in blocks)
+    M = np.zeros((rows, cols))
+    i = j = 0
+    for b in blocks:
+        M[i:i + b.shape[0], j:j + b.shape[1]] = b
+        i, j = i + b.shape[0], j + b.shape[1]
+    return M

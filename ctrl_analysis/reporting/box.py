@@ -40,6 +40,8 @@ PERMUTATION_SEED = 20261127
 
 
 def _same(a, b) -> bool:
+    if a is None or b is None:  # np.asarray(None, dtype=float) is nan, never close to itself
+        return a is b
     try:
         return bool(np.all(np.isclose(np.asarray(a, dtype=float), np.asarray(b, dtype=float), rtol=1e-9, atol=0)))
     except (TypeError, ValueError):

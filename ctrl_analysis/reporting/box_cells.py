@@ -2,9 +2,10 @@
 
 A cell's *band* at a point of the box is the central 95 % of its Monte Carlo runs (a number from a noisy
 simulation) or half a unit of its last printed digit (a deterministic one). :func:`search_cells` looks for a
-point whose band holds the paper's value: among the box's samples, then by bisection between two samples on
-either side of it (differing only along intervals, so continuity brackets a crossing), then by a local compass
-search from the closest sample along the reconstructions that move the cell most. Used by
+point whose band holds the paper's value: among the box's samples (and, for a cell none of them reaches, the
+chosen point's one-at-a-time neighbours along each set of alternatives), then by bisection between two of those
+points on either side of it (differing only along intervals, so continuity brackets a crossing), then by a
+local compass search from the closest one along the reconstructions that move the cell most. Used by
 :func:`ctrl_analysis.reporting.sensitivity.explore`.
 """
 
@@ -90,6 +91,18 @@ def search_cells(runner, box, U, per, cell_steps, search_rounds, bisect) -> dict
     for a in algos:
         pts.append((box.chosen, a, per[a][0]))
         pts += [(u, a, o) for u, o in zip(U, per[a][1:])]
+    # a cell no sampled point reaches: the chosen point's one-at-a-time neighbours along each set of alternatives
+    # (another integrator, another reading) join the points searched from. A printed number often sits next to
+    # the chosen values, where a quasi-random sample spread over every combination of alternatives rarely lands
+    neighbours = []
+    if any(not any((o["cells"].get(qid) or {}).get("in_band") for _, _, o in pts) for qid in base["cells"]):
+        for i, d in enumerate(box.dims):
+            for k in range(1, 0 if d.continuous else len(d.levels)):
+                u = box.chosen.copy()
+                u[i] = (k + 0.5) / len(d.levels)
+                neighbours.append(u)
+        pts += [(u, main, o) for u, o in zip(neighbours, runner.run([(u, main) for u in neighbours]))]
+    near = {id(u) for u in neighbours}
     segments, searches = [], []
     for qid in base["cells"]:
         states = [(u, a, o["cells"].get(qid)) for u, a, o in pts]
@@ -111,7 +124,8 @@ def search_cells(runner, box, U, per, cell_steps, search_rounds, bisect) -> dict
         hits = [(box.distance(box.chosen, u), u, a) for u, a, s in states if s["in_band"]]  # usually few
         if hits:
             _, u, a = min(hits, key=lambda t: t[0])
-            entry.update(verdict="reachable", reached_at=box.changed(u), how="sample", algorithm=a)
+            entry.update(verdict="reachable", reached_at=box.changed(u), how="neighbour" if id(u) in near else "sample",
+                         algorithm=a)
             continue
         # two points on either side of the paper's value, differing only along intervals: bisect between them
         straddles = _straddles(box, states)

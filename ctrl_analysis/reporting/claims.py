@@ -234,7 +234,8 @@ def sensitivity_lines(results: dict) -> list[str]:
         for q in reached:
             b = q["box"]
             where = ", ".join(f"`{k}` = {_short(v)}" for k, v in (b.get("reached_at") or {}).items()) or "the chosen values"
-            how = {"sample": "a sample", "bisection": "bisection between samples on either side",
+            how = {"sample": "a sample", "neighbour": "switching one alternative of the chosen values",
+                   "bisection": "bisection between samples on either side",
                    "search": "the local search"}.get(b.get("how"), b.get("how"))
             lines.append(f"- {_cell(q['label'])}: at {where}" + (f" ({b['algorithm']} algorithm)" if b.get("algorithm")
                                                                  else "") + f", found by {how}")

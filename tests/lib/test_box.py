@@ -253,3 +253,43 @@ def test_a_derived_cell_takes_its_sources_reachable_verdict_and_the_report_lists
     assert "box" not in d["curve_db"]
     text = write_report_md([result.to_dict()], tmp_path).read_text()
     assert "a printed curve value: at `toy.k`" in text and "the curve in dB: at" not in text
+
+
+@dataclass(frozen=True)
+class Near:
+    a: float = reconstructed(0.5, "not printed", plausible=span(0.0, 1.0, "a share"))
+    rule: str = reconstructed("x", "one of two readings", plausible=choices(("y",), "the other reading"))
+
+
+def _evaluate_near(params):
+    """A printed 1.02 reached only with the other reading at the chosen a (within 1e-4 of it)."""
+    p = params["near"]
+    r = StudyResult(INFO)
+    value = 1.02 + 50.0 * abs(p.a - 0.5) if p.rule == "y" else 5.0
+    r.quantity("cell", "a printed value", value, paper=1.02, unit="", cell="Table 2 / c")
+    r.claim(ALWAYS, True, evidence=["cell"])
+    return r
+
+
+def test_a_cell_reached_by_switching_one_alternative_of_the_chosen_values():
+    result = _evaluate_near({"near": Near()})
+    ex = sensitivity.explore(_evaluate_near, {"near": Near()})
+    # no sample lands within 1e-4 of a = 0.5, and the value never crosses 1.02: neither bisection nor search reach it
+    U = ex.box.sample(64, ex.summary["seed"])
+    assert np.abs(U[:, 0] - 0.5).min() > 1e-4
+    sensitivity.apply(result, ex)
+    q = result.get("cell")
+    assert q.verdict == "reachable" and q.box["how"] == "neighbour" and q.box["reached_at"] == {"near.rule": "y"}
+
+
+@dataclass(frozen=True)
+class Unset:
+    delta: object = reconstructed(None, "None: follows another setting",
+                                  plausible=choices((5e-3, 1e-2), "two fixed values"))
+
+
+def test_a_chosen_none_is_a_level_of_its_own():
+    box = Box({"u": Unset()})
+    assert box.chosen[0] == pytest.approx(1 / 6) and box.changed(box.chosen) == {}
+    assert box.params_at([0.1])["u"].delta is None and box.params_at([0.5])["u"].delta == 5e-3
+    assert box.distance(box.chosen, [0.1]) == 0.0 and box.distance(box.chosen, [0.9]) == 0.5
