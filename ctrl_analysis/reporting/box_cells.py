@@ -163,26 +163,36 @@ def search_cells(runner, box, U, per, cell_steps, search_rounds, bisect) -> dict
 
 
 def _prune(runner, box, U, per, out) -> None:
-    """Name what moves each cell: its drivers (Sobol' indices of its gap over the sample), and for a reached cell
-    the point with every other reconstruction back at its chosen value, where that still reaches it (one batch)."""
+    """Name what moves each cell: its drivers (Sobol' indices of its gap over the sample); and for a reached cell,
+    the fewest reconstructions (those with the largest indices first, k = 1, 2, 3, 5) that, moved to the reached
+    point with every other one back at its chosen value, still reach it (one batch over every cell)."""
     main = box.algorithms[0]
     tries = []
     for qid, entry in out.items():
         gaps = np.array([(o["cells"].get(qid) or {}).get("dist", math.nan) for o in per[main][1:]], dtype=float)
         gaps[~np.isfinite(gaps)] = math.nan
-        entry["drivers"] = [d for d in first_order(box, U, gaps) if d["significant"]][:4] if len(U) else []
-        if entry["verdict"] != "reachable" or not entry["drivers"]:
+        ranked = first_order(box, U, gaps) if len(U) else []
+        entry["drivers"] = [d for d in ranked if d["significant"]][:4]
+        if entry["verdict"] != "reachable" or len(entry["reached_at"] or {}) < 2:
             continue
-        keep = {d["reconstruction"] for d in entry["drivers"]}
-        u = np.array([box.dims[i].coordinate(_value(box, entry["reached_at"], i)) if box.dims[i].name in keep
-                      else box.chosen[i] for i in range(len(box.dims))])
-        if box.changed(u) != entry["reached_at"]:
-            tries.append((qid, u, entry["algorithm"]))
-    outs = runner.run([(u, a) for _, u, a in tries])
-    for (qid, u, _), o in zip(tries, outs):
+        moved = list(entry["reached_at"])
+        order = [d["reconstruction"] for d in ranked if d["reconstruction"] in moved]
+        order += [name for name in moved if name not in order]
+        for k in (1, 2, 3, 5):
+            if k >= len(order):
+                break
+            keep = set(order[:k])
+            u = np.array([box.dims[i].coordinate(_value(box, entry["reached_at"], i)) if box.dims[i].name in keep
+                          else box.chosen[i] for i in range(len(box.dims))])
+            tries.append((qid, k, u, entry["algorithm"]))
+    outs = runner.run([(u, a) for _, _, u, a in tries])
+    best: dict = {}
+    for (qid, k, u, _), o in zip(tries, outs):
         s = o["cells"].get(qid)
-        if s is not None and s["in_band"]:
-            out[qid]["reached_at"] = box.changed(u)
+        if s is not None and s["in_band"] and (qid not in best or k < best[qid][0]):
+            best[qid] = (k, u)
+    for qid, (_, u) in best.items():
+        out[qid]["reached_at"] = box.changed(u)
 
 
 def _value(box, point, i):
