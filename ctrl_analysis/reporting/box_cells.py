@@ -164,35 +164,39 @@ def search_cells(runner, box, U, per, cell_steps, search_rounds, bisect) -> dict
 
 def _prune(runner, box, U, per, out) -> None:
     """Name what moves each cell: its drivers (Sobol' indices of its gap over the sample); and for a reached cell,
-    the fewest reconstructions (those with the largest indices first, k = 1, 2, 3, 5) that, moved to the reached
-    point with every other one back at its chosen value, still reach it (one batch over every cell)."""
+    only the reconstructions it needs: each one moved to the reached point is put back at its chosen value alone
+    (one batch over every cell), and those the cell does not need are put back together where that still reaches
+    it (a second batch)."""
     main = box.algorithms[0]
-    tries = []
+    singles = []
     for qid, entry in out.items():
         gaps = np.array([(o["cells"].get(qid) or {}).get("dist", math.nan) for o in per[main][1:]], dtype=float)
         gaps[~np.isfinite(gaps)] = math.nan
-        ranked = first_order(box, U, gaps) if len(U) else []
-        entry["drivers"] = [d for d in ranked if d["significant"]][:4]
+        entry["drivers"] = [d for d in first_order(box, U, gaps) if d["significant"]][:4] if len(U) else []
         if entry["verdict"] != "reachable" or len(entry["reached_at"] or {}) < 2:
             continue
-        moved = list(entry["reached_at"])
-        order = [d["reconstruction"] for d in ranked if d["reconstruction"] in moved]
-        order += [name for name in moved if name not in order]
-        for k in (1, 2, 3, 5):
-            if k >= len(order):
-                break
-            keep = set(order[:k])
-            u = np.array([box.dims[i].coordinate(_value(box, entry["reached_at"], i)) if box.dims[i].name in keep
-                          else box.chosen[i] for i in range(len(box.dims))])
-            tries.append((qid, k, u, entry["algorithm"]))
-    outs = runner.run([(u, a) for _, _, u, a in tries])
-    best: dict = {}
-    for (qid, k, u, _), o in zip(tries, outs):
+        for name in entry["reached_at"]:
+            singles.append((qid, {name}, _point(box, entry["reached_at"], {name}), entry["algorithm"]))
+    outs = runner.run([(u, a) for _, _, u, a in singles])
+    needless: dict = {}
+    for (qid, names, _, _), o in zip(singles, outs):
         s = o["cells"].get(qid)
-        if s is not None and s["in_band"] and (qid not in best or k < best[qid][0]):
-            best[qid] = (k, u)
-    for qid, (_, u) in best.items():
-        out[qid]["reached_at"] = box.changed(u)
+        if s is not None and s["in_band"]:
+            needless.setdefault(qid, set()).update(names)
+    combined = [(qid, _point(box, out[qid]["reached_at"], names), out[qid]["algorithm"])
+                for qid, names in needless.items()]
+    outs = runner.run([(u, a) for _, u, a in combined])
+    for (qid, u, _), o in zip(combined, outs):
+        s = o["cells"].get(qid)
+        if s is not None and s["in_band"]:
+            out[qid]["reached_at"] = box.changed(u)
+
+
+def _point(box, point: dict, back: set) -> np.ndarray:
+    """Coordinates of ``point`` (``{name: value}``, chosen values elsewhere) with the names in ``back`` at their chosen
+    values."""
+    return np.array([box.chosen[i] if d.name in back or d.name not in point else d.coordinate(point[d.name])
+                     for i, d in enumerate(box.dims)])
 
 
 def _value(box, point, i):
