@@ -447,6 +447,11 @@ def ikf_mfac(estimator: PPDEstimator, law: CFDLLaw, ikf, **kw) -> list:
     estimator : PPDEstimator
     law : CFDLLaw
     ikf : ctrl_analysis.estimators.kalman.ImprovedKalmanFilter
+        Its ``R`` is the measurement noise variance ``σ²``; its ``Q`` the variance of the output's
+        change per step that the loop must follow (to follow a setpoint ``r``, ``Q ≈ mean(Δr²)``).
+        ``Q/R`` sets the filter's bandwidth and lag: too small a ``Q`` lags, and the loop stops
+        following the setpoint; ``Q ≫ R`` is no filter (CFDL-MFAC). See
+        :class:`~ctrl_analysis.estimators.kalman.ImprovedKalmanFilter` and the user guide's sweep.
     **kw
         Passed to :func:`mfac_controller`.
 

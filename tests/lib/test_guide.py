@@ -16,13 +16,13 @@ def _recipes():
 
 
 #: The recipes, in the order of the page.
-RECIPES = ["eso_monte_carlo", "kernel_block_params", "sampled_pid_on_continuous_plant", "mfac", "kalman_dlqe",
-           "ckf_online_identification", "fuzzy_pd", "nlsys"]
+RECIPES = ["eso_monte_carlo", "kernel_block_params", "sampled_pid_on_continuous_plant", "mfac",
+           "ikf_mfac_choosing_q_and_r", "kalman_dlqe", "ckf_online_identification", "fuzzy_pd", "nlsys"]
 
 
-def test_the_guide_has_eight_recipes_each_checking_its_result():
+def test_the_guide_has_nine_recipes_each_checking_its_result():
     recipes = _recipes()
-    assert len(recipes) == len(RECIPES) == 8
+    assert len(recipes) == len(RECIPES) == 9
     assert all("assert" in r for r in recipes)
 
 
