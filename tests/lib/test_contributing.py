@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import doctest
 import importlib
 import re
+import textwrap
 from pathlib import Path
 
 import pytest
@@ -84,3 +86,42 @@ def test_every_module_the_text_names_imports(name):
             obj = getattr(obj, attr)
         return
     pytest.fail(f"CONTRIBUTING.md names {name}, which does not import")
+
+
+def _templates() -> tuple[str, str]:
+    """The block template and the test template of "Add a block" (the first two python blocks of the section)."""
+    section = TEXT[TEXT.index("## Add a block"):TEXT.index("## Add a study")]
+    blocks = [textwrap.dedent(b) for b in re.findall(r"```python\n(.*?)\n *```", section, re.DOTALL)]
+    assert len(blocks) == 2, f"'Add a block' should hold two python templates, found {len(blocks)}"
+    return blocks[0], blocks[1]
+
+
+@pytest.mark.filterwarnings("error:compiled engine unavailable")
+def test_the_block_template_runs_its_doctest_and_passes_the_test_template():
+    module, tests = _templates()
+    ns = {"__name__": "contributing_template"}
+    # the template is a module of ctrl_analysis' subpackages: its relative imports, made absolute
+    exec(compile(module.replace("from ..", "from ctrl_analysis."), "CONTRIBUTING.md (block template)", "exec"), ns)  # noqa: S102
+    block = ns["RateLimiter"]
+    runner = doctest.DocTestRunner()
+    for test in doctest.DocTestFinder().find(block, "RateLimiter", globs=dict(ns)):
+        runner.run(test)
+    assert runner.failures == 0 and runner.tries > 0
+    own_import = re.compile(r"^from ctrl_analysis\.\w+\.rate_limit import RateLimiter$", re.MULTILINE)
+    assert own_import.search(tests), "the test template imports the block from its module"
+    exec(compile(own_import.sub("", tests), "CONTRIBUTING.md (test template)", "exec"), ns)  # noqa: S102
+    ran = 0
+    for name, fn in list(ns.items()):
+        if not (name.startswith("test_") and callable(fn)):
+            continue
+        marks = [m for m in getattr(fn, "pytestmark", []) if m.name == "parametrize"]
+        if not marks:
+            fn()
+            ran += 1
+            continue
+        names, values = marks[0].args
+        names = [n.strip() for n in (names.split(",") if isinstance(names, str) else names)]
+        for row in values:
+            fn(**dict(zip(names, row if len(names) > 1 else (row,), strict=True)))
+            ran += 1
+    assert ran >= 6
