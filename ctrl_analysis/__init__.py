@@ -16,6 +16,7 @@ from .engine.blocks import (
     SampledBlock,
     StaticBlock,
     StaticGain,
+    UnitDelay,
     signal_names,
 )
 from .engine.loop import Loop, LoopResponse, place
@@ -32,6 +33,7 @@ __all__ = [
     "SampledBlock",
     "StaticBlock",
     "StaticGain",
+    "UnitDelay",
     "draw_noise",
     "gaussian_noise",
     "place",

@@ -537,6 +537,19 @@ class ArxRegressor(KernelBlock, DiscreteBlock):
     ValueError
         Negative orders or lag, or no regressor at all.
 
+    Notes
+    -----
+    **Never feed it a noisy measurement.** Least squares assumes noise-free regressors; with a
+    measurement ``s = y + v`` in ``h`` (*errors in variables*) it converges to ``(R_hh + Σ)⁻¹ R_hh θ``,
+    not ``θ`` (``R_hh`` the noise-free regressors' second moment, ``Σ`` the noise's), and no test
+    inside the estimator can tell. Sampled fast, the ``a_i`` are carried by the sample-to-sample change
+    of ``y``, much smaller than the noise's, and the fit describes the noise (the user guide's
+    second-order plant: ``a_1 = 0.53, a_2 = 0.45`` for ``1.93, −0.93``). Filter ``s`` *and* ``u`` with one low-pass
+    first, ``LowPassFilter(ω, order=na + 1).digital(h, channels=2)`` with ``ω`` near the plant's
+    bandwidth: a linear filter commutes with the model, so the filtered pair obeys it with the same
+    ``θ``, and the noise leaves the regression (``docs/guide.rst``, "Online characteristic-model
+    identification with the CKF").
+
     Examples
     --------
     >>> import numpy as np

@@ -4,7 +4,8 @@ Blocks (each batched, under the protocol of :mod:`ctrl_analysis.engine.blocks`) 
 plant ``y(k+1) = f(y(k), ..., u(k), ...)`` whose (possibly filtered) output ``y_f`` the controller
 sees:
 
-* :class:`UnitDelay` — ``u(k−1)`` from ``u(k)``;
+* :class:`~ctrl_analysis.engine.blocks.UnitDelay` — ``u(k−1)`` from ``u(k)`` (defined in
+  :mod:`ctrl_analysis.engine.blocks`, importable from here too);
 * :class:`PPDEstimator` — the pseudo-partial-derivative estimate ``φ̂(k)`` with its reset rule;
 * :class:`CFDLLaw` — the CFDL-MFAC control law ``u(k)``;
 * :class:`DecreasingGainLaw` — the same law with a decreasing gain inside an error band (D-MFAC),
@@ -23,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._validate import check_finite, check_positive, check_str
-from ..engine.blocks import Block, DiscreteBlock, StaticBlock
+from ..engine.blocks import Block, DiscreteBlock, StaticBlock, UnitDelay
 from ..engine.kernels import KernelBlock, Kernels, Layout, jitable
 from ..engine.loop import place
 
@@ -37,7 +38,7 @@ __all__ = [
     "mfac_controller",
 ]
 
-NO_PARAMS = Layout()  # UnitDelay, CFDLPredictor
+NO_PARAMS = Layout()  # CFDLPredictor
 PPD = Layout("eta", "mu", "epsilon", "phi_reset", "sign0")
 PPD_AT = PPD.at  # parameter offsets, numba constants
 LAW = Layout("rho", "lam")
@@ -69,11 +70,6 @@ def _ppd_projection(phi_prev, du, dy, eta, mu):
 # ------------------------------------------------------------------ kernels (one run; see ctrl_analysis.engine.kernels)
 # Each equation once: the blocks' batched numpy methods and the compiled engine both call these.
 # PPDEstimator's reset (7) and DecreasingGainLaw's band (36) branch per run (columns=False).
-
-def delay_update(t, x, u, p, x_next):
-    """Kernel update of :class:`UnitDelay`: ``u_prev(k+1) = u(k)``."""
-    x_next[0] = u[0]
-
 
 @jitable
 def ppd_output(t, x, u, p, y):
@@ -138,32 +134,6 @@ def predictor_update(t, x, u, p, x_next):
     x_next[0] = u[0]
     x_next[1] = u[1]
     x_next[2] = x[1]
-
-
-class UnitDelay(KernelBlock, DiscreteBlock):
-    """One-sample delay ``u_prev(k) = u(k−1)``: input ``u``, state and output ``u_prev``.
-
-    Parameters
-    ----------
-    u0 : float
-        ``u(−1)``, the output at the first sample.
-    """
-
-    inputs = ("u",)
-    states = ("u_prev",)
-    outputs = ("u_prev",)
-    feedthrough = False
-    kernels = Kernels(update=delay_update)
-
-    def __init__(self, u0: float = 0.0):
-        self.u0 = float(check_finite("u0", u0, scalar=True))
-        self.kernel_params = NO_PARAMS.pack()
-
-    def initial_state(self) -> np.ndarray:
-        return np.array([self.u0])
-
-    def __repr__(self) -> str:
-        return f"UnitDelay(u0={self.u0:g})"
 
 
 class PPDEstimator(KernelBlock, DiscreteBlock):
@@ -477,6 +447,11 @@ def ikf_mfac(estimator: PPDEstimator, law: CFDLLaw, ikf, **kw) -> list:
     estimator : PPDEstimator
     law : CFDLLaw
     ikf : ctrl_analysis.estimators.kalman.ImprovedKalmanFilter
+        Its ``R`` is the measurement noise variance ``σ²``; its ``Q`` the variance of the output's
+        change per step that the loop must follow (to follow a setpoint ``r``, ``Q ≈ mean(Δr²)``).
+        ``Q/R`` sets the filter's bandwidth and lag: too small a ``Q`` lags, and the loop stops
+        following the setpoint; ``Q ≫ R`` is no filter (CFDL-MFAC). See
+        :class:`~ctrl_analysis.estimators.kalman.ImprovedKalmanFilter` and the user guide's sweep.
     **kw
         Passed to :func:`mfac_controller`.
 

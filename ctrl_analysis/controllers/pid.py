@@ -1,9 +1,9 @@
 """Discrete PID controller with a filtered derivative and anti-windup, a kernel-first block.
 
-Written by following CONTRIBUTING.md's recipe "Add a block" (one file for the block, one for its
-tests, one docs entry): the equations are the two kernels below, once; the batched methods, the
-compiled engine, ``nlsys`` and per-run parameters (``Loop.simulate(params={"pid": {"kp": ...}})``)
-come from :class:`~ctrl_analysis.engine.kernels.KernelBlock`.
+Written by following CONTRIBUTING.md's recipe "Add a block" (the block's module, its tests, a
+row of the fuzz table, a docs entry): the equations are the two kernels below, once; the batched
+methods, the compiled engine, ``nlsys`` and per-run parameters
+(``Loop.simulate(params={"pid": {"kp": ...}})``) come from :class:`~ctrl_analysis.engine.kernels.KernelBlock`.
 """
 
 from __future__ import annotations

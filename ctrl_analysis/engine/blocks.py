@@ -43,6 +43,7 @@ __all__ = [
     "SampledBlock",
     "StaticBlock",
     "StaticGain",
+    "UnitDelay",
     "signal_names",
 ]
 
@@ -512,6 +513,44 @@ class StaticGain(KernelBlock, StaticBlock):
 
     def __repr__(self) -> str:
         return f"StaticGain(D shape {self.D.shape}, inputs={self.inputs}, outputs={self.outputs})"
+
+
+def delay_update(t, x, u, p, x_next):
+    """Kernel update of :class:`UnitDelay`: ``u_prev(k+1) = u(k)`` (one run, or the batch's columns)."""
+    x_next[0] = u[0]
+
+
+class UnitDelay(KernelBlock, DiscreteBlock):
+    """One-sample delay ``u_prev(k) = u(k−1)``: input ``u``, state and output ``u_prev``.
+
+    Wherever a loop reads a signal of the previous sample (``u(k−1)`` for a characteristic-model Kalman
+    filter or an MFAC law; ``place(UnitDelay(), "delay", inputs=["u"], outputs=["u_prev"])``).
+
+    Parameters
+    ----------
+    u0 : float
+        ``u(−1)``, the output at the first sample.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> y, _ = UnitDelay(u0=-1.0).run(np.array([1.0, 2.0, 3.0]))
+    >>> y[:, 0, 0]
+    array([-1.,  1.,  2.])
+    """
+
+    inputs, states, outputs, feedthrough = ("u",), ("u_prev",), ("u_prev",), False
+    kernels = Kernels(update=delay_update)
+
+    def __init__(self, u0: float = 0.0):
+        self.u0 = float(check_finite("u0", u0, scalar=True))
+        self.kernel_params = Layout().pack()
+
+    def initial_state(self) -> np.ndarray:
+        return np.array([self.u0])
+
+    def __repr__(self) -> str:
+        return f"UnitDelay(u0={self.u0:g})"
 
 
 class SampledBlock(DiscreteBlock):

@@ -262,7 +262,7 @@ class TrackingDifferentiator(KernelBlock, DiscreteBlock):
     def step_block(self):
         """The sample's steps as a static block (inputs ``v``, ``x[0]``, ``x[1]``; outputs ``x[0]``, ``x[1]`` after them).
 
-        With two :class:`~ctrl_analysis.controllers.mfac.UnitDelay` blocks holding its outputs it is
+        With two :class:`~ctrl_analysis.engine.blocks.UnitDelay` blocks holding its outputs it is
         this TD with feedthrough, computing the steps once per sample where the block's output and
         update compute them twice (same numbers).
 

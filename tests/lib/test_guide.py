@@ -15,15 +15,19 @@ def _recipes():
     return [textwrap.dedent(b) for b in blocks]
 
 
-def test_the_guide_has_six_recipes_each_checking_its_result():
+#: The recipes, in the order of the page.
+RECIPES = ["eso_monte_carlo", "kernel_block_params", "sampled_pid_on_continuous_plant", "mfac",
+           "ikf_mfac_choosing_q_and_r", "kalman_dlqe", "ckf_online_identification", "fuzzy_pd", "nlsys"]
+
+
+def test_the_guide_has_nine_recipes_each_checking_its_result():
     recipes = _recipes()
-    assert len(recipes) == 6
+    assert len(recipes) == len(RECIPES) == 9
     assert all("assert" in r for r in recipes)
 
 
 @pytest.mark.filterwarnings("error:compiled engine unavailable")  # a user block in a notebook cell compiles too
-@pytest.mark.parametrize("index", range(6), ids=["eso_monte_carlo", "kernel_block_params", "mfac", "kalman_dlqe",
-                                                 "fuzzy_pd", "nlsys"])
+@pytest.mark.parametrize("index", range(len(RECIPES)), ids=RECIPES)
 def test_recipe_runs(index):
     code = _recipes()[index]
-    exec(compile(code, f"docs/guide.rst (recipe {index + 1})", "exec"), {"__name__": "guide_recipe"})
+    exec(compile(code, f"docs/guide.rst (recipe {index + 1})", "exec"), {"__name__": "guide_recipe"})  # noqa: S102

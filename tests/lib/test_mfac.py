@@ -146,6 +146,16 @@ def test_cfdl_law_and_predictor_values():
     np.testing.assert_array_equal(x1, [[3.0, 2.0, 1.0]])
 
 
+def test_unit_delay_lives_in_engine_blocks_and_keeps_its_old_imports():
+    import ctrl_analysis
+    from ctrl_analysis.controllers import UnitDelay as from_controllers
+    from ctrl_analysis.engine import blocks
+
+    assert UnitDelay is blocks.UnitDelay is from_controllers is ctrl_analysis.UnitDelay
+    y, _ = blocks.UnitDelay(u0=0.5).run(np.array([1.0, 2.0]))
+    np.testing.assert_array_equal(y[:, 0, 0], [0.5, 1.0])
+
+
 def closed_loop(scheme):
     est = ppd()
     law = DecreasingGainLaw(1.0, 2.0, 0.3) if scheme == "d" else CFDLLaw(1.0, 2.0)

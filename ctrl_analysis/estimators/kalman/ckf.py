@@ -122,6 +122,14 @@ class CharacteristicKalmanFilter(KernelBlock, DiscreteBlock):
     Every 2×2 product is written out element-wise (no matrix product on the batch axis), so a
     run is bit-identical whatever the batch size.
 
+    ``f1, f2, g0`` usually come from an online identification
+    (:class:`~ctrl_analysis.identification.ArxRegressor` into
+    :class:`~ctrl_analysis.identification.RecursiveLeastSquaresBlock`) and ``u(k−1)`` from a
+    :class:`~ctrl_analysis.engine.blocks.UnitDelay`. Identify from ``y`` and ``u`` passed through one
+    low-pass, not from the noisy ``y`` the filter reads: least squares on noisy regressors is biased
+    (see :class:`~ctrl_analysis.identification.ArxRegressor`), and a CKF driven by the biased model
+    does worse than the raw measurement.
+
     Parameters
     ----------
     Q : float or array_like, shape (2, 2)

@@ -89,10 +89,18 @@ class ImprovedKalmanFilter(KernelBlock, DiscreteBlock):
     Parameters
     ----------
     Q : float
-        Process-noise variance of the data model, ``>= 0``. Values per run (a grid on the batch
-        axis) are given to ``Loop.simulate(params={name: {"Q": values}})``.
+        Process-noise variance of the data model, ``>= 0``: the variance of the output's change per
+        sample that the filter must follow and ``δ`` does not predict. To follow a setpoint profile
+        ``r``, ``Q ≈ mean((r(k+1) − r(k))²)`` (a sine of amplitude ``A``, period ``P`` samples:
+        ``(2πA/P)²/2``). Not a smoothing knob: too small a ``Q`` makes the filter lag, and a loop
+        that acts on its output (IKF-MFAC) falls behind its setpoint. Values per run (a grid on
+        the batch axis) are given to ``Loop.simulate(params={name: {"Q": values}})``.
     R : float
-        Measurement-noise variance, ``> 0`` (per run as ``Q``).
+        Measurement-noise variance, ``> 0``: the sensor's ``σ²`` (the variance of ``y_m`` at rest),
+        per run as ``Q``. Only ``Q/R`` matters once ``P`` has converged: it sets ``K∞``, hence the
+        filter's bandwidth, the share ``K∞/(2 − K∞)`` of the noise variance it passes, and its lag,
+        ``(1 − K∞)/K∞`` samples per unit slope of a change ``δ`` misses (``docs/guide.rst``,
+        "Choosing IKF-MFAC's Q and R", has a sweep).
     y0 : float
         Initial estimate ``ŷ(0|0)`` (the state before the first sample).
     P0 : float
