@@ -353,8 +353,9 @@ class Box:
         return np.where(np.isfinite(u), idx, 0.0)
 
     def discrete_keys(self, U) -> list:
-        """:meth:`discrete_key` of every row of ``U`` (the alternatives' indexes; equal keys differ only along
-        intervals).
+        """:meth:`discrete_key` of every row of ``U`` (the alternatives' indexes).
+
+        Points with equal keys differ only along intervals.
 
         Parameters
         ----------
