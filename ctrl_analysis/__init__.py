@@ -9,35 +9,29 @@ so ``import ctrl_analysis`` (and the command line) does not import them: ``impor
 ctrl_analysis.controllers`` does.
 """
 
-from .engine.blocks import (
-    Block,
-    ContinuousBlock,
-    DiscreteBlock,
-    SampledBlock,
-    StaticBlock,
-    StaticGain,
-    UnitDelay,
-    signal_names,
-)
-from .engine.loop import Loop, LoopResponse, place
-from .noise import draw_noise, gaussian_noise, run_seeds, uniform_noise
+import importlib
 
 __version__ = "0.1.0"
 
-__all__ = [
-    "Block",
-    "ContinuousBlock",
-    "DiscreteBlock",
-    "Loop",
-    "LoopResponse",
-    "SampledBlock",
-    "StaticBlock",
-    "StaticGain",
-    "UnitDelay",
-    "draw_noise",
-    "gaussian_noise",
-    "place",
-    "run_seeds",
-    "signal_names",
-    "uniform_noise",
-]
+#: name -> the module it comes from, imported on first use (PEP 562): ``import ctrl_analysis`` itself loads
+#: nothing heavy, so the command line can settle the process's settings (one BLAS thread) before numpy loads
+_EXPORTS = {
+    **dict.fromkeys(("Block", "ContinuousBlock", "DiscreteBlock", "SampledBlock", "StaticBlock", "StaticGain",
+                     "UnitDelay", "signal_names"), ".engine.blocks"),
+    **dict.fromkeys(("Loop", "LoopResponse", "place"), ".engine.loop"),
+    **dict.fromkeys(("draw_noise", "gaussian_noise", "run_seeds", "uniform_noise"), ".noise"),
+}
+
+__all__ = sorted(_EXPORTS)
+
+
+def __getattr__(name: str):
+    if name in _EXPORTS:
+        value = getattr(importlib.import_module(_EXPORTS[name], __name__), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'ctrl_analysis' has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_EXPORTS))

@@ -11,6 +11,7 @@ import tempfile
 import time
 from pathlib import Path
 
+from . import _threads  # noqa: F401 - before the imports that load numpy: one BLAS thread per process
 from .arena.report_section import arena_links, arena_section
 from .reporting.atomic import (
     LockedError,
