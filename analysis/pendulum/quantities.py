@@ -292,11 +292,10 @@ def _record_discrete(result: StudyResult, d: VerifyData) -> None:
 
 #: quantity -> (label, unit); per-run metrics are mean ± std over the healthy runs, the others single values
 METRICS = {
-    "overshoot": (("step overshoot per run: peak of φ in the transient window t < t_tr above the run's own final "
-                   "value (its mean over t ≥ t_ss), in % of that value — what one run of the paper's Fig. 4 shows, "
-                   "noise excursions included"), "%"),
-    "overshoot_noise_only": (("the same peak statistic per run over an equally long window from t_ss, where there "
-                              "is no step: what the noise alone makes of it"), "%"),
+    "overshoot": (("step overshoot per run (peak of φ for t < t_tr over the run's own final value, the mean for "
+                   "t ≥ t_ss; noise excursions included, as one run of Fig. 4 shows it)"), "%"),
+    "overshoot_noise_only": (("the same per-run peak over an equally long window from t_ss, without a step (what the "
+                              "noise alone makes of it)"), "%"),
     "overshoot_mean_response": (("step overshoot of the mean response over the runs (peak of the run-averaged φ "
                                  "for t < t_tr above its own final value)"), "%"),
     "overshoot_mean_response_floor": (("noise floor of the mean-response overshoot: the same peak statistic of the "
@@ -326,14 +325,13 @@ SINGLE = ("overshoot_mean_response", "overshoot_mean_response_floor", "overshoot
 #: per-run comparisons of the filter case with no filter (same noise in both: common random numbers), what the
 #: claims read: metric -> (what it is, what a lower value means)
 PAIRED = {
-    "overshoot": ("step overshoot (peak for t < t_tr above the run's own final value)", "a lower peak"),
-    "angle_rms": ("steady RMS of φ − r (oscillation)", "less oscillation (jitter) of the pendulum"),
-    "angle_input_error": ("RMS error of the angle the controller receives", "an angle closer to the true one"),
-    "rate_input_error": ("RMS error of the rate the controller receives", "a rate closer to the true one"),
-    "settling_time": ("settling time into the band",
-                      "earlier settling (a run that does not settle counts at the end of the record)"),
-    "accel_rms": ("steady RMS of the cart acceleration u (control effort)", "less control effort"),
-    "chatter": ("steady RMS of the control increments Δu (chatter)", "less control chatter"),
+    "overshoot": ("step overshoot", "a lower peak"),
+    "angle_rms": ("oscillation (steady RMS of φ − r)", "less jitter of the pendulum"),
+    "angle_input_error": ("error of the angle the controller receives", "closer to the true angle"),
+    "rate_input_error": ("error of the rate the controller receives", "closer to the true rate"),
+    "settling_time": ("settling time", "earlier; a run that does not settle counts at the end of the record"),
+    "accel_rms": ("control effort (steady RMS of u)", "less effort"),
+    "chatter": ("control chatter (steady RMS of Δu)", "less chatter"),
 }
 #: the comparisons of the literal regime (its claims: overshoot and oscillation)
 PAIRED_LITERAL = ("overshoot", "angle_rms")
@@ -532,8 +530,8 @@ def record_comparisons(result: StudyResult, ma: dict, mb: dict, p, literal: bool
                                 f"{base:.3g} {unit}); 95 % interval of the median {st.lo:+.1%} to {st.hi:+.1%} "
                                 "(order statistics, scipy.stats.quantile_test)" if st.n else "no run healthy in both"))
         name, lower = PAIRED[key]
-        result.quantity(cid(key, literal), f"per-run change of the {name} with the filter against no filter, same "
-                        f"noise (median over the runs, as a fraction of the no-filter median; below 0: {lower})",
+        result.quantity(cid(key, literal), f"{name}: per-run change with the filter against no filter, same noise "
+                        f"(median, fraction of the no-filter median; below 0: {lower})",
                         None if not st.n else st.median,
                         runs=int(np.size(ma[key])), unit="", note=note, samples=ch if st.n else None)
 
