@@ -13,6 +13,7 @@ __all__ = [
     "plot_fig4_output",
     "plot_filter_bode",
     "plot_gain_interpretations",
+    "plot_per_run_changes",
     "plot_qr_sweep",
     "plot_riccati_convergence",
     "plot_saturation",
@@ -342,4 +343,54 @@ def plot_beyond(est_cases: dict, angles, final: dict, T: float, run: int = 0):
     ax.set_xlabel("initial angle φ(0)  (rad)")
     ax.set_title("noise-free regulation to r = 0 from rest", fontsize=10)
     ax.legend(fontsize=8, loc="center left")
+    return fig
+
+
+def plot_per_run_changes(regimes: dict, thresholds: dict):
+    """§5/abstract claims, per run: each run's change against no filter (same noise), per measure and filter.
+
+    ``regimes`` = ``{row title: {measure: {filter label: per-run relative changes}}}``; ``thresholds`` =
+    ``{measure: (value, label)}``, the change each claim asks for (drawn as a dashed line).
+    """
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
+    rows = list(regimes)
+    fig, axes = new_figure(len(rows), 1, size=(13.0, 4.3 * len(rows) + 0.4),
+                           title="§5 / abstract claims per run: change with a filter against no filter, same noise "
+                                 "(boxes: quartiles, whiskers 5-95 %, dots: runs)")
+    axes = np.atleast_1d(axes)
+    colors = ("C0", "C2")
+    for ax, row in zip(axes, rows):
+        measures = list(regimes[row])
+        labels = list(dict.fromkeys(lab for m in measures for lab in regimes[row][m]))
+        width = 0.8 / len(labels)
+        rng = np.random.default_rng(0)
+        low = -100.0
+        for i, m in enumerate(measures):
+            for j, lab in enumerate(labels):
+                v = 100 * np.asarray(regimes[row][m].get(lab, []), dtype=float)
+                v = v[np.isfinite(v)]
+                if not v.size:
+                    continue
+                low = min(low, float(np.min(v)))
+                x = i + (j - (len(labels) - 1) / 2) * width
+                ax.boxplot([v], positions=[x], widths=0.8 * width, whis=(5, 95), showfliers=False,
+                           patch_artist=True, boxprops={"facecolor": colors[j % 2], "alpha": 0.35},
+                           medianprops={"color": "k"})
+                ax.plot(x + rng.uniform(-0.25, 0.25, v.size) * width, v, ".", ms=2.5, color=colors[j % 2], alpha=0.6)
+                ax.annotate(f"lower in {np.mean(v < 0):.0%}\nmedian {np.median(v):+.0f} %", (x, 0.99),
+                            xycoords=("data", "axes fraction"), ha="center", va="top", fontsize=7)
+            if m in thresholds:
+                val, tlab = thresholds[m]
+                ax.hlines(100 * val, i - 0.45, i + 0.45, colors="C3", linestyles="--", lw=1.2)
+                ax.annotate(tlab, (i + 0.45, 100 * val), ha="right", va="bottom", fontsize=7, color="C3")
+        ax.axhline(0.0, color="0.3", lw=0.8)
+        ax.set_xticks(range(len(measures)), measures, fontsize=8)
+        ax.set_ylabel("change against no filter\n(% of the no-filter median)")
+        ax.set_title(row, fontsize=9)
+        ax.set_ylim(low - 10, max(60, ax.get_ylim()[1]))
+        handles = [Patch(color=colors[j % 2], alpha=0.5, label=lab) for j, lab in enumerate(labels)]
+    fig.legend(handles=handles + [Line2D([], [], color="C3", ls="--", label="the change the claim asks for (chosen "
+                                         "reading of its words)")], fontsize=8, loc="outside lower center", ncol=3)
     return fig

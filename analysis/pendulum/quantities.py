@@ -7,6 +7,8 @@ finding is typed: each is formatted from the data.
 
 from __future__ import annotations
 
+import dataclasses
+import functools
 import math
 from dataclasses import asdict
 
@@ -78,22 +80,34 @@ def _record_model(result: StudyResult, d: VerifyData) -> None:
     )
 
 
+def gain_tolerances(P) -> tuple[float, float]:
+    """Relative bands of §4's printed K = [0.950, 0.863]: half a unit of the third printed decimal, per entry.
+
+    The float 0.950 reads back as 0.95 (two digits), so the printed decimals are given explicitly (seed text:
+    "0.950, 0.863"). The vector cell takes the stricter of the two (every entry within half a digit).
+    """
+    return tuple(digits_tolerance(k, 3) for k in P.K_printed)
+
+
 def record_gain_cells(result: StudyResult, P, K_cont, closest, note: str = "") -> None:
     """The §4 cell K = [0.950, 0.863]: the stated problem's continuous gain (primary) and the closest interpretation.
 
-    Used by the main run and by the sensitivity sweep's evaluation (same cells, same tolerance).
+    Used by the main run and by the box exploration's evaluation (same cells, same bands: half a unit of the
+    third printed decimal, :func:`gain_tolerances`).
     """
+    tol_a, tol_b = gain_tolerances(P)
     result.quantity(
         "ss.gain_continuous", "continuous steady-state Kalman–Bucy gain K = P̄Cᵀ/R (a21 = g·B2, Q = 100, R = 50)",
-        list(K_cont), paper=list(P.K_printed), tolerance=P.gain_tol, unit="1/s, 1/s²", cell=CELL_GAIN, primary=True,
-        note=f"§4 prints K = PCᵀR⁻¹ = [0.950, 0.863] (no unit); tolerance {P.gain_tol:.2%} (reconstruction gain_tol)"
-             + (f"; {note}" if note else ""))
+        list(K_cont), paper=list(P.K_printed), tolerance=min(tol_a, tol_b), unit="1/s, 1/s²", cell=CELL_GAIN,
+        primary=True,
+        note=f"§4 prints K = PCᵀR⁻¹ = [0.950, 0.863] (no unit); band half a unit of the third printed decimal "
+             f"({min(tol_a, tol_b):.3%} relative, the stricter entry)" + (f"; {note}" if note else ""))
     note = f"from the closest interpretation: {closest.name}; max rel. error {closest.error:.1%}"
     result.quantity("ss.gain_alpha", "α = k1 of the steady-state gain (closest interpretation, see note)",
-                    closest.alpha, paper=P.K_printed[0], tolerance=P.gain_tol, unit="", note=note,
+                    closest.alpha, paper=P.K_printed[0], tolerance=tol_a, unit="", note=note,
                     cell=CELL_GAIN, primary=False)
     result.quantity("ss.gain_beta", "β of the steady-state gain (closest interpretation, see note)",
-                    closest.beta, paper=P.K_printed[1], tolerance=P.gain_tol, note=note,
+                    closest.beta, paper=P.K_printed[1], tolerance=tol_b, note=note,
                     unit=_beta_unit(closest), cell=CELL_GAIN, primary=False)
 
 
@@ -202,7 +216,7 @@ def _record_interpretations(result: StudyResult, d: VerifyData) -> None:
         "gain-not-reproducible",
         f"K = [0.950, 0.863]ᵀ is not reproduced by any of {len(rows)} interpretations. Closest: {closest.name} "
         f"→ (α, β) = ({closest.alpha:.4f}, {closest.beta:.4f}), max relative error {closest.error:.1%} "
-        f"(tolerance {P.gain_tol:.0%}). Sweeping T over [{P.T_sweep[0]:g}, {P.T_sweep[1]:g}] s ({P.T_sweep[2]} log-spaced values) the best "
+        f"(band: half a unit of the third printed decimal, {min(gain_tolerances(P)):.2%}). Sweeping T over [{P.T_sweep[0]:g}, {P.T_sweep[1]:g}] s ({P.T_sweep[2]} log-spaced values) the best "
         f"is {sweep_best.error:.1%} at T = {sweep_best.T:.3g} s ({sweep_best.name}), a sampling period far too "
         f"long for a pendulum with a pole at {math.sqrt(a21):.2f} rad/s. Continuous gains: "
         + "; ".join(f"{g.name} → ({g.alpha:.4g}, {g.beta:.4g})" for g in non_discrete)
@@ -278,21 +292,25 @@ def _record_discrete(result: StudyResult, d: VerifyData) -> None:
 
 #: quantity -> (label, unit); per-run metrics are mean ± std over the healthy runs, the others single values
 METRICS = {
-    "overshoot": (("step overshoot of the mean response over the runs (peak of the run-averaged φ in the transient "
-                   "window t < t_tr above its own final value, the mean over t ≥ t_ss; the zero-mean noise averages "
-                   "out up to its noise floor)"), "%"),
-    "overshoot_noise_floor": (("noise floor of the mean-response overshoot: the same peak statistic of the "
-                               "run-averaged φ over an equally long steady window from t_ss (no step there)"), "%"),
+    "overshoot": (("step overshoot per run (peak of φ for t < t_tr over the run's own final value, the mean for "
+                   "t ≥ t_ss; noise excursions included, as one run of Fig. 4 shows it)"), "%"),
+    "overshoot_noise_only": (("the same per-run peak over an equally long window from t_ss, without a step (what the "
+                              "noise alone makes of it)"), "%"),
+    "overshoot_mean_response": (("step overshoot of the mean response over the runs (peak of the run-averaged φ "
+                                 "for t < t_tr above its own final value)"), "%"),
+    "overshoot_mean_response_floor": (("noise floor of the mean-response overshoot: the same peak statistic of the "
+                                       "run-averaged φ over an equally long steady window from t_ss (no step "
+                                       "there)"), "%"),
     "overshoot_noise_free": ("step overshoot of the noise-free response (peak for t < t_tr above its final value)", "%"),
     "steady_offset": ("steady-state offset: mean of φ − r over the steady-state window", "rad"),
-    "peak_excursion": (("largest excursion of φ above the step in the transient window t < t_tr, per run (noise "
-                        "excursions included: what one noisy run shows)"), "%"),
     "settling_time": ("settling time of φ into the band, per run (runs that settle and stay)", "s"),
     "settled_share": ("fraction of the runs that settle into the band and stay there", ""),
     "settling_time_mean": ("settling time of the mean response over the runs into the band", "s"),
     "settling_time_noise_free": ("settling time of the noise-free response into the band", "s"),
     "angle_rms": ("RMS of φ − r over the steady-state window", "rad"),
-    "accel_rms": ("RMS of the cart acceleration u over the steady-state window", "m/s²"),
+    "accel_rms": ("RMS of the cart acceleration u over the steady-state window (control effort)", "m/s²"),
+    "chatter": (("RMS of the control increments Δu(k) = u(k) − u(k−1) over the steady-state window (control "
+                 "chatter)"), "m/s²"),
     "sat_e": ("fraction of steady-state samples in which the angle-error input e is saturated (|Ke·e| ≥ 6)", ""),
     "sat_ec": ("fraction of steady-state samples in which the rate input ec is saturated (|Kec·ec| ≥ 6)", ""),
     "angle_input_error": (("RMS error of the angle the controller receives (y, or φ̂) against the true φ, "
@@ -301,11 +319,31 @@ METRICS = {
                           "against the true φ', steady-state window"), "rad/s"),
 }
 #: metrics computed once from the mean response or the noise-free run (no spread over runs)
-SINGLE = ("overshoot", "overshoot_noise_floor", "overshoot_noise_free", "settled_share", "settling_time_mean", "settling_time_noise_free")
+SINGLE = ("overshoot_mean_response", "overshoot_mean_response_floor", "overshoot_noise_free", "settled_share",
+          "settling_time_mean", "settling_time_noise_free")
 
+#: per-run comparisons of the filter case with no filter (same noise in both: common random numbers), what the
+#: claims read: metric -> (what it is, what a lower value means)
+PAIRED = {
+    "overshoot": ("step overshoot", "a lower peak"),
+    "angle_rms": ("oscillation (steady RMS of φ − r)", "less jitter of the pendulum"),
+    "angle_input_error": ("error of the angle the controller receives", "closer to the true angle"),
+    "rate_input_error": ("error of the rate the controller receives", "closer to the true rate"),
+    "settling_time": ("settling time", "earlier; a run that does not settle counts at the end of the record"),
+    "accel_rms": ("control effort (steady RMS of u)", "less effort"),
+    "chatter": ("control chatter (steady RMS of Δu)", "less chatter"),
+}
+#: the comparisons of the literal regime (its claims: overshoot and oscillation)
+PAIRED_LITERAL = ("overshoot", "angle_rms")
+
+_FILTER_LABEL = {
+    "paper": "paper's suboptimal filter, K = [0.950, 0.863] read as a discrete α-β filter (k2 = β/T)",
+    "steady-state": ("the suboptimal filter with the corrected gain: the steady-state Kalman gain of the noise "
+                     "simulated (algorithm axis, gain_reading = steady-state)"),
+}
 CASE_LABELS = {
     "nofilter": "no filter (e and its backward difference)",
-    "filter": "paper's suboptimal filter, K = [0.950, 0.863] read as a discrete α-β filter (k2 = β/T)",
+    "filter": _FILTER_LABEL["paper"],
     "kf": "time-varying discrete Kalman filter (beyond the paper)",
     "kf_ss": "correct steady-state gain for the simulated noise (beyond the paper)",
     "kf_ss_qr": "steady-state gain of the paper's Q/R = 2, i.e. σ_w/σ_v = √2 (beyond the paper)",
@@ -313,6 +351,16 @@ CASE_LABELS = {
     "nonlinear.nofilter": "nonlinear sin φ pendulum, no filter (beyond the paper)",
     "nonlinear.filter": "nonlinear sin φ pendulum, paper's α-β filter (beyond the paper)",
 }
+
+
+def case_label(name: str, p) -> str:
+    """The label of case ``name`` (the filter case says which gain reading it runs)."""
+    return _FILTER_LABEL[p.gain_reading] if name == "filter" else CASE_LABELS[name]
+
+
+def _gain_word(p) -> str:
+    """How the claims' notes name the filter case: the paper's K or the corrected gain."""
+    return "the paper's K" if p.gain_reading == "paper" else "the corrected (steady-state) gain"
 
 
 def regime_label(p, literal: bool) -> str:
@@ -327,44 +375,165 @@ def qid(case: str, metric: str, literal: bool = False) -> str:
     return f"{prefix}.{case}.{metric}"
 
 
+def cid(metric: str, literal: bool = False) -> str:
+    """Quantity id of a per-run comparison of the filter case with no filter: ``cl.filter_vs_nofilter.<metric>``."""
+    return f"{'literal' if literal else 'cl'}.filter_vs_nofilter.{metric}"
+
+
 def _settled_at(t, phi, p) -> np.ndarray:
     """Settling time into the band; NaN for a response that is not inside it for the last ``p.settle_hold`` s."""
     st = np.atleast_1d(metrics.settling_time(t, phi, p.step, band=p.settle_band))
     return np.where(st <= t[-1] - p.settle_hold, st, np.nan)
 
 
-def case_metrics(c, p) -> dict:
-    """Metrics of one case (:class:`~.loops.CaseRuns`): per-run arrays (NaN where a run diverged) and single values."""
+def _peak_over_final(phi, final) -> np.ndarray:
+    """Per-run overshoot ``max(max φ / final − 1, 0) · 100`` (:func:`ctrl_analysis.metrics.overshoot` of a step
+    from 0 to each run's own ``final``, vectorised over the runs; equal to it run by run, tested)."""
+    with np.errstate(all="ignore"):
+        return np.maximum(np.max(phi, axis=0) / final - 1.0, 0.0) * 100.0
+
+
+def case_metrics(c, p, keys=None) -> dict:
+    """Metrics of one case (:class:`~.loops.CaseRuns`): per-run arrays (NaN where a run diverged) and single values.
+
+    ``keys``: only these metrics (the box exploration computes what its claims read); default all of
+    :data:`METRICS`.
+    """
+    keys = set(METRICS) if keys is None else set(keys)
     run, quiet = c.noisy, c.quiet
     ss = run.t >= p.t_ss
     tr = run.t < p.t_tr  # the step transient
     floor = ss & (run.t < p.t_ss + p.t_tr)  # an equally long window without a step
     ok = ~run.diverged
+    per_run = {
+        "overshoot": lambda: _peak_over_final(run.phi[tr], final_run),
+        "overshoot_noise_only": lambda: _peak_over_final(run.phi[floor], final_run),
+        "settling_time": lambda: _settled_at(run.t, run.phi, p),
+        "angle_rms": lambda: np.sqrt(np.mean((run.phi[ss] - p.step) ** 2, axis=0)),
+        "accel_rms": lambda: np.sqrt(np.mean(run.u[ss] ** 2, axis=0)),
+        "chatter": lambda: np.sqrt(np.mean(np.diff(run.u, axis=0)[ss[1:]] ** 2, axis=0)),
+        "sat_e": lambda: np.mean(np.abs(p.Ke * run.e[ss]) >= p.input_range, axis=0),
+        "sat_ec": lambda: np.mean(np.abs(p.Kec * run.ec[ss]) >= p.input_range, axis=0),
+        # what the fuzzy controller receives: e = r − φ_in, ec = −φ_in'
+        "angle_input_error": lambda: np.sqrt(np.mean((p.step - run.e[ss] - run.phi[ss]) ** 2, axis=0)),
+        "rate_input_error": lambda: np.sqrt(np.mean((-run.ec[ss] - run.dphi[ss]) ** 2, axis=0)),
+        "steady_offset": lambda: final_run - p.step,
+    }
+    m = {}
     with np.errstate(all="ignore"):
-        mean_phi = np.mean(run.phi[:, ok], axis=1) if ok.any() else np.full(run.t.size, np.nan)
-        angle_in, rate_in = p.step - run.e, -run.ec  # what the fuzzy controller receives (e = r − φ_in, ec = −φ_in')
-        m = {
-            "peak_excursion": metrics.overshoot(run.t[tr], run.phi[tr], p.step),
-            "settling_time": _settled_at(run.t, run.phi, p),
-            "angle_rms": np.sqrt(np.mean((run.phi[ss] - p.step) ** 2, axis=0)),
-            "accel_rms": np.sqrt(np.mean(run.u[ss] ** 2, axis=0)),
-            "sat_e": np.mean(np.abs(p.Ke * run.e[ss]) >= p.input_range, axis=0),
-            "sat_ec": np.mean(np.abs(p.Kec * run.ec[ss]) >= p.input_range, axis=0),
-            "angle_input_error": np.sqrt(np.mean((angle_in[ss] - run.phi[ss]) ** 2, axis=0)),
-            "rate_input_error": np.sqrt(np.mean((rate_in[ss] - run.dphi[ss]) ** 2, axis=0)),
-        }
-        m["steady_offset"] = np.mean(run.phi[ss] - p.step, axis=0)
-        m = {k: np.where(ok, v, np.nan) for k, v in m.items()}
+        final_run = np.mean(run.phi[ss], axis=0)  # each run's own final value (the loop has a steady offset)
+        for k, f in per_run.items():
+            if k in keys or (k == "settling_time" and "settled_share" in keys):
+                m[k] = np.where(ok, f(), np.nan)
         quiet_ok = not quiet.diverged[0]
-        m["settled_share"] = float(np.mean(np.isfinite(m["settling_time"][ok]))) if ok.any() else None
-        final = float(np.mean(mean_phi[ss]))  # the response's own final value (the loop has a steady offset)
-        m["overshoot"] = float(metrics.overshoot(run.t[tr], mean_phi[tr], final)) if ok.any() else None
-        m["overshoot_noise_floor"] = float(metrics.overshoot(run.t[floor], mean_phi[floor], final)) if ok.any() else None
-        m["settling_time_mean"] = float(_settled_at(run.t, mean_phi, p)[0]) if ok.any() else None
-        m["overshoot_noise_free"] = (float(metrics.overshoot(quiet.t[tr], quiet.phi[tr, 0], np.mean(quiet.phi[ss, 0])))
-                                     if quiet_ok else None)
-        m["settling_time_noise_free"] = float(_settled_at(quiet.t, quiet.phi[:, 0], p)[0]) if quiet_ok else None
+        if "settled_share" in keys:
+            m["settled_share"] = float(np.mean(np.isfinite(m["settling_time"][ok]))) if ok.any() else None
+        if keys & {"overshoot_mean_response", "overshoot_mean_response_floor", "settling_time_mean"}:
+            mean_phi = np.mean(run.phi[:, ok], axis=1) if ok.any() else np.full(run.t.size, np.nan)
+            final = float(np.mean(mean_phi[ss]))  # the mean response's own final value
+            m["overshoot_mean_response"] = (float(metrics.overshoot(run.t[tr], mean_phi[tr], final))
+                                            if ok.any() else None)
+            m["overshoot_mean_response_floor"] = (float(metrics.overshoot(run.t[floor], mean_phi[floor], final))
+                                                  if ok.any() else None)
+            m["settling_time_mean"] = float(_settled_at(run.t, mean_phi, p)[0]) if ok.any() else None
+        if "overshoot_noise_free" in keys:
+            m["overshoot_noise_free"] = (float(metrics.overshoot(quiet.t[tr], quiet.phi[tr, 0],
+                                                                 np.mean(quiet.phi[ss, 0]))) if quiet_ok else None)
+        if "settling_time_noise_free" in keys:
+            m["settling_time_noise_free"] = float(_settled_at(quiet.t, quiet.phi[:, 0], p)[0]) if quiet_ok else None
     return m
+
+
+@functools.cache
+def _median_ci_ranks(n: int) -> tuple:
+    """0-based ranks of the order statistics that bound the 95 % interval of the median of ``n`` values.
+
+    scipy's distribution-free interval (:func:`scipy.stats.quantile_test`) evaluated once per ``n`` on the
+    ranks themselves; ``(None, None)`` where ``n`` is too small for a 95 % interval.
+    """
+    from scipy.stats import quantile_test
+
+    ci = quantile_test(np.arange(n, dtype=float), q=0.0, p=0.5).confidence_interval(0.95)
+    if not (np.isfinite(ci.low) and np.isfinite(ci.high)):
+        return (None, None)
+    return (int(ci.low), int(ci.high))
+
+
+@dataclasses.dataclass(frozen=True)
+class Paired:
+    """Per-run changes of one metric, filter vs no filter, in units of the no-filter median.
+
+    ``median`` is the claim's measure; ``lo``/``hi`` the 95 % interval of the median; ``floor`` the half-width of
+    that interval on zero's side (the smallest median change the runs resolve: ``|median| < floor`` means the
+    interval contains 0); ``share`` the fraction of runs in which the filter lowers the metric.
+    """
+
+    n: int
+    median: float
+    lo: float
+    hi: float
+    share: float
+
+    @property
+    def floor(self) -> float:
+        if self.n == 0:
+            return math.inf
+        return (self.hi - self.median) if self.median < 0 else (self.median - self.lo)
+
+    @property
+    def resolved(self) -> bool:
+        return bool(self.n and abs(self.median) >= self.floor)
+
+    @classmethod
+    def of(cls, changes) -> Paired:
+        d = np.sort(np.asarray(changes, dtype=float))
+        d = d[np.isfinite(d)]
+        if not d.size:
+            return cls(0, math.nan, -math.inf, math.inf, math.nan)
+        i, j = _median_ci_ranks(d.size)
+        return cls(int(d.size), float(np.median(d)), -math.inf if i is None else float(d[i]),
+                   math.inf if j is None else float(d[j]), float(np.mean(d < 0)))
+
+
+def paired_changes(a, b, horizon: float | None = None):
+    """Per-run changes ``b − a`` over the median of ``a`` (runs healthy in both; NaN marks a diverged run).
+
+    With ``horizon`` (settling times) a run that does not settle counts as settling at the end of the record.
+    Returns ``(changes, median of a)``.
+    """
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    if horizon is not None:
+        a, b = np.where(np.isnan(a), horizon, a), np.where(np.isnan(b), horizon, b)
+    both = np.isfinite(a) & np.isfinite(b)
+    if not both.any():
+        return np.array([]), math.nan
+    base = float(np.median(a[both]))
+    with np.errstate(all="ignore"):
+        return (b[both] - a[both]) / base, base
+
+
+def record_comparisons(result: StudyResult, ma: dict, mb: dict, p, literal: bool = False, metrics_=None) -> None:
+    """Record the per-run comparisons (:data:`PAIRED`) of the filter case (``mb``) with no filter (``ma``).
+
+    Each quantity's value is the median per-run change in units of the no-filter median, its samples the
+    per-run changes (the claims read the interval of the median and the share of runs from them).
+    """
+    for key in metrics_ or (PAIRED_LITERAL if literal else PAIRED):
+        horizon = p.t_end if key == "settling_time" else None
+        ch, base = paired_changes(ma[key], mb[key], horizon)
+        st = Paired.of(ch)
+        unit = METRICS[key][1]
+        step = "percentage points" if unit == "%" else unit
+        note = (f"{'literal' if literal else 'main'} regime, {case_label('filter', p)} against no filter, same noise "
+                f"in both: " + (f"lower in {round(st.share * st.n)} of {st.n} runs ({st.share:.0%}); median "
+                                f"change {st.median * base:+.3g} {step} ({st.median:+.1%} of the no-filter median "
+                                f"{base:.3g} {unit}); 95 % interval of the median {st.lo:+.1%} to {st.hi:+.1%} "
+                                "(order statistics, scipy.stats.quantile_test)" if st.n else "no run healthy in both"))
+        name, lower = PAIRED[key]
+        result.quantity(cid(key, literal), f"{name}: per-run change with the filter against no filter, same noise "
+                        f"(median, fraction of the no-filter median; below 0: {lower})",
+                        None if not st.n else st.median,
+                        runs=int(np.size(ma[key])), unit="", note=note, samples=ch if st.n else None)
 
 
 def case_stats(result: StudyResult, case: str, literal: bool) -> dict:
@@ -376,18 +545,30 @@ def case_stats(result: StudyResult, case: str, literal: bool) -> dict:
     return out
 
 
-def record_regime(result: StudyResult, cases: dict, p, literal: bool = False) -> dict:
-    """Record every metric of every case of one regime; returns ``{case: {metric: (value, std, n)}}``."""
-    return {name: _record_case(result, name, c, p, literal) for name, c in cases.items()}
+def record_regime(result: StudyResult, cases: dict, p, literal: bool = False, keys=None, metrics_=None) -> dict:
+    """Record every metric of every case of one regime, and the per-run comparisons of the filter case with no
+    filter; returns ``{case: {metric: (value, std, n)}}``.
+
+    ``keys``: ``{case: metrics}``, only these (the box exploration records what its claims read); ``metrics_``:
+    ``{case: case_metrics(...)}`` computed already (then ``cases`` need only say which runs diverged,
+    :meth:`~.loops.CaseRuns.light`).
+    """
+    ms = metrics_ or {name: case_metrics(c, p, None if keys is None else keys[name]) for name, c in cases.items()}
+    out = {name: _record_case(result, name, c, p, literal, ms[name], None if keys is None else keys[name])
+           for name, c in cases.items()}
+    if "nofilter" in ms and "filter" in ms:
+        record_comparisons(result, ms["nofilter"], ms["filter"], p, literal)
+    return out
 
 
-def _record_case(result: StudyResult, name: str, c, p, literal: bool) -> dict:
-    m = case_metrics(c, p)
+def _record_case(result: StudyResult, name: str, c, p, literal: bool, m: dict, keys=None) -> dict:
     run = c.noisy
     ok = ~run.diverged
-    where = f"{CASE_LABELS[name]}; {regime_label(p, literal)}"
+    where = f"{case_label(name, p)}; {regime_label(p, literal)}"
     out = {}
     for key, (label, unit) in METRICS.items():
+        if keys is not None and key not in keys:
+            continue
         vals = m[key]
         if key in SINGLE:
             value, std, n = (None if vals is None or not np.isfinite(vals) else vals), None, int(ok.sum())
@@ -410,7 +591,7 @@ def _record_case(result: StudyResult, name: str, c, p, literal: bool) -> dict:
             steps = run.diverged_step[~ok] if not key.endswith("noise_free") else c.quiet.diverged_step[:1]
             note += f"; {diverged} diverged (first at t = {int(np.min(steps)) * p.T:.3g} s), excluded"
         all_div = runs > 0 and diverged == runs
-        result.quantity(qid(name, key, literal), f"{label} — {CASE_LABELS[name]}, "
+        result.quantity(qid(name, key, literal), f"{label} — {case_label(name, p)}, "
                         f"{'literal' if literal else 'main'} regime", None if all_div else value,
                         std=None if all_div else std, runs=runs, runs_diverged=diverged, unit=unit, note=note)
         out[key] = (None if all_div else value, std, n)
@@ -552,21 +733,69 @@ def _record_regimes(result: StudyResult, d, stats) -> None:
         + "; ".join(parts) + ".",
         evidence={reg: {c: {k: st[c][k][0] for k in ("sat_e", "sat_ec", "accel_rms", "angle_rms")} for c in st}
                   for reg, st in stats.items()})
-    lit = stats["literal"]
+    _record_overshoot_per_run(result, d, stats)
+    _record_chatter(result, d, stats)
+
+
+def _record_overshoot_per_run(result: StudyResult, d, stats) -> None:
+    """Why the overshoot claims are judged per run: what a single run's peak is, and what the mean response hides."""
+    parts = []
+    for reg, q in (("main", d.p), ("literal", d.lit)):
+        st, lit = stats[reg], reg == "literal"
+        ch = result.get(cid("overshoot", lit))
+        parts.append(
+            f"{regime_label(q, lit)}: per run {_fmt_stat(st['nofilter']['overshoot'], '%')} without filter and "
+            f"{_fmt_stat(st['filter']['overshoot'], '%')} with the paper's K; over an equally long window without "
+            f"a step {_fmt_stat(st['nofilter']['overshoot_noise_only'], '%')} and "
+            f"{_fmt_stat(st['filter']['overshoot_noise_only'], '%')}; noise-free "
+            f"{_fmt_stat(st['nofilter']['overshoot_noise_free'], '%')} and {_fmt_stat(st['filter']['overshoot_noise_free'], '%')}; "
+            f"the mean response over the runs {_fmt_stat(st['nofilter']['overshoot_mean_response'], '%')} and "
+            f"{_fmt_stat(st['filter']['overshoot_mean_response'], '%')} against its own noise floor "
+            f"{_fmt_stat(st['nofilter']['overshoot_mean_response_floor'], '%')} and "
+            f"{_fmt_stat(st['filter']['overshoot_mean_response_floor'], '%')}; the filter lowers the per-run "
+            f"overshoot by a median {-(ch.value or 0):.0%} of the no-filter median ({ch.note.split(': ', 1)[-1]})")
     result.finding(
-        "overshoot-vs-noise",
-        "In the literal regime the per-run 'overshoot' is mostly the largest noise excursion, not the "
-        f"step transient: in the transient window t < {d.p.t_tr:g} s the per-run peak excursion is {_fmt_stat(lit['nofilter']['peak_excursion'], '%')} without "
-        f"filter and {_fmt_stat(lit['filter']['peak_excursion'], '%')} with the paper's K, while the overshoot of the "
-        f"mean response over the runs is {_fmt_stat(lit['nofilter']['overshoot'], '%')} and "
-        f"{_fmt_stat(lit['filter']['overshoot'], '%')} (noise floor of the mean response "
-        f"{_fmt_stat(lit['nofilter']['overshoot_noise_floor'], '%')} and {_fmt_stat(lit['filter']['overshoot_noise_floor'], '%')}), "
-        f"and noise-free {_fmt_stat(lit['nofilter']['overshoot_noise_free'], '%')} and "
-        f"{_fmt_stat(lit['filter']['overshoot_noise_free'], '%')}. The overshoot claims are judged on the mean response: "
-        "a reduction counts only if it exceeds the no-filter noise floor.",
-        evidence={reg: {c: {k: st[c][k][0] for k in ("overshoot", "overshoot_noise_floor", "overshoot_noise_free",
-                                                      "peak_excursion")}
-                        for c in st} for reg, st in stats.items()})
+        "overshoot-per-run",
+        "The paper reads 'overshoot … clearly smaller' off one noisy run (Fig. 4), so the claims are judged per run, "
+        f"on the peak of φ in the transient window t < {d.p.t_tr:g} s above the run's own final value, filter and no "
+        "filter on the same noise: the share of runs in which the filter lowers it and the median change, with the "
+        "95 % interval of the median as its noise floor. The overshoot of the mean response over the runs is not "
+        "the paper's measure: averaging removes the noise excursions that make a single run's peak, and the "
+        "reconstructed loop has (almost) no step overshoot noise-free, so the mean response's value sits at or "
+        "below its own noise floor. " + "; ".join(parts) + ". " + " ".join(
+            f"In the {reg} regime a single run's peak is mostly a noise excursion: without filter it is no larger than "
+            "what the same window shows without a step."
+            for reg in ("main", "literal") if (stats[reg]["nofilter"]["overshoot"][0] or 0)
+            <= (stats[reg]["nofilter"]["overshoot_noise_only"][0] or 0)),
+        evidence={reg: {c: {k: st[c][k][0] for k in ("overshoot", "overshoot_noise_only", "overshoot_noise_free",
+                                                      "overshoot_mean_response", "overshoot_mean_response_floor")}
+                        for c in st if c in ("nofilter", "filter")} for reg, st in stats.items()})
+
+
+def _record_chatter(result: StudyResult, d, stats) -> None:
+    """The control chatters at many times the acceleration that holds the pendulum; what each filter removes."""
+    st, p = stats["main"], d.p
+    u_hold = d.a21 * p.step / p.b2
+    ms = {c: case_metrics(d.main[c], p) for c in ("nofilter", "filter", "kf_ss")}
+    removed = {}
+    for c in ("filter", "kf_ss"):
+        for k in ("accel_rms", "chatter"):
+            removed[(c, k)] = -Paired.of(paired_changes(ms["nofilter"][k], ms[c][k])[0]).median
+    result.finding(
+        "control-chatter",
+        f"'Smoothly' (平稳) is tested on the control: with noise the fuzzy loop's cart acceleration has a steady RMS "
+        f"of {_fmt_stat(st['nofilter']['accel_rms'], 'm/s²')} without filter and "
+        f"{_fmt_stat(st['filter']['accel_rms'], 'm/s²')} with the paper's K, where holding φ = r needs |u| = "
+        f"a21·r/b2 = {u_hold:.2g} m/s² (about {st['filter']['accel_rms'][0] / u_hold:.0f} times as much); the RMS of "
+        f"its sample-to-sample increments (chatter) is {_fmt_stat(st['nofilter']['chatter'], 'm/s²')} and "
+        f"{_fmt_stat(st['filter']['chatter'], 'm/s²')}. Per run, the paper's K removes a median "
+        f"{removed[('filter', 'accel_rms')]:.0%} of the control effort and {removed[('filter', 'chatter')]:.0%} of "
+        f"the chatter; the correct steady-state gain removes {removed[('kf_ss', 'accel_rms')]:.0%} and "
+        f"{removed[('kf_ss', 'chatter')]:.0%} (u RMS {_fmt_stat(st['kf_ss']['accel_rms'], 'm/s²')}, chatter "
+        f"{_fmt_stat(st['kf_ss']['chatter'], 'm/s²')}) (main regime).",
+        evidence={"u_hold": u_hold, "removed_median": {f"{c}.{k}": v for (c, k), v in removed.items()},
+                  "accel_rms": {c: st[c]["accel_rms"][0] for c in ("nofilter", "filter", "kf_ss")},
+                  "chatter": {c: st[c]["chatter"][0] for c in ("nofilter", "filter", "kf_ss")}})
 
 
 def _record_offset(result: StudyResult, d, stats) -> None:
@@ -619,14 +848,6 @@ def _record_qr_sweep(result: StudyResult, d) -> None:
         evidence={"ratios": r, "alpha_opt": alpha, "est": est, "angle": qr["angle"]})
 
 
-def _cmp(result, a: str, b: str, margin: float):
-    """``b < (1 − margin)·a`` on the recorded values (None if either is missing or diverged)."""
-    qa, qb = result.get(a), result.get(b)
-    if qa.is_diverged or qb.is_diverged or qa.value is None or qb.value is None:
-        return None
-    return bool(qb.value < (1.0 - margin) * qa.value)
-
-
 def _val(result, q: str) -> str:
     x = result.get(q)
     if x.is_diverged:
@@ -634,49 +855,150 @@ def _val(result, q: str) -> str:
     return "n/a (does not settle)" if x.value is None else f"{x.value:.3g} {x.unit}".strip()
 
 
+def _paired(result, id_: str) -> Paired:
+    """The per-run comparison recorded as ``id_`` (:func:`record_comparisons`)."""
+    q = result.get(id_)
+    return Paired.of(q.samples if q.samples is not None else [])
+
+
+def _pct(x: float) -> str:
+    return "n/a" if not math.isfinite(x) else f"{x:+.1%}"
+
+
+def _describe(st: Paired, what: str) -> str:
+    """``lower in 78 % of 100 runs, median −16.3 % (95 % interval −23 % to −11 %)``."""
+    if not st.n:
+        return f"{what}: no run healthy in both cases"
+    return (f"{what}: lower in {st.share:.0%} of {st.n} runs, median change {_pct(st.median)} of the no-filter "
+            f"median (95 % interval {_pct(st.lo)} to {_pct(st.hi)})")
+
+
+def _judge_all(parts):
+    """An AND of per-run comparisons ``[(holds, Paired or None)]`` -> ``(holds, measure, floor)``.
+
+    A comparison without a Paired (a definition such as 'settles no clearly later') is always resolved. The
+    claim fails when a resolved part fails; holds when every part holds and is resolved; otherwise the deciding
+    part is below its noise floor and the claim is untestable (``measure``/``floor`` of that part).
+    """
+    def resolved(st):
+        return st is None or st.resolved
+
+    failing = [(h, st) for h, st in parts if h is False and resolved(st)]
+    if failing:
+        st = failing[0][1]
+        return False, (None, None) if st is None else (st.median, st.floor)
+    if any(h is None for h, _ in parts):
+        return None, (None, None)
+    open_ = [st for h, st in parts if not resolved(st)]
+    if open_:
+        st = open_[0]
+        return all(h for h, _ in parts), (st.median, st.floor)
+    # every part resolved: the one closest to its floor is the measure (it is above it)
+    sts = [st for _, st in parts if st is not None]
+    st = min(sts, key=lambda x: abs(x.median) / x.floor if x.floor > 0 else math.inf) if sts else None
+    return all(h for h, _ in parts), (None, None) if st is None else (st.median, st.floor)
+
+
+def _claim(result, claim, holds_measure, evidence, note):
+    holds, (measure, floor) = holds_measure
+    ev = [e for e in evidence if _has(result, e)]
+    if measure is None or not math.isfinite(floor):
+        if measure is not None:  # too few runs for an interval: below any floor
+            holds = None
+            note += " Untestable: too few healthy runs for a 95 % interval of the median."
+        return result.claim(claim, holds, evidence=ev, note=note)
+    return result.claim(claim, holds, evidence=ev, note=note, measure=measure, noise_floor=floor)
+
+
+def _has(result, qid_: str) -> bool:
+    try:
+        result.get(qid_)
+    except KeyError:
+        return False
+    return True
+
+
 def record_claims(result: StudyResult, p) -> None:
-    """Judge the paper's claims (:data:`.paper.CLAIMS`) from the recorded quantities; the sensitivity sweep uses this too."""
+    """Judge the paper's claims (:data:`.paper.CLAIMS`) from the recorded quantities; the box exploration uses this too.
+
+    The overshoot, oscillation, true-state and fast-smooth claims are judged per run (the paper reads them off a
+    single-run figure): the filter case against no filter on the same noise, the median per-run change and the
+    95 % interval of the median; a change the interval does not resolve from zero makes the claim untestable
+    (``measure``/``noise_floor``), never fails.
+    """
+    _per_run_claims(result, p)
+    _fast_smooth(result, p)
+    _other_claims(result, p)
+
+
+def _per_run_claims(result: StudyResult, p) -> None:
+    """Overshoot, oscillation (both regimes) and true-state: per-run comparisons with no filter."""
     C = _paper
+    gw = _gain_word(p)
     for claim, lit in ((C.C_OVERSHOOT, False), (C.C_OVERSHOOT_LIT, True)):
-        a, b, f = qid("nofilter", "overshoot", lit), qid("filter", "overshoot", lit), qid("nofilter", "overshoot_noise_floor", lit)
-        smaller = _cmp(result, a, b, p.clear_margin)
-        va, vb, vf = (result.get(x).value for x in (a, b, f))
-        beyond_floor = None if None in (va, vb, vf) else bool(va - vb > vf)
-        result.claim(claim, None if smaller is None or beyond_floor is None else smaller and beyond_floor,
-                     evidence=[a, b, f, qid("nofilter", "overshoot_noise_free", lit), qid("filter", "overshoot_noise_free", lit)],
-                     note=f"step overshoot of the mean response: {_val(result, b)} with the paper's K vs {_val(result, a)} "
-                          f"without filter ({'literal' if lit else 'main'} regime); 'clearly' read as at least "
-                          f"{p.clear_margin:.0%} smaller and by more than the mean response's noise floor "
-                          f"({_val(result, f)}); noise-free {_val(result, qid('filter', 'overshoot_noise_free', lit))} "
-                          f"vs {_val(result, qid('nofilter', 'overshoot_noise_free', lit))}")
+        st = _paired(result, cid("overshoot", lit))
+        ev = [cid("overshoot", lit)] + [qid(c, m, lit) for c in ("nofilter", "filter")
+                                        for m in ("overshoot", "overshoot_noise_only", "overshoot_noise_free")]
+        _claim(result, claim, _judge_all([(None if not st.n else st.median <= -p.clear_margin, st)]), ev,
+               f"per-run step overshoot (peak for t < {p.t_tr:g} s above the run's own final value) with {gw} against "
+               f"no filter on the same noise ({'literal' if lit else 'main'} regime); "
+               + _describe(st, "overshoot") + f"; 'clearly' read as a median change of at least −{p.clear_margin:.0%}; "
+               f"per run {_val(result, qid('filter', 'overshoot', lit))} vs {_val(result, qid('nofilter', 'overshoot', lit))}, "
+               f"noise-only window {_val(result, qid('filter', 'overshoot_noise_only', lit))} vs "
+               f"{_val(result, qid('nofilter', 'overshoot_noise_only', lit))}, noise-free "
+               f"{_val(result, qid('filter', 'overshoot_noise_free', lit))} vs "
+               f"{_val(result, qid('nofilter', 'overshoot_noise_free', lit))}.")
     for claim, lit in ((C.C_OSCILLATION, False), (C.C_OSCILLATION_LIT, True)):
-        a, b = qid("nofilter", "angle_rms", lit), qid("filter", "angle_rms", lit)
-        result.claim(claim, _cmp(result, a, b, p.clear_margin), evidence=[a, b],
-                     note=f"steady RMS of φ − r: {_val(result, b)} with the paper's K vs {_val(result, a)} without filter "
-                          f"({'literal' if lit else 'main'} regime); 'clearly' read as at least {p.clear_margin:.0%} smaller")
+        st = _paired(result, cid("angle_rms", lit))
+        _claim(result, claim, _judge_all([(None if not st.n else st.median <= -p.clear_margin, st)]),
+               [cid("angle_rms", lit), qid("nofilter", "angle_rms", lit), qid("filter", "angle_rms", lit)],
+               f"per-run steady RMS of φ − r with {gw} against no filter ({'literal' if lit else 'main'} regime); "
+               + _describe(st, "oscillation") + f"; 'clearly' read as a median change of at least "
+               f"−{p.clear_margin:.0%}; mean over the runs {_val(result, qid('filter', 'angle_rms', lit))} vs "
+               f"{_val(result, qid('nofilter', 'angle_rms', lit))}.")
+    sa, sr = _paired(result, cid("angle_input_error")), _paired(result, cid("rate_input_error"))
     ids = [qid(c, m) for c in ("nofilter", "filter") for m in ("angle_input_error", "rate_input_error")]
-    ang, rate = _cmp(result, ids[0], ids[2], 0.0), _cmp(result, ids[1], ids[3], 0.0)
-    result.claim(C.C_SEPARATES, None if ang is None or rate is None else ang and rate, evidence=ids,
-                 note=f"RMS error of the angle the controller receives: {_val(result, ids[2])} filtered vs "
-                      f"{_val(result, ids[0])} measured; of the rate: {_val(result, ids[3])} filtered vs "
-                      f"{_val(result, ids[1])} by backward difference (main regime)")
-    a, b = qid("nofilter", "settling_time"), qid("filter", "settling_time")
-    qa, qb = result.get(a), result.get(b)
-    share = {x: result.get(x.replace("settling_time", "settled_share")).value for x in (a, b)}
-    settled = {x: q.value if (q.value is not None and (share[x] or 0) >= p.settled_share_min) else None for x, q in ((a, qa), (b, qb))}
-    # "no later": within one sample period (settling times are multiples of T; their means differ by less)
-    result.claim(C.C_SETTLES, None if qb.is_diverged else (
-        settled[b] is not None and (settled[a] is None or settled[b] <= settled[a] + p.T)),
-                 evidence=[a, b, a.replace("settling_time", "settled_share"), b.replace("settling_time", "settled_share")],
-                 note=f"settling time into the ±{p.settle_band:.0%} band, mean over the runs that settle: {_val(result, b)} "
-                      f"with the paper's K vs {_val(result, a)} without filter (main regime; 'no later' within one "
-                      f"sample period T = {p.T * 1e3:g} ms; a case counts as settling when at least "
-                      f"{p.settled_share_min:.0%} of its runs do)")
+    _claim(result, C.C_SEPARATES, _judge_all([(None if not sa.n else sa.median < 0, sa),
+                                              (None if not sr.n else sr.median < 0, sr)]),
+           [cid("angle_input_error"), cid("rate_input_error")] + ids,
+           f"RMS error (steady window, per run) of what the controller receives against the true state, {gw} vs the "
+           "raw measurement and its backward difference (main regime); "
+           + _describe(sa, "angle") + "; " + _describe(sr, "rate")
+           + f"; means {_val(result, ids[2])} vs {_val(result, ids[0])} and {_val(result, ids[3])} vs {_val(result, ids[1])}.")
+
+
+def _fast_smooth(result: StudyResult, p) -> None:
+    """'Quickly' = settles (in most runs) and not clearly later; 'smoothly' = removes the control's jitter."""
+    C = _paper
+    gw = _gain_word(p)
+    stt = _paired(result, cid("settling_time"))
+    share = _has(result, qid("filter", "settled_share")) and result.get(qid("filter", "settled_share")).value
+    settles = share is not None and share is not False and share >= p.settled_share_min
+    quick = None if result.get(qid("filter", "settling_time")).is_diverged else bool(
+        settles and stt.n and stt.median <= p.clear_margin)
+    se, sc = _paired(result, cid("accel_rms")), _paired(result, cid("chatter"))
+    smooth = [(None if not x.n else x.median <= -p.smooth_margin, x) for x in (se, sc)]
+    _claim(result, C.C_SETTLES, _judge_all([(quick, None)] + smooth),
+           [cid("settling_time"), cid("accel_rms"), cid("chatter"), qid("filter", "settled_share"),
+            qid("nofilter", "accel_rms"), qid("filter", "accel_rms"), qid("nofilter", "chatter"), qid("filter", "chatter")],
+           f"with {gw} (main regime). Quickly: {share or 0:.0%} of the runs settle into the ±{p.settle_band:.0%} band "
+           f"(at least {p.settled_share_min:.0%} required) and " + _describe(stt, "settling time")
+           + f", required not clearly later (median change at most +{p.clear_margin:.0%}): "
+           + ("yes" if quick else "no") + ". Smoothly ('eliminates the jitter'): " + _describe(se, "control effort (RMS of u)")
+           + "; " + _describe(sc, "chatter (RMS of Δu)") + f"; required a median change of at most −{p.smooth_margin:.0%} "
+           f"for both; RMS of u {_val(result, qid('filter', 'accel_rms'))} vs {_val(result, qid('nofilter', 'accel_rms'))} "
+           "(finding control-chatter: what holding φ = r needs).")
+
+
+def _other_claims(result: StudyResult, p) -> None:
+    """Stabilises (both regimes), the §4 gain, near-optimal."""
+    C = _paper
+    gw = _gain_word(p)
     for claim, lit in ((C.C_STABILISES, False), (C.C_STABILISES_LIT, True)):
         ev = [qid("filter", "angle_rms", lit), qid("filter", "settling_time_noise_free", lit), qid("filter", "settling_time", lit)]
         q0, q1, q2 = (result.get(e) for e in ev)
         result.claim(claim, not q0.runs_diverged and q1.value is not None, evidence=ev,
-                     note=f"{q0.runs_diverged} of {q0.runs} runs diverged; the noise-free step settles at "
+                     note=f"with {gw}: {q0.runs_diverged} of {q0.runs} runs diverged; the noise-free step settles at "
                           f"{_val(result, ev[1])}; per noisy run: {_val(result, ev[2])} ({q2.note.split('; ')[-1]}) "
                           f"({'literal' if lit else 'main'} regime)")
     cells = ("ss.gain_continuous", "ss.gain_alpha", "ss.gain_beta")
@@ -686,14 +1008,17 @@ def record_claims(result: StudyResult, p) -> None:
                  note="the continuous steady-state gain of Q = 100, R = 50 is "
                       + f"{np.round(result.get(cells[0]).value, 3).tolist()} and the closest of the interpretations "
                       f"tried is ({result.get(cells[1]).value:.3f}, {result.get(cells[2]).value:.3f}); verdicts "
-                      + ", ".join(f"{c}: {x}" for c, x in v.items()))
-    a, b = qid("kf", "angle_rms"), qid("filter", "angle_rms")
+                      + ", ".join(f"{c}: {x}" for c, x in v.items()) + " (band: half a unit of the third printed decimal)")
+    a, b = qid("kf_ss", "angle_rms"), qid("filter", "angle_rms")
     qa, qb = result.get(a), result.get(b)
     near = None if qa.value is None or qb.value is None else bool(qb.value <= (1 + p.near_margin) * qa.value)
-    result.claim(C.C_NEAR_OPTIMAL, near, evidence=[a, b, qid("kf_ss", "angle_rms")],
-                 note=f"steady angle RMS {_val(result, b)} with the paper's K vs {_val(result, a)} with the "
-                      f"time-varying Kalman filter (within {p.near_margin:.0%} required) and "
-                      f"{_val(result, qid('kf_ss', 'angle_rms'))} with the correct steady-state gain (main regime)")
+    result.claim(C.C_NEAR_OPTIMAL, near, evidence=[e for e in (b, a, qid("kf", "angle_rms")) if _has(result, e)],
+                 note=f"steady angle RMS {_val(result, b)} with {gw} vs {_val(result, a)} with the optimal filter in its "
+                      f"steady state (the steady-state Kalman gain; within {p.near_margin:.0%} required)"
+                      + (f"; the time-varying Kalman filter gives {_val(result, qid('kf', 'angle_rms'))} in the same "
+                         "window (its gain has converged)" if _has(result, qid("kf", "angle_rms")) else "")
+                      + "; 'at much less computation' holds by construction: a constant gain needs no covariance "
+                        "recursion (main regime)")
 
 
 def _record_beyond(result: StudyResult, d, stats) -> None:

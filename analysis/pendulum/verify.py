@@ -326,7 +326,7 @@ def compute_verify(P: Verify = VERIFY) -> VerifyData:
 
 
 def gain_cells_data(P: Verify = VERIFY):
-    """What the §4 gain cell needs, cheaply (the sensitivity sweep): the continuous gain and the closest interpretation.
+    """What the §4 gain cell needs, cheaply (the box exploration): the continuous gain and the closest interpretation.
 
     Cached on the values they depend on (not on tolerances or other settings of ``P``).
 

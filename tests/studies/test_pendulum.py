@@ -47,7 +47,9 @@ def test_interpretations_contain_the_continuous_gain_and_miss_the_paper():
     cont = [g for g in rows if g.kind == "continuous" and not g.swapped][0]
     np.testing.assert_allclose([cont.alpha, cont.beta], second_order_gain(V.a21, V.Q / V.R), rtol=1e-9)
     assert rows == sorted(rows, key=lambda g: g.error)
-    assert rows[0].error > V.gain_tol  # the printed K is not reproduced
+    # the printed K is not reproduced, by far: the band is half a unit of the third printed decimal (0.950: 0.053 %)
+    assert quantities.gain_tolerances(V) == pytest.approx((0.0005 / 0.950, 0.0005 / 0.863))
+    assert rows[0].error > 100 * max(quantities.gain_tolerances(V))
     f = [g for g in rows if g.kind == "discrete" and g.T == 0.01 and g.noise == "sampled" and not g.swapped
          and g.form == "filter" and g.beta_rule == "beta = T k2"][0]
     _F, ss = verify._discrete(V.a21, V.Q, V.R, 0.01, "sampled")
@@ -106,8 +108,13 @@ def test_run_smoke(small_run):
                 "ss.printed_P_is_covariance", "sec5.step_deg", "cl.rule_sign_ok"):
         assert qid in ids
     for case in ("nofilter", "filter"):
-        for m in ("overshoot", "overshoot_noise_free", "settling_time", "angle_rms", "accel_rms", "sat_e", "sat_ec"):
+        for m in ("overshoot", "overshoot_noise_only", "overshoot_noise_free", "overshoot_mean_response",
+                  "settling_time", "angle_rms", "accel_rms", "chatter", "sat_e", "sat_ec"):
             assert f"cl.{case}.{m}" in ids and f"literal.{case}.{m}" in ids
+    for m in quantities.PAIRED:
+        assert quantities.cid(m) in ids
+    for m in quantities.PAIRED_LITERAL:
+        assert quantities.cid(m, literal=True) in ids
     for qid in ("ss.gain_alpha", "ss.gain_beta", "ss.gain_continuous", "sec5.step_deg"):
         assert result.get(qid).verdict == "differs"
     # the paper's 5.7325° for 0.1 rad is a check of its own arithmetic (an erratum), not a reproduction cell
@@ -126,8 +133,14 @@ def test_run_smoke(small_run):
     assert result.get("beyond.kf_ss.angle_rms").runs == 4
     finding_ids = {f["id"] for f in result.findings}
     assert {"are-sign-flipped", "riccati-limit", "observability-rank", "printed-P-6x6", "gain-not-reproducible",
-            "printed-filter-unstable", "noise-plausibility", "rule-sign", "noise-saturation", "overshoot-vs-noise",
-            "steady-offset", "qr-sweep", "step-degrees", "nonlinear-recovery"} <= finding_ids
+            "printed-filter-unstable", "noise-plausibility", "rule-sign", "noise-saturation", "overshoot-per-run",
+            "control-chatter", "steady-offset", "qr-sweep", "step-degrees", "nonlinear-recovery"} <= finding_ids
+    # the paper's errata are marked as such (the report counts findings without them)
+    errata = {f["id"] for f in result.findings if f.get("kind") == "erratum"}
+    assert errata == {"a21-decimal", "observability-rank", "are-sign-flipped", "riccati-limit", "step-degrees"}
+    # §4's printed K is judged on its printed digits (0.950 keeps its trailing zero), no blanket allowance
+    assert result.get("ss.gain_alpha").tolerance == pytest.approx(0.0005 / 0.950)
+    assert result.get("ss.gain_beta").tolerance == pytest.approx(0.0005 / 0.863)
     for name in result.figures:
         assert (tmp_path / name).stat().st_size > 10_000
     data = json.loads(write_results_json(result, tmp_path).read_text(encoding="utf-8"))
@@ -198,22 +211,150 @@ def test_noise_saturates_the_rate_input_only_in_the_literal_regime():
 
 
 def test_claims_judged_with_evidence(small_run):
+    from ctrl_analysis.reporting.verdicts import claim_verdict
+
     result, _ = small_run
-    verdicts = {c.claim.id: c.verdict for c in result.claims}
+    verdicts = {c.claim.id: c.base_verdict for c in result.claims}
     assert set(verdicts) == {c.id for c in paper.CLAIMS}
+    assert not any(c.claim.beyond for c in result.claims)  # every claim is the paper's
     assert verdicts["steady-state-gain"] == "fails"
     assert verdicts["stabilises"] == "holds" and verdicts["stabilises-literal"] == "holds"
-    assert verdicts["overshoot"] == "fails" and verdicts["overshoot-literal"] == "fails"
-    assert verdicts["true-state"] == "holds"
+    # four runs give no 95 % interval of a median: the per-run claims are untestable, never judged on noise
+    for cid in ("overshoot", "overshoot-literal", "oscillation", "oscillation-literal", "true-state"):
+        assert verdicts[cid] == "untestable", cid
+        assert "Untestable" in result.get_claim(cid).note
     ev = {c.claim.id: c.evidence for c in result.claims}
     assert ev["steady-state-gain"] == ("ss.gain_continuous", "ss.gain_alpha", "ss.gain_beta")
-    assert ev["oscillation-literal"] == ("literal.nofilter.angle_rms", "literal.filter.angle_rms")
-    assert ev["overshoot"][:3] == ("cl.nofilter.overshoot", "cl.filter.overshoot", "cl.nofilter.overshoot_noise_floor")
-    # the sensitivity sweep ran and judged with the same functions (its baseline equals the main judgement here)
-    assert result.sensitivity["evaluations"] > 1
-    assert "sensitivity.png" in result.figures
-    # a verdict is 'depends' exactly where the sweep found a flip inside a plausible range, naming the value
+    assert ev["oscillation-literal"][0] == "literal.filter_vs_nofilter.angle_rms"
+    assert ev["overshoot"][0] == "cl.filter_vs_nofilter.overshoot"
+    assert {"cl.filter_vs_nofilter.accel_rms", "cl.filter_vs_nofilter.chatter", "cl.filter_vs_nofilter.settling_time"} \
+        <= set(ev["fast-smooth"])  # 'quickly' and 'smoothly' are both judged
+    # the box ran under both gain readings and judged with the same functions
+    s = result.sensitivity
+    assert s["evaluations"] > 1 and s["algorithm"]["fields"] == ["loop.gain_reading"]
+    assert "sensitivity.png" in result.figures and "fig4_per_run_changes.png" in result.figures
     for c in result.claims:
-        assert (c.verdict == "depends") == bool(c.depends_on)
-        for d in c.depends_on:
-            assert set(d["flips_at"]) <= set(d["tried"])
+        assert c.verdict == claim_verdict(c.support, c.base_verdict)
+        assert set(c.box["by_algorithm"]) == {"printed", "corrected"}
+
+
+def test_points_on_one_batch_equal_single_simulations():
+    """simulate_points: points with their own T, a21, σ and filter side by side on a time axis counted in samples
+    give the runs simulate_case gives one point at a time (to rounding; the last instant included)."""
+    base = dataclasses.replace(L, t_end=0.3)
+    pts = [(base, V.a21, None), (dataclasses.replace(base, T=0.0033, sigma_w=2.0), V.a21 * 1.001, "alpha-beta"),
+           (dataclasses.replace(base, T=0.0011, sigma_v=1e-3), V.a21, "kf-ss"),
+           (dataclasses.replace(base, T=0.0045), V.a21, "alpha-beta")]  # one chunk with 0.0033: padded rows
+    seeds = [3, 4, 5]
+    got = loops.simulate_points(pts, seeds, ratio=1.5)
+    for (p, a21, kind), c in zip(pts, got):
+        ref = loops.simulate_case(p, a21, seeds, filter_kind=kind, noise_free_extra=True)
+        assert c.noisy.phi.shape == (round(p.t_end / p.T) + 1, 3)
+        np.testing.assert_allclose(c.noisy.t, ref.t, rtol=1e-12)
+        for f in ("phi", "dphi", "u", "e", "ec"):
+            scale = np.max(np.abs(getattr(ref, f)))
+            np.testing.assert_allclose(getattr(c.noisy, f), getattr(ref, f)[:, :3], rtol=0, atol=1e-11 * scale)
+            np.testing.assert_allclose(getattr(c.quiet, f)[:, 0], getattr(ref, f)[:, 3], rtol=0, atol=1e-11 * scale)
+        assert not c.noisy.diverged.any()
+
+
+def test_batched_gains_equal_the_filters_built_one_by_one():
+    p = dataclasses.replace(L, T=0.003, sigma_w=1.7)
+    F, g, _, _ = loops.sampled_model(V.a21, p.b2, p.T, p.sigma_w, p.sigma_v)
+    F2, g2 = loops.sampled_pendulum(V.a21, p.T)
+    np.testing.assert_allclose(F2, F, rtol=1e-12)
+    np.testing.assert_allclose(g2, g, rtol=1e-10)
+    (a1, b1, _, bvec), (a2, b2, _, _) = loops.ab_gains([(p, V.a21, "kf-ss"), (p, V.a21, "alpha-beta")])
+    ss = loops.build_filter("kf-ss", p, V.a21)
+    np.testing.assert_allclose([a1, b1], [ss.alpha, ss.beta], rtol=1e-9)
+    np.testing.assert_allclose(bvec, g * p.b2, rtol=1e-10)
+    assert (a2, b2) == p.K_printed
+    with pytest.raises(ValueError, match="kind must be"):
+        loops.ab_gains([(p, V.a21, "kf")])
+
+
+def test_box_evaluates_many_points_as_one_by_one():
+    """evaluate_many (explore's batch) judges every point as evaluate does alone; the two gain readings differ."""
+    from ctrl_analysis.reporting.box import Box
+
+    params = {"verify": V, "loop": L}  # the box moves t_ss and t_tr up to 2 s and 1 s: the full horizon
+    box = Box(params)
+    assert box.algorithms == ("printed", "corrected")
+    assert [d.name for d in box.algorithm_dims] == ["loop.gain_reading"]
+    u = box.sample(8, 1)
+    variants = [box.params_at(u[0], "printed"), box.params_at(u[0], "corrected"), box.params_at(u[3], "printed")]
+    assert variants[1]["loop"].gain_reading == "steady-state" and variants[0]["loop"].gain_reading == "paper"
+    seeds = tuple(range(4))
+    many = pm.evaluate_many(variants, seeds)
+    for v, r in zip(variants, many):
+        alone = pm.evaluate(v, seeds)
+        assert [(c.claim.id, c.holds) for c in r.claims] == [(c.claim.id, c.holds) for c in alone.claims]
+        assert r.get("cl.filter.angle_rms").value == pytest.approx(alone.get("cl.filter.angle_rms").value, rel=1e-12)
+    # the corrected reading puts the steady-state gain in the loop: near-optimal holds by construction there
+    assert many[1].get("cl.filter.angle_rms").value == pytest.approx(many[1].get("beyond.kf_ss.angle_rms").value)
+    assert many[1].get_claim("near-optimal").holds is True
+    assert many[0].get("cl.filter.angle_rms").value != many[1].get("cl.filter.angle_rms").value
+
+
+def test_only_gravity_moves_the_printed_cells_in_the_box():
+    """The §4 cells depend on the verify part only, and there only g is varied (a set of alternatives every one of
+    which the sample holds): explore's compass search for them is switched off with that reason."""
+    from ctrl_analysis.reporting.box import Box
+
+    box = Box({"verify": V, "loop": L})
+    assert [d.name for d in box.dims if d.prefix == "verify"] == ["verify.g"]
+    assert not box.dims[0].continuous
+    assert pm.BOX_SETTINGS["search_rounds"] == 0
+
+
+def test_median_interval_and_per_run_overshoot_use_the_library_statistics():
+    from scipy.stats import quantile_test
+
+    from ctrl_analysis import metrics
+
+    rng = np.random.default_rng(4)
+    for n in (6, 16, 48, 100):
+        d = rng.normal(-0.1, 0.3, n)
+        st = quantities.Paired.of(d)
+        ci = quantile_test(d, q=0.0, p=0.5).confidence_interval(0.95)
+        assert (st.lo, st.hi) == (pytest.approx(ci.low), pytest.approx(ci.high))
+        assert st.median == pytest.approx(np.median(d)) and st.share == pytest.approx(np.mean(d < 0))
+        assert st.resolved == (not ci.low <= 0 <= ci.high)
+    assert quantities.Paired.of([0.1, -0.2, 0.3]).floor == np.inf  # too few runs for an interval
+    phi = np.cumsum(rng.normal(0.01, 0.02, (50, 4)), axis=0)
+    final = np.array([0.3, 0.4, 0.5, 0.2])
+    expect = [metrics.overshoot(None, phi[:, k], final[k]) for k in range(4)]
+    np.testing.assert_allclose(quantities._peak_over_final(phi, final), expect, rtol=1e-12)
+
+
+def test_a_change_below_its_noise_floor_is_untestable_never_fails():
+    from ctrl_analysis.reporting.report import StudyResult
+
+    P = quantities.Paired.of
+    rng = np.random.default_rng(0)
+    noise = P(rng.normal(0.0, 1.0, 40))  # no effect: the interval holds zero
+    clear = P(rng.normal(-0.5, 0.1, 40))
+    worse = P(rng.normal(+0.5, 0.1, 40))
+    assert not noise.resolved and clear.resolved and worse.resolved
+
+    def judged(parts):
+        res = StudyResult(pm.INFO)
+        return quantities._claim(res, paper.C_OVERSHOOT, quantities._judge_all(parts), [], "").holds
+
+    assert judged([(noise.median < 0, noise)]) is None
+    assert judged([(True, clear), (noise.median < 0, noise)]) is None
+    assert judged([(False, worse), (noise.median < 0, noise)]) is False  # a resolved part fails: fails
+    assert judged([(True, clear)]) is True
+    assert judged([(False, None), (True, clear)]) is False  # a definition part ('quickly') is always resolved
+    assert judged([(True, P([0.1, -0.2, -0.3]))]) is None  # too few runs for an interval
+
+
+def test_kf_initial_covariance_does_not_reach_the_steady_window():
+    """P0_kf is fixed, not varied in the box: the steady angle RMS per run does not depend on it."""
+    p = L  # the chosen horizon and steady window
+    rms = []
+    for P0 in ((1e-4, 0.01), (1.0, 100.0)):
+        r = loops.simulate_case(dataclasses.replace(p, P0_kf=P0), V.a21, [1, 2, 3], filter_kind="kf")
+        ss = r.t >= p.t_ss
+        rms.append(np.sqrt(np.mean((r.phi[ss] - p.step) ** 2, axis=0)))
+    np.testing.assert_allclose(rms[0], rms[1], rtol=1e-8)
