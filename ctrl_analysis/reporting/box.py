@@ -3,7 +3,7 @@
 A study's reconstructions with a plausible range (:func:`~ctrl_analysis.reporting.study.span`,
 :func:`~ctrl_analysis.reporting.study.choices`) are the dimensions of its *plausible box*; the printed values
 stay fixed. A point of the box has a coordinate in [0, 1] per dimension; :class:`Box` maps points to the
-study's parameter objects, samples the box quasi-randomly (scrambled Sobol', ``scipy.stats.qmc``) and
+study's parameter objects, samples the box (a Latin hypercube, ``scipy.stats.qmc``) and
 interpolates along segments for bisection. :mod:`ctrl_analysis.reporting.sensitivity` judges the verdicts on it.
 
 Examples
@@ -230,7 +230,14 @@ class Box:
         return np.array([d.coordinate(d.chosen) for d in self.dims], dtype=float)
 
     def sample(self, n: int, seed: int) -> np.ndarray:
-        """``n`` scrambled Sobol' points (rounded up to a power of two), shape ``(n, dims)``.
+        """A Latin hypercube sample of ``n`` points (``n`` rounded up to a power of two), shape ``(n, dims)``.
+
+        Each coordinate has exactly one point in each of its ``n`` equal strata, and the coordinates are paired at
+        random. A scrambled Sobol' sample spreads the points more evenly, but its coordinates are paired by
+        structure: at 64 points a reconstruction that cannot act then shows a first-order index above the
+        permutation test's chance level on about a third of the claims (11 of 30 seeded toy claims with 12 idle
+        reconstructions), against 2 of 30 with a Latin hypercube, where the permutation test's null (the verdict independent of the coordinate)
+        holds (:func:`first_order`).
 
         Parameters
         ----------
@@ -246,7 +253,7 @@ class Box:
         m = max(int(math.ceil(math.log2(max(n, 2)))), 1)
         if not self.dims:
             return np.zeros((0, 0))
-        return qmc.Sobol(len(self.dims), scramble=True, seed=seed).random_base2(m)
+        return qmc.LatinHypercube(len(self.dims), seed=seed).random(2 ** m)
 
     def values(self, u) -> dict:
         """``{name: value}`` at coordinates ``u``.

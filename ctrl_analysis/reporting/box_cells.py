@@ -93,7 +93,7 @@ def search_cells(runner, box, U, per, cell_steps, search_rounds, bisect) -> dict
         pts += [(u, a, o) for u, o in zip(U, per[a][1:])]
     # a cell no sampled point reaches: the chosen point's one-at-a-time neighbours along each set of alternatives
     # (another integrator, another reading) join the points searched from. A printed number often sits next to
-    # the chosen values, where a quasi-random sample spread over every combination of alternatives rarely lands
+    # the chosen values, where a sample spread over every combination of alternatives rarely lands
     neighbours = []
     if any(not any((o["cells"].get(qid) or {}).get("in_band") for _, _, o in pts) for qid in base["cells"]):
         for i, d in enumerate(box.dims):

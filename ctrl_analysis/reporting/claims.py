@@ -209,7 +209,7 @@ def sensitivity_lines(results: dict) -> list[str]:
     ranges = sens.get("ranges") or {}
     alg = sens.get("algorithm")
     lines = ["### The plausible box", "",
-             f"{sens.get('samples', 0)} quasi-random points (scrambled Sobol') of the box spanned by "
+             f"{sens.get('samples', 0)} points of a Latin hypercube sample of the box spanned by "
              f"{len(ranges)} reconstructions, all varied jointly"
              + (f", under the paper's printed and the corrected algorithm (`{'`, `'.join(alg['fields'])}`)"
                 if alg else "")

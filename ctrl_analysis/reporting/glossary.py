@@ -27,7 +27,7 @@ GLOSSARY = {
     "claim": "a statement the paper makes (a comparison, a ranking, a property), judged on computed quantities "
              "over the plausible box: holds, fails, depends (its support lies between the policy's thresholds), "
              "or untestable (the measure is below its own noise floor, or the method cannot run as printed).",
-    "support": "the share of the plausible box (quasi-random samples, all reconstructions varied jointly) where a "
+    "support": "the share of the plausible box (a Latin hypercube sample, all reconstructions varied jointly) where a "
                "claim holds, with its binomial standard error.",
     "plausible box": "the product of the plausible ranges of a study's reconstructions, printed values fixed; "
                      "every claim and printed cell is judged over it.",

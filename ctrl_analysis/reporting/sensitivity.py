@@ -6,7 +6,7 @@ A study declares each value the paper does not print with
 fixed). Its claims and primary cells are computed by an ``evaluate(params)`` function that builds a
 :class:`~ctrl_analysis.reporting.results.StudyResult` with the same recording code as the study's main run.
 
-:func:`explore` evaluates the study at the chosen values and at a scrambled Sobol' sample of the box
+:func:`explore` evaluates the study at the chosen values and at a Latin hypercube sample of the box
 (``scipy.stats.qmc``, at least 64 points), then refines, every round one batch over processes:
 
 * **claims** — where the claim's verdict differs between the chosen point and a sample, or between two
@@ -65,7 +65,7 @@ from .verdicts import SUPPORT_HIGH, SUPPORT_LOW, claim_verdict
 
 __all__ = ["QUICK", "SAMPLES", "Box", "Dimension", "Exploration", "apply", "caption", "explore", "plot_sensitivity"]
 
-#: Default number of quasi-random samples of the box (a power of two: Sobol' points are balanced there).
+#: Default number of points of the box's Latin hypercube sample.
 SAMPLES = 64
 #: :func:`explore`'s settings for a smoke test (``--quick``): a few points, short bisections; never for a verdict.
 QUICK = {"samples": 8, "refine": 2, "cell_steps": 3, "search_rounds": 1}
@@ -178,7 +178,7 @@ def _support(y) -> dict:
     if n == 0:
         return {"holds": None, "samples": 0, "stderr": None, "untestable": int(y.size)}
     s = float(ok.mean())
-    # binomial standard error; for a scrambled Sobol' sample an upper bound of the sampling error
+    # binomial standard error (a Latin hypercube's stratification makes the sampling error no larger)
     return {"holds": round(s, 4), "samples": n, "stderr": round(math.sqrt(max(s * (1 - s), 0.25 / n) / n), 4),
             "untestable": int(y.size - n)}
 
@@ -226,7 +226,7 @@ def explore(evaluate: Callable, params: dict, *, samples: int = SAMPLES, seed: i
         Quasi-random points of the box per algorithm (rounded up to a power of two; at least 64 for a verdict
         the report calls robust — fewer only for smoke tests).
     seed : int, optional
-        Scrambling seed of the Sobol' sample (default: from the reconstructions' names, so a study's sample
+        Seed of the Latin hypercube sample (default: from the reconstructions' names, so a study's sample
         is the same on every run).
     names : collection of str, optional
         Vary only these reconstructions.
@@ -450,7 +450,7 @@ def caption(result: StudyResult, detail: str = "") -> str:
     if not isinstance(detail, str):
         raise TypeError(f"detail must be a string, got {type(detail).__name__}")
     s = result.sensitivity or {}
-    return (f"Each claim judged over the plausible box ({s.get('samples', 0)} quasi-random points, all "
+    return (f"Each claim judged over the plausible box ({s.get('samples', 0)} points of a Latin hypercube, all "
             f"{s.get('dimensions', 0)} reconstructions with a plausible range varied jointly"
             + (f"; {detail}" if detail else "") + "): left, its support (the share of the box where it holds, "
             f"± standard error) against the policy's thresholds ({100 * SUPPORT_LOW:.0f} % and "

@@ -47,7 +47,7 @@ def plot_sensitivity(result: StudyResult, top: int = 8):
     fig, (ax, bx) = new_figure(1, 2, size=(13.0, 2.4 + 0.42 * n),
                                gridspec_kw={"width_ratios": [1.0, max(1.0, 0.35 * max(len(names), 1))]},
                                title=f"{result.info.name}: each claim judged over the plausible box "
-                                     f"({result.sensitivity.get('samples')} quasi-random points, all "
+                                     f"({result.sensitivity.get('samples')} points of a Latin hypercube, all "
                                      f"{result.sensitivity.get('dimensions')} reconstructions varied jointly)")
     y = np.arange(len(claims))[::-1]
     for yi, c in zip(y, claims):

@@ -71,7 +71,7 @@ def test_the_box_spans_every_varied_reconstruction_and_maps_points_to_parameters
     assert (p.k, p.a, p.b, p.rule, p.grid) == (3.0, 0.0, 1.0, "y", 10)
     U = box.sample(64, seed=3)
     assert U.shape == (64, 4) and 0.0 <= U.min() and U.max() < 1.0
-    # Sobol' balance: each quarter of each coordinate holds exactly 16 points
+    # a Latin hypercube: each of the 64 strata of each coordinate holds one point (so each quarter 16)
     assert all((np.floor(U[:, j] * 4) == q).sum() == 16 for j in range(4) for q in range(4))
 
 
