@@ -216,13 +216,14 @@ PLANT2_FORMULA = {"resonant-delay": "9 / ((s² + 0.9 s + 9)(s + 1)) · e^(−0.1
 def save_all(ctx, result, p, data, data_f, extra, ident):
     """Draw and save Fig. 2-12 with their captions (``ident``: :func:`.beyond.ablation`'s bounds and progress)."""
     from .beyond import Q_SWEEP
+    from .loops import case_id
     from .quantities import TABLE1_ROWS, noise_free_fit
 
     bounds, _ = ident
     id_note = {"lpf": "the characteristic model identified online from the LPF output",
                "raw": "the characteristic model identified online from the measurement"}
     for no, case in ((2, "nofilter"), (3, "lpf"), (4, "ckf")):
-        own = p.nofilter_id if case == "nofilter" else p.id_signal
+        own = case_id(p, case)
         extra_words = (" (an LPF run beside the loop, not fed back: the no-filter loop's feedback is unfiltered, its "
                        "identification is not; finding nofilter-identification)" if case == "nofilter" and own == "lpf"
                        else "")

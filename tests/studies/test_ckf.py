@@ -76,6 +76,7 @@ def test_short_run_writes_table1_claims_and_figures(tmp_path):
     assert len(data["figures"]) == 12 and all((tmp_path / f).exists() for f in data["figures"])
     assert "still converging" not in data["captions"]["fig7_ckf_transient.png"]
     assert "lower bound" in data["captions"]["fig10_identified_parameters.png"]
+    assert "identified online from the LPF output (an LPF run beside the loop" in data["captions"]["fig2_nofilter.png"]
 
 
 def test_claims_of_a_small_evaluation_and_a_known_flip():
