@@ -151,16 +151,15 @@ def bench_loop(T, repeat, runs=RUNS):
     t0 = time.perf_counter()
     simulate_cases(dataclasses.replace(p, t_end=0.05), 1, seed=0, engine="compiled")  # compile or load once
     t_compile = time.perf_counter() - t0
-    res, idx = simulate_cases(p, 1, seed=0, engine="compiled")
-    sl = idx[(p.id_signal, "ckf")]
-    v = res["y_m"][:, sl][:, 0] - res["y"][:, sl][:, 0]
+    d = simulate_cases(p, 1, seed=0, engine="compiled")[(p.id_signal, "ckf")]
+    v = d["y_m"][:, 0] - d["y"][:, 0]
     fns = {"float": lambda: float_loop(p, v, n)}
     for engine in ("numpy", "compiled"):
         for r in runs:
             fns[(engine, r)] = (lambda e=engine, r=r: simulate_cases(p, r, seed=0, engine=e))
     timed = round_robin(fns, repeat)
     fl = timed["float"][1]
-    err = max(np.max(np.abs(fl[:, 0] - res["y"][:, sl][:, 0])), np.max(np.abs(fl[:, 2] - res["u"][:, sl][:, 0])))
+    err = max(np.max(np.abs(fl[:, 0] - d["y"][:, 0])), np.max(np.abs(fl[:, 2] - d["u"][:, 0])))
     times = {k: v[0] for k, v in timed.items() if k != "float"}
     return times, timed["float"][0], err, n, t_compile
 

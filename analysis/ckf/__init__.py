@@ -1,16 +1,18 @@
 """Study `ckf`: Gong & Wu 2010, characteristic-model-based Kalman filter with golden-section adaptive control.
 
 Three closed loops (no filter, digital LPF, CKF) on a reconstructed high-order plant, run as one
-batch through :class:`ctrl_analysis.engine.loop.Loop` (:mod:`.loops`), with the characteristic model identified
-online; Table 1 and the paper's claims checked with Monte Carlo numbers, beside the frozen-Φ ablation
-(the identification held at θ0), the identification signal, the projection, the full-order Kalman filter
-and a second plant (:mod:`.quantities`, :mod:`.beyond`); every claim re-judged across the plausible range of
-every reconstruction (:func:`evaluate`); Fig. 2-12 (:mod:`.figures`). Every value the extracted text lost is a
-reconstruction in :mod:`.paper`.
+batch through :class:`ctrl_analysis.engine.loop.Loop` (:mod:`.loops`), with the characteristic model's RLS
+running online; Table 1 and the paper's claims checked per run (the paper reads them off one run) over Monte
+Carlo runs, beside the frozen-Φ ablation (the identification held at θ0), the identification signal, the
+projection, the full-order Kalman filter and a second plant (:mod:`.quantities`, :mod:`.beyond`); every claim and
+the printed cell judged over the plausible box, many points per simulation (:func:`evaluate_many`), under the
+printed and the corrected reading of the no-filter loop's identification; Fig. 2-12 (:mod:`.figures`). Every value
+the extracted text lost is a reconstruction in :mod:`.paper`.
 """
 
 from __future__ import annotations
 
+import collections
 import dataclasses
 import functools
 
@@ -20,67 +22,106 @@ from ctrl_analysis.reporting.study import record_parameters, study_params
 
 from . import beyond, figures
 from . import quantities as qty
-from .loops import simulate_cases, split_cases
+from .loops import BOX_SIGNALS, CASES, case_id, simulate_cases, simulate_specs
 from .paper import PAPER, READINGS, frozen
 
-__all__ = ["INFO", "evaluate", "run", "simulate_study"]
+__all__ = ["INFO", "SweepRun", "evaluate", "evaluate_many", "run", "simulate_study"]
 
 INFO = StudyInfo(
     name='ckf',
     seed_file='001_98762e3e5a8851d8.txt',
     paper='Gong & Wu 2010, characteristic-model-based Kalman filter with golden-section adaptive control',
     reproduces='Fig. 2-9 and Table 1: no filter vs LPF vs CKF under golden-section control with the characteristic '
-               'model identified online; the frozen-Φ ablation, identified parameters, Q sweep, full-order KF and a '
-               'second plant beyond the paper',
+               "model's RLS running online; the frozen-Φ ablation, identified parameters against the projection box, "
+               'Q sweep, full-order KF and a second plant beyond the paper',
 )
 
-#: Reconstructions the quick sweep varies (the full run varies every one with a plausible range); a reading of the
-#: claims re-judges the baseline's cached runs, so it costs no simulation.
+#: Reconstructions the quick box varies (the full run varies every one with a plausible range); a reading of the
+#: claims re-judges the cached runs, so it costs no simulation.
 QUICK_SWEEP = ("P0_rls", "lpf_omega", "claims.z_significant")
 
 
 def simulate_study(p, runs, seed, options=None):
-    """Run the three cases (per identification option) and return ``{option: {case: signals}}``."""
-    res, index = simulate_cases(p, runs, seed, options=options)
+    """Run the three cases (per identification option) and return ``{option: {case: signals}}``.
+
+    Without ``options`` the study's own identification (``p.id_signal``, the no-filter loop ``p.nofilter_id``),
+    under the key ``p.id_signal``."""
     data = {}
-    for (opt, case), d in split_cases(res, index).items():
+    for (opt, case), d in simulate_cases(p, runs, seed, options=options).items():
         data.setdefault(opt, {})[case] = d
     return data
 
 
-def record_main(result, data, p, plant_order, r=READINGS):
-    """Table 1, the filter errors, the operation counts and the judged claims: shared by :func:`run` and
-    :func:`evaluate`, so the sensitivity sweep judges with the main run's code."""
-    qty.table1(result, data, p)
-    errs = qty.filter_errors(result, data, p)
+def record_main(result, m, p, plant_order, r=READINGS):
+    """Table 1, the filter errors, the operation counts and the judged claims from the per-run numbers ``m``
+    (:func:`.quantities.metrics`): shared by :func:`run` and :func:`evaluate`, so the box judges with the main
+    run's code."""
+    qty.record_metrics(result, m, p, r=r)
     qty.cost(result, p, plant_order)
-    qty.record_claims(result, p, r)
-    return errs
+    qty.record_claims(result, p, m, r)
 
 
 def evaluate(params) -> StudyResult:
-    """One evaluation of the sensitivity sweep: ``params[""]`` simulated over ``sweep_runs`` runs (same seeds as
-    the main run's first runs), its paper cell and claims recorded by :func:`record_main` with the readings
-    ``params["claims"]`` (a reading alone re-judges the cached runs of the baseline)."""
-    p = params[""]
-    result = StudyResult(INFO)
-    data = _sweep_runs(p, params["run"].seed)
-    record_main(result, data, p, _order(p.plant), params["claims"])
-    return result
+    """One evaluation of the plausible box: :func:`evaluate_many` of one point."""
+    return evaluate_many([params])[0]
 
 
-@functools.lru_cache(maxsize=2)
-def _sweep_runs(p, seed):
-    return simulate_study(p, p.sweep_runs, seed)[p.id_signal]
+def evaluate_many(points) -> list:
+    """Evaluate many points of the plausible box at once, on the batch axis of one simulation.
+
+    Each point ``params[""]`` is simulated over ``sweep_runs`` runs (the main run's first seeds, the same noise at
+    every point: common random numbers) and its claims and cell recorded by :func:`record_main` with the readings
+    ``params["claims"]``. Only the signals the claims read are kept, and each loop's per-run numbers are cached by
+    what it simulates (a loop whose settings a point does not change, e.g. the filtered loops under the other
+    algorithm or a point that moves only a reading, is not simulated again).
+    """
+    need, keys = [], []
+    for params in points:
+        p, seed = params[""], params["run"].seed
+        ks = {case: (_sim_key(p, case), case, case_id(p, case), p.sweep_runs, seed) for case in CASES}
+        keys.append(ks)
+        need += [k for k in ks.values() if k not in _CACHE and k not in need]
+    by_run: dict = {}
+    for k in need:
+        by_run.setdefault((k[3], k[4]), []).append(k)
+    for (runs, seed), ks in by_run.items():
+        data = simulate_specs([(k[0], k[1], k[2]) for k in ks], runs, seed, keep=BOX_SIGNALS)
+        for k, d in zip(ks, data):
+            _remember(k, qty.case_metrics(d, k[0], k[1]))
+    out = []
+    for params, ks in zip(points, keys):
+        p = params[""]
+        result = StudyResult(INFO)
+        record_main(result, {case: _CACHE[k] for case, k in ks.items()}, p, _order(p.plant), params["claims"])
+        out.append(result)
+    return out
+
+
+#: Per-run numbers of the loops simulated for the box, by what they simulate (bounded).
+_CACHE: collections.OrderedDict = collections.OrderedDict()
+_CACHE_SIZE = 4096
+
+
+def _remember(key, value):
+    _CACHE[key] = value
+    while len(_CACHE) > _CACHE_SIZE:
+        _CACHE.popitem(last=False)
+
+
+def _sim_key(p, case):
+    """What a loop of case ``case`` simulates: ``p`` with the no-filter loop's identification (an algorithm axis that
+    only that loop reads) normalised away in the filtered loops."""
+    return p if case == "nofilter" else dataclasses.replace(p, nofilter_id="same")
 
 
 @dataclasses.dataclass(frozen=True)
 class SweepRun:
-    """What an evaluation of the sweep takes from the CLI, not from the paper (nothing here is varied)."""
+    """What an evaluation of the box takes from the CLI, not from the paper (nothing here is varied)."""
 
     seed: int
 
 
+@functools.lru_cache(maxsize=8)
 def _order(plant):
     from .loops import plant_tf
 
@@ -89,11 +130,11 @@ def _order(plant):
 
 def run(ctx: StudyContext, params=None) -> StudyResult:
     """Reproduce Table 1 and Fig. 2-9 with the live identification, then the ablation and the studies beyond
-    the paper (Fig. 10-12), then the sensitivity of every claim to every reconstruction.
+    the paper (Fig. 10-12), then every claim and the printed cell over the plausible box.
 
     ``params`` overrides the settings (:func:`ctrl_analysis.reporting.study.study_params`): ``{"": Paper}`` (the paper's
     values and reconstructions, :data:`.paper.PAPER`) and ``{"claims": Readings}`` (:data:`.paper.READINGS`),
-    each an object or a dict of its fields; ``--quick`` then shortens the horizon and the option and sweep runs.
+    each an object or a dict of its fields; ``--quick`` then shortens the horizon and the option and box runs.
     """
     result = StudyResult(INFO)
     chosen = study_params({"": PAPER, "claims": READINGS}, params, result)
@@ -107,26 +148,31 @@ def run(ctx: StudyContext, params=None) -> StudyResult:
     result.seeds = {"base": ctx.seed, "runs": runs}
     ctx.progress(f"ckf: {runs} runs x 3 cases, {p.t_end:g} s at Ts = {p.Ts:g} s, live identification")
     data = simulate_study(p, runs, ctx.seed)[p.id_signal]
-    errs = record_main(result, data, p, _order(p.plant), r)
+    m = qty.metrics(data, p)
+    record_main(result, m, p, _order(p.plant), r)
     ctx.progress("ckf: frozen-Φ ablation")
     data_f = simulate_study(frozen(p), runs, ctx.seed)[p.id_signal]
-    beyond.ablation(result, p, data, data_f)
+    m_f = qty.metrics(data_f, p)
+    ident = beyond.ablation(result, p, data, data_f, m_f)
     beyond.paper_number(result, p, data)
-    extra = beyond.beyond(ctx, result, p, data, errs)
-    beyond.claims_table(result, p, r)
-    ctx.progress("ckf: sensitivity of the claims to every reconstruction")
+    extra = beyond.beyond(ctx, result, p, data, m)
+    beyond.claims_table(result, p, {"live": m, "frozen": m_f, "plant2": extra["m2"]}, r)
+    ctx.progress("ckf: the claims and the printed cell over the plausible box")
     _sensitivity(ctx, result, p, r)
-    figures.save_all(ctx, result, p, data, data_f, extra)
+    figures.save_all(ctx, result, p, data, data_f, extra, ident)
     result.missing = qty.missing(result)
     return result
 
 
 def _sensitivity(ctx, result, p, r):
-    """Sweep every plausible range one at a time (quick: :data:`QUICK_SWEEP` only) and mark the claims."""
-    note = (f"each evaluation: the three cases over {p.sweep_runs} runs of {p.t_end:g} s on the main run's first "
-            "seeds (common random numbers)")
+    """Judge every claim and the printed cell over the plausible box (quick: :data:`QUICK_SWEEP` only), many points
+    per simulation (:func:`evaluate_many`), under both readings of the no-filter loop's identification."""
+    note = (f"the three loops over {p.sweep_runs} runs of {p.t_end:g} s on the main run's first "
+            "seeds (common random numbers; the same noise at every point), many points side by side on one "
+            "simulation's batch axis")
     sens = sensitivity.explore(evaluate, {"": p, "claims": r, "run": SweepRun(ctx.seed)}, jobs=ctx.jobs,
-                               names=QUICK_SWEEP if ctx.quick else None, **(sensitivity.QUICK if ctx.quick else {}), note=note)
+                               batch=evaluate_many, names=QUICK_SWEEP if ctx.quick else None,
+                               **(sensitivity.QUICK if ctx.quick else {}), note=note)
     sensitivity.apply(result, sens)
     ctx.save_figure(result, sensitivity.plot_sensitivity(result), "sensitivity.png",
                     caption=sensitivity.caption(result, note))

@@ -17,13 +17,15 @@ from .paper import READINGS
 
 __all__ = [
     "COMPARED",
+    "case_metrics",
+    "comparisons",
     "cost",
-    "filter_errors",
     "full_order_errors",
     "identification",
     "identification_bias",
     "judge_claims",
     "kf_mults",
+    "metrics",
     "missing",
     "noise_free_fit",
     "offset_terms",
@@ -33,8 +35,10 @@ __all__ = [
     "record",
     "record_claims",
     "record_fit",
+    "record_metrics",
     "rls_mults",
-    "table1",
+    "spans",
+    "tracks",
     "window",
 ]
 
@@ -69,67 +73,112 @@ def record(result, id, label, per_run, ok, unit="", paper=None, tolerance=None, 
                            runs_diverged=lost, unit=unit, tolerance=tolerance, note=note, **cell)
 
 
-def table1(result, data, p, prefix="", tag=""):
-    """Table 1: mean and variance of the true output and of the control over the steady stage, per case.
+def spans(p) -> dict:
+    """``{quantity: (t0, t1)}`` of the filter-error windows of the study ``p``.
 
-    Also the steady RMS error of the output about the reference (``<case>.y_rmse``, for the claims) and,
-    on the main run, the control's RMS without a filter beside the printed 1.27 (percentile policy).
+    The whole run, the transient 0-10 s (the paper's Fig. 6-7), the transient from when the filters are fed back
+    (``t_filter``-10 s: the one the transient claim is judged on) and the steady stage.
     """
-    stats = {}
-    for case in ("nofilter", "lpf", "ckf"):
-        d = data[case]
-        m = window(d["t"], p.t_steady)
-        y, u = d["y"][m], d["u"][m]
-        per = {"y_mean": y.mean(0), "y_var": y.var(0), "u_mean": u.mean(0), "u_var": u.var(0)}
-        for q, v in per.items():
+    from .loops import T_TRANSIENT
+
+    return {"filter_rmse": (0.0, np.inf), "filter_rmse_transient": (0.0, T_TRANSIENT),
+            "filter_rmse_transient_used": (p.t_filter, T_TRANSIENT), "filter_rmse_steady": (p.t_steady, np.inf)}
+
+
+def case_metrics(d, p, case) -> dict:
+    """Per-run numbers of one loop (arrays of one value per run): everything Table 1, the claims and the cell read.
+
+    From the loop's window sums (:class:`~analysis.ckf.loops.RunStats`, ``d["stats"]``, samples ``t_0 .. t_{N−1}``):
+    over the steady stage, output and control mean and variance and the output's RMS error about the reference;
+    the RMS error of the case's own filter (LPF, CKF) over :func:`spans`; in the LPF loop, of the LPF at half the
+    cut-off (never fed back) over the two transient windows. ``ok``: the runs that did not diverge.
+    """
+    from .loops import STATS_SUMS, T_TRANSIENT, stats_scale
+
+    t = d["t"][:-1]  # the samples the sums hold
+    S = dict(zip(STATS_SUMS, np.asarray(d["stats"], dtype=float).T / stats_scale(p)))
+    count = lambda a, b=np.inf: max(int(np.count_nonzero(window(t, a, b))), 1)
+    n_st = count(p.t_steady)
+    dy, du = S["dy_st"] / n_st, S["du_st"] / n_st
+    m = {"ok": np.asarray(d["ok"]), "y_mean": p.reference + dy, "y_var": np.maximum(S["dy2_st"] / n_st - dy * dy, 0.0),
+         "u_mean": p.reference + du, "u_var": np.maximum(S["du2_st"] / n_st - du * du, 0.0),
+         "y_rmse": np.sqrt(S["dy2_st"] / n_st)}
+    tr, used = count(0.0, T_TRANSIENT), count(p.t_filter, T_TRANSIENT)
+    if case in ("lpf", "ckf"):
+        m.update({"filter_rmse": np.sqrt(S["e2_all"] / t.size), "filter_rmse_transient": np.sqrt(S["e2_tr"] / tr),
+                  "filter_rmse_transient_used": np.sqrt(S["e2_used"] / used),
+                  "filter_rmse_steady": np.sqrt(S["e2_st"] / n_st)})
+    if case == "lpf":
+        m["half.filter_rmse_transient"] = np.sqrt(S["h2_tr"] / tr)
+        m["half.filter_rmse_transient_used"] = np.sqrt(S["h2_used"] / used)
+    return m
+
+
+def metrics(data, p) -> dict:
+    """``{case: case_metrics}`` of the three loops in ``data`` (``{case: signals}``)."""
+    return {case: case_metrics(data[case], p, case) for case in TABLE1_ROWS}
+
+
+def tracks(m, p, r=READINGS) -> bool:
+    """Whether a loop tracks: its steady output RMS error about the reference (mean over runs) below the bar."""
+    ok = m["ok"]
+    return bool(ok.any()) and float(np.mean(m["y_rmse"][ok])) < r.tracks * p.reference
+
+
+def row_label(p, case) -> str:
+    """How a loop is named in the labels: the no-filter loop says where its identification reads (the scorecard
+    shows the labels of a claim's evidence)."""
+    if case != "nofilter":
+        return TABLE1_ROWS[case]
+    from .loops import case_id
+
+    reads = {"raw": "its own measurement", "lpf": "an LPF output run beside the loop, not its own measurement",
+             "feedback": "its fed-back signal"}[case_id(p, case)]
+    return f"no filter (its identification reads {reads}: finding nofilter-identification)"
+
+
+def record_metrics(result, m, p, prefix="", tag="", r=READINGS):
+    """Record Table 1 (mean and variance of the true output and of the control over the steady stage, per case),
+    each loop's steady RMS error about the reference, the filter errors and, on the main run, the no-filter
+    control's RMS beside the printed 1.27 (percentile policy; measured only where the no-filter loop tracks)."""
+    for case, row in TABLE1_ROWS.items():
+        mc = m[case]
+        name = row_label(p, case)
+        for q, column in TABLE1_COLUMNS.items():
             what = {"y": "true output", "u": "control"}[q[0]] + (" mean" if "mean" in q else " variance")
             # the paper's Table 1 cell: printed, but its number was lost in extraction (paper None)
-            cell = {} if prefix else {"cell": f"Table 1 / {TABLE1_ROWS[case]} / {TABLE1_COLUMNS[q]}", "primary": True}
-            record(result, f"{prefix}{case}.{q}", f"{tag}{TABLE1_ROWS[case]}: {what} over {p.t_steady:g}-{p.t_end:g} s",
-                   v, d["ok"], **cell)
-        per["y_rmse"] = np.sqrt(np.mean((y - p.reference) ** 2, axis=0))
-        record(result, f"{prefix}{case}.y_rmse", f"{tag}{TABLE1_ROWS[case]}: RMS output error about the reference, "
-               f"{p.t_steady:g}-{p.t_end:g} s", per["y_rmse"], d["ok"])
-        stats[case] = per
-    if not prefix:
-        ok = data["nofilter"]["ok"]
-        rms = np.sqrt(stats["nofilter"]["u_var"])
-        record(result, "nofilter.u_rms", "no filter: RMS of the control about its mean (steady stage)", rms, ok,
-               paper=p.u_rms_nofilter, samples=rms[ok],
-               note=f"the paper's number comes from one noisy run: percentile policy over the runs; read as the RMS "
-                    f"about the mean ('the signal stays within the mean ± 3 RMS'); it scales as 1/(ĝ0 + μ) with the "
-                    f"reconstructed μ = {p.mu:g}",
-               cell="§3 text / control RMS without filter", primary=True)
-    return stats
-
-
-def filter_errors(result, data, p, prefix="", tag=""):
-    """RMS of (filtered − true output) per run: whole run, transient 0-10 s (and 2-10 s) and steady stage.
-
-    Also the LPF at half its cut-off re-run on the LPF case's measurements (``lpf_half.filter_rmse_transient``):
-    the paper's remark that a lower bandwidth deviates more in the transient.
-    """
-    from ctrl_analysis.estimators.lowpass import LowPassFilter
-
-    t = data["lpf"]["t"]
-    spans = {"filter_rmse": (0.0, np.inf), "filter_rmse_transient": (0.0, 10.0),
-             "filter_rmse_transient_used": (p.t_filter, 10.0), "filter_rmse_steady": (p.t_steady, np.inf)}
-    half = open_loop(LowPassFilter(p.lpf_omega / 2, p.lpf_order).digital(p.Ts), {"y_m": data["lpf"]["y_m"]}, "y_lpf")
-    sigs = (("lpf", "lpf", data["lpf"]["y_lpf"]), ("ckf", "ckf", data["ckf"]["y_ckf"]), ("lpf_half", "lpf", half))
-    out = {}
-    for name, case, sig in sigs:
-        d = data[case]
-        for q, (a, b) in spans.items():
-            if name == "lpf_half" and q != "filter_rmse_transient":
+            cell = {} if prefix else {"cell": f"Table 1 / {row} / {column}", "primary": True}
+            record(result, f"{prefix}{case}.{q}", f"{tag}{name}: {what} over {p.t_steady:g}-{p.t_end:g} s",
+                   mc[q], mc["ok"], **cell)
+        record(result, f"{prefix}{case}.y_rmse", f"{tag}{name}: RMS output error about the reference, "
+               f"{p.t_steady:g}-{p.t_end:g} s", mc["y_rmse"], mc["ok"])
+    for name, case, key in (("lpf", "lpf", ""), ("ckf", "ckf", ""), ("lpf_half", "lpf", "half.")):
+        mc = m[case]
+        for q, (a, b) in spans(p).items():
+            if key + q not in mc:
                 continue
-            m = window(t, a, b)
-            v = np.sqrt(np.mean((sig[m] - d["y"][m]) ** 2, axis=0))
-            who = (f"LPF at half the cut-off ({p.lpf_omega / 2:g} rad/s, re-run on the LPF case's measurements)"
-                   if name == "lpf_half" else TABLE1_ROWS[name])
-            record(result, f"{prefix}{name}.{q}", f"{tag}{who}: RMS filter error, {a:g}-{min(b, p.t_end):g} s", v,
-                   d["ok"])
-            out[(name, q)] = v
-    return out
+            who = (f"LPF at half the cut-off ({p.lpf_omega / 2:g} rad/s, beside the LPF loop on its measurement, not "
+                   "fed back)" if name == "lpf_half" else TABLE1_ROWS[name])
+            record(result, f"{prefix}{name}.{q}", f"{tag}{who}: RMS filter error, {a:g}-{min(b, p.t_end):g} s",
+                   mc[key + q], mc["ok"])
+    if not prefix:
+        mc = m["nofilter"]
+        ok = mc["ok"]
+        rms = np.sqrt(mc["u_var"])
+        label = f"{row_label(p, 'nofilter')}: RMS of the control about its mean (steady stage)"
+        cell = {"cell": "§3 text / control RMS without filter", "primary": True}
+        if not tracks(mc, p, r):
+            # the paper's 1.27 is the control of a no-filter loop that tracks ('accurate output'): a loop that loses
+            # the reference has no comparable number
+            result.quantity("nofilter.u_rms", label, None, paper=p.u_rms_nofilter, unit="",
+                            note=f"not measured: the no-filter loop does not track (steady RMS error "
+                                 f"{float(np.mean(mc['y_rmse'][ok])) if ok.any() else float('nan'):.3g} against "
+                                 f"{r.tracks:.0%} of the reference)", **cell)
+        else:
+            record(result, "nofilter.u_rms", label, rms, ok, paper=p.u_rms_nofilter, samples=rms[ok],
+                   note=f"the paper's number comes from one noisy run: percentile policy over the runs; read as the "
+                        f"RMS about the mean ('the signal stays within the mean ± 3 RMS'); it scales as 1/(ĝ0 + μ) "
+                        f"with the reconstructed μ = {p.mu:g}", **cell)
 
 
 def kf_mults(n: int) -> int:
@@ -164,6 +213,7 @@ def noise_free_fit(d, p, t0=None, t1=np.inf):
     Returns
     -------
     theta : ndarray, shape (runs, 3)
+        ``nan`` for a run that diverged.
     cond : float
         Largest column-scaled condition number of the batches.
     """
@@ -173,7 +223,11 @@ def noise_free_fit(d, p, t0=None, t1=np.inf):
     theta, cond = [], 0.0
     for b in range(d["y"].shape[1]):
         x, u = d["y"][:, b], d["u"][:, b]
-        fit = batch_least_squares(np.column_stack([x[k - 1], x[k - 2], u[k - 1]]), x[k], warn=False)
+        H, z = np.column_stack([x[k - 1], x[k - 2], u[k - 1]]), x[k]
+        if not (np.all(np.isfinite(H)) and np.all(np.isfinite(z))):  # a diverged run: no fit
+            theta.append(np.full(3, np.nan))
+            continue
+        fit = batch_least_squares(H, z, warn=False)
         theta.append(fit.theta)
         cond = max(cond, fit.report.cond_scaled)
     return np.array(theta), cond
@@ -258,8 +312,9 @@ def offset_terms(d, p):
             "e": mean(e)}
 
 
-def identification_bias(result, data_opts, p, r=READINGS):
-    """Bias of f̂1, f̂2, ĝ0 (steady-stage mean minus the noise-free fit) per identification option, CKF case."""
+def identification_bias(result, data_opts, p, r=READINGS, prefix="ident.", tag=""):
+    """Bias of f̂1, f̂2, ĝ0 (steady-stage mean minus the noise-free fit) per identification option, CKF case, and
+    the share of runs that track, per loop and over all three."""
     out = {}
     for opt, data in data_opts.items():
         d = data["ckf"]
@@ -267,15 +322,19 @@ def identification_bias(result, data_opts, p, r=READINGS):
         m = window(d["t"], p.t_steady)
         for i, name in enumerate(PARAMS):
             bias = d[name][m].mean(0) - ref[:, i]
-            record(result, f"ident.{opt}.{name}_bias", f"identification from '{opt}': bias of {name} (CKF case)",
-                   bias, d["ok"], note="steady-stage mean of the estimate minus the noise-free LS fit of the same run")
-            out[(opt, name)] = float(np.mean(bias))
-        track = np.mean([np.mean(np.abs(data[c]["y"][m].mean(0) - p.reference) < r.tracks * p.reference)
-                         for c in data])
-        result.quantity(f"ident.{opt}.tracking_fraction", f"identification from '{opt}': fraction of runs (all "
-                        f"cases) whose steady output mean is within {r.tracks:.0%} of the reference", float(track),
+            record(result, f"{prefix}{opt}.{name}_bias", f"{tag}identification from '{opt}': bias of {name} (CKF case)",
+                   bias, d["ok"] & np.isfinite(bias),
+                   note="steady-stage mean of the estimate minus the noise-free LS fit of the same run")
+            ok = d["ok"] & np.isfinite(bias)
+            out[(opt, name)] = float(np.mean(bias[ok])) if ok.any() else float("nan")
+        per = {c: np.abs(data[c]["y"][m].mean(0) - p.reference) < r.tracks * p.reference for c in data}
+        track = float(np.mean([np.mean(v) for v in per.values()]))
+        result.quantity(f"{prefix}{opt}.tracking_fraction", f"{tag}identification from '{opt}': fraction of runs (all "
+                        f"cases) whose steady output mean is within {r.tracks:.0%} of the reference", track,
                         runs=int(sum(data[c]["y"].shape[1] for c in data)), unit="")
-        out[(opt, "track")] = float(track)
+        out[(opt, "track")] = track
+        for c, v in per.items():
+            out[(opt, "track", c)] = float(np.mean(v))
     return out
 
 
@@ -326,92 +385,160 @@ def q_sweep(d, p, qs, runs=10):
     return {k: np.array(v) for k, v in out.items()}
 
 
-#: Comparisons behind the claims: claim id -> (quantity, case the CKF is compared with).
-COMPARED = {"transient": ("filter_rmse_transient", "lpf"), "steady": ("filter_rmse_steady", "lpf"),
-            "steady-output": ("y_var", "lpf"), "steady-control": ("u_var", "lpf")}
-def _not_tracking(result, p, r, prefix, cases) -> str | None:
+#: Comparisons behind the claims: claim id -> (per-run number, case the CKF is compared with, what it is).
+COMPARED = {"transient": ("filter_rmse_transient_used", "lpf", "filter error from when the filters are fed back to 10 s"),
+            "steady": ("filter_rmse_steady", "lpf", "filter error in the steady stage"),
+            "steady-output": ("y_var", "lpf", "steady output variance"),
+            "steady-control": ("u_var", "lpf", "steady control variance")}
+#: Which loops a claim compares: each must track for the comparison to be the paper's (else untestable).
+TRACKING = {"transient": ("ckf", "lpf"), "steady": ("ckf", "lpf"), "steady-output": ("ckf", "lpf"),
+            "steady-control": ("ckf", "lpf"), "smoother": ("ckf", "nofilter"), "lpf-bandwidth": ("lpf",)}
+
+
+def _share(wins, ok, z) -> dict:
+    """The share of the runs in ``ok`` where ``wins``, with the sign test's noise floor at ``z`` standard errors."""
+    n = int(np.count_nonzero(ok))
+    if n == 0:
+        return {"share": None, "runs": 0, "measure": None, "floor": None}
+    s = float(np.mean(wins[ok]))
+    return {"share": s, "runs": n, "measure": s - 0.5, "floor": z * 0.5 / np.sqrt(n)}
+
+
+def comparisons(m, p, r=READINGS) -> dict:
+    """Each claim judged per run, as the paper read it off one run: ``{claim id: dict}``.
+
+    ``share`` (of the runs, diverged ones excluded, in which the claim shows; the runs are paired: every loop sees
+    the same noise draw), ``measure`` = share − 1/2 and ``floor`` = ``r.z_significant`` standard errors of the share
+    (a sign test): the claim holds when the measure exceeds the floor, fails below minus it, and the runs cannot
+    tell in between. ``median`` is the median paired relative change (CKF against the other loop) or ratio.
+    """
+    z, out = r.z_significant, {}
+    for key, (q, other, _) in COMPARED.items():
+        a, b = m["ckf"], m[other]
+        ok = a["ok"] & b["ok"] & np.isfinite(a[q]) & np.isfinite(b[q])
+        rel = (a[q] - b[q]) / np.where(b[q] != 0, b[q], np.nan)
+        out[key] = {**_share(a[q] < b[q], ok, z), "median": float(np.median(rel[ok])) if ok.any() else None}
+    c, n = m["ckf"], m["nofilter"]
+    ok = c["ok"] & n["ok"]
+    ratio = c["u_var"] / np.where(n["u_var"] > 0, n["u_var"], np.nan)
+    wins = (ratio < r.smoother_ratio) & (c["y_rmse"] < r.accurate * p.reference)
+    out["smoother"] = {**_share(wins, ok, z), "median": float(np.median(ratio[ok])) if ok.any() else None}
+    ok = n["ok"]
+    out["nofilter-accurate"] = {**_share(n["y_rmse"] < r.accurate * p.reference, ok, z),
+                                "median": float(np.median(n["y_rmse"][ok])) if ok.any() else None}
+    lpf = m["lpf"]
+    q = "filter_rmse_transient"
+    ok = lpf["ok"]
+    rel = (lpf[f"half.{q}"] - lpf[q]) / lpf[q]
+    out["lpf-bandwidth"] = {**_share(lpf[f"half.{q}"] > lpf[q], ok, z),
+                            "median": float(np.median(rel[ok])) if ok.any() else None}
+    return out
+
+
+def _not_tracking(m, p, r, cases) -> str | None:
     """A note naming the cases whose loop does not track the reference (None when all track)."""
     bad = []
     for case in cases:
-        q = result.get(f"{prefix}{case}.y_rmse")
-        if q.value is None or q.value >= r.tracks * p.reference:
-            bad.append(f"{q.label} = {'—' if q.value is None else f'{q.value:.3g}'}")
+        if not tracks(m[case], p, r):
+            ok = m[case]["ok"]
+            v = float(np.mean(m[case]["y_rmse"][ok])) if ok.any() else None
+            bad.append(f"{TABLE1_ROWS[case]}: steady RMS error {'—' if v is None else f'{v:.3g}'}")
     if not bad:
         return None
     return (f"untestable: the loop does not track the reference ({'; '.join(bad)}, against {r.tracks:.0%} of the "
             "reference), so the filters are not compared in the working closed loop the paper describes")
 
 
-def judge_claims(result, p, r=READINGS, prefix=""):
-    """Judge the paper's claims on recorded quantities: ``{claim id: (holds, evidence ids, note)}``.
+def _share_text(c, what, paired=True) -> str:
+    if c["share"] is None:
+        return "no run to judge (all diverged)"
+    return (f"{what} in {c['share']:.0%} of {c['runs']} runs ({'paired, same noise; ' if paired else ''}sign test: the "
+            f"share must differ from 1/2 by more than {c['floor']:.2f})")
+
+
+def judge_claims(result, p, r=READINGS, prefix="", m=None):
+    """Judge the paper's claims: ``{claim id: (holds, evidence ids, note, measure, noise floor)}``.
 
     The same function judges the main run, the frozen-Φ ablation, the second plant and every evaluation of the
-    sensitivity sweep. Every bar is a reconstruction of ``r`` (:class:`.paper.Readings`): a comparison holds only
-    when the CKF is on the claimed side by more than ``r.z_significant`` standard errors of the difference of the
-    means.
+    plausible box. The paper reads each comparison off one run, so each is judged per run on the paired runs of
+    ``m`` (:func:`comparisons`); a comparison of loops that do not track is untestable. ``result`` holds the
+    recorded quantities (``prefix``) named as evidence; the cost claim reads them.
     """
+    comps = comparisons(m, p, r)
     out = {}
-    for key, (q, other) in COMPARED.items():
-        a, b = f"{prefix}ckf.{q}", f"{prefix}{other}.{q}"
-        ok, significant, numbers = _compare(result, a, b, r.z_significant)
-        broken = _not_tracking(result, p, r, prefix, ("ckf", other))
-        out[key] = ((None, [a, b], broken) if broken else
-                    (None if ok is None else bool(ok and significant), [a, b], numbers))
-    g = lambda i: result.get(prefix + i)
-    u_c, u_n, y_c, y_n = g("ckf.u_var"), g("nofilter.u_var"), g("ckf.y_rmse"), g("nofilter.y_rmse")
-    vals = [x.value for x in (u_c, u_n, y_c, y_n)]
-    if any(v is None for v in vals):
-        out["smoother"] = (None, [u_c.id, u_n.id, y_c.id, y_n.id], "a case has no value (all runs diverged)")
-    else:
-        holds = vals[0] < r.smoother_ratio * vals[1] and vals[2] < r.accurate * p.reference
-        note = (f"control variance CKF / no filter = {vals[0] / vals[1]:.3g} (needs < {r.smoother_ratio:g}); steady "
-                f"output RMS error about the reference CKF {vals[2]:.3g}, no filter {vals[3]:.3g} (the CKF's needs < "
-                f"{r.accurate:.1%} of the reference, {r.accurate * p.reference:g}, the bar of claim nofilter-accurate)")
-        broken = _not_tracking(result, p, r, prefix, ("ckf",))
-        out["smoother"] = (None if broken else holds, [u_c.id, u_n.id, y_c.id, y_n.id], broken or note)
-    v = y_n.value
-    out["nofilter-accurate"] = (None if v is None else v < r.accurate * p.reference, [y_n.id],
-                                "no value" if v is None else f"no filter: steady output RMS error about the reference "
-                                f"{v:.3g} against {r.accurate:.1%} of the reference, {r.accurate * p.reference:g}")
-    ok, significant, numbers = _compare(result, f"{prefix}lpf.filter_rmse_transient",
-                                        f"{prefix}lpf_half.filter_rmse_transient", r.z_significant)
-    broken = _not_tracking(result, p, r, prefix, ("lpf",))
-    out["lpf-bandwidth"] = (None if ok is None or broken else bool(ok and significant),
-                            [f"{prefix}lpf_half.filter_rmse_transient", f"{prefix}lpf.filter_rmse_transient"],
-                            broken or numbers)
+    for key, (q, other, what) in COMPARED.items():
+        c = comps[key]
+        ev = [f"{prefix}ckf.{q}", f"{prefix}{other}.{q}", f"{prefix}cmp.{key}.share", f"{prefix}cmp.{key}.median_change"]
+        broken = _not_tracking(m, p, r, TRACKING[key])
+        note = (_share_text(c, f"the CKF's {what} is smaller than the {TABLE1_ROWS[other]}'s")
+                + ("" if c["median"] is None else f"; median paired change {c['median']:+.1%}"))
+        out[key] = ((None, ev, broken, None, None) if broken or c["share"] is None else
+                    (c["share"] > 0.5, ev, note, c["measure"], c["floor"]))
+    c = comps["smoother"]
+    ev = [f"{prefix}ckf.u_var", f"{prefix}nofilter.u_var", f"{prefix}ckf.y_rmse", f"{prefix}cmp.smoother.share"]
+    broken = _not_tracking(m, p, r, TRACKING["smoother"])
+    note = (_share_text(c, f"the CKF's steady control variance is below {r.smoother_ratio:g} of the no-filter loop's "
+                           f"with its steady output RMS error below {r.accurate:.1%} of the reference")
+            + ("" if c["median"] is None else f"; median variance ratio CKF / no filter {c['median']:.3g}"))
+    out["smoother"] = ((None, ev, broken, None, None) if broken or c["share"] is None else
+                       (c["share"] > 0.5, ev, note, c["measure"], c["floor"]))
+    c = comps["nofilter-accurate"]
+    ev = [f"{prefix}nofilter.y_rmse", f"{prefix}cmp.nofilter-accurate.share"]
+    note = (_share_text(c, f"the no-filter loop's steady output RMS error is below {r.accurate:.1%} of the reference "
+                           f"({r.accurate * p.reference:g})", paired=False)
+            + ("" if c["median"] is None else f"; median RMS error {c['median']:.3g}"))
+    out["nofilter-accurate"] = ((None, ev, note, None, None) if c["share"] is None else
+                                (c["share"] > 0.5, ev, note, c["measure"], c["floor"]))
+    c = comps["lpf-bandwidth"]
+    ev = [f"{prefix}lpf_half.filter_rmse_transient", f"{prefix}lpf.filter_rmse_transient",
+          f"{prefix}cmp.lpf-bandwidth.share"]
+    broken = _not_tracking(m, p, r, TRACKING["lpf-bandwidth"])
+    note = (_share_text(c, "the LPF at half the cut-off deviates more over 0-10 s than the LPF (both on the LPF "
+                           "loop's measurement)")
+            + ("" if c["median"] is None else f"; median paired change {c['median']:+.1%}"))
+    out["lpf-bandwidth"] = ((None, ev, broken, None, None) if broken or c["share"] is None else
+                            (c["share"] > 0.5, ev, note, c["measure"], c["floor"]))
     ckf, full = result.get("cost.ckf_mults").value, result.get("cost.fullorder_mults").value
     known = result.get("cost.fullorder_known_mults").value
     note = (f"multiplications per step: full-order KF with the identification it would need {full:g} (knowing the "
             f"plant, without identification, {known:g}) vs CKF with its identification {ckf:g}: {full / ckf:.3g}x "
             f"(needs >= {r.cheaper_ratio:g}x)")
-    out["cheaper"] = (full / ckf >= r.cheaper_ratio, ["cost.ckf_mults", "cost.fullorder_mults"], note)
-    return out
+    out["cheaper"] = (full / ckf >= r.cheaper_ratio, ["cost.ckf_mults", "cost.fullorder_mults"], note, None, None)
+    return out, comps
 
 
-def record_claims(result, p, r=READINGS):
-    """Judge the paper's claims on the main quantities and record them (``result.claim``)."""
+def _exists(result, qid) -> bool:
+    try:
+        result.get(qid)
+    except KeyError:
+        return False
+    return True
+
+
+def record_claims(result, p, m, r=READINGS):
+    """Judge the paper's claims on the main runs ``m`` (:func:`metrics`) and record them with their per-run shares."""
     from .paper import CLAIMS
 
-    judged = judge_claims(result, p, r)
+    judged, comps = judge_claims(result, p, r, m=m)
+    for key, c in comps.items():
+        if c["share"] is None:
+            continue
+        what = {k: v[2] for k, v in COMPARED.items()}.get(key)
+        label = (f"share of runs in which the CKF's {what} is smaller than the LPF's" if what else
+                 {"smoother": "share of runs in which the CKF's control variance is below the smoothness bar of the "
+                              "no-filter loop's, its output accurate",
+                  "nofilter-accurate": "share of runs in which the no-filter loop's output is accurate",
+                  "lpf-bandwidth": "share of runs in which the LPF at half the cut-off deviates more, 0-10 s"}[key])
+        result.quantity(f"cmp.{key}.share", label, c["share"], runs=c["runs"], unit="",
+                        note=f"claim {key}: the sign test's noise floor is ±{c['floor']:.2f} about 1/2")
+        if key in COMPARED or key == "lpf-bandwidth":
+            result.quantity(f"cmp.{key}.median_change", f"median paired relative change, claim {key}",
+                            c["median"], runs=c["runs"], unit="")
     for c in CLAIMS:
-        holds, evidence, note = judged[c.id]
-        result.claim(c, holds, evidence=evidence, note=note)
+        holds, evidence, note, measure, floor = judged[c.id]
+        evidence = [e for e in evidence if _exists(result, e)]
+        result.claim(c, holds, evidence=evidence, note=note, measure=measure, noise_floor=floor)
     return judged
-
-
-def _compare(result, a, b, z):
-    """Whether ``a < b``, whether the difference exceeds ``z`` standard errors, and the numbers (with labels)."""
-    qa, qb = result.get(a), result.get(b)
-    if qa.value is None or qb.value is None:
-        return None, None, f"{qa.label} or {qb.label} has no value (all runs diverged)"
-    diff = qa.value - qb.value
-    na, nb = (max(q.runs - (q.runs_diverged or 0), 1) for q in (qa, qb))  # the runs the means are over
-    se = float(np.sqrt(qa.std**2 / na + qb.std**2 / nb))
-    significant = bool(abs(diff) > z * se)
-    sig = "significant" if significant else "NOT significant"
-    return qa.value < qb.value, significant, (f"{qa.label} = {qa.value:.4g} ± {qa.std:.2g} vs {qb.label} = "
-                                              f"{qb.value:.4g} ± {qb.std:.2g} (difference {diff:+.3g}, standard error "
-                                              f"{se:.2g}: {sig} at {z:g} SE)")
 
 
 def missing(result) -> list:
