@@ -97,7 +97,7 @@ def test_report_shows_the_arena_verdict_beside_the_study_claim(tmp_path):
 def test_cli_reads_the_arena_links_for_the_report(tmp_path):
     import json
 
-    from ctrl_analysis.cli import _arena_links
+    from ctrl_analysis.arena.report_section import arena_links as _arena_links
 
     assert _arena_links(tmp_path) == {}  # no arena run: no links
     arena = StudyResult(INFO)
