@@ -80,6 +80,11 @@ def _algorithm_text(c: dict) -> str:
     return "differs between the algorithms — " + ", ".join(parts)
 
 
+def _clip(label: str, limit: int = 90) -> str:
+    """A quantity's label cut to ``limit`` characters at a word (the scorecard's cells stay readable)."""
+    return label if len(label) <= limit else label[:limit].rsplit(" ", 1)[0].rstrip(",;:") + " …"
+
+
 def _rests_on(c: dict, labels: dict, max_evidence: int) -> str:
     parts = []
     drivers = [d for d in c.get("drivers") or [] if d.get("significant", d["S1"] >= 0.05)]
@@ -89,11 +94,14 @@ def _rests_on(c: dict, labels: dict, max_evidence: int) -> str:
         parts.append("no reconstruction drives it alone (no first-order index above its noise: interactions)")
     flip = c.get("nearest_flip")
     if flip:
-        where = ", ".join(f"`{k}` = {_short(v)}" for k, v in list(flip["point"].items())[:4]) or "the chosen values"
+        moved = list(flip["point"].items())
+        where = ", ".join(f"`{k}` = {_short(v)}" for k, v in moved[:3]) or "the chosen values"
+        if len(moved) > 3:
+            where += f" and {len(moved) - 3} more"
         parts.append(f"nearest flip ({flip['verdict_there']}) at {where}")
     elif c.get("support") and c["support"].get("holds") is not None and c["verdict"] in ("holds", "fails"):
         parts.append("no flip anywhere in the box" if c["support"]["holds"] in (0, 1) else "")
-    ev = [labels.get(e, e) for e in c.get("evidence") or []]
+    ev = [_clip(labels.get(e, e)) for e in c.get("evidence") or []]
     if ev:
         parts.append("on " + "; ".join(ev[:max_evidence]) + (f"; and {len(ev) - max_evidence} more"
                                                               if len(ev) > max_evidence else ""))
@@ -121,7 +129,7 @@ def _claim_rows(results: dict, claims: list, max_evidence: int, links: dict | No
     return rows
 
 
-def scorecard(results: dict, max_evidence: int = 3, links: dict | None = None) -> list[str]:
+def scorecard(results: dict, max_evidence: int = 2, links: dict | None = None) -> list[str]:
     """The paper's claims judged over the plausible box, then the project's own tests beyond the paper.
 
     Each row: statement, section, verdict (with the verdict at the chosen values where it differs, and the
