@@ -24,6 +24,7 @@ P(k=10.0, rule='b')
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import warnings
 
@@ -90,9 +91,10 @@ class Dimension:
         """
         return self.plausible.low is not None
 
-    @property
+    @functools.cached_property
     def levels(self) -> tuple:
-        """The alternatives of a discrete dimension, the chosen value first.
+        """The alternatives of a discrete dimension, the chosen value first (computed once: explore reads it for
+        every distance between two points).
 
         Returns
         -------
@@ -318,7 +320,11 @@ class Box:
             elif d.continuous:
                 diff = abs(a - b)
             else:
-                diff = 0.0 if _same(d.value(a), d.value(b)) else 0.5
+                # the levels are distinct, so two coordinates take the same value exactly when they fall on the
+                # same level (the index value() uses)
+                n = len(d.levels)
+                diff = 0.0 if min(int(min(max(a, 0.0), 1.0) * n), n - 1) == min(int(min(max(b, 0.0), 1.0) * n),
+                                                                                    n - 1) else 0.5
             total += diff * diff
         return math.sqrt(total)
 
