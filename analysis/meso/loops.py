@@ -42,6 +42,7 @@ __all__ = [
     "Row",
     "SituationRun",
     "build_loop",
+    "full_solved",
     "meso_rhs",
     "path_output",
     "pick",
@@ -335,6 +336,26 @@ class SituationRun:
     diverged: np.ndarray = None
     diverged_step: np.ndarray = None
     b0: float = 0.0
+    full_solved: np.ndarray = None      # (B,) batches in which situation 2's full regression (16) was solved
+
+
+def full_solved(rows, regression: str, log10_cond, rank) -> np.ndarray:
+    """Batches in which each run solved the full regression (16)/(10) (0 everywhere for the reduced (22)).
+
+    The literal and direct rules solve it every batch; the well-posed rule only where it passes the gate
+    (numerically full rank and column-scaled condition number <= the run's threshold, Theorem 1).
+    """
+    out = np.zeros(len(rows), dtype=int)
+    if regression != "full":
+        return out
+    for b, r in enumerate(rows):
+        lc, rk = log10_cond[:, b], rank[:, b]
+        ok = np.isfinite(lc)
+        if r.variant == "wellposed":
+            out[b] = int(np.sum(ok & (rk == 4) & (10.0 ** np.where(ok, lc, 0.0) <= r.threshold)))
+        elif r.variant in ("literal", "direct"):
+            out[b] = int(np.sum(ok))
+    return out
 
 
 def x3_true(sig, rows, paper, b0):
@@ -455,37 +476,71 @@ def _simulate_rows(sit, rows, T, paper, window, keep, exact, bound, progress) ->
         sl = slice(k0, k0 + n + 1)
         inputs = {"level": level[sl], "v": noise[sl], "r[0]": np.sin(t_all[sl]), "r[1]": np.cos(t_all[sl]),
                   "r[2]": -np.sin(t_all[sl])}
-        res = loop.simulate(n, inputs=inputs, x0=x0, runs=B, t0=t_all[k0], params=params, bound=bound,
-                            store_states=False, keep=_STORED)
-        new = res.diverged & ~out.diverged
-        out.diverged_step[new] = k0 + res.diverged_step[new]
-        out.diverged |= res.diverged
-        states = res.final_states
+        # a run that diverged is not stepped again (its records end where it diverged, _cut_at_divergence): the
+        # chunk runs the others only (``act``); the signals below are theirs, the states are all runs'
+        act = np.flatnonzero(~out.diverged)
+        sig, states, div, div_step = _step(loop, n, inputs, x0, params, act, B, t_all[k0], bound)
+        new = div & ~out.diverged
+        out.diverged_step[new] = k0 + div_step[new]
+        out.diverged |= div
         if n == N:  # a full batch ended at the chunk's last sample: solve it before the next sample
-            _end_batch(out, states, ident, (variants, thresholds), res.diverged, k0 + n, bound)
-        sig = {s: res[s][:n] for s in res.signals}
-        err, x3 = _chunk_errors(sig, t_all[k0:k0 + n], rows, paper, sit.b0)
-        w = in_window[k0:k0 + n]
-        for m in metrics:
-            out.sums[m] += err[m].sum(axis=0)
-            out.window_sums[m] += err[m][w].sum(axis=0)
-        _sup_dx3(out, x3, x3_last, t_all[k0:k0 + n], paper, t_from=2 * N * h)
-        x3_last = x3[-1]
+            _end_batch(out, states, ident, (variants, thresholds), div, k0 + n, bound)
+        if act.size:
+            err, x3 = _chunk_errors(sig, t_all[k0:k0 + n], [rows[i] for i in act], paper, sit.b0)
+            w = in_window[k0:k0 + n]
+            for m in metrics:
+                out.sums[m][act] += err[m].sum(axis=0)
+                out.window_sums[m][act] += err[m][w].sum(axis=0)
+            _sup_dx3(out, act, x3, None if x3_last is None else x3_last[act], t_all[k0:k0 + n], paper,
+                     t_from=2 * N * h)
+            x3_last = np.full(B, np.nan) if x3_last is None else x3_last
+            x3_last[act] = x3[-1]
+        col = {b: i for i, b in enumerate(act)}
         for b in keep:
             for s in _KEPT:
-                out.keep[b][s][k0:k0 + n] = sig[s][:, b]
+                out.keep[b][s][k0:k0 + n] = sig[s][:, col[b]] if b in col else np.nan
         if n == N:  # the batch's result is the next sample's output
             tb.append(t_all[k0 + n - 1])
             thb.append(states["lsm"][:, :4].copy())
             lc.append(states["lsm"][:, 4].copy())
             rk.append(states["lsm"][:, 5].copy())
-            _record_exact(out, sig, ident, rows, sit, exact)
+            _record_exact(out, sig, col, ident, rows, sit, exact)
         x0 = {name: np.nan_to_num(x, nan=0.0, posinf=0.0, neginf=0.0) for name, x in states.items()}
         k0 += n
         if progress is not None:
             progress(f"{sit.key}: t = {k0 * h:.0f} / {T:.0f} s")
+    # a diverged run's whole-run sums are not defined (its signals end where it diverged)
+    for m in metrics:
+        out.sums[m][out.diverged] = np.nan
     _finish(out, tb, thb, lc, rk, B)
+    out.full_solved = full_solved(rows, sit.regression, out.log10_cond, out.rank)
     return out
+
+
+def _step(loop, n, inputs, x0, params, act, B, t0, bound):
+    """One chunk of ``n`` samples for the runs ``act`` of ``B``.
+
+    Returns the signals of the runs ``act`` (``(n, len(act))`` each), the final states of all ``B`` runs (NaN
+    for the runs not stepped) and the divergence flags and steps of all ``B`` runs.
+    """
+    if act.size == B:
+        res = loop.simulate(n, inputs=inputs, x0=x0, runs=B, t0=t0, params=params, bound=bound,
+                            store_states=False, keep=_STORED)
+        return {s: res[s][:n] for s in res.signals}, res.final_states, res.diverged, res.diverged_step
+    div, div_step = np.zeros(B, dtype=bool), np.full(B, -1)
+    states = {name: np.full((B,) + np.shape(x)[1:], np.nan) for name, x in x0.items()}
+    if act.size == 0:
+        return {s: np.empty((n, 0)) for s in _STORED}, states, div, div_step
+    sub_in = {k: (v[:, act] if np.ndim(v) == 2 else v) for k, v in inputs.items()}
+    sub_params = {blk: {k: np.asarray(v)[act] for k, v in ps.items()} for blk, ps in params.items()}
+    res = loop.simulate(n, inputs=sub_in, x0={k: v[act] for k, v in x0.items()}, runs=act.size, t0=t0,
+                        params=sub_params, bound=bound, store_states=False, keep=_STORED)
+    for name, x in res.final_states.items():
+        if name not in states:
+            states[name] = np.full((B,) + x.shape[1:], np.nan)
+        states[name][act] = x
+    div[act], div_step[act] = res.diverged, res.diverged_step
+    return {s: res[s][:n] for s in res.signals}, states, div, div_step
 
 
 def _end_batch(out, states, ident, configs, chunk_diverged, k: int, bound: float) -> None:
@@ -528,7 +583,8 @@ def _join(outs, parts, rows) -> SituationRun:
         window_sums={m: np.concatenate([o.window_sums[m] for o in outs]) for m in first.window_sums},
         sup_dx3=cat("sup_dx3"), theta_batch=cat("theta_batch", 1), log10_cond=cat("log10_cond", 1),
         rank=cat("rank", 1), exact_cond=renumber("exact_cond"), exact_rank=renumber("exact_rank"),
-        keep=renumber("keep"), diverged=cat("diverged"), diverged_step=cat("diverged_step"))
+        keep=renumber("keep"), diverged=cat("diverged"), diverged_step=cat("diverged_step"),
+        full_solved=cat("full_solved"))
 
 
 def _finish(out, tb, thb, lc, rk, B: int) -> None:
@@ -542,21 +598,24 @@ def _finish(out, tb, thb, lc, rk, B: int) -> None:
 
 def _situation_noise(rows, K: int, paper: Paper) -> np.ndarray:
     """Measurement noise ``(K + 1, B)``: one draw per seed (ESO and MESO runs with one seed share it)."""
-    noise = np.zeros((K + 1, len(rows)))
     seeds = sorted({r.seed for r in rows if r.seed is not None})
-    if seeds:
-        drawn = draw_noise(seeds, K, uniform_noise(-1.0, 1.0))[:, :, 0]
-        for b, r in enumerate(rows):
-            if r.seed is not None:
-                noise[:K, b] = paper.noise_amp * drawn[:, seeds.index(r.seed)]
-    return noise
+    if not seeds:
+        return np.zeros((K + 1, len(rows)))
+    drawn = draw_noise(seeds, K, uniform_noise(-1.0, 1.0))[:, :, 0]
+    # column 0 of the padded draw is the noise-free run's zeros
+    padded = np.zeros((K + 1, len(seeds) + 1))
+    padded[:K, 1:] = paper.noise_amp * drawn
+    return np.ascontiguousarray(padded[:, [0 if r.seed is None else 1 + seeds.index(r.seed) for r in rows]])
 
 
-def _record_exact(out, sig, ident, rows, sit, exact) -> None:
-    """Exact (SVD) identifiability of the batch that just ended, for the runs in ``exact``."""
+def _record_exact(out, sig, col, ident, rows, sit, exact) -> None:
+    """Exact (SVD) identifiability of the batch that just ended, for the runs in ``exact`` (``col``: run -> column
+    of ``sig``; a run not stepped in this chunk gets NaN)."""
     for b in exact:
-        phi = ident.phi(np.stack([sig[s][:, b] for s in ident.inputs], axis=1))
-        ok = np.all(np.isfinite(phi))
+        ok = b in col
+        if ok:
+            phi = ident.phi(np.stack([sig[s][:, col[b]] for s in ident.inputs], axis=1))
+            ok = bool(np.all(np.isfinite(phi)))
         rep = exact_report(rows[b].variant, sit.regression, phi, rows[b].threshold) if ok else None
         out.exact_cond[b].append(rep.cond_scaled if ok else np.nan)
         out.exact_rank[b].append(rep.rank if ok else -1)
@@ -577,15 +636,15 @@ def _cut_at_divergence(out):
                 out.keep[b][s][k - 1:] = np.nan
 
 
-def _sup_dx3(out, x3, x3_last, t, paper, t_from):
-    """Update sup |Δx3/h| per run (M and N of (5)/(8)) from ``t_from`` on, skipping the θ4 step at t_step."""
+def _sup_dx3(out, act, x3, x3_last, t, paper, t_from):
+    """Update sup |Δx3/h| of the runs ``act`` (M and N of (5)/(8)) from ``t_from`` on, skipping the θ4 step at t_step."""
     full = x3 if x3_last is None else np.vstack([x3_last[None], x3])
     t_end = t[1:] if x3_last is None else t
     d = np.abs(np.diff(full, axis=0)) / paper.h
     d[(np.abs(t_end - paper.t_step) < 0.5 * paper.h) | (t_end < t_from)] = 0.0
     d[~np.isfinite(d)] = 0.0
     if d.size:
-        out.sup_dx3 = np.maximum(out.sup_dx3, d.max(axis=0))
+        out.sup_dx3[act] = np.maximum(out.sup_dx3[act], d.max(axis=0))
 
 
 def situation_rows(key: str, seeds, paper: Paper = PAPER) -> list:

@@ -213,6 +213,45 @@ def test_claim_verdicts_of_a_small_run_and_the_sweep_flips(tmp_path):
     assert "s2.theta_rel_error.end" in result.get_claim("s2-theta-converges").evidence
 
 
+def test_a_diverged_run_is_not_stepped_again_and_leaves_the_others_bit_for_bit():
+    """The Table-1 literal rule diverges in situation 2 (~12 s); from then on its run is left out of the batch: its
+    sums are NaN and its records end, and the other runs equal a batch without it, bit for bit."""
+    rows = [Row("meso", "literal", None), Row("meso", "wellposed", 4), Row("eso", "none", None)]
+    with_it = simulate_situation(SITUATIONS["s2"], rows, 24.0)
+    without = simulate_situation(SITUATIONS["s2"], rows[1:], 24.0)
+    assert with_it.diverged.tolist() == [True, False, False]
+    assert np.all(np.isnan([v[0] for v in with_it.sums.values()]))
+    assert np.all(np.isnan(with_it.theta_batch[-1, 0]))
+    for m in with_it.sums:
+        assert np.array_equal(with_it.sums[m][1:], without.sums[m]), m
+    assert np.array_equal(with_it.theta_batch[:, 1:], without.theta_batch)
+
+
+def test_batched_identification_equals_the_single_run_solve():
+    """identify() solves every run of a variant at once (solve_many); each run equals solve_batch to rounding, with
+    the same rank and condition number (the gate's decision), near-collinear batches included."""
+    from analysis.meso.identification import solve_many
+
+    rng = np.random.default_rng(2)
+    k, b0 = np.array([100.0, 20.0, 1.0]), 3.0
+    for regression, variants in (("reduced", ("wellposed", "literal", "no_const", "literal_no_const")),
+                                 ("full", ("wellposed", "literal", "direct"))):
+        G = []
+        for b in range(9):
+            xh1, xh2, xh3, u, f, kbar = _synthetic_batch(N=300, seed=b)
+            if b % 3 == 0:   # closed-loop-like: u in span{x1, x2, 1}, the full regression near-collinear
+                u = -(2.3 * xh1 - 1.6 * xh2 + 0.5) / 3.95 + 1e-3 * rng.normal(size=u.size)
+            phi = regressors(xh1, xh2, xh3, u, f, kbar)
+            G.append(phi.T @ phi / len(u))
+        G, cum, thr = np.array(G), rng.normal(size=(9, 4)), np.full(9, 100.0)
+        for v in variants:
+            th, cond, rank = solve_many(v, regression, cum, k, b0, thr, G)
+            for b in range(9):
+                one, rep = solve_batch(v, regression, cum[b], k, b0, thr[b], G=G[b])
+                np.testing.assert_allclose(th[b], one, rtol=1e-9, atol=1e-9)
+                assert rank[b] == rep.rank and cond[b] == pytest.approx(rep.cond_scaled, rel=1e-12)
+
+
 def _model_term(t, x_hat, u, params=None):
     # (29) XᵀΘ with X = [x̂1, x̂2, u, 1]; u = [y, u, θ1, θ2, θ3, θ4]
     return u[:, 2] * x_hat[:, 0] + u[:, 3] * x_hat[:, 1] + u[:, 4] * u[:, 1] + u[:, 5]
