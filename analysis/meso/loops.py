@@ -382,7 +382,7 @@ def x3_true(sig, rows, paper, b0):
 
 
 def _chunk_errors(sig, t, rows, paper, b0):
-    """|e| of every table metric at the chunk's samples, each (n, B)."""
+    """|e| of every table metric at the chunk's samples, each (n, B) (the reference of :func:`_accumulate`)."""
     x3 = x3_true(sig, rows, paper, b0)
     return {
         "est_x1": np.abs(sig["x[0]"] - sig["xhat[0]"]),
@@ -392,6 +392,67 @@ def _chunk_errors(sig, t, rows, paper, b0):
         "track_x1": np.abs(np.sin(t)[:, None] - sig["x[0]"]),
         "track_x2": np.abs(np.cos(t)[:, None] - sig["x[1]"]),
     }, x3
+
+
+#: the metrics of :func:`_chunk_errors`, in the order of :func:`_accumulate`'s rows
+METRIC_ORDER = ("est_x1", "est_x2", "est_x3", "est_x3_no_bu", "track_x1", "track_x2")
+
+
+def _accumulate(x1, x2, xh1, xh2, xh3, u, level, th0, th1, th2, th3, t, w, b, b0, theta1, theta2, bb, t_step, h,
+                t_from, prev, has_prev, sums, wsums, sup):
+    """One pass over a chunk (``n`` samples, ``A`` runs): the |e| sums of :func:`_chunk_errors` (whole run and
+    window ``w``) and sup |Δx3/h| from ``t_from`` on (M, N of (5)/(8)), the θ4 step excluded, added in place; ``prev`` holds each run's last x3.
+
+    Signals are ``(n, A)`` (any strides); ``b`` (A,) the plant gains; ``bb = paper.b − b0``. Compiled with numba
+    (:func:`_accumulator`); the same function runs in Python.
+    """
+    n, A = x1.shape
+    for k in range(n):
+        r1, r2, tk = np.sin(t[k]), np.cos(t[k]), t[k]
+        skip = abs(tk - t_step) < 0.5 * h or tk < t_from
+        for j in range(A):
+            x2dot = theta1 * x1[k, j] + theta2 * x2[k, j] + level[k, j] + b[j] * u[k, j]
+            f = th0[k, j] * xh1[k, j] + th1[k, j] * xh2[k, j] + th2[k, j] * u[k, j] + th3[k, j]
+            x3 = x2dot - b0 * u[k, j] - f
+            e0 = abs(x1[k, j] - xh1[k, j])
+            e1 = abs(x2[k, j] - xh2[k, j])
+            e2 = abs(x3 - xh3[k, j])
+            e3 = abs(x3 - bb * u[k, j] - xh3[k, j])
+            e4 = abs(r1 - x1[k, j])
+            e5 = abs(r2 - x2[k, j])
+            sums[0, j] += e0
+            sums[1, j] += e1
+            sums[2, j] += e2
+            sums[3, j] += e3
+            sums[4, j] += e4
+            sums[5, j] += e5
+            if w[k]:
+                wsums[0, j] += e0
+                wsums[1, j] += e1
+                wsums[2, j] += e2
+                wsums[3, j] += e3
+                wsums[4, j] += e4
+                wsums[5, j] += e5
+            if (k > 0 or has_prev) and not skip:
+                d = abs(x3 - prev[j]) / h
+                if np.isfinite(d) and d > sup[j]:
+                    sup[j] = d
+            prev[j] = x3
+
+
+_ACC: list = []
+
+
+def _accumulator():
+    """:func:`_accumulate` compiled by numba (once per process; numba's disk cache keeps it across processes)."""
+    if not _ACC:
+        import numba
+
+        try:
+            _ACC.append(numba.njit(cache=True, error_model="numpy")(_accumulate))
+        except RuntimeError:  # no writable cache next to the source: compile, don't cache
+            _ACC.append(numba.njit(cache=False, error_model="numpy")(_accumulate))
+    return _ACC[0]
 
 
 _KEPT = ("x[0]", "x[1]", "xhat[0]", "xhat[1]", "xhat[2]", "u", "theta[0]", "theta[1]", "theta[2]", "theta[3]")
@@ -459,7 +520,7 @@ def _simulate_rows(sit, rows, T, paper, window, keep, exact, bound, progress) ->
     ident = loop.placed[3].block
     variants, thresholds = [r.variant for r in rows], [r.threshold for r in rows]
     in_window = (t_all[:K] >= window[0]) & (np.arange(K) < round(window[1] / h))
-    metrics = ("est_x1", "est_x2", "est_x3", "est_x3_no_bu", "track_x1", "track_x2")
+    metrics = METRIC_ORDER
     out = SituationRun(rows=list(rows), t=t_all[:K], sums={m: np.zeros(B) for m in metrics},
                        window_sums={m: np.zeros(B) for m in metrics}, n_window=int(in_window.sum()),
                        sup_dx3=np.zeros(B), t_batch=np.empty(0), theta_batch=np.empty((0, B, 4)),
@@ -470,7 +531,8 @@ def _simulate_rows(sit, rows, T, paper, window, keep, exact, bound, progress) ->
     out.exact_rank = {b: [] for b in exact}
     # per-run initial states of plant and observer (Row.x0, Row.xhat0); the other blocks start at their defaults
     x0 = {"plant": np.array([r.x0 for r in rows], dtype=float), "observer": np.array([r.xhat0 for r in rows], dtype=float)}
-    k0, x3_last, tb, thb, lc, rk = 0, None, [], [], [], []
+    k0, x3_last, tb, thb, lc, rk = 0, np.full(B, np.nan), [], [], [], []
+    b_plant = np.array([r.b_plant for r in rows], dtype=float)
     while k0 < K:
         n = min(N, K - k0)
         sl = slice(k0, k0 + n + 1)
@@ -486,15 +548,17 @@ def _simulate_rows(sit, rows, T, paper, window, keep, exact, bound, progress) ->
         if n == N:  # a full batch ended at the chunk's last sample: solve it before the next sample
             _end_batch(out, states, ident, (variants, thresholds), div, k0 + n, bound)
         if act.size:
-            err, x3 = _chunk_errors(sig, t_all[k0:k0 + n], [rows[i] for i in act], paper, sit.b0)
-            w = in_window[k0:k0 + n]
-            for m in metrics:
-                out.sums[m][act] += err[m].sum(axis=0)
-                out.window_sums[m][act] += err[m][w].sum(axis=0)
-            _sup_dx3(out, act, x3, None if x3_last is None else x3_last[act], t_all[k0:k0 + n], paper,
-                     t_from=2 * N * h)
-            x3_last = np.full(B, np.nan) if x3_last is None else x3_last
-            x3_last[act] = x3[-1]
+            # the table sums, the ε window's sums and sup |Δx3/h| of the stepped runs, in one compiled pass
+            sums, wsums = np.zeros((6, act.size)), np.zeros((6, act.size))
+            sup, prev = out.sup_dx3[act], x3_last[act]
+            _accumulator()(sig["x[0]"], sig["x[1]"], sig["xhat[0]"], sig["xhat[1]"], sig["xhat[2]"], sig["u"],
+                           sig["level"], sig["theta[0]"], sig["theta[1]"], sig["theta[2]"], sig["theta[3]"],
+                           t_all[k0:k0 + n], in_window[k0:k0 + n], b_plant[act], sit.b0, paper.theta1, paper.theta2,
+                           paper.b - sit.b0, paper.t_step, h, 2 * N * h, prev, k0 > 0, sums, wsums, sup)
+            for i, m in enumerate(METRIC_ORDER):
+                out.sums[m][act] += sums[i]
+                out.window_sums[m][act] += wsums[i]
+            out.sup_dx3[act], x3_last[act] = sup, prev
         col = {b: i for i, b in enumerate(act)}
         for b in keep:
             for s in _KEPT:
@@ -634,17 +698,6 @@ def _cut_at_divergence(out):
         if b in out.keep:
             for s in _KEPT:
                 out.keep[b][s][k - 1:] = np.nan
-
-
-def _sup_dx3(out, act, x3, x3_last, t, paper, t_from):
-    """Update sup |Δx3/h| of the runs ``act`` (M and N of (5)/(8)) from ``t_from`` on, skipping the θ4 step at t_step."""
-    full = x3 if x3_last is None else np.vstack([x3_last[None], x3])
-    t_end = t[1:] if x3_last is None else t
-    d = np.abs(np.diff(full, axis=0)) / paper.h
-    d[(np.abs(t_end - paper.t_step) < 0.5 * paper.h) | (t_end < t_from)] = 0.0
-    d[~np.isfinite(d)] = 0.0
-    if d.size:
-        out.sup_dx3[act] = np.maximum(out.sup_dx3[act], d.max(axis=0))
 
 
 def situation_rows(key: str, seeds, paper: Paper = PAPER) -> list:

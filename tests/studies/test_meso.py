@@ -227,6 +227,35 @@ def test_a_diverged_run_is_not_stepped_again_and_leaves_the_others_bit_for_bit()
     assert np.array_equal(with_it.theta_batch[:, 1:], without.theta_batch)
 
 
+def test_compiled_accumulation_equals_the_numpy_errors():
+    """The chunk's table sums, window sums and sup |Δx3/h| in one compiled pass (_accumulate) = the numpy reference
+    (_chunk_errors, the sup of the finite differences outside the θ4 step and before t_from skipped), on strided
+    signals as the loop returns them, NaN included."""
+    from analysis.meso import loops
+
+    rng = np.random.default_rng(4)
+    n, B, S = 400, 5, len(loops._STORED)
+    base = rng.normal(size=(n + 1, B, S))
+    base[300:, 2, 0] = np.nan                                       # a run that diverges in the chunk
+    sig = {s: base[:n, :, i] for i, s in enumerate(loops._STORED)}
+    rows = [Row("eso", "none", None, b_plant=b) for b in (3.95, 4.9, 3.95, 3.0, 3.95)]
+    t = 29.1 + PAPER.h * np.arange(n)                               # the θ4 step at 30 s inside the chunk
+    w = (t >= 29.4) & (t < 29.7)
+    sums, wsums, sup, prev = np.zeros((6, B)), np.zeros((6, B)), np.zeros(B), rng.normal(size=B)
+    loops._accumulator()(sig["x[0]"], sig["x[1]"], sig["xhat[0]"], sig["xhat[1]"], sig["xhat[2]"], sig["u"],
+                         sig["level"], sig["theta[0]"], sig["theta[1]"], sig["theta[2]"], sig["theta[3]"], t, w,
+                         np.array([r.b_plant for r in rows]), 3.0, PAPER.theta1, PAPER.theta2, PAPER.b - 3.0,
+                         PAPER.t_step, PAPER.h, 29.2, prev.copy(), True, sums, wsums, sup)
+    err, x3 = loops._chunk_errors(sig, t, rows, PAPER, 3.0)
+    for i, m in enumerate(loops.METRIC_ORDER):
+        np.testing.assert_allclose(sums[i], err[m].sum(axis=0), rtol=1e-12)
+        np.testing.assert_allclose(wsums[i], err[m][w].sum(axis=0), rtol=1e-12)
+    d = np.abs(np.diff(np.vstack([prev[None], x3]), axis=0)) / PAPER.h
+    d[(np.abs(t - PAPER.t_step) < 0.5 * PAPER.h) | (t < 29.2)] = 0.0
+    np.testing.assert_allclose(sup, np.nanmax(np.where(np.isfinite(d), d, 0.0), axis=0), rtol=1e-12)
+    assert np.isnan(sums[0, 2]) and np.isfinite(sums[0, 1])
+
+
 def test_batched_identification_equals_the_single_run_solve():
     """identify() solves every run of a variant at once (solve_many); each run equals solve_batch to rounding, with
     the same rank and condition number (the gate's decision), near-collinear batches included."""
