@@ -8,7 +8,6 @@ situation-1 runs in :mod:`.quantities`).
 from __future__ import annotations
 
 import functools
-
 from dataclasses import dataclass
 
 import control as ct
