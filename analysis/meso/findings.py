@@ -150,11 +150,11 @@ def _identifiability(result, s1, s2, horizons, gate) -> None:
         f"batch {_summary(c_on)}. "
         f"The well-posed identification therefore converges to the trajectory-equivalent Θ_eq = {eq.round(3).tolist()} "
         f"(θ3·u folded into x1, x2, 1), reached: {np.round(th_fin, 3).tolist()} (mean of {len(iw_on)} noise runs), not "
-        f"to the true {true_end.tolist()}; {passes[PAPER.cond_threshold]} of {gate['total']} situation-2 batches "
+        f"to the true {np.round(true_end, 6).tolist()}; {passes[PAPER.cond_threshold]} of {gate['total']} situation-2 batches "
         f"passed the identifiability gate (cond <= {PAPER.cond_threshold:g}"
         + (": one per run, the start-up batch" if passes[PAPER.cond_threshold] == len(iw_on) + 1
            and np.all(s2.full_solved[iw_on] == 1) else "")
-        + f"), θ3 held in between; its final value {th_fin[2]:.3g} (see identifiability-threshold). The direct "
+        + f"), θ3 held otherwise (mean final value {th_fin[2]:.3g}; see identifiability-threshold). The direct "
         "regression (10) on [x̂1 x̂2 u 1] is well conditioned only because of the noise, and biased by it (u carries "
         f"−x̂3/b0, the same noise as the regressand): θ3 goes {np.array2string(dir_th, precision=2)} per batch; "
         f"{_div_text(s2, idir, 'noise on')}, {_div_text(s2, idir_off, 'noise off')}.",

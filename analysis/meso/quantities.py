@@ -277,7 +277,7 @@ def theta_final(result: StudyResult, key: str, sim: SituationRun, horizon: float
     mean, std, n_ok = mean_std(sim.theta_batch[-1, idx], ~sim.diverged[idx])
     true_end = theta_truth(key, [horizon], paper)[0]
     note = (f"Fig. {4 if key == 's1' else 6} plots Θ converging to the truth; the paper prints no value. "
-            f"Truth Θ = {true_end.tolist()} (at t = {horizon:g} s)")
+            f"Truth Θ = {np.round(true_end, 6).tolist()} (at t = {horizon:g} s)")
     if key == "s2":
         note += (f"; trajectory-equivalent Θ_eq = {equivalent_theta(true_end, plant_b(key, paper)).round(4).tolist()} "
                  "(θ3 not identifiable in closed loop)")
@@ -338,7 +338,7 @@ def theta_errors(result: StudyResult, key: str, sim: SituationRun, paper: Paper 
         out[tag] = per_run
         mean, std, n_ok = mean_std(per_run, ok & np.isfinite(per_run))
         note = (f"{when}, ending at t = {sim.t_batch[k] + PAPER.h:.0f} s; relative error over {names} against the "
-                f"truth {truth[list(cols)].tolist()}; noise {'on' if on else 'off'}")
+                f"truth {np.round(truth[list(cols)], 6).tolist()}; noise {'on' if on else 'off'}")
         if key == "s2":
             eq = equivalent_theta(truth, plant_b(key, paper))
             e_eq = theta_rel_error(sim.theta_batch[k, idx], eq, cols)
