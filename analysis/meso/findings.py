@@ -51,38 +51,46 @@ def _div_text(sim, i, what) -> str:
 
 
 def noise_free_counts(result: StudyResult) -> dict:
-    """ESO cells agreeing with the paper, noise on (percentile policy) / off (tolerance); x3 of Table 3 against the
-    paper's own reference (without (b − b0)u)."""
-    def cell(key, off, m):
-        if key == "s2" and m == "est_x3":
-            m = "est_x3_no_bu"
-        return result.get(f"{key}.{'nonoise.' if off else ''}eso.{m}")
-    return {nz: sum(cell(k, nz == "off", m).verdict == "agrees" for k in ("s1", "s2") for m in METRICS)
-            for nz in ("on", "off")}
+    """ESO cells closer to the noise-free run than to the noisy runs' mean, and the median deviations of each reading.
 
-
-def _tables_noise(result, tol) -> None:
-    n = noise_free_counts(result)
-    lines, err_on, err_off = [], [], []
+    x3 of Table 3 is read against the paper's own reference (without (b − b0)u). Each ESO cell's deviation is
+    ``|value / paper − 1|``; no allowance decides anything here.
+    """
+    off, on, closer = [], [], 0
     for key in ("s1", "s2"):
         for m in METRICS:
             mm = "est_x3_no_bu" if key == "s2" and m == "est_x3" else m
-            on, off = result.get(f"{key}.eso.{mm}"), result.get(f"{key}.nonoise.eso.{mm}")
-            err_off.append(abs(off.value / off.paper - 1))
-            err_on.append(abs(on.value / on.paper - 1))
+            a, b = result.get(f"{key}.nonoise.eso.{mm}"), result.get(f"{key}.noise.eso.{mm}")
+            d_off, d_on = abs(a.value / a.paper - 1), abs(b.value / b.paper - 1)
+            off.append(d_off)
+            on.append(d_on)
+            closer += d_off < d_on
+    return {"closer_off": int(closer), "cells": len(off), "median_off": float(np.median(off)),
+            "median_on": float(np.median(on)), "max_off": float(np.max(off))}
+
+
+def _tables_noise(result) -> dict:
+    n = noise_free_counts(result)
+    lines = []
+    for key in ("s1", "s2"):
+        for m in METRICS:
+            mm = "est_x3_no_bu" if key == "s2" and m == "est_x3" else m
+            on, off = result.get(f"{key}.noise.eso.{mm}"), result.get(f"{key}.nonoise.eso.{mm}")
             pct = "" if on.percentile is None else f", the paper at the {on.percentile:.0f}th percentile of the runs"
-            lines.append(f"{key} ESO {m}: paper {on.paper:.4g}, noise off {_fmt(off.value)}, noise on "
-                         f"{_fmt(on.value)}{pct}")
+            lines.append(f"{key} ESO {m}: paper {on.paper:.4g}, noise off {_fmt(off.value)} "
+                         f"({100 * (off.value / off.paper - 1):+.1f} %), noise on {_fmt(on.value)}{pct}")
     result.finding(
         "tables-are-noise-free",
         ("The ESO rows of Tables 2 and 3 match the noise-free simulation, not the one with the stated 0.002·U[-1,1] "
-         "measurement noise. " if n["off"] > n["on"] else "The ESO rows of Tables 2 and 3 do not match the "
-         "noise-free simulation better than the noisy one. ")
-        + f"The ESO has no identification, so only the initial state and the integrator are reconstructed: its "
-        f"10 cells lie within {tol:.0%} of the noise-free run in {n['off']}/10 (median deviation "
-        f"{100 * np.median(err_off):.1f} %), while the paper's value lies inside the central 95 % of the noisy runs "
-        f"in {n['on']}/10 (median deviation of the runs' mean {100 * np.median(err_on):.0f} %; x3 of Table 3 against "
-        "the paper's own reference, see table3-x3-reference). Per cell: " + "; ".join(lines) + ".",
+         "measurement noise" if n["closer_off"] > n["cells"] / 2 else "The ESO rows of Tables 2 and 3 do not match "
+         "the noise-free simulation better than the noisy one")
+        + f": the ESO has no identification, so only the initial states and the integrator are reconstructed; "
+        f"{n['closer_off']} of its {n['cells']} cells lie closer to the noise-free run (median deviation "
+        f"{100 * n['median_off']:.1f} %, at most {100 * n['max_off']:.0f} %) than to the noisy runs' mean (median "
+        f"deviation {100 * n['median_on']:.0f} %; x3 of Table 3 against the paper's own reference, see "
+        "table3-x3-reference). The study therefore reads the tables as noise-free (reconstruction table_noise, the "
+        "noise-on reading is the other value of its box); a deterministic cell is judged at its printed digits, so a "
+        "cell a few per cent off differs unless some plausible point lands on it. Per cell: " + "; ".join(lines) + ".",
         evidence=lines)
     return n
 
@@ -142,8 +150,11 @@ def _identifiability(result, s1, s2, horizons, gate) -> None:
         f"batch {_summary(c_on)}. "
         f"The well-posed identification therefore converges to the trajectory-equivalent Θ_eq = {eq.round(3).tolist()} "
         f"(θ3·u folded into x1, x2, 1), reached: {np.round(th_fin, 3).tolist()} (mean of {len(iw_on)} noise runs), not "
-        f"to the true {true_end.tolist()}; {passes[PAPER.cond_threshold]} of {gate['total']} situation-2 batches "
-        f"passed the identifiability gate (cond <= {PAPER.cond_threshold:g}), so θ3 stayed at its initial 0. The direct "
+        f"to the true {np.round(true_end, 6).tolist()}; {passes[PAPER.cond_threshold]} of {gate['total']} situation-2 batches "
+        f"passed the identifiability gate (cond <= {PAPER.cond_threshold:g}"
+        + (": one per run, the start-up batch" if passes[PAPER.cond_threshold] == len(iw_on) + 1
+           and np.all(s2.full_solved[iw_on] == 1) else "")
+        + f"), θ3 held otherwise (mean final value {th_fin[2]:.3g}; see identifiability-threshold). The direct "
         "regression (10) on [x̂1 x̂2 u 1] is well conditioned only because of the noise, and biased by it (u carries "
         f"−x̂3/b0, the same noise as the regressand): θ3 goes {np.array2string(dir_th, precision=2)} per batch; "
         f"{_div_text(s2, idir, 'noise on')}, {_div_text(s2, idir_off, 'noise off')}.",
@@ -153,23 +164,33 @@ def _identifiability(result, s1, s2, horizons, gate) -> None:
 
 def _gate(result, s2, gate) -> None:
     grid, passes = gate["grid"], gate["passes"]
-    lowest = float(np.min(gate["cond"]))
+    on = pick(s2.rows, "meso", "wellposed", True)
+    base = pick(s2.rows, "meso", "wellposed", False)[0]
+    first = np.concatenate([10.0 ** s2.log10_cond[0, on], s2.exact_cond[base][:1]])
+    later = np.concatenate([10.0 ** s2.log10_cond[1:, on].ravel(), s2.exact_cond[base][1:]])
+    first, later = first[np.isfinite(first)], later[np.isfinite(later)]
     reruns = []
     for g, i in gate["reruns"].items():
         th = s2.theta_batch[-1, i]
-        reruns.append(f"threshold {g:g}: " + (f"diverges at t = {first_divergence(s2, [i]):.2f} s" if s2.diverged[i]
-                      else f"Θ_final = {np.round(th, 3).tolist()}, track_x1 {_fmt(result.get(f's2.gate{g:g}.track_x1').value)}"))
-    base = pick(s2.rows, "meso", "wellposed", False)[0]
+        reruns.append(f"threshold {g:g}: (16) solved in {int(s2.full_solved[i])} batches, " + (
+            f"diverges at t = {first_divergence(s2, [i]):.2f} s" if s2.diverged[i] else
+            f"Θ_final = {np.round(th, 3).tolist()}, track_x1 {_fmt(result.get(f's2.gate{g:g}.track_x1').value)}"))
     result.finding(
         "identifiability-threshold",
-        f"The count '{passes[list(grid).index(PAPER.cond_threshold)]} of {gate['total']} batches pass' in situation 2 "
-        f"depends on the chosen gate: the lowest column-scaled condition number of any situation-2 batch is "
-        f"{lowest:.4g} (the start-up batch), so thresholds {list(grid)} let "
-        f"{', '.join(str(int(p)) for p in passes)} batches through. Re-running the noise-free well-posed MESO with a "
-        f"gate that admits the start-up batch: " + "; ".join(reruns) + f" (threshold {PAPER.cond_threshold:g}: Θ_final = "
-        f"{np.round(s2.theta_batch[-1, base], 3).tolist()}). {int(np.sum(gate['cond'] <= 2 * PAPER.cond_threshold))} "
-        f"of {gate['total']} batches have a condition number below twice the threshold.",
-        evidence={"thresholds": list(grid), "passes": passes})
+        "The identifiability gate decides whether situation 2 runs the paper's identification at all. Column-scaled "
+        f"condition numbers of the full regression (16) (well-posed runs at the chosen threshold, noise on and off): "
+        f"the start-up batch {_summary(first)}, every later batch {_summary(later)} — the later batches are "
+        f"near-collinear (situation2-not-identifiable). Thresholds {list(grid)} let "
+        f"{', '.join(str(int(p)) for p in passes)} of {gate['total']} batches through. At the chosen "
+        f"{PAPER.cond_threshold:g}, (16) is solved in "
+        + ("the start-up batch only" if s2.full_solved[base] == 1 else f"{int(s2.full_solved[base])} batches")
+        + f" (noise off; Θ_final = {np.round(s2.theta_batch[-1, base], 3).tolist()}). Noise-free "
+        "reruns: " + "; ".join(reruns) + f". So below ≈ {np.min(first):.4g} the paper's identification never runs "
+        "(the box judges the situation-2 claims untestable there)" + "".join(
+            f"; the rerun at {g:g}, which admits later batches, diverges" for g, i in gate["reruns"].items()
+            if s2.diverged[i] and s2.full_solved[i] > 1) + ".",
+        evidence={"thresholds": list(grid), "passes": passes, "cond_first": _summary(first),
+                  "cond_later": _summary(later)})
 
 
 def _x3_reference(result, s2) -> None:
@@ -238,14 +259,20 @@ def _conclusion3_and_mn(result, sims, out) -> None:
 
 
 def _summary_findings(result, sims) -> None:
-    better = {k: [m for m in METRICS if (result.get(f"{k}.nonoise.meso.{m}").value or np.inf)
-                  < (result.get(f"{k}.nonoise.eso.{m}").value or 0)] for k in ("s1", "s2")}
+    def better(tag, key):
+        return [m for m in METRICS if (result.get(f"{key}.{tag}meso.{m}").value or np.inf)
+                < (result.get(f"{key}.{tag}eso.{m}").value or 0)]
+
+    off = {k: better("nonoise.", k) for k in ("s1", "s2")}
+    on = {k: better("noise.", k) for k in ("s1", "s2")}
+    runs = result.get("s1.noise.eso.est_x1").runs
     result.finding(
         "meso-better-than-eso",
-        f"Without measurement noise the MESO (well-posed identification) beats the ESO at equal ε in "
-        f"{len(better['s1'])}/5 columns of Table 2 and {len(better['s2'])}/5 of Table 3, as with noise (claims "
-        f"s1-meso-better, s2-meso-better). Situation 1: {', '.join(better['s1']) or 'none'}; situation 2: "
-        f"{', '.join(better['s2']) or 'none'}; in situation 2 this needs only the trajectory-equivalent model, not the "
+        f"Without measurement noise (the tables' reading) the MESO (well-posed identification) beats the ESO at equal "
+        f"ε in {len(off['s1'])}/5 columns of Table 2 and {len(off['s2'])}/5 of Table 3; with the noise on (means over "
+        f"{runs} runs) in {len(on['s1'])}/5 and {len(on['s2'])}/5 (claims s1-meso-better, s2-meso-better judge it per "
+        f"run over the whole box). Noise-free, situation 1: {', '.join(off['s1']) or 'none'}; situation 2: "
+        f"{', '.join(off['s2']) or 'none'}; in situation 2 this needs only the trajectory-equivalent model, not the "
         "true Θ.")
     div = []
     for key, sim in sims.items():
@@ -263,7 +290,7 @@ def _summary_findings(result, sims) -> None:
                        + "; ".join(div) + ".")
 
 
-def add_findings(result: StudyResult, sims: dict, lin, sc: dict, claims: dict, horizons: dict, tol: float) -> None:
+def add_findings(result: StudyResult, sims: dict, lin, sc: dict, claims: dict, horizons: dict) -> None:
     """Every finding of the study, in reading order; every number in them comes from the arguments.
 
     Parameters
@@ -277,11 +304,9 @@ def add_findings(result: StudyResult, sims: dict, lin, sc: dict, claims: dict, h
     claims : dict
         From :func:`.quantities.claim_quantities`.
     horizons : dict of str -> float
-    tol : float
-        Relative tolerance of the table cells.
     """
     s1, s2 = sims["s1"], sims["s2"]
-    _tables_noise(result, tol)
+    _tables_noise(result)
     _literal(result, s1, s2)
     _identifiability(result, s1, s2, horizons, claims["gate"])
     _gate(result, s2, claims["gate"])

@@ -17,6 +17,7 @@ the per-sample block is the same for every variant):
   (column-scaled condition number <= threshold, Theorem 1), else (22) with θ3 held;
 * ``direct``: (10) directly on ``[x̂1 x̂2 u 1]`` with the total disturbance (situation 2);
 * ``no_const``: ``wellposed`` without the non-model-class column θ_{n+2} (Conclusion 3);
+* ``literal_no_const``: ``literal`` without θ_{n+2} (Conclusion 3 under the printed rule; reduced regression only);
 * ``none``: no identification (the conventional ESO; Θ ≡ 0).
 """
 
@@ -41,10 +42,11 @@ __all__ = [
     "regressor_vector",
     "regressors",
     "solve_batch",
+    "solve_many",
     "theta_from_lambda",
 ]
 
-VARIANTS = ("none", "wellposed", "literal", "direct", "no_const")
+VARIANTS = ("none", "wellposed", "literal", "direct", "no_const", "literal_no_const")
 #: the regressor vector whose Gram matrix the block accumulates
 PHI = ("xhat[0]", "xhat[1]", "1", "xhat[2]", "f", "u", "kbar")
 _NPHI = len(PHI)
@@ -102,6 +104,10 @@ def design(variant: str, regression: str, full: bool = True, theta3_held: float 
         # (22)-(23): [x̂1 x̂2 1] [θ1 θ2 θ4]ᵀ = x̂3;  (16)-(17): [x̂1 x̂2 K̄ 1] Λ = x̂3
         cols = [x1, x2, one] if regression == "reduced" else [x1, x2, kb, one]
         return np.array(cols), x3
+    if variant == "literal_no_const":
+        if regression != "reduced":
+            raise ValueError("literal_no_const is defined for the reduced regression (22) only")
+        return np.array([x1, x2]), x3
     z = x3 + f  # the total disturbance estimate x̂3 + XᵀΘ_used
     if variant == "no_const":
         return np.array([x1, x2]), z
@@ -167,6 +173,100 @@ def _lsq(T_H, t_z, G=None, Phi=None, threshold=100.0):
     return batch_least_squares(F[:, :-1], F[:, -1], warn=False, cond_threshold=threshold)
 
 
+def _lsq_many(T, G):
+    """:func:`_lsq` from Gram matrices for many runs at once (the same solution to rounding).
+
+    ``T`` (B, p + 1, 7) stacks each run's design ``[T_H; t_z]``, ``G`` (B, 7, 7) its Gram matrix. Returns the
+    least-squares solution (B, p) — the minimum-norm one, singular values below ``eps·max(rows, p)·s_max``
+    dropped, as ``numpy.linalg.lstsq(rcond=None)`` — with the numerical rank and the column-scaled condition
+    number of ``H`` that :func:`ctrl_analysis.identification.identifiability` reports.
+    """
+    Tt = np.swapaxes(T, 1, 2)
+    Ga = T @ G @ Tt
+    lam, V = np.linalg.eigh(0.5 * (Ga + np.swapaxes(Ga, 1, 2)))
+    F = np.sqrt(np.clip(lam, 0.0, None))[:, :, None] * np.swapaxes(V, 1, 2)
+    H, z = F[:, :, :-1], F[:, :, -1]
+    rows, p = H.shape[1], H.shape[2]
+    U, s, Vt = np.linalg.svd(H, full_matrices=False)
+    cut = max(rows, p) * np.finfo(float).eps * s[:, :1]
+    rank = np.sum(s > cut, axis=1)
+    norms = np.linalg.norm(H, axis=1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ss = np.linalg.svd(H / np.where(norms > 0, norms, 1.0)[:, None, :], compute_uv=False)
+        cond = np.where(np.all(norms > 0, axis=1) & (ss[:, -1] > 0), ss[:, 0] / ss[:, -1], np.inf)
+        inv = np.where(s > cut, 1.0 / np.where(s > cut, s, 1.0), 0.0)
+    theta = np.einsum("bji,bj->bi", Vt, inv * np.einsum("bkj,bk->bj", U, z))
+    return theta, cond, rank
+
+
+def _theta_from_lambda_many(lam, k_gains, b0):
+    """:func:`theta_from_lambda` of many runs: ``lam`` (B, 4)."""
+    n = lam.shape[0]
+    X = np.zeros((n, 4, 4))
+    X[:, 0, 0] = X[:, 1, 1] = X[:, 3, 3] = b0
+    X[:, 0, 2] = -(k_gains[0] + lam[:, 0])
+    X[:, 1, 2] = -(k_gains[1] + lam[:, 1])
+    X[:, 2, 2] = 1.0 - lam[:, 2]
+    X[:, 3, 2] = -lam[:, 3]
+    return b0 * np.linalg.solve(X, lam[:, :, None])[:, :, 0]
+
+
+def solve_many(variant, regression, theta_cum, k_gains, b0, thresholds, G):
+    """:func:`solve_batch` for many runs of one variant at once, from their Gram matrices.
+
+    Parameters
+    ----------
+    variant : str
+        One of :data:`VARIANTS` except ``"none"``.
+    regression : {"reduced", "full"}
+    theta_cum : ndarray, shape (B, 4)
+    k_gains : array_like
+    b0 : float
+    thresholds : ndarray, shape (B,)
+    G : ndarray, shape (B, 7, 7)
+
+    Returns
+    -------
+    theta : ndarray, shape (B, 4)
+        The new Θ per run.
+    cond, rank : ndarray, shape (B,)
+        Column-scaled condition number and numerical rank of the regression tried first.
+    """
+    n = G.shape[0]
+    T_H, t_z = design(variant, regression)
+    p = T_H.shape[0]
+    th, cond, rank = _lsq_many(np.broadcast_to(np.vstack([T_H, t_z]), (n, p + 1, _NPHI)), G)
+    zero = np.zeros(n)
+    if variant in ("literal", "literal_no_const"):
+        if variant == "literal_no_const":
+            inc = np.stack([th[:, 0], th[:, 1], zero, zero], axis=1)
+        elif regression == "reduced":
+            inc = np.stack([th[:, 0], th[:, 1], zero, th[:, 2]], axis=1)
+        else:
+            inc = _theta_from_lambda_many(th, k_gains, b0)
+        return theta_cum + inc, cond, rank
+    if variant == "no_const":
+        return np.stack([th[:, 0], th[:, 1], zero, zero], axis=1), cond, rank
+    if variant == "direct":
+        return th.copy(), cond, rank
+    if regression == "reduced":
+        return np.stack([th[:, 0], th[:, 1], zero, th[:, 2]], axis=1), cond, rank
+    out = np.empty((n, 4))
+    ok = (rank == p) & (cond <= thresholds)
+    if ok.any():
+        out[ok] = _theta_from_lambda_many(th[ok], k_gains, b0)
+    bad = ~ok
+    if bad.any():
+        # Theorem 1 gate failed: identify only the identifiable part, θ3 held at its current value
+        T_H2, tz0 = design(variant, regression, full=False, theta3_held=0.0)
+        held = theta_cum[bad, 2]
+        t_z2 = tz0[None, :] - held[:, None] * np.eye(_NPHI)[PHI.index("u")][None, :]
+        T2 = np.concatenate([np.broadcast_to(T_H2, (held.size,) + T_H2.shape), t_z2[:, None, :]], axis=1)
+        red, _, _ = _lsq_many(T2, G[bad])
+        out[bad] = np.stack([red[:, 0], red[:, 1], held, red[:, 2]], axis=1)
+    return out, cond, rank
+
+
 def solve_batch(variant, regression, theta_cum, k_gains, b0, threshold, G=None, Phi=None):
     """One batch of one run of the identification.
 
@@ -204,6 +304,8 @@ def solve_batch(variant, regression, theta_cum, k_gains, b0, threshold, G=None, 
         return theta_cum + inc, res.report
     if variant == "no_const":
         return np.array([th[0], th[1], 0.0, 0.0]), res.report
+    if variant == "literal_no_const":
+        return theta_cum + np.array([th[0], th[1], 0.0, 0.0]), res.report
     if variant == "direct":
         return th.copy(), res.report
     if regression == "reduced":
@@ -370,12 +472,17 @@ class BatchIdentification(KernelBlock, DiscreteBlock):
         thresholds = np.broadcast_to(check_positive("thresholds", thresholds), (B,))
         if len(variants) != B:
             raise ValueError(f"variants must have one entry per run ({B}), got {len(variants)}")
+        finite = np.all(np.isfinite(x[:, 6:]), axis=1)
+        groups: dict = {}
         for b, variant in enumerate(variants):
-            G = x[b, 6:].reshape(_NPHI, _NPHI)
-            if variant == "none" or not np.all(np.isfinite(G)):
-                continue
-            theta, rep = solve_batch(variant, self.regression, x[b, :4], self.k, self.b0, thresholds[b], G=G)
-            x[b, :4] = theta
+            if variant != "none" and finite[b]:
+                groups.setdefault(variant, []).append(b)
+        for variant, idx in groups.items():
+            # every run of a variant at once (solve_batch's solution, vectorised over the runs)
+            idx = np.array(idx)
+            G = x[idx, 6:].reshape(-1, _NPHI, _NPHI)
+            theta, cond, rank = solve_many(variant, self.regression, x[idx, :4], self.k, self.b0, thresholds[idx], G)
+            x[idx, :4] = theta
             # log10 keeps the state bounded (the loop flags states beyond its bound as diverged)
-            x[b, 4], x[b, 5] = np.log10(min(rep.cond_scaled, 1e99)), rep.rank
+            x[idx, 4], x[idx, 5] = np.log10(np.minimum(cond, 1e99)), rank
         x[:, 6:] = 0.0

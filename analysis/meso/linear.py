@@ -7,6 +7,7 @@ situation-1 runs in :mod:`.quantities`).
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import control as ct
@@ -44,8 +45,14 @@ def noise_std(paper: Paper, epsilon: float) -> np.ndarray:
 
     For the linear (M)ESO the error obeys ``e' = (A − L C) e − L v`` whatever the control (the input
     cancels), so its noise part is the ZOH discretisation of that system driven by white ``v`` of
-    variance ``a²/3`` per step: ``P = A_d P A_dᵀ + B_d σ² B_dᵀ`` (``control.dlyap``).
+    variance ``a²/3`` per step: ``P = A_d P A_dᵀ + B_d σ² B_dᵀ`` (``control.dlyap``). Computed once per
+    ``(paper, epsilon)`` (the box asks for it at every point).
     """
+    return _noise_std(paper, float(epsilon)).copy()
+
+
+@functools.lru_cache(maxsize=256)
+def _noise_std(paper: Paper, epsilon: float) -> np.ndarray:
     obs = ExtendedStateObserver.from_epsilon(paper.n, epsilon, paper.beta, b0=1.0)
     A, B = obs.ss.A, obs.ss.B[:, :1]
     err = ct.c2d(ct.ss(A, -B, np.eye(A.shape[0]), 0), paper.h, method="zoh")

@@ -42,6 +42,7 @@ __all__ = [
     "Row",
     "SituationRun",
     "build_loop",
+    "full_solved",
     "meso_rhs",
     "path_output",
     "pick",
@@ -335,6 +336,26 @@ class SituationRun:
     diverged: np.ndarray = None
     diverged_step: np.ndarray = None
     b0: float = 0.0
+    full_solved: np.ndarray = None      # (B,) batches in which situation 2's full regression (16) was solved
+
+
+def full_solved(rows, regression: str, log10_cond, rank) -> np.ndarray:
+    """Batches in which each run solved the full regression (16)/(10) (0 everywhere for the reduced (22)).
+
+    The literal and direct rules solve it every batch; the well-posed rule only where it passes the gate
+    (numerically full rank and column-scaled condition number <= the run's threshold, Theorem 1).
+    """
+    out = np.zeros(len(rows), dtype=int)
+    if regression != "full":
+        return out
+    for b, r in enumerate(rows):
+        lc, rk = log10_cond[:, b], rank[:, b]
+        ok = np.isfinite(lc)
+        if r.variant == "wellposed":
+            out[b] = int(np.sum(ok & (rk == 4) & (10.0 ** np.where(ok, lc, 0.0) <= r.threshold)))
+        elif r.variant in ("literal", "direct"):
+            out[b] = int(np.sum(ok))
+    return out
 
 
 def x3_true(sig, rows, paper, b0):
@@ -361,7 +382,7 @@ def x3_true(sig, rows, paper, b0):
 
 
 def _chunk_errors(sig, t, rows, paper, b0):
-    """|e| of every table metric at the chunk's samples, each (n, B)."""
+    """|e| of every table metric at the chunk's samples, each (n, B) (the reference of :func:`_accumulate`)."""
     x3 = x3_true(sig, rows, paper, b0)
     return {
         "est_x1": np.abs(sig["x[0]"] - sig["xhat[0]"]),
@@ -371,6 +392,67 @@ def _chunk_errors(sig, t, rows, paper, b0):
         "track_x1": np.abs(np.sin(t)[:, None] - sig["x[0]"]),
         "track_x2": np.abs(np.cos(t)[:, None] - sig["x[1]"]),
     }, x3
+
+
+#: the metrics of :func:`_chunk_errors`, in the order of :func:`_accumulate`'s rows
+METRIC_ORDER = ("est_x1", "est_x2", "est_x3", "est_x3_no_bu", "track_x1", "track_x2")
+
+
+def _accumulate(x1, x2, xh1, xh2, xh3, u, level, th0, th1, th2, th3, t, w, b, b0, theta1, theta2, bb, t_step, h,
+                t_from, prev, has_prev, sums, wsums, sup):
+    """One pass over a chunk (``n`` samples, ``A`` runs): the |e| sums of :func:`_chunk_errors` (whole run and
+    window ``w``) and sup |Δx3/h| from ``t_from`` on (M, N of (5)/(8)), the θ4 step excluded, added in place; ``prev`` holds each run's last x3.
+
+    Signals are ``(n, A)`` (any strides); ``b`` (A,) the plant gains; ``bb = paper.b − b0``. Compiled with numba
+    (:func:`_accumulator`); the same function runs in Python.
+    """
+    n, A = x1.shape
+    for k in range(n):
+        r1, r2, tk = np.sin(t[k]), np.cos(t[k]), t[k]
+        skip = abs(tk - t_step) < 0.5 * h or tk < t_from
+        for j in range(A):
+            x2dot = theta1 * x1[k, j] + theta2 * x2[k, j] + level[k, j] + b[j] * u[k, j]
+            f = th0[k, j] * xh1[k, j] + th1[k, j] * xh2[k, j] + th2[k, j] * u[k, j] + th3[k, j]
+            x3 = x2dot - b0 * u[k, j] - f
+            e0 = abs(x1[k, j] - xh1[k, j])
+            e1 = abs(x2[k, j] - xh2[k, j])
+            e2 = abs(x3 - xh3[k, j])
+            e3 = abs(x3 - bb * u[k, j] - xh3[k, j])
+            e4 = abs(r1 - x1[k, j])
+            e5 = abs(r2 - x2[k, j])
+            sums[0, j] += e0
+            sums[1, j] += e1
+            sums[2, j] += e2
+            sums[3, j] += e3
+            sums[4, j] += e4
+            sums[5, j] += e5
+            if w[k]:
+                wsums[0, j] += e0
+                wsums[1, j] += e1
+                wsums[2, j] += e2
+                wsums[3, j] += e3
+                wsums[4, j] += e4
+                wsums[5, j] += e5
+            if (k > 0 or has_prev) and not skip:
+                d = abs(x3 - prev[j]) / h
+                if np.isfinite(d) and d > sup[j]:
+                    sup[j] = d
+            prev[j] = x3
+
+
+_ACC: list = []
+
+
+def _accumulator():
+    """:func:`_accumulate` compiled by numba (once per process; numba's disk cache keeps it across processes)."""
+    if not _ACC:
+        import numba
+
+        try:
+            _ACC.append(numba.njit(cache=True, error_model="numpy")(_accumulate))
+        except RuntimeError:  # no writable cache next to the source: compile, don't cache
+            _ACC.append(numba.njit(cache=False, error_model="numpy")(_accumulate))
+    return _ACC[0]
 
 
 _KEPT = ("x[0]", "x[1]", "xhat[0]", "xhat[1]", "xhat[2]", "u", "theta[0]", "theta[1]", "theta[2]", "theta[3]")
@@ -438,7 +520,7 @@ def _simulate_rows(sit, rows, T, paper, window, keep, exact, bound, progress) ->
     ident = loop.placed[3].block
     variants, thresholds = [r.variant for r in rows], [r.threshold for r in rows]
     in_window = (t_all[:K] >= window[0]) & (np.arange(K) < round(window[1] / h))
-    metrics = ("est_x1", "est_x2", "est_x3", "est_x3_no_bu", "track_x1", "track_x2")
+    metrics = METRIC_ORDER
     out = SituationRun(rows=list(rows), t=t_all[:K], sums={m: np.zeros(B) for m in metrics},
                        window_sums={m: np.zeros(B) for m in metrics}, n_window=int(in_window.sum()),
                        sup_dx3=np.zeros(B), t_batch=np.empty(0), theta_batch=np.empty((0, B, 4)),
@@ -449,43 +531,80 @@ def _simulate_rows(sit, rows, T, paper, window, keep, exact, bound, progress) ->
     out.exact_rank = {b: [] for b in exact}
     # per-run initial states of plant and observer (Row.x0, Row.xhat0); the other blocks start at their defaults
     x0 = {"plant": np.array([r.x0 for r in rows], dtype=float), "observer": np.array([r.xhat0 for r in rows], dtype=float)}
-    k0, x3_last, tb, thb, lc, rk = 0, None, [], [], [], []
+    k0, x3_last, tb, thb, lc, rk = 0, np.full(B, np.nan), [], [], [], []
+    b_plant = np.array([r.b_plant for r in rows], dtype=float)
     while k0 < K:
         n = min(N, K - k0)
         sl = slice(k0, k0 + n + 1)
         inputs = {"level": level[sl], "v": noise[sl], "r[0]": np.sin(t_all[sl]), "r[1]": np.cos(t_all[sl]),
                   "r[2]": -np.sin(t_all[sl])}
-        res = loop.simulate(n, inputs=inputs, x0=x0, runs=B, t0=t_all[k0], params=params, bound=bound,
-                            store_states=False, keep=_STORED)
-        new = res.diverged & ~out.diverged
-        out.diverged_step[new] = k0 + res.diverged_step[new]
-        out.diverged |= res.diverged
-        states = res.final_states
+        # a run that diverged is not stepped again (its records end where it diverged, _cut_at_divergence): the
+        # chunk runs the others only (``act``); the signals below are theirs, the states are all runs'
+        act = np.flatnonzero(~out.diverged)
+        sig, states, div, div_step = _step(loop, n, inputs, x0, params, act, B, t_all[k0], bound)
+        new = div & ~out.diverged
+        out.diverged_step[new] = k0 + div_step[new]
+        out.diverged |= div
         if n == N:  # a full batch ended at the chunk's last sample: solve it before the next sample
-            _end_batch(out, states, ident, (variants, thresholds), res.diverged, k0 + n, bound)
-        sig = {s: res[s][:n] for s in res.signals}
-        err, x3 = _chunk_errors(sig, t_all[k0:k0 + n], rows, paper, sit.b0)
-        w = in_window[k0:k0 + n]
-        for m in metrics:
-            out.sums[m] += err[m].sum(axis=0)
-            out.window_sums[m] += err[m][w].sum(axis=0)
-        _sup_dx3(out, x3, x3_last, t_all[k0:k0 + n], paper, t_from=2 * N * h)
-        x3_last = x3[-1]
+            _end_batch(out, states, ident, (variants, thresholds), div, k0 + n, bound)
+        if act.size:
+            # the table sums, the ε window's sums and sup |Δx3/h| of the stepped runs, in one compiled pass
+            sums, wsums = np.zeros((6, act.size)), np.zeros((6, act.size))
+            sup, prev = out.sup_dx3[act], x3_last[act]
+            _accumulator()(sig["x[0]"], sig["x[1]"], sig["xhat[0]"], sig["xhat[1]"], sig["xhat[2]"], sig["u"],
+                           sig["level"], sig["theta[0]"], sig["theta[1]"], sig["theta[2]"], sig["theta[3]"],
+                           t_all[k0:k0 + n], in_window[k0:k0 + n], b_plant[act], sit.b0, paper.theta1, paper.theta2,
+                           paper.b - sit.b0, paper.t_step, h, 2 * N * h, prev, k0 > 0, sums, wsums, sup)
+            for i, m in enumerate(METRIC_ORDER):
+                out.sums[m][act] += sums[i]
+                out.window_sums[m][act] += wsums[i]
+            out.sup_dx3[act], x3_last[act] = sup, prev
+        col = {b: i for i, b in enumerate(act)}
         for b in keep:
             for s in _KEPT:
-                out.keep[b][s][k0:k0 + n] = sig[s][:, b]
+                out.keep[b][s][k0:k0 + n] = sig[s][:, col[b]] if b in col else np.nan
         if n == N:  # the batch's result is the next sample's output
             tb.append(t_all[k0 + n - 1])
             thb.append(states["lsm"][:, :4].copy())
             lc.append(states["lsm"][:, 4].copy())
             rk.append(states["lsm"][:, 5].copy())
-            _record_exact(out, sig, ident, rows, sit, exact)
+            _record_exact(out, sig, col, ident, rows, sit, exact)
         x0 = {name: np.nan_to_num(x, nan=0.0, posinf=0.0, neginf=0.0) for name, x in states.items()}
         k0 += n
         if progress is not None:
             progress(f"{sit.key}: t = {k0 * h:.0f} / {T:.0f} s")
+    # a diverged run's whole-run sums are not defined (its signals end where it diverged)
+    for m in metrics:
+        out.sums[m][out.diverged] = np.nan
     _finish(out, tb, thb, lc, rk, B)
+    out.full_solved = full_solved(rows, sit.regression, out.log10_cond, out.rank)
     return out
+
+
+def _step(loop, n, inputs, x0, params, act, B, t0, bound):
+    """One chunk of ``n`` samples for the runs ``act`` of ``B``.
+
+    Returns the signals of the runs ``act`` (``(n, len(act))`` each), the final states of all ``B`` runs (NaN
+    for the runs not stepped) and the divergence flags and steps of all ``B`` runs.
+    """
+    if act.size == B:
+        res = loop.simulate(n, inputs=inputs, x0=x0, runs=B, t0=t0, params=params, bound=bound,
+                            store_states=False, keep=_STORED)
+        return {s: res[s][:n] for s in res.signals}, res.final_states, res.diverged, res.diverged_step
+    div, div_step = np.zeros(B, dtype=bool), np.full(B, -1)
+    states = {name: np.full((B,) + np.shape(x)[1:], np.nan) for name, x in x0.items()}
+    if act.size == 0:
+        return {s: np.empty((n, 0)) for s in _STORED}, states, div, div_step
+    sub_in = {k: (v[:, act] if np.ndim(v) == 2 else v) for k, v in inputs.items()}
+    sub_params = {blk: {k: np.asarray(v)[act] for k, v in ps.items()} for blk, ps in params.items()}
+    res = loop.simulate(n, inputs=sub_in, x0={k: v[act] for k, v in x0.items()}, runs=act.size, t0=t0,
+                        params=sub_params, bound=bound, store_states=False, keep=_STORED)
+    for name, x in res.final_states.items():
+        if name not in states:
+            states[name] = np.full((B,) + x.shape[1:], np.nan)
+        states[name][act] = x
+    div[act], div_step[act] = res.diverged, res.diverged_step
+    return {s: res[s][:n] for s in res.signals}, states, div, div_step
 
 
 def _end_batch(out, states, ident, configs, chunk_diverged, k: int, bound: float) -> None:
@@ -528,7 +647,8 @@ def _join(outs, parts, rows) -> SituationRun:
         window_sums={m: np.concatenate([o.window_sums[m] for o in outs]) for m in first.window_sums},
         sup_dx3=cat("sup_dx3"), theta_batch=cat("theta_batch", 1), log10_cond=cat("log10_cond", 1),
         rank=cat("rank", 1), exact_cond=renumber("exact_cond"), exact_rank=renumber("exact_rank"),
-        keep=renumber("keep"), diverged=cat("diverged"), diverged_step=cat("diverged_step"))
+        keep=renumber("keep"), diverged=cat("diverged"), diverged_step=cat("diverged_step"),
+        full_solved=cat("full_solved"))
 
 
 def _finish(out, tb, thb, lc, rk, B: int) -> None:
@@ -542,21 +662,24 @@ def _finish(out, tb, thb, lc, rk, B: int) -> None:
 
 def _situation_noise(rows, K: int, paper: Paper) -> np.ndarray:
     """Measurement noise ``(K + 1, B)``: one draw per seed (ESO and MESO runs with one seed share it)."""
-    noise = np.zeros((K + 1, len(rows)))
     seeds = sorted({r.seed for r in rows if r.seed is not None})
-    if seeds:
-        drawn = draw_noise(seeds, K, uniform_noise(-1.0, 1.0))[:, :, 0]
-        for b, r in enumerate(rows):
-            if r.seed is not None:
-                noise[:K, b] = paper.noise_amp * drawn[:, seeds.index(r.seed)]
-    return noise
+    if not seeds:
+        return np.zeros((K + 1, len(rows)))
+    drawn = draw_noise(seeds, K, uniform_noise(-1.0, 1.0))[:, :, 0]
+    # column 0 of the padded draw is the noise-free run's zeros
+    padded = np.zeros((K + 1, len(seeds) + 1))
+    padded[:K, 1:] = paper.noise_amp * drawn
+    return np.ascontiguousarray(padded[:, [0 if r.seed is None else 1 + seeds.index(r.seed) for r in rows]])
 
 
-def _record_exact(out, sig, ident, rows, sit, exact) -> None:
-    """Exact (SVD) identifiability of the batch that just ended, for the runs in ``exact``."""
+def _record_exact(out, sig, col, ident, rows, sit, exact) -> None:
+    """Exact (SVD) identifiability of the batch that just ended, for the runs in ``exact`` (``col``: run -> column
+    of ``sig``; a run not stepped in this chunk gets NaN)."""
     for b in exact:
-        phi = ident.phi(np.stack([sig[s][:, b] for s in ident.inputs], axis=1))
-        ok = np.all(np.isfinite(phi))
+        ok = b in col
+        if ok:
+            phi = ident.phi(np.stack([sig[s][:, col[b]] for s in ident.inputs], axis=1))
+            ok = bool(np.all(np.isfinite(phi)))
         rep = exact_report(rows[b].variant, sit.regression, phi, rows[b].threshold) if ok else None
         out.exact_cond[b].append(rep.cond_scaled if ok else np.nan)
         out.exact_rank[b].append(rep.rank if ok else -1)
@@ -575,17 +698,6 @@ def _cut_at_divergence(out):
         if b in out.keep:
             for s in _KEPT:
                 out.keep[b][s][k - 1:] = np.nan
-
-
-def _sup_dx3(out, x3, x3_last, t, paper, t_from):
-    """Update sup |Δx3/h| per run (M and N of (5)/(8)) from ``t_from`` on, skipping the θ4 step at t_step."""
-    full = x3 if x3_last is None else np.vstack([x3_last[None], x3])
-    t_end = t[1:] if x3_last is None else t
-    d = np.abs(np.diff(full, axis=0)) / paper.h
-    d[(np.abs(t_end - paper.t_step) < 0.5 * paper.h) | (t_end < t_from)] = 0.0
-    d[~np.isfinite(d)] = 0.0
-    if d.size:
-        out.sup_dx3 = np.maximum(out.sup_dx3, d.max(axis=0))
 
 
 def situation_rows(key: str, seeds, paper: Paper = PAPER) -> list:

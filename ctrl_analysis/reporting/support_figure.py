@@ -58,7 +58,15 @@ def plot_sensitivity(result: StudyResult, top: int = 8):
             continue
         ax.barh(yi, 100 * s["holds"], color=colors[v], alpha=0.85,
                 xerr=100 * (s["stderr"] or 0), error_kw={"elinewidth": 1, "capsize": 2})
-        ax.text(101, yi, f" {v}", va="center", fontsize=8)
+        ax.text(103, yi, f" {v}", va="center", fontsize=8)
+    # an algorithm axis: the other algorithm's support as a marker on the claim's row
+    algo = result.sensitivity.get("algorithm") or {}
+    other = {"printed": "corrected", "corrected": "printed"}.get(algo.get("chosen"))
+    if other:
+        for yi, c in zip(y, claims):
+            s = ((c.box.get("by_algorithm") or {}).get(other) or {}).get("support") or {}
+            if s.get("holds") is not None:
+                ax.plot(100 * s["holds"], yi, "D", mfc="white", mec="k", ms=6, zorder=5, clip_on=False)
     for t in (SUPPORT_LOW, SUPPORT_HIGH):
         ax.axvline(100 * t, color="k", ls=":", lw=1)
     labels = [(c.claim.id + (" (beyond)" if c.claim.beyond else "")) for c in claims]
@@ -66,7 +74,8 @@ def plot_sensitivity(result: StudyResult, top: int = 8):
     ax.set_xlim(0, 118)
     ax.set_xlabel("support: share of the plausible box where the claim holds (%)\n"
                   f"dotted: the policy's thresholds ({100 * SUPPORT_LOW:.0f} % fails, {100 * SUPPORT_HIGH:.0f} % holds)")
-    ax.set_title("Support of each claim (± standard error)", fontsize=10)
+    ax.set_title("Support of each claim (± standard error)" + (
+        f"\nbars: the {algo['chosen']} algorithm, \u25c7: the {other} one" if other else ""), fontsize=10)
     if names:
         grid = np.full((len(claims), len(names)), np.nan)
         for i, c in enumerate(claims):

@@ -14,10 +14,19 @@ from analysis.meso.identification import (
     theta_from_lambda,
 )
 from analysis.meso.loops import Row, pick, simulate_situation, situation_rows
-from analysis.meso.paper import CLAIMS, METRICS, PAPER, QUICK, READINGS, SITUATIONS
+from analysis.meso.paper import (
+    CLAIMS,
+    METRICS,
+    PAPER,
+    QUICK,
+    READINGS,
+    SITUATIONS,
+    TABLE_DECIMALS,
+)
 from ctrl_analysis.identification import batch_least_squares
 from ctrl_analysis.reporting.report import StudyContext, write_results_json
 from ctrl_analysis.reporting.study import missing_plausible
+from ctrl_analysis.reporting.verdicts import digits_tolerance
 from ctrl_analysis.simulate import run_seeds
 
 
@@ -104,7 +113,8 @@ def test_identification_block_identifies_every_N_samples_and_accumulates_the_lit
 ])
 def test_loop_reproduces_the_pre_migration_values(key, T, expected):
     """Regression values of the index-slice implementation (noise off, ESO and well-posed MESO), 1e-9 relative."""
-    rows = [Row("eso", "none", None), Row("meso", "wellposed", None)]
+    # at the pre-migration gate threshold (100: situation 2's start-up batch is rejected)
+    rows = [Row("eso", "none", None), Row("meso", "wellposed", None, threshold=100.0)]
     sim = simulate_situation(SITUATIONS[key], rows, T)
     for m, (eso, mes) in expected.items():
         np.testing.assert_allclose(sim.sums[m] / len(sim.t), [eso, mes], rtol=1e-9)
@@ -141,20 +151,32 @@ def test_short_run_writes_every_quantity_with_unit_and_policy(tmp_path):
     for s in ("s1", "s2"):
         for o in ("meso", "eso"):
             required |= {f"{s}.{o}.{m}" for m in METRICS} | {f"{s}.nonoise.{o}.{m}" for m in METRICS}
-        required |= {f"{s}.literal.meso.{m}" for m in METRICS}
+            required |= {f"{s}.noise.{o}.{m}" for m in METRICS}
+        required |= {f"{s}.literal.meso.{m}" for m in METRICS} | {f"{s}.meso_better.share"}
     assert required <= ids
     for q in result.quantities:
         assert isinstance(q.unit, str)
         if q.paper is not None:
             assert q.unit in ("", "1/s", "1/s²")
-            # noise on (several runs): the percentile policy; noise off (one deterministic run): the tolerance
+            # noise on (several runs): the percentile policy; noise off (one deterministic run): the printed digits,
+            # no blanket allowance
             if q.runs and q.runs > 1 and q.value is not None:
                 assert q.policy == "percentile" and q.percentile is not None, q.id
             else:
-                assert q.policy == "tolerance" and q.tolerance == QUICK.tolerance, q.id
+                key, o, m = q.id.split(".")[0], "eso" if ".eso." in q.id else "meso", q.id.split(".")[-1]
+                decimals = TABLE_DECIMALS[key][o][METRICS.index("est_x3" if m == "est_x3_no_bu" else m)]
+                assert q.policy == "tolerance" and q.tolerance == digits_tolerance(q.paper, decimals), q.id
+    # the primary cells are the tables' noise reading (noise-free at the chosen point): one run at the printed digits
+    for s in ("s1", "s2"):
+        for o in ("meso", "eso"):
+            for m in METRICS:
+                q = result.get(f"{s}.{o}.{m}")
+                assert q.primary and q.runs == 1 and q.value == result.get(f"{s}.nonoise.{o}.{m}").value
+    # 0.0070 is printed with four decimals (the float's repr would say three)
+    assert result.get("s2.eso.est_x2").tolerance == pytest.approx(0.5e-4 / 0.007)
     assert result.get("leso.omega_o").value == pytest.approx(20.0)
     assert result.get("s1.eso.est_x1").paper == pytest.approx(1.7115e-4)
-    assert result.get("s2.eso.est_x3_no_bu").paper == pytest.approx(0.5797)
+    assert result.get("s2.noise.eso.est_x3_no_bu").paper == pytest.approx(0.5797)
     assert data["seeds"]["noise"] == run_seeds(3, 2)
     for name in data["figures"]:
         assert (tmp_path / name).stat().st_size > 10_000
@@ -164,9 +186,9 @@ def test_short_run_writes_every_quantity_with_unit_and_policy(tmp_path):
     found = {f["id"]: f["text"] for f in data["findings"]}
     assert {"tables-are-noise-free", "situation2-not-identifiable", "identifiability-threshold",
             "conclusion3-theta4", "m-le-n", "literal-without-W"} <= set(found)
-    # the counts in the sentence are the quantities' verdicts, not typed
+    # the counts in the sentence are computed, not typed
     n = meso.findings.noise_free_counts(result)
-    assert f"noise-free run in {n['off']}/10" in found["tables-are-noise-free"]
+    assert f"{n['closer_off']} of its {n['cells']} cells lie closer to the noise-free run" in found["tables-are-noise-free"]
     assert len(data["reconstructions"]) >= 8
     # every claim of the paper judged, on evidence that was recorded; the sweep ran
     assert [c["id"] for c in data["claims"]] == [c.id for c in CLAIMS]
@@ -189,28 +211,194 @@ def test_every_reconstruction_has_a_plausible_range():
         assert missing_plausible(obj) == []
 
 
-#: claim -> (verdict, reconstructions that flip it) of the small run below (quick horizons 9 s / 12 s, before the
-#: θ4 step, 2 noise runs); the default run's verdicts differ (60 s / 210 s) and are in figures/meso/results.json
+#: claim -> (verdict, verdict under the printed Table-1 rule, under the corrected rule) of the small run below (quick
+#: horizons 9 s / 12 s, before the θ4 step, 2 noise runs, 8 box points); the default run's verdicts differ (60 s /
+#: 210 s) and are in figures/meso/results.json
 EXPECTED_CLAIMS = {
-    "s1-meso-better": ("depends", ["table_identification_variant", "x0", "x_hat0"]),
-    "s2-meso-better": ("holds", []),
-    "s1-theta-identified": ("depends", ["claims.theta_accuracy", "table_identification_variant", "x0"]),
-    "s2-theta-converges": ("fails", []),
-    "theta4-needed": ("fails", []),
-    "larger-eps": ("fails", []),
-    "m-le-n": ("depends", ["x0"]),
-    "eps-law": ("holds", []),
+    "s1-meso-better": ("depends", "fails", "depends"),
+    "s2-meso-better": ("holds", "holds", "holds"),
+    "s1-theta-identified": ("depends", "fails", "depends"),
+    "s2-theta-converges": ("fails", "fails", "fails"),
+    "theta4-needed": ("fails", "fails", "fails"),
+    "larger-eps": ("fails", "fails", "fails"),
+    "m-le-n": ("depends", "depends", "depends"),
+    "eps-law": ("holds", "holds", "holds"),
 }
 
 
-def test_claim_verdicts_of_a_small_run_and_the_sweep_flips(tmp_path):
-    """Quick horizons (9 s / 12 s), 2 noise runs: the judged claims and which reconstructions flip them."""
+def test_claim_verdicts_of_a_small_run_under_both_algorithms(tmp_path):
+    """Quick horizons (9 s / 12 s), 2 noise runs: each claim judged over the box under the printed and the corrected
+    identification (an axis, not a reconstruction of the box), the situation-2 claims untestable where the gate
+    rejects every batch of the full regression."""
     ctx = StudyContext(out_dir=tmp_path, runs=2, seed=3, quick=True)
     result = meso.run(ctx)
-    got = {c.claim.id: (c.verdict, sorted({d["reconstruction"] for d in c.depends_on})) for c in result.claims}
+    got = {c.claim.id: (c.verdict, c.box["by_algorithm"]["printed"]["verdict"],
+                        c.box["by_algorithm"]["corrected"]["verdict"]) for c in result.claims}
     assert got == EXPECTED_CLAIMS, got
-    assert result.get_claim("s1-meso-better").evidence[0] == "s1.meso.est_x1"
+    assert result.sensitivity["algorithm"] == {"chosen": "corrected", "fields": ["table_identification_variant"]}
+    for c in result.claims:
+        assert "table_identification_variant" not in {d["reconstruction"] for d in c.depends_on}
+        assert "table_identification_variant" not in {d["reconstruction"] for d in c.box["drivers"]}
+    # below the start-up batch's condition number (~105) the paper's identification never runs: untestable there
+    s2 = result.get_claim("s2-meso-better").box["by_algorithm"]
+    assert s2["corrected"]["support"]["untestable"] > 0 and s2["printed"]["support"]["untestable"] == 0
+    assert result.get_claim("s1-meso-better").evidence[0] == "s1.meso_better.share"
     assert "s2.theta_rel_error.end" in result.get_claim("s2-theta-converges").evidence
+
+
+def _box_point(T=(("s1", 6.0), ("s2", 12.0)), seeds=(), **paper):
+    from dataclasses import replace
+
+    from analysis.meso.claims import BoxSettings
+
+    an = replace(QUICK, horizons=T, eps_window=(1.0, 3.0))
+    return {"": replace(PAPER, **paper), "claims": READINGS, "box": BoxSettings(tuple(seeds), T, an)}
+
+
+def test_situation2_claims_are_untestable_where_the_gate_never_admits_the_full_regression():
+    """The gate decides whether the paper's identification runs: at 100 it rejects situation 2's start-up batch
+    (cond ≈ 105), so the MESO never solves (16) and the s2 claims are untestable; at the chosen 200 it runs once;
+    the printed Table-1 rule is not gated and diverges (12 s: before it diverges it is judged)."""
+    from analysis.meso.claims import CACHE, evaluate_many
+
+    CACHE.clear()
+    never, once, printed = evaluate_many([_box_point(cond_threshold=100.0), _box_point(),
+                                          _box_point(table_identification_variant="literal")])
+    assert never.get("s2.full_regression_batches").value == 0
+    assert never.get_claim("s2-meso-better").holds is None and never.get_claim("s2-theta-converges").holds is None
+    assert "untestable" in never.get_claim("s2-meso-better").note
+    assert once.get("s2.full_regression_batches").value == 1
+    assert once.get_claim("s2-meso-better").holds is not None
+    assert once.get("s2.theta_final").value[2] != 0.0          # θ3 identified in the start-up batch, then held
+    assert never.get("s2.theta_final").value[2] == 0.0
+    assert printed.get("s2.full_regression_batches").value == 2  # every batch
+    assert "Table-1 literal" in printed.get_claim("s2-meso-better").note
+    CACHE.clear()
+
+
+def test_run_cache_reuses_a_run_exactly_for_a_threshold_that_admits_the_same_batches():
+    """A cached situation-2 run is read for another gate threshold only where every batch is decided alike; the run
+    read equals a fresh simulation at that threshold bit for bit, and a threshold that decides a batch otherwise is
+    simulated anew."""
+    from analysis.meso.claims import CACHE, evaluate_many
+
+    CACHE.clear()
+    evaluate_many([_box_point(cond_threshold=150.0)])
+    done = CACHE.simulated
+    same, other = evaluate_many([_box_point(cond_threshold=300.0)]), None
+    assert CACHE.simulated == done                              # 150 and 300 admit the same (start-up) batch
+    other = evaluate_many([_box_point(cond_threshold=60.0)])
+    assert CACHE.simulated == done + 1                          # 60 rejects it: one new MESO run (the ESO is shared)
+    CACHE.clear()
+    fresh = evaluate_many([_box_point(cond_threshold=300.0)])
+    for q in ("s2.meso.est_x3", "s2.meso.track_x1", "s2.theta_rel_error.end"):
+        assert same[0].get(q).value == fresh[0].get(q).value, q
+    assert other[0].get("s2.meso.track_x1").value != fresh[0].get("s2.meso.track_x1").value
+    CACHE.clear()
+
+
+def test_many_points_at_once_equal_each_point_alone():
+    """evaluate_many (the box's batch: the runs of every point on one batch axis) = evaluate point by point."""
+    from analysis.meso.claims import CACHE, evaluate, evaluate_many
+
+    pts = [_box_point(seeds=(5, 6), table_noise="noise on"), _box_point(x0=(0.0, 1.0), integrator="euler"),
+           _box_point(situation2_plant="extra term", table_identification_variant="literal")]
+    CACHE.clear()
+    together = evaluate_many(pts)
+    CACHE.clear()
+    alone = []
+    for p in pts:
+        CACHE.clear()
+        alone.append(evaluate(p))
+    CACHE.clear()
+    for a, b in zip(together, alone):
+        assert [c.holds for c in a.claims] == [c.holds for c in b.claims]
+        for q in a.quantities:
+            if q.paper is not None:
+                assert np.array_equal(q.value, b.get(q.id).value), q.id
+    # the noise reading: per run at a noise-on point (two runs, paired by seed), one run noise-free
+    assert together[0].get("s1.meso.est_x1").runs == 2 and together[1].get("s1.meso.est_x1").runs == 1
+    assert together[0].get("s1.meso_better.share").value in (0.0, 0.5, 1.0)
+
+
+def test_a_diverged_run_is_not_stepped_again_and_leaves_the_others_bit_for_bit():
+    """The Table-1 literal rule diverges in situation 2 (~12 s); from then on its run is left out of the batch: its
+    sums are NaN and its records end, and the other runs equal a batch without it, bit for bit."""
+    rows = [Row("meso", "literal", None), Row("meso", "wellposed", 4), Row("eso", "none", None)]
+    with_it = simulate_situation(SITUATIONS["s2"], rows, 24.0)
+    without = simulate_situation(SITUATIONS["s2"], rows[1:], 24.0)
+    assert with_it.diverged.tolist() == [True, False, False]
+    assert np.all(np.isnan([v[0] for v in with_it.sums.values()]))
+    assert np.all(np.isnan(with_it.theta_batch[-1, 0]))
+    for m in with_it.sums:
+        assert np.array_equal(with_it.sums[m][1:], without.sums[m]), m
+    assert np.array_equal(with_it.theta_batch[:, 1:], without.theta_batch)
+
+
+def test_compiled_accumulation_equals_the_numpy_errors():
+    """The chunk's table sums, window sums and sup |Δx3/h| in one compiled pass (_accumulate) = the numpy reference
+    (_chunk_errors, the sup of the finite differences outside the θ4 step and before t_from skipped), on strided
+    signals as the loop returns them, NaN included."""
+    from analysis.meso import loops
+
+    rng = np.random.default_rng(4)
+    n, B, S = 400, 5, len(loops._STORED)
+    base = rng.normal(size=(n + 1, B, S))
+    base[300:, 2, 0] = np.nan                                       # a run that diverges in the chunk
+    sig = {s: base[:n, :, i] for i, s in enumerate(loops._STORED)}
+    rows = [Row("eso", "none", None, b_plant=b) for b in (3.95, 4.9, 3.95, 3.0, 3.95)]
+    t = 29.1 + PAPER.h * np.arange(n)                               # the θ4 step at 30 s inside the chunk
+    w = (t >= 29.4) & (t < 29.7)
+    sums, wsums, sup, prev = np.zeros((6, B)), np.zeros((6, B)), np.zeros(B), rng.normal(size=B)
+    loops._accumulator()(sig["x[0]"], sig["x[1]"], sig["xhat[0]"], sig["xhat[1]"], sig["xhat[2]"], sig["u"],
+                         sig["level"], sig["theta[0]"], sig["theta[1]"], sig["theta[2]"], sig["theta[3]"], t, w,
+                         np.array([r.b_plant for r in rows]), 3.0, PAPER.theta1, PAPER.theta2, PAPER.b - 3.0,
+                         PAPER.t_step, PAPER.h, 29.2, prev.copy(), True, sums, wsums, sup)
+    err, x3 = loops._chunk_errors(sig, t, rows, PAPER, 3.0)
+    for i, m in enumerate(loops.METRIC_ORDER):
+        np.testing.assert_allclose(sums[i], err[m].sum(axis=0), rtol=1e-12)
+        np.testing.assert_allclose(wsums[i], err[m][w].sum(axis=0), rtol=1e-12)
+    d = np.abs(np.diff(np.vstack([prev[None], x3]), axis=0)) / PAPER.h
+    d[(np.abs(t - PAPER.t_step) < 0.5 * PAPER.h) | (t < 29.2)] = 0.0
+    np.testing.assert_allclose(sup, np.nanmax(np.where(np.isfinite(d), d, 0.0), axis=0), rtol=1e-12)
+    assert np.isnan(sums[0, 2]) and np.isfinite(sums[0, 1])
+
+
+def test_batched_identification_equals_the_single_run_solve():
+    """identify() solves every run of a variant at once (solve_many); each run equals solve_batch to rounding, with
+    the same rank and condition number (the gate's decision), near-collinear batches included."""
+    from analysis.meso.identification import solve_many
+
+    rng = np.random.default_rng(2)
+    k, b0 = np.array([100.0, 20.0, 1.0]), 3.0
+    for regression, variants in (("reduced", ("wellposed", "literal", "no_const", "literal_no_const")),
+                                 ("full", ("wellposed", "literal", "direct"))):
+        G = []
+        for b in range(9):
+            xh1, xh2, xh3, u, f, kbar = _synthetic_batch(N=300, seed=b)
+            if b % 3 == 0:   # closed-loop-like: u in span{x1, x2, 1}, the full regression near-collinear
+                u = -(2.3 * xh1 - 1.6 * xh2 + 0.5) / 3.95 + 1e-3 * rng.normal(size=u.size)
+            phi = regressors(xh1, xh2, xh3, u, f, kbar)
+            G.append(phi.T @ phi / len(u))
+        G, cum, thr = np.array(G), rng.normal(size=(9, 4)), np.full(9, 100.0)
+        for v in variants:
+            th, cond, rank = solve_many(v, regression, cum, k, b0, thr, G)
+            for b in range(9):
+                one, rep = solve_batch(v, regression, cum[b], k, b0, thr[b], G=G[b])
+                np.testing.assert_allclose(th[b], one, rtol=1e-9, atol=1e-9)
+                assert rank[b] == rep.rank and cond[b] == pytest.approx(rep.cond_scaled, rel=1e-12)
+
+
+def test_the_identification_variant_is_an_algorithm_axis_and_the_box_ranges_say_why():
+    from ctrl_analysis.reporting.study import reconstructions_of
+
+    recs = {r["name"]: r for r in reconstructions_of(PAPER)}
+    variant = recs["table_identification_variant"]["plausible"]
+    assert variant.axis == "algorithm" and variant.options == ("literal", "wellposed")
+    assert recs["table_noise"]["plausible"].options == ("noise on",)
+    gate = recs["cond_threshold"]["plausible"]
+    # the range holds the three regimes: never admits the start-up batch, admits it only, admits later batches
+    assert gate.low < 104 < PAPER.cond_threshold < 494 < gate.high
 
 
 def _model_term(t, x_hat, u, params=None):
