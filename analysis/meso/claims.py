@@ -319,9 +319,15 @@ def judge(result: StudyResult, paper: Paper = PAPER, readings: Readings = READIN
     the point when it holds in at least half the runs. In situation 2 a run whose MESO never solved the full
     regression (16) does not run the paper's identification: the claims are untestable on it.
     """
-    acc = readings.theta_accuracy
     alg = ("the corrected (well-posed) identification" if paper.table_identification_variant == "wellposed"
            else "the Table-1 literal identification")
+    _judge_tables(result, paper, per_run, alg)
+    _judge_theta(result, paper, readings, per_run, alg)
+    _judge_observers(result, readings, alg)
+
+
+def _judge_tables(result, paper, per_run, alg) -> None:
+    """Tables 2-3: the MESO more accurate than the ESO (per run under noise, on the run when noise-free)."""
     for key in ("s1", "s2"):
         b = per_run[key]["better"]
         holds = None if b["share"] is None else b["share"] >= 0.5
@@ -341,6 +347,11 @@ def judge(result: StudyResult, paper: Paper = PAPER, readings: Readings = READIN
         result.claim(_CLAIM[f"{key}-meso-better"], holds,
                      evidence=[f"{key}.meso_better.share"] + [f"{key}.{o}.{m}" for o in ("meso", "eso") for m in METRICS],
                      note=note)
+
+
+def _judge_theta(result, paper, readings, per_run, alg) -> None:
+    """The identified parameters: accurate in situation 1, converging in situation 2, θ4 needed."""
+    acc = readings.theta_accuracy
     th1 = per_run["s1"]["theta"]
     ok1 = np.where(np.isfinite(th1["before_step"]) & np.isfinite(th1["end"]),
                    (np.maximum(th1["before_step"], th1["end"]) <= acc).astype(float), 0.0)
@@ -371,6 +382,10 @@ def judge(result: StudyResult, paper: Paper = PAPER, readings: Readings = READIN
                            "s1.no_const.track_x2", "s1.nonoise.meso.track_x1", "s1.nonoise.meso.track_x2"],
                  note=f"{alg}, situation 1, noise off: relative error of θ1, θ2 without θ4 {nc:.3g}, with θ4 {wp:.3g} "
                       f"(converged read as <= {acc:.0%}); tracking worse without θ4 in {len(worse)}/2 columns")
+
+
+def _judge_observers(result, readings, alg) -> None:
+    """The observers themselves: a larger ε for the MESO, M <= N, and the ε-law of the steady error."""
     e = readings.larger_eps
     ok = [m for m in METRICS if _v(result, f"s1.nonoise.meso_eps_larger.{m}") <= _v(result, f"s1.nonoise.eso.{m}")]
     ratio = np.asarray(_v(result, "s1.meso_eps_larger.noise_std_ratio"))

@@ -443,8 +443,26 @@ def claim_quantities(result: StudyResult, sims: dict, lin, horizons: dict, readi
         Run indices and gate counts the findings reuse (``no_const``, ``gate``).
     """
     s1, s2 = sims["s1"], sims["s2"]
-    out = {}
-    # Conclusion 3: the well-posed MESO without θ4 (noise off)
+    out = {"no_const": _conclusion3(result, s1, horizons)}
+    _m_and_n(result, sims, s2)
+    _larger_eps(result, s1, readings)
+    if not extras:
+        return out
+    # the literal rule without W(s)
+    for key, sim in sims.items():
+        i = pick(sim.rows, "meso", "literal", False, bypass_w=True)[0]
+        t_div = first_divergence(sim, [i])
+        for m in ("track_x1", "est_x3"):
+            result.quantity(f"{key}.literal_noW.{m}", f"situation {key[1]}, Table-1 literal rule without W(s), "
+                            f"mean |e| {m}, noise off", None if sim.diverged[i] else _one(sim, i, m),
+                            diverged=bool(sim.diverged[i]), runs=1, unit=TABLE_UNITS[m],
+                            note=f"diverged at t = {t_div:.2f} s: no value" if t_div else "")
+    out["gate"] = _gate_quantities(result, s2)
+    return out
+
+
+def _conclusion3(result, s1, horizons) -> tuple:
+    """Conclusion 3: the well-posed MESO without θ4 (noise off); returns the two runs' indices."""
     i_nc, i_wp = pick(s1.rows, "meso", "no_const", False)[0], pick(s1.rows, "meso", "wellposed", False)[0]
     for m in ("track_x1", "track_x2", "est_x3"):
         result.quantity(f"s1.no_const.{m}", f"Situation 1, MESO without θ4 (Conclusion 3), mean |e| {m}, noise off",
@@ -461,8 +479,12 @@ def claim_quantities(result: StudyResult, sims: dict, lin, horizons: dict, readi
                     s1.theta_batch[-1, i_nc], unit="[1/s², 1/s, 1, 1/s²]",
                     note=f"truth {theta_truth('s1', [horizons['s1']])[0].tolist()}; with θ4: "
                          f"{np.round(s1.theta_batch[-1, i_wp], 4).tolist()}")
-    out["no_const"] = (i_nc, i_wp)
-    # (5)/(8): M = sup|d x3/dt| of the MESO's extended state, N that of the ESO's (noise off)
+    return i_nc, i_wp
+
+
+def _m_and_n(result, sims, s2) -> None:
+    """(5)/(8): M = sup|d x3/dt| of the MESO's extended state, N that of the ESO's (noise off); situation 2's full
+    regressions."""
     for key, sim in sims.items():
         i_m, i_e = pick(sim.rows, "meso", "wellposed", False)[0], pick(sim.rows, "eso", "none", False)[0]
         result.quantity(f"{key}.M_sup", f"situation {key[1]}: M of (5), sup |dx3/dt| of the MESO's extended "
@@ -480,7 +502,10 @@ def claim_quantities(result: StudyResult, sims: dict, lin, horizons: dict, readi
                     note=f"of {len(s2.t_batch)}; the corrected algorithm solves (16) only when it passes the "
                          "identifiability gate (cond_threshold), else (22) with θ3 held; the Table-1 literal rule "
                          "solves it every batch")
-    # §5: the MESO at a larger ε
+
+
+def _larger_eps(result, s1, readings) -> None:
+    """§5: the MESO at a larger ε against the ESO at the paper's, and the noise std ratio."""
     e = readings.larger_eps
     i_m01 = pick(s1.rows, "meso", "wellposed", False, epsilon=e)[0]
     for m in METRICS:
@@ -492,18 +517,6 @@ def claim_quantities(result: StudyResult, sims: dict, lin, horizons: dict, readi
     result.quantity("s1.meso_eps_larger.noise_std_ratio", f"steady noise std of e1, e2, e3 at ε = {e:g} relative to "
                     f"ε = {PAPER.epsilon:g}", ratio, unit="",
                     note="linear error dynamics driven by the measurement noise (control.dlyap), the same for ESO and MESO")
-    if not extras:
-        return out
-    # the literal rule without W(s)
-    for key, sim in sims.items():
-        i = pick(sim.rows, "meso", "literal", False, bypass_w=True)[0]
-        t_div = first_divergence(sim, [i])
-        for m in ("track_x1", "est_x3"):
-            result.quantity(f"{key}.literal_noW.{m}", f"situation {key[1]}, Table-1 literal rule without W(s), "
-                            f"mean |e| {m}, noise off", None if sim.diverged[i] else _one(sim, i, m),
-                            diverged=bool(sim.diverged[i]), runs=1, unit=TABLE_UNITS[m], note=f"diverged at t = {t_div:.2f} s: no value" if t_div else "")
-    out["gate"] = _gate_quantities(result, s2)
-    return out
 
 
 def gate_passes(sim: SituationRun, thresholds) -> tuple:
