@@ -23,6 +23,7 @@ __all__ = [
     "check_str",
     "check_names",
     "check_path",
+    "check_out_dir",
     "check_vector",
 ]
 
@@ -454,6 +455,43 @@ def check_path(name: str, value) -> Path:
     if not os.fspath(value).strip():
         raise ValueError(f"{name} must be a non-empty path, got {value!r}")
     return Path(value)
+
+
+def check_out_dir(name: str, value) -> Path:
+    """An output directory, created if needed and proved writable (a temporary file is made and removed).
+
+    Parameters
+    ----------
+    name : str
+        The argument's name, for the message (e.g. ``"--out"``).
+    value : str or os.PathLike
+        The directory.
+
+    Returns
+    -------
+    pathlib.Path
+
+    Raises
+    ------
+    TypeError
+        If ``value`` is not a path.
+    ValueError
+        If it is empty, names a file, or cannot be created or written.
+    """
+    import tempfile
+
+    if isinstance(value, str) and not value.strip():
+        raise ValueError(f"{name} must name a directory, got an empty string")
+    out = check_path(name, value)
+    if out.exists() and not out.is_dir():
+        raise ValueError(f"{name} must be a directory, got the file {os.fspath(value)!r}")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=out):
+            pass
+    except OSError as exc:
+        raise ValueError(f"{name} {os.fspath(value)!r} is not a writable directory ({exc.strerror or exc})") from None
+    return out
 
 
 def check_vector(name: str, value, n: int, *, allow_inf: bool = False, broadcast: bool = True) -> np.ndarray:

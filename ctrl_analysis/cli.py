@@ -106,18 +106,12 @@ def _progress(study: str, verbose: bool = True):
 
 def _check_out(text: str) -> Path:
     """The --out directory, created if needed; a one-line usage error when it cannot hold results."""
-    if not text or not text.strip():
-        raise _UsageError("--out must name a directory, got an empty string")
-    out = Path(text)
-    if out.exists() and not out.is_dir():
-        raise _UsageError(f"--out must be a directory, got the file {text!r}")
+    from ._validate import check_out_dir
+
     try:
-        out.mkdir(parents=True, exist_ok=True)
-        with tempfile.TemporaryFile(dir=out):
-            pass
-    except OSError as exc:
-        raise _UsageError(f"--out {text!r} is not a writable directory ({exc.strerror or exc})") from None
-    return out
+        return check_out_dir("--out", text)
+    except (TypeError, ValueError) as exc:
+        raise _UsageError(str(exc)) from None
 
 
 class _UsageError(Exception):

@@ -5,14 +5,13 @@ from __future__ import annotations
 import argparse
 import math
 import sys
-import tempfile
 import time
 from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
 
-from .._validate import check_path
+from .._validate import check_out_dir, check_path
 
 __all__ = ["add_parser", "check_args", "main", "read_record"]
 
@@ -155,19 +154,9 @@ def check_args(args) -> SimpleNamespace:
 
 def _check_out(text: str) -> Path:
     """The --out directory, created if needed; ValueError when it cannot hold results."""
-    if not text or not text.strip():
-        raise ValueError("--out must name a directory, got an empty string")
-    out = Path(text)
-    if out.exists() and not out.is_dir():
-        raise ValueError(f"--out must be a directory, got the file {text!r}")
+    out = check_out_dir("--out", text)
     if (out / "arena").exists() and not (out / "arena").is_dir():
         raise ValueError(f"--out {text!r} holds a file named arena where the arena's folder goes")
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-        with tempfile.TemporaryFile(dir=out):
-            pass
-    except OSError as exc:
-        raise ValueError(f"--out {text!r} is not a writable directory ({exc.strerror or exc})") from None
     return out
 
 

@@ -37,3 +37,17 @@ def test_valid_values_pass_through():
     np.testing.assert_array_equal(check_matrix("A", [[1, 0], [0, 1]], square=True), np.eye(2))
     with pytest.raises(TypeError):
         check_int("n", True)
+
+
+def test_check_out_dir_creates_a_writable_directory_and_refuses_a_file(tmp_path):
+    from ctrl_analysis._validate import check_out_dir
+
+    out = check_out_dir("--out", str(tmp_path / "a" / "b"))
+    assert out.is_dir() and list(out.iterdir()) == []  # the probe file is gone
+    (tmp_path / "f").write_text("x")
+    with pytest.raises(ValueError, match="--out must be a directory, got the file"):
+        check_out_dir("--out", str(tmp_path / "f"))
+    with pytest.raises(ValueError, match="--out must name a directory, got an empty string"):
+        check_out_dir("--out", " ")
+    with pytest.raises(TypeError, match="--out must be a path"):
+        check_out_dir("--out", 3)
