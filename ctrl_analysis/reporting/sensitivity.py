@@ -303,8 +303,11 @@ def _claims(runner, box, U, per, refine) -> dict:
                 s = _support(_indicator(per[a][1:], cid))
                 b0 = per[a][0]["claims"].get(cid)
                 base_a = "untestable" if b0 is None else ("holds" if b0 else "fails")
-                entry["by_algorithm"][a] = {"support": s, "verdict": claim_verdict(s["holds"], base_a),
-                                            "at_chosen": base_a}
+                # the verdict from the support alone: the chosen point's own judgement is ``at_chosen`` (for the
+                # study's algorithm apply() puts the main run's verdict here, judged on more runs)
+                entry["by_algorithm"][a] = {"support": s, "at_chosen": base_a,
+                                            "verdict": claim_verdict(s["holds"],
+                                                                     "untestable" if s["holds"] is None else "holds")}
         out[cid] = entry
         if holds0 is None or not len(U):
             continue
@@ -420,6 +423,10 @@ def apply(result: StudyResult, exploration: Exploration) -> None:
         if entry is None:
             continue
         c.box = {k: v for k, v in entry.items()}
+        if "by_algorithm" in c.box:  # the study's own algorithm: the claim's verdict, main run included
+            main = exploration.box.algorithms[0]
+            c.box["by_algorithm"] = {a: dict(v) for a, v in c.box["by_algorithm"].items()}
+            c.box["by_algorithm"][main]["verdict"] = c.verdict
         b = entry["baseline"]
         if b != (None if c.holds is None else ("holds" if c.holds else "fails")):
             c.note = (c.note + " " if c.note else "") + (
