@@ -262,7 +262,9 @@ def simulate_sampled(
             k, xk, wk = _split(s, len(x_sig), len(w_sig))
             if k == 0:
                 return u0
-            return np.full_like(u0, np.nan) if k == n_steps else _rows(controller(k, t, xk, wk), len(s))
+            # no controller call at the last sample (u has N rows); a finite placeholder, never read, so the
+            # loop's test of its signals does not take it for a diverged run
+            return np.zeros_like(u0) if k == n_steps else _rows(controller(k, t, xk, wk), len(s))
 
         blocks.append(place(_PerSample(discrete_part, x_sig + w_sig + ("k",), u_sig), "controller"))
     blocks.insert(0, place(_Plant(lambda t, xx, u: rhs(t, xx, u if u_sig else None, params), x_sig, u_sig), "plant"))

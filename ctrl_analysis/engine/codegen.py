@@ -197,7 +197,8 @@ def _gen_source(blocks, order, stage, discrete, continuous, nc, method, n_signal
         return [ind + s for s in lines]
 
     pargs = ", ".join(f"P{i}" for i in range(len(blocks)))
-    add(f"def run(n_steps, t, h, substeps, X0, H, HC, HS, HCS, S0, KEEP, EVERY, store, xs, bound, diverged, div_step, PS, "
+    add(f"def run(n_steps, t, h, substeps, X0, H, HC, HS, HCS, S0, KEEP, EVERY, store, xs, bound, diverged, div_step, "
+        "div_where, PS, "
         f"{pargs}):")
     add("    B = X0.shape[0]")
     # one signal vector serves every run: each sample writes the held inputs and every block's
@@ -238,6 +239,17 @@ def _gen_source(blocks, order, stage, discrete, continuous, nc, method, n_signal
     add("                if xs.shape[0] > 0:")
     add(f"                    for j in range({n}):")
     add("                        xs[kk, b, j] = x[j]")
+    # a signal that is not finite (a block's output, also while its states stay finite) ends the run here, as a
+    # state that leaves the bound does: the numpy engine's test too (numpy_engine.run_numpy)
+    add("            if not diverged[b]:")
+    add(f"                for j in range({n_signals}):")
+    add("                    if not abs(S[j]) < np.inf:")
+    add("                        diverged[b] = True")
+    add("                        div_step[b] = k")
+    add(f"                        div_where[b] = {n} + j")
+    add(f"                        for jj in range({n}):")
+    add("                            x[jj] = np.nan")
+    add("                        break")
     add("            if k == n_steps:")
     add("                continue")
     for i in discrete:
@@ -283,17 +295,18 @@ def _gen_source(blocks, order, stage, discrete, continuous, nc, method, n_signal
             add("                    x[j] = x[j] + h * dx[j]")
         add("                tau += h")
     # divergence: ctrl_analysis.engine.integrators.is_bad, the numpy engine's test too
-    add("            bad = False")
+    add("            bad = -1")
     for lo, hi, vec in ((0, nc, "x"), (nc, n, "xn")):
         if hi > lo:
             add(f"            for j in range({lo}, {hi}):")
             add(f"                v = {vec}[j]")
-            add("                if IS_BAD(v, bound):")
-            add("                    bad = True")
+            add("                if bad < 0 and IS_BAD(v, bound):")
+            add("                    bad = j")
             add("                X[b, j] = v")
-    add("            if bad and not diverged[b]:")
+    add("            if bad >= 0 and not diverged[b]:")
     add("                diverged[b] = True")
     add("                div_step[b] = k + 1")
+    add("                div_where[b] = bad")
     add(f"                for j in range({n}):")
     add("                    X[b, j] = np.nan")
     return "\n".join(L) + "\n"
@@ -321,7 +334,8 @@ def compiled_runner(loop, kernels: dict):
     Returns
     -------
     run : callable
-        ``run(n_steps, t, h, substeps, X0, H, HC, HS, HCS, S0, KEEP, EVERY, store, xs, bound, diverged, div_step, PS, *P)``:
+        ``run(n_steps, t, h, substeps, X0, H, HC, HS, HCS, S0, KEEP, EVERY, store, xs, bound, diverged, div_step,
+        div_where, PS, *P)``:
         ``H`` holds the per-run inputs ``(., N+1, B)`` at signal columns ``HC``, ``HS`` the inputs
         shared by every run ``(N+1, .)`` at columns ``HCS``.
     consts : dict
@@ -368,7 +382,8 @@ def compiled_runner(loop, kernels: dict):
         f64, i64 = numba.float64, numba.int64
         sig = numba.void(i64, f64[::1], f64, i64, f64[:, ::1], f64[:, :, ::1], numba.intp[::1], f64[:, ::1],
                          numba.intp[::1], f64[::1],
-                         numba.intp[::1], i64, f64[:, :, :], f64[:, :, :], f64, numba.boolean[:], i64[:], numba.intp[::1],
+                         numba.intp[::1], i64, f64[:, :, :], f64[:, :, :], f64, numba.boolean[:], i64[:], i64[:],
+                         numba.intp[::1],
                          *[f64[:, ::1] for b in blocks])
         run = _compile(module.run, sig)
         _RUNNERS[key] = (run, time.perf_counter() - t0)

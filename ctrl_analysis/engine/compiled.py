@@ -140,8 +140,8 @@ def _params_2d(name, params):
     return np.ascontiguousarray(a[None, :] if a.ndim == 1 else a)
 
 
-def run_compiled(loop, runner, plan, n_steps, t, x, held, bound, keep_cols, store, xs, diverged, div_step, lo=0,
-                 every=1):
+def run_compiled(loop, runner, plan, n_steps, t, x, held, bound, keep_cols, store, xs, diverged, div_step, div_where,
+                 lo=0, every=1):
     """One chunk through the compiled runner, writing into the result slices (every ``every``-th sample).
 
     ``lo`` is the chunk's first run within the call: per-run parameter rows ``lo:lo+B`` are its runs'.
@@ -162,7 +162,7 @@ def run_compiled(loop, runner, plan, n_steps, t, x, held, bound, keep_cols, stor
     xs_arg = np.empty((0, 0, 0)) if xs is None else xs
     X = np.array(x, dtype=float, order="C")  # a copy, stepped in place by the runner
     run(n_steps, t, loop.dt / loop.substeps, loop.substeps, X, H, HC, HS, HCS, S0,
-        keep_cols, every, store, xs_arg, float(bound), diverged, div_step, PS, *P)
+        keep_cols, every, store, xs_arg, float(bound), diverged, div_step, div_where, PS, *P)
     x[...] = X  # the final state, as the numpy path leaves it (final_states, chunk carry-over)
 
 

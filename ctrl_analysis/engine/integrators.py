@@ -162,12 +162,17 @@ def _check_bad(x_new: np.ndarray, bound: float) -> np.ndarray:
         return is_bad(x_new, bound).any(axis=1)
 
 
-def _flag_divergence(x, bound, diverged, div_step, step_index):
-    """Mark runs that just left the bound (in place) and set every diverged run's state to NaN."""
-    bad = _check_bad(x, bound) & ~diverged
+def _flag_divergence(x, bound, diverged, div_step, step_index, div_where=None):
+    """Mark runs that just left the bound (in place, with the first bad state's index in ``div_where``) and set every
+    diverged run's state to NaN."""
+    with np.errstate(invalid="ignore"):
+        bad_values = is_bad(x, bound)
+    bad = bad_values.any(axis=1) & ~diverged
     if bad.any():
         diverged |= bad
         div_step[bad] = step_index
+        if div_where is not None:
+            div_where[bad] = np.argmax(bad_values[bad], axis=1)
         x = x.copy()
         x[diverged] = np.nan
     return x

@@ -429,6 +429,7 @@ class Loop:
         xs = np.empty((n_kept, B, self.n_states)) if store_states else None
         diverged = np.zeros(B, dtype=bool)
         div_step = np.full(B, -1, dtype=int)
+        div_where = np.full(B, -1, dtype=int)
         # a callable input returning one value per run is sliced with its chunk
         per_run_funcs = {s for s, f in funcs.items() if np.ndim(f(t[0])) == 1 and np.size(f(t[0])) == B > 1}
         from ..progress import enabled, updater
@@ -437,18 +438,27 @@ class Loop:
         with updater(progress if callable(progress) else auto, B * n_steps,
                      f"{B} runs x {n_steps} samples", "run-sample") as pbar:
             self._run_chunks(plan, runner, n_steps, t, x, held, funcs, per_run_funcs, variants, bound, keep_cols,
-                             (store, xs, every), diverged, div_step, chunk_bounds(B, size), pbar)
+                             (store, xs, every), (diverged, div_step, div_where), chunk_bounds(B, size), pbar)
         sig_store = {s: store[:, :, j] for j, s in enumerate(keep)}
         state_names = [f"{p.name}.{s}" for p in self.continuous + self.discrete for s in p.block.states]
         return LoopResponse(t=t[::every], x=xs, u=None, y=None, diverged=diverged, diverged_step=div_step,
                             seeds=None if seeds is None else list(seeds), bound=bound, signals=sig_store,
                             slices=dict(self.slices), external=self.external, outlist=self.outlist,
-                            state_names=state_names, x_final=x)
+                            state_names=state_names, x_final=x, diverged_where=div_where,
+                            where_names=state_names + [self._signal_owner(s) for s in plan.names])
+
+    def _signal_owner(self, signal: str) -> str:
+        """How a divergence names a signal: the block that outputs it, or the loop's external input."""
+        for p in self.placed:
+            if signal in p.outputs:
+                return f"{p.name}.{signal} (output of block {p.name!r})"
+        return f"{signal} (an input of the loop)"
 
     def _run_chunks(self, plan, runner, n_steps, t, x, held, funcs, per_run_funcs, variants, bound, keep_cols,
-                    stored, diverged, div_step, bounds, progress):
+                    stored, flags, bounds, progress):
         """Step every chunk ``(lo, hi)`` of the batch (compiled or numpy), reporting run-samples to ``progress``."""
         store, xs, every = stored
+        diverged, div_step, div_where = flags
         for lo, hi in bounds:
             f_c = {s: (f if s not in per_run_funcs else (lambda tt, f=f, lo=lo, hi=hi: np.asarray(f(tt))[lo:hi]))
                    for s, f in funcs.items()}
@@ -457,7 +467,7 @@ class Loop:
                 chunk_plan = replace(plan, **chunk_functions(plan, self._variant_ids(variants), lo, hi - lo))
                 run_numpy(self, chunk_plan, n_steps, t, x[lo:hi], h_c, f_c, bound, keep_cols,
                           (store[:, lo:hi], None if xs is None else xs[:, lo:hi], every),
-                          (diverged[lo:hi], div_step[lo:hi]), progress)
+                          (diverged[lo:hi], div_step[lo:hi], div_where[lo:hi]), progress)
                 continue
             # compiled: one call per chunk, or (with progress) about 20 calls over its runs (runs are
             # independent: the same numbers either way)
@@ -465,7 +475,8 @@ class Loop:
             for a, b in parts if progress is None else [(lo + a, lo + b) for a, b in parts]:
                 h_p = {s: (v[:, a:b] if v.ndim == 2 else v) for s, v in held.items()}
                 run_compiled(self, runner, plan, n_steps, t, x[a:b], h_p, bound, keep_cols, store[:, a:b],
-                             None if xs is None else xs[:, a:b], diverged[a:b], div_step[a:b], lo=a, every=every)
+                             None if xs is None else xs[:, a:b], diverged[a:b], div_step[a:b], div_where[a:b], lo=a,
+                             every=every)
                 if progress is not None:
                     progress((b - a) * n_steps)
 

@@ -38,11 +38,13 @@ def run_numpy(loop, plan, n_steps, t, x, held, funcs, bound, keep_cols, stored, 
     stored : tuple
         ``(store, xs, every)``: the chunk's signal and state records and the decimation.
     flags : tuple
-        ``(diverged, div_step)`` of the chunk's runs, set in place.
+        ``(diverged, div_step, div_where)`` of the chunk's runs, set in place (``div_where``: the state index, or
+        the number of states plus the signal's column, that first went bad).
     progress : callable or None
         Called with run-samples as they complete.
     """
-    diverged, div_step = flags
+    diverged, div_step, div_where = flags
+    n_states = x.shape[1]
     x_out = x
     store, xs, every = stored
     B = x.shape[0]
@@ -87,6 +89,15 @@ def run_numpy(loop, plan, n_steps, t, x, held, funcs, bound, keep_cols, stored, 
                 store[k // every] = S if store_all else S[:, keep_cols]
                 if xs is not None:
                     xs[k // every] = x
+            # a signal that is not finite (a block's output, also while its states stay finite) ends the run
+            # here, as a state that leaves the bound does (the compiled runner's test too)
+            bad_out = ~np.isfinite(S).all(axis=1) & ~diverged
+            if bad_out.any():
+                diverged |= bad_out
+                div_step[bad_out] = k
+                div_where[bad_out] = n_states + np.argmax(~np.isfinite(S[bad_out]), axis=1)
+                x = x.copy()
+                x[bad_out] = np.nan
             if k == n_steps:
                 break
             if discrete:
@@ -104,7 +115,7 @@ def run_numpy(loop, plan, n_steps, t, x, held, funcs, bound, keep_cols, stored, 
                     x_next[:, :nc] = xc
                 else:
                     x_next = xc
-            x = _flag_divergence(x_next, bound, diverged, div_step, k + 1)
+            x = _flag_divergence(x_next, bound, diverged, div_step, k + 1, div_where)
             if progress is not None and (k + 1) % tick == 0:
                 progress(tick * B)
     x_out[...] = x

@@ -55,6 +55,7 @@ def simulate_chunks(loop, jobs: int, n_steps: int, held: dict, x, opts: dict, se
     return LoopResponse(t=first.t, x=xs, u=None, y=None,
                         diverged=np.concatenate([p.diverged for p in parts]),
                         diverged_step=np.concatenate([p.diverged_step for p in parts]),
+                        diverged_where=np.concatenate([p.diverged_where for p in parts]), where_names=first.where_names,
                         seeds=None if seeds is None else list(seeds), bound=first.bound, signals=signals,
                         slices=dict(loop.slices), external=loop.external, outlist=loop.outlist,
                         state_names=first.state_names, x_final=x_final)

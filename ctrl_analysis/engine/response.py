@@ -24,8 +24,13 @@ class LoopResponse(SimResult):
         ``x0`` of a continuation.
     """
 
-    def __init__(self, *, signals, slices, external, outlist, state_names, x_final=None, **kw):
+    def __init__(self, *, signals, slices, external, outlist, state_names, x_final=None, diverged_where=None,
+                 where_names=None, **kw):
         super().__init__(**kw)
+        #: per run: the index in ``where_names`` of the state or signal that first went bad (-1: none)
+        self.diverged_where = (np.full(self.runs, -1, dtype=int) if diverged_where is None
+                               else np.asarray(diverged_where, dtype=int))
+        self.where_names = list(where_names or [])
         self.signals = signals
         self.x_final = x_final
         self._slices = slices
@@ -57,6 +62,22 @@ class LoopResponse(SimResult):
         if self.x_final is None:
             return {}
         return {name: self.x_final[:, sl] for name, sl in self._slices.items()}
+
+    def divergences(self) -> list[dict]:
+        """One record per diverged run: ``run``, ``step``, ``t``, ``seed`` and ``where``.
+
+        ``where`` names what went bad first: a state (``block.state``) that left the bound or is not finite, or a
+        signal that is not finite (``block.signal (output of block 'block')``, or an input of the loop).
+
+        Returns
+        -------
+        list of dict
+        """
+        out = super().divergences()
+        for rec in out:
+            code = int(self.diverged_where[rec["run"]])
+            rec["where"] = self.where_names[code] if 0 <= code < len(self.where_names) else None
+        return out
 
     def __getitem__(self, name: str) -> np.ndarray:
         try:

@@ -336,3 +336,59 @@ def test_every_library_signal_follows_the_naming_rule():
         assert not m or m["base"][-1].isdigit()
     assert {"xhat[0]", "x[1]", "td_x[0]", "P[0][1]", "h[0]"} <= {s for *_, s in names}
 
+
+
+def _sqrt_block():
+    """A static block whose output is NaN for a negative input (y = sqrt(u)): its states stay finite."""
+    from ctrl_analysis.engine.blocks import StaticBlock as _Static
+    from ctrl_analysis.engine.kernels import KernelBlock, Kernels, Layout
+
+    def out(t, x, u, p, y):
+        y[0] = np.sqrt(u[0])
+
+    class Sqrt(KernelBlock, _Static):
+        inputs, outputs, states = ("u",), ("y",), ()
+        kernels = Kernels(output=out)
+
+        def __init__(self):
+            self.kernel_params = Layout().pack()
+
+    return Sqrt()
+
+
+@pytest.mark.parametrize("engine", ["numpy", "compiled"])
+def test_a_signal_that_is_not_finite_is_a_diverged_run_named_by_its_block(engine):
+    # issue 28: a block whose output is NaN while its states stay finite, or a stateless loop producing NaN,
+    # was not reported as diverged
+    u = np.where(np.arange(11)[:, None] >= np.array([3, 99, 7])[None, :], -1.0, 1.0)  # run 1 never goes negative
+    stateless = Loop([place(_sqrt_block(), "root")], dt=0.1)
+    res = stateless.simulate(10, inputs={"u": u}, engine=engine)
+    assert res.diverged.tolist() == [True, False, True] and res.diverged_step.tolist() == [3, -1, 7]
+    recs = res.divergences()
+    assert [r["where"] for r in recs] == ["root.y (output of block 'root')"] * 2 and recs[0]["t"] == pytest.approx(0.3)
+    # with a stateful block downstream: the state stays finite until it reads the NaN, the run ends at the output
+    from ctrl_analysis.engine.blocks import UnitDelay
+
+    loop = Loop([place(_sqrt_block(), "root"), place(UnitDelay(), "delay", inputs=["y"], outputs=["y_prev"])],
+                dt=0.1)
+    res = loop.simulate(10, inputs={"u": u}, engine=engine)
+    assert res.diverged.tolist() == [True, False, True] and res.diverged_step.tolist() == [3, -1, 7]
+    assert res.divergences()[0]["where"] == "root.y (output of block 'root')"
+    assert np.all(np.isnan(res.final_states["delay"][[0, 2]])) and np.isfinite(res.final_states["delay"][1]).all()
+
+
+def test_the_engines_agree_on_where_and_when_a_run_diverged():
+    from ctrl_analysis.engine.blocks import UnitDelay
+
+    u = np.where(np.arange(21)[:, None] >= np.array([4, 50, 13, 2])[None, :], -1.0, 1.0)
+    loop = Loop([place(_sqrt_block(), "root"), place(UnitDelay(), "delay", inputs=["y"], outputs=["y_prev"])],
+                dt=0.1)
+    a, b = (loop.simulate(20, inputs={"u": u}, engine=e) for e in ("numpy", "compiled"))
+    assert a.divergences() == b.divergences()
+    np.testing.assert_array_equal(a["y_prev"], b["y_prev"])
+    # a state that leaves the bound names the state
+    grow = Loop([place(UnitDelay(), "delay", inputs=["g"], outputs=["d"]),
+                 place(StaticGain([[10.0]], inputs=("d",), outputs=("g",)), "gain")], dt=1.0)
+    for engine in ("numpy", "compiled"):
+        res = grow.simulate(30, x0={"delay": np.ones((2, 1))}, runs=2, bound=1e6, engine=engine)
+        assert res.diverged.all() and res.divergences()[0]["where"] == "delay.u_prev"
