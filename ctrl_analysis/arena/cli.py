@@ -165,7 +165,8 @@ def check_args(args) -> SimpleNamespace:
     if args.signal is None:
         given = [name for name, v in bounds if v is not None]
         if given:
-            raise ValueError(f"{' and '.join(given)} describe a record: give them with --signal F.csv")
+            raise ValueError(f"{' and '.join(given)} " + ("describe a record: give them" if len(given) > 1 else
+                                                         "describes a record: give it") + " with --signal F.csv")
     else:
         for name, v in bounds:
             if v is None or not math.isfinite(v) or v <= 0:

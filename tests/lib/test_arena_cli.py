@@ -107,7 +107,9 @@ def test_a_record_run_writes_its_folder(tmp_path, capsys, derivative):
 
 def test_bounds_without_a_record_and_a_file_as_out_are_usage_errors(tmp_path, capsys):
     assert main(["arena", "--noise-bound", "0.01"]) == 2
-    assert "--noise-bound describe a record: give them with --signal" in capsys.readouterr().err
+    assert "--noise-bound describes a record: give it with --signal" in capsys.readouterr().err
+    assert main(["arena", "--noise-bound", "0.01", "--accel-bound", "1"]) == 2
+    assert "--noise-bound and --accel-bound describe a record: give them with --signal" in capsys.readouterr().err
     f = _sine_csv(tmp_path / "rec.csv")
     (tmp_path / "file").write_text("x")
     assert main(["arena", "--signal", str(f), "--noise-bound", "0.01", "--accel-bound", "1", "--out",
