@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import io
 import math
 import sys
 import time
@@ -68,17 +69,33 @@ def read_record(path) -> tuple:
     TypeError
         If ``path`` is not a path.
     ValueError
-        An empty path, an unreadable or non-UTF-8 file, fewer than two columns, fewer than 20 rows, a
-        non-numeric or NaN value, time not strictly increasing or not uniformly sampled (within 1 %).
+        An empty path, not a regular file (``/dev/zero``, a FIFO, a folder), a file over
+        :data:`~.recordcheck.MAX_FILE_BYTES` or with over :data:`~.recordcheck.MAX_ROWS` rows, an unreadable
+        or non-UTF-8 file, fewer than two columns, fewer than 20 rows, a non-numeric or NaN value, time not
+        strictly increasing or not uniformly sampled (within 1 %).
+
+    Notes
+    -----
+    A UTF-8 byte-order mark at the start of the file is skipped (it would otherwise make the first row look
+    like a header and drop it).
     """
+    from .recordcheck import MAX_ROWS, check_file
+
     path = check_path("--signal path", path)
     where = f"--signal path {str(path)!r}"  # names the option and the argument
+    check_file(path, where)
     try:
-        text = path.read_text(encoding="utf-8")
+        text = path.read_text(encoding="utf-8-sig")  # -sig: a byte-order mark is not part of the first row
     except OSError as exc:
         raise ValueError(f"{where} cannot be read ({exc.strerror or exc})") from None
     except UnicodeDecodeError:
         raise ValueError(f"{where} is not a UTF-8 text (CSV) file") from None
+    if text.count("\n") > MAX_ROWS:  # counted before the rows are split into lists
+        n = sum(1 for line in io.StringIO(text) if line.strip())
+        n -= 0 if _numeric(text.lstrip().split("\n", 1)[0].split(",")[0]) else 1  # a header
+        if n > MAX_ROWS:
+            raise ValueError(f"{where} has {n} rows, over the limit of {MAX_ROWS}: decimate the record (keep every "
+                             "k-th row) or cut it")
     rows = [r for r in (line.strip() for line in text.splitlines()) if r]
     if rows and not _numeric(rows[0].split(",")[0]):
         rows = rows[1:]  # header
@@ -90,6 +107,9 @@ def read_record(path) -> tuple:
     if not data or min(widths) < 2 or len(widths) != 1:
         raise ValueError(f"{where} must have the columns time, measurement[, derivative] on every row")
     a = np.array(data)
+    if a.shape[0] > MAX_ROWS:
+        raise ValueError(f"{where} has {a.shape[0]} rows, over the limit of {MAX_ROWS}: decimate the record (keep "
+                         "every k-th row) or cut it")
     if a.shape[0] < 20:
         raise ValueError(f"{where} must have at least 20 samples, got {a.shape[0]}")
     if not np.all(np.isfinite(a)):
@@ -120,12 +140,15 @@ def check_args(args) -> SimpleNamespace:
     Returns
     -------
     types.SimpleNamespace
-        ``jobs``, ``out`` (created, writable), ``record`` (``(t, y, d1)`` of ``--signal`` or None).
+        ``jobs``, ``out`` (created, writable), ``record`` (``(t, y, d1)`` of ``--signal`` or None),
+        ``record_check`` (:func:`~.recordcheck.check_record`'s result, or None).
 
     Raises
     ------
     ValueError
-        Naming the argument and the rule.
+        Naming the argument and the rule: with ``--signal`` also a record whose bounds it contradicts, whose
+        arithmetic would not stay finite, or whose tuning would cost more work or memory than the limits
+        (:mod:`.recordcheck`).
     """
     from ..parallel import check_scheduler_address, default_jobs
 
@@ -142,14 +165,22 @@ def check_args(args) -> SimpleNamespace:
     if args.signal is None:
         given = [name for name, v in bounds if v is not None]
         if given:
-            raise ValueError(f"{' and '.join(given)} describe a record: give them with --signal F.csv")
+            raise ValueError(f"{' and '.join(given)} " + ("describe a record: give them" if len(given) > 1 else
+                                                         "describes a record: give it") + " with --signal F.csv")
     else:
         for name, v in bounds:
             if v is None or not math.isfinite(v) or v <= 0:
                 raise ValueError(f"{name} must be given, finite and > 0 with --signal, got {v}")
     record = read_record(args.signal) if args.signal is not None else None
+    record_check = None
+    if record is not None:
+        from .recordcheck import check_record
+
+        record_check = check_record(*record, args.noise_bound, args.accel_bound,
+                                    where=f"--signal path {str(args.signal)!r}",
+                                    names=("--noise-bound", "--accel-bound"))
     out = _check_out(args.out if args.out is not None else ("figures" if args.signal is None else "arena-out"))
-    return SimpleNamespace(jobs=jobs, out=out, record=record)
+    return SimpleNamespace(jobs=jobs, out=out, record=record, record_check=record_check)
 
 
 def _check_out(text: str) -> Path:
@@ -192,16 +223,24 @@ def _user(args, checked) -> int:
 
     t, y, d1 = checked.record
     out = checked.out
+    check = getattr(checked, "record_check", None)
+    for w in (check or {}).get("warnings", []):
+        sys.stderr.write(f"ctrl-analysis: warning: {w}\n")
     t0 = time.perf_counter()
     with staged_directory(out / "arena") as staged:
         ctx = StudyContext(out_dir=staged, jobs=checked.jobs, progress=lambda m: write(f"[arena] {m}"))
-        result, ranking = run_record(ctx, t, y, d1, args.noise_bound, args.accel_bound, source=str(args.signal))
+        result, ranking = run_record(ctx, t, y, d1, args.noise_bound, args.accel_bound, source=str(args.signal),
+                                     check=check)
         result.runtime_s = time.perf_counter() - t0
         write_results_json(result, staged)
         write_text_atomic(staged / "REPORT.md", "\n".join(report_lines(result.to_dict())) + "\n")
     s = result.settings
     print(f"bound 2√(εL) = {result.get('bound').value:.4g}; errors after a start-up window of "
           f"{s['startup_window_s']:.4g} s, scored on {s['scored_on']}")
+    e = s["record_check"]["estimates"]
+    print(f"stated ε = {args.noise_bound:.4g}, L = {args.accel_bound:.4g}; the record's own estimates: ε ≈ "
+          f"{e['noise_bound']:.4g}, |f''| ≈ {e['accel']:.4g}"
+          + ("" if e["accel"] > 0 else " (none beyond its noise)"))
     for i, r in enumerate(ranking, 1):
         params = ", ".join(f"{k} = {v:.4g}" for k, v in r["params"].items())
         print(f"{i}. {r['family']:10s} worst |f̂' - f'| = {r['worst']:.4g} ({r['ratio']:.2f}× bound)  {params}")

@@ -353,6 +353,11 @@ def record_case(t, y, d1, eps: float, L: float) -> tuple:
 def recommend_for_record(t, y, d1, eps: float, L: float, *, rounds: int = 2, jobs: int = 1) -> list:
     """Tune every family on one recorded signal; the ranking by worst-case error.
 
+    The record and the bounds are checked first (:func:`~ctrl_analysis.arena.recordcheck.check_record`): bounds
+    that the record contradicts by more than an order of magnitude, values whose arithmetic would not stay finite,
+    and records whose tuning would cost more work or memory than the limits are refused before any work (the
+    warnings of a looser bound are not raised here: ``check_record`` returns them).
+
     Parameters
     ----------
     t, y : numpy.ndarray, shape (N,)
@@ -370,9 +375,22 @@ def recommend_for_record(t, y, d1, eps: float, L: float, *, rounds: int = 2, job
     -------
     list of dict
         One per family, best first: ``family``, ``label``, ``params``, ``worst``, ``ratio``.
+
+    Raises
+    ------
+    TypeError, ValueError
+        A malformed record or bound, a refused record (above), or a family whose every tuning gave a
+        non-finite error on the record (never ranked as "inf × bound").
     """
     from . import tuning
+    from .recordcheck import check_record
 
+    check_record(t, y, d1, eps, L)  # errors name t, y, d1, eps, L; a refused record is one sentence
+    t, y = np.asarray(t, dtype=float), np.asarray(y, dtype=float)
+    d1 = None if d1 is None else np.asarray(d1, dtype=float)
+    eps, L = float(eps), float(L)
+    rounds = check_int("rounds", rounds, minimum=0)
+    jobs = check_int("jobs", jobs, minimum=1)
     setup, rec = record_case(t, y, d1, eps, L)
     case = Case("user", "user", float(eps), float(L), (0,))
     tuning._USER_RECORDS[case] = rec
@@ -381,11 +399,13 @@ def recommend_for_record(t, y, d1, eps: float, L: float, *, rounds: int = 2, job
         for fam in FAMILIES:
             r = tune_family(fam.name, [case], setup, rounds=rounds, jobs=jobs)
             v, m = r["best"][0]["worst"]
+            if not np.isfinite(m[0]):
+                raise ValueError(f"every tuning of the {fam.name} family gave a non-finite derivative error on this "
+                                 f"record (ε = {eps:.3g}, L = {L:.3g}, dt = {setup.dt:.3g} s); the arena cannot "
+                                 "rank it")
             out.append({"family": fam.name, "label": fam.label, "params": dict(zip([p.name for p in fam.params],
                                                                                    v.tolist())),
                         "worst": float(m[0]), "ratio": float(m[0] / lower_bound(eps, L))})
     finally:
         tuning._USER_RECORDS.pop(case, None)
     return sorted(out, key=lambda r: r["worst"])
-
-

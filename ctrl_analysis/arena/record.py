@@ -20,7 +20,8 @@ INFO = StudyInfo(name="arena", seed_file="", paper="",
                  reproduces="the estimator families tuned fairly on a user's record, ranked against the bound 2√(εL)")
 
 
-def run_record(ctx: StudyContext, t, y, d1, eps: float, L: float, source: str = "") -> tuple:
+def run_record(ctx: StudyContext, t, y, d1, eps: float, L: float, source: str = "",
+               check: dict | None = None) -> tuple:
     """Rank every family on one record and save the outputs into ``ctx.out_dir``.
 
     Parameters
@@ -35,6 +36,10 @@ def run_record(ctx: StudyContext, t, y, d1, eps: float, L: float, source: str = 
         Noise bound and bound on |f''|.
     source : str
         Where the record came from (the CSV's path), recorded in results.json.
+    check : dict, optional
+        :func:`~ctrl_analysis.arena.recordcheck.check_record`'s result (made here when not given): the record's
+        own noise and curvature estimates beside the stated bounds, and the warnings, go into results.json and
+        REPORT.md.
 
     Returns
     -------
@@ -43,9 +48,15 @@ def run_record(ctx: StudyContext, t, y, d1, eps: float, L: float, source: str = 
     """
     from .interface import estimate, family
     from .recommend import recommend_for_record, record_case
+    from .recordcheck import check_record
 
     if not isinstance(ctx, StudyContext):
         raise TypeError(f"ctx must be a StudyContext, got {ctx!r:.80}")
+    if check is None:
+        check = check_record(t, y, d1, eps, L)
+    t, y = np.asarray(t, dtype=float), np.asarray(y, dtype=float)
+    d1 = None if d1 is None else np.asarray(d1, dtype=float)
+    eps, L = float(eps), float(L)
     ctx.progress("tuning every family on the record")
     ranking = recommend_for_record(t, y, d1, eps, L, jobs=ctx.jobs)
     setup, (ref, _, fit) = record_case(t, y, d1, eps, L)
@@ -59,9 +70,17 @@ def run_record(ctx: StudyContext, t, y, d1, eps: float, L: float, source: str = 
               "(no derivative given; the errors are estimates)")
     result.settings.update({"mode": "record", "signal": source, "noise_bound": float(eps), "accel_bound": float(L),
                             "dt": setup.dt, "samples": int(y.size), "startup_window_s": setup.transient,
-                            "scored_on": scored})
+                            "scored_on": scored, "record_check": _check_settings(check, float(t[0]))})
     result.quantity("bound", "lower bound 2√(εL) on the worst-case error of any causal estimator", bound,
                     unit="signal unit/s")
+    e = check["estimates"]
+    result.quantity("record.noise_estimate", "the record's own noise bound ε̂ (uniform noise of the spread that the "
+                    "median absolute deviation of its third differences shows)", e["noise_bound"], unit="signal unit",
+                    note=f"stated ε = {eps:.4g}" + (f"; quantised, step {e['quantum']:.4g}" if e["quantum"] else ""))
+    result.quantity("record.accel_estimate", "the record's own |f''| beyond its noise (smoothed second differences; "
+                    "0 = none resolved)", e["accel"], unit="signal unit/s²", note=f"stated L = {L:.4g}")
+    for i, w in enumerate(check["warnings"]):
+        result.finding(f"bound-warning-{i + 1}", f"Warning: {w}.")
     for r in ranking:
         result.quantity(f"{r['family']}.worst", f"{r['label']}: tuned worst-case |f̂' - f'| after the start-up window",
                         r["worst"], unit="signal unit/s",
@@ -77,6 +96,17 @@ def run_record(ctx: StudyContext, t, y, d1, eps: float, L: float, source: str = 
                header=f"time,measurement,derivative estimate ({win['family']})", comments="")
     _figures(ctx, result, t, y, est, ref[:, 0], fit[:, 0], setup, ranking, bound, d1 is not None)
     return result, ranking
+
+
+def _check_settings(check: dict, t0: float) -> dict:
+    """The record check for results.json: stated bounds, the record's estimates, the factor, warnings, cost."""
+    e = check["estimates"]
+    return {"stated": dict(check["stated"]), "factor": check["factor"], "warnings": list(check["warnings"]),
+            "estimates": {"noise_bound": float(e["noise_bound"]), "noise_sigma": float(e["noise_sigma"]),
+                          "quantum": float(e["quantum"]), "accel": float(e["accel"]),
+                          "accel_time_s": None if e["accel_time"] is None else t0 + float(e["accel_time"]),
+                          "accel_scale_s": None if e["accel_scale_s"] is None else float(e["accel_scale_s"])},
+            "cost": {k: float(v) for k, v in (check.get("cost") or {}).items()}}
 
 
 def _figures(ctx, result, t, y, est, ref, fit, setup, ranking, bound, exact) -> None:
@@ -144,12 +174,25 @@ def report_lines(results: dict, out_dir: Path | str = ".") -> list[str]:
              f"Record `{s['signal']}`: {s['samples']} samples at dt = {s['dt']:.4g} s; noise bound ε = "
              f"{s['noise_bound']:.4g}, bound L = {s['accel_bound']:.4g} on |f''|; lower bound 2√(εL) = "
              f"{q['bound']['value']:.4g}. Errors are scored on {s['scored_on']}, after a start-up window of "
-             f"{s['startup_window_s']:.4g} s.", "",
-             "| rank | family | worst-case error | × bound | tuning |", "|---|---|---|---|---|"]
+             f"{s['startup_window_s']:.4g} s.", ""]
+    rc = s.get("record_check")
+    if rc:
+        e = rc["estimates"]
+        lines += [f"Stated bounds against the record's own estimates: noise ε = {rc['stated']['noise_bound']:.4g} "
+                  f"(record: ε̂ ≈ {e['noise_bound']:.4g}, from the robust spread of its third differences"
+                  + (f"; quantised, step {e['quantum']:.4g}" if e["quantum"] else "") + f"), |f''| ≤ L = "
+                  f"{rc['stated']['accel_bound']:.4g} (record: "
+                  + (f"≈ {e['accel']:.4g} beyond its noise, from its smoothed second differences" if e["accel"] > 0
+                     else "no curvature resolved beyond its noise")
+                  + f"). A bound tighter than the record by more than {rc['factor']:g}× is refused; a looser one is "
+                  "a warning.", ""]
+        lines += [f"**Warning:** {w}." for w in rc["warnings"]] + ([""] if rc["warnings"] else [])
+    lines += ["| rank | family | worst-case error | × bound | tuning |", "|---|---|---|---|---|"]
     for i, f in enumerate(fams, 1):
         lines.append(f"| {i} | {q[f + '.worst']['label'].split(':')[0]} | {q[f + '.worst']['value']:.4g} "
                      f"| {q[f + '.ratio']['value']:.3g} | {q[f + '.worst']['note']} |")
-    lines += ["", *[f"- {f['text']}" for f in results.get("findings") or []], "",
+    findings = [f for f in results.get("findings") or [] if not str(f.get("id", "")).startswith("bound-warning")]
+    lines += ["", *[f"- {f['text']}" for f in findings], "",
               "The recommended estimator's f̂' at every sample: `estimate.csv` (time, measurement, estimate).", ""]
     for fig in results.get("figures") or []:
         lines += [f"![{fig}]({Path(out_dir) / fig})", "", (results.get("captions") or {}).get(fig, ""), ""]

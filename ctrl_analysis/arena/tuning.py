@@ -51,6 +51,9 @@ __all__ = ["Case", "Setup", "case_records", "evaluate", "param_values", "pareto_
 METRICS = ("worst", "rms", "lag", "noise")
 #: Runs per engine call (memory: N x runs x outputs doubles).
 RUNS_PER_CALL = 480
+#: The largest Kalata index Λ tuned (α-β and α-β-γ): beyond about 10^5 the gains round to α = 1, β = 2 (γ = 4),
+#: the filters' stability edge, and the engine refuses them; 10^3 is already a one-sample filter (α > 0.99999).
+LAMBDA_MAX = 1e3
 #: Records of user cases (a recorded signal), looked up by :func:`case_records` before drawing.
 _USER_RECORDS: dict = {}
 
@@ -168,6 +171,13 @@ def param_values(fam: Family, z, case: Case, setup: Setup) -> np.ndarray:
     Returns
     -------
     numpy.ndarray, shape (C, n_params)
+
+    Notes
+    -----
+    Caps, so that no bound or sample period asks for what cannot run: the fastest pole at ``OMEGA_DT_MAX / dt``,
+    a time constant at least ``dt``, Kalata's ``Λ`` at most :data:`LAMBDA_MAX` and a window at most the record's
+    ``n`` samples (a longer one only repeats the first sample; uncapped, ``2√(ε/L)/dt`` at ``dt = 1e-9`` s
+    asked for windows of 6·10⁸ samples and 20 GB).
     """
     if not isinstance(fam, Family):
         raise TypeError(f"fam must be a Family, got {fam!r:.80}")
@@ -188,8 +198,12 @@ def param_values(fam: Family, z, case: Case, setup: Setup) -> np.ndarray:
             v = np.minimum(v, OMEGA_DT_MAX / (pole * setup.dt))
         if p.ref == "tau":
             v = np.maximum(v, setup.dt)
+        if p.ref in ("lambda", "lambda3"):
+            v = np.minimum(v, LAMBDA_MAX)
         if p.integer:
             v = np.maximum(np.round(v), 2.0)
+        if p.ref == "window":
+            v = np.minimum(v, float(setup.n))
         out[:, j] = v
     return out
 

@@ -107,7 +107,9 @@ def test_a_record_run_writes_its_folder(tmp_path, capsys, derivative):
 
 def test_bounds_without_a_record_and_a_file_as_out_are_usage_errors(tmp_path, capsys):
     assert main(["arena", "--noise-bound", "0.01"]) == 2
-    assert "--noise-bound describe a record: give them with --signal" in capsys.readouterr().err
+    assert "--noise-bound describes a record: give it with --signal" in capsys.readouterr().err
+    assert main(["arena", "--noise-bound", "0.01", "--accel-bound", "1"]) == 2
+    assert "--noise-bound and --accel-bound describe a record: give them with --signal" in capsys.readouterr().err
     f = _sine_csv(tmp_path / "rec.csv")
     (tmp_path / "file").write_text("x")
     assert main(["arena", "--signal", str(f), "--noise-bound", "0.01", "--accel-bound", "1", "--out",
@@ -147,3 +149,155 @@ def test_the_reports_arena_section_says_where_it_comes_from(tmp_path):
     result.settings["signal"] = "my.csv"
     write_results_json(result, tmp_path / "arena")
     assert "holds an arena run on a record (`my.csv`), not the benchmark" in _arena_section(tmp_path)[2]
+
+
+# --------------------------------------------------------------------- the record checked before any work (#28)
+def _arena(args, capsys):
+    code = main(["arena", *args])
+    cap = capsys.readouterr()
+    return code, cap.out, cap.err
+
+
+@pytest.mark.parametrize("values, eps, L, message", [
+    (1.0, "0.01", "1e-6", "--accel-bound 1e-06 is far below what the record shows: beyond its noise, its smoothed "
+                          "second differences reach |f''| ≈ 0.8"),
+    (1.0, "1e-8", "1", "--noise-bound 1e-08 is far below the record's own noise: the spread of its third differences "
+                       "gives ε ≈ 0.011"),
+    (1.0, "1e4", "1", "the bounds' time scale √(ε/L) = 100 s is longer than the record (5.99 s)"),
+    (1.0, "0.01", "1e-300", "--accel-bound is 1e-300, outside the magnitudes 1e-50 to 1e+50"),
+    (1e200, "0.01", "1", "the largest |measurement| is 1.01e+200, outside the magnitudes 1e-50 to 1e+50"),
+], ids=["accel-1e6-too-small", "noise-1e6-too-small", "noise-1e6-too-large", "bound-1e-300", "values-1e200"])
+def test_bounds_the_record_contradicts_are_one_line_and_nothing_written(tmp_path, capsys, values, eps, L, message):
+    t = 0.01 * np.arange(600)
+    y = values * (np.sin(t) + 0.01 * np.random.default_rng(0).uniform(-1, 1, t.size))
+    f = _csv(tmp_path / "rec.csv", np.column_stack([t, y]))
+    out = tmp_path / "D"
+    code, printed, err = _arena(["--signal", str(f), "--noise-bound", eps, "--accel-bound", L, "--out", str(out)],
+                                capsys)
+    assert code == 2 and printed == "" and err.count("\n") == 1 and message in err, err
+    assert err.startswith(f"ctrl-analysis: error: --signal path {str(f)!r}") or "--accel-bound is" in err
+    assert not out.exists()
+
+
+def test_a_bound_looser_than_the_record_is_a_warning_recorded_beside_the_records_estimates(tmp_path, capsys):
+    """--accel-bound 1e6 x too large: before, 'alpha, beta must give a stable filter' (exit 2); now the run, with
+    one warning line, no numpy warning, and both the stated bounds and the record's estimates in the outputs."""
+    import warnings
+
+    f = _sine_csv(tmp_path / "rec.csv", derivative=False)
+    out = tmp_path / "D"
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no RuntimeWarning (overflow, invalid value) anywhere in the run
+        code, printed, err = _arena(["--signal", str(f), "--noise-bound", "0.01", "--accel-bound", "1e6", "--out",
+                                     str(out), "--jobs", "1"], capsys)
+    assert code == 0
+    assert [line for line in err.splitlines() if not line.startswith("[arena]")] == [
+        "ctrl-analysis: warning: --accel-bound 1e+06 is 1.07e+06× above what the record shows (|f''| ≈ 0.938 beyond "
+        "its noise): the ranking is tuned for the stated bound, and errors below the bound 2√(εL) are to be expected "
+        "on this record"]
+    assert "stated ε = 0.01, L = 1e+06; the record's own estimates: ε ≈ 0.01141, |f''| ≈ 0.9379" in printed
+    data = validate_results(json.loads((out / "arena" / "results.json").read_text()))
+    rc = data["settings"]["record_check"]
+    assert rc["stated"] == {"noise_bound": 0.01, "accel_bound": 1e6} and len(rc["warnings"]) == 1
+    assert rc["estimates"]["noise_bound"] == pytest.approx(0.01141, rel=1e-3)
+    q = {x["id"]: x["value"] for x in data["quantities"]}
+    assert q["record.accel_estimate"] == pytest.approx(0.9379, rel=1e-3)
+    assert all(np.isfinite(v) for k, v in q.items() if k.endswith((".worst", ".ratio")))
+    report = (out / "arena" / "REPORT.md").read_text()
+    assert "noise ε = 0.01 (record: ε̂ ≈ 0.01141" in report and "|f''| ≤ L = 1e+06 (record: ≈ 0.9379" in report
+    assert "**Warning:** --accel-bound 1e+06 is 1.07e+06× above" in report
+
+
+def test_a_byte_order_mark_keeps_the_first_row(tmp_path):
+    t = 0.01 * np.arange(40)
+    body = "\n".join(f"{a!r},{b!r}" for a, b in zip(t.tolist(), np.sin(t).tolist())) + "\n"
+    for name, text in (("bom.csv", body), ("bom_header.csv", "time,y\n" + body)):
+        (tmp_path / name).write_text("\ufeff" + text, encoding="utf-8")
+        tt, y, _ = read_record(tmp_path / name)
+        assert tt.size == 40 and tt[0] == 0.0 and y[1] == np.sin(0.01), name
+
+
+@pytest.mark.parametrize("kind", ["dev-zero", "folder", "fifo", "200 MB", "2 GiB"])
+def test_what_is_not_a_small_regular_file_is_refused_before_it_is_read(tmp_path, capsys, kind):
+    import os
+
+    path = {"dev-zero": "/dev/zero", "folder": str(tmp_path)}.get(kind, str(tmp_path / "f.csv"))
+    if kind == "dev-zero" and not os.path.exists(path):
+        pytest.skip("no /dev/zero here")
+    if kind == "fifo":
+        os.mkfifo(path)  # opening it would wait for a writer forever
+    if kind in ("200 MB", "2 GiB"):
+        with open(path, "wb") as fh:  # sparse: no disk or memory is used
+            fh.truncate(200 * 10**6 if kind == "200 MB" else 2 * 2**30)
+    code, _, err = _arena(["--signal", path, "--noise-bound", "0.01", "--accel-bound", "1",
+                           "--out", str(tmp_path / "D")], capsys)
+    assert code == 2 and err.count("\n") == 1
+    if kind.endswith("B"):
+        assert "MiB, over the limit of 128 MiB (and at most 1000000 rows): decimate the record" in err
+    else:
+        assert "is not a regular file (a CSV file is needed, not a device, pipe or folder)" in err
+    assert not (tmp_path / "D").exists()
+
+
+def test_more_rows_than_the_limit_are_refused(tmp_path, monkeypatch):
+    from ctrl_analysis.arena import recordcheck
+
+    monkeypatch.setattr(recordcheck, "MAX_ROWS", 50)
+    f = _sine_csv(tmp_path / "rec.csv", derivative=False, n=100)
+    with pytest.raises(ValueError, match="has 100 rows, over the limit of 50: decimate the record"):
+        read_record(f)
+    f.write_text(f.read_text().split("\n", 1)[1])  # no header, no trailing newline: counted after parsing
+    f.write_text(f.read_text().rstrip("\n"))
+    monkeypatch.setattr(recordcheck, "MAX_ROWS", 99)
+    with pytest.raises(ValueError, match="has 100 rows, over the limit of 99"):
+        read_record(f)
+
+
+def test_quick_with_a_file_as_out_and_a_bad_scheduler_are_refused_before_any_work(tmp_path, capsys, monkeypatch):
+    from ctrl_analysis.arena import recommend
+
+    def no_work(*args, **kwargs):
+        raise AssertionError("the arena started tuning")
+
+    monkeypatch.setattr(recommend, "run_arena", no_work)
+    (tmp_path / "FILE").write_text("x")
+    code, _, err = _arena(["--quick", "--out", str(tmp_path / "FILE")], capsys)
+    assert code == 2 and err == f"ctrl-analysis: error: --out must be a directory, got the file {str(tmp_path / 'FILE')!r}\n"
+    code, _, err = _arena(["--quick", "--scheduler", "nonsense", "--out", str(tmp_path / "D")], capsys)
+    assert code == 2 and err.count("\n") == 1 and "got 'nonsense'" in err and "Traceback" not in err
+    assert not (tmp_path / "D").exists()
+
+
+def test_the_library_entry_checks_the_record_and_refuses_non_finite_errors(monkeypatch):
+    from ctrl_analysis.arena import recommend
+
+    t = 0.01 * np.arange(600)
+    y = np.sin(t) + 0.01 * np.random.default_rng(0).uniform(-1, 1, t.size)
+    with pytest.raises(ValueError, match="^the record: L 1e-06 is far below"):
+        recommend.recommend_for_record(t, y, None, 0.01, 1e-6)
+    with pytest.raises(ValueError, match="^eps must be"):
+        recommend.recommend_for_record(t, y, None, -0.01, 1.0)
+
+    def diverged(name, cases, setup, **kwargs):
+        return {"best": [{"worst": (np.array([1.0] * len(family(name).params)), np.array([np.inf] * 4))}]}
+
+    from ctrl_analysis.arena.interface import family
+
+    monkeypatch.setattr(recommend, "tune_family", diverged)
+    with pytest.raises(ValueError, match="every tuning of the sigma family gave a non-finite derivative error"):
+        recommend.recommend_for_record(t, y, None, 0.01, 1.0)
+
+
+def test_a_record_at_the_edge_of_the_scale_ranks_as_the_original_without_overflow():
+    import warnings
+
+    from ctrl_analysis.arena.recommend import recommend_for_record
+
+    t = 0.01 * np.arange(300)
+    y = np.sin(t) + 0.01 * np.random.default_rng(0).uniform(-1, 1, t.size)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        a = recommend_for_record(t, y, None, 0.01, 1.0, rounds=0)
+        b = recommend_for_record(t, 2.0**150 * y, None, 2.0**150 * 0.01, 2.0**150, rounds=0)  # ~1.4e45
+    assert [r["family"] for r in a] == [r["family"] for r in b]
+    assert [r["ratio"] for r in a] == pytest.approx([r["ratio"] for r in b], rel=1e-9)

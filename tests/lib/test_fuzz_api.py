@@ -762,6 +762,25 @@ def _arena_cases(tmp):
                        {"quantities": [{"id": "q"}]}])),
         ("read_record", arena_cli.read_record, dict(path=ok), dict(path=[None, 3, ""] + bad_csv)),
         *_arena_registry_cases(case, setup),
+        *_arena_record_check_cases(),
+    ]
+
+
+def _arena_record_check_cases():
+    """The arena's checks of a user's record before its work (a record whose bounds hold, then each bad part)."""
+    from ctrl_analysis.arena import recordcheck
+
+    t = 0.01 * np.arange(600)
+    y = np.sin(t) + 0.01 * np.random.default_rng(0).uniform(-1, 1, t.size)
+    return [
+        ("record_estimates", recordcheck.record_estimates, dict(y=y, dt=0.01),
+         dict(y=ARR + [np.zeros((2, 3)), [1.0, 2.0], _nan_like(y)], dt=POS, d1=opt(ARR) + [np.zeros(3), _nan_like(y)],
+              eps=opt(POS))),
+        ("work_estimate", recordcheck.work_estimate, dict(n=600, dt=0.01, eps=0.01, L=1.0),
+         dict(n=INT + [1, -5], dt=POS, eps=POS, L=POS, derivative=BOOL)),
+        ("check_record", recordcheck.check_record, dict(t=t, y=y, d1=None, eps=0.01, L=1.0),
+         dict(t=ARR + [t[::-1], t[:10], t ** 2, _nan_like(t)], y=ARR + [y[:-1], np.zeros((600, 2)), _nan_like(y)],
+              d1=opt(ARR) + [np.zeros(3), _nan_like(y)], eps=POS, L=POS, where=STR, names=[None, "ab", ("a",), (1, 2)])),
     ]
 
 
