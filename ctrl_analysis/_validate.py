@@ -25,6 +25,7 @@ __all__ = [
     "check_path",
     "check_out_dir",
     "check_vector",
+    "finite_result",
 ]
 
 
@@ -32,6 +33,19 @@ def _is_real_scalar(value) -> bool:
     return isinstance(value, numbers.Real) and not isinstance(value, bool) or (
         isinstance(value, np.generic) and np.isrealobj(value) and np.ndim(value) == 0
     )
+
+
+def _float_array(name: str, value, what: str) -> np.ndarray:
+    """``value`` as a float array; a string, bytes, ``None``, a bool or complex entries are a ``TypeError``."""
+    if isinstance(value, (str, bytes, bool, np.bool_)) or value is None:
+        raise TypeError(f"{name} must be {what}, got {value!r}")
+    try:
+        arr = np.asarray(value)
+        if arr.dtype.kind in "bcUSV":  # a bool, complex, text or bytes is not a real number
+            raise TypeError
+        return arr.astype(float, copy=False)
+    except (TypeError, ValueError, OverflowError):
+        raise TypeError(f"{name} must be {what}, got {value!r:.200}") from None
 
 
 def check_real(name: str, value) -> float:
@@ -89,12 +103,7 @@ def check_finite(name: str, value, *, shape=None, scalar: bool = False) -> np.nd
     """
     if scalar:
         value = check_real(name, value)
-    if isinstance(value, (str, bytes)) or value is None:
-        raise TypeError(f"{name} must be a real number or array, got {value!r}")
-    try:
-        arr = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        raise TypeError(f"{name} must be a real number or array, got {value!r}") from None
+    arr = _float_array(name, value, "a real number or array")
     if not np.all(np.isfinite(arr)):
         raise ValueError(f"{name} must be finite (no NaN or inf), got {value!r}")
     if shape is not None and arr.shape != tuple(shape):
@@ -120,14 +129,9 @@ def check_array(name: str, value) -> np.ndarray:
     Raises
     ------
     TypeError
-        If ``value`` is a string, ``None`` or not convertible to a float array.
+        If ``value`` is a string, ``None``, a bool, complex or not convertible to a float array.
     """
-    if isinstance(value, (str, bytes)) or value is None:
-        raise TypeError(f"{name} must be a real array, got {value!r}")
-    try:
-        return np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        raise TypeError(f"{name} must be a real array, got {value!r}") from None
+    return _float_array(name, value, "a real array")
 
 
 def check_positive(name: str, value, *, scalar: bool = False) -> np.ndarray | float:
@@ -531,3 +535,36 @@ def check_vector(name: str, value, n: int, *, allow_inf: bool = False, broadcast
         rule = f"one number or shape ({n},)" if broadcast else f"shape ({n},)"
         raise ValueError(f"{name} must be {rule}, got shape {arr.shape}")
     return arr.copy()
+
+
+def finite_result(names: str, compute):
+    """``compute()``, whose arguments were checked finite; a ``ValueError`` naming ``names`` if it overflows.
+
+    Parameters
+    ----------
+    names : str
+        The arguments the result comes from, for the message (e.g. ``"omega and order"``).
+    compute : callable
+        ``compute()`` returns a number, an array (real or complex) or a tuple of them.
+
+    Returns
+    -------
+    The value ``compute()`` returned.
+
+    Raises
+    ------
+    ValueError
+        If ``compute()`` raises ``OverflowError`` or returns NaN or inf: finite arguments of too large or
+        too small a magnitude for double precision.
+    """
+    try:
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+            value = compute()
+        parts = value if isinstance(value, tuple) else (value,)  # a tuple: arrays of different shapes
+        finite = all(bool(np.all(np.isfinite(np.asarray(v, dtype=complex)))) for v in parts)
+    except OverflowError:
+        finite = False
+    if not finite:
+        raise ValueError(f"{names} overflow double precision (the result is not finite): use values of a "
+                         f"smaller magnitude")
+    return value

@@ -21,8 +21,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import identification_kernels as kern
-from ._validate import check_bool, check_finite, check_int, check_positive, check_vector
-from .engine.blocks import DiscreteBlock, signal_names
+from ._validate import check_bool, check_finite, check_int, check_positive, check_vector, finite_result
+from .engine.blocks import MAX_SIGNALS, DiscreteBlock, signal_names
 from .engine.kernels import KernelBlock, Kernels
 
 __all__ = [
@@ -35,6 +35,9 @@ __all__ = [
     "batch_least_squares",
     "identifiability",
 ]
+
+#: Most parameters a recursive least squares estimates (its covariance is n_params² floats).
+MAX_PARAMS = 1000
 
 #: Default threshold on the (column-scaled) condition number above which a batch is ill-conditioned.
 DEFAULT_COND_THRESHOLD = 1e6
@@ -129,11 +132,13 @@ def _check_regression(H, z=_NO_Z):
         raise ValueError(f"H must be a 2-D regression matrix (samples x parameters), got ndim={H.ndim}")
     if H.shape[0] < 1 or H.shape[1] < 1:
         raise ValueError(f"H must have at least one row and one column, got shape {H.shape}")
+    finite_result("H", lambda: np.linalg.norm(H, axis=0))  # its column norms (and H^T H) must not overflow
     if z is _NO_Z:
         return H
     z = np.atleast_1d(check_finite("z", z))
     if z.shape != (H.shape[0],):
         raise ValueError(f"z must have shape ({H.shape[0]},) to match H's rows, got {z.shape}")
+    finite_result("z", lambda: np.linalg.norm(z))
     return H, z
 
 
@@ -312,7 +317,7 @@ class RecursiveLeastSquaresBlock(KernelBlock, DiscreteBlock):
                  max_trace: float | None = None, feedthrough: bool = True):
         self.feedthrough = check_bool("feedthrough", feedthrough)
         self.max_trace = None if max_trace is None else float(check_positive("max_trace", max_trace, scalar=True))
-        self.n_params = check_int("n_params", n_params, minimum=1)
+        self.n_params = check_int("n_params", n_params, minimum=1, maximum=MAX_PARAMS)
         forgetting = float(check_finite("forgetting", forgetting, scalar=True))
         if not 0.0 < forgetting <= 1.0:
             raise ValueError(f"forgetting must be in (0, 1], got {forgetting}")
@@ -337,6 +342,9 @@ class RecursiveLeastSquaresBlock(KernelBlock, DiscreteBlock):
         upper = np.full(p, np.inf) if upper is None else check_vector("upper", upper, p, allow_inf=True)
         if np.any(np.isnan(lower)) or np.any(np.isnan(upper)) or np.any(lower > upper):
             raise ValueError(f"lower must be <= upper element-wise (no NaN), got lower={lower}, upper={upper}")
+        if np.any(lower == np.inf) or np.any(upper == -np.inf):
+            raise ValueError(f"lower must be < inf and upper > -inf (an infinite bound is on its own side), got "
+                             f"lower={lower}, upper={upper}")
         self.lower, self.upper = lower.copy(), upper.copy()
         self.projected = bool(np.any(np.isfinite(lower)) or np.any(np.isfinite(upper)))
         if theta0 is None:
@@ -417,7 +425,7 @@ class RecursiveLeastSquares:
                  lower=None, upper=None, max_trace: float | None = None):
         self.block = RecursiveLeastSquaresBlock(n_params, forgetting, P0, theta0, lower=lower, upper=upper,
                                                 max_trace=max_trace)
-        self.batch = None if batch is None else check_int("batch", batch, minimum=1)
+        self.batch = None if batch is None else check_int("batch", batch, minimum=1, maximum=MAX_SIGNALS)
         self.reset()
 
     def reset(self) -> None:
@@ -502,6 +510,9 @@ class RecursiveLeastSquares:
         """
         H = np.atleast_2d(check_finite("H", H))
         z = np.atleast_1d(check_finite("z", z))
+        if H.ndim > 3 or z.ndim != H.ndim - 1:
+            raise ValueError(f"H and z must have shapes (N, p) and (N,), or (N, B, p) and (N, B), got {H.shape} "
+                             f"and {z.shape}")
         if H.shape[0] != z.shape[0]:
             raise ValueError(f"H and z must have the same number of samples, got {H.shape[0]} and {z.shape[0]}")
         out = np.empty(H.shape[:1] + np.shape(self.theta))
@@ -563,9 +574,9 @@ class ArxRegressor(KernelBlock, DiscreteBlock):
     kernels = Kernels(output=kern.arx_output, update=kern.arx_update)
 
     def __init__(self, na: int, nb: int, lag: int = 0):
-        self.na = check_int("na", na, minimum=0)
-        self.nb = check_int("nb", nb, minimum=0)
-        self.lag = check_int("lag", lag, minimum=0)
+        self.na = check_int("na", na, minimum=0, maximum=MAX_SIGNALS)
+        self.nb = check_int("nb", nb, minimum=0, maximum=MAX_SIGNALS)
+        self.lag = check_int("lag", lag, minimum=0, maximum=MAX_SIGNALS)
         if self.na + self.nb < 1:
             raise ValueError(f"na + nb must be >= 1, got na={na}, nb={nb}")
         self.ns, self.nu = self.na + self.lag, self.nb + self.lag

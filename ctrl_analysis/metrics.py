@@ -32,6 +32,14 @@ def _pair(names: tuple[str, str], a, b, axis) -> tuple[np.ndarray, np.ndarray]:
     return a, b
 
 
+def _no_overflow(names: str, result, *inputs):
+    """``result``; a ``ValueError`` naming ``names`` where finite inputs gave a NaN or inf (an overflow)."""
+    parts = result if isinstance(result, tuple) else (result,)
+    if all(np.all(np.isfinite(a)) for a in inputs) and not all(np.all(np.isfinite(p)) for p in parts):
+        raise ValueError(f"{names} overflow double precision (finite values, a result that is not finite)")
+    return result
+
+
 def _check_axis(axis, ndim: int, allow_none: bool = True) -> None:
     if axis is None and allow_none:
         return
@@ -84,7 +92,8 @@ def rmse(reference, y, axis=0):
         The RMSE, with ``axis`` removed.
     """
     reference, y = _pair(("reference", "y"), reference, y, axis)
-    return np.sqrt(np.mean((reference - y) ** 2, axis=axis))
+    with np.errstate(over="ignore", invalid="ignore"):
+        return _no_overflow("reference and y", np.sqrt(np.mean((reference - y) ** 2, axis=axis)), reference, y)
 
 
 def snr_db(reference, y, axis=0):
@@ -104,8 +113,11 @@ def snr_db(reference, y, axis=0):
     """
     r, y = _pair(("reference", "y"), reference, y, axis)
     e = r - y
+    with np.errstate(over="ignore", invalid="ignore"):
+        power, noise = np.sum(r**2, axis=axis), np.sum(e**2, axis=axis)
+    _no_overflow("reference and y", (power, noise), r, y)
     with np.errstate(divide="ignore"):
-        return 10.0 * np.log10(np.sum(r**2, axis=axis) / np.sum(e**2, axis=axis))
+        return 10.0 * np.log10(power / noise)
 
 
 def overshoot(t, y, final, initial=0.0, axis=0):
@@ -127,10 +139,13 @@ def overshoot(t, y, final, initial=0.0, axis=0):
     float or numpy.ndarray
         ``max(peak − 1, 0) · 100`` with the peak relative to the step, per run.
     """
+    check_array("t", t)  # unused, but a real array
     y = check_array("y", y)
     final = check_finite("final", final, scalar=True)
     initial = check_finite("initial", initial, scalar=True)
     _check_axis(axis, y.ndim)
+    if y.size == 0:
+        raise ValueError(f"y must hold at least one sample, got shape {y.shape}")
     step = final - initial
     if step == 0:
         raise ValueError("final must differ from initial for an overshoot")
@@ -222,13 +237,16 @@ def mean_std(values, ok=None, axis=0):
             raise TypeError(f"ok must be a boolean mask (one entry per run), got dtype {ok.dtype}")
         n_runs = v.shape[axis] if v.ndim else 1
         if ok.shape != (n_runs,):
-            raise ValueError(f"ok must have one entry per run ({n_runs}), got shape {ok.shape}")
+            raise ValueError(f"ok must have one entry per run of values ({n_runs}), got shape {ok.shape}")
         v = np.compress(ok, v, axis=axis)
     n = v.shape[axis]
     if n == 0:
         return np.nan, np.nan, 0
-    std = np.std(v, axis=axis, ddof=1) if n > 1 else np.zeros_like(np.mean(v, axis=axis))
-    return np.mean(v, axis=axis), std, n
+    with np.errstate(over="ignore", invalid="ignore"):
+        std = np.std(v, axis=axis, ddof=1) if n > 1 else np.zeros_like(np.mean(v, axis=axis))
+        mean = np.mean(v, axis=axis)
+    _no_overflow("values", (mean, std), v)
+    return mean, std, n
 
 
 def bandwidth_3db(sys, dbdrop: float = -3.0) -> float:
@@ -249,8 +267,8 @@ def bandwidth_3db(sys, dbdrop: float = -3.0) -> float:
     import control as ct
 
     dbdrop = check_finite("dbdrop", dbdrop, scalar=True)
-    if dbdrop >= 0:
-        raise ValueError(f"dbdrop must be < 0 (a drop in dB), got {dbdrop!r}")
+    if not -300.0 <= dbdrop < 0:
+        raise ValueError(f"dbdrop must be in [-300, 0) (a drop in dB within double precision), got {dbdrop!r}")
     return float(ct.bandwidth(sys, dbdrop=dbdrop))
 
 
@@ -284,14 +302,14 @@ def resonance_peak(sys, omega=None):
     _check_lti(sys)
     if omega is not None:
         omega = np.atleast_1d(check_positive("omega", omega))
-        if omega.ndim != 1:
-            raise ValueError(f"omega must be a 1-D array of frequencies, got shape {omega.shape}")
+        if omega.ndim != 1 or omega.size == 0:
+            raise ValueError(f"omega must be a non-empty 1-D array of frequencies, got shape {omega.shape}")
     if omega is None:
         poles = np.abs(np.asarray(sys.poles()))
         wmax = 100.0 * max(1.0, float(poles.max(initial=1.0)))
         omega = np.logspace(np.log10(wmax) - 7, np.log10(wmax), 4000)
     resp = ct.frequency_response(sys, omega)
-    mag = np.abs(np.squeeze(resp.complex))
+    mag = np.atleast_1d(np.abs(np.squeeze(resp.complex)))
     dc = abs(float(np.real(sys.dcgain())))
     k = int(np.argmax(mag))
     peak = 20 * np.log10(mag[k] / dc) if dc > 0 else np.inf

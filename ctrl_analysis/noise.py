@@ -12,6 +12,7 @@ from collections.abc import Callable
 import numpy as np
 
 from ._validate import check_finite, check_int
+from .engine.memory import RESULT_BYTES, check_result_memory
 
 __all__ = ["MAX_RUNS", "draw_noise", "gaussian_noise", "run_seeds", "uniform_noise"]
 
@@ -164,7 +165,10 @@ def gaussian_noise(std, mean=0.0) -> Callable:
     std = np.atleast_1d(check_finite("std", std))
     if np.any(std < 0):
         raise ValueError(f"std must be >= 0, got {std}")
-    mean = np.broadcast_to(np.atleast_1d(check_finite("mean", mean)), std.shape)
+    mean = np.atleast_1d(check_finite("mean", mean))
+    if mean.shape not in ((1,), std.shape):
+        raise ValueError(f"mean must be one number or have std's shape {std.shape}, got shape {mean.shape}")
+    mean = np.broadcast_to(mean, std.shape)
 
     def sample(rng: np.random.Generator, n_steps: int) -> np.ndarray:
         return mean + std * rng.standard_normal((n_steps, std.size))
@@ -203,6 +207,7 @@ def draw_noise(seeds, n_steps: int, *samplers: Callable) -> np.ndarray:
     if not seeds:
         raise ValueError("seeds must contain at least one seed")
     n_steps = check_int("n_steps", n_steps, minimum=1)
+    check_result_memory(8.0 * n_steps * len(seeds), RESULT_BYTES, f"draw_noise(n_steps={n_steps}, {len(seeds)} seeds)")
     if not samplers:
         raise ValueError("draw_noise needs at least one sampler")
     per_run = []

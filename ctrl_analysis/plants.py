@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._validate import check_positive, check_vector
+from ._validate import check_positive, check_vector, finite_result
 from .engine.blocks import DiscreteBlock, signal_names
 from .engine.kernels import KernelBlock, Kernels, Layout, as_int, jitable
 
@@ -143,6 +143,7 @@ class DiscreteLTI(KernelBlock, DiscreteBlock):
         self.dt = float(check_positive("dt", dt, scalar=True))
         if sys.isctime(strict=True):
             sysd = ct.c2d(ct.ss(sys), self.dt, method="zoh")
+            finite_result("dt (with sys)", lambda: (sysd.A, sysd.B))
         else:
             if sys.dt is not True and sys.dt is not None and not np.isclose(sys.dt, self.dt):
                 raise ValueError(f"sys is discrete with dt={sys.dt}, which must equal dt={self.dt}")

@@ -6,9 +6,12 @@ from math import comb
 
 import numpy as np
 
-from ._validate import check_int, check_positive
+from ._validate import check_int, check_positive, finite_result
 
-__all__ = ["repeated_pole_coefficients"]
+__all__ = ["MAX_POLE_ORDER", "repeated_pole_coefficients"]
+
+#: Highest power ``m`` of ``(s + ω)^m`` (its binomial coefficients near 1e300 beyond it overflow double precision).
+MAX_POLE_ORDER = 1000
 
 
 def repeated_pole_coefficients(m: int, omega: float) -> np.ndarray:
@@ -34,6 +37,11 @@ def repeated_pole_coefficients(m: int, omega: float) -> np.ndarray:
     >>> repeated_pole_coefficients(3, 2.0)
     array([ 1.,  6., 12.,  8.])
     """
-    m = check_int("m", m, minimum=0)
+    m = check_int("m", m, minimum=0, maximum=MAX_POLE_ORDER)
     omega = float(check_positive("omega", omega, scalar=True))
+    return finite_result("m and omega", lambda: _coefficients(m, omega))
+
+
+def _coefficients(m: int, omega: float) -> np.ndarray:
+    """The coefficients of ``(s + ω)^m``, unchecked (an ``OverflowError`` or inf where they overflow)."""
     return np.array([comb(m, i) * omega**i for i in range(m + 1)], dtype=float)

@@ -34,9 +34,10 @@ from ._validate import (
     check_finite,
     check_in,
     check_int,
+    check_names,
     check_positive,
 )
-from .engine.blocks import ContinuousBlock, DiscreteBlock, signal_names
+from .engine.blocks import MAX_SIGNALS, ContinuousBlock, DiscreteBlock, signal_names
 from .engine.integrators import MAX_SUBSTEPS, STEPPERS, euler_step, rk4_step
 from .engine.ivp import simulate_ivp
 from .engine.loop import Loop, place
@@ -318,6 +319,8 @@ def simulate_discrete(
     n_steps = check_int("n_steps", n_steps, minimum=1)
     bound = _check_bound(bound)
     x, noise, B = _prepare(x0, noise, seeds)
+    check_result_memory(8.0 * (n_steps + 1) * B * (x.shape[1] + 1), RESULT_BYTES,
+                        f"simulate_discrete(n_steps={n_steps}, {B} runs)")
     w_sig, inputs = _loop_inputs(noise, n_steps, "w", True)
     x_sig, rows = signal_names("x", x.shape[1]), None
 
@@ -337,6 +340,13 @@ def simulate_discrete(
 # ----------------------------------------------------------------------------------------------
 # python-control interoperability
 # ----------------------------------------------------------------------------------------------
+
+def _signal_spec(name: str, value):
+    """A signal count (0 to MAX_SIGNALS) or a list of names, as :func:`control.nlsys` takes them."""
+    if isinstance(value, (list, tuple, str)):
+        return check_names(name, value)
+    return check_int(name, value, minimum=0, maximum=MAX_SIGNALS)
+
 
 def continuous_nlsys(rhs: Callable, *, states, inputs, outputs=None, output: Callable | None = None,
                      params=None, name: str | None = None):
@@ -362,6 +372,8 @@ def continuous_nlsys(rhs: Callable, *, states, inputs, outputs=None, output: Cal
 
     check_callable("rhs", rhs, "rhs(t, x, u, params)")
     check_callable("output", output, "output(t, x, u, params)", optional=True)
+    states, inputs = _signal_spec("states", states), _signal_spec("inputs", inputs)
+    outputs = None if outputs is None else _signal_spec("outputs", outputs)
 
     def updfcn(t, x, u, p):
         return np.asarray(rhs(t, np.atleast_2d(x), np.atleast_2d(u), p if p else params)).reshape(-1)

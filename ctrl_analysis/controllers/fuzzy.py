@@ -42,6 +42,9 @@ __all__ = [
     "triangular_memberships",
 ]
 
+#: Most grid points, terms or table points along one axis (a larger grid takes minutes and gigabytes).
+MAX_POINTS = 10_000
+
 
 # ------------------------------------------------------------ the equations, once
 @jitable
@@ -466,12 +469,13 @@ class FuzzyController(_FuzzyBlock):
             raise ValueError(f"input_range must be > 0, got {input_range!r}")
         self.X_e, self.X_ec = float(xr[0]), float(xr[1])
         self.Y = check_positive("output_range", output_range, scalar=True)
-        n_u = int(rules.max()) + 1 if n_output_terms is None else check_int("n_output_terms", n_output_terms, minimum=2)
+        n_u = (int(rules.max()) + 1 if n_output_terms is None
+               else check_int("n_output_terms", n_output_terms, minimum=2, maximum=MAX_POINTS))
         if rules.min() < 0 or rules.max() >= n_u:
             raise ValueError(f"rules must hold output term indices in [0, {n_u - 1}] (n_output_terms={n_u}), "
                              f"got [{rules.min()}, {rules.max()}]")
         self.n_u = n_u
-        self.n_grid = check_int("n_grid", n_grid, minimum=3)
+        self.n_grid = check_int("n_grid", n_grid, minimum=3, maximum=MAX_POINTS)
         self.c_e = np.linspace(-self.X_e, self.X_e, rules.shape[0])
         self.c_ec = np.linspace(-self.X_ec, self.X_ec, rules.shape[1])
         self.c_u = np.linspace(-self.Y, self.Y, n_u)
@@ -522,8 +526,8 @@ class FuzzyController(_FuzzyBlock):
         U : ndarray, shape (n_e, n_ec)
             Output on the output universe (multiply by ``Ku`` for physical units): :meth:`infer` on the grid.
         """
-        E = np.linspace(-self.X_e, self.X_e, check_int("n_e", n_e, minimum=2))
-        EC = np.linspace(-self.X_ec, self.X_ec, check_int("n_ec", n_ec, minimum=2))
+        E = np.linspace(-self.X_e, self.X_e, check_int("n_e", n_e, minimum=2, maximum=MAX_POINTS))
+        EC = np.linspace(-self.X_ec, self.X_ec, check_int("n_ec", n_ec, minimum=2, maximum=MAX_POINTS))
         EE, CC = np.meshgrid(E, EC, indexing="ij")
         return E, EC, self.infer(EE.ravel(), CC.ravel()).reshape(E.size, EC.size)
 
@@ -557,7 +561,7 @@ class FuzzyLookupController(_FuzzyBlock):
         n = np.asarray(n_points, dtype=object)
         if n.shape not in ((), (1,), (2,)):
             raise ValueError(f"n_points must be one integer or two, got {n_points!r}")
-        n_e, n_ec = (check_int("n_points", v, minimum=2) for v in np.broadcast_to(n, (2,)))
+        n_e, n_ec = (check_int("n_points", v, minimum=2, maximum=MAX_POINTS) for v in np.broadcast_to(n, (2,)))
         self.controller = controller
         self.E, self.EC, self.U = controller.control_surface(n_e, n_ec)
         self.dE, self.dEC = self.E[1] - self.E[0], self.EC[1] - self.EC[0]

@@ -25,10 +25,11 @@ from .._validate import (
     check_hurwitz,
     check_int,
     check_positive,
+    finite_result,
 )
 from ..engine.blocks import DiscreteBlock, signal_names
 from ..engine.kernels import KernelBlock, Kernels, Layout
-from ..polynomials import repeated_pole_coefficients
+from ..polynomials import MAX_POLE_ORDER, _coefficients
 
 __all__ = ["PDFeedforward", "bandwidth_gains"]
 
@@ -63,10 +64,10 @@ def bandwidth_gains(n: int, omega_c: float) -> np.ndarray:
     ----------
     Gao Z., "Scaling and bandwidth-parameterization based controller tuning", ACC 2003.
     """
-    n = check_int("n", n, minimum=1)
+    n = check_int("n", n, minimum=1, maximum=MAX_POLE_ORDER)
     omega_c = float(check_positive("omega_c", omega_c, scalar=True))
     # k_i = C(n, i-1) ω_c^(n-i+1): the coefficients of (s + ω_c)^n, lowest power first
-    return repeated_pole_coefficients(n, omega_c)[::-1].copy()
+    return finite_result("n and omega_c", lambda: _coefficients(n, omega_c))[::-1].copy()
 
 
 def pd_step(t, x, u, p, out):
@@ -183,7 +184,7 @@ class PDFeedforward(KernelBlock, DiscreteBlock):
         if b0 == 0:
             raise ValueError("b0 must be non-zero, got 0")
         self.b0 = b0
-        order = check_int("order", order, minimum=1)
+        order = check_int("order", order, minimum=1, maximum=MAX_POLE_ORDER)
         if (omega_c is None) == (gains is None):
             raise ValueError(f"give exactly one of omega_c or gains, got omega_c={omega_c!r}, gains={gains!r}")
         if omega_c is not None:

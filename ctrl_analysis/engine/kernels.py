@@ -53,6 +53,8 @@ from typing import ClassVar, NamedTuple
 
 import numpy as np
 
+from .._validate import check_array
+
 __all__ = ["BlockKernel", "KernelBlock", "Kernels", "Layout", "as_int", "copy_output", "gather", "jitable", "scratch"]
 
 
@@ -305,8 +307,8 @@ class Layout:
         out = np.empty(self.size)
         for name, shape, lo in zip(self.names, self.shapes, self.at):
             try:
-                v = np.asarray(values[name], dtype=float)
-            except (TypeError, ValueError):
+                v = check_array(name, values[name])
+            except TypeError:
                 v = None
             if v is None or values[name] is None or np.isnan(v).any():
                 raise ValueError(f"parameter {name!r} must be a number or an array of numbers (no NaN), "

@@ -32,6 +32,7 @@ from typing import ClassVar
 import numpy as np
 
 from .._validate import (
+    check_array,
     check_bool,
     check_callable,
     check_finite,
@@ -227,8 +228,8 @@ class Loop:
                 funcs[s] = v
                 continue
             try:
-                a = np.asarray(v, dtype=float)
-            except (TypeError, ValueError):
+                a = check_array(f"inputs[{s!r}]", v)
+            except TypeError:
                 raise TypeError(f"inputs[{s!r}] must be a number, an array or a callable f(t), got {v!r:.80}") from None
             if a.ndim == 2:
                 if B is not None and a.shape[1] != B:
@@ -373,6 +374,8 @@ class Loop:
             raise TypeError(f"x0 must be a dict of block name -> initial state, got {x0!r:.80}")
         if seeds is not None and (isinstance(seeds, (str, bytes)) or not hasattr(seeds, "__len__")):
             raise TypeError(f"seeds must be a sequence of one seed per run, got {seeds!r:.80}")
+        if seeds is not None:
+            seeds = [check_int("seeds", s, minimum=0) for s in seeds]
         if keep is not None:
             if store_signals is not None:
                 raise ValueError("give keep or store_signals (the same thing), not both")
@@ -392,7 +395,6 @@ class Loop:
             from .params import runs_of
 
             B = runs_of(self, params) or 1  # per-run parameters say how many runs
-        x = self._x0(x0, B)
         if seeds is not None and len(seeds) != B:
             raise ValueError(f"seeds must have one entry per run ({B}), got {len(seeds)}")
         plan = self._plan()
@@ -404,7 +406,8 @@ class Loop:
         keep_cols = np.array([col[s] for s in keep], dtype=np.intp)
         n_kept = n_steps // every + 1  # stored instants
         per_run = self._memory_per_run(n_kept - 1, len(keep), store_states)
-        check_result_memory(per_run * B, RESULT_BYTES, "Loop.simulate")
+        check_result_memory(per_run * B, RESULT_BYTES, f"Loop.simulate(n_steps={n_steps}, runs={B})")
+        x = self._x0(x0, B)  # after the memory check: B runs' states are allocated here
         limit = CHUNK_BYTES if max_bytes is None else check_positive("max_bytes", max_bytes)
         work = 8 * (8 * self.n_states + 2 * len(names)) + per_run  # temporaries + stored rows, per run
         size = B if chunk_runs is None else check_int("chunk_runs", chunk_runs, minimum=1)

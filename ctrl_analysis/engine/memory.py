@@ -9,9 +9,9 @@ from __future__ import annotations
 
 import os
 
-from .._validate import check_int, check_nonnegative, check_positive
+from .._validate import check_int, check_nonnegative, check_positive, check_str
 
-__all__ = ["CHUNK_BYTES", "RESULT_BYTES", "check_result_memory", "chunk_bounds"]
+__all__ = ["CHUNK_BYTES", "MAX_CHUNKS", "RESULT_BYTES", "check_result_memory", "chunk_bounds"]
 
 
 
@@ -22,6 +22,8 @@ def _physical_memory() -> int:
         return 8 * 2**30
 
 
+#: Most chunks :func:`chunk_bounds` lists (its list alone would take about 100 MB).
+MAX_CHUNKS = 10**6
 #: Working memory (bytes) one chunk of a batch may use; larger batches are stepped in chunks.
 CHUNK_BYTES = 256 * 2**20
 #: Largest stored result (bytes) a runner allocates: half the machine's physical memory.
@@ -44,6 +46,9 @@ def chunk_bounds(runs: int, size: int) -> list[tuple[int, int]]:
     """
     runs = check_int("runs", runs, minimum=1)
     size = check_int("size", size, minimum=1)
+    if -(-runs // size) > MAX_CHUNKS:
+        raise ValueError(f"runs={runs} in chunks of size={size} would make {-(-runs // size)} chunks "
+                         f"(at most MAX_CHUNKS = {MAX_CHUNKS}): pass a larger size")
     return [(lo, min(lo + size, runs)) for lo in range(0, runs, size)]
 
 
@@ -70,6 +75,7 @@ def check_result_memory(nbytes: float, limit: float, where: str) -> None:
     """
     nbytes = check_nonnegative("nbytes", nbytes, scalar=True)
     limit = check_positive("limit", limit, scalar=True)
+    where = check_str("where", where)
     if nbytes > limit:
         raise MemoryError(
             f"{where} would store {nbytes / 2**30:.1f} GiB of trajectories (limit {limit / 2**30:.1f} GiB, half "

@@ -96,8 +96,8 @@ def _prepare(x0, noise, seeds):
     x0 = check_array("x0", x0)
     if seeds is not None:
         seeds = _check_seeds(seeds)
-    if x0.ndim not in (1, 2):
-        raise ValueError(f"x0 must have shape (n,) or (B, n), got {x0.shape}")
+    if x0.ndim not in (1, 2) or x0.shape[-1] == 0:
+        raise ValueError(f"x0 must have shape (n,) or (B, n) with n >= 1 states, got {x0.shape}")
     if not np.all(np.isfinite(x0)):
         raise ValueError("x0 must be finite (no NaN or inf)")
     B = x0.shape[0] if x0.ndim == 2 else 1

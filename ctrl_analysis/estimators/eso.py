@@ -28,10 +28,11 @@ from .._validate import (
     check_hurwitz,
     check_int,
     check_positive,
+    finite_result,
 )
 from ..engine.blocks import ContinuousBlock, signal_names
 from ..engine.kernels import KernelBlock, Kernels, Layout, as_int, jitable
-from ..polynomials import repeated_pole_coefficients
+from ..polynomials import MAX_POLE_ORDER, _coefficients
 
 __all__ = ["fal", "ExtendedStateObserver"]
 
@@ -75,7 +76,11 @@ def fal(e, alpha, delta):
     """
     delta = check_positive("delta", delta, scalar=True)
     alpha = np.asarray(check_finite("alpha", alpha), dtype=float)
-    out = _fal_array(check_array("e", e), alpha, delta, np.power(delta, 1.0 - alpha))
+    delta_pow = finite_result("alpha and delta", lambda: np.power(delta, 1.0 - alpha))
+    try:
+        out = _fal_array(check_array("e", e), alpha, delta, delta_pow)
+    except OverflowError:
+        raise ValueError("e and alpha overflow double precision (|e|**alpha is not finite)") from None
     return float(out) if out.ndim == 0 else out
 
 
@@ -101,6 +106,17 @@ _fal_array = np.vectorize(_fal, otypes=[float])
 HEAD = Layout("linear", "b0", "delta")
 AT = HEAD.at
 _ARRAYS = HEAD.size
+
+
+def _from_gains(cls, names: str, compute, kw):
+    """``cls(gains, **kw)`` with the gains that ``names`` give; an error names them where they do not fit."""
+    gains = finite_result(names, compute)
+    if np.any(gains <= 0):
+        raise ValueError(f"{names} underflow double precision: the gains {gains.tolist()} are not all > 0")
+    try:
+        return cls(gains, **kw)
+    except ValueError as exc:
+        raise ValueError(f"{exc} (the gains come from {names})") from None
 
 
 def eso_layout(m: int) -> Layout:
@@ -237,7 +253,8 @@ class ExtendedStateObserver(KernelBlock, ContinuousBlock):
         if alpha is not None:
             alpha = np.atleast_1d(check_finite("alpha", alpha)).astype(float)
             if alpha.shape != (self.nstates,):
-                raise ValueError(f"alpha must have n + 1 = {self.nstates} entries, got {alpha.size}")
+                raise ValueError(f"alpha must have one entry per entry of gains (n + 1 = {self.nstates}), "
+                                 f"got {alpha.size}")
             if delta is None:
                 raise ValueError("delta must be given (> 0) when alpha is given, got None")
             delta = float(check_positive("delta", delta, scalar=True))
@@ -249,13 +266,15 @@ class ExtendedStateObserver(KernelBlock, ContinuousBlock):
             raise TypeError(f"allow_unstable must be True or False, got {allow_unstable!r}")
         self.alpha = alpha
         self.delta = delta
-        self._delta_pow = None if alpha is None else np.power(delta, 1.0 - alpha)
+        self._delta_pow = None if alpha is None else finite_result(
+            "alpha and delta", lambda: np.power(delta, 1.0 - alpha))
         self.known = known
         self.allow_unstable = bool(allow_unstable)
         if not allow_unstable:
             # linear-zone gains: fal(e) = e / δ^(1-α) for |e| <= δ
             small_signal = gains if alpha is None else gains / self._delta_pow
-            check_hurwitz("gains", np.concatenate([[1.0], small_signal]),
+            check_hurwitz("gains" if alpha is None else "gains (with alpha and delta)",
+                          np.concatenate([[1.0], small_signal]),
                           polynomial="the error dynamics s^(n+1) + L_1 s^n + ... + L_(n+1)"
                           + ("" if alpha is None else " (linear zone of fal)"))
         m, linear = self.nstates, alpha is None
@@ -291,13 +310,13 @@ class ExtendedStateObserver(KernelBlock, ContinuousBlock):
         -------
         ExtendedStateObserver
         """
-        n = check_int("n", n, minimum=1)
+        n = check_int("n", n, minimum=1, maximum=MAX_POLE_ORDER - 1)
         epsilon = float(check_positive("epsilon", epsilon, scalar=True))
         beta = np.atleast_1d(check_positive("beta", beta)).astype(float)
         if beta.shape != (n + 1,):
             raise ValueError(f"beta must have n + 1 = {n + 1} entries, got {beta.size}")
         i = np.arange(1, n + 2)
-        return cls(beta / epsilon**i, **kw)
+        return _from_gains(cls, "beta and epsilon", lambda: beta / epsilon**i, kw)
 
     @classmethod
     def from_bandwidth(cls, n: int, omega_o: float, **kw) -> "ExtendedStateObserver":
@@ -316,10 +335,10 @@ class ExtendedStateObserver(KernelBlock, ContinuousBlock):
         -------
         ExtendedStateObserver
         """
-        n = check_int("n", n, minimum=1)
+        n = check_int("n", n, minimum=1, maximum=MAX_POLE_ORDER - 1)
         omega_o = float(check_positive("omega_o", omega_o, scalar=True))
         # (s + omega_o)^(n+1) = sum_i C(n+1, i) omega_o^i s^(n+1-i)
-        return cls(repeated_pole_coefficients(n + 1, omega_o)[1:], **kw)
+        return _from_gains(cls, "n and omega_o", lambda: _coefficients(n + 1, omega_o)[1:], kw)
 
     # ------------------------------------------------------------------------------------------
     # Dynamics

@@ -9,10 +9,16 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validate import check_array, check_int, check_positive, check_vector
-from ..engine.blocks import ContinuousBlock, DiscreteBlock, signal_names
+from .._validate import (
+    check_array,
+    check_int,
+    check_positive,
+    check_vector,
+    finite_result,
+)
+from ..engine.blocks import MAX_SIGNALS, ContinuousBlock, DiscreteBlock, signal_names
 from ..engine.kernels import KernelBlock, Kernels, Layout, as_int
-from ..polynomials import repeated_pole_coefficients
+from ..polynomials import _coefficients
 
 __all__ = ["LowPassFilter", "DiscreteLowPass"]
 
@@ -126,8 +132,8 @@ class LowPassFilter(KernelBlock, ContinuousBlock):
         self.order = check_int("order", order, minimum=1, maximum=20)
         m = self.order
         # (s + ω)^m = s^m + C(m,1) ω s^(m-1) + ... + ω^m
-        self.den = repeated_pole_coefficients(m, self.omega)
-        self.gain = self.omega**m
+        self.den = finite_result("omega and order", lambda: _coefficients(m, self.omega))
+        self.gain = self.den[-1]  # ω^m
         #: last row of A: −[c_0, ..., c_(m-1)] with c_j the coefficient of s^j
         self.coeffs = self.den[:0:-1].copy()
         A = np.diag(np.ones(m - 1), 1)
@@ -192,7 +198,8 @@ class LowPassFilter(KernelBlock, ContinuousBlock):
 
         h = float(check_positive("h", h, scalar=True))
         sysd = ct.c2d(ct.ss(self.A, self.B, np.eye(self.order), 0), h, method="zoh")
-        return np.asarray(sysd.A), np.asarray(sysd.B)[:, 0]
+        return (finite_result("h (with omega)", lambda: np.asarray(sysd.A)),
+                finite_result("h (with omega)", lambda: np.asarray(sysd.B)[:, 0]))
 
     def digital(self, h: float, channels: int = 1, initial=None) -> "DiscreteLowPass":
         """A :class:`DiscreteLowPass` with sample period ``h`` filtering ``channels`` signals.
@@ -328,7 +335,7 @@ class DiscreteLowPass(KernelBlock, DiscreteBlock):
             raise TypeError(f"lowpass must be a LowPassFilter, got {type(lowpass).__name__}")
         self.lowpass = lowpass
         self.h = float(check_positive("h", h, scalar=True))
-        self.channels = check_int("channels", channels, minimum=1)
+        self.channels = check_int("channels", channels, minimum=1, maximum=MAX_SIGNALS)
         self.Ad, self.Bd = lowpass.discretize(self.h)
         m = lowpass.order
         init = np.zeros(self.channels) if initial is None else check_vector("initial", initial, self.channels)

@@ -18,7 +18,7 @@ from __future__ import annotations
 import control as ct
 import numpy as np
 
-from .._validate import check_array, check_finite, check_in, check_int, check_positive
+from .._validate import check_array, check_finite, check_in, check_int, check_positive, finite_result
 from ..engine.blocks import DiscreteBlock, StaticBlock
 from ..engine.integrators import MAX_SUBSTEPS
 from ..engine.kernels import KernelBlock, Kernels, Layout, as_int, jitable
@@ -79,6 +79,8 @@ def fhan(x1, x2, r, h0):
     """
     r = float(check_positive("r", r, scalar=True))
     h0 = float(check_positive("h0", h0, scalar=True))
+    if not 1e-150 < r * h0 * h0 < 1e150:  # d = r·h0² and d² must stay inside double precision
+        raise ValueError(f"r and h0 overflow double precision: r·h0² = {r * h0 * h0:g} must lie in (1e-150, 1e150)")
     out = _fhan(check_array("x1", x1), check_array("x2", x2), r, h0)
     return float(out) if out.ndim == 0 else out
 
@@ -362,6 +364,7 @@ def softened_setpoint(softener, r, h: float, *, method: str = "zoh") -> np.ndarr
         if method == "zoh":
             # exact for r held over each step: q_(k+1) = e^(A h) q_k + ∫ e^(A s) ds B r_k
             sysd = ct.c2d(softener.ss, h, method="zoh")
+            finite_result("h (with the softener's omega)", lambda: (sysd.A, sysd.B))
             resp = ct.forced_response(sysd, T=h * np.arange(r.size), U=r)
             return np.asarray(resp.states).T.reshape(r.size, softener.order).copy()
         res = simulate_sampled(softener.rhs, np.zeros(softener.order),

@@ -180,6 +180,9 @@ class Box:
         if not isinstance(params, dict) or not params or not all(
                 dataclasses.is_dataclass(p) and not isinstance(p, type) for p in params.values()):
             raise TypeError("params must be a non-empty dict {prefix: dataclass instance}")
+        if names is not None and (isinstance(names, (str, bytes)) or
+                                  not isinstance(names, (set, frozenset, list, tuple))):
+            raise TypeError(f"names must be a collection of dimension names, got {names!r:.80}")
         self.params = dict(params)
         dims, algos = [], []
         for prefix, obj in params.items():

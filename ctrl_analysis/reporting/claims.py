@@ -288,5 +288,7 @@ def plausible_text(p: dict | None) -> str:
         return "one of " + ", ".join(_short(v) for v in p["options"])
     if p.get("fixed"):
         return "not varied"
+    if "low" not in p or "high" not in p:
+        raise ValueError(f"p must hold options, fixed, or low and high, got keys {sorted(p)}")
     scale = "" if p.get("scale", "linear") == "linear" else f", {p['scale']}"
     return f"{_short(p['low'])} … {_short(p['high'])}{scale}"

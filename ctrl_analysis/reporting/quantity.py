@@ -8,7 +8,14 @@ from pathlib import Path
 
 import numpy as np
 
-from .._validate import check_array, check_bool, check_int, check_nonnegative, check_str
+from .._validate import (
+    check_array,
+    check_bool,
+    check_finite,
+    check_int,
+    check_nonnegative,
+    check_str,
+)
 from .verdicts import (
     DEFAULT_TOLERANCE,
     KINDS,
@@ -125,6 +132,10 @@ class Quantity:
             raise ValueError(f"kind must be one of {KINDS}, got {self.kind!r}")
         if self.tolerance is not None:
             self.tolerance = _check_tolerance(self.tolerance)
+        if self.value is not None:  # NaN allowed: the mean of runs that all diverged
+            check_array("value", self.value)
+        if self.paper is not None:
+            check_finite("paper", self.paper)
         self.primary = check_bool("primary", self.primary)
         self.diverged = check_bool("diverged", self.diverged)
         if self.runs is not None:

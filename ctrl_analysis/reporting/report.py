@@ -16,6 +16,7 @@ from typing import Callable
 import numpy as np
 
 from .._validate import check_callable, check_int, check_path, check_positive, check_str
+from ..noise import MAX_RUNS
 from .atomic import staged_directory, write_text_atomic  # noqa: F401 (public API)
 from .results import (  # noqa: F401 (public API)
     CLAIM_VERDICTS,
@@ -95,9 +96,9 @@ class StudyContext:
     scheduler: str | None = None
 
     def __post_init__(self):
-        self.out_dir = Path(self.out_dir)
+        self.out_dir = check_path("out_dir", self.out_dir)
         if self.runs is not None:
-            self.runs = check_int("runs", self.runs, minimum=1)
+            self.runs = check_int("runs", self.runs, minimum=1, maximum=MAX_RUNS)
         self.seed = check_int("seed", self.seed, minimum=0)
         self.jobs = check_int("jobs", self.jobs, minimum=1)
         check_callable("progress", self.progress, "progress(message)")
@@ -116,9 +117,9 @@ class StudyContext:
         -------
         int
         """
-        default = check_int("default", default, minimum=1)
+        default = check_int("default", default, minimum=1, maximum=MAX_RUNS)
         if quick_default is not None:
-            quick_default = check_int("quick_default", quick_default, minimum=1)
+            quick_default = check_int("quick_default", quick_default, minimum=1, maximum=MAX_RUNS)
         if self.runs is not None:
             return self.runs
         if self.quick:
@@ -262,7 +263,7 @@ def validate_results(data: dict) -> dict:
         raise ValueError(f"data must be a results dict, got {type(data).__name__}")
     missing = [k for k in _RESULTS_KEYS if k not in data]
     if missing:
-        raise ValueError(f"results of study {data.get('study')!r} lack keys {missing}")
+        raise ValueError(f"data (results of study {data.get('study')!r}) lack keys {missing}")
     study = data["study"]
     if not isinstance(data["quantities"], list):
         raise ValueError(f"{study}: quantities must be a list")
@@ -388,6 +389,10 @@ def count_verdicts(results: dict) -> dict:
     return counts
 
 
+#: Most axes :func:`new_figure` draws (a grid of thousands takes minutes to lay out).
+MAX_AXES = 100
+
+
 def new_figure(nrows: int = 1, ncols: int = 1, *, title: str | None = None, size=(7.0, 4.5), **kw):
     """A figure in the toolkit's style (object API, grid on, readable size, constrained layout).
 
@@ -409,8 +414,10 @@ def new_figure(nrows: int = 1, ncols: int = 1, *, title: str | None = None, size
     """
     import matplotlib
 
-    nrows = check_int("nrows", nrows, minimum=1)
-    ncols = check_int("ncols", ncols, minimum=1)
+    nrows = check_int("nrows", nrows, minimum=1, maximum=MAX_AXES)
+    ncols = check_int("ncols", ncols, minimum=1, maximum=MAX_AXES)
+    if nrows * ncols > MAX_AXES:
+        raise ValueError(f"nrows * ncols must be <= {MAX_AXES} axes (MAX_AXES), got nrows={nrows}, ncols={ncols}")
     size = np.atleast_1d(check_positive("size", size))
     if size.shape != (2,):
         raise ValueError(f"size must be (width, height) in inches, got {size.tolist()}")

@@ -257,7 +257,7 @@ def explore(evaluate: Callable, params: dict, *, samples: int = SAMPLES, seed: i
     refine = check_int("refine", refine, minimum=0, maximum=30)
     cell_steps = check_int("cell_steps", cell_steps, minimum=0, maximum=40)
     search_rounds = check_int("search_rounds", search_rounds, minimum=0, maximum=20)
-    box = Box(params, None if names is None else set(names))
+    box = Box(params, set(names) if isinstance(names, (list, tuple, set, frozenset)) else names)
     if seed is None:
         seed = zlib.crc32(",".join(d.name for d in box.dims).encode())
     if batch is not None:

@@ -30,7 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._validate import check_int, check_str
+from .._validate import check_finite, check_int, check_str
 
 __all__ = ["Claim", "Plausible", "choices", "fixed", "missing_plausible", "printed", "reconstructed",
            "record_parameters", "reconstructions_of", "span", "study_params", "algorithm"]
@@ -127,7 +127,8 @@ class Plausible:
         if self.low is not None:
             if self.options is not None:
                 raise ValueError("give either low/high or options, not both")
-            lo, hi = float(self.low), float(self.high)
+            lo, hi = (float(check_finite(name, value, scalar=True)) for name, value in
+                      (("low", self.low), ("high", self.high)))
             if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
                 raise ValueError(f"low must be finite and below high, got low={self.low!r}, high={self.high!r}")
             if self.scale == "log" and lo <= 0:
@@ -229,6 +230,8 @@ def choices(options, why: str) -> Plausible:
     >>> choices(("raw", "filtered"), "the paper does not say which signal").values()
     ('raw', 'filtered')
     """
+    if not isinstance(options, (tuple, list)):
+        raise TypeError(f"options must be a tuple or list of alternatives, got {options!r:.80}")
     return Plausible(why=why, options=tuple(options))
 
 
@@ -256,6 +259,9 @@ def algorithm(printed, corrected, why: str) -> Plausible:
     >>> a.axis, a.values()
     ('algorithm', ('literal', 'wellposed'))
     """
+    for name, value in (("printed", printed), ("corrected", corrected)):
+        if isinstance(value, (list, dict, set)):
+            raise TypeError(f"{name} must be immutable (use a tuple), got {type(value).__name__}")
     if printed == corrected:
         raise ValueError(f"printed and corrected must differ, got {printed!r} twice")
     return Plausible(why=why, options=(printed, corrected), axis="algorithm")

@@ -22,7 +22,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._validate import check_array, check_bool, check_int, check_nonnegative, check_str
+from .._validate import (
+    check_array,
+    check_bool,
+    check_finite,
+    check_int,
+    check_nonnegative,
+    check_real,
+    check_str,
+)
 from .study import Claim
 
 __all__ = ["VERDICTS", "CLAIM_VERDICTS", "KINDS", "DEFAULT_TOLERANCE", "CENTRAL", "SUPPORT_LOW", "SUPPORT_HIGH",
@@ -80,7 +88,7 @@ def relative_error(value, paper) -> float:
         The error; ``inf`` for a length mismatch or a non-finite value.
     """
     v = np.atleast_1d(check_array("value", value))
-    p = np.atleast_1d(check_array("paper", paper))
+    p = np.atleast_1d(check_finite("paper", paper))
     if v.shape != p.shape or not np.all(np.isfinite(v)):
         return math.inf
     scale = np.where(p == 0, 1.0, np.abs(p))
@@ -112,8 +120,8 @@ def digits_tolerance(paper: float, decimals: int) -> float:
     0.000526
     """
     decimals = check_int("decimals", decimals, minimum=0, maximum=15)
-    paper = float(paper)
-    if not math.isfinite(paper) or paper == 0:
+    paper = float(check_finite("paper", paper, scalar=True))
+    if paper == 0:
         raise ValueError(f"paper must be a finite non-zero number, got {paper!r}")
     return 0.5 * 10.0 ** (-decimals) / abs(paper)
 
@@ -176,6 +184,10 @@ def claim_verdict(support: float | None, base: str) -> str:
     """
     if base not in ("holds", "fails", "untestable"):
         raise ValueError(f"base must be holds, fails or untestable, got {base!r}")
+    if support is not None:
+        support = check_real("support", support)
+        if not 0.0 <= support <= 1.0:
+            raise ValueError(f"support must be a share in [0, 1] (or None), got {support!r}")
     if base == "untestable" or support is None:
         return base
     if support >= SUPPORT_HIGH:
@@ -207,6 +219,7 @@ def central_interval(samples, share: float = CENTRAL) -> tuple[float, float]:
     v = np.asarray(check_array("samples", samples), dtype=float).ravel()
     if v.size == 0 or not np.all(np.isfinite(v)):
         raise ValueError(f"samples must be a non-empty array of finite values, got {v.size} values")
+    share = check_real("share", share)
     if not 0.0 < share < 1.0:
         raise ValueError(f"share must be in (0, 1), got {share!r}")
     lo, hi = np.quantile(v, [(1 - share) / 2, (1 + share) / 2])
@@ -290,6 +303,8 @@ class ClaimResult:
             raise TypeError(f"claim must be a Claim, got {self.claim!r}")
         if self.holds is not None:
             self.holds = check_bool("holds", self.holds)
+        if not isinstance(self.evidence, (tuple, list)):
+            raise TypeError(f"evidence must be a tuple of quantity ids, got {self.evidence!r:.80}")
         self.evidence = tuple(check_str("evidence", e) for e in self.evidence)
         check_str("note", self.note, empty=True)
 

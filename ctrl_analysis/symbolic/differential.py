@@ -23,7 +23,7 @@ from functools import lru_cache
 import numpy as np
 import sympy as sp
 
-from .._validate import check_int, check_positive
+from .._validate import check_int, check_positive, finite_result
 
 __all__ = [
     "S",
@@ -251,7 +251,7 @@ def locus_gain(s_value, n0: int, a: float):
         raise TypeError(f"s_value must be a number or an array of numbers, got {s_value!r}")
     if not np.all(np.isfinite(s_arr)):
         raise ValueError(f"s_value must be finite (no NaN or inf), got {s_value!r}")
-    return _numeric_functions()[2](s_arr, float(n0_value), a_value)
+    return finite_result("s_value (with n0 and a)", lambda: _numeric_functions()[2](s_arr, float(n0_value), a_value))
 
 
 def coefficient_formula() -> sp.Expr:
@@ -349,4 +349,5 @@ def differential_coefficients(n0: int, a: float, K: float) -> np.ndarray:
     n0_value, a_value = _check_n0_a(n0, a)
     k_value = check_positive("K", K, scalar=True)
     # (5)+(6) a_i = K C(n0-1, i-1) a^(i-1), i = 1..n0
-    return np.array([k_value * math.comb(n0_value - 1, j) * a_value**j for j in range(n0_value)])
+    return finite_result("a and K", lambda: np.array([k_value * math.comb(n0_value - 1, j) * a_value**j
+                                                      for j in range(n0_value)]))

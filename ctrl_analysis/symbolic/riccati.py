@@ -15,7 +15,7 @@ from typing import Callable
 import numpy as np
 import sympy as sp
 
-from .._validate import check_finite
+from .._validate import check_finite, finite_result
 
 __all__ = [
     "DEFAULT_SAMPLES",
@@ -213,7 +213,7 @@ def second_order_gain(a21, q) -> np.ndarray:
     numpy.ndarray
         ``[k1, k2]`` (last axis) for each ``(a21, q)``.
     """
-    return derive_second_order_gain().numeric(a21, q)
+    return finite_result("a21 and q", lambda: derive_second_order_gain().numeric(a21, q))
 
 
 # --------------------------------------------------------------------------------------------
@@ -319,7 +319,7 @@ def random_walk_gain_closed_form(q):
     float or numpy.ndarray
         The steady-state gain ``K∞``.
     """
-    return derive_random_walk_gain().numeric(q)
+    return finite_result("q", lambda: derive_random_walk_gain().numeric(q))
 
 
 # --------------------------------------------------------------------------------------------
@@ -448,4 +448,4 @@ def kalata_gains_closed_form(Lambda):
     -------
     (alpha, beta) : floats or arrays
     """
-    return derive_kalata_gains().numeric(Lambda)
+    return finite_result("Lambda", lambda: derive_kalata_gains().numeric(Lambda))

@@ -68,7 +68,7 @@ def test_no_silent_broadcasting(fn, names):
 def test_mean_std_checks_the_mask():
     v = np.array([1.0, 2.0, 3.0, 10.0])
     assert mean_std(v, np.array([True, True, True, False]))[2] == 3
-    with pytest.raises(ValueError, match=r"ok must have one entry per run \(4\), got shape \(3,\)"):
+    with pytest.raises(ValueError, match=r"ok must have one entry per run of values \(4\), got shape \(3,\)"):
         mean_std(v, [True, True, True])
     with pytest.raises(TypeError, match="ok must be a boolean mask"):
         mean_std(v, np.array([0, 1, 2]))  # an index array would be read as a mask

@@ -7,7 +7,7 @@ import warnings
 import control as ct
 import numpy as np
 
-from ..._validate import check_finite, check_matrix
+from ..._validate import check_finite, check_matrix, finite_result
 
 __all__ = ["controllability_matrix", "observability_matrix", "controllability_rank", "observability_rank", "check_controllable", "check_observable", "check_detectable"]
 
@@ -57,13 +57,16 @@ def _symb(M: np.ndarray) -> np.ndarray:
     return 0.5 * (M + np.swapaxes(M, -1, -2))
 
 
-def _covariance(name: str, value, size: int, *, definite: bool) -> np.ndarray:
-    """A symmetric size×size covariance; positive definite if ``definite`` else semidefinite."""
+def _covariance(name: str, value, size: int, *, definite: bool, per: str = "") -> np.ndarray:
+    """A symmetric size×size covariance; positive definite if ``definite`` else semidefinite.
+
+    ``per`` says where ``size`` comes from (e.g. ``"one row per output of C"``), for the message."""
     arr = np.atleast_2d(check_finite(name, value))
+    per = f" ({per})" if per else ""
     if arr.shape == (1, 1) and size > 1:
-        raise ValueError(f"{name} must have shape ({size}, {size}), got a scalar")
+        raise ValueError(f"{name} must have shape ({size}, {size}){per}, got a scalar")
     if arr.shape != (size, size):
-        raise ValueError(f"{name} must have shape ({size}, {size}), got {arr.shape}")
+        raise ValueError(f"{name} must have shape ({size}, {size}){per}, got {arr.shape}")
     if not np.allclose(arr, arr.T, rtol=1e-10, atol=1e-12):
         raise ValueError(f"{name} must be symmetric")
     arr = _sym(arr)
@@ -289,8 +292,9 @@ def _prepare(A, C, G, Q, R, discrete: bool, require: str, names=("A", "C", "G"))
     if require not in ("detectable", "observable"):
         raise ValueError(f"require must be one of ['detectable', 'observable'], got {require!r}")
     A, C, G = _system(A, C, G, names=names)
-    Q = _covariance("Q", Q, G.shape[1], definite=False)
-    R = _covariance("R", R, C.shape[0], definite=True)
+    Q = _covariance("Q", Q, G.shape[1], definite=False, per=f"one row per column of {names[2]}")
+    R = _covariance("R", R, C.shape[0], definite=True, per=f"one row per output of {names[1]}")
+    _check_scaling(C, G, Q, R, names)
     if require == "observable":
         check_observable(A, C, names=names[:2])
     else:
@@ -301,6 +305,12 @@ def _prepare(A, C, G, Q, R, discrete: bool, require: str, names=("A", "C", "G"))
     return A, C, G, Q, R
 
 
+
+
+def _check_scaling(C, G, Q, R, names) -> None:
+    """The Riccati equation's terms G Q Gᵀ and Cᵀ R⁻¹ C must be finite (no overflow of double precision)."""
+    finite_result(f"{names[2]} and Q", lambda: G @ Q @ G.T)
+    finite_result(f"{names[1]} and R", lambda: C.T @ np.linalg.solve(R, C))
 
 
 def _riccati_solution(primary, unbalanced, solved, equation: str, names=("A", "C", "G")):
@@ -326,7 +336,7 @@ def _riccati_solution(primary, unbalanced, solved, equation: str, names=("A", "C
     except (np.linalg.LinAlgError, ValueError) as exc:
         raise ValueError(f"the filter {equation} has no stabilising solution in double precision ({exc}); "
                          f"({a}, {c}) or ({a}, {g}·Q^½) is numerically close to losing detectability / "
-                         "stabilisability") from None
+                         "stabilisability, or Q and R are of extreme magnitude") from None
     if not solved(P):
         raise ValueError(f"the filter {equation} could not be solved accurately in double precision (residual "
                          f"too large); check the scaling of {a}, {c}, {g}, Q and R")

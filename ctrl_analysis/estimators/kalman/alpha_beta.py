@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..._validate import check_bool, check_finite, check_matrix, check_positive
+from ..._validate import check_bool, check_finite, check_matrix, check_positive, finite_result
 from ...engine.blocks import DiscreteBlock
 from ...engine.kernels import KernelBlock, Kernels, Layout, as_int, jitable
 
@@ -92,7 +92,7 @@ def tracking_index(sigma_w, sigma_v, T):
         raise ValueError(f"sigma_w must be >= 0, got {sigma_w!r}")
     sigma_v = check_positive("sigma_v", sigma_v)
     T = check_positive("T", T)
-    return sigma_w * T**2 / sigma_v
+    return finite_result("sigma_w, sigma_v and T", lambda: sigma_w * T**2 / sigma_v)
 
 
 def tracking_index_from_gains(alpha, beta):
@@ -144,9 +144,11 @@ def kalata_gains(Lambda):
     L = check_finite("Lambda", Lambda)
     if np.any(np.asarray(L) < 0):
         raise ValueError(f"Lambda must be >= 0, got {Lambda!r}")
-    r = np.sqrt(L * L + 8.0 * L)
-    alpha = -(L * L + 8.0 * L - (L + 4.0) * r) / 8.0
-    beta = (L * L + 4.0 * L - L * r) / 4.0
+    with np.errstate(over="ignore", invalid="ignore"):
+        r = np.sqrt(L * L + 8.0 * L)
+        alpha = -(L * L + 8.0 * L - (L + 4.0) * r) / 8.0
+        beta = (L * L + 4.0 * L - L * r) / 4.0
+    finite_result("Lambda", lambda: (alpha, beta))
     return alpha, beta
 
 
@@ -368,7 +370,7 @@ def alpha_beta_gamma_gains(Lambda):
     flat = lam.reshape(-1)
     F = np.array([[1.0, 1.0, 0.5], [0.0, 1.0, 1.0], [0.0, 0.0, 1.0]])
     G = np.array([0.5, 1.0, 1.0])
-    Qd = flat[:, None, None] ** 2 * np.outer(G, G)[None]  # σ_v = 1, σ_w = Λ at T = 1
+    Qd = finite_result("Lambda", lambda: flat[:, None, None] ** 2 * np.outer(G, G)[None])  # σ_v = 1, σ_w = Λ, T = 1
     K = discrete_steady_state_batch(np.broadcast_to(F, (flat.size, 3, 3)), np.array([[1.0, 0.0, 0.0]]), Qd,
                                     1.0).K_filter[:, :, 0]
     alpha, beta, gamma = K[:, 0], K[:, 1], 2.0 * K[:, 2]

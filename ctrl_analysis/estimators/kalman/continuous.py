@@ -8,7 +8,7 @@ import numpy as np
 import scipy.integrate
 import scipy.linalg
 
-from ..._validate import check_finite, check_matrix, check_positive
+from ..._validate import check_finite, check_matrix, check_positive, finite_result
 from ._checks import _covariance, _prepare, _riccati_solution, _sym, _system
 
 __all__ = ["ContinuousSteadyState", "continuous_steady_state", "continuous_steady_state_gain", "care_residual", "riccati_rhs", "riccati_trajectory"]
@@ -153,10 +153,10 @@ def care_residual(A, C, G, Q, R, P) -> np.ndarray:
     """
     A, C, G = _system(A, C, G)
     n = A.shape[0]
-    Q = _covariance("Q", Q, G.shape[1], definite=False)
-    R = _covariance("R", R, C.shape[0], definite=True)
+    Q = _covariance("Q", Q, G.shape[1], definite=False, per="one row per column of G")
+    R = _covariance("R", R, C.shape[0], definite=True, per="one row per output of C")
     P = check_matrix("P", P, shape=(n, n))
-    return _care_residual(A, C, G @ Q @ G.T, R, P)
+    return finite_result("A, C, G, Q, R and P", lambda: _care_residual(A, C, G @ Q @ G.T, R, P))
 
 
 def riccati_rhs(t, p, A, C, GQGt, Rinv, iu) -> np.ndarray:
@@ -191,6 +191,14 @@ def riccati_rhs(t, p, A, C, GQGt, Rinv, iu) -> np.ndarray:
     PCt = P @ C.T
     dP = A @ P + P @ A.T - PCt @ Rinv @ PCt.T + GQGt
     return dP[iu]
+
+
+#: Most steps :func:`riccati_trajectory` takes (a stiffer problem is refused instead of running for hours).
+MAX_RICCATI_STEPS = 100_000
+
+
+class _TooManySteps(Exception):
+    pass
 
 
 def riccati_trajectory(A, C, G, Q, R, P0, t, *, rtol: float = 1e-8, atol: float | None = None) -> np.ndarray:
@@ -230,8 +238,8 @@ def riccati_trajectory(A, C, G, Q, R, P0, t, *, rtol: float = 1e-8, atol: float 
     """
     A, C, G = _system(A, C, G)
     n = A.shape[0]
-    Q = _covariance("Q", Q, G.shape[1], definite=False)
-    R = _covariance("R", R, C.shape[0], definite=True)
+    Q = _covariance("Q", Q, G.shape[1], definite=False, per="one row per column of G")
+    R = _covariance("R", R, C.shape[0], definite=True, per="one row per output of C")
     P0 = _covariance("P0", P0, n, definite=False)
     rtol = check_positive("rtol", rtol, scalar=True)
     if atol is not None:
@@ -249,12 +257,31 @@ def riccati_trajectory(A, C, G, Q, R, P0, t, *, rtol: float = 1e-8, atol: float 
         return P0[None].copy()
     if atol is None:
         atol = 1e-10 * max(1.0, float(np.abs(P0).max()), float(np.abs(GQGt).max()))
-    sol = scipy.integrate.solve_ivp(
-        riccati_rhs, (t[0], t[-1]), P0[iu], t_eval=t, args=(A, C, GQGt, Rinv, iu),
-        rtol=rtol, atol=atol, method="RK45",
-    )
-    if not sol.success:
-        raise ValueError(f"Riccati ODE integration failed: {sol.message}")
+    # the equation's fastest rate: an explicit solver needs steps of about 1/rate over t's span
+    with np.errstate(over="ignore"):
+        CRC = np.linalg.norm(C.T @ Rinv @ C)
+        rate = np.linalg.norm(A) + np.sqrt(np.linalg.norm(GQGt) * CRC) + CRC * np.linalg.norm(P0)
+    if not rate * (t[-1] - t[0]) <= MAX_RICCATI_STEPS:
+        raise ValueError(f"the Riccati ODE for these A, C, G, Q, R, P0 and t is too stiff: its rates (about "
+                         f"{rate:.3g}/s over {t[-1] - t[0]:g} s) would take more than {MAX_RICCATI_STEPS} steps")
+    steps = iter(range(MAX_RICCATI_STEPS))
+
+    def budget(*_):  # called once per accepted step: a bound on the work, never a root
+        if next(steps, None) is None:
+            raise _TooManySteps
+        return 1.0
+
+    try:
+        with np.errstate(over="ignore", invalid="ignore"):
+            sol = scipy.integrate.solve_ivp(
+                riccati_rhs, (t[0], t[-1]), P0[iu], t_eval=t, args=(A, C, GQGt, Rinv, iu),
+                rtol=rtol, atol=atol, method="RK45", events=budget,
+            )
+    except _TooManySteps:
+        raise ValueError(f"the Riccati ODE for these A, C, G, Q, R, P0 and t needs more than {MAX_RICCATI_STEPS} "
+                         f"steps (too stiff: G Q Gᵀ or Cᵀ R⁻¹ C of extreme magnitude)") from None
+    if not sol.success or not np.all(np.isfinite(sol.y)):
+        raise ValueError(f"the Riccati ODE for these A, C, G, Q, R, P0 and t failed: {sol.message}")
     out = np.empty((t.size, n, n))
     for k in range(t.size):
         out[k][iu] = sol.y[:, k]

@@ -2,13 +2,20 @@
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 import scipy.integrate
 import scipy.linalg
 
-from ..._validate import check_finite, check_int, check_matrix, check_positive
+from ..._validate import (
+    check_finite,
+    check_int,
+    check_matrix,
+    check_positive,
+    finite_result,
+)
 from ._checks import (
     _covariance,
     _prepare,
@@ -211,7 +218,8 @@ def discrete_steady_state_batch(F, H, Qd, R, *, tol: float = 1e-12, max_iter: in
     if R.ndim < 2:  # a scalar, or one scalar per batch element (p = 1)
         R = R.reshape(R.shape + (1, 1))
     if R.shape[-2:] != (p, p) or R.ndim > 3 or (R.ndim == 3 and R.shape[0] not in (1, nb)):
-        raise ValueError(f"R must have shape (B, {p}, {p}), ({p}, {p}), (B,) or be a scalar, got {R.shape}")
+        raise ValueError(f"R must have shape (B, {p}, {p}), ({p}, {p}), (B,) or be a scalar (p = {p} rows of H), "
+                         f"got {R.shape}")
     R = np.broadcast_to(R, (nb, p, p))
     if np.any(np.linalg.eigvalsh(_symb(R)).min(axis=-1) <= 0):
         raise ValueError(f"R must be > 0 (positive definite), got smallest eigenvalue "
@@ -235,7 +243,8 @@ def discrete_steady_state_batch(F, H, Qd, R, *, tol: float = 1e-12, max_iter: in
             break
     else:
         raise ValueError(f"doubling iteration did not converge in max_iter={max_iter} steps "
-                         f"(largest relative change {change.max():.2e}); check detectability of (F, H)")
+                         f"(largest relative change {change.max():.2e}); check detectability of (F, H) and the scaling "
+                         f"of Qd and R")
     P = Hk
     S = H @ P @ Ht + R
     K = np.swapaxes(np.linalg.solve(S, H @ P), -1, -2)  # K = P⁻ Hᵀ S⁻¹
@@ -265,10 +274,10 @@ def dare_residual(F, H, G, Q, R, P_prior) -> np.ndarray:
     """
     F, H, G = _system(F, H, G, names=("F", "H", "G"))
     n = F.shape[0]
-    Q = _covariance("Q", Q, G.shape[1], definite=False)
-    R = _covariance("R", R, H.shape[0], definite=True)
+    Q = _covariance("Q", Q, G.shape[1], definite=False, per="one row per column of G")
+    R = _covariance("R", R, H.shape[0], definite=True, per="one row per output of H")
     P = check_matrix("P_prior", P_prior, shape=(n, n))
-    return _dare_residual(F, H, G @ Q @ G.T, R, P)
+    return finite_result("F, H, G, Q, R and P_prior", lambda: _dare_residual(F, H, G @ Q @ G.T, R, P))
 
 
 def discretize_noise(A, G, Q, T):
@@ -302,15 +311,17 @@ def discretize_noise(A, G, Q, T):
     G = check_matrix("G", G)
     if G.shape[0] != n:
         raise ValueError(f"G must have {n} rows (the order of A), got shape {G.shape}")
-    Q = _covariance("Q", Q, G.shape[1], definite=False)
+    Q = _covariance("Q", Q, G.shape[1], definite=False, per="one row per column of G")
     T = check_positive("T", T, scalar=True)
     M = np.zeros((2 * n, 2 * n))
     M[:n, :n] = -A
     M[:n, n:] = G @ Q @ G.T
     M[n:, n:] = A.T
-    E = scipy.linalg.expm(M * T)
+    with np.errstate(over="ignore", invalid="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # the result is checked below
+        E = finite_result("A, G, Q and T", lambda: scipy.linalg.expm(M * T))
     F = E[n:, n:].T
-    Qd = F @ E[:n, n:]
+    Qd = finite_result("A, G, Q and T", lambda: F @ E[:n, n:])
     return F, 0.5 * (Qd + Qd.T)
 
 
