@@ -151,10 +151,13 @@ def _consistent(out: Path, committed_by=None) -> None:
             row = rows[name]
             seeds = data["seeds"]["noise"]
             assert f"[{seeds[0]}, {seeds[1]}, " in row  # the per-run seeds shown are those of the file
+            cli = data["settings"]["cli"]
             if row.startswith("yes"):
-                cli = data["settings"]["cli"]
                 assert row.startswith(f"yes (quick) | {cli['seed']} | default |"), (name, row, cli)
                 assert data["quantities"][0]["value"] == cli["seed"]
+            else:  # stale: the base seed and runs of the run that wrote the file, read from it
+                assert row.startswith(f"**no — stale** (results of an earlier run, quick) | {cli['seed']} | default |"), \
+                    (name, row, cli)
     leftovers = [p.name for p in out.iterdir() if p.name.startswith(".") and p.name != ".ctrl-analysis.lock"]
     if committed_by is not None:
         assert not leftovers, leftovers
