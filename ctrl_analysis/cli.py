@@ -57,9 +57,11 @@ _seed = _int_at_least(0, "non-negative")
 
 #: What ``--help`` says about the command (plain text: it is printed on a terminal, not rendered).
 DESCRIPTION = "List the reproduced papers, and reproduce them into figures, results.json and REPORT.md."
-EPILOG = """exit status: 0 done; 1 a study failed (the others still ran, the failures are listed at the end);
-2 the command cannot run, checked before any work (an unknown study, a bad --out, --runs beyond this
-machine's memory, a bad or unreachable --scheduler, another run writing into the same --out);
+EPILOG = """exit status: 0 done; 1 a study failed (the others still ran, the failures are listed at the end),
+REPORT.md could not be written, or the Dask cluster failed mid-run (its scheduler lost, or no worker
+connected for 60 s: the run stops in one line); 2 the command cannot run, checked before any work (an
+unknown study, a bad --out, --runs beyond this machine's memory, a --scheduler that is malformed,
+unreachable or not a Dask scheduler (10 s to answer), another run writing into the same --out);
 130 interrupted with Ctrl-C (the previous output is left intact)."""
 
 
@@ -146,8 +148,14 @@ def _run_study(task) -> dict:
 def _run_study_here(name, out, runs, seed, quick, jobs, scheduler, verbose=True) -> dict:
     from analysis import load_study
 
-    record = {"name": name, "error": None, "text": "", "staged": None,
+    from .parallel import ClusterError, active_cluster
+
+    record = {"name": name, "error": None, "text": "", "staged": None, "cluster": None,
               "run": {"seed": seed, "runs": runs, "quick": bool(quick)}}
+    cluster = active_cluster()
+    if cluster is not None and cluster["failed"] is not None:  # every batch would fail: not started
+        record["error"], record["cluster"] = f"not run: the Dask cluster had failed: {cluster['failed']}", "not run"
+        return record
     staged = new_staging(out / name)
     try:
         ctx = StudyContext(out_dir=staged, runs=runs, seed=seed, quick=quick, progress=_progress(name, verbose),
@@ -162,6 +170,8 @@ def _run_study_here(name, out, runs, seed, quick, jobs, scheduler, verbose=True)
     except Exception as exc:  # noqa: BLE001 - any study failure is reported in one line, never a traceback
         remove_tree(staged)
         record["error"] = _one_line(exc)
+        if isinstance(exc, ClusterError):
+            record["cluster"] = "failed"
         return record
     except BaseException:
         remove_tree(staged)
@@ -215,13 +225,20 @@ def _read_results(path: Path, name: str) -> dict:
 
 
 class _Run:
-    """What the main process knows of this run: which studies it committed, which failed, the report."""
+    """What the main process knows of this run: which studies it committed, which failed, the report.
+
+    ``failed`` holds this run's failed studies only (study -> one line); ``left_out`` the other studies
+    of the folder whose results.json cannot be read as a results record (left out of REPORT.md, not a
+    failure of this run); ``report_error`` why REPORT.md could not be written (None once it is).
+    """
 
     def __init__(self, out: Path, report: bool):
         self.out = out
         self.report = report  # whether REPORT.md is (re)written
         self.committed: list[str] = []
         self.failed: dict = {}
+        self.left_out: dict = {}
+        self.report_error: str | None = None
         self.report_path = None
 
     def _on_disk(self, replace: dict) -> tuple[list, dict]:
@@ -247,15 +264,16 @@ class _Run:
 
         Provenance comes from the files: a study counts as this run's when this run committed it,
         and its seed, runs and quick flag are those its results.json records (``settings.cli``).
+        A study whose results.json is unreadable is left out, and the report says so in a section of
+        its own (it is not a failure of this run).
         """
-        results, bad = self._on_disk(replace)
-        for name, why in bad.items():
-            self.failed.setdefault(name, why)
+        results, self.left_out = self._on_disk(replace)
         this_run = {r["study"]: dict((r.get("settings") or {}).get("cli") or {}) for r in results
                     if r["study"] in committed}
+        extra = [*_left_out_lines(self.left_out), *(arena_section(self.out) or [])]
         tmp = Path(tempfile.mkdtemp(dir=self.out, prefix=".REPORT.md.new-"))
         try:
-            write_report_md(results, tmp, this_run=this_run, failed=dict(self.failed), extra=arena_section(self.out),
+            write_report_md(results, tmp, this_run=this_run, failed=dict(self.failed), extra=extra or None,
                             claim_links=arena_links(self.out))
         except BaseException:
             remove_tree(tmp)
@@ -263,11 +281,14 @@ class _Run:
         return tmp
 
     def _publish(self, tmp: Path | None) -> None:
+        """Move the rendered REPORT.md into place (OSError when it cannot be; ``tmp`` is removed either way)."""
         if tmp is None:
             return
-        os.replace(tmp / "REPORT.md", self.out / "REPORT.md")
+        try:
+            os.replace(tmp / "REPORT.md", self.out / "REPORT.md")
+        finally:
+            remove_tree(tmp)
         self.report_path = self.out / "REPORT.md"
-        remove_tree(tmp)
 
     def commit(self, name: str, staged: Path) -> None:
         """Move study ``name``'s staged folder into place and rebuild REPORT.md from the files on disk.
@@ -276,6 +297,8 @@ class _Run:
         folder and the report are swapped in back to back with SIGINT and SIGTERM held, so REPORT.md
         and every results.json agree before and after. Nothing runs between the two renames (the old
         folder is removed after both): a kill -9 can still fall between them, but only within microseconds.
+        Once the folder is swapped in the study is committed, whatever happens to the report: a report
+        that cannot be rendered or moved into place is recorded in ``report_error`` (:meth:`finish` tries again).
         """
         tmp = None
         if self.report:
@@ -283,17 +306,24 @@ class _Run:
             try:
                 tmp = self._render({name: new}, self.committed + [name])
             except OSError as exc:  # e.g. a full disk: the study is still committed, the old report stays
-                self.failed["REPORT.md"] = _one_line(exc)
+                self.report_error = _one_line(exc)
         with sigint_deferred():
             old = swap_in(staged, self.out / name, keep_old=True)
-            self._publish(tmp)
             self.committed.append(name)
             self.failed.pop(name, None)
+            try:
+                self._publish(tmp)
+            except OSError as exc:
+                self.report_error = _one_line(exc)
         if old is not None:
             remove_tree(old)
 
     def finish(self) -> None:
-        """Rebuild REPORT.md from the files on disk once more (with every failure of the run)."""
+        """Rebuild REPORT.md from the files on disk once more (with every failure of the run).
+
+        When it cannot be written, says so in one line on stderr, with whether the REPORT.md left in
+        ``out`` is an earlier run's (which no longer describes the folder).
+        """
         if not self.report:
             return
         try:
@@ -301,8 +331,23 @@ class _Run:
             with sigint_deferred():
                 self._publish(tmp)
         except OSError as exc:  # e.g. a full disk: the previous REPORT.md stays as it was
-            self.failed["REPORT.md"] = _one_line(exc)
-            sys.stderr.write(f"ctrl-analysis: error: REPORT.md not written: {self.failed['REPORT.md']}\n")
+            self.report_error = _one_line(exc)
+            report = self.out / "REPORT.md"
+            old = ("; the REPORT.md in --out is an earlier run's, which does not describe the studies of this run"
+                   if self.committed and report.is_file() and not report.is_symlink() else "")
+            sys.stderr.write(f"ctrl-analysis: error: REPORT.md not written: {self.report_error}{old}\n")
+        else:
+            self.report_error = None
+
+
+def _left_out_lines(left_out: dict) -> list[str]:
+    """REPORT.md's section on the studies of the folder whose results.json is unreadable (none: no lines)."""
+    if not left_out:
+        return []
+    return ["## Left out of this report", "",
+            ("These studies have a folder here whose `results.json` is not a results record that this report can "
+             "read; they were not run by this run. Rerun them to bring them back."), "",
+            *(f"- **{name}**: {why}" for name, why in left_out.items()), ""]
 
 
 def _resolve_names(studies: list[str], registry) -> list[str]:
@@ -318,7 +363,16 @@ def _resolve_names(studies: list[str], registry) -> list[str]:
 
 
 def _check_targets(out: Path, names: list[str]) -> None:
-    """Refuse (one line) to replace anything in ``out`` that ctrl-analysis did not write."""
+    """Refuse (one line) to replace anything in ``out`` that ctrl-analysis did not write.
+
+    A REPORT.md that is a folder or a link is refused too: the run would write every study and then
+    fail to put its report in place.
+    """
+    report = out / "REPORT.md"
+    if report.is_symlink() or (report.exists() and not report.is_file()):
+        raise _UsageError(f"--out {str(out)!r} holds REPORT.md, which is not a file ctrl-analysis wrote (a "
+                          f"{'link' if report.is_symlink() else 'folder'}); it is not replaced: move it away or "
+                          f"choose another --out")
     for name in names:
         target = out / name
         if target.is_symlink() or (target.exists() and not target.is_dir()):
@@ -387,12 +441,24 @@ def _clean_report_temporaries(out: Path) -> None:
                 p.unlink()
 
 
-def _scheduler_timeout() -> float:
+def _env_seconds(name: str, default: float) -> float:
     try:
-        value = float(os.environ.get("CTRL_ANALYSIS_SCHEDULER_TIMEOUT", "10"))
+        value = float(os.environ.get(name, default))
     except ValueError:
-        value = 10.0
-    return value if value > 0 else 10.0
+        value = default
+    return value if value > 0 and value != float("inf") else default
+
+
+def _scheduler_timeout() -> float:
+    """Seconds --scheduler's address has to answer as a Dask scheduler (CTRL_ANALYSIS_SCHEDULER_TIMEOUT, 10)."""
+    return _env_seconds("CTRL_ANALYSIS_SCHEDULER_TIMEOUT", 10.0)
+
+
+def _worker_timeout() -> float:
+    """Seconds a run waits while no Dask worker is connected (CTRL_ANALYSIS_WORKER_TIMEOUT, parallel.WORKER_TIMEOUT)."""
+    from .parallel import WORKER_TIMEOUT
+
+    return _env_seconds("CTRL_ANALYSIS_WORKER_TIMEOUT", WORKER_TIMEOUT)
 
 
 def _reproduce(args) -> int:
@@ -412,6 +478,14 @@ def _reproduce(args) -> int:
     # studies side by side in processes (each with its share of the cores), or one by one on a scheduler
     side_by_side = 1 if args.scheduler is not None else min(jobs, len(todo))
     _check_memory(todo, args.runs, args.quick, side_by_side)
+    created = _missing_dirs(Path(args.out))
+    try:
+        return _reproduce_into(args, todo, jobs, side_by_side, t_start, STUDIES, load_study, map_chunks, use_cluster)
+    finally:  # a run that wrote nothing (a refused --scheduler, say) leaves no folder it made behind
+        _remove_if_empty(created)
+
+
+def _reproduce_into(args, todo, jobs, side_by_side, t_start, STUDIES, load_study, map_chunks, use_cluster) -> int:
     out = _check_out(args.out)  # created here, after every check that needs no folder
     try:
         lock = exclusive_lock(out / ".ctrl-analysis.lock", what=f"--out {str(out)!r}")
@@ -419,50 +493,80 @@ def _reproduce(args) -> int:
     except LockedError as exc:
         raise _UsageError(str(exc)) from None
     run = _Run(out, report="all" in args.studies or (out / "REPORT.md").exists())
+    lost = {}  # the studies the Dask cluster's failure stopped: name -> "failed" or "not run"
     try:
         recover_staging(out, list(STUDIES) + ["REPORT.md"])  # what a killed run left; nobody else writes here
         _clean_report_temporaries(out)
         _check_targets(out, todo)
         cluster = contextlib.nullcontext()
         if args.scheduler is not None:
-            cluster = use_cluster(args.scheduler, jobs, timeout=_scheduler_timeout())
+            from .parallel import silence_dask_logs
+
+            silence_dask_logs()  # for good: a lost scheduler's client may still log after the cluster's block
+            cluster = use_cluster(args.scheduler, jobs, timeout=_scheduler_timeout(),
+                                  worker_timeout=_worker_timeout())
             try:
                 cluster.__enter__()
             except (OSError, ValueError) as exc:
                 raise _UsageError(f"--scheduler: {exc}") from None
         try:
             records = _run_studies(args, todo, out, jobs, side_by_side, run, load_study, map_chunks)
-            dask = _cluster_line()
+            dask, cluster_failed = _cluster_line()
         finally:
             cluster.__exit__(None, None, None)
         for record in records:
             name = record["name"]
-            if record["error"] is not None:
+            if record.get("cluster"):
+                lost[name] = record["cluster"]
+            elif record["error"] is not None:
                 sys.stderr.write(f"ctrl-analysis: error: study {name!r} failed: {run.failed[name]}\n")
-                continue
-            print(record["text"])
+            else:
+                print(record["text"])
         run.finish()
-        for name, why in run.failed.items():
-            if name not in todo and name != "REPORT.md":  # another study's results.json, left out of the report
-                sys.stderr.write(f"ctrl-analysis: error: REPORT.md leaves out {name}: {why}\n")
-        if run.report_path is not None and args.verbose:
+        for name, why in run.left_out.items():  # another study's results.json, not this run's: not a failure
+            sys.stderr.write(f"ctrl-analysis: warning: REPORT.md leaves out {name}, not run now: {why}\n")
+        if run.report_path is not None and run.report_error is None and args.verbose:
             print(f"\nreport: {run.report_path}")
-        if dask:
+        if lost:
+            stopped = ", ".join(f"{name} {how}" for name, how in lost.items())
+            sys.stderr.write(f"ctrl-analysis: error: the Dask cluster failed: {cluster_failed}; the run stopped: "
+                             f"{stopped}\n")
+        elif dask:
             print(dask)
     finally:
         recover_staging(out, list(STUDIES) + ["REPORT.md"])  # this run's staging, after an interrupt or crash
         lock.__exit__(None, None, None)
-    n_failed = sum(name != "REPORT.md" for name in run.failed if name in todo)
-    where = f"report: {run.report_path}" if run.report_path is not None else "no REPORT.md (written by reproduce all)"
-    print(f"ctrl-analysis: {len(todo) - n_failed} of {len(todo)} studies OK, {n_failed} failed, "
+    failed = [name for name in todo if name in run.failed]
+    if run.report_error is not None:
+        where = "REPORT.md not written"
+    elif run.report_path is not None:
+        where = f"report: {run.report_path}"
+    else:
+        where = "no REPORT.md (written by reproduce all)"
+    print(f"ctrl-analysis: {len(todo) - len(failed)} of {len(todo)} studies OK, {len(failed)} failed, "
           f"{time.perf_counter() - t_start:.1f} s; {where}")
-    if run.failed:
-        order = {name: i for i, name in enumerate([*todo, "REPORT.md", *STUDIES])}
-        failed = [name if name in todo or name == "REPORT.md" else f"{name}'s results.json"
-                  for name in sorted(run.failed, key=lambda name: order.get(name, len(order)))]
-        sys.stderr.write(f"ctrl-analysis: {n_failed} of {len(todo)} studies failed: {', '.join(failed)}\n")
-        return 1
-    return 0
+    if any(name not in lost for name in failed):  # the cluster's line already names the studies it stopped
+        sys.stderr.write(f"ctrl-analysis: {len(failed)} of {len(todo)} studies failed: {', '.join(failed)}\n")
+    return 1 if failed or run.report_error is not None else 0
+
+
+def _missing_dirs(path: Path) -> list[Path]:
+    """``path`` and those of its parents that do not exist yet, deepest first (what creating it will make)."""
+    missing = []
+    path = path.absolute()
+    while not path.exists() and not path.is_symlink() and path != path.parent:
+        missing.append(path)
+        path = path.parent
+    return missing
+
+
+def _remove_if_empty(dirs: list[Path]) -> None:
+    """Remove the folders this run created, deepest first, each only if it is empty (``rmdir``)."""
+    for d in dirs:
+        try:
+            d.rmdir()
+        except OSError:
+            return
 
 
 def _run_studies(args, todo, out, jobs, side_by_side, run, load_study, map_chunks) -> list[dict]:
@@ -492,20 +596,22 @@ def _run_studies(args, todo, out, jobs, side_by_side, run, load_study, map_chunk
     return [by_name[name] for name in todo]
 
 
-def _cluster_line() -> str:
+def _cluster_line() -> tuple[str, str | None]:
+    """The run's line on the Dask cluster (empty without one), and why the cluster failed (None if it did not)."""
     from .parallel import active_cluster
 
     c = active_cluster()
     if c is None:
-        return ""
-    return f"dask: {c['chunks']} chunks of Monte Carlo batches and sweeps ran on {c['address']}"
+        return "", None
+    return f"dask: {c['chunks']} chunks of Monte Carlo batches and sweeps ran on {c['address']}", c["failed"]
 
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the console script; returns the exit status.
 
-    0 on success, 1 when a study failed (the others still ran; failures listed at the end), 2 on a
-    bad command line (checked before any work), 130 on Ctrl-C (previous output left intact).
+    0 on success, 1 when a study failed (the others still ran; failures listed at the end), REPORT.md
+    could not be written or the Dask cluster failed mid-run, 2 on a bad command line (checked before any
+    work), 130 on Ctrl-C (previous output left intact).
     ``reproduce all`` writes REPORT.md; reproducing some studies refreshes an existing REPORT.md,
     marking the studies not run now as stale.
 

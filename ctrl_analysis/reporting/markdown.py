@@ -357,7 +357,11 @@ def _anchor(name: str) -> str:
 
 
 def _run_table(results: list[dict], this_run: dict, failed: dict) -> list[str]:
-    """Which studies come from this run (with base seed, runs and per-run seeds) and which are stale."""
+    """Which studies come from this run (with base seed, runs and per-run seeds) and which are stale.
+
+    A stale study's base seed, runs and quick flag are those its own results.json records (the command
+    line of the run that wrote it, ``settings.cli``); "—" only where the file does not record them.
+    """
     rows = ["| study | from this run | base seed | runs | per-run seeds |", "|---|---|---|---|---|"]
     present = {r["study"] for r in results}
     rows += [f"| {name} | **no — failed**, and no earlier results | — | — | — |" for name in failed
@@ -367,7 +371,13 @@ def _run_table(results: list[dict], this_run: dict, failed: dict) -> list[str]:
         run = this_run.get(name)
         seeds = ", ".join(f"{k}: {_seed_summary(v)}" for k, v in (r.get("seeds") or {}).items()) or "—"
         if run is None:
-            rows.append(f"| {name} | **no — stale** (results of an earlier run) | — | — | {_cell(seeds)} |")
+            cli = (r.get("settings") or {}).get("cli")
+            cli = cli if isinstance(cli, dict) else {}
+            quick = ", quick" if cli.get("quick") else ""
+            seed = _cell(str(cli["seed"])) if cli.get("seed") is not None else "—"
+            runs = "—" if "runs" not in cli else ("default" if cli["runs"] is None else _cell(str(cli["runs"])))
+            rows.append(f"| {name} | **no — stale** (results of an earlier run{quick}) | {seed} | {runs} | "
+                        f"{_cell(seeds)} |")
         else:
             runs = "default" if run.get("runs") is None else run["runs"]
             quick = " (quick)" if run.get("quick") else ""

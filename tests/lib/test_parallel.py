@@ -135,6 +135,58 @@ def test_map_chunks_given_the_process_wide_clusters_scheduler_runs_there_not_on_
     assert parallel.active_cluster() is None
 
 
+def test_a_cluster_without_workers_fails_in_one_error_after_the_worker_timeout_and_at_once_after():
+    # a scheduler with no worker keeps tasks waiting for ever (as after every worker is killed): the mapping
+    # gives up after worker_timeout, and the process-wide cluster is marked failed so the next batch does not wait
+    from distributed import Client, LocalCluster
+
+    with LocalCluster(n_workers=0, processes=False, dashboard_address=None) as cluster, Client(cluster) as client, \
+            parallel.use_cluster(client, worker_timeout=1.0):
+        with pytest.raises(parallel.ClusterError, match=r"no Dask worker connected to the scheduler at \S+ for "
+                                                         r"1 s: every worker was lost, or none joined \(3 of 3 chunks"):
+            parallel.map_chunks(abs, [-1, -2, 3])
+        failed = parallel.active_cluster()["failed"]
+        assert failed is not None and "no Dask worker" in failed
+        with pytest.raises(parallel.ClusterError) as again:
+            parallel.map_chunks(abs, [-4])
+        assert str(again.value) == failed
+    assert parallel.active_cluster() is None
+
+
+def test_an_address_that_is_a_dask_worker_not_its_scheduler_is_refused_in_one_line():
+    from distributed import LocalCluster
+
+    with LocalCluster(n_workers=1, processes=False, protocol="tcp", host="127.0.0.1",
+                      dashboard_address=None) as cluster:
+        worker = next(iter(cluster.scheduler_info["workers"]))
+        with pytest.raises(OSError, match=r"is a Dask Worker, not a scheduler: give the scheduler's address"), \
+                parallel.use_cluster(worker, timeout=10.0):
+            pass
+        with parallel.use_cluster(cluster.scheduler_address, timeout=10.0):  # the scheduler's own address works
+            assert parallel.map_chunks(abs, [-5]) == [5]
+
+
+class UnpicklableDamped(Damped):
+    """The small plant with a lambda inside: a loop of it cannot go to worker processes."""
+
+    def __init__(self):
+        super().__init__()
+        self.hook = lambda x: x
+
+
+def test_an_unpicklable_loops_batches_warn_once_per_process(monkeypatch):
+    import warnings
+
+    monkeypatch.setattr(parallel, "_WARNED", set())
+    loop = Loop([place(UnpicklableDamped(), "plant"), place(DifferentialEstimator(3, 4.0), "sigma")], dt=0.01)
+    noise = draw_noise(run_seeds(1, 4), 20, gaussian_noise([0.3, 0.01]))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        for _ in range(3):  # a study's three batches of one loop: the same sentence once
+            loop.simulate(20, inputs={"w": noise[:, :, 0], "v": noise[:, :, 1]}, jobs=2)
+    said = [w for w in caught if "needs a picklable loop" in str(w.message)]
+    assert len(said) == 1 and said[0].category is RuntimeWarning
+
 def test_loop_chunked_batch_equals_unchunked_bit_for_bit():
     seeds = run_seeds(2, 7)
     noise = draw_noise(seeds, N_STEPS, gaussian_noise([0.3, 0.01]))
