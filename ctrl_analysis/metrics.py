@@ -125,8 +125,8 @@ def overshoot(t, y, final, initial=0.0, axis=0):
 
     Parameters
     ----------
-    t : array_like
-        Sample times (unused; kept for a signature shared with :func:`settling_time`).
+    t : array_like or None
+        Sample times (unused; kept for a signature shared with :func:`settling_time`; None is accepted).
     y : array_like
         The response.
     final, initial : float
@@ -139,7 +139,8 @@ def overshoot(t, y, final, initial=0.0, axis=0):
     float or numpy.ndarray
         ``max(peak − 1, 0) · 100`` with the peak relative to the step, per run.
     """
-    check_array("t", t)  # unused, but a real array
+    if t is not None:
+        check_array("t", t)  # unused, but a real array when given
     y = check_array("y", y)
     final = check_finite("final", final, scalar=True)
     initial = check_finite("initial", initial, scalar=True)
