@@ -4,10 +4,8 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import json
 import os
 import sys
-import tempfile
 import time
 from pathlib import Path
 
@@ -19,11 +17,11 @@ from .reporting.atomic import (
     new_staging,
     recover_staging,
     remove_tree,
-    swap_in,
 )
-from .reporting.atomic import _sigint_deferred as sigint_deferred
-from .reporting.markdown import summary_table, write_report_md
-from .reporting.report import StudyContext, validate_results, write_results_json
+from .reporting.formatting import one_line
+from .reporting.markdown import summary_table
+from .reporting.report import StudyContext, write_results_json
+from .reporting.run_folder import RunFolder
 
 __all__ = ["main"]
 
@@ -120,13 +118,6 @@ class _UsageError(Exception):
     """A bad command line detected after parsing: one line, exit status 2."""
 
 
-def _one_line(exc: BaseException, limit: int = 400) -> str:
-    text = " ".join(str(exc).split())
-    if len(text) > limit:
-        text = text[: limit - 1] + "…"
-    return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
-
-
 def _run_study(task) -> dict:
     """Run one study (here or in a worker process) into a fresh staging directory beside ``out/name``.
 
@@ -169,7 +160,7 @@ def _run_study_here(name, out, runs, seed, quick, jobs, scheduler, verbose=True)
         data = result.to_dict()
     except Exception as exc:  # noqa: BLE001 - any study failure is reported in one line, never a traceback
         remove_tree(staged)
-        record["error"] = _one_line(exc)
+        record["error"] = one_line(exc)
         if isinstance(exc, ClusterError):
             record["cluster"] = "failed"
         return record
@@ -207,147 +198,6 @@ def _previous_runtime(study_dir: Path) -> float:
 
     value = read_runtime(study_dir)
     return float("inf") if value is None else value
-
-
-def _read_results(path: Path, name: str) -> dict:
-    """A study's results.json read back; ValueError (one line) when unreadable or not a results record."""
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError) as exc:
-        raise ValueError(f"unreadable results.json: {_one_line(exc)}") from None
-    try:
-        validate_results(data)
-        if data["study"] != name:
-            raise ValueError(f"it is the record of study {data['study']!r}")
-    except (ValueError, TypeError, KeyError, AttributeError) as exc:
-        raise ValueError(f"{path} is not a results record of {name}: {_one_line(exc)}") from None
-    return data
-
-
-class _Run:
-    """What the main process knows of this run: which studies it committed, which failed, the report.
-
-    ``failed`` holds this run's failed studies only (study -> one line); ``left_out`` the other studies
-    of the folder whose results.json cannot be read as a results record (left out of REPORT.md, not a
-    failure of this run); ``report_error`` why REPORT.md could not be written (None once it is).
-    """
-
-    def __init__(self, out: Path, report: bool):
-        self.out = out
-        self.report = report  # whether REPORT.md is (re)written
-        self.committed: list[str] = []
-        self.failed: dict = {}
-        self.left_out: dict = {}
-        self.report_error: str | None = None
-        self.report_path = None
-
-    def _on_disk(self, replace: dict) -> tuple[list, dict]:
-        """results.json dicts of every registered study as on disk (``replace``: about to be), and the unreadable."""
-        from analysis import STUDIES
-
-        results, bad = [], {}
-        for name in STUDIES:
-            if name in replace:
-                results.append(replace[name])
-                continue
-            path = self.out / name / "results.json"
-            if not path.exists():
-                continue
-            try:
-                results.append(_read_results(path, name))
-            except ValueError as exc:
-                bad[name] = str(exc)
-        return results, bad
-
-    def _render(self, replace: dict, committed: list[str]) -> Path | None:
-        """REPORT.md of the folder as it is (or will be, with ``replace``), written into a hidden folder in ``out``.
-
-        Provenance comes from the files: a study counts as this run's when this run committed it,
-        and its seed, runs and quick flag are those its results.json records (``settings.cli``).
-        A study whose results.json is unreadable is left out, and the report says so in a section of
-        its own (it is not a failure of this run).
-        """
-        results, self.left_out = self._on_disk(replace)
-        this_run = {r["study"]: dict((r.get("settings") or {}).get("cli") or {}) for r in results
-                    if r["study"] in committed}
-        extra = [*_left_out_lines(self.left_out), *(arena_section(self.out) or [])]
-        tmp = Path(tempfile.mkdtemp(dir=self.out, prefix=".REPORT.md.new-"))
-        try:
-            write_report_md(results, tmp, this_run=this_run, failed=dict(self.failed), extra=extra or None,
-                            claim_links=arena_links(self.out))
-        except BaseException:
-            remove_tree(tmp)
-            raise
-        return tmp
-
-    def _publish(self, tmp: Path | None) -> None:
-        """Move the rendered REPORT.md into place (OSError when it cannot be; ``tmp`` is removed either way)."""
-        if tmp is None:
-            return
-        try:
-            os.replace(tmp / "REPORT.md", self.out / "REPORT.md")
-        finally:
-            remove_tree(tmp)
-        self.report_path = self.out / "REPORT.md"
-
-    def commit(self, name: str, staged: Path) -> None:
-        """Move study ``name``'s staged folder into place and rebuild REPORT.md from the files on disk.
-
-        The report is rendered first (with the staged results in place of the old ones), then the
-        folder and the report are swapped in back to back with SIGINT and SIGTERM held, so REPORT.md
-        and every results.json agree before and after. Nothing runs between the two renames (the old
-        folder is removed after both): a kill -9 can still fall between them, but only within microseconds.
-        Once the folder is swapped in the study is committed, whatever happens to the report: a report
-        that cannot be rendered or moved into place is recorded in ``report_error`` (:meth:`finish` tries again).
-        """
-        tmp = None
-        if self.report:
-            new = _read_results(staged / "results.json", name)
-            try:
-                tmp = self._render({name: new}, self.committed + [name])
-            except OSError as exc:  # e.g. a full disk: the study is still committed, the old report stays
-                self.report_error = _one_line(exc)
-        with sigint_deferred():
-            old = swap_in(staged, self.out / name, keep_old=True)
-            self.committed.append(name)
-            self.failed.pop(name, None)
-            try:
-                self._publish(tmp)
-            except OSError as exc:
-                self.report_error = _one_line(exc)
-        if old is not None:
-            remove_tree(old)
-
-    def finish(self) -> None:
-        """Rebuild REPORT.md from the files on disk once more (with every failure of the run).
-
-        When it cannot be written, says so in one line on stderr, with whether the REPORT.md left in
-        ``out`` is an earlier run's (which no longer describes the folder).
-        """
-        if not self.report:
-            return
-        try:
-            tmp = self._render({}, self.committed)
-            with sigint_deferred():
-                self._publish(tmp)
-        except OSError as exc:  # e.g. a full disk: the previous REPORT.md stays as it was
-            self.report_error = _one_line(exc)
-            report = self.out / "REPORT.md"
-            old = ("; the REPORT.md in --out is an earlier run's, which does not describe the studies of this run"
-                   if self.committed and report.is_file() and not report.is_symlink() else "")
-            sys.stderr.write(f"ctrl-analysis: error: REPORT.md not written: {self.report_error}{old}\n")
-        else:
-            self.report_error = None
-
-
-def _left_out_lines(left_out: dict) -> list[str]:
-    """REPORT.md's section on the studies of the folder whose results.json is unreadable (none: no lines)."""
-    if not left_out:
-        return []
-    return ["## Left out of this report", "",
-            ("These studies have a folder here whose `results.json` is not a results record that this report can "
-             "read; they were not run by this run. Rerun them to bring them back."), "",
-            *(f"- **{name}**: {why}" for name, why in left_out.items()), ""]
 
 
 def _resolve_names(studies: list[str], registry) -> list[str]:
@@ -492,7 +342,8 @@ def _reproduce_into(args, todo, jobs, side_by_side, t_start, STUDIES, load_study
         lock.__enter__()
     except LockedError as exc:
         raise _UsageError(str(exc)) from None
-    run = _Run(out, report="all" in args.studies or (out / "REPORT.md").exists())
+    run = RunFolder(out, report="all" in args.studies or (out / "REPORT.md").exists(), studies=list(STUDIES),
+                    extra=arena_section, links=arena_links)
     lost = {}  # the studies the Dask cluster's failure stopped: name -> "failed" or "not run"
     try:
         recover_staging(out, list(STUDIES) + ["REPORT.md"])  # what a killed run left; nobody else writes here
@@ -588,7 +439,7 @@ def _run_studies(args, todo, out, jobs, side_by_side, run, load_study, map_chunk
         try:
             run.commit(name, Path(record["staged"]))
         except (OSError, ValueError) as exc:
-            record["error"] = run.failed[name] = _one_line(exc)
+            record["error"] = run.failed[name] = one_line(exc)
 
     records = map_chunks(_run_study, tasks, jobs=side_by_side, scheduler=False, desc="studies", unit="study",
                          on_result=commit)

@@ -9,12 +9,9 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+from ..reporting.formatting import one_line
+
 __all__ = ["arena_links", "arena_section"]
-
-
-def _one_line(exc: BaseException) -> str:
-    text = " ".join(str(exc).split())
-    return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
 
 
 def arena_links(out: Path) -> dict:
@@ -69,7 +66,7 @@ def arena_section(out: Path) -> list[str] | None:
                     f"(`{settings.get('signal')}`), not the benchmark: its ranking is in `arena/REPORT.md`."]
         lines = arena_report_lines(data)
     except (ValueError, TypeError, AttributeError) as exc:
-        return ["## Estimator arena", "", f"The arena's results.json could not be read: {_one_line(exc)}"]
+        return ["## Estimator arena", "", f"The arena's results.json could not be read: {one_line(exc)}"]
     cli = settings.get("cli") or {}
     where = (f"seed {cli.get('seed')}" + (", --quick" if cli.get("quick") else "")
              + (f", --runs {cli['runs']}" if cli.get("runs") else "")) if cli else "settings not recorded"

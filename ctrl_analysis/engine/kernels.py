@@ -115,12 +115,18 @@ def copy_output(t, x, u, p, y):
         y[i] = x[i]
 
 
+class RowsNeeded(ValueError):
+    """A kernel called on a batch's columns met a size or switch that differs between runs (:func:`as_int`):
+    :meth:`KernelBlock.batched` then runs it run by run."""
+
+
 def as_int(v) -> int:
     """A size or a switch stored in a parameter vector (an order, a count of substeps, a 0/1 flag), as an int.
 
     A kernel reads ``n = as_int(p[AT.n])``. Compiled, ``p[AT.n]`` is one run's float. In the batched
     methods on the batch's columns with one parameter row per run, it is the row of the runs'
-    values, which must then all be equal: a size cannot differ between the columns of one call.
+    values: when they differ (per-run substeps) a size cannot serve every column of one call, and
+    :meth:`KernelBlock.batched` runs the kernel run by run instead.
 
     Parameters
     ----------
@@ -133,14 +139,14 @@ def as_int(v) -> int:
 
     Raises
     ------
-    ValueError
-        If the runs' values differ.
+    RowsNeeded
+        If the runs' values differ (a ValueError; the batched methods catch it and go run by run).
     """
     a = np.asarray(v)
     if a.ndim:
         if a.size and np.any(a != a.flat[0]):
-            raise ValueError(f"a size or switch of a kernel's parameters differs between runs ({np.unique(a)}): "
-                             f"it cannot vary per run in the batched methods (the compiled engine takes it)")
+            raise RowsNeeded(f"a size or switch of a kernel's parameters differs between runs ({np.unique(a)}): "
+                             f"it cannot vary between the columns of one call")
         a = a.flat[0]
     return int(a)
 
@@ -475,8 +481,11 @@ class KernelBlock:
         B = u.shape[0]
         out = np.empty((B, len(self.outputs) if kind == "output" else x.shape[1]))
         if self.kernels.columns:
-            fn(t, x.T, u.T, P if P.ndim == 1 else P.T, out.T)
-            return out
+            try:
+                fn(t, x.T, u.T, P if P.ndim == 1 else P.T, out.T)
+                return out
+            except RowsNeeded:  # a size or switch differs between runs (per-run substeps): run by run below
+                pass
         if B >= ROWS_COMPILED_MIN:
             # compiled code does not check bounds: a kernel that reads or writes outside its vectors would
             # corrupt memory or return garbage, so it is first run in Python on the real first and last rows

@@ -243,14 +243,23 @@ class Loop:
             held[s] = a
         return held, funcs, (1 if B is None else B)
 
-    def _x0(self, x0, B):
+    def _x0(self, x0, B, variants=None):
+        """The batch's initial states: ``x0`` where given, else each block's ``initial_state()`` under its run-time
+        parameters (a per-run ``x0`` given through ``params`` gives each run its own)."""
         x = np.empty((B, self.n_states))
         x0 = dict(x0 or {})
         unknown = set(x0) - set(self.slices)
         if unknown:
             raise ValueError(f"x0 names unknown blocks {sorted(unknown)}; blocks with states are {list(self.slices)}")
+        variants = variants or {}
         for p in self.continuous + self.discrete:
-            v = np.asarray(x0[p.name] if p.name in x0 else p.block.initial_state(), dtype=float)
+            if p.name not in x0 and p.name in variants:
+                var = variants[p.name]
+                v = np.empty((B, p.block.n_states))
+                for block, idx in (var.groups or ((var.block, np.arange(B)),)):
+                    v[idx] = np.asarray(block.initial_state(), dtype=float).reshape(-1)
+            else:
+                v = np.asarray(x0[p.name] if p.name in x0 else p.block.initial_state(), dtype=float)
             n = p.block.n_states
             if v.shape not in ((n,), (B, n)):
                 raise ValueError(f"x0[{p.name!r}] must have shape ({n},) or ({B}, {n}), got {v.shape}")
@@ -407,7 +416,8 @@ class Loop:
         n_kept = n_steps // every + 1  # stored instants
         per_run = self._memory_per_run(n_kept - 1, len(keep), store_states)
         check_result_memory(per_run * B, RESULT_BYTES, f"Loop.simulate(n_steps={n_steps}, runs={B})")
-        x = self._x0(x0, B)  # after the memory check: B runs' states are allocated here
+        variants = resolve(self, params, B)  # validated here, before any work
+        x = self._x0(x0, B, variants)  # after the memory check: B runs' states are allocated here
         limit = CHUNK_BYTES if max_bytes is None else check_positive("max_bytes", max_bytes)
         work = 8 * (8 * self.n_states + 2 * len(names)) + per_run  # temporaries + stored rows, per run
         size = B if chunk_runs is None else check_int("chunk_runs", chunk_runs, minimum=1)
@@ -417,7 +427,6 @@ class Loop:
         from ..parallel import active_cluster, picklable
         from .processes import simulate_chunks
 
-        variants = resolve(self, params, B)  # validated here, before any work
 
         # over processes, or a process-wide Dask cluster's workers (per-run parameters follow the chunk)
         on_cluster = jobs == 1 and B > 1 and not funcs and active_cluster() is not None \

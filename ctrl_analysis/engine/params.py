@@ -89,9 +89,30 @@ def split(block, values: dict, B: int, where: str) -> tuple[dict, dict]:
                 raise ValueError(f"{where}[{name!r}] differs per run (one axis more than the block's value), so "
                                  f"its first axis must have the batch's {B} runs, got shape {a.shape}")
             per_run[name] = a
+        elif a is not None and own is None and _per_run_of_none(block, name, a, B):
+            per_run[name] = a
         else:
             shared[name] = v
     return shared, per_run
+
+
+def _accepts(block, name: str, value) -> bool:
+    try:
+        block.with_params(**{name: value})
+    except (TypeError, ValueError):
+        return False
+    return True
+
+
+def _per_run_of_none(block, name: str, a: np.ndarray, B: int) -> bool:
+    """Whether ``a`` holds one value per run of an argument whose current value is ``None`` (say ``x0=None``).
+
+    Such an argument has no shape to count axes against; ``a`` is per run when its first axis has the ``B`` runs
+    and the block's constructor takes one run's value ``a[0]`` but not ``a`` itself.
+    """
+    if a.dtype == object or a.ndim < 1 or a.shape[0] != B or B < 2:
+        return False
+    return _accepts(block, name, a[0]) and not _accepts(block, name, a)
 
 
 def runs_of(loop, params) -> int | None:
@@ -121,9 +142,14 @@ def runs_of(loop, params) -> int | None:
             continue
         for key, v in values.items():
             own = current.get(key)
-            if own is None or isinstance(v, (str, bytes)):
+            if isinstance(v, (str, bytes)) or key not in current:
                 continue
             a = np.asarray(v)
+            if own is None:  # no shape to count against: one run's value taken, the whole value refused
+                if a.dtype != object and a.ndim >= 1 and a.shape[0] > 1 \
+                        and _per_run_of_none(placed[name], key, a, a.shape[0]):
+                    return int(a.shape[0])
+                continue
             if a.dtype != object and a.ndim == np.ndim(own) + 1 and a.shape[0] > 0:
                 return int(a.shape[0])
     return None

@@ -95,3 +95,26 @@ def check_results(name: str, results) -> None:
     if not isinstance(results, dict) or not isinstance(results.get("quantities"), list) \
             or not isinstance(results.get("study"), str):
         raise TypeError(f"{name} must be a results.json dict with 'study' and a 'quantities' list, got {results!r:.80}")
+
+
+def one_line(exc: BaseException, limit: int = 400) -> str:
+    """An exception as one line: ``Type: message`` with its whitespace folded, cut at ``limit`` characters.
+
+    Parameters
+    ----------
+    exc : BaseException
+    limit : int
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> one_line(ValueError("bad\n  value"))
+    'ValueError: bad value'
+    """
+    text = " ".join(str(exc).split())
+    if len(text) > limit:
+        text = text[: limit - 1] + "…"
+    return f"{type(exc).__name__}: {text}" if text else type(exc).__name__

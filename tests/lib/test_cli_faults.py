@@ -363,7 +363,7 @@ def test_a_report_md_that_cannot_be_written_is_its_own_line_and_the_studies_coun
     def full(*args, **kwargs):
         raise OSError(28, "No space left on device")
 
-    monkeypatch.setattr("ctrl_analysis.cli.write_report_md", full)
+    monkeypatch.setattr("ctrl_analysis.reporting.run_folder.write_report_md", full)
     capsys.readouterr()
     assert main(["reproduce", names[0], "--out", str(tmp_path), "--seed", "4"]) == 1
     captured = capsys.readouterr()

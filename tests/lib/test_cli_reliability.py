@@ -136,11 +136,16 @@ def test_report_that_cannot_be_written_is_one_line_and_keeps_the_old_one(tmp_pat
     def full_disk(*args, **kw):
         raise OSError(28, "No space left on device")
 
-    monkeypatch.setattr("ctrl_analysis.cli.write_report_md", full_disk)
-    assert main(["reproduce", "all", "--out", str(tmp_path)]) == 1
-    err = capsys.readouterr().err
-    assert "REPORT.md not written: OSError: [Errno 28] No space left on device" in err and "Traceback" not in err
-    assert err.strip().splitlines()[-1] == f"ctrl-analysis: 0 of {len(names)} studies failed: REPORT.md"
+    monkeypatch.setattr("ctrl_analysis.reporting.run_folder.write_report_md", full_disk)
+    assert main(["reproduce", "all", "--out", str(tmp_path)]) == 1  # an output asked for is missing
+    captured = capsys.readouterr()
+    err = captured.err
+    assert "Traceback" not in err
+    # the studies succeeded; REPORT.md is the one thing not written, and the old one is said to be stale
+    assert err.strip().splitlines()[-1] == ("ctrl-analysis: error: REPORT.md not written: OSError: [Errno 28] No "
+                                            "space left on device; the REPORT.md in --out is an earlier run's, "
+                                            "which does not describe the studies of this run")
+    assert f"{len(names)} of {len(names)} studies OK, 0 failed" in captured.out
     assert (tmp_path / "REPORT.md").read_text() == "old report"
 
 

@@ -134,3 +134,25 @@ def test_keep_and_every_store_the_decimated_signals_of_the_full_run(engine, ever
     assert np.array_equal(some.x_final, full.x[-1])  # the final state whatever is stored
     with pytest.raises(ValueError, match="every must be"):
         _sigma_loop().simulate(N, inputs={"y": y}, every=0)
+
+
+@pytest.mark.parametrize("engine", ["numpy", "compiled"])
+def test_per_run_initial_states_and_substeps_equal_single_runs(engine):
+    """Issue 29: a per-run x0 given through params was accepted and ignored (x0's default is None, so it could not
+    vary per run), and per-run substeps ran compiled but raised on the numpy engine."""
+    from ctrl_analysis.estimators.tracking import TrackingDifferentiator
+
+    u = np.linspace(0.0, 1.0, 31)
+    x0s = np.array([[1.0, 0.0], [2.0, -1.0], [0.5, 3.0]])
+    subs = np.array([1, 2, 3])
+    loop = Loop([place(TrackingDifferentiator(r=50.0, h=0.01), "td")], dt=0.01)
+    (name,) = loop.external
+    both = loop.simulate(30, inputs={name: u}, params={"td": {"x0": x0s, "substeps": subs}}, engine=engine)
+    assert both.runs == 3  # the batch size comes from the per-run values
+    for b in range(3):
+        one = Loop([place(TrackingDifferentiator(r=50.0, h=0.01, x0=x0s[b], substeps=int(subs[b])), "td")],
+                   dt=0.01).simulate(30, inputs={name: u}, engine=engine)
+        np.testing.assert_array_equal(both.states["td"][:, b], one.states["td"][:, 0])
+    # a value for a None-default argument that the constructor takes whole is shared, not per run
+    shared = loop.simulate(30, inputs={name: u}, params={"td": {"x0": [1.0, 0.0]}}, runs=3, engine=engine)
+    assert np.all(shared.states["td"][0] == [1.0, 0.0])

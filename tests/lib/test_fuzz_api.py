@@ -66,7 +66,7 @@ from ctrl_analysis.estimators.kalman import (
     scalar,
 )
 from ctrl_analysis.estimators.kalman import filter as kfilter
-from ctrl_analysis.reporting import box_cells, report, study
+from ctrl_analysis.reporting import box_cells, report, run_folder, study
 from ctrl_analysis.reporting import markdown as report_md
 from ctrl_analysis.reporting import sensitivity as sensitivity_module
 from ctrl_analysis.reporting.box import Box, Dimension, first_order
@@ -869,6 +869,8 @@ NOT_FUZZED = {
     arena_report_section.arena_links: "reads OUT/arena/results.json for REPORT.md; covered with the section",
     arena_record.run_record: "the arena's record run on a checked record (read_record and check_args are fuzzed)",
     arena_record.report_lines: "renders the results.json run_record writes; the CLI's arena tests check it",
+    run_folder.RunFolder: "the reproduce command's own bookkeeping; test_cli_faults and test_cli_reliability drive it",
+    run_folder.read_results: "reads a results.json back for RunFolder; the CLI fault tests feed it broken files",
     first_order: "a step of explore() on its own sample (explore is fuzzed); SALib checks its arrays",
     box_cells.cell_state: "a step of explore() on the study's own Quantity objects (explore is fuzzed)",
     box_cells.search_cells: "a step of explore() on its own runner and sample (explore is fuzzed)",

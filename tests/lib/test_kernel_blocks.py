@@ -205,11 +205,19 @@ def test_kalman_kernels_follow_the_matrix_form():
     np.testing.assert_allclose(lkf.output(0.0, x, u)[0, 0], H @ xf, rtol=1e-12)
 
 
-def test_a_size_cannot_differ_between_columns():
+def test_a_size_that_differs_between_runs_runs_run_by_run():
+    # a size cannot serve every column of one call: the batched methods then go run by run (issue 29: per-run
+    # substeps raised on the numpy engine), equal to each run alone
+    from ctrl_analysis.engine.kernels import RowsNeeded, as_int
+
     td = TrackingDifferentiator(r=20.0, h=0.01)
     P = np.stack([td.kernel_params, td.with_params(substeps=2).kernel_params])
-    with pytest.raises(ValueError, match="differs between runs"):
-        td.batched("update", 0.0, np.zeros((2, 2)), np.ones((2, 1)), P)
+    x, u = np.array([[0.1, 0.0], [0.2, 0.5]]), np.ones((2, 1))
+    both = td.batched("update", 0.0, x, u, P)
+    for b in range(2):
+        np.testing.assert_array_equal(both[b], td.batched("update", 0.0, x[b:b + 1], u[b:b + 1], P[b])[0])
+    with pytest.raises(RowsNeeded, match="differs between runs"):
+        as_int(np.array([1.0, 2.0]))
 
 
 def _outside_block(read: bool):
