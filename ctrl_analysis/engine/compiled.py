@@ -56,6 +56,7 @@ def compiled_for(loop, engine, funcs, variants):
     if why is not None:
         if engine == "compiled":
             raise ValueError(f"engine='compiled' is not possible for this loop: {why}")
+        _tell_slow_path(loop, why)
         return None
     if variants or getattr(loop, "_kernels_checked", None) is not loop.placed:
         check_kernel_reads(loop, kernels)
@@ -73,6 +74,33 @@ def compiled_for(loop, engine, funcs, variants):
         return None
     P = [_params_2d(p.name, kernels[p.name].params) for p in loop.placed]
     return run, P, [np.ndim(kernels[p.name].params) == 2 for p in loop.placed]
+
+
+class SlowPathWarning(RuntimeWarning):
+    """A loop runs on the numpy engine under ``engine="auto"`` (told once per loop, with what would make it compile)."""
+
+
+#: What makes each reason for the numpy path go away.
+_REMEDY = {
+    "no kernel": ("write it as a kernel block (a Layout and scalar kernels, CONTRIBUTING.md 'Add a block'), or a "
+                  "sum/difference/selection as StaticGain"),
+    "per-run parameters but no kernel": "write it as a kernel block, whose per-run parameters the compiled engine reads",
+    "callable inputs": "give the input as an array of its samples, shape (N,) or (N, B)",
+    "numba is not installed": "install numba",
+}
+
+
+def _tell_slow_path(loop, why: str) -> None:
+    """Warn once per loop that it runs on the numpy engine: which block (or input) and what would make it compile."""
+    if getattr(loop, "_slow_path_told", False):
+        return
+    loop._slow_path_told = True
+    import warnings
+
+    remedy = next((r for key, r in _REMEDY.items() if key in why), "")
+    warnings.warn(f"this loop runs on the numpy engine, often 10-100x slower than compiled: {why}"
+                  + (f"; to compile it, {remedy}" if remedy else "")
+                  + " (engine='numpy' chooses the numpy engine without this warning)", SlowPathWarning, stacklevel=4)
 
 
 def check_kernel_reads(loop, kernels: dict) -> None:

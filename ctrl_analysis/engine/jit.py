@@ -72,12 +72,17 @@ def source_key(fn) -> str:
         if id(f) in seen:
             return
         seen.add(id(f))
+        code, env = getattr(f, "__code__", None), getattr(f, "__globals__", {})
         try:
             parts.append(inspect.getsource(f))
-        except (OSError, TypeError):  # source unavailable (a builtin, exec'd code): key on the identity
-            parts.append(repr(f))
-            return
-        code, env = getattr(f, "__code__", None), getattr(f, "__globals__", {})
+        except Exception:  # noqa: BLE001 - no source (exec'd code: a notebook cell, a README example, whose
+            # "file" may even exist with other lines in it, giving a TokenError): key on the compiled code itself
+            if code is None:
+                parts.append(repr(f))
+                return
+            import marshal
+
+            parts.append(marshal.dumps(code).hex())
         if code is None:
             return
         for name in sorted(set(code_names(code))):

@@ -111,7 +111,7 @@ def one_line(exc: BaseException, limit: int = 400) -> str:
 
     Examples
     --------
-    >>> one_line(ValueError("bad\n  value"))
+    >>> one_line(ValueError("bad\\n  value"))
     'ValueError: bad value'
     """
     text = " ".join(str(exc).split())
