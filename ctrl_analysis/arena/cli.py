@@ -151,12 +151,13 @@ def check_args(args) -> SimpleNamespace:
         (:mod:`.recordcheck`).
     """
     from ..parallel import check_scheduler_address, default_jobs
+    from .recordcheck import MAX_RECORDS
 
     jobs = default_jobs() if args.jobs is None else int(args.jobs)
     if jobs < 1:
         raise ValueError(f"--jobs must be >= 1, got {jobs}")
-    if args.runs is not None and args.runs < 1:
-        raise ValueError(f"--runs must be >= 1, got {args.runs}")
+    if args.runs is not None and not 1 <= args.runs <= MAX_RECORDS:
+        raise ValueError(f"--runs must be in 1..{MAX_RECORDS} (records per case), got {args.runs}")
     if args.seed < 0:
         raise ValueError(f"--seed must be >= 0, got {args.seed}")
     if args.scheduler is not None:

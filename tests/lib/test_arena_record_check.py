@@ -181,6 +181,21 @@ def test_work_estimate_names_a_bad_argument(kwargs, name):
         work_estimate(**(dict(n=100, dt=0.01, eps=0.01, L=1.0) | kwargs))
 
 
+def test_the_estimates_refuse_magnitudes_beyond_the_scale_range_and_a_scalar_derivative():
+    _, y = _sine()
+    for kwargs, name in (({"dt": 1e300}, "dt is 1e"), ({"dt": 1e-300}, "dt is 1e-300"),
+                         ({"eps": 1e300}, "eps is 1e"), ({"d1": np.full(600, 1e60)}, "d1's largest magnitude")):
+        with pytest.raises(ValueError, match=f"{name}.*outside the magnitudes 1e-50 to 1e[+]50"):
+            record_estimates(y, **({"dt": 0.01} | kwargs))
+    with pytest.raises(ValueError, match=r"y's largest magnitude is 1e\+300"):
+        record_estimates(np.full(600, 1e300), 0.01)
+    with pytest.raises(ValueError, match=r"d1 must have the shape of y \(600,\), got \(\)"):
+        record_estimates(y, 0.01, d1=3)
+    assert record_estimates(-y, 0.01)["noise_bound"] == record_estimates(y, 0.01)["noise_bound"]  # any sign
+    with pytest.raises(ValueError, match=f"n must be <= {recordcheck.MAX_ROWS}"):
+        work_estimate(10**100, 0.01, 0.01, 1.0)
+
+
 def test_an_extreme_ratio_of_the_bounds_does_not_overflow_the_estimate():
     w = work_estimate(1000, 1e-300, 1e300, 1e-300)
     assert w["window"] == 1000 and w["fit_taps"] == 1000 and math.isfinite(w["core_s"])
