@@ -237,6 +237,14 @@ RULES = [
     (TEXT + ": the record's name in the messages", "unknown empty", ["check_record.where"]),
     ("a record of any length from 4 samples on: without d1 nothing else fixes its length", "shorter longer",
      ["record_estimates.y"]),
+    # the last findings of the generated fuzz (issue 28: the arena, ctrl_analysis/parallel.py)
+    (SIGNAL, "negative", ["record_estimates.y"]),
+    (("an estimate of f' may be any real number; NaN/inf of a diverged estimator give a NaN/inf error (documented: "
+      "'a diverged estimator's error is not finite')"), "negative nan-entry inf-entry", ["adversarial_error.est_d1"]),
+    ("a batch of any number of seeds (at least one): one run per seed", "longer shorter",
+     ["monte_carlo.seeds", "sweep.seeds"]),
+    ("a grid's parameter names are free (fn reads the names the grid gives); a single number is one value",
+     "unknown", ["sweep.grid"]),
 ]
 
 
