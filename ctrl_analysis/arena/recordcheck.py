@@ -418,11 +418,13 @@ def _check_arrays(t, y, d1, eps, L) -> tuple:
             out.append(None)
             continue
         if isinstance(v, (str, bytes)):
-            raise TypeError(f"{name} must be a 1-D array of numbers, got {v!r:.80}")
+            raise TypeError(f"{name} must be a 1-D array of real numbers, got {v!r:.80}")
         try:
+            if np.iscomplexobj(v):  # asarray(dtype=float) would drop the imaginary part
+                raise TypeError
             a = np.asarray(v, dtype=float)
         except (TypeError, ValueError):
-            raise TypeError(f"{name} must be a 1-D array of numbers, got {v!r:.80}") from None
+            raise TypeError(f"{name} must be a 1-D array of real numbers, got {v!r:.80}") from None
         if a.ndim != 1:
             raise ValueError(f"{name} must be a 1-D array, got shape {a.shape}")
         if not np.all(np.isfinite(a)):

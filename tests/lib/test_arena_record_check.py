@@ -119,6 +119,10 @@ def test_arrays_and_bounds_are_checked_by_name():
         args = dict(t=t, y=y, d1=None, eps=0.01, L=1.0) | kwargs
         with pytest.raises((TypeError, ValueError), match=rf"^{name} "):
             check_record(**args)
+    for name in ("t", "y", "d1"):  # a complex array is not read as its real part
+        args = {"t": t, "y": y, "d1": None, "eps": 0.01, "L": 1.0} | {name: (t if name == "t" else y) + 1j}
+        with pytest.raises(TypeError, match=f"^{name} must be a 1-D array of real numbers"):
+            check_record(**args)
 
 
 # ------------------------------------------------------------------------------------------------ the cost
