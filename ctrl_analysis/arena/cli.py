@@ -43,7 +43,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p.add_argument("--out", default=None,
                    help="output directory; the results go to OUT/arena (default: figures, or arena-out with --signal, "
                         "so a record run never replaces the committed benchmark)")
-    p.add_argument("--runs", type=int, default=None, help="records per case (default 3; 1 with --quick)")
+    p.add_argument("--runs", type=int, default=None, help="records per case, 1 to 1000 (default 3; 1 with --quick)")
     p.add_argument("--seed", type=int, default=0, help="base seed (default: 0)")
     p.add_argument("--quick", action="store_true", help="2 signal classes, 1 noise class, short records")
     p.add_argument("--jobs", type=int, default=None, help="processes (default: all cores)")
