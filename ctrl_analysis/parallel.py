@@ -56,6 +56,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from ._validate import check_int, check_positive, check_str
+from .noise import _check_seeds
 from .progress import bar
 
 __all__ = ["MAX_CHUNKS", "WORKER_TIMEOUT", "active_cluster", "check_scheduler_address",
@@ -661,7 +662,7 @@ def monte_carlo(fn: Callable, seeds: Sequence, *, jobs: int = 1, scheduler=None,
     fn : callable
         Module-level ``fn(seeds) -> array, or dict/tuple of arrays`` with one row per seed.
     seeds : sequence of int
-        Per-run seeds (e.g. :func:`ctrl_analysis.simulate.run_seeds`).
+        Per-run seeds, non-negative integers (e.g. :func:`ctrl_analysis.simulate.run_seeds`).
     jobs, scheduler, desc
         As in :func:`map_chunks`.
     chunk_size : int, optional
@@ -671,7 +672,7 @@ def monte_carlo(fn: Callable, seeds: Sequence, *, jobs: int = 1, scheduler=None,
     -------
     The gathered result: what ``fn(list(seeds))`` returns in one process, bit for bit.
     """
-    seeds = _sequence("seeds", seeds)
+    seeds = _check_seeds(seeds)  # non-negative integers, as noise.draw_noise takes them
     if not seeds:
         raise ValueError("seeds must contain at least one seed")
     jobs = check_int("jobs", jobs, minimum=1)
@@ -726,7 +727,7 @@ def sweep(fn: Callable, grid: dict, seeds: Sequence, *, jobs: int = 1, scheduler
     grid : dict of str -> sequence of float
         The parameter values.
     seeds : sequence of int
-        Seeds run at every point.
+        Seeds run at every point, non-negative integers.
     jobs, scheduler, desc
         As in :func:`map_chunks`.
     chunk_size : int, optional
@@ -740,7 +741,7 @@ def sweep(fn: Callable, grid: dict, seeds: Sequence, *, jobs: int = 1, scheduler
     jobs = check_int("jobs", jobs, minimum=1)
     if not callable(fn):
         raise TypeError(f"fn must be callable fn(points, seeds), got {fn!r}")
-    seeds = _sequence("seeds", seeds)
+    seeds = _check_seeds(seeds)
     if not seeds:
         raise ValueError("seeds must contain at least one seed")
     pts = grid_points(grid)

@@ -202,7 +202,7 @@ RULES = [
     ("a response of several runs along other axes, of any length: overshoot takes any shape along axis",
      "extra-dims longer shorter", ["overshoot.y", "mean_std.values", "settling_time.y"]),
     ("t is documented unused by overshoot (kept for a signature shared with settling_time); any real array",
-     "empty extra-dims nan-entry inf-entry negative longer shorter", ["overshoot.t"]),
+     "none empty extra-dims nan-entry inf-entry negative longer shorter", ["overshoot.t"]),
     ("a final value the response never settles to: the documented answer is NaN (never settles)",
      "negative huge -huge tiny", ["settling_time.final"]),
     ("a drop of -3 dB is the default; any drop in [-300, 0) is valid", "negative", ["bandwidth_3db.dbdrop"]),
@@ -235,8 +235,18 @@ RULES = [
     ("a registered signal class's name is checked by make_signal when used", "unknown", ["native_bound.kind"]),
     # the arena's record check (issue 28), fuzzed after this list was made
     (TEXT + ": the record's name in the messages", "unknown empty", ["check_record.where"]),
+    ("two free-text names of the bounds for the messages (None: 'eps', 'L'); the generated 'longer' value is two",
+     "longer", ["check_record.names"]),
     ("a record of any length from 4 samples on: without d1 nothing else fixes its length", "shorter longer",
      ["record_estimates.y"]),
+    # the last findings of the generated fuzz (issue 28: the arena, ctrl_analysis/parallel.py)
+    (SIGNAL, "negative", ["record_estimates.y"]),
+    (("an estimate of f' may be any real number; NaN/inf of a diverged estimator give a NaN/inf error (documented: "
+      "'a diverged estimator's error is not finite')"), "negative nan-entry inf-entry", ["adversarial_error.est_d1"]),
+    ("a batch of any number of seeds (at least one): one run per seed", "longer shorter",
+     ["monte_carlo.seeds", "sweep.seeds"]),
+    ("a grid's parameter names are free (fn reads the names the grid gives); a single number is one value",
+     "unknown", ["sweep.grid"]),
 ]
 
 

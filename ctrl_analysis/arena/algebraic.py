@@ -10,11 +10,17 @@ polynomials of the window is the same least-squares fit).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .._validate import check_finite, check_int, check_positive
+from .recordcheck import MAX_ROWS
 
-__all__ = ["algebraic_derivative", "algebraic_weights"]
+__all__ = ["MAX_WINDOW", "algebraic_derivative", "algebraic_weights"]
+
+#: The longest window (samples): a record's most rows (:data:`~ctrl_analysis.arena.recordcheck.MAX_ROWS`).
+MAX_WINDOW = MAX_ROWS
 
 
 def algebraic_weights(window: int, degree: int, dt: float) -> np.ndarray:
@@ -23,11 +29,11 @@ def algebraic_weights(window: int, degree: int, dt: float) -> np.ndarray:
     Parameters
     ----------
     window : int
-        Samples in the window, ``W >= degree + 1``.
+        Samples in the window, ``degree + 1 <= W <=`` :data:`MAX_WINDOW`.
     degree : int
         Polynomial degree ``d``, 1 or 2.
     dt : float
-        Sample period (> 0).
+        Sample period (> 0), not so small that the weights ``1/dt`` and ``2/dt²`` overflow double precision.
 
     Returns
     -------
@@ -38,7 +44,8 @@ def algebraic_weights(window: int, degree: int, dt: float) -> np.ndarray:
     Raises
     ------
     ValueError
-        If ``degree`` is not 1 or 2, ``window < degree + 1`` or ``dt <= 0``.
+        If ``degree`` is not 1 or 2, ``window`` is outside ``[degree + 1, MAX_WINDOW]``, ``dt <= 0``, or ``dt`` so
+        small that the weights overflow.
 
     References
     ----------
@@ -54,17 +61,29 @@ def algebraic_weights(window: int, degree: int, dt: float) -> np.ndarray:
     [1.5, -2.0, 0.5]
     """
     degree = check_int("degree", degree, minimum=1, maximum=2)
-    window = check_int("window", window, minimum=degree + 1)
+    window = check_int("window", window, minimum=degree + 1, maximum=MAX_WINDOW)
     dt = float(check_positive("dt", dt, scalar=True))
     tau = -np.arange(window, dtype=float)  # time of y_(k-j) relative to t_k, in samples
     V = np.vander(tau, degree + 1, increasing=True)  # columns 1, τ, τ²
     pinv = np.linalg.pinv(V)  # coefficients c = pinv y: p(τ) = c0 + c1 τ + c2 τ²
     w = np.zeros((3, window))
     w[0] = pinv[0]
-    w[1] = pinv[1] / dt  # p'(0) = c1, per sample -> per second
-    if degree == 2:
-        w[2] = 2.0 * pinv[2] / dt**2  # p''(0) = 2 c2
+    with np.errstate(over="ignore", divide="ignore"):
+        w[1] = pinv[1] / dt  # p'(0) = c1, per sample -> per second
+        if degree == 2:
+            w[2] = 2.0 * pinv[2] / _square(dt)  # p''(0) = 2 c2
+    if not np.all(np.isfinite(w)):
+        raise ValueError(f"dt = {dt!r} s is too small for double precision: the weights 1/dt and 2/dt² of a "
+                         "window's samples overflow; express the record in another unit of time")
     return w
+
+
+def _square(dt: float) -> float:
+    """``dt**2``, ``inf`` past the float range (whose weights ``2 c2/dt²`` are then 0 to double precision)."""
+    try:
+        return dt**2
+    except OverflowError:
+        return math.inf
 
 
 def algebraic_derivative(y, windows, degrees, dt: float) -> np.ndarray:
@@ -77,7 +96,8 @@ def algebraic_derivative(y, windows, degrees, dt: float) -> np.ndarray:
     y : array_like, shape (N, B)
         Measured samples, one record per run.
     windows, degrees : array_like of int, shape (B,)
-        Window ``W`` and degree ``d`` of each run (``W`` raised to ``d + 1`` when smaller).
+        Window ``W`` (at most :data:`MAX_WINDOW`) and degree ``d`` of each run (``W`` raised to ``d + 1`` when
+        smaller).
     dt : float
         Sample period (> 0).
 
@@ -89,8 +109,9 @@ def algebraic_derivative(y, windows, degrees, dt: float) -> np.ndarray:
     Raises
     ------
     TypeError, ValueError
-        If ``y`` is not a finite (N, B) array, ``windows``/``degrees`` are not integers (``>= 1``;
-        degrees 1 or 2) of one value or ``B`` values, or ``dt <= 0``.
+        If ``y`` is not a finite (N, B) array, ``windows``/``degrees`` are not integers (windows 1 to
+        :data:`MAX_WINDOW`, degrees 1 or 2) of one value or ``B`` values, ``dt`` is not as
+        :func:`algebraic_weights` needs it, or the magnitudes of ``y`` and ``dt`` make an estimate overflow.
 
     Examples
     --------
@@ -104,7 +125,7 @@ def algebraic_derivative(y, windows, degrees, dt: float) -> np.ndarray:
         raise ValueError(f"y must have shape (N, B), got {y.shape}")
     N, B = y.shape
     dt = float(check_positive("dt", dt, scalar=True))
-    windows = _integers("windows", windows, B, minimum=1)
+    windows = _integers("windows", windows, B, minimum=1, maximum=MAX_WINDOW)
     degrees = _integers("degrees", degrees, B, minimum=1, maximum=2)
     windows = np.maximum(windows, degrees + 1)
     out = np.empty((N, B, 3))
@@ -115,6 +136,9 @@ def algebraic_derivative(y, windows, degrees, dt: float) -> np.ndarray:
         # sliding windows: view[k, b, j] = padded[k + j, b]; newest sample last, so reverse the weights
         view = np.lib.stride_tricks.sliding_window_view(padded, W, axis=0)
         out[:, cols, :] = np.einsum("kbj,rj->kbr", view, w[:, ::-1])
+    if not np.all(np.isfinite(out)):
+        raise ValueError("y and dt overflow double precision (an estimate is not finite): express the record in "
+                         "other units of the signal or of time")
     return out
 
 

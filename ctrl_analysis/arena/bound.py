@@ -49,6 +49,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._validate import check_array, check_finite, check_int, check_positive
+from .recordcheck import MAX_ROWS
 
 __all__ = ["adversarial_error", "adversarial_pair", "lower_bound"]
 
@@ -88,7 +89,7 @@ def adversarial_pair(eps: float, L: float, dt: float, n_samples: int, k_star: in
     dt : float
         Sample period (> 0).
     n_samples : int
-        Samples ``N``.
+        Samples ``N`` (at most :data:`~ctrl_analysis.arena.recordcheck.MAX_ROWS`, a record's most rows).
     k_star : int
         The sample ``t* = k_star dt`` where the two derivatives differ most; needs
         ``t* >= 2√(ε/L)`` and ``k_star < N``.
@@ -104,7 +105,7 @@ def adversarial_pair(eps: float, L: float, dt: float, n_samples: int, k_star: in
     Raises
     ------
     TypeError, ValueError
-        If ``eps``, ``L`` or ``dt`` is not a number > 0, ``n_samples`` (>= 1) or ``k_star`` (>= 0)
+        If ``eps``, ``L`` or ``dt`` is not a number > 0, ``n_samples`` (1 to ``MAX_ROWS``) or ``k_star`` (>= 0)
         not an integer, ``slope`` not finite, or ``t*`` is too early or outside the record.
 
     Examples
@@ -116,7 +117,7 @@ def adversarial_pair(eps: float, L: float, dt: float, n_samples: int, k_star: in
     eps = float(check_positive("eps", eps, scalar=True))
     L = float(check_positive("L", L, scalar=True))
     dt = float(check_positive("dt", dt, scalar=True))
-    n_samples = check_int("n_samples", n_samples, minimum=1)
+    n_samples = check_int("n_samples", n_samples, minimum=1, maximum=MAX_ROWS)
     k_star = check_int("k_star", k_star, minimum=0)
     slope = float(check_finite("slope", slope, scalar=True))
     tau = 2.0 * np.sqrt(eps / L)

@@ -43,7 +43,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p.add_argument("--out", default=None,
                    help="output directory; the results go to OUT/arena (default: figures, or arena-out with --signal, "
                         "so a record run never replaces the committed benchmark)")
-    p.add_argument("--runs", type=int, default=None, help="records per case (default 3; 1 with --quick)")
+    p.add_argument("--runs", type=int, default=None, help="records per case, 1 to 1000 (default 3; 1 with --quick)")
     p.add_argument("--seed", type=int, default=0, help="base seed (default: 0)")
     p.add_argument("--quick", action="store_true", help="2 signal classes, 1 noise class, short records")
     p.add_argument("--jobs", type=int, default=None, help="processes (default: all cores)")
@@ -151,12 +151,13 @@ def check_args(args) -> SimpleNamespace:
         (:mod:`.recordcheck`).
     """
     from ..parallel import check_scheduler_address, default_jobs
+    from .recordcheck import MAX_RECORDS
 
     jobs = default_jobs() if args.jobs is None else int(args.jobs)
     if jobs < 1:
         raise ValueError(f"--jobs must be >= 1, got {jobs}")
-    if args.runs is not None and args.runs < 1:
-        raise ValueError(f"--runs must be >= 1, got {args.runs}")
+    if args.runs is not None and not 1 <= args.runs <= MAX_RECORDS:
+        raise ValueError(f"--runs must be in 1..{MAX_RECORDS} (records per case), got {args.runs}")
     if args.seed < 0:
         raise ValueError(f"--seed must be >= 0, got {args.seed}")
     if args.scheduler is not None:

@@ -20,6 +20,7 @@ filter run with vectorised numpy.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -40,7 +41,7 @@ from ..estimators.kalman.alpha_beta import (
 from ..estimators.lowpass import DiscreteLowPass, LowPassFilter
 from ..estimators.tracking import TrackingDifferentiator
 from ..polynomials import repeated_pole_coefficients
-from .algebraic import algebraic_derivative
+from .algebraic import MAX_WINDOW, algebraic_derivative
 
 __all__ = ["FAMILIES", "Family", "Param", "estimate", "family", "scales"]
 
@@ -168,6 +169,11 @@ def scales(eps: float, L: float, dt: float) -> dict:
     dict
         ``omega, tau, eps, L, lambda, lambda3, window, one, dt``.
 
+    Raises
+    ------
+    TypeError, ValueError
+        A bound or ``dt`` that is not a number > 0, or magnitudes whose references overflow or underflow.
+
     Examples
     --------
     >>> s = scales(0.01, 4.0, 0.002)
@@ -177,9 +183,17 @@ def scales(eps: float, L: float, dt: float) -> dict:
     eps = float(check_positive("eps", eps, scalar=True))
     L = float(check_positive("L", L, scalar=True))
     dt = float(check_positive("dt", dt, scalar=True))
-    omega = float(np.sqrt(L / eps))
-    return {"omega": omega, "tau": 1.0 / omega, "eps": eps, "L": L, "lambda": (omega * dt) ** 2,
-            "lambda3": (omega * dt) ** 3, "window": round(2.0 / omega / dt, 6), "one": 1.0, "dt": dt}
+    try:
+        omega = float(np.sqrt(L / eps))
+        out = {"omega": omega, "tau": 1.0 / omega, "eps": eps, "L": L, "lambda": (omega * dt) ** 2,
+               "lambda3": (omega * dt) ** 3, "window": round(2.0 / omega / dt, 6), "one": 1.0, "dt": dt}
+    except (OverflowError, ZeroDivisionError):
+        out = {"omega": math.nan}
+    if not all(math.isfinite(v) and (v > 0 or k == "window") for k, v in out.items()):
+        raise ValueError(f"eps, L and dt (eps = {eps:.3g}, L = {L:.3g}, dt = {dt:.3g}) give reference values beyond "
+                         "double precision (ω = √(L/ε), 1/ω and (ω dt)³ must be finite and > 0): express the signal "
+                         "and time in other units")
+    return out
 
 
 # ---------------------------------------------------------------------------------------- blocks
@@ -260,7 +274,8 @@ def _build(fam: Family, P: np.ndarray, dt: float):
 
 
 def _check_params(fam: Family, P: np.ndarray) -> None:
-    """Every tuning parameter > 0; integer parameters integral; a degree (reference ``"one"``) within its range."""
+    """Every tuning parameter > 0; integer parameters integral; a degree (reference ``"one"``) within its range, a
+    window at most :data:`~ctrl_analysis.arena.algebraic.MAX_WINDOW`."""
     for j, p in enumerate(fam.params):
         col = P[:, j]
         if np.any(col <= 0):
@@ -270,6 +285,9 @@ def _check_params(fam: Family, P: np.ndarray) -> None:
         if p.ref == "one" and np.any((col < p.lo) | (col > p.hi)):
             raise ValueError(f"P column {j} ({fam.name} parameter {p.name}) must be in [{p.lo:g}, {p.hi:g}], "
                              f"got {col.tolist()!r:.80}")
+        if p.ref == "window" and np.any(col > MAX_WINDOW):
+            raise ValueError(f"P column {j} ({fam.name} parameter {p.name}) must be <= MAX_WINDOW = {MAX_WINDOW} "
+                             f"samples, got {col.tolist()!r:.80}")
 
 
 def estimate(fam, P, y, dt: float, *, engine: str = "auto") -> np.ndarray:
@@ -298,8 +316,9 @@ def estimate(fam, P, y, dt: float, *, engine: str = "auto") -> np.ndarray:
     ------
     TypeError, ValueError
         If ``fam`` is not a family, the shapes of ``P`` and ``y`` disagree, a value is not finite, a
-        parameter is not > 0 (an integer parameter not an integer, a degree not 1 or 2), ``dt <= 0`` or
-        ``engine`` is unknown.
+        parameter is not > 0 (an integer parameter not an integer, a degree not 1 or 2, a window over
+        :data:`~ctrl_analysis.arena.algebraic.MAX_WINDOW`) or builds no valid estimator (gains that overflow),
+        ``dt <= 0`` or ``engine`` is unknown.
 
     Examples
     --------
@@ -325,7 +344,11 @@ def estimate(fam, P, y, dt: float, *, engine: str = "auto") -> np.ndarray:
     k = 3 if fam.second else 2
     if fam.name == "algebraic":
         return algebraic_derivative(y, P[:, 0].astype(int), P[:, 1].astype(int), dt)
-    block, ins, outs, per_run = _build(fam, P, dt)
+    try:
+        block, ins, outs, per_run = _build(fam, P, dt)
+    except ValueError as exc:  # a block's own check (gains overflowing, an unstable filter): the values come from P
+        raise ValueError(f"P ({fam.name} parameters {', '.join(p.name for p in fam.params)}) gives no valid "
+                         f"estimator: {exc}") from None
     continuous = fam.name in ("sigma", "leso2", "leso3", "neso")
     loop = Loop([place(block, "est", inputs=[f"_{s}" for s in block.inputs], outputs=list(outs))], dt,
                 substeps=SUBSTEPS if continuous else 1)

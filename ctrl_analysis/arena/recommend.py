@@ -21,6 +21,7 @@ from ..reporting.results import StudyInfo, StudyResult
 from .bound import adversarial_error, adversarial_pair, lower_bound
 from .claims import VERDICT_TEXT, judge_claims
 from .interface import FAMILIES, estimate, family
+from .recordcheck import MAX_RECORDS
 from .signals import (
     NOISE_CLASSES,
     SIGNAL_CLASSES,
@@ -28,7 +29,7 @@ from .signals import (
     registered_signal_classes,
     signal_classes,
 )
-from .tuning import Case, Setup, case_records, tune_family
+from .tuning import MAX_ROUNDS, Case, Setup, case_records, tune_family
 
 __all__ = [
     "DEFAULT",
@@ -57,10 +58,10 @@ class ArenaSettings:
     L : float
         Bound on ``|f''|`` of every signal.
     records : int
-        Seeded records per case.
+        Seeded records per case (1 to :data:`~ctrl_analysis.arena.recordcheck.MAX_RECORDS`).
     setup : Setup
     rounds : int
-        Pattern-search rounds.
+        Pattern-search rounds (0 to :data:`~ctrl_analysis.arena.tuning.MAX_ROUNDS`).
     families : tuple of str
     """
 
@@ -86,10 +87,10 @@ class ArenaSettings:
         for e in self.eps:
             check_positive("eps", e, scalar=True)
         check_positive("L", self.L, scalar=True)
-        check_int("records", self.records, minimum=1)
+        check_int("records", self.records, minimum=1, maximum=MAX_RECORDS)
         if not isinstance(self.setup, Setup):
             raise TypeError(f"setup must be a Setup, got {self.setup!r:.80}")
-        check_int("rounds", self.rounds, minimum=0)
+        check_int("rounds", self.rounds, minimum=0, maximum=MAX_ROUNDS)
 
 
 #: The defaults with the built-in signal classes (:func:`default_settings` adds the registered ones).
@@ -367,7 +368,7 @@ def recommend_for_record(t, y, d1, eps: float, L: float, *, rounds: int = 2, job
     eps, L : float
         Noise bound and bound on ``|f''|``.
     rounds : int
-        Pattern-search rounds.
+        Pattern-search rounds (0 to :data:`~ctrl_analysis.arena.tuning.MAX_ROUNDS`).
     jobs : int
         Processes.
 
@@ -389,7 +390,7 @@ def recommend_for_record(t, y, d1, eps: float, L: float, *, rounds: int = 2, job
     t, y = np.asarray(t, dtype=float), np.asarray(y, dtype=float)
     d1 = None if d1 is None else np.asarray(d1, dtype=float)
     eps, L = float(eps), float(L)
-    rounds = check_int("rounds", rounds, minimum=0)
+    rounds = check_int("rounds", rounds, minimum=0, maximum=MAX_ROUNDS)
     jobs = check_int("jobs", jobs, minimum=1)
     setup, rec = record_case(t, y, d1, eps, L)
     case = Case("user", "user", float(eps), float(L), (0,))

@@ -63,13 +63,16 @@ import numpy as np
 
 from .._validate import check_bool, check_finite, check_int, check_positive
 
-__all__ = ["FACTOR", "MAX_FILE_BYTES", "MAX_MEMORY_BYTES", "MAX_ROWS", "MAX_WORK_S", "SCALE_RANGE",
+__all__ = ["FACTOR", "MAX_FILE_BYTES", "MAX_MEMORY_BYTES", "MAX_RECORDS", "MAX_ROWS", "MAX_WORK_S", "SCALE_RANGE",
            "check_record", "record_estimates", "work_estimate"]
 
 #: The largest ``--signal`` file read (bytes).
 MAX_FILE_BYTES = 128 * 2**20
-#: The most rows a record may have.
+#: The most rows a record may have (and samples of the arena's own records, windows and adversarial pairs).
 MAX_ROWS = 1_000_000
+#: The most seeded records per case of the benchmark (``--runs``): every configuration runs two per record, so
+#: 1000 records already make the default benchmark's tuning about 300 times its three records' work.
+MAX_RECORDS = 1000
 #: The most memory a record run may be estimated to need (bytes).
 MAX_MEMORY_BYTES = 4 * 2**30
 #: The most work a record run may be estimated to need (core-seconds at the rates below).
@@ -141,7 +144,7 @@ def work_estimate(n: int, dt: float, eps: float, L: float, *, derivative: bool =
     Parameters
     ----------
     n : int
-        Samples.
+        Samples (2 to :data:`MAX_ROWS`: a longer record is refused before its cost matters).
     dt : float
         Sample period (s).
     eps, L : float
@@ -162,7 +165,7 @@ def work_estimate(n: int, dt: float, eps: float, L: float, *, derivative: bool =
     >>> int(w["window"]), w["memory_bytes"] < 1e9          # capped at the record's 500 samples
     (500, True)
     """
-    n = check_int("n", n, minimum=2)
+    n = check_int("n", n, minimum=2, maximum=MAX_ROWS)
     dt = float(check_positive("dt", dt, scalar=True))
     eps = float(check_positive("eps", eps, scalar=True))
     L = float(check_positive("L", L, scalar=True))
@@ -252,6 +255,12 @@ def record_estimates(y, dt: float, *, d1=None, eps: float | None = None) -> dict
         ``accel_scale_s`` (the averaging span ``m dt`` it was seen at), ``quantum`` (the step of a quantised
         record, else 0).
 
+    Raises
+    ------
+    TypeError, ValueError
+        ``y`` not a finite 1-D array of at least 4 samples, ``d1`` not of its shape, ``dt`` or ``eps`` not > 0, or a
+        magnitude of ``y``, ``d1``, ``dt`` or ``eps`` outside :data:`SCALE_RANGE` (where the differences stay finite).
+
     Examples
     --------
     >>> t = 0.01 * np.arange(2000)
@@ -259,16 +268,22 @@ def record_estimates(y, dt: float, *, d1=None, eps: float | None = None) -> dict
     >>> 0.5 < e["noise_bound"] / 0.01 < 2, 0.3 < e["accel"] < 1.0
     (True, True)
     """
-    y = check_finite("y", y)
+    y = np.asarray(check_finite("y", y))
     if y.ndim != 1 or y.size < 4:
         raise ValueError(f"y must be a 1-D array of at least 4 samples, got shape {y.shape}")
     dt = float(check_positive("dt", dt, scalar=True))
     if d1 is not None:
-        d1 = check_finite("d1", d1)
+        d1 = np.asarray(check_finite("d1", d1))
         if d1.shape != y.shape:
             raise ValueError(f"d1 must have the shape of y {y.shape}, got {d1.shape}")
     if eps is not None:
         eps = float(check_positive("eps", eps, scalar=True))
+    _scale("y's largest magnitude", float(np.max(np.abs(y))))  # where the differences below stay finite
+    _scale("dt", dt)
+    if d1 is not None:
+        _scale("d1's largest magnitude", float(np.max(np.abs(d1))))
+    if eps is not None:
+        _scale("eps", eps)
     n = y.size
     y = y - np.median(y)
     d3 = np.diff(y, 3)
@@ -403,11 +418,13 @@ def _check_arrays(t, y, d1, eps, L) -> tuple:
             out.append(None)
             continue
         if isinstance(v, (str, bytes)):
-            raise TypeError(f"{name} must be a 1-D array of numbers, got {v!r:.80}")
+            raise TypeError(f"{name} must be a 1-D array of real numbers, got {v!r:.80}")
         try:
+            if np.iscomplexobj(v):  # asarray(dtype=float) would drop the imaginary part
+                raise TypeError
             a = np.asarray(v, dtype=float)
         except (TypeError, ValueError):
-            raise TypeError(f"{name} must be a 1-D array of numbers, got {v!r:.80}") from None
+            raise TypeError(f"{name} must be a 1-D array of real numbers, got {v!r:.80}") from None
         if a.ndim != 1:
             raise ValueError(f"{name} must be a 1-D array, got shape {a.shape}")
         if not np.all(np.isfinite(a)):

@@ -25,7 +25,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._validate import check_finite, check_in, check_int, check_positive, check_str
+from .._validate import (
+    check_finite,
+    check_in,
+    check_int,
+    check_positive,
+    check_str,
+    finite_result,
+)
 from ..noise import gaussian_noise, uniform_noise
 
 __all__ = ["NOISE_CLASSES", "SIGNAL_CLASSES", "SignalClass", "add_noise", "make_signal", "native_bound",
@@ -247,6 +254,13 @@ def make_signal(kind: str, seed: int, t, L: float) -> np.ndarray:
     numpy.ndarray, shape (3, N)
         ``f, f', f''``.
 
+    Raises
+    ------
+    TypeError, ValueError
+        An unknown class, a seed that is not a non-negative integer, ``t`` not a finite non-empty 1-D array (for a
+        registered class, not uniform samples from 0), ``L`` not > 0, or magnitudes of ``t`` and ``L`` for which
+        the signal overflows double precision.
+
     Examples
     --------
     >>> t = np.linspace(0, 10, 1001)
@@ -261,19 +275,21 @@ def make_signal(kind: str, seed: int, t, L: float) -> np.ndarray:
     if kind in _REGISTERED:
         *parts, bound = _native(kind, seed, _uniform_grid(t), t.size)
         return np.array(parts) * (L / bound)
-    rng = np.random.default_rng(seed)
+    return finite_result("t and L", lambda: np.array(_scaled(_built_in(kind, np.random.default_rng(seed), t), L)))
+
+
+def _built_in(kind: str, rng, t) -> tuple:
+    """``(f, f', f'')`` of a built-in class on ``t``, before scaling."""
     if kind == "sines":
-        parts = _sines(rng, t)
-    elif kind == "steps":
-        parts = _smooth_steps(rng, t, False)
-    elif kind == "ramps":
-        parts = _smooth_steps(rng, t, True)
-    elif kind == "chirp":
-        parts = _chirp(rng, t)
-    else:
-        parts = [sum(x) for x in zip(*(_scaled(g, 1.0) for g in
-                                        (_sines(rng, t), _smooth_steps(rng, t, False), _smooth_steps(rng, t, True))))]
-    return np.array(_scaled(parts, L))
+        return _sines(rng, t)
+    if kind == "steps":
+        return _smooth_steps(rng, t, False)
+    if kind == "ramps":
+        return _smooth_steps(rng, t, True)
+    if kind == "chirp":
+        return _chirp(rng, t)
+    return [sum(x) for x in zip(*(_scaled(g, 1.0) for g in
+                                   (_sines(rng, t), _smooth_steps(rng, t, False), _smooth_steps(rng, t, True))))]
 
 
 def add_noise(kind: str, f, eps: float, seed: int) -> np.ndarray:

@@ -38,6 +38,7 @@ from .._validate import (
 from ..metrics import rmse
 from ..parallel import map_chunks
 from .interface import FAMILIES, OMEGA_DT_MAX, Family, estimate, family, scales
+from .recordcheck import MAX_ROWS
 from .signals import (
     add_noise,
     make_signal,
@@ -45,7 +46,7 @@ from .signals import (
     registered_signal_classes,
 )
 
-__all__ = ["Case", "Setup", "case_records", "evaluate", "param_values", "pareto_front", "tune_family"]
+__all__ = ["MAX_ROUNDS", "Case", "Setup", "case_records", "evaluate", "param_values", "pareto_front", "tune_family"]
 
 #: Metric columns returned by :func:`evaluate`.
 METRICS = ("worst", "rms", "lag", "noise")
@@ -54,6 +55,9 @@ RUNS_PER_CALL = 480
 #: The largest Kalata index Λ tuned (α-β and α-β-γ): beyond about 10^5 the gains round to α = 1, β = 2 (γ = 4),
 #: the filters' stability edge, and the engine refuses them; 10^3 is already a one-sample filter (α > 0.99999).
 LAMBDA_MAX = 1e3
+#: The most pattern-search rounds: the step halves every round, and after 30 it is 2^-30 (about 1e-9) of the
+#: first, so further rounds change no configuration (and each costs a full batch).
+MAX_ROUNDS = 30
 #: Records of user cases (a recorded signal), looked up by :func:`case_records` before drawing.
 _USER_RECORDS: dict = {}
 
@@ -67,7 +71,7 @@ class Setup:
     dt : float
         Sample period (s).
     n : int
-        Samples per record.
+        Samples per record (2 to :data:`~ctrl_analysis.arena.recordcheck.MAX_ROWS`).
     transient : float
         Errors before this time are not counted (s).
     """
@@ -78,7 +82,7 @@ class Setup:
 
     def __post_init__(self):
         check_positive("dt", self.dt, scalar=True)
-        check_int("n", self.n, minimum=2)
+        check_int("n", self.n, minimum=2, maximum=MAX_ROWS)
         check_nonnegative("transient", self.transient, scalar=True)
         if self.k_from >= self.n:
             raise ValueError(f"transient must end before the record does (n dt = {self.n * self.dt:g} s), "
@@ -172,6 +176,12 @@ def param_values(fam: Family, z, case: Case, setup: Setup) -> np.ndarray:
     -------
     numpy.ndarray, shape (C, n_params)
 
+    Raises
+    ------
+    TypeError, ValueError
+        ``fam``, ``case`` or ``setup`` of the wrong type, ``z`` not finite or of the wrong shape, or a ``z`` whose
+        ``exp(z)`` overflows or underflows a parameter value.
+
     Notes
     -----
     Caps, so that no bound or sample period asks for what cannot run: the fastest pole at ``OMEGA_DT_MAX / dt``,
@@ -192,7 +202,8 @@ def param_values(fam: Family, z, case: Case, setup: Setup) -> np.ndarray:
         if p.ref == "one":
             out[:, j] = np.clip(np.round(z[:, j]), p.lo, p.hi)
             continue
-        v = sc[p.ref] * np.exp(z[:, j])
+        with np.errstate(over="ignore", under="ignore"):  # a z beyond exp's range: refused below
+            v = sc[p.ref] * np.exp(z[:, j])
         if p.ref == "omega":  # fastest pole ω (Σ: 3a) at most OMEGA_DT_MAX / dt
             pole = 3.0 if fam.name == "sigma" else 1.0
             v = np.minimum(v, OMEGA_DT_MAX / (pole * setup.dt))
@@ -205,6 +216,9 @@ def param_values(fam: Family, z, case: Case, setup: Setup) -> np.ndarray:
         if p.ref == "window":
             v = np.minimum(v, float(setup.n))
         out[:, j] = v
+    if not np.all(np.isfinite(out) & (out > 0)):
+        raise ValueError(f"z must give {fam.name} parameter values reference × exp(z) that are finite and > 0 in "
+                         f"double precision, got z of magnitude up to {np.max(np.abs(z)):.3g}")
     return out
 
 
@@ -324,7 +338,7 @@ def tune_family(name: str, cases, setup: Setup, *, rounds: int = 3, engine: str 
     cases : sequence of Case
     setup : Setup
     rounds : int
-        Pattern-search rounds after the grid (>= 0).
+        Pattern-search rounds after the grid (0 to :data:`MAX_ROUNDS`).
     engine : {"auto", "numpy", "compiled"}
     jobs : int
         Processes (:func:`ctrl_analysis.parallel.map_chunks`).
@@ -339,7 +353,7 @@ def tune_family(name: str, cases, setup: Setup, *, rounds: int = 3, engine: str 
         configurations evaluated.
     """
     fam = family(name)
-    rounds = check_int("rounds", rounds, minimum=0)
+    rounds = check_int("rounds", rounds, minimum=0, maximum=MAX_ROUNDS)
     if isinstance(cases, (str, bytes)) or not hasattr(cases, "__iter__"):
         raise TypeError(f"cases must be a sequence of Case, got {cases!r:.80}")
     cases = list(cases)

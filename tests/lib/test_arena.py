@@ -3,15 +3,29 @@
 import numpy as np
 import pytest
 
-from ctrl_analysis.arena.algebraic import algebraic_derivative, algebraic_weights
+from ctrl_analysis.arena import tuning
+from ctrl_analysis.arena.algebraic import (
+    MAX_WINDOW,
+    algebraic_derivative,
+    algebraic_weights,
+)
 from ctrl_analysis.arena.interface import FAMILIES, estimate, family, scales
+from ctrl_analysis.arena.recommend import ArenaSettings
+from ctrl_analysis.arena.recordcheck import MAX_RECORDS, MAX_ROWS
 from ctrl_analysis.arena.signals import (
     NOISE_CLASSES,
     SIGNAL_CLASSES,
     add_noise,
     make_signal,
 )
-from ctrl_analysis.arena.tuning import Case, Setup, pareto_front, tune_family
+from ctrl_analysis.arena.tuning import (
+    MAX_ROUNDS,
+    Case,
+    Setup,
+    param_values,
+    pareto_front,
+    tune_family,
+)
 from ctrl_analysis.engine.loop import Loop, place
 from ctrl_analysis.estimators.differential import DifferentialEstimator
 from ctrl_analysis.estimators.eso import ExtendedStateObserver
@@ -60,6 +74,22 @@ def test_algebraic_errors_name_the_argument():
         algebraic_weights(2, 2, 1.0)
     with pytest.raises(ValueError, match="degree"):
         algebraic_weights(5, 3, 1.0)
+
+
+def test_algebraic_windows_have_a_maximum_and_a_dt_whose_weights_overflow_is_refused():
+    with pytest.raises(ValueError, match=f"window must be <= {MAX_WINDOW}"):
+        algebraic_weights(MAX_WINDOW + 1, 2, 1.0)
+    with pytest.raises(ValueError, match=r"windows must be in \[1, 1000000\]"):
+        algebraic_derivative(np.zeros((20, 1)), [10**12], [2], 0.1)
+    with pytest.raises(ValueError, match="dt = 1e-300 s is too small for double precision"):
+        algebraic_weights(5, 2, 1e-300)  # 2 c2 / dt² overflows
+    with pytest.raises(ValueError, match="dt = 1e-300 s is too small"):
+        algebraic_derivative(np.zeros((20, 1)), [5], [2], 1e-300)
+    w = algebraic_weights(5, 2, 1e300)  # f'' weights below double precision: 0, and finite
+    assert np.all(np.isfinite(w)) and np.all(w[2] == 0.0) and np.all(w[1] != 0.0)
+    assert np.array_equal(algebraic_weights(5, 2, 0.1)[2], algebraic_weights(5, 2, 1.0)[2] / 0.1**2)
+    with pytest.raises(ValueError, match="y and dt overflow double precision"):
+        algebraic_derivative(np.full((20, 1), 1e300), [5], [2], 1e-100)
 
 
 # ------------------------------------------------------------------ the interface runs the library's blocks
@@ -125,7 +155,25 @@ def test_estimate_rejects_bad_shapes():
         estimate("nope", [[1.0]], np.zeros((10, 1)), DT)
 
 
+def test_references_and_parameters_beyond_double_precision_are_refused_naming_them():
+    for eps, L, dt in ((1e-300, 4.0, 0.002), (0.01, 1e300, 0.002), (0.01, 4.0, 1e300), (1e300, 1e-300, 0.002)):
+        with pytest.raises(ValueError, match="eps, L and dt .* give reference values beyond double precision"):
+            scales(eps, L, dt)
+    assert scales(1e-12, 1e4, 0.1)["window"] == 0.0  # a window under a sample is capped at 2 later, not refused
+    with pytest.raises(ValueError, match=r"P \(leso2 parameters omega_o\) gives no valid estimator: m and omega"):
+        estimate("leso2", [[1e300]], np.zeros((50, 1)), DT)
+    with pytest.raises(ValueError, match=r"P column 0 \(algebraic parameter window\) must be <= MAX_WINDOW"):
+        estimate("algebraic", [[1e300, 2.0]], np.zeros((50, 1)), DT)
+
+
 # ------------------------------------------------------------------ signals and noise
+def test_a_signal_that_overflows_is_refused_naming_t_and_L():
+    t = np.linspace(0.0, 1.0, 20)
+    t[0] = 1e300
+    with pytest.raises(ValueError, match="t and L overflow double precision"):
+        make_signal("chirp", 1, t, 2.0)
+
+
 @pytest.mark.parametrize("kind", sorted(SIGNAL_CLASSES))
 def test_signals_have_their_derivatives_and_bound(kind):
     t = np.linspace(0, 8, 8001)
@@ -172,3 +220,25 @@ def test_pareto_front_is_non_dominated():
     for i in idx:
         assert not np.any((p[:, 0] <= p[i, 0]) & (p[:, 1] <= p[i, 1]) & ((p[:, 0] < p[i, 0]) | (p[:, 1] < p[i, 1])))
     assert len(idx) >= 1
+
+
+def test_sizes_of_the_tuning_have_a_maximum_and_are_checked_before_any_work(monkeypatch):
+    def no_work(*args, **kwargs):
+        raise AssertionError("the tuning started")
+
+    monkeypatch.setattr(tuning, "_run", no_work)
+    setup = Setup(dt=DT, n=600, transient=2.0)
+    case = Case("sines", "uniform", 0.01, 2.0, (3,))
+    with pytest.raises(ValueError, match=f"rounds must be <= {MAX_ROUNDS}, got 1000000000000"):
+        tune_family("leso2", [case], setup, rounds=10**12)
+    with pytest.raises(ValueError, match=f"n must be <= {MAX_ROWS}"):
+        Setup(dt=DT, n=10**100, transient=2.0)
+    with pytest.raises(ValueError, match=f"records must be <= {MAX_RECORDS}"):
+        ArenaSettings(records=MAX_RECORDS + 1)
+    with pytest.raises(ValueError, match=f"rounds must be <= {MAX_ROUNDS}"):
+        ArenaSettings(rounds=10**100)
+    with pytest.raises(ValueError, match="z must give td parameter values .* finite and > 0"):
+        param_values(family("td"), [[1e300, 0.5]], case, setup)
+    with pytest.raises(ValueError, match="z must give td parameter values"):
+        param_values(family("td"), [[-1e300, 0.5]], case, setup)
+    assert np.all(param_values(family("td"), [[0.0, 0.5]], case, setup) > 0)

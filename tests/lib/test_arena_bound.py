@@ -36,6 +36,14 @@ def test_adversarial_pair_is_admissible_and_attains_the_constant():
     assert p["f1"][0, k] - p["f1"][1, k] == pytest.approx(2 * lower_bound(EPS, L), rel=1e-12)
 
 
+def test_the_pair_has_a_stated_maximum_of_samples():
+    from ctrl_analysis.arena.recordcheck import MAX_ROWS
+
+    with pytest.raises(ValueError, match=f"n_samples must be <= {MAX_ROWS}, got 1000000000000"):
+        adversarial_pair(0.01, 1.0, 0.01, 10**12, 50)
+    assert adversarial_pair(0.01, 1.0, 0.01, MAX_ROWS, 50)["t"].shape == (MAX_ROWS,)
+
+
 def test_a_noncausal_differentiator_can_beat_the_bound():
     # the error measure is not >= bound by construction: a central difference that looks past t* beats it there
     p = adversarial_pair(EPS, L, 0.001, 3000, 2000)

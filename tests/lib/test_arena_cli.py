@@ -266,6 +266,9 @@ def test_quick_with_a_file_as_out_and_a_bad_scheduler_are_refused_before_any_wor
     code, _, err = _arena(["--quick", "--scheduler", "nonsense", "--out", str(tmp_path / "D")], capsys)
     assert code == 2 and err.count("\n") == 1 and "got 'nonsense'" in err and "Traceback" not in err
     assert not (tmp_path / "D").exists()
+    code, _, err = _arena(["--quick", "--runs", "1001", "--out", str(tmp_path / "D")], capsys)
+    assert code == 2 and err == "ctrl-analysis: error: --runs must be in 1..1000 (records per case), got 1001\n"
+    assert not (tmp_path / "D").exists()
 
 
 def test_the_library_entry_checks_the_record_and_refuses_non_finite_errors(monkeypatch):

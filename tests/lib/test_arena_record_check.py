@@ -119,6 +119,10 @@ def test_arrays_and_bounds_are_checked_by_name():
         args = dict(t=t, y=y, d1=None, eps=0.01, L=1.0) | kwargs
         with pytest.raises((TypeError, ValueError), match=rf"^{name} "):
             check_record(**args)
+    for name in ("t", "y", "d1"):  # a complex array is not read as its real part
+        args = {"t": t, "y": y, "d1": None, "eps": 0.01, "L": 1.0} | {name: (t if name == "t" else y) + 1j}
+        with pytest.raises(TypeError, match=f"^{name} must be a 1-D array of real numbers"):
+            check_record(**args)
 
 
 # ------------------------------------------------------------------------------------------------ the cost
@@ -179,6 +183,21 @@ def test_a_run_over_the_work_or_memory_limit_is_refused_with_the_limit_and_the_w
 def test_work_estimate_names_a_bad_argument(kwargs, name):
     with pytest.raises((TypeError, ValueError), match=name):
         work_estimate(**(dict(n=100, dt=0.01, eps=0.01, L=1.0) | kwargs))
+
+
+def test_the_estimates_refuse_magnitudes_beyond_the_scale_range_and_a_scalar_derivative():
+    _, y = _sine()
+    for kwargs, name in (({"dt": 1e300}, "dt is 1e"), ({"dt": 1e-300}, "dt is 1e-300"),
+                         ({"eps": 1e300}, "eps is 1e"), ({"d1": np.full(600, 1e60)}, "d1's largest magnitude")):
+        with pytest.raises(ValueError, match=f"{name}.*outside the magnitudes 1e-50 to 1e[+]50"):
+            record_estimates(y, **({"dt": 0.01} | kwargs))
+    with pytest.raises(ValueError, match=r"y's largest magnitude is 1e\+300"):
+        record_estimates(np.full(600, 1e300), 0.01)
+    with pytest.raises(ValueError, match=r"d1 must have the shape of y \(600,\), got \(\)"):
+        record_estimates(y, 0.01, d1=3)
+    assert record_estimates(-y, 0.01)["noise_bound"] == record_estimates(y, 0.01)["noise_bound"]  # any sign
+    with pytest.raises(ValueError, match=f"n must be <= {recordcheck.MAX_ROWS}"):
+        work_estimate(10**100, 0.01, 0.01, 1.0)
 
 
 def test_an_extreme_ratio_of_the_bounds_does_not_overflow_the_estimate():

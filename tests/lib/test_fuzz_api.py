@@ -138,8 +138,10 @@ def _step(k, x, w, params):
     return 0.5 * x
 
 
-def _square(x):
-    return x * x
+def _pair(x):
+    """map_chunks' fn of the table: takes any value (map_chunks passes args on unchanged, so an error is its own,
+    not its fn's)."""
+    return (x, x)
 
 
 def _new_result():
@@ -559,7 +561,7 @@ def build_cases(tmp):
          dict(scheduler=[None, 3, "", "banana", "tcp://127.0.0.1:0", "tcp://127.0.0.1:99999", "tcp://:8786"])),
         ("gather", parallel.gather, dict(parts=[np.ones(2), np.ones(3)]), dict(parts=[None, 3, []])),
         ("grid_points", parallel.grid_points, dict(grid={"a": [1.0, 2.0]}), dict(grid=[None, 3, {}, {"a": []}, {3: [1.0]}])),
-        ("map_chunks", parallel.map_chunks, dict(fn=_square, args=[1.0, 2.0], jobs=1, scheduler=None, desc="",
+        ("map_chunks", parallel.map_chunks, dict(fn=_pair, args=[1.0, 2.0], jobs=1, scheduler=None, desc="",
                                                  unit="chunk"),
          dict(fn=CALLABLE, args=[None, 3], jobs=INT + [0], scheduler=[3, "nonsense"], desc=[None, 3],
               unit=[None, 3, ""])),
@@ -849,7 +851,8 @@ def _seed_rows(seeds):
 
 
 def _sweep_fn(points, seeds):
-    return points["a"] * np.asarray(seeds, dtype=float)
+    (values,) = points.values()  # the grid's one parameter, whatever its name (names are free)
+    return values * np.asarray(seeds, dtype=float)
 
 
 @dataclasses.dataclass(frozen=True)

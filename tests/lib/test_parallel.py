@@ -80,6 +80,39 @@ def test_monte_carlo_in_two_processes_equals_one_process_bit_for_bit():
     assert one["err"].shape == (12,) and np.all(one["err"] > 0)
 
 
+@pytest.mark.parametrize("bad, error, message", [
+    ([1, -2], ValueError, "seeds must be >= 0, got -2"),
+    ([1, np.nan], TypeError, "seeds must be an integer"),
+    ([1.5], TypeError, "seeds must be an integer, got 1.5"),
+    (["x"], TypeError, "seeds must be an integer, got 'x'"),
+    ([1 + 1j], TypeError, "seeds must be an integer"),
+    (np.ones((2, 1, 1)), TypeError, "seeds must be an integer"),
+    ([], ValueError, "seeds must contain at least one seed"),
+    ("12", TypeError, "seeds must be a sequence of non-negative integers"),
+])
+def test_monte_carlo_and_sweep_take_non_negative_integer_seeds(bad, error, message):
+    with pytest.raises(error, match=message):
+        parallel.monte_carlo(_seeds_as_floats, bad)
+    with pytest.raises(error, match=message):
+        parallel.sweep(_sweep_rows, {"a": [1.0]}, bad)
+
+
+def test_seeds_of_any_integer_kind_and_size_give_the_same_batch():
+    one = parallel.monte_carlo(_seeds_as_floats, [0, 7, 2**40])
+    assert np.array_equal(one, parallel.monte_carlo(_seeds_as_floats, np.array([0.0, 7.0, 2.0**40])))
+    assert np.array_equal(parallel.monte_carlo(_seeds_as_floats, np.array([3, 4], dtype=np.uint32)), [3.0, 4.0])
+    assert parallel.sweep(_sweep_rows, {"b": [1.0, 2.0]}, np.array([5, 6])).shape == (2, 2)
+
+
+def _seeds_as_floats(seeds):
+    return np.array([float(s) for s in seeds])
+
+
+def _sweep_rows(points, seeds):
+    (values,) = points.values()
+    return values * np.array([float(s) for s in seeds])
+
+
 def test_map_chunks_keeps_order_and_validates():
     assert parallel.map_chunks(abs, [-3, 1, -2, 5], jobs=2) == [3, 1, 2, 5]
     with pytest.raises(ValueError, match="jobs must be"):
