@@ -38,7 +38,7 @@ from __future__ import annotations
 import inspect
 import time
 
-from .jit import _JIT, _jit, _runner_module
+from .jit import _JIT, _jit, _runner_module, cacheable
 from .kernels import BlockKernel
 
 __all__ = ["available", "compile_seconds", "compiled_runner", "kernel_of"]
@@ -391,7 +391,7 @@ def compiled_runner(loop, kernels: dict):
                          numba.intp[::1], i64, f64[:, :, :], f64[:, :, :], f64, numba.boolean[:], i64[:], i64[:],
                          numba.intp[::1],
                          *[f64[:, ::1] for b in blocks])
-        run = _compile(module.run, sig)
+        run = _compile(module.run, sig, cache=cacheable(fn for k, fn in fns.items() if k.startswith("K")))
         _RUNNERS[key] = (run, time.perf_counter() - t0)
         _COMPILE["seconds"] += _RUNNERS[key][1]
     return _RUNNERS[key][0]
@@ -407,7 +407,7 @@ UNROLL_BUDGET = 2000
 _LLVM_UNROLL_DEFAULT = 300
 
 
-def _compile(fn, sig):
+def _compile(fn, sig, cache=True):
     """``numba.njit(sig)`` of the generated runner, with LLVM's unrolling budget raised to :data:`UNROLL_BUDGET`.
 
     LLVM's options are global to the process: they are changed and restored under numba's compiler
@@ -417,14 +417,14 @@ def _compile(fn, sig):
     import numba
 
     if not UNROLL_BUDGET:
-        return numba.njit(sig, cache=True, error_model="numpy")(fn)
+        return numba.njit(sig, cache=cache, error_model="numpy")(fn)
     import llvmlite.binding as llvm
     from numba.core.compiler_lock import global_compiler_lock
 
     with global_compiler_lock:
         llvm.set_option("", f"-unroll-threshold-aggressive={UNROLL_BUDGET}")
         try:
-            return numba.njit(sig, cache=True, error_model="numpy")(fn)
+            return numba.njit(sig, cache=cache, error_model="numpy")(fn)
         finally:
             llvm.set_option("", f"-unroll-threshold-aggressive={_LLVM_UNROLL_DEFAULT}")
 

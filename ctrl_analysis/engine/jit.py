@@ -34,6 +34,31 @@ def _jit(fn):
     return _JIT[fn]
 
 
+def cacheable(fns) -> bool:
+    """Whether code calling ``fns`` may go to numba's disk cache: each is defined in an importable module file.
+
+    numba's cache re-imports, by name, the module whose globals a compiled function uses; a kernel
+    exec'd into a namespace (a notebook cell, a doctest, ``exec``) has none, and a runner cached with it
+    inlined fails to load in the next process (``No module named '<dynamic>'``). Such runners are
+    compiled once per process instead.
+
+    Parameters
+    ----------
+    fns : iterable of callable
+        Kernels (plain functions or numba dispatchers of them).
+
+    Returns
+    -------
+    bool
+    """
+    for fn in fns:
+        py = getattr(fn, "py_func", fn)
+        module = sys.modules.get(getattr(py, "__module__", None) or "")
+        if module is None or not getattr(module, "__file__", None) or getattr(py, "__globals__", None) is not vars(module):
+            return False
+    return True
+
+
 def source_key(fn) -> str:
     """What a compiled kernel depends on, as text: its source, and that of everything it reads by name.
 
@@ -185,6 +210,6 @@ def compiled_rows(fn):
             return None
         module = _runner_module(_ROWS_SOURCE, {"FN": fn}, prefix="rows")
         module.FN = _jit(fn)
-        rows = numba.njit(cache=True, error_model="numpy")(module.rows)
+        rows = numba.njit(cache=cacheable([fn]), error_model="numpy")(module.rows)
         _JIT[key] = rows
     return _JIT[key]

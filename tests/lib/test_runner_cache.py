@@ -11,9 +11,10 @@ import textwrap
 
 import numpy as np
 import pytest
+from hang import limit
 
 from ctrl_analysis.engine.blocks import DiscreteBlock
-from ctrl_analysis.engine.jit import source_key
+from ctrl_analysis.engine.jit import cacheable, source_key
 from ctrl_analysis.engine.kernels import KernelBlock, Kernels
 from ctrl_analysis.engine.loop import Loop, place
 
@@ -70,3 +71,58 @@ def test_a_changed_helper_or_layout_gives_its_own_runner(tmp_path, monkeypatch, 
         ys.append(res["compiled"].x[-1, 0, 0])
     # three steps of 1 (gain v, a = p[0] = 1), then of 2 (gain 2v, or a = p[1] = 2); a stale runner gives 3 again
     assert ys == [3.0, 6.0]
+
+
+EXECD = """
+import numpy as np
+from ctrl_analysis.engine.blocks import DiscreteBlock
+from ctrl_analysis.engine.kernels import KernelBlock, Kernels, Layout
+from ctrl_analysis.engine.loop import Loop, place
+
+SRC = '''
+import numpy as np
+from ctrl_analysis.engine.kernels import Layout, jitable
+
+AT = Layout("rate", "T").at
+
+
+@jitable
+def output(t, x, u, p, y):
+    step = p[AT.rate] * p[AT.T]
+    y[0] = x[0] + np.minimum(np.maximum(u[0] - x[0], -step), step)
+
+
+def update(t, x, u, p, x_next):
+    output(t, x, u, p, x_next)
+'''
+ns = {"__name__": "not_a_module"}
+exec(compile(SRC, "<cell>", "exec"), ns)
+
+
+class Acc(KernelBlock, DiscreteBlock):
+    inputs, outputs, states = ("u",), ("y",), ("y",)
+    kernels = Kernels(update=ns["update"])
+
+    def __init__(self):
+        self.kernel_params = np.array([2.0, 1.0])  # rate 2, T 1
+
+
+loop = Loop([place(Acc(), "acc")], dt=1.0)
+print(loop.simulate(3, inputs={"u": 10.0}, engine="compiled").x[-1, 0, 0])  # 2, 4, 6
+"""
+
+
+def test_a_kernel_without_a_module_file_is_not_disk_cached(tmp_path):
+    """An exec'd kernel (a notebook cell, a doctest) has no module numba can re-import: its runner is compiled
+    in each process, not cached (the second process failed with ``No module named '<dynamic>'``)."""
+    import os
+    import subprocess
+
+    ns = {"__name__": "not_a_module"}
+    exec(compile("def f(t, x, u, p, out):\n    out[0] = 1.0\n", "<cell>", "exec"), ns)  # noqa: S102
+    assert not cacheable([ns["f"]]) and cacheable([source_key])
+    env = dict(os.environ, CTRL_ANALYSIS_CACHE=str(tmp_path / "cache"))
+    for _ in range(2):  # the second process meets whatever the first left in the cache
+        out = subprocess.run([sys.executable, "-c", EXECD], env=env, capture_output=True, text=True, timeout=limit(300))
+        assert out.returncode == 0, out.stderr[-2000:]
+        assert out.stdout.split()[-1] == "6.0"
