@@ -30,6 +30,7 @@ import ctrl_analysis
 from ctrl_analysis import (
     _validate,
     cli,
+    cluster,
     metrics,
     parallel,
     plants,
@@ -932,6 +933,8 @@ NOT_FUZZED = {
     sym_ric.derive_random_walk_gain: "sympy derivation without arguments",
     sym_ric.derive_kalata_gains: "sympy derivation without arguments",
     parallel.default_jobs: "no arguments",
+    cluster.ClusterError: "an exception class, raised by map_chunks on a failing cluster (tests/lib/test_parallel.py)",
+    cluster.silence_dask_logs: "no arguments",
     parallel.active_cluster: "no arguments",
     parallel.use_cluster: "connects to a Dask cluster; its address checks are check_scheduler_address's (fuzzed), "
                           "an unreachable one is tested in tests/lib/test_cli_cluster.py",

@@ -5,7 +5,7 @@ import io
 import numpy as np
 import pytest
 
-from ctrl_analysis import parallel, progress
+from ctrl_analysis import cluster, parallel, progress
 from ctrl_analysis.engine.blocks import ContinuousBlock
 from ctrl_analysis.engine.loop import Loop, place
 from ctrl_analysis.estimators.differential import DifferentialEstimator
@@ -160,6 +160,7 @@ def test_map_chunks_given_the_process_wide_clusters_scheduler_runs_there_not_on_
         return Client(cluster), True
 
     monkeypatch.setattr(parallel, "_client", client)
+    monkeypatch.setattr(cluster, "_client", client)  # use_cluster lives in ctrl_analysis.cluster
     with parallel.use_cluster("local", 1):
         assert parallel.map_chunks(abs, [-1, -2, 3], scheduler="local") == [1, 2, 3]
         assert parallel.map_chunks(abs, [-4]) == [4]
