@@ -1,224 +1,46 @@
 """Streamed statistics: accumulators fed chunk by chunk, merged across processes, in bounded memory.
 
-A Monte Carlo study reduces its runs to means, standard deviations, percentiles, divergence
-counts and histograms. The accumulators here take the runs a chunk at a time, as arrays of shape
-``(B_chunk, ...)`` (the runs on axis 0, the trailing axes a per-run trace or a scalar), so memory
-is bounded by the trailing shape (and the sketch size), never by the number of runs:
-
-* :class:`Moments`: count, mean, variance / standard deviation (any ``ddof``), min and max per
-  trailing element (Chan, Golub & LeVeque's pairwise update; each chunk is centred two-pass);
-* :class:`Quantiles`: exact (``np.quantile`` bit for bit) while at most ``k`` runs were added,
-  then a deterministic mergeable compactor sketch with a proven, reported rank-error bound;
-* :class:`Counts`: how many runs have a flag (e.g. diverged), per trailing element, exact;
-* :class:`Histogram`: fixed bins, exact counts (as ``np.histogram``), under- and overflow;
-* :class:`Keep`: the traces of chosen runs (the ones a figure draws) with their run index.
-
-Every accumulator has ``add(values, ...)`` (returns the accumulator), ``merge(other)`` (in place,
-returns the accumulator), ``copy()``, ``nbytes`` and the class method ``of(values, ...)``.
+The accumulators take a Monte Carlo run's results a chunk at a time, as arrays of shape
+``(B_chunk, ...)`` (runs on axis 0; the trailing axes a per-run trace, or none for a scalar), so
+memory is bounded by the trailing shape (and a sketch), never by the number of runs:
+:class:`Moments` (count, mean, variance, min, max), :class:`Quantiles` (exact up to ``k`` runs,
+then a sketch with a proven rank-error bound), :class:`Counts` (e.g. diverged runs),
+:class:`Histogram` (fixed bins) and :class:`Keep` (the traces of the runs a figure draws). Each
+has ``add(values, ...)``, ``merge(other)`` (both in place, returning the accumulator), ``copy()``,
+``nbytes`` and the class method ``of(values, ...)``; all pickle, for other processes.
 
 **Excluded runs.** ``add(values, exclude=mask)`` leaves out the runs where the boolean ``mask``
-(one entry per run) is true, e.g. the diverged runs; they are counted in ``excluded``. A NaN or an
-infinity in a run that is not excluded is an error, unless the accumulator was built with
-``nonfinite="exclude"``: then such a run is left out whole and counted in ``excluded`` too.
+(one entry per run) is true, e.g. the diverged ones, and counts them in ``excluded``. A NaN or inf
+in a run that is not excluded is an error, unless the accumulator was built with
+``nonfinite="exclude"``: then that run is left out whole and counted in ``excluded`` too.
 
-**Determinism.** Every accumulator is a pure function of its inputs: no random numbers, no
-dependence on the number of processes. ``acc.add(chunk)`` *is* ``acc.merge(type(acc).of(chunk))``
-(that is how it is written), so folding per-chunk accumulators in the order of the chunk index
+**Determinism.** No random numbers; nothing depends on the number of processes. ``acc.add(chunk)``
+*is* ``acc.merge(type(acc).of(chunk))``, so folding per-chunk accumulators in chunk-index order
 gives the same bits as feeding the chunks to one accumulator, however the chunks were spread over
-processes: a worker returns one accumulator per chunk, the parent merges them in chunk order.
-Counts, histograms, min, max, kept traces and exact quantiles do not depend on the chunking or
-the merge tree at all; means and variances do only through floating-point rounding (a few ulps);
-sketched quantiles do within their rank-error bound.
+processes (a worker returns one accumulator per chunk; the parent merges them in chunk order).
+Counts, histograms, min, max, kept traces and exact quantiles do not depend on the chunking or the
+merge tree at all; means and variances only through rounding (a few ulps); sketched quantiles
+within their rank-error bound.
 """
 
 from __future__ import annotations
 
-import copy as _copy
-import math
-
 import numpy as np
 
-from ._validate import check_array, check_finite, check_in, check_int
+from . import _sketch
+from ._accumulator import Accumulator
+from ._validate import check_finite, check_in, check_int
 
 __all__ = ["Moments", "Quantiles", "Counts", "Histogram", "Keep"]
 
-#: What a NaN or inf in a run that is not excluded does: an error, or the run is excluded.
-NONFINITE = ("raise", "exclude")
 #: The ``method`` values of ``np.quantile``, for the exact regime of :class:`Quantiles`.
 METHODS = ("inverted_cdf", "averaged_inverted_cdf", "closest_observation", "interpolated_inverted_cdf",
            "hazen", "weibull", "linear", "median_unbiased", "normal_unbiased", "lower", "higher",
            "midpoint", "nearest")
 
 
-def _shape(value) -> tuple | None:
-    """The trailing shape: ``None`` (taken from the first chunk), an int or a tuple of ints >= 0."""
-    if value is None:
-        return None
-    if isinstance(value, (list, tuple)):
-        return tuple(check_int("shape", v, minimum=0) for v in value)
-    return (check_int("shape", value, minimum=0),)
 
-
-def _mask(value, n: int) -> np.ndarray:
-    """``exclude`` as a boolean array of ``n`` entries, one per run of the chunk."""
-    arr = None if isinstance(value, (str, bytes)) else np.asarray(value)
-    if arr is None or arr.dtype != bool:
-        raise TypeError(f"exclude must be a boolean array with one entry per run, got {value!r:.80}")
-    if arr.shape != (n,):
-        raise ValueError(f"exclude must have shape ({n},) (one entry per run of values), got {arr.shape}")
-    return arr
-
-
-def _rows(values, shape) -> np.ndarray:
-    """``values`` as a float array ``(B, *shape)`` with the runs on axis 0."""
-    arr = check_array("values", values)
-    if arr.ndim < 1:
-        raise ValueError("values must have the runs on axis 0 (ndim >= 1), got a single number")
-    if shape is not None and arr.shape[1:] != shape:
-        raise ValueError(f"values must have the trailing shape {shape} of the accumulator (runs on axis 0), "
-                         f"got shape {arr.shape}")
-    return arr
-
-
-class _Accumulator:
-    """Plumbing shared by the accumulators: the trailing shape, excluded runs, add, merge, copy."""
-
-    def __init__(self, shape=None, *, nonfinite: str = "raise"):
-        self.shape = _shape(shape)
-        self.nonfinite = check_in("nonfinite", nonfinite, NONFINITE)
-        self.n_runs = 0  # runs offered to add, the excluded ones included
-        self.excluded = 0
-        self._reset()
-
-    @property
-    def count(self) -> int:
-        """The number of runs accumulated (offered minus excluded)."""
-        return self.n_runs - self.excluded
-
-    @property
-    def size(self) -> int:
-        """The number of trailing elements (1 for scalar values)."""
-        return math.prod(self.shape or ())
-
-    @classmethod
-    def of(cls, values, exclude=None, **options):
-        """A new accumulator holding one chunk.
-
-        Parameters
-        ----------
-        values : array_like
-            The chunk, shape ``(B, ...)``: runs on axis 0.
-        exclude : array_like of bool, optional
-            One entry per run; true leaves the run out (counted in ``excluded``).
-        **options
-            The constructor's keyword arguments.
-
-        Returns
-        -------
-        accumulator
-            A new accumulator of this class that has seen only ``values``.
-        """
-        acc = cls(**options)
-        acc._fill(values, exclude)
-        return acc
-
-    def add(self, values, exclude=None):
-        """Accumulate one chunk of runs: ``self.merge(type(self).of(values, exclude, <same options>))``.
-
-        Parameters
-        ----------
-        values : array_like
-            The chunk, shape ``(B, ...)``: runs on axis 0, the trailing shape as before.
-        exclude : array_like of bool, optional
-            One entry per run; true leaves the run out (e.g. diverged), counted in ``excluded``.
-
-        Returns
-        -------
-        accumulator
-            ``self``, updated.
-        """
-        fresh = self._empty()
-        fresh._fill(values, exclude)
-        return self.merge(fresh)
-
-    def merge(self, other):
-        """Merge another accumulator of the same kind into this one (in place; ``other`` is unchanged).
-
-        Parameters
-        ----------
-        other : accumulator
-            Of the same class, the same trailing shape and options (e.g. from another process).
-
-        Returns
-        -------
-        accumulator
-            ``self``, updated.
-        """
-        if not isinstance(other, type(self)):
-            raise TypeError(f"other must be a {type(self).__name__}, got {type(other).__name__}")
-        if self.shape is not None and other.shape is not None and self.shape != other.shape:
-            raise ValueError(f"other must have the trailing shape {self.shape}, got {other.shape}")
-        self._check_options(other)
-        if self.shape is None:
-            self.shape = other.shape
-            if other.shape is not None:
-                self._allocate()
-        if other.shape is not None:
-            self._merge(other)
-        self.n_runs += other.n_runs
-        self.excluded += other.excluded
-        return self
-
-    def copy(self):
-        """An independent copy.
-
-        Returns
-        -------
-        accumulator
-            A deep copy of ``self``.
-        """
-        return _copy.deepcopy(self)
-
-    @property
-    def nbytes(self) -> int:
-        """Bytes held by the accumulator's arrays (what grows with the data, if anything)."""
-        return sum(v.nbytes for v in vars(self).values() if isinstance(v, np.ndarray)) + sum(
-            a.nbytes for v in vars(self).values() if isinstance(v, list) for a in v if isinstance(a, np.ndarray))
-
-    # -- hooks -----------------------------------------------------------------------------
-    def _empty(self):
-        acc = _copy.copy(self)  # same options
-        acc.shape, acc.n_runs, acc.excluded = self.shape, 0, 0
-        acc._reset()
-        return acc
-
-    def _kept(self, values, exclude) -> np.ndarray:
-        """The chunk's kept runs as ``(n, size)`` rows; sets the shape and the run counts."""
-        arr = _rows(values, self.shape)
-        b = arr.shape[0]
-        keep = np.ones(b, bool) if exclude is None else ~_mask(exclude, b)
-        flat = arr.reshape(b, -1)
-        bad = keep & ~np.isfinite(flat).all(axis=1)
-        if bad.any():
-            if self.nonfinite == "raise":
-                raise ValueError(f"values must be finite in every run not excluded (run {int(np.argmax(bad))} of the "
-                                 "chunk is not): pass exclude=<mask of diverged runs> or build with nonfinite='exclude'")
-            keep &= ~bad
-        if self.shape is None:
-            self.shape = arr.shape[1:]
-            self._allocate()
-        self.n_runs, self.excluded = b, int(b - keep.sum())
-        return flat[keep]
-
-    def _reset(self):
-        if self.shape is not None:
-            self._allocate()
-
-    def _check_options(self, other):
-        pass
-
-
-class Moments(_Accumulator):
+class Moments(Accumulator):
     """Count, mean, variance, min and max per trailing element, merged exactly as pairs of chunks.
 
     Each chunk is reduced two-pass around its first run ``x0`` (the shift): ``r = mean(x - x0)``,
@@ -256,8 +78,7 @@ class Moments(_Accumulator):
 
     def _reset(self):
         self._n = 0
-        if self.shape is not None:
-            self._allocate()
+        super()._reset()
 
     def _fill(self, values, exclude):
         rows = self._kept(values, exclude)
@@ -283,23 +104,14 @@ class Moments(_Accumulator):
         self._n = na + nb
 
     def _result(self, arr, valid: bool):
-        out = arr if valid else np.full(self.size, np.nan)
-        return out.reshape(self.shape or ())[()]
+        return (arr() if valid else np.full(self.size, np.nan)).reshape(self.shape or ())[()]
 
-    @property
-    def mean(self):
-        """The mean per trailing element (NaN before any run is accumulated)."""
-        return self._result(self._shift + self._rel if self.count else None, self.count > 0)
-
-    @property
-    def min(self):
-        """The smallest value per trailing element (NaN before any run is accumulated)."""
-        return self._result(getattr(self, "_min", None), self.count > 0)
-
-    @property
-    def max(self):
-        """The largest value per trailing element (NaN before any run is accumulated)."""
-        return self._result(getattr(self, "_max", None), self.count > 0)
+    mean = property(lambda self: self._result(lambda: self._shift + self._rel, self.count > 0),
+                    doc="The mean per trailing element (NaN before any run).")
+    min = property(lambda self: self._result(lambda: self._min, self.count > 0),
+                   doc="The smallest value per trailing element (NaN before any run).")
+    max = property(lambda self: self._result(lambda: self._max, self.count > 0),
+                   doc="The largest value per trailing element (NaN before any run).")
 
     def var(self, ddof: int = 0):
         """The variance per trailing element, ``M2 / (count - ddof)``, as ``np.var(x, axis=0, ddof=ddof)``.
@@ -315,8 +127,7 @@ class Moments(_Accumulator):
             Of the trailing shape; NaN where ``count <= ddof``.
         """
         ddof = check_int("ddof", ddof, minimum=0)
-        valid = self.count > ddof
-        return self._result(self._m2 / (self.count - ddof) if valid else None, valid)
+        return self._result(lambda: self._m2 / (self.count - ddof), self.count > ddof)
 
     def std(self, ddof: int = 0):
         """The standard deviation per trailing element, ``sqrt(var(ddof))``.
@@ -324,49 +135,42 @@ class Moments(_Accumulator):
         Parameters
         ----------
         ddof : int
-            Delta degrees of freedom, >= 0.
+            As :meth:`var`.
 
         Returns
         -------
         numpy.ndarray or numpy.float64
-            Of the trailing shape; NaN where ``count <= ddof``.
         """
         return np.sqrt(self.var(ddof))
 
 
-class Quantiles(_Accumulator):
+class Quantiles(Accumulator):
     """Quantiles per trailing element: exact up to ``k`` runs, then a mergeable sketch with a rank-error bound.
 
     While at most ``k`` runs were accumulated every value is kept and :meth:`quantile` /
-    :meth:`percentile` return ``np.quantile`` / ``np.percentile`` with ``method``, bit for bit
-    (whatever the chunking and merge order). Past ``k`` the values form a compactor hierarchy
-    (Manku, Rajagopalan & Lindsay; the deterministic form of KLL): level ``h`` holds values of
-    weight ``2**h``; when a level holds more than ``k`` values they are sorted and every other one
-    moves up with twice the weight (the lower or upper of each pair, alternately), an odd one out
-    staying. All trailing elements see the same runs, so they compact together.
+    :meth:`percentile` return ``np.quantile`` / ``np.percentile`` with ``method``, bit for bit,
+    whatever the chunking and merge order. Past ``k`` the values go into a deterministic compactor
+    sketch (levels of values of weight ``2**h``, at most ``k`` per level; :mod:`ctrl_analysis._sketch`
+    has the design and the proof). All trailing elements see the same runs and compact together.
 
-    **Rank-error bound.** Let ``n`` be the count and ``R(x)`` the number of values ``<= x``. One
-    compaction at level ``h`` changes the estimated ``R(x)`` of any ``x`` by at most ``2**h``;
-    level ``h`` receives at most ``n / 2**h`` values and each compaction takes at least ``k`` of
-    them, so its compactions cost at most ``n / k``, and only levels ``h < log2(n / k)`` compact.
-    Hence for every ``x``: ``|R_est(x) - R(x)| <= E <= n * ceil(log2(n / k)) / k``, where ``E``
-    (the sum of ``2**h`` over the compactions made) is tracked: :attr:`rank_error` is ``E / n``.
-    In the sketch regime the ``q``-quantile returned is the smallest kept value ``y`` with
-    ``R_est(y) >= q n`` (inverted CDF, whatever ``method``); its true rank (the count below it to
-    the count up to it) meets ``[q n - E, q n + E]``. ``q = 0`` and ``q = 1`` give the exact min
-    and max. Memory: at most ``k`` values per level and ``ceil(log2(n / k)) + 1`` levels, i.e.
-    ``8 * k * (ceil(log2(n / k)) + 1)`` bytes per trailing element (:meth:`bytes_bound`), plus
-    one chunk while it is added. With ``k = 4096`` and ``10**6`` runs: ``E / n <= 0.2 %``,
-    288 KiB per trailing element.
+    **Bound.** With ``n`` values and ``R(x)`` the number of them ``<= x``, the sketch's estimate
+    of ``R(x)`` is within ``E`` of it for every ``x``, where ``E <= n * ceil(log2(n / k)) / k``
+    (:meth:`error_bound`); ``E / n`` as actually reached is :attr:`rank_error`. A sketched
+    ``q``-quantile ``y`` is the smallest kept value whose estimated rank reaches ``q n`` (inverted
+    CDF, whatever ``method``): the count of values ``< y`` is at most ``q n + E``, the count
+    ``<= y`` at least ``q n - E``. ``q = 0`` and ``q = 1`` give the exact min and max.
+    **Memory**: at most ``k`` values on each of ``ceil(log2(n / k)) + 1`` levels
+    (:meth:`bytes_bound`), plus the chunk being added. With ``k = 4096`` and ``10**6`` runs:
+    ``E / n <= 0.2 %`` and at most 288 KiB per trailing element.
 
     Parameters
     ----------
     shape : int or tuple of int, optional
         The trailing shape of the values; by default that of the first chunk.
     k : int
-        Values kept per level, 16 to 2**24: exact up to ``k`` runs, rank error ``<= ceil(log2(n/k))/k``.
+        Values kept per level, 16 to 2**24: exact up to ``k`` runs.
     method : str
-        ``np.quantile``'s method for the exact regime (default ``"linear"``).
+        ``np.quantile``'s method, used while exact (default ``"linear"``).
     nonfinite : {"raise", "exclude"}
         What a NaN or inf does in a run that is not excluded: an error, or the run is excluded.
 
@@ -389,8 +193,7 @@ class Quantiles(_Accumulator):
         super().__init__(shape, nonfinite=nonfinite)
 
     def _allocate(self):
-        self._levels = [np.empty((self.size, 0))]  # level h: (size, m_h) values of weight 2**h
-        self._compactions = [0]
+        self._levels, self._compactions = [np.empty((self.size, 0))], [0]  # level h: (size, m_h), weight 2**h
         self._min, self._max = np.full(self.size, np.inf), np.full(self.size, -np.inf)
 
     def _reset(self):
@@ -405,36 +208,13 @@ class Quantiles(_Accumulator):
     def _fill(self, values, exclude):
         rows = self._kept(values, exclude)
         self._levels = [np.ascontiguousarray(rows.T)]
-        self._compactions = [0]
         if rows.shape[0]:
             self._min, self._max = rows.min(axis=0), rows.max(axis=0)
-        self._compact()
+        _sketch.compact(self._levels, self._compactions, self.k)
 
     def _merge(self, other):
-        for h, (buf, c) in enumerate(zip(other._levels, other._compactions)):
-            if h == len(self._levels):
-                self._levels.append(np.empty((self.size, 0)))
-                self._compactions.append(0)
-            self._levels[h] = np.concatenate([self._levels[h], buf], axis=1)
-            self._compactions[h] += c
+        _sketch.merge_levels(self._levels, self._compactions, other._levels, other._compactions, self.k)
         self._min, self._max = np.minimum(self._min, other._min), np.maximum(self._max, other._max)
-        self._compact()
-
-    def _compact(self):
-        h = 0
-        while h < len(self._levels):
-            buf = self._levels[h]
-            if buf.shape[1] > self.k:
-                buf = np.sort(buf, axis=1, kind="quicksort" if h == 0 else "stable")  # upper levels: sorted runs
-                m = buf.shape[1] - buf.shape[1] % 2
-                up = buf[:, self._compactions[h] % 2:m:2]  # the lower or upper of each pair, alternately
-                self._levels[h] = buf[:, m:].copy()  # the odd one out (the largest) stays
-                self._compactions[h] += 1
-                if h + 1 == len(self._levels):
-                    self._levels.append(np.empty((self.size, 0)))
-                    self._compactions.append(0)
-                self._levels[h + 1] = np.concatenate([self._levels[h + 1], up], axis=1)
-            h += 1
 
     @property
     def exact(self) -> bool:
@@ -443,13 +223,13 @@ class Quantiles(_Accumulator):
 
     @property
     def rank_error(self) -> float:
-        """The proven bound on the rank error now, as a fraction of the count (0.0 while exact)."""
+        """The proven bound on the rank error reached, ``E / n`` (0.0 while exact)."""
         e = sum(c * 2 ** h for h, c in enumerate(self._compactions))
         return e / self.count if self.count else 0.0
 
     @staticmethod
     def error_bound(n: int, k: int) -> float:
-        """The a-priori rank-error bound ``ceil(log2(n / k)) / k`` for ``n`` values (0 for ``n <= k``).
+        """The a-priori bound on :attr:`rank_error` after ``n`` values: ``ceil(log2(n / k)) / k`` (0 if ``n <= k``).
 
         Parameters
         ----------
@@ -461,13 +241,12 @@ class Quantiles(_Accumulator):
         Returns
         -------
         float
-            The largest possible :attr:`rank_error` after ``n`` values, whatever the chunking and merges.
+            Holds whatever the chunking and the merges.
         """
-        n, k = check_int("n", n, minimum=0), check_int("k", k, minimum=1)
-        return 0.0 if n <= k else math.ceil(math.log2(n / k)) / k
+        return _sketch.error_bound(check_int("n", n, minimum=0), check_int("k", k, minimum=1))
 
     def bytes_bound(self, n: int) -> int:
-        """The most bytes the kept values take after ``n`` runs (between chunks), by the bound above.
+        """The most bytes :attr:`nbytes` reaches between chunks after ``n`` runs.
 
         Parameters
         ----------
@@ -477,11 +256,10 @@ class Quantiles(_Accumulator):
         Returns
         -------
         int
-            ``8 * size * k * (levels)`` plus the min and max, where ``levels = ceil(log2(n / k)) + 1``.
+            ``8 * size * (min(n, k) * (ceil(log2(n / k)) + 1) + 2)``: the levels, the min and the max.
         """
         n = check_int("n", n, minimum=0)
-        levels = 1 if n <= self.k else math.ceil(math.log2(n / self.k)) + 1
-        return 8 * self.size * (min(n, self.k) * levels + 2)
+        return 8 * self.size * (min(n, self.k) * _sketch.levels_bound(n, self.k) + 2)
 
     def _answer(self, q, name: str, scale: float):
         qs = check_finite(name, q)
@@ -491,28 +269,15 @@ class Quantiles(_Accumulator):
         if self.count == 0:
             return np.full(qs.shape + (self.shape or ()), np.nan)[()]
         if self.exact:
-            fn = np.percentile if scale == 100 else np.quantile
-            out = fn(self._levels[0], qs, axis=1, method=self.method)
-            return out.reshape(qs.shape + self.shape)[()]
-        out = self._sketch(qs.ravel() / scale)
+            out = (np.percentile if scale == 100 else np.quantile)(self._levels[0], qs, axis=1, method=self.method)
+        else:
+            flat = qs.ravel() / scale
+            out = _sketch.weighted_quantiles(self._levels, flat, self.count)
+            out[flat == 0.0], out[flat == 1.0] = self._min, self._max
         return out.reshape(qs.shape + self.shape)[()]
 
-    def _sketch(self, qs):
-        items = np.concatenate(self._levels, axis=1)
-        weights = np.concatenate([np.full(b.shape[1], 2 ** h, np.int64) for h, b in enumerate(self._levels)])
-        order = np.argsort(items, axis=1, kind="stable")
-        items = np.take_along_axis(items, order, axis=1)
-        cum = np.cumsum(weights[order], axis=1)
-        out = np.empty((len(qs), self.size))
-        for i, q in enumerate(qs):
-            idx = np.minimum((cum < q * self.count).sum(axis=1), items.shape[1] - 1)
-            out[i] = items[np.arange(self.size), idx]
-            if q == 0.0 or q == 1.0:
-                out[i] = self._min if q == 0.0 else self._max
-        return out
-
     def quantile(self, q):
-        """The ``q``-quantiles per trailing element (``np.quantile(x, q, axis=0)`` while :attr:`exact`).
+        """The ``q``-quantiles per trailing element: ``np.quantile(x, q, axis=0)`` while :attr:`exact`.
 
         Parameters
         ----------
@@ -522,13 +287,12 @@ class Quantiles(_Accumulator):
         Returns
         -------
         numpy.ndarray or numpy.float64
-            Shape ``q.shape + shape``; NaN before any run is accumulated. In the sketch regime the
-            rank of each answer is within :attr:`rank_error` of ``q`` (see the class).
+            Shape ``q.shape + shape``; NaN before any run. Sketched: within :attr:`rank_error` in rank.
         """
         return self._answer(q, "q", 1.0)
 
     def percentile(self, p):
-        """The ``p``-th percentiles per trailing element (``np.percentile(x, p, axis=0)`` while :attr:`exact`).
+        """The ``p``-th percentiles per trailing element: ``np.percentile(x, p, axis=0)`` while :attr:`exact`.
 
         Parameters
         ----------
@@ -538,12 +302,12 @@ class Quantiles(_Accumulator):
         Returns
         -------
         numpy.ndarray or numpy.float64
-            Shape ``p.shape + shape``, as :meth:`quantile` of ``p / 100``.
+            Shape ``p.shape + shape``; sketched, as :meth:`quantile` of ``p / 100``.
         """
         return self._answer(p, "p", 100.0)
 
 
-class Counts(_Accumulator):
+class Counts(Accumulator):
     """How many runs have a flag set (e.g. diverged), per trailing element; merged exactly.
 
     Parameters
@@ -593,7 +357,7 @@ class Counts(_Accumulator):
         return self.hits / self.n_runs if self.n_runs else np.full(self.shape or (), np.nan)[()]
 
 
-class Histogram(_Accumulator):
+class Histogram(Accumulator):
     """Counts in fixed bins per trailing element, as ``np.histogram(x, bins=edges)``; merged exactly.
 
     Bin ``i`` holds ``edges[i] <= x < edges[i + 1]``, the last bin also ``x == edges[-1]``; values
@@ -666,7 +430,7 @@ class Histogram(_Accumulator):
         return self._shaped(getattr(self, "_above", None))
 
 
-class Keep(_Accumulator):
+class Keep(Accumulator):
     """The traces of chosen runs (those a figure draws), with their run index, NaN included.
 
     Parameters
@@ -709,24 +473,20 @@ class Keep(_Accumulator):
 
     @classmethod
     def of(cls, values, start=0, **options):
-        """A new :class:`Keep` holding the wanted runs of one chunk whose first run is ``start``.
+        """A new :class:`Keep` (built with ``options``) holding one chunk; arguments as :meth:`add`.
 
         Parameters
         ----------
-        values : array_like
-            The chunk, shape ``(B, ...)``: runs on axis 0.
-        start : int
-            The run index of ``values[0]``.
+        values, start
+            As :meth:`add` (``start`` 0 by default).
         **options
-            The constructor's arguments (``runs``, ``shape``).
+            The constructor's arguments.
 
         Returns
         -------
         Keep
         """
-        acc = cls(**options)
-        acc._fill(values, start)
-        return acc
+        return super().of(values, start, **options)
 
     def add(self, values, start=None):
         """Keep the wanted runs of one chunk.
@@ -741,7 +501,7 @@ class Keep(_Accumulator):
         Returns
         -------
         Keep
-            ``self``, updated.
+            ``self``.
         """
         fresh = self._empty()
         fresh._fill(values, self.seen if start is None else start)
@@ -749,7 +509,7 @@ class Keep(_Accumulator):
 
     def _fill(self, values, start):
         start = check_int("start", start, minimum=0)
-        arr = _rows(values, self.shape)
+        arr = self._rows(values)
         if self.shape is None:
             self.shape = arr.shape[1:]
         index = start + np.arange(arr.shape[0])
