@@ -9,7 +9,9 @@ seconds (``time.perf_counter``; the draws alone timed apart), the peak of traced
 largest difference of mean and std (relative to the std), and the worst rank error of the streamed quantiles
 (their rank among the held values, over every sample) beside the proven bound.
 
-    OPENBLAS_NUM_THREADS=1 python benchmarks/bench_streaming.py [--runs 1000000] [--chunk 1000] [--samples 100] [--k 4096]
+    OPENBLAS_NUM_THREADS=1 python benchmarks/bench_streaming.py [--runs R] [--chunk C] [--samples S] [--k K]
+
+(defaults: 10**6 runs, chunks of 1000, 100 samples, k = 4096).
 """
 
 from __future__ import annotations

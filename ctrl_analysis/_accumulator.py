@@ -173,7 +173,7 @@ class Accumulator:
         arr = self._rows(values)
         b = arr.shape[0]
         keep = np.ones(b, bool) if exclude is None else ~_mask(exclude, b)
-        flat = arr.reshape(b, -1)
+        flat = arr.reshape(b, math.prod(arr.shape[1:]))
         bad = keep & ~np.isfinite(flat).all(axis=1)
         if bad.any():
             if self.nonfinite == "raise":

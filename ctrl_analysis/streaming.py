@@ -25,6 +25,8 @@ within their rank-error bound.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from . import _sketch
@@ -41,7 +43,7 @@ METHODS = ("inverted_cdf", "averaged_inverted_cdf", "closest_observation", "inte
 
 
 class Moments(Accumulator):
-    """Count, mean, variance, min and max per trailing element, merged exactly as pairs of chunks.
+    """Count, mean, variance, min and max per trailing element, combined chunk by chunk by the pairwise update.
 
     Each chunk is reduced two-pass around its first run ``x0`` (the shift): ``r = mean(x - x0)``,
     ``M2 = sum((x - x0 - r)**2)``; the mean is kept as ``x0 + r``. Chunks and accumulators are
@@ -340,7 +342,7 @@ class Counts(Accumulator):
             raise ValueError(f"values must have the trailing shape {self.shape} (runs on axis 0), got {arr.shape}")
         if self.shape is None:
             self.shape = arr.shape[1:]
-        self._hits = arr.reshape(arr.shape[0], -1).sum(axis=0, dtype=np.int64)
+        self._hits = arr.reshape(arr.shape[0], math.prod(arr.shape[1:])).sum(axis=0, dtype=np.int64)
         self.n_runs = arr.shape[0]
 
     def _merge(self, other):
@@ -514,7 +516,7 @@ class Keep(Accumulator):
             self.shape = arr.shape[1:]
         index = start + np.arange(arr.shape[0])
         take = np.isin(index, self.wanted)
-        self._runs, self._traces = index[take], arr.reshape(arr.shape[0], -1)[take]
+        self._runs, self._traces = index[take], arr.reshape(arr.shape[0], math.prod(arr.shape[1:]))[take]
         self.n_runs, self.seen = arr.shape[0], start + arr.shape[0]
 
     def _merge(self, other):

@@ -667,7 +667,8 @@ def _streaming_cases():
         ("Keep", streaming.Keep, dict(runs=3, shape=None),
          dict(runs=["ab", None, -1, 1.5, [1, "a"], [-1], HUGE, [[1, 2]]], shape=SHAPE)),
         ("Moments.add", _stream_add, dict(kind="Moments", values=np.ones((3, 2)), exclude=None),
-         dict(values=values + [[[NAN, 1.0]], [[INF, 1.0]]], exclude=["x", 3, [1, 0, 1], np.ones(2, bool), [[True] * 3]])),
+         dict(values=values + [[[NAN, 1.0]], [[INF, 1.0]]],
+              exclude=["x", 3, [1, 0, 1], np.ones(2, bool), [[True] * 3]])),
         ("Quantiles.add", _stream_add, dict(kind="Quantiles", values=np.ones((3, 2)), exclude=None),
          dict(values=values + [[[NAN, 1.0]]], exclude=["x", [1, 0, 1], np.ones(4, bool)])),
         ("Histogram.add", _stream_add, dict(kind="Histogram", values=np.ones((3, 2)), exclude=None),
@@ -689,7 +690,8 @@ def _streaming_cases():
                       dict(other=bad_other + [_STREAMS["Quantiles" if kind != "Quantiles" else "Moments"]()])))
     cases.append(("Quantiles.merge (k)", _stream_merge, dict(kind="Quantiles", other=streaming.Quantiles(k=16)),
                   dict(other=[streaming.Quantiles(k=32)])))
-    cases.append(("Histogram.merge (edges)", _stream_merge, dict(kind="Histogram", other=streaming.Histogram([0.0, 1.0])),
+    cases.append(("Histogram.merge (edges)", _stream_merge,
+                  dict(kind="Histogram", other=streaming.Histogram([0.0, 1.0])),
                   dict(other=[streaming.Histogram([0.0, 2.0])])))
     return cases
 
@@ -1029,8 +1031,8 @@ NOT_FUZZED = {
     arena_cli.main: "command line, fuzzed in test_arena_cli.py (malformed CSV, missing bounds: one line, exit 2); "
                     "its CSV reader read_record is fuzzed here",
     **{getattr(_validate, name): "the shared validators themselves (test_validate.py)" for name in _validate.__all__},
-    _accumulator.Accumulator: "the streaming accumulators' base class; its add and merge are fuzzed through each of them",
-    **{getattr(_sketch, name): "the sketch's internals, called by Quantiles with the arrays it made (Quantiles is fuzzed)"
+    _accumulator.Accumulator: "the streaming accumulators' base; its add and merge are fuzzed through each of them",
+    **{getattr(_sketch, name): "the sketch's internals, called by Quantiles with arrays it made (Quantiles is fuzzed)"
        for name in _sketch.__all__},
     **{getattr(_kernels, name): "compiled per-step kernels and the engine's internals (test_speed_kernels.py)"
        for name in _kernels.__all__},

@@ -228,6 +228,19 @@ def test_keep_holds_the_first_runs_with_their_index():
         spread.merge(Keep.of(x[:3], runs=[2, 17]))
 
 
+def test_empty_chunks_change_nothing():
+    x = np.arange(40.0) / 7
+    results = {Moments: lambda a: (a.mean, a.var(1), a.min), Quantiles: lambda a: a.quantile([0.1, 0.5]),
+               Histogram: lambda a: (a.counts, a.above)}
+    for cls, read in results.items():
+        options = dict(edges=[0.0, 1.0, 2.0]) if cls is Histogram else dict(k=16) if cls is Quantiles else {}
+        plain = cls(**options).add(x[:25]).add(x[25:])
+        padded = cls(**options).add(np.zeros(0)).add(x[:25]).add(np.zeros(0)).add(x[25:])
+        assert plain.count == padded.count == 40, cls
+        for a, b in zip(read(plain), read(padded)):
+            assert np.array_equal(a, b), cls
+
+
 # -- bad input ---------------------------------------------------------------------------------------
 @pytest.mark.parametrize("call, arg", [
     (lambda: Moments().add("abc"), "values"),
