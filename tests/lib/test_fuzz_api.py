@@ -28,6 +28,8 @@ import numpy as np
 
 import ctrl_analysis
 from ctrl_analysis import (
+    _accumulator,
+    _sketch,
     _validate,
     cli,
     cluster,
@@ -37,6 +39,7 @@ from ctrl_analysis import (
     polynomials,
     progress,
     simulate,
+    streaming,
 )
 from ctrl_analysis import identification as ident
 from ctrl_analysis.arena import claims, signals
@@ -626,7 +629,71 @@ def build_cases(tmp):
          dict(results=[None, 3, [None], ["x"]], out_dir=[None, 3, ""], this_run=[3, "x"], failed=[3, "x"])),
         *_claim_cases(results),
         *_arena_cases(tmp),
+        *_streaming_cases(),
     ]
+
+
+SHAPE = ["x", 1.5, -1, [2, "a"], True]
+_STREAMS = {"Moments": lambda: streaming.Moments(shape=2), "Quantiles": lambda: streaming.Quantiles(shape=2, k=16),
+            "Histogram": lambda: streaming.Histogram([0.0, 1.0], shape=2), "Counts": lambda: streaming.Counts(shape=2),
+            "Keep": lambda: streaming.Keep(2, shape=2)}
+
+
+def _stream_add(kind, values, exclude=None, start=None):
+    acc = _STREAMS[kind]()
+    return acc.add(values, start) if kind == "Keep" else acc.add(values, exclude)
+
+
+def _stream_merge(kind, other):
+    return _STREAMS[kind]().merge(other)
+
+
+def _stream_call(method, **kw):
+    acc = streaming.Quantiles(k=16).add(np.arange(40.0)) if method != "var" else streaming.Moments().add(np.ones(3))
+    return getattr(acc, method)(**kw)
+
+
+def _streaming_cases():
+    """The accumulators of ctrl_analysis.streaming, their add, merge and results."""
+    values = ARR + [3.0, np.ones((3, 4)), np.ones((3, 2, 1))]
+    bad_other = [None, 3, "x", streaming.Keep(1), streaming.Moments(shape=3).add(np.ones((1, 3)))]
+    cases = [
+        ("Moments", streaming.Moments, dict(shape=None, nonfinite="raise"), dict(shape=SHAPE, nonfinite=CHOICE)),
+        ("Quantiles", streaming.Quantiles, dict(shape=None, k=64, method="linear", nonfinite="raise"),
+         dict(shape=SHAPE, k=INT + [0, 8, HUGE], method=CHOICE + [None], nonfinite=CHOICE)),
+        ("Counts", streaming.Counts, dict(shape=None), dict(shape=SHAPE)),
+        ("Histogram", streaming.Histogram, dict(edges=[0.0, 1.0], shape=None, nonfinite="raise"),
+         dict(edges=ARR + [[1.0], [1.0, 0.0], [0.0, NAN], [[0.0, 1.0]], 2.0], shape=SHAPE, nonfinite=CHOICE)),
+        ("Keep", streaming.Keep, dict(runs=3, shape=None),
+         dict(runs=["ab", None, -1, 1.5, [1, "a"], [-1], HUGE, [[1, 2]]], shape=SHAPE)),
+        ("Moments.add", _stream_add, dict(kind="Moments", values=np.ones((3, 2)), exclude=None),
+         dict(values=values + [[[NAN, 1.0]], [[INF, 1.0]]],
+              exclude=["x", 3, [1, 0, 1], np.ones(2, bool), [[True] * 3]])),
+        ("Quantiles.add", _stream_add, dict(kind="Quantiles", values=np.ones((3, 2)), exclude=None),
+         dict(values=values + [[[NAN, 1.0]]], exclude=["x", [1, 0, 1], np.ones(4, bool)])),
+        ("Histogram.add", _stream_add, dict(kind="Histogram", values=np.ones((3, 2)), exclude=None),
+         dict(values=values + [[[NAN, 1.0]]], exclude=["x", [1, 0, 1], np.ones(4, bool)])),
+        ("Counts.add", _stream_add, dict(kind="Counts", values=np.ones((3, 2), bool)),
+         dict(values=values + [True, np.ones((3, 2)), np.ones((3, 3), bool)], exclude=[np.ones(3, bool)])),
+        ("Keep.add", _stream_add, dict(kind="Keep", values=np.ones((3, 2)), start=None),
+         dict(values=values, start=["3", 2.5, NAN, [2], True, -1])),
+        ("Quantiles.quantile", _stream_call, dict(method="quantile", q=0.5),
+         dict(q=["abc", None, NAN, INF, -0.1, 1.5, [0.5, NAN], [[0.1, 2.0]]])),
+        ("Quantiles.percentile", _stream_call, dict(method="percentile", p=50.0),
+         dict(p=["abc", None, NAN, -1.0, 100.5, [50.0, INF]])),
+        ("Quantiles.bytes_bound", _stream_call, dict(method="bytes_bound", n=10), dict(n=INT + [-1])),
+        ("Quantiles.error_bound", streaming.Quantiles.error_bound, dict(n=10, k=4), dict(n=INT + [-1], k=INT + [0])),
+        ("Moments.var", _stream_call, dict(method="var", ddof=1), dict(ddof=INT + [-1])),
+    ]
+    for kind in _STREAMS:
+        cases.append((f"{kind}.merge", _stream_merge, dict(kind=kind, other=_STREAMS[kind]()),
+                      dict(other=bad_other + [_STREAMS["Quantiles" if kind != "Quantiles" else "Moments"]()])))
+    cases.append(("Quantiles.merge (k)", _stream_merge, dict(kind="Quantiles", other=streaming.Quantiles(k=16)),
+                  dict(other=[streaming.Quantiles(k=32)])))
+    cases.append(("Histogram.merge (edges)", _stream_merge,
+                  dict(kind="Histogram", other=streaming.Histogram([0.0, 1.0])),
+                  dict(other=[streaming.Histogram([0.0, 2.0])])))
+    return cases
 
 
 def _claim_cases(results):
@@ -964,6 +1031,9 @@ NOT_FUZZED = {
     arena_cli.main: "command line, fuzzed in test_arena_cli.py (malformed CSV, missing bounds: one line, exit 2); "
                     "its CSV reader read_record is fuzzed here",
     **{getattr(_validate, name): "the shared validators themselves (test_validate.py)" for name in _validate.__all__},
+    _accumulator.Accumulator: "the streaming accumulators' base; its add and merge are fuzzed through each of them",
+    **{getattr(_sketch, name): "the sketch's internals, called by Quantiles with arrays it made (Quantiles is fuzzed)"
+       for name in _sketch.__all__},
     **{getattr(_kernels, name): "compiled per-step kernels and the engine's internals (test_speed_kernels.py)"
        for name in _kernels.__all__},
     **{getattr(module, name): "the engine's internals, called with arrays it made (semantic_cases below)"
