@@ -28,8 +28,6 @@ import numpy as np
 
 import ctrl_analysis
 from ctrl_analysis import (
-    _accumulator,
-    _sketch,
     _validate,
     cli,
     cluster,
@@ -42,6 +40,7 @@ from ctrl_analysis import (
     streaming,
 )
 from ctrl_analysis import identification as ident
+from ctrl_analysis.streaming import _accumulator, _sketch
 from ctrl_analysis.arena import claims, signals
 from ctrl_analysis.arena import cli as arena_cli
 from ctrl_analysis.arena import figures as arena_figures

@@ -31,7 +31,7 @@ import numpy as np
 
 from . import _sketch
 from ._accumulator import Accumulator
-from ._validate import check_finite, check_in, check_int
+from .._validate import check_finite, check_in, check_int
 
 __all__ = ["Moments", "Quantiles", "Counts", "Histogram", "Keep"]
 
@@ -152,7 +152,7 @@ class Quantiles(Accumulator):
     While at most ``k`` runs were accumulated every value is kept and :meth:`quantile` /
     :meth:`percentile` return ``np.quantile`` / ``np.percentile`` with ``method``, bit for bit,
     whatever the chunking and merge order. Past ``k`` the values go into a deterministic compactor
-    sketch (levels of values of weight ``2**h``, at most ``k`` per level; :mod:`ctrl_analysis._sketch`
+    sketch (levels of values of weight ``2**h``, at most ``k`` per level; :mod:`ctrl_analysis.streaming._sketch`
     has the design and the proof). All trailing elements see the same runs and compact together.
 
     **Bound.** With ``n`` values and ``R(x)`` the number of them ``<= x``, the sketch's estimate

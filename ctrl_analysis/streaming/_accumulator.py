@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 
-from ._validate import check_array, check_in, check_int
+from .._validate import check_array, check_in, check_int
 
 __all__ = ["Accumulator", "NONFINITE"]
 
