@@ -357,6 +357,90 @@ def _ask_scheduler(address: str, timeout: float) -> None:
     raise OSError(f"{address!r} is not a Dask scheduler: it did not answer with Dask's protocol ({what})")
 
 
+#: What several chunks share (the function, a member of their argument tuples) is sent to the cluster once, as a
+#: future, from this size on (bytes, pickled): below it, sending it with every chunk costs less than a round trip.
+SCATTER_BYTES = 1 << 20
+
+
+def _pickled_size(obj) -> int:
+    """Bytes of ``obj`` as Dask would send it (cloudpickle); 0 for what cannot be pickled (Dask reports that)."""
+    import numpy as np
+
+    if isinstance(obj, np.ndarray):
+        return obj.nbytes
+    if obj is None or isinstance(obj, (bool, int, float, str, bytes)):
+        return len(obj) if isinstance(obj, (str, bytes)) else 8
+    try:
+        import cloudpickle
+
+        return len(cloudpickle.dumps(obj))
+    except Exception:  # noqa: BLE001 - anything unpicklable is Dask's to report, with its own message
+        return 0
+
+
+def _call(fn, arg):
+    """``fn(arg)`` on a worker: what :func:`_shared_once` sent as futures arrives here as the objects."""
+    return fn(arg)
+
+
+def _shared_once(client, fn, args: list):
+    """``fn`` and ``args`` with what several calls share, and is large, replaced by futures of one copy.
+
+    Dask otherwise embeds a chunk's inputs in its task, so a loop and its held inputs shared by every chunk
+    travel once per chunk ("Sending large graph of size 12.8 MiB", again and again). Shared means the same
+    object (by identity) in two calls or more: ``fn`` itself, or a member of the argument tuples. Each is
+    scattered to every worker once (``broadcast``); workers resolve the futures before the call, so ``fn``
+    sees the same objects and the results are the same bit for bit.
+    """
+    if len(args) < 2:
+        return fn, args
+    seen: dict = {}
+
+    def count(obj, depth):
+        seen.setdefault(id(obj), [obj, 0])[1] += 1
+        if depth:
+            for m in _members(obj):
+                count(m, depth - 1)
+
+    for a in args:
+        count(a, _SCATTER_DEPTH)
+    big = {i: m for i, (m, n) in seen.items() if n > 1 and _pickled_size(m) >= SCATTER_BYTES}
+    send_fn = _pickled_size(fn) >= SCATTER_BYTES
+    if not big and not send_fn:
+        return fn, args
+    futures: dict = {}
+
+    def swap(obj, depth):
+        if id(obj) in big:  # sent once, when first met: a shared object's own members are not looked into
+            if id(obj) not in futures:
+                futures[id(obj)] = client.scatter(obj, broadcast=True, hash=False)
+            return futures[id(obj)]
+        if not depth:
+            return obj
+        if isinstance(obj, dict):
+            return {k: swap(v, depth - 1) for k, v in obj.items()}
+        if isinstance(obj, list):
+            return [swap(v, depth - 1) for v in obj]
+        if isinstance(obj, tuple) and type(obj) is tuple:
+            return tuple(swap(v, depth - 1) for v in obj)
+        return obj
+
+    return (client.scatter(fn, broadcast=True, hash=False) if send_fn else fn), [swap(a, _SCATTER_DEPTH) for a in args]
+
+
+#: How deep :func:`_shared_once` looks into a call's argument: its members and theirs (tuples, lists, dicts).
+_SCATTER_DEPTH = 2
+
+
+def _members(obj) -> list:
+    """The members Dask resolves futures in: of a plain tuple, a list, a dict's values."""
+    if isinstance(obj, dict):
+        return list(obj.values())
+    if isinstance(obj, list) or type(obj) is tuple:
+        return list(obj)
+    return []
+
+
 def _map_on_dask(client, fn, args: list, out: list, done_one, pb) -> None:
     """Run ``fn`` on every argument on ``client``'s cluster into ``out``, watching the cluster meanwhile.
 
@@ -384,7 +468,8 @@ def _map_on_dask(client, fn, args: list, out: list, done_one, pb) -> None:
         raise ClusterError(_CLUSTER["failed"])
     if client.status not in ("running", "newly-created"):
         raise fail(f"lost the Dask scheduler at {address}: its client is {client.status}", len(args))
-    futures = client.map(fn, args, pure=False)
+    call, call_args = _shared_once(client, fn, args)
+    futures = client.map(_call, [call] * len(args), call_args, pure=False)
     index = {f.key: i for i, f in enumerate(futures)}
     pending = set(futures)
     alone_since = None  # when the scheduler was first seen without a worker

@@ -146,6 +146,33 @@ def test_sweep_on_a_two_worker_local_cluster_equals_the_local_sweep_bit_for_bit(
     assert local[2, 1].mean() < local[0, 1].mean()
 
 
+def _sum_with(task):
+    table, (i, scale) = task
+    return float(table[i::7].sum() * scale)
+
+
+def test_what_every_chunk_shares_is_sent_to_the_cluster_once_with_the_same_results():
+    """A 4 MB table shared by 6 chunks is scattered once (not embedded in every task), results bit for bit."""
+    import warnings
+
+    from distributed import Client, LocalCluster
+
+    table = np.random.default_rng(3).standard_normal(500_000)
+    tasks = [(table, (i, 0.5 * i)) for i in range(6)]
+    local = parallel.map_chunks(_sum_with, tasks)
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=False, dashboard_address=None) as lc, \
+            Client(lc) as client:
+        sent = []
+        scatter = client.scatter
+        client.scatter = lambda obj, **kw: sent.append(obj) or scatter(obj, **kw)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            on_dask = parallel.map_chunks(_sum_with, tasks, scheduler=client)
+    assert on_dask == local
+    assert len(sent) == 1 and sent[0] is table  # the table once; the small per-chunk members stay in their tasks
+    assert not [w for w in caught if "large graph" in str(w.message)], [str(w.message) for w in caught]
+
+
 def test_map_chunks_given_the_process_wide_clusters_scheduler_runs_there_not_on_a_second_cluster(monkeypatch):
     # a study hands its context's --scheduler to a sweep while the CLI's use_cluster is active
     from distributed import Client, LocalCluster
