@@ -156,6 +156,22 @@ def _stop_workers(ex) -> None:
     ex.shutdown(wait=True, cancel_futures=True)
 
 
+def _by_value(fn, arg) -> bytes:
+    """``(fn, arg)`` pickled with cloudpickle, as Dask sends tasks: a lambda, a class defined in a script or a
+    notebook, an exec'd kernel travel by value, so what runs on a cluster also runs in local processes."""
+    import cloudpickle
+
+    return cloudpickle.dumps((fn, arg))
+
+
+def _call_pickled(blob: bytes):
+    """``fn(arg)`` in a worker process, from :func:`_by_value`'s bytes."""
+    import pickle
+
+    fn, arg = pickle.loads(blob)
+    return fn(arg)
+
+
 def map_chunks(fn: Callable, args: Sequence, *, jobs: int = 1, scheduler=None, desc: str = "",
                unit: str = "chunk", on_result: Callable | None = None) -> list:
     """``[fn(a) for a in args]``, computed serially, in local processes or on Dask; results in order.
@@ -163,7 +179,8 @@ def map_chunks(fn: Callable, args: Sequence, *, jobs: int = 1, scheduler=None, d
     Parameters
     ----------
     fn : callable
-        A module-level function (picklable by name) of one argument.
+        A function of one argument; it and ``args`` travel to worker processes by cloudpickle (lambdas and
+        functions defined in a script or a notebook too).
     args : sequence
         One argument per call (e.g. chunks of seeds, study names).
     jobs : int
@@ -232,7 +249,7 @@ def map_chunks(fn: Callable, args: Sequence, *, jobs: int = 1, scheduler=None, d
         ex = ProcessPoolExecutor(max_workers=min(jobs, len(args)), mp_context=mp.get_context(method),
                                  initializer=_worker_init, initargs=(os.getpid(),))
         try:
-            futures = {ex.submit(fn, a): i for i, a in enumerate(args)}
+            futures = {ex.submit(_call_pickled, _by_value(fn, a)): i for i, a in enumerate(args)}
             for fut in done(futures):
                 i = futures[fut]
                 out[i] = fut.result()
@@ -384,7 +401,7 @@ def _reshape(out, shape):
 
 
 def picklable(obj) -> bool:
-    """Whether ``obj`` pickles (a loop must, to run in worker processes); warns when it does not.
+    """Whether ``obj`` pickles with cloudpickle (a loop must, to run in worker processes); warns when it does not.
 
     The warning is given once per process for each reason (a study runs many batches of the same
     loop: the same sentence eight times says nothing more).
@@ -400,8 +417,10 @@ def picklable(obj) -> bool:
     import pickle
     import warnings
 
+    import cloudpickle
+
     try:
-        pickle.dumps(obj)
+        cloudpickle.dumps(obj)  # as the chunks travel (_by_value, Dask): lambdas and script-defined classes do
     except (pickle.PicklingError, AttributeError, TypeError) as exc:
         message = (f"running a batch in parallel (jobs > 1 or a cluster) needs a picklable loop ({exc}); "
                    f"running the batch in this process")

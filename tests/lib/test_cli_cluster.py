@@ -77,7 +77,9 @@ INFO = StudyInfo(name="big", seed_file="s.txt", paper="P", reproduces="r")
 
 class Unpicklable:
     def __init__(self):
-        self.f = lambda x: x
+        import threading
+
+        self.f = threading.Lock()  # a lambda would travel (cloudpickle); a lock does not
 
 
 def run(ctx, params=None):

@@ -228,7 +228,17 @@ def test_an_address_that_is_a_dask_worker_not_its_scheduler_is_refused_in_one_li
 
 
 class UnpicklableDamped(Damped):
-    """The small plant with a lambda inside: a loop of it cannot go to worker processes."""
+    """The small plant holding a lock: a loop of it cannot go to worker processes, even by cloudpickle."""
+
+    def __init__(self):
+        super().__init__()
+        import threading
+
+        self.hook = threading.Lock()
+
+
+class LambdaDamped(Damped):
+    """The small plant with a lambda inside, as a script writes it: it travels by cloudpickle."""
 
     def __init__(self):
         super().__init__()
@@ -247,6 +257,22 @@ def test_an_unpicklable_loops_batches_warn_once_per_process(monkeypatch):
             loop.simulate(20, inputs={"w": noise[:, :, 0], "v": noise[:, :, 1]}, jobs=2)
     said = [w for w in caught if "needs a picklable loop" in str(w.message)]
     assert len(said) == 1 and said[0].category is RuntimeWarning
+
+def test_a_loop_with_a_lambda_runs_in_worker_processes_bit_for_bit(monkeypatch):
+    """Chunks travel by cloudpickle (as on Dask): a lambda inside a block no longer keeps the batch in-process."""
+    import warnings
+
+    monkeypatch.setattr(parallel, "_WARNED", set())
+    loop = Loop([place(LambdaDamped(), "plant"), place(DifferentialEstimator(3, 4.0), "sigma")], dt=0.01)
+    noise = draw_noise(run_seeds(1, 4), 20, gaussian_noise([0.3, 0.01]))
+    inputs = {"w": noise[:, :, 0], "v": noise[:, :, 1]}
+    with warnings.catch_warnings():
+        warnings.filterwarnings("error", message=".*needs a picklable loop")
+        two = loop.simulate(20, inputs=inputs, jobs=2)
+    one = loop.simulate(20, inputs=inputs)
+    np.testing.assert_array_equal(two.x, one.x)
+    assert parallel.map_chunks(lambda a: a * 2, [1, 2, 3], jobs=2) == [2, 4, 6]
+
 
 def test_loop_chunked_batch_equals_unchunked_bit_for_bit():
     seeds = run_seeds(2, 7)
