@@ -425,11 +425,20 @@ def _run_studies(args, todo, out, jobs, side_by_side, run, load_study, map_chunk
     # longest first (by the runtime of the previous output, unknown first): side by side, the run
     # then ends with the longest study instead of starting it last; summaries print in the asked order
     start = sorted(todo, key=lambda name: -_previous_runtime(out / name))
-    tasks = [(name, str(out), args.runs, args.seed, args.quick, max(1, jobs // side_by_side), args.scheduler,
+    # with more cores than studies side by side, every study may use all of them: their chunks share one pool
+    # (ctrl_analysis.taskpool); with as many or fewer, each driver has its core and runs its chunks in place
+    shared = side_by_side > 1 and jobs > side_by_side
+    tasks = [(name, str(out), args.runs, args.seed, args.quick, jobs if shared else max(1, jobs // side_by_side),
+              args.scheduler,
               1 + i % side_by_side if side_by_side > 1 else None, args.verbose) for i, name in enumerate(start)]
+    pool = contextlib.nullcontext()
     if side_by_side > 1:  # import the studies (numpy, scipy, control, matplotlib) once, before the workers fork
         for name in todo:
             load_study(name)
+    if shared:
+        from .taskpool import shared_pool
+
+        pool = shared_pool(jobs)
 
     def commit(i, record):
         name = record["name"]
@@ -441,8 +450,9 @@ def _run_studies(args, todo, out, jobs, side_by_side, run, load_study, map_chunk
         except (OSError, ValueError) as exc:
             record["error"] = run.failed[name] = one_line(exc)
 
-    records = map_chunks(_run_study, tasks, jobs=side_by_side, scheduler=False, desc="studies", unit="study",
-                         on_result=commit)
+    with pool:
+        records = map_chunks(_run_study, tasks, jobs=side_by_side, scheduler=False, desc="studies", unit="study",
+                             on_result=commit)
     by_name = {r["name"]: r for r in records}
     return [by_name[name] for name in todo]
 

@@ -31,17 +31,13 @@ stops them.
 
 from __future__ import annotations
 
-import contextlib
 import math
 import os
-import signal
-import threading
 from collections.abc import Callable, Sequence
 
 import numpy as np
 
 from ._validate import check_int, check_str
-from .noise import _check_seeds
 from .cluster import (  # noqa: F401 - the cluster's public names, from here too
     _CLUSTER,
     WORKER_TIMEOUT,
@@ -49,16 +45,26 @@ from .cluster import (  # noqa: F401 - the cluster's public names, from here too
     _check_scheduler,
     _client,
     _close,
-    _quiet_dask,
-    default_jobs,
     _cluster_workers,
     _map_on_dask,
+    _quiet_dask,
     active_cluster,
     check_scheduler_address,
+    default_jobs,
     silence_dask_logs,
     use_cluster,
 )
+from .noise import _check_seeds
 from .progress import bar
+from .taskpool import (
+    _STATE,
+    _by_value,
+    _call_pickled,
+    _stop_workers,
+    map_on_pool,
+    pool_available,
+)
+from .taskpool import _die_with_parent as _worker_init
 
 __all__ = ["MAX_CHUNKS", "WORKER_TIMEOUT", "active_cluster", "check_scheduler_address",
            "chunk_slices", "default_jobs", "gather", "grid_points", "map_chunks", "monte_carlo", "picklable",
@@ -118,58 +124,9 @@ def _sequence(name: str, value) -> list:
     return list(value)
 
 
-def _worker_init(parent: int) -> None:
-    """Initialiser of local worker processes: die with the parent, leave Ctrl-C to it.
-
-    On Linux ``prctl(PR_SET_PDEATHSIG, SIGKILL)`` has the kernel kill this process when its parent
-    dies (even by ``kill -9``); elsewhere a daemon thread polls the parent's pid. SIGINT is ignored:
-    the parent catches Ctrl-C once, stops the workers and reports.
-    """
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    try:
-        import ctypes
-
-        libc = ctypes.CDLL(None, use_errno=True)
-        armed = libc.prctl(1, int(signal.SIGKILL), 0, 0, 0) == 0  # 1 = PR_SET_PDEATHSIG
-    except (OSError, AttributeError):
-        armed = False
-    if os.getppid() != parent:  # the parent died before the signal was armed
-        os._exit(1)
-    if not armed:
-        def watch():
-            while os.getppid() == parent:
-                threading.Event().wait(1.0)
-            os._exit(1)
-
-        threading.Thread(target=watch, daemon=True, name="ctrl-analysis-parent-watch").start()
-
-
-def _stop_workers(ex) -> None:
-    """Cancel what has not started and kill the pool's workers (after an exception or Ctrl-C in the parent)."""
-    procs = list((getattr(ex, "_processes", None) or {}).values())  # shutdown() forgets them
-    for proc in procs:
-        with contextlib.suppress(OSError, AttributeError, ValueError):
-            proc.kill()
-    for proc in procs:
-        with contextlib.suppress(OSError, AttributeError, ValueError, AssertionError):
-            proc.join(5)
-    ex.shutdown(wait=True, cancel_futures=True)
-
-
-def _by_value(fn, arg) -> bytes:
-    """``(fn, arg)`` pickled with cloudpickle, as Dask sends tasks: a lambda, a class defined in a script or a
-    notebook, an exec'd kernel travel by value, so what runs on a cluster also runs in local processes."""
-    import cloudpickle
-
-    return cloudpickle.dumps((fn, arg))
-
-
-def _call_pickled(blob: bytes):
-    """``fn(arg)`` in a worker process, from :func:`_by_value`'s bytes."""
-    import pickle
-
-    fn, arg = pickle.loads(blob)
-    return fn(arg)
+def _in_pool_worker() -> bool:
+    """Whether this process is a worker of a run's shared pool (:mod:`ctrl_analysis.taskpool`): it maps in place."""
+    return _STATE["worker"]
 
 
 def map_chunks(fn: Callable, args: Sequence, *, jobs: int = 1, scheduler=None, desc: str = "",
@@ -235,7 +192,15 @@ def map_chunks(fn: Callable, args: Sequence, *, jobs: int = 1, scheduler=None, d
                     if own:
                         _close(client)
             return out
-        if jobs == 1 or len(args) <= 1:
+        if jobs > 1 and len(args) > 1 and pool_available():  # a study's driver: the run's one pool
+            from .progress import _CONTEXT
+
+            def one(i, value):
+                done_one(i, value)
+                pb.update(1)
+
+            return map_on_pool(fn, args, one, study=_CONTEXT["label"])
+        if jobs == 1 or len(args) <= 1 or _in_pool_worker():
             for i, a in enumerate(args):
                 out[i] = fn(a)
                 done_one(i, out[i])

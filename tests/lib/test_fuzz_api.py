@@ -38,6 +38,7 @@ from ctrl_analysis import (
     progress,
     simulate,
     streaming,
+    taskpool,
 )
 from ctrl_analysis import identification as ident
 from ctrl_analysis.streaming import _accumulator, _sketch
@@ -1001,6 +1002,9 @@ NOT_FUZZED = {
     parallel.default_jobs: "no arguments",
     cluster.ClusterError: "an exception class, raised by map_chunks on a failing cluster (tests/lib/test_parallel.py)",
     cluster.silence_dask_logs: "no arguments",
+    taskpool.pool_available: "no arguments",
+    taskpool.shared_pool: "its one argument is check_int's (tested in tests/lib/test_taskpool.py); opens processes",
+    taskpool.map_on_pool: "internal half of map_chunks in a run's driver, whose arguments are fuzzed",
     parallel.active_cluster: "no arguments",
     parallel.use_cluster: "connects to a Dask cluster; its address checks are check_scheduler_address's (fuzzed), "
                           "an unreachable one is tested in tests/lib/test_cli_cluster.py",

@@ -1,0 +1,268 @@
+"""One pool of worker processes for a whole run: every study's chunks share all the cores.
+
+``reproduce all`` runs its studies side by side, each in a driver process. Before, each driver started its
+own pool with ``jobs // studies`` processes, so a study's Monte Carlo batches could never use the cores
+another study left idle while it drew figures or ran its serial parts. Now the command starts one pool of
+``jobs`` worker processes (:func:`shared_pool`), and :func:`~ctrl_analysis.parallel.map_chunks` in a driver
+sends its calls there (:func:`map_on_pool`): the chunks of every study wait in one queue, first come first
+served, and each runs on whichever worker is free. What a chunk computes does not depend on where it runs,
+so the results are those of ``--jobs 1`` bit for bit.
+
+The drivers talk to the pool's owner (the command's process) through a local socket whose address and key
+travel in the environment (``CTRL_ANALYSIS_POOL``); a thread there serves each ``map_chunks`` call: it
+submits the calls, cloudpickled as for Dask, and sends each result back as it finishes. A worker process of
+the pool never sends calls back to the pool (a chunk that maps again runs its calls in place), so no call
+waits for a worker that waits for it.
+
+With ``CTRL_ANALYSIS_TRACE=FILE`` the owner writes every call's study, submission, start and end (seconds,
+one clock for all processes) to ``FILE`` as JSON when the pool closes: what ``benchmarks/scaling.py``
+replays for other numbers of workers.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import signal
+import threading
+import time
+
+__all__ = ["map_on_pool", "pool_available", "shared_pool"]
+
+_ENV = "CTRL_ANALYSIS_POOL"
+_STATE: dict = {"owner": None, "worker": False}  # owner: the pid of the process that opened the pool
+
+
+def pool_available() -> bool:
+    """Whether this process is a driver that may send its calls to a run's shared pool.
+
+    Returns
+    -------
+    bool
+        True in a process started while :func:`shared_pool` is open (a study's driver), False in the
+        pool's owner, in the pool's workers and outside a run.
+    """
+    return bool(os.environ.get(_ENV)) and _STATE["owner"] != os.getpid() and not _STATE["worker"]
+
+
+def _die_with_parent(parent: int) -> None:
+    """Initialiser of local worker processes: die with the parent, leave Ctrl-C to it.
+
+    On Linux ``prctl(PR_SET_PDEATHSIG, SIGKILL)`` has the kernel kill this process when its parent
+    dies (even by ``kill -9``); elsewhere a daemon thread polls the parent's pid. SIGINT is ignored:
+    the parent catches Ctrl-C once, stops the workers and reports.
+    """
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        import ctypes
+
+        libc = ctypes.CDLL(None, use_errno=True)
+        armed = libc.prctl(1, int(signal.SIGKILL), 0, 0, 0) == 0  # 1 = PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        armed = False
+    if os.getppid() != parent:  # the parent died before the signal was armed
+        os._exit(1)
+    if not armed:
+        def watch():
+            while os.getppid() == parent:
+                threading.Event().wait(1.0)
+            os._exit(1)
+
+        threading.Thread(target=watch, daemon=True, name="ctrl-analysis-parent-watch").start()
+
+
+def _stop_workers(ex) -> None:
+    """Cancel what has not started and kill the pool's workers (after an exception or Ctrl-C in the parent)."""
+    procs = list((getattr(ex, "_processes", None) or {}).values())  # shutdown() forgets them
+    for proc in procs:
+        with contextlib.suppress(OSError, AttributeError, ValueError):
+            proc.kill()
+    for proc in procs:
+        with contextlib.suppress(OSError, AttributeError, ValueError, AssertionError):
+            proc.join(5)
+    ex.shutdown(wait=True, cancel_futures=True)
+
+
+def _by_value(fn, arg) -> bytes:
+    """``(fn, arg)`` pickled with cloudpickle, as Dask sends tasks: a lambda, a class defined in a script or a
+    notebook, an exec'd kernel travel by value, so what runs on a cluster also runs in local processes."""
+    import cloudpickle
+
+    return cloudpickle.dumps((fn, arg))
+
+
+def _call_pickled(blob: bytes):
+    """``fn(arg)`` in a worker process, from :func:`_by_value`'s bytes."""
+    import pickle
+
+    fn, arg = pickle.loads(blob)
+    return fn(arg)
+
+
+def _worker_init(parent: int) -> None:
+    """A pool worker: dies with the owner, leaves Ctrl-C to it, and never maps onto the pool itself."""
+    _die_with_parent(parent)
+    _STATE["worker"] = True
+    os.environ.pop(_ENV, None)
+
+
+def _timed_call(blob: bytes):
+    """``fn(arg)`` from cloudpickled bytes, with when it started and ended (``time.time``) and where."""
+    import pickle
+
+    start = time.time()
+    fn, arg = pickle.loads(blob)
+    value = fn(arg)
+    return value, start, time.time(), os.getpid()
+
+
+@contextlib.contextmanager
+def shared_pool(jobs: int, trace: str | None = None):
+    """Open one pool of ``jobs`` worker processes for every driver process started inside the block.
+
+    Parameters
+    ----------
+    jobs : int
+        Worker processes (>= 1).
+    trace : str, optional
+        A file to write every call's timing to when the pool closes (default: ``$CTRL_ANALYSIS_TRACE``).
+
+    Yields
+    ------
+    dict
+        The trace being recorded: ``{"jobs": jobs, "calls": [...]}``, each call a dict of ``study``,
+        ``submitted``, ``start``, ``end`` (``time.time`` seconds) and ``pid``.
+    """
+    import multiprocessing as mp
+    import secrets
+    from concurrent.futures import ProcessPoolExecutor
+    from multiprocessing.connection import Listener
+
+    from ._validate import check_int
+
+    jobs = check_int("jobs", jobs, minimum=1)
+    trace = trace if trace is not None else os.environ.get("CTRL_ANALYSIS_TRACE") or None
+    method = "fork" if "fork" in mp.get_all_start_methods() else "spawn"
+    ex = ProcessPoolExecutor(max_workers=jobs, mp_context=mp.get_context(method), initializer=_worker_init,
+                             initargs=(os.getpid(),))
+    for f in [ex.submit(time.sleep, 0.01) for _ in range(jobs)]:  # the workers start now, before any thread
+        f.result()
+    key = secrets.token_bytes(16)
+    listener = Listener(family="AF_UNIX" if hasattr(os, "fork") else "AF_INET", authkey=key)
+    record = {"jobs": jobs, "calls": []}
+    lock = threading.Lock()
+    stop = threading.Event()
+
+    def serve(conn):
+        with conn:
+            try:
+                study, blobs = conn.recv()
+            except (EOFError, OSError):
+                return
+            submitted = time.time()
+            futures = {ex.submit(_timed_call, b): i for i, b in enumerate(blobs)}
+            try:
+                for fut in _completed(futures):
+                    i = futures[fut]
+                    try:
+                        value, start, end, pid = fut.result()
+                    except BaseException as exc:  # noqa: BLE001 - the driver raises it, as map_chunks does
+                        conn.send(("error", i, _sendable(exc)))
+                        raise
+                    with lock:
+                        record["calls"].append({"study": study, "submitted": submitted, "start": start, "end": end,
+                                                "pid": pid})
+                    conn.send(("ok", i, value))
+            except BaseException:  # noqa: BLE001 - a failed call or a driver gone: its other calls are dropped
+                for fut in futures:
+                    fut.cancel()
+
+    def accept():
+        while not stop.is_set():
+            try:
+                conn = listener.accept()
+            except (OSError, EOFError):
+                if stop.is_set():
+                    return
+                continue
+            threading.Thread(target=serve, args=(conn,), daemon=True, name="ctrl-analysis-pool-call").start()
+
+    acceptor = threading.Thread(target=accept, daemon=True, name="ctrl-analysis-pool")
+    acceptor.start()
+    before = os.environ.get(_ENV)
+    os.environ[_ENV] = json.dumps({"address": listener.address, "key": key.hex()})
+    _STATE["owner"] = os.getpid()  # a forked driver inherits this dict, not the pid
+    try:
+        yield record
+    finally:
+        _STATE["owner"] = None
+        if before is None:
+            os.environ.pop(_ENV, None)
+        else:
+            os.environ[_ENV] = before
+        stop.set()
+        listener.close()
+        _stop_workers(ex)
+        if trace:
+            with open(trace, "w", encoding="utf-8") as fh:
+                json.dump(record, fh)
+
+
+def _completed(futures):
+    from concurrent.futures import as_completed
+
+    return as_completed(futures)
+
+
+def _sendable(exc: BaseException) -> BaseException:
+    """``exc`` if it pickles, else a RuntimeError with its one line (what the driver re-raises)."""
+    import pickle
+
+    try:
+        pickle.dumps(exc)
+    except Exception:  # noqa: BLE001 - an exception that cannot travel is sent as its text
+        return RuntimeError(f"{type(exc).__name__}: {exc}")
+    return exc
+
+
+def map_on_pool(fn, args: list, done_one, study: str = "") -> list:
+    """``[fn(a) for a in args]`` on the run's shared pool, from a driver; results in order.
+
+    Parameters
+    ----------
+    fn : callable
+        A function of one argument (sent with each argument by cloudpickle).
+    args : list
+        One argument per call.
+    done_one : callable
+        ``done_one(i, result)``, called here as each call finishes.
+    study : str
+        The driver's name, for the trace.
+
+    Returns
+    -------
+    list
+
+    Raises
+    ------
+    RuntimeError
+        When the pool's owner is gone (the connection closed before every result came back).
+    """
+    from multiprocessing.connection import Client
+
+    where = json.loads(os.environ[_ENV])
+    address = where["address"]
+    out = [None] * len(args)
+    with Client(tuple(address) if isinstance(address, list) else address, authkey=bytes.fromhex(where["key"])) as c:
+        c.send((study, [_by_value(fn, a) for a in args]))
+        for _ in range(len(args)):
+            try:
+                kind, i, value = c.recv()
+            except (EOFError, OSError) as exc:
+                raise RuntimeError(f"the run's process pool went away ({type(exc).__name__})") from None
+            if kind == "error":
+                raise value
+            out[i] = value
+            done_one(i, value)
+    return out

@@ -1,0 +1,86 @@
+"""One pool for a whole run: drivers' chunks run on the shared workers, in order, with the same values."""
+
+import json
+import os
+
+import numpy as np
+import pytest
+
+from ctrl_analysis import parallel, taskpool
+
+
+def _square(x):
+    return x * x, os.getpid()
+
+
+def _driver(n):
+    """A study's driver: maps its chunks (jobs > 1) and says where they ran."""
+    out = parallel.map_chunks(_square, list(range(n)), jobs=4)
+    return [v for v, _ in out], {pid for _, pid in out}, os.getpid(), taskpool.pool_available()
+
+
+def _nested(x):
+    """A chunk that maps again: in a pool worker it runs its calls in place (no call waits on the pool)."""
+    return sum(v for v, _ in parallel.map_chunks(_square, [x, x + 1], jobs=2))
+
+
+def _nested_driver(_):
+    return parallel.map_chunks(_nested, [1, 2, 3], jobs=2)
+
+
+def _fails(x):
+    if x == 2:
+        raise ValueError("chunk 2 is bad")
+    return x
+
+
+def _failing_driver(_):
+    try:
+        parallel.map_chunks(_fails, [0, 1, 2, 3], jobs=2)
+    except ValueError as exc:
+        return str(exc)
+    return "no error"
+
+
+def test_drivers_send_their_chunks_to_the_one_pool_in_order_and_traced(tmp_path):
+    trace = tmp_path / "trace.json"
+    with taskpool.shared_pool(2, trace=str(trace)) as record:
+        assert not taskpool.pool_available()  # the owner maps as before (its drivers are its own processes)
+        results = parallel.map_chunks(_driver, [5, 7], jobs=2, scheduler=False)
+    for (values, pids, driver, available), n in zip(results, [5, 7], strict=True):
+        assert values == [i * i for i in range(n)]
+        assert available and driver not in pids  # the chunks ran on the pool's workers, not in the driver
+    assert len(record["calls"]) == 12
+    saved = json.loads(trace.read_text())
+    assert saved["jobs"] == 2 and len(saved["calls"]) == 12
+    assert all(c["submitted"] <= c["start"] + 1e-3 and c["start"] <= c["end"] for c in saved["calls"])
+    assert not taskpool.pool_available() and taskpool._ENV not in os.environ
+
+
+def test_a_chunk_that_maps_again_runs_in_place_and_errors_reach_the_driver():
+    with taskpool.shared_pool(2):
+        nested = parallel.map_chunks(_nested_driver, [0, 0], jobs=2, scheduler=False)
+        failed = parallel.map_chunks(_failing_driver, [0, 0], jobs=2, scheduler=False)
+    assert nested == [[1 + 4, 4 + 9, 9 + 16]] * 2
+    assert failed == ["chunk 2 is bad"] * 2
+
+
+def test_shared_pool_refuses_a_bad_job_count():
+    with pytest.raises(ValueError, match="jobs"), taskpool.shared_pool(0):
+        pass
+
+
+def test_values_through_the_pool_are_bit_identical():
+    with taskpool.shared_pool(2):
+        a = parallel.map_chunks(_driver_arrays, [3], jobs=2, scheduler=False)[0]
+    b = [np.random.default_rng(s).standard_normal(1000).cumsum() for s in range(3)]
+    for x, y in zip(a, b, strict=True):
+        np.testing.assert_array_equal(x, y)
+
+
+def _rng_chunk(seed):
+    return np.random.default_rng(seed).standard_normal(1000).cumsum()
+
+
+def _driver_arrays(n):
+    return parallel.map_chunks(_rng_chunk, list(range(n)), jobs=2)
