@@ -129,9 +129,12 @@ def _run_study(task) -> dict:
     from .progress import set_context
 
     name, out, runs, seed, quick, jobs, scheduler, position, verbose = task
+    from .taskpool import driver
+
     set_context(name, position)  # the study's own bars (long simulations) carry its name, on their own line
     try:
-        return _run_study_here(name, Path(out), runs, seed, quick, jobs, scheduler, verbose)
+        with driver():
+            return _run_study_here(name, Path(out), runs, seed, quick, jobs, scheduler, verbose)
     finally:
         set_context()
 
@@ -140,6 +143,7 @@ def _run_study_here(name, out, runs, seed, quick, jobs, scheduler, verbose=True)
     from analysis import load_study
 
     from .parallel import ClusterError, active_cluster
+    from .taskpool import trace_event
 
     record = {"name": name, "error": None, "text": "", "staged": None, "cluster": None,
               "run": {"seed": seed, "runs": runs, "quick": bool(quick)}}
@@ -151,9 +155,10 @@ def _run_study_here(name, out, runs, seed, quick, jobs, scheduler, verbose=True)
     try:
         ctx = StudyContext(out_dir=staged, runs=runs, seed=seed, quick=quick, progress=_progress(name, verbose),
                            jobs=jobs, scheduler=scheduler)
-        t0 = time.perf_counter()
+        t0, started = time.perf_counter(), time.time()
         result = load_study(name).run(ctx, params=None)  # the study's chosen values (analysis/__init__.py)
         result.runtime_s = time.perf_counter() - t0
+        trace_event({"kind": "study", "study": name, "start": started, "end": time.time(), "jobs": jobs})
         # what the command line asked for, beside the study's own settings
         result.settings["cli"] = dict(record["run"])
         write_results_json(result, staged)

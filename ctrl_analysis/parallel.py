@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import math
 import os
+import time
 from collections.abc import Callable, Sequence
 
 import numpy as np
@@ -55,14 +56,16 @@ from .cluster import (  # noqa: F401 - the cluster's public names, from here too
     use_cluster,
 )
 from .noise import _check_seeds
-from .progress import bar
+from .progress import _CONTEXT, bar
 from .taskpool import (
     _STATE,
     _by_value,
-    _call_pickled,
     _stop_workers,
+    _timed,
+    _timed_call,
     map_on_pool,
     pool_available,
+    trace_event,
 )
 from .taskpool import _die_with_parent as _worker_init
 
@@ -192,39 +195,45 @@ def map_chunks(fn: Callable, args: Sequence, *, jobs: int = 1, scheduler=None, d
                     if own:
                         _close(client)
             return out
+        submitted, times = time.time(), [None] * len(args)
+
+        def one(i, timed_value):
+            out[i], times[i] = timed_value[0], timed_value[1:]
+            done_one(i, out[i])
+            pb.update(1)
+
+        where = "here"
         if jobs > 1 and len(args) > 1 and pool_available():  # a study's driver: the run's one pool
-            from .progress import _CONTEXT
-
-            def one(i, value):
-                done_one(i, value)
-                pb.update(1)
-
-            return map_on_pool(fn, args, one, study=_CONTEXT["label"])
-        if jobs == 1 or len(args) <= 1 or _in_pool_worker():
+            where = "pool"
+            map_on_pool(fn, args, one)
+        elif jobs == 1 or len(args) <= 1 or _in_pool_worker():
             for i, a in enumerate(args):
-                out[i] = fn(a)
-                done_one(i, out[i])
-                pb.update(1)
-            return out
-        import multiprocessing as mp
-        from concurrent.futures import ProcessPoolExecutor
-        from concurrent.futures import as_completed as done
-
-        method = "fork" if "fork" in mp.get_all_start_methods() else "spawn"
-        ex = ProcessPoolExecutor(max_workers=min(jobs, len(args)), mp_context=mp.get_context(method),
-                                 initializer=_worker_init, initargs=(os.getpid(),))
-        try:
-            futures = {ex.submit(_call_pickled, _by_value(fn, a)): i for i, a in enumerate(args)}
-            for fut in done(futures):
-                i = futures[fut]
-                out[i] = fut.result()
-                done_one(i, out[i])
-                pb.update(1)
-        except BaseException:  # a failed call or Ctrl-C: nothing more starts, no worker outlives this call
-            _stop_workers(ex)
-            raise
-        ex.shutdown(wait=True)
+                one(i, _timed(fn, a))
+        else:
+            where = "processes"
+            _map_on_processes(fn, args, jobs, one)
+        trace_event({"kind": "map", "study": _CONTEXT["label"], "where": where, "submitted": submitted,
+                     "returned": time.time(), "calls": times})
     return out
+
+
+def _map_on_processes(fn, args: list, jobs: int, one) -> None:
+    """``one(i, (fn(args[i]), start, end))`` for every call, computed in a pool of local processes of this call."""
+    import multiprocessing as mp
+    from concurrent.futures import ProcessPoolExecutor
+    from concurrent.futures import as_completed as done
+
+    method = "fork" if "fork" in mp.get_all_start_methods() else "spawn"
+    ex = ProcessPoolExecutor(max_workers=min(jobs, len(args)), mp_context=mp.get_context(method),
+                             initializer=_worker_init, initargs=(os.getpid(),))
+    try:
+        futures = {ex.submit(_timed_call, _by_value(fn, a)): i for i, a in enumerate(args)}
+        for fut in done(futures):
+            one(futures[fut], fut.result())
+    except BaseException:  # a failed call or Ctrl-C: nothing more starts, no worker outlives this call
+        _stop_workers(ex)
+        raise
+    ex.shutdown(wait=True)
 
 
 def gather(parts: list):

@@ -14,9 +14,10 @@ submits the calls, cloudpickled as for Dask, and sends each result back as it fi
 the pool never sends calls back to the pool (a chunk that maps again runs its calls in place), so no call
 waits for a worker that waits for it.
 
-With ``CTRL_ANALYSIS_TRACE=FILE`` the owner writes every call's study, submission, start and end (seconds,
-one clock for all processes) to ``FILE`` as JSON when the pool closes: what ``benchmarks/scaling.py``
-replays for other numbers of workers.
+With ``CTRL_ANALYSIS_TRACE=DIR`` every process of a run appends what it did to ``DIR/<pid>.jsonl``
+(:func:`trace_event`): each study's start and end, and each ``map_chunks`` call's submission, return and
+its calls' starts and ends (``time.time``, one clock for all processes), wherever they ran. This is what
+``benchmarks/scaling.py`` replays for other numbers of workers.
 """
 
 from __future__ import annotations
@@ -28,10 +29,10 @@ import signal
 import threading
 import time
 
-__all__ = ["map_on_pool", "pool_available", "shared_pool"]
+__all__ = ["driver", "map_on_pool", "pool_available", "shared_pool", "trace_event"]
 
 _ENV = "CTRL_ANALYSIS_POOL"
-_STATE: dict = {"owner": None, "worker": False}  # owner: the pid of the process that opened the pool
+_STATE: dict = {"owner": None, "worker": False, "in_call": False}  # owner: the pid of the process that opened the pool
 
 
 def pool_available() -> bool:
@@ -92,14 +93,6 @@ def _by_value(fn, arg) -> bytes:
     return cloudpickle.dumps((fn, arg))
 
 
-def _call_pickled(blob: bytes):
-    """``fn(arg)`` in a worker process, from :func:`_by_value`'s bytes."""
-    import pickle
-
-    fn, arg = pickle.loads(blob)
-    return fn(arg)
-
-
 def _worker_init(parent: int) -> None:
     """A pool worker: dies with the owner, leaves Ctrl-C to it, and never maps onto the pool itself."""
     _die_with_parent(parent)
@@ -108,31 +101,83 @@ def _worker_init(parent: int) -> None:
 
 
 def _timed_call(blob: bytes):
-    """``fn(arg)`` from cloudpickled bytes, with when it started and ended (``time.time``) and where."""
+    """``fn(arg)`` from cloudpickled bytes, with when it started and ended (``time.time``)."""
     import pickle
 
     start = time.time()
     fn, arg = pickle.loads(blob)
-    value = fn(arg)
-    return value, start, time.time(), os.getpid()
+    value = _timed(fn, arg)[0]
+    return value, start, time.time()
+
+
+def _timed(fn, arg):
+    """``(fn(arg), start, end)``; maps inside the call are part of it, and are not traced on their own.
+
+    Parameters
+    ----------
+    fn : callable
+    arg : object
+
+    Returns
+    -------
+    tuple
+        The value, and ``time.time()`` before and after.
+    """
+    outer = _STATE["in_call"]
+    _STATE["in_call"] = True
+    start = time.time()
+    try:
+        return fn(arg), start, time.time()
+    finally:
+        _STATE["in_call"] = outer
 
 
 @contextlib.contextmanager
-def shared_pool(jobs: int, trace: str | None = None):
+def driver():
+    """The block is a study's driver: its maps are traced, though it runs as a call of the command's own map.
+
+    Yields
+    ------
+    None
+    """
+    outer = _STATE["in_call"]
+    _STATE["in_call"] = False
+    try:
+        yield
+    finally:
+        _STATE["in_call"] = outer
+
+
+def trace_event(event: dict) -> None:
+    """Append ``event`` to this process's trace file, when ``$CTRL_ANALYSIS_TRACE`` names a folder.
+
+    Nothing is written from inside a traced call (its nested maps are part of its duration).
+
+    Parameters
+    ----------
+    event : dict
+        JSON-serialisable, with a ``"kind"`` (``"study"`` or ``"map"``).
+    """
+    folder = os.environ.get("CTRL_ANALYSIS_TRACE")
+    if not folder or _STATE["in_call"]:
+        return
+    os.makedirs(folder, exist_ok=True)
+    with open(os.path.join(folder, f"{os.getpid()}.jsonl"), "a", encoding="utf-8") as fh:
+        fh.write(json.dumps(event) + "\n")
+
+
+@contextlib.contextmanager
+def shared_pool(jobs: int):
     """Open one pool of ``jobs`` worker processes for every driver process started inside the block.
 
     Parameters
     ----------
     jobs : int
         Worker processes (>= 1).
-    trace : str, optional
-        A file to write every call's timing to when the pool closes (default: ``$CTRL_ANALYSIS_TRACE``).
 
     Yields
     ------
-    dict
-        The trace being recorded: ``{"jobs": jobs, "calls": [...]}``, each call a dict of ``study``,
-        ``submitted``, ``start``, ``end`` (``time.time`` seconds) and ``pid``.
+    None
     """
     import multiprocessing as mp
     import secrets
@@ -142,7 +187,6 @@ def shared_pool(jobs: int, trace: str | None = None):
     from ._validate import check_int
 
     jobs = check_int("jobs", jobs, minimum=1)
-    trace = trace if trace is not None else os.environ.get("CTRL_ANALYSIS_TRACE") or None
     method = "fork" if "fork" in mp.get_all_start_methods() else "spawn"
     ex = ProcessPoolExecutor(max_workers=jobs, mp_context=mp.get_context(method), initializer=_worker_init,
                              initargs=(os.getpid(),))
@@ -150,29 +194,23 @@ def shared_pool(jobs: int, trace: str | None = None):
         f.result()
     key = secrets.token_bytes(16)
     listener = Listener(family="AF_UNIX" if hasattr(os, "fork") else "AF_INET", authkey=key)
-    record = {"jobs": jobs, "calls": []}
-    lock = threading.Lock()
     stop = threading.Event()
 
     def serve(conn):
         with conn:
             try:
-                study, blobs = conn.recv()
+                blobs = conn.recv()
             except (EOFError, OSError):
                 return
-            submitted = time.time()
             futures = {ex.submit(_timed_call, b): i for i, b in enumerate(blobs)}
             try:
                 for fut in _completed(futures):
                     i = futures[fut]
                     try:
-                        value, start, end, pid = fut.result()
+                        value = fut.result()
                     except BaseException as exc:  # noqa: BLE001 - the driver raises it, as map_chunks does
                         conn.send(("error", i, _sendable(exc)))
                         raise
-                    with lock:
-                        record["calls"].append({"study": study, "submitted": submitted, "start": start, "end": end,
-                                                "pid": pid})
                     conn.send(("ok", i, value))
             except BaseException:  # noqa: BLE001 - a failed call or a driver gone: its other calls are dropped
                 for fut in futures:
@@ -194,7 +232,7 @@ def shared_pool(jobs: int, trace: str | None = None):
     os.environ[_ENV] = json.dumps({"address": listener.address, "key": key.hex()})
     _STATE["owner"] = os.getpid()  # a forked driver inherits this dict, not the pid
     try:
-        yield record
+        yield
     finally:
         _STATE["owner"] = None
         if before is None:
@@ -204,9 +242,6 @@ def shared_pool(jobs: int, trace: str | None = None):
         stop.set()
         listener.close()
         _stop_workers(ex)
-        if trace:
-            with open(trace, "w", encoding="utf-8") as fh:
-                json.dump(record, fh)
 
 
 def _completed(futures):
@@ -226,7 +261,7 @@ def _sendable(exc: BaseException) -> BaseException:
     return exc
 
 
-def map_on_pool(fn, args: list, done_one, study: str = "") -> list:
+def map_on_pool(fn, args: list, done_one) -> list:
     """``[fn(a) for a in args]`` on the run's shared pool, from a driver; results in order.
 
     Parameters
@@ -236,13 +271,12 @@ def map_on_pool(fn, args: list, done_one, study: str = "") -> list:
     args : list
         One argument per call.
     done_one : callable
-        ``done_one(i, result)``, called here as each call finishes.
-    study : str
-        The driver's name, for the trace.
+        ``done_one(i, (value, start, end))``, called here as each call finishes.
 
     Returns
     -------
     list
+        ``(fn(a), start, end)`` for every ``a``.
 
     Raises
     ------
@@ -255,7 +289,7 @@ def map_on_pool(fn, args: list, done_one, study: str = "") -> list:
     address = where["address"]
     out = [None] * len(args)
     with Client(tuple(address) if isinstance(address, list) else address, authkey=bytes.fromhex(where["key"])) as c:
-        c.send((study, [_by_value(fn, a) for a in args]))
+        c.send([_by_value(fn, a) for a in args])
         for _ in range(len(args)):
             try:
                 kind, i, value = c.recv()

@@ -1003,6 +1003,8 @@ NOT_FUZZED = {
     cluster.ClusterError: "an exception class, raised by map_chunks on a failing cluster (tests/lib/test_parallel.py)",
     cluster.silence_dask_logs: "no arguments",
     taskpool.pool_available: "no arguments",
+    taskpool.driver: "no arguments",
+    taskpool.trace_event: "writes only where $CTRL_ANALYSIS_TRACE points; any JSON-serialisable dict is valid",
     taskpool.shared_pool: "its one argument is check_int's (tested in tests/lib/test_taskpool.py); opens processes",
     taskpool.map_on_pool: "internal half of map_chunks in a run's driver, whose arguments are fuzzed",
     parallel.active_cluster: "no arguments",

@@ -15,7 +15,8 @@ def _square(x):
 
 def _driver(n):
     """A study's driver: maps its chunks (jobs > 1) and says where they ran."""
-    out = parallel.map_chunks(_square, list(range(n)), jobs=4)
+    with taskpool.driver():
+        out = parallel.map_chunks(_square, list(range(n)), jobs=4)
     return [v for v, _ in out], {pid for _, pid in out}, os.getpid(), taskpool.pool_available()
 
 
@@ -42,19 +43,28 @@ def _failing_driver(_):
     return "no error"
 
 
-def test_drivers_send_their_chunks_to_the_one_pool_in_order_and_traced(tmp_path):
-    trace = tmp_path / "trace.json"
-    with taskpool.shared_pool(2, trace=str(trace)) as record:
+def test_drivers_send_their_chunks_to_the_one_pool_in_order_and_traced(tmp_path, monkeypatch):
+    monkeypatch.setenv("CTRL_ANALYSIS_TRACE", str(tmp_path / "trace"))
+    with taskpool.shared_pool(2):
         assert not taskpool.pool_available()  # the owner maps as before (its drivers are its own processes)
         results = parallel.map_chunks(_driver, [5, 7], jobs=2, scheduler=False)
     for (values, pids, driver, available), n in zip(results, [5, 7], strict=True):
         assert values == [i * i for i in range(n)]
         assert available and driver not in pids  # the chunks ran on the pool's workers, not in the driver
-    assert len(record["calls"]) == 12
-    saved = json.loads(trace.read_text())
-    assert saved["jobs"] == 2 and len(saved["calls"]) == 12
-    assert all(c["submitted"] <= c["start"] + 1e-3 and c["start"] <= c["end"] for c in saved["calls"])
+    events = [json.loads(line) for f in sorted((tmp_path / "trace").glob("*.jsonl")) for line in f.open()]
+    # the owner's map of the two drivers ("processes") and each driver's map on the pool; no worker writes
+    assert sorted((e["where"], len(e["calls"])) for e in events) == [("pool", 5), ("pool", 7), ("processes", 2)]
+    for e in events:
+        assert all(e["submitted"] <= s + 1e-3 and s <= t <= e["returned"] + 1e-3 for s, t in e["calls"])
     assert not taskpool.pool_available() and taskpool._ENV not in os.environ
+
+
+def test_calls_inside_a_call_are_part_of_it_in_the_trace(tmp_path, monkeypatch):
+    monkeypatch.setenv("CTRL_ANALYSIS_TRACE", str(tmp_path / "t"))
+    assert parallel.map_chunks(_nested, [1, 2]) == [1 + 4, 4 + 9]
+    (f,) = (tmp_path / "t").glob("*.jsonl")
+    (event,) = [json.loads(line) for line in f.open()]  # one map of two calls; their inner maps are inside them
+    assert event["where"] == "here" and len(event["calls"]) == 2
 
 
 def test_a_chunk_that_maps_again_runs_in_place_and_errors_reach_the_driver():
