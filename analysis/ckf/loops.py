@@ -27,8 +27,8 @@ from ctrl_analysis.engine.loop import Loop, place
 from ctrl_analysis.estimators.kalman import CharacteristicKalmanFilter
 from ctrl_analysis.estimators.lowpass import DiscreteLowPass, LowPassFilter
 from ctrl_analysis.identification import ArxRegressor, RecursiveLeastSquaresBlock
+from ctrl_analysis.noise import draw_noise, gaussian_noise, run_seeds
 from ctrl_analysis.plants import DiscreteLTI
-from ctrl_analysis.simulate import draw_noise, gaussian_noise, run_seeds
 
 __all__ = [
     "BOX_SIGNALS",

@@ -25,8 +25,8 @@ from ctrl_analysis.controllers.pd import PDFeedforward
 from ctrl_analysis.engine.blocks import signal_names
 from ctrl_analysis.engine.loop import Loop, place
 from ctrl_analysis.estimators.lowpass import LowPassFilter
+from ctrl_analysis.noise import draw_noise, uniform_noise
 from ctrl_analysis.parallel import chunk_slices, map_chunks
-from ctrl_analysis.simulate import draw_noise, uniform_noise
 
 from .blocks import ModelledESO, ParameterPath, Plant
 from .chunk_errors import METRIC_ORDER, _accumulator, full_solved

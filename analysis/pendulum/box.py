@@ -14,7 +14,7 @@ import numpy as np
 from ctrl_analysis.engine.blocks import StaticGain
 from ctrl_analysis.engine.loop import Loop, place
 from ctrl_analysis.estimators.kalman import AlphaBetaFilter
-from ctrl_analysis.simulate import draw_noise, gaussian_noise
+from ctrl_analysis.noise import draw_noise, gaussian_noise
 
 from .blocks import BackwardDifference, CartPendulum, _Corrector, _Predictor
 from .loops import CaseRuns, ClosedLoopRun, _fuzzy, _take, sampled_pendulum

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ctrl_analysis.simulate import run_seeds
+from ctrl_analysis.noise import run_seeds
 
 from .box import ab_gains, simulate_points
 from .loops import (

@@ -35,7 +35,7 @@ from ctrl_analysis.estimators.kalman import (
     DiscreteKalmanFilter,
     discrete_steady_state,
 )
-from ctrl_analysis.simulate import draw_noise, gaussian_noise
+from ctrl_analysis.noise import draw_noise, gaussian_noise
 
 from .blocks import BackwardDifference, CartPendulum, split_filter
 

@@ -557,7 +557,7 @@ class SampledBlock(DiscreteBlock):
     """A continuous block integrated over one sample with a fixed step, its input held: a discrete block.
 
     ``update`` advances ``block`` over ``[t, t + dt]`` with ``substeps`` steps of ``method``
-    (:func:`ctrl_analysis.simulate.rk4_step` or :func:`~ctrl_analysis.simulate.euler_step`, the
+    (:func:`ctrl_analysis.engine.integrators.rk4_step` or :func:`~ctrl_analysis.engine.integrators.euler_step`, the
     engine's own integrators), so ``SampledBlock(sys, dt).nlsys(dt)`` runs in python-control exactly
     as the engine runs ``sys``. Outputs are the continuous block's outputs at the sample instant.
 
@@ -568,7 +568,7 @@ class SampledBlock(DiscreteBlock):
         Sampling period (> 0).
     method : {"rk4", "euler"}
     substeps : int
-        Integration steps per sample (1 to :data:`~ctrl_analysis.simulate.MAX_SUBSTEPS`).
+        Integration steps per sample (1 to :data:`~ctrl_analysis.engine.integrators.MAX_SUBSTEPS`).
     """
 
     def __init__(self, block: ContinuousBlock, dt: float, method: str = "rk4", substeps: int = 1):

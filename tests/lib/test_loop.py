@@ -14,7 +14,7 @@ from ctrl_analysis.engine.blocks import (
 from ctrl_analysis.engine.loop import Loop, place
 from ctrl_analysis.estimators.differential import DifferentialEstimator
 from ctrl_analysis.estimators.kalman import AlphaBetaFilter, kalata_gains
-from ctrl_analysis.simulate import draw_noise, gaussian_noise, run_seeds
+from ctrl_analysis.noise import draw_noise, gaussian_noise, run_seeds
 
 
 class Oscillator(ContinuousBlock):

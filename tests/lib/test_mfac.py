@@ -17,7 +17,7 @@ from ctrl_analysis.engine.blocks import DiscreteBlock, StaticBlock
 from ctrl_analysis.engine.loop import Loop, place
 from ctrl_analysis.estimators.kalman import ImprovedKalmanFilter
 from ctrl_analysis.estimators.tracking import TrackingDifferentiator
-from ctrl_analysis.simulate import draw_noise, gaussian_noise, run_seeds
+from ctrl_analysis.noise import draw_noise, gaussian_noise, run_seeds
 
 
 class StaticGainPlant(DiscreteBlock):

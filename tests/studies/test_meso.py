@@ -24,10 +24,10 @@ from analysis.meso.paper import (
     TABLE_DECIMALS,
 )
 from ctrl_analysis.identification import batch_least_squares
+from ctrl_analysis.noise import run_seeds
 from ctrl_analysis.reporting.report import StudyContext, write_results_json
 from ctrl_analysis.reporting.study import missing_plausible
 from ctrl_analysis.reporting.verdicts import digits_tolerance
-from ctrl_analysis.simulate import run_seeds
 
 
 def test_equivalent_theta_is_the_closed_loop_projection():

@@ -13,9 +13,9 @@ from analysis._skeleton import INFO, run
 from analysis._skeleton.loops import build_loop, simulate
 from analysis._skeleton.paper import EXAMPLE, QUICK
 from ctrl_analysis.engine.blocks import StaticBlock, StaticGain
+from ctrl_analysis.noise import run_seeds
 from ctrl_analysis.reporting.report import StudyContext, write_results_json
 from ctrl_analysis.reporting.study import missing_plausible
-from ctrl_analysis.simulate import run_seeds
 
 SMALL = dataclasses.replace(QUICK, t_end=5.5)
 
