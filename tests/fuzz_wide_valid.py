@@ -68,7 +68,7 @@ RULES = [
                           "ArenaSettings.rounds"]),
     # blocks and loops
     ("a static block without inputs is a source; its names are free, and fn's widths are checked when it runs",
-     "empty unknown longer", ["StaticBlock.inputs", "StaticBlock.outputs"]),
+     "empty unknown longer", ["FunctionBlock.inputs", "FunctionBlock.outputs"]),
     (NAMES, "unknown", ["StaticGain.inputs", "StaticGain.outputs", "place.inputs", "place.outputs",
                         "mfac_controller.measured", "mfac_controller.reference", "mfac_controller.control"]),
     (MATRIX, "negative", ["StaticGain.D"]),

@@ -50,6 +50,7 @@ from ctrl_analysis.controllers import differential_feedback as hodf
 from ctrl_analysis.controllers import fuzzy, golden_section, mfac, pd, pid
 from ctrl_analysis.engine import (
     blocks,
+    function_block,
     integrators,
     ivp,
     memory,
@@ -315,7 +316,7 @@ def build_cases(tmp):
         ("repeated_pole_coefficients", polynomials.repeated_pole_coefficients, dict(m=3, omega=2.0),
          dict(m=INT + [-1], omega=REAL)),
         # blocks and loops
-        ("StaticBlock", blocks.StaticBlock, dict(fn=lambda t, u: u, inputs=("a",), outputs=("b",)),
+        ("FunctionBlock", function_block.FunctionBlock, dict(fn=lambda t, u: u, inputs=("a",), outputs=("b",)),
          dict(fn=CALLABLE, inputs=[None, 3, ["a", 3]], outputs=[None, 3, [1.5]])),
         ("StaticGain", blocks.StaticGain, dict(D=[[1.0, -1.0]], inputs=("r", "y"), outputs=("e",)),
          dict(D=ARR + [[1.0, 2.0], [[1.0]], np.ones((2, 2, 2)), [[NAN, 1.0]]], inputs=[None, 3, ["a", 3]],
@@ -879,6 +880,8 @@ NOT_FUZZED = {
     sensitivity_module.Exploration: "the record explore() returns (explore and apply are fuzzed)",
     blocks.Block: "abstract base class without constructor arguments",
     blocks.ContinuousBlock: "abstract base class without constructor arguments",
+    blocks.StaticBlock: "protocol without constructor arguments; given some, a TypeError naming FunctionBlock "
+                        "(test_function_block.py)",
     blocks.DiscreteBlock: "abstract base class without constructor arguments (run/nlsys are fuzzed above)",
     loop_mod.Placed: "record built by place(), which is fuzzed",
     engine_kernels.KernelBlock: "mixin without constructor arguments (the blocks using it are fuzzed)",

@@ -164,7 +164,8 @@ def test_loop_equals_python_control_interconnect():
     """The no-filter loop with the plant as a SampledBlock runs the same in Loop and in control.interconnect."""
     import control as ct
 
-    from ctrl_analysis.engine.blocks import SampledBlock, StaticBlock
+    from ctrl_analysis.engine.blocks import SampledBlock
+    from ctrl_analysis.engine.function_block import FunctionBlock
     from ctrl_analysis.engine.loop import Loop, place
 
     p = dataclasses.replace(L, t_end=0.25, n_lookup=31)
@@ -172,8 +173,8 @@ def test_loop_equals_python_control_interconnect():
     rng = np.random.default_rng(0)
     w, v = rng.normal(scale=p.sigma_w, size=N), rng.normal(scale=p.sigma_v, size=N)
     blocks = [place(SampledBlock(CartPendulum(V.a21, p.b2), p.T, substeps=p.substeps), "plant"),
-              place(StaticBlock(lambda t, u: u[:, :1] + u[:, 1:], ("phi", "v"), ("y",)), "sensor"),
-              place(StaticBlock(lambda t, u: u[:, :1] - u[:, 1:], ("r", "y"), ("e",)), "error"),
+              place(FunctionBlock(lambda t, u: u[:, :1] + u[:, 1:], ("phi", "v"), ("y",)), "sensor"),
+              place(FunctionBlock(lambda t, u: u[:, :1] - u[:, 1:], ("r", "y"), ("e",)), "error"),
               place(BackwardDifference(p.T), "diff"), place(loops.fuzzy_controller(p), "fuzzy")]
     loop = Loop(blocks, p.T, outputs=["phi", "u"])
     res = loop.simulate(N, inputs={"r": p.step, "w": w, "v": v})
