@@ -89,7 +89,8 @@ def meso_situation1(seed: int, dt: float, n: int) -> tuple:
     tuple
         ``x1, x2, x2'`` (arrays, shape (n,)) and ``L = max |x2'|`` over every step of the record.
     """
-    from .meso.loops import Plant, Row, simulate_situation
+    from .meso.blocks import Plant
+    from .meso.loops import Row, simulate_situation
     from .meso.paper import PAPER, SITUATIONS
 
     sub, h = _step(dt, PAPER.h)

@@ -35,7 +35,7 @@ from bench_example1 import (
     float_loop,
 )
 
-from ctrl_analysis.simulate import draw_noise, run_seeds, uniform_noise
+from ctrl_analysis.noise import draw_noise, run_seeds, uniform_noise
 
 NAME = "Example 1, user block (engine)"
 KEEP = ["x[0]", "x[1]", "xhat[0]", "xhat[1]", "eso_xhat[0]", "eso_xhat[1]"]

@@ -14,7 +14,7 @@ integrated with classical RK4. Compared, on the same equations, the same noise a
   gains) and the plant (19) written here as a small kernel-first block (a
   :class:`~ctrl_analysis.engine.kernels.KernelBlock`, as the docs describe), Monte Carlo runs on the batch axis;
 * ``python-control, discrete``: the loop's ``control.interconnect`` advanced as a discrete-time
-  ``control.nlsys`` whose update is one RK4 step (:func:`ctrl_analysis.simulate.rk4_step`), run by
+  ``control.nlsys`` whose update is one RK4 step (:func:`ctrl_analysis.engine.integrators.rk4_step`), run by
   ``input_output_response``; one run;
 * ``python-control, adaptive``: ``input_output_response`` on the continuous interconnect (RK45),
   the noise as a zero-order hold, with the loosest ``rtol`` (from 1e-3 down) whose error against a
@@ -34,11 +34,12 @@ import numpy as np
 from _common import Row, median_time, round_robin
 
 from ctrl_analysis.engine.blocks import ContinuousBlock, signal_names
+from ctrl_analysis.engine.integrators import rk4_step
 from ctrl_analysis.engine.kernels import KernelBlock, Kernels, Layout
 from ctrl_analysis.engine.loop import Loop, place
 from ctrl_analysis.estimators.differential import DifferentialEstimator
 from ctrl_analysis.estimators.eso import ExtendedStateObserver
-from ctrl_analysis.simulate import draw_noise, rk4_step, run_seeds, uniform_noise
+from ctrl_analysis.noise import draw_noise, run_seeds, uniform_noise
 
 NAME = "Example 1 (10 states, RK4)"
 H = 1e-3

@@ -25,7 +25,7 @@ from analysis.ikf_mfac.loops import noise_draws, run_scheme
 from analysis.ikf_mfac.paper import EX1, EX2, SCHEMES
 from analysis.ikf_mfac.plants import reference
 from ctrl_analysis.metrics import rmse
-from ctrl_analysis.simulate import run_seeds
+from ctrl_analysis.noise import run_seeds
 
 
 def _sign(a: float) -> float:

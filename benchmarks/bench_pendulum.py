@@ -37,7 +37,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from analysis.pendulum import loops, paper
-from ctrl_analysis.simulate import draw_noise, gaussian_noise
+from ctrl_analysis.noise import draw_noise, gaussian_noise
 
 
 def best_of(fn, repeat):

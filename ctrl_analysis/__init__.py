@@ -18,6 +18,7 @@ __version__ = "0.1.0"
 _EXPORTS = {
     **dict.fromkeys(("Block", "ContinuousBlock", "DiscreteBlock", "SampledBlock", "StaticBlock", "StaticGain",
                      "UnitDelay", "signal_names"), ".engine.blocks"),
+    "FunctionBlock": ".engine.function_block",
     **dict.fromkeys(("Loop", "LoopResponse", "place"), ".engine.loop"),
     **dict.fromkeys(("draw_noise", "gaussian_noise", "run_seeds", "uniform_noise"), ".noise"),
 }

@@ -3,9 +3,10 @@
 * :func:`arx_update` / :func:`arx_output`: the tapped delay lines of
   :class:`~ctrl_analysis.identification.ArxRegressor` (a kernel-first block, parameters :data:`ARX`),
   written with scalar indexing only, so they also run on a batch's columns.
-* :func:`rls_update` / :func:`rls_output` (:func:`rls_hold_output` without feedthrough): the compiled twins of
-  :class:`~ctrl_analysis.identification.RecursiveLeastSquaresBlock` (a kernel-first block; the projection
-  and the trace cap branch per value, so its batched methods call them run by run).
+* :func:`rls_update` / :func:`rls_output` (:func:`rls_hold_output` without feedthrough): the equations of
+  :class:`~ctrl_analysis.identification.RecursiveLeastSquaresBlock` (a kernel-first block: the compiled
+  engine and its batched methods run these kernels; the projection and the trace cap branch per value, so
+  the batched methods call them run by run).
 
 Parameters ``p`` of the RLS kernels: :func:`rls_layout` (``n``, ``forgetting`` λ, ``max_trace`` (0: none),
 ``projected`` (0/1, informative: the kernels clip to the bounds always, and infinite bounds make the

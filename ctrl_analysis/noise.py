@@ -78,7 +78,7 @@ def _spawned_states(base_seed: int, runs: int) -> np.ndarray:
     (the same for every child, done once in Python integers) and then the word ``i``, and its first
     state word hashes pool word 0. The hash constant evolves independently of the data, so the per-child
     work is a handful of uint32 operations on an array of ``i``: 10^7 seeds in a second instead of
-    minutes and gigabytes of SeedSequence objects (``tests/lib/test_simulate.py`` checks equality with
+    minutes and gigabytes of SeedSequence objects (``tests/lib/test_noise.py`` checks equality with
     numpy's own SeedSequence).
     """
     words = []

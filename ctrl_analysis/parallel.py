@@ -1,7 +1,7 @@
 """Every core and beyond one machine: chunks of a batch and independent studies in parallel processes or on Dask.
 
 A Monte Carlo batch is a list of seeds; each run depends only on its own seed (the noise of run
-``b`` is drawn from ``default_rng(seeds[b])``, see :func:`ctrl_analysis.simulate.draw_noise`) and
+``b`` is drawn from ``default_rng(seeds[b])``, see :func:`ctrl_analysis.noise.draw_noise`) and
 the engine steps runs independently, so splitting the seeds into chunks, simulating the chunks
 anywhere and concatenating what each chunk returns gives, bit for bit, what one process gives.
 
@@ -271,7 +271,7 @@ def monte_carlo(fn: Callable, seeds: Sequence, *, jobs: int = 1, scheduler=None,
     fn : callable
         Module-level ``fn(seeds) -> array, or dict/tuple of arrays`` with one row per seed.
     seeds : sequence of int
-        Per-run seeds, non-negative integers (e.g. :func:`ctrl_analysis.simulate.run_seeds`).
+        Per-run seeds, non-negative integers (e.g. :func:`ctrl_analysis.noise.run_seeds`).
     jobs, scheduler, desc
         As in :func:`map_chunks`.
     chunk_size : int, optional

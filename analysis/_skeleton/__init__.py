@@ -8,10 +8,10 @@ plausible box those ranges span, two figures. See CONTRIBUTING.md, "Add a study"
 
 from __future__ import annotations
 
+from ctrl_analysis.noise import run_seeds
 from ctrl_analysis.reporting import sensitivity
 from ctrl_analysis.reporting.report import StudyContext, StudyInfo, StudyResult
 from ctrl_analysis.reporting.study import record_parameters, study_params
-from ctrl_analysis.simulate import run_seeds
 
 from . import figures, loops, quantities
 from .paper import EXAMPLE, QUICK

@@ -19,7 +19,7 @@ import numpy as np
 from ctrl_analysis.engine.blocks import StaticGain
 from ctrl_analysis.engine.loop import Loop, LoopResponse, place
 from ctrl_analysis.estimators.lowpass import LowPassFilter
-from ctrl_analysis.simulate import draw_noise, gaussian_noise
+from ctrl_analysis.noise import draw_noise, gaussian_noise
 
 from .paper import Example
 

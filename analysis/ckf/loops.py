@@ -19,7 +19,7 @@ import functools
 
 import numpy as np
 
-from ctrl_analysis._validate import check_finite
+from ctrl_analysis._validate import check_finite, check_names
 from ctrl_analysis.controllers.golden_section import GoldenSectionController
 from ctrl_analysis.engine.blocks import DiscreteBlock, StaticBlock, StaticGain
 from ctrl_analysis.engine.kernels import KernelBlock, Kernels, Layout
@@ -27,8 +27,8 @@ from ctrl_analysis.engine.loop import Loop, place
 from ctrl_analysis.estimators.kalman import CharacteristicKalmanFilter
 from ctrl_analysis.estimators.lowpass import DiscreteLowPass, LowPassFilter
 from ctrl_analysis.identification import ArxRegressor, RecursiveLeastSquaresBlock
+from ctrl_analysis.noise import draw_noise, gaussian_noise, run_seeds
 from ctrl_analysis.plants import DiscreteLTI
-from ctrl_analysis.simulate import draw_noise, gaussian_noise, run_seeds
 
 __all__ = [
     "BOX_SIGNALS",
@@ -134,14 +134,11 @@ class FeedbackSwitch(KernelBlock, StaticBlock):
     kernels = Kernels(output=gated_gain_output, columns=False)
 
     def __init__(self, weights, t_on, inputs, outputs):
-        super().__init__(self._select, inputs, outputs)
+        self.inputs, self.outputs = check_names("inputs", inputs), check_names("outputs", outputs)
         if len(self.inputs) != 3 or len(self.outputs) != 1:
             raise ValueError(f"FeedbackSwitch has 3 inputs and 1 output, got {self.inputs} and {self.outputs}")
         self.t_on = check_finite("t_on", t_on, scalar=True)
         self.kernel_params = SWITCH.pack(t_on=self.t_on, weights=check_finite("weights", weights))
-
-    def _select(self, t, u):  # StaticBlock's fn (python-control): the kernel on the batch
-        return self.output(t, np.zeros((u.shape[0], 0)), u)
 
 
 #: The kernel parameters of :class:`RunStats`: the window edges, the reference and the weights of the filters.

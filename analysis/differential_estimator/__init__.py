@@ -13,10 +13,10 @@ from dataclasses import replace
 import numpy as np
 
 from ctrl_analysis.estimators.differential import DifferentialEstimator
+from ctrl_analysis.noise import run_seeds
 from ctrl_analysis.reporting import sensitivity
 from ctrl_analysis.reporting.report import StudyContext, StudyInfo, StudyResult
 from ctrl_analysis.reporting.study import record_parameters, study_params
-from ctrl_analysis.simulate import run_seeds
 
 from . import claims, example1, example2, figures, linear_checks
 from .paper import EX1, EX2, LINEAR, READINGS

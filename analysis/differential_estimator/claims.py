@@ -15,8 +15,8 @@ from dataclasses import replace
 
 import numpy as np
 
+from ctrl_analysis.noise import run_seeds
 from ctrl_analysis.reporting.report import StudyResult
-from ctrl_analysis.simulate import run_seeds
 
 from . import example1, example2, linear_checks
 from .paper import CLAIMS, READINGS, Example1, Example2, Linear, Readings

@@ -18,8 +18,8 @@ from scipy.optimize import brentq
 from ctrl_analysis.estimators.differential import DifferentialEstimator
 from ctrl_analysis.estimators.eso import ExtendedStateObserver
 from ctrl_analysis.metrics import mean_abs_error, mean_std
+from ctrl_analysis.noise import draw_noise, uniform_noise
 from ctrl_analysis.reporting.report import StudyResult
-from ctrl_analysis.simulate import draw_noise, uniform_noise
 
 from . import loops
 from .paper import Example1

@@ -14,8 +14,8 @@ import numpy as np
 
 from ctrl_analysis.estimators.differential import DifferentialEstimator
 from ctrl_analysis.metrics import mean_abs_error, rmse
+from ctrl_analysis.noise import draw_noise, uniform_noise
 from ctrl_analysis.reporting.report import StudyResult
-from ctrl_analysis.simulate import draw_noise, uniform_noise
 
 from . import loops
 from .example1 import quantity_ms

@@ -11,10 +11,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from ctrl_analysis.noise import run_seeds
 from ctrl_analysis.reporting import sensitivity
 from ctrl_analysis.reporting.report import StudyContext, StudyInfo, StudyResult
 from ctrl_analysis.reporting.study import record_parameters, study_params
-from ctrl_analysis.simulate import run_seeds
 
 from . import figures as F
 from .claims import judge_claims, record_fig2, record_noise_margin, record_table1

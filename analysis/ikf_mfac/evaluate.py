@@ -19,8 +19,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ctrl_analysis.noise import draw_noise, gaussian_noise
 from ctrl_analysis.reporting.report import StudyInfo, StudyResult
-from ctrl_analysis.simulate import draw_noise, gaussian_noise
 
 from .claims import (
     fig2_measures,

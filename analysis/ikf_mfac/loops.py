@@ -17,7 +17,7 @@ from ctrl_analysis.engine.blocks import StaticGain
 from ctrl_analysis.engine.loop import Loop, place
 from ctrl_analysis.estimators.kalman import ImprovedKalmanFilter
 from ctrl_analysis.estimators.tracking import TrackingDifferentiator
-from ctrl_analysis.simulate import draw_noise, gaussian_noise
+from ctrl_analysis.noise import draw_noise, gaussian_noise
 
 from .paper import Example
 from .plants import SwitchedPlant, plant_start_state, reference, reference_next

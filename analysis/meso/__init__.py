@@ -14,10 +14,10 @@ from __future__ import annotations
 import warnings
 from dataclasses import asdict
 
+from ctrl_analysis.noise import run_seeds
 from ctrl_analysis.reporting import sensitivity
 from ctrl_analysis.reporting.report import StudyContext, StudyInfo, StudyResult
 from ctrl_analysis.reporting.study import record_parameters, study_params
-from ctrl_analysis.simulate import run_seeds
 
 from . import claims, figures, findings, linear, quantities
 from .loops import pick, simulate_situation, situation_rows

@@ -11,8 +11,9 @@ import numpy as np
 
 from ctrl_analysis.reporting.report import new_figure
 
+from .chunk_errors import x3_true
 from .identification import equivalent_theta
-from .loops import SituationRun, x3_true
+from .loops import SituationRun
 from .paper import PAPER
 
 __all__ = ["plot_eps_scaling", "plot_error_bode", "plot_identifiability", "plot_situation", "plot_theta"]

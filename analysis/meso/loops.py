@@ -12,46 +12,35 @@ Every block has a compiled kernel, so :meth:`Loop.simulate <ctrl_analysis.engine
 runs the whole loop as one numba function; ``CTRL_ANALYSIS_ENGINE=numpy`` gives the same results bit
 for bit. The blocks are built for one configuration; what differs per run (the plant gain b, the
 observer's ε, the W(s) bypass flag) is given to the simulation (:func:`run_params`), and the
-identification's variant and gate per run to its batch-end solve.
+identification's variant and gate per run to its batch-end solve. The blocks are in :mod:`.blocks`, what each
+chunk adds to the tables in :mod:`.chunk_errors`.
 """
 
-from __future__ import annotations
 
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from ctrl_analysis._validate import check_bool, check_finite, check_positive
 from ctrl_analysis.controllers.pd import PDFeedforward
-from ctrl_analysis.engine.blocks import ContinuousBlock, DiscreteBlock, signal_names
-from ctrl_analysis.engine.codegen import kernel_of
-from ctrl_analysis.engine.kernels import KernelBlock, Kernels, Layout, copy_output
+from ctrl_analysis.engine.blocks import signal_names
 from ctrl_analysis.engine.loop import Loop, place
-from ctrl_analysis.estimators.eso import ExtendedStateObserver, eso_rhs
 from ctrl_analysis.estimators.lowpass import LowPassFilter
+from ctrl_analysis.noise import draw_noise, uniform_noise
 from ctrl_analysis.parallel import chunk_slices, map_chunks
-from ctrl_analysis.simulate import draw_noise, uniform_noise
 
+from .blocks import ModelledESO, ParameterPath, Plant
+from .chunk_errors import METRIC_ORDER, _accumulator, full_solved
 from .identification import BatchIdentification, exact_report
 from .paper import GATE_RERUNS, PAPER, Paper, Situation
 
 __all__ = [
-    "ModelledESO",
-    "ParameterPath",
-    "Plant",
     "Row",
     "SituationRun",
     "build_loop",
-    "full_solved",
-    "meso_rhs",
-    "path_output",
     "pick",
-    "plant_output",
-    "plant_rhs",
     "run_params",
     "simulate_situation",
     "situation_rows",
-    "x3_true",
 ]
 
 
@@ -83,191 +72,6 @@ class Row:
                          f"/x0={self.x0}" if self.x0 != PAPER.x0 else "",
                          f"/xhat0={self.xhat0}" if self.xhat0 != PAPER.x_hat0 else ""])
         return f"{self.observer}{v}/" + ("no-noise" if self.seed is None else f"seed{self.seed}") + extra
-
-
-#: Plant (27)'s kernel parameters.
-PLANT = Layout("theta1", "theta2", "b")
-AT_PLANT = PLANT.at
-
-
-def plant_rhs(t, x, u, p, dx):
-    """(27)/(31)/(32) of one run (or a batch's columns): ``x1' = x2``, ``x2' = θ1 x1 + θ2 x2 + θ4 + b u``.
-
-    Parameters
-    ----------
-    t : float
-        Time (unused).
-    x : ndarray
-        ``[x1, x2]``.
-    u : ndarray
-        ``[u, θ4, v]``.
-    p : ndarray
-        :data:`PLANT`: ``θ1, θ2, b``.
-    dx : ndarray
-        The derivative, written in place.
-    """
-    dx[0] = x[1]
-    dx[1] = p[AT_PLANT.theta1] * x[0] + p[AT_PLANT.theta2] * x[1] + u[1] + p[AT_PLANT.b] * u[0]
-
-
-def plant_output(t, x, u, p, y):
-    """Outputs ``[x1, x2, y]`` with (27) ``y = x1 + 0.002 n0`` (the noise ``v`` is an input).
-
-    Parameters
-    ----------
-    t, x, u, p
-        As :func:`plant_rhs`.
-    y : ndarray
-        The outputs, written in place.
-    """
-    y[0] = x[0]
-    y[1] = x[1]
-    y[2] = x[0] + u[2]
-
-
-class Plant(KernelBlock, ContinuousBlock):
-    """Plant (27) with the disturbance (31)/(32): ``x1' = x2``, ``x2' = θ1 x1 + θ2 x2 + θ4 + b u``, ``y = x1 + v``.
-
-    Kernels :func:`plant_rhs` / :func:`plant_output` (the batched methods are derived from them).
-
-    Parameters
-    ----------
-    paper : Paper
-        ``θ1``, ``θ2`` are read from it.
-    b : float
-        Input gain of the simulated plant (per run through ``Loop.simulate(params={"plant": {"b": ...}})``).
-
-    Block signals: inputs ``u``, ``level`` (θ4, held), ``v`` (measurement noise, held); outputs
-    ``x1``, ``x2``, ``y``; states ``x1``, ``x2``.
-    """
-
-    inputs = ("u", "level", "v")
-    outputs = ("x[0]", "x[1]", "y")
-    states = ("x[0]", "x[1]")
-    feedthrough = True
-    kernels = Kernels(output=plant_output, rhs=plant_rhs)
-
-    def __init__(self, paper: Paper, b: float):
-        self.theta1, self.theta2 = paper.theta1, paper.theta2
-        self.b = check_finite("b", b, scalar=True)
-        self.kernel_params = PLANT.pack(theta1=self.theta1, theta2=self.theta2, b=self.b)
-
-
-def _eso_vector(paper: Paper, epsilon: float) -> np.ndarray:
-    """The parameter vector of :func:`~ctrl_analysis.engine.codegen.eso_rhs` for the linear ESO (29) at ε, its b0 slot 0."""
-    return kernel_of(ExtendedStateObserver.from_epsilon(paper.n, epsilon, paper.beta, b0=0.0)).params
-
-
-#: (29)'s kernel parameters: ``eso_rhs``'s vector (its b0 slot 0, see :func:`meso_rhs`), then b0.
-OBSERVER = Layout(("eso", _eso_vector(PAPER, PAPER.epsilon).size), "b0")
-AT_OBSERVER = OBSERVER.at
-
-
-def meso_rhs(t, x, u, p, dx):
-    """(29) of one run: the ESO of :func:`ctrl_analysis.engine.codegen.eso_rhs` plus ``b0 u + XᵀΘ`` in row n.
-
-    ``eso_rhs`` is called with ``b0 = 0`` in its parameters (adding ``0 u`` is exact), and the drive
-    ``b0 u + XᵀΘ`` is added afterwards.
-
-    Parameters
-    ----------
-    t : float
-        Time (unused).
-    x : ndarray
-        ``x̂1..x̂3``.
-    u : ndarray
-        ``[y, u, θ1, θ2, θ3, θ4]``.
-    p : ndarray
-        :data:`OBSERVER`: ``eso_rhs``'s parameters (first, as it reads them), then ``b0``.
-    dx : ndarray
-        The derivative, written in place.
-    """
-    eso_rhs(t, x, u, p, dx)
-    m = x.shape[0]
-    # (29) XᵀΘ with X = [x̂1, x̂2, u, 1]
-    f = u[2] * x[0] + u[3] * x[1] + u[4] * u[1] + u[5]
-    dx[m - 2] = dx[m - 2] + (p[AT_OBSERVER.b0] * u[1] + f)
-
-
-class ModelledESO(KernelBlock, ContinuousBlock):
-    """The linear (M)ESO (29) with the identified model XᵀΘ as the known part, Θ an input signal.
-
-    The observer of :class:`~ctrl_analysis.estimators.eso.ExtendedStateObserver` (its kernel
-    :func:`~ctrl_analysis.engine.codegen.eso_rhs`, gains ``L_i = β_i / ε^i``) with ``b0 u + XᵀΘ`` in the
-    n-th equation (:func:`meso_rhs`); Θ = 0 gives the conventional ESO (6). ``eso_rhs`` branches on
-    its parameters, so the batched methods call the kernel run by run.
-
-    Parameters
-    ----------
-    paper : Paper
-        ``n`` and ``β`` are read from it.
-    b0 : float
-        Nominal input gain.
-    epsilon : float
-        High-gain parameter ε (> 0; per run through ``Loop.simulate(params={"observer": {"epsilon": ...}})``).
-
-    Block signals: inputs ``y``, ``u``, ``theta[0..3]``; states and outputs ``xhat[0..2]``.
-    """
-
-    inputs = ("y", "u") + signal_names("theta", 4)
-    outputs = states = ("xhat[0]", "xhat[1]", "xhat[2]")
-    kernels = Kernels(rhs=meso_rhs, columns=False)
-
-    def __init__(self, paper: Paper, b0: float, epsilon: float):
-        self.b0 = check_finite("b0", b0, scalar=True)
-        self.epsilon = check_positive("epsilon", epsilon, scalar=True)
-        self.kernel_params = OBSERVER.pack(eso=_eso_vector(paper, self.epsilon), b0=self.b0)
-
-
-#: The W(s) bypass flag of :class:`ParameterPath`.
-PATH = Layout("bypass")
-AT_PATH = PATH.at
-
-
-def path_output(t, x, u, p, y):
-    """Θ_used of one run: the LSM result ``c`` if bypassed, else its W(s)-smoothed ``w``.
-
-    Parameters
-    ----------
-    t, x : float, ndarray
-        Time and (empty) state, unused.
-    u : ndarray
-        ``[c0..c3, w0..w3]``.
-    p : ndarray
-        :data:`PATH`: ``bypass`` (1 or 0).
-    y : ndarray
-        Θ_used, written in place.
-    """
-    off = 0 if p[AT_PATH.bypass] != 0.0 else 4
-    for i in range(4):
-        y[i] = u[off + i]
-
-
-class ParameterPath(KernelBlock, DiscreteBlock):
-    """Θ_used = W(s)-smoothed LSM result, or the raw LSM result with ``bypass`` (a discrete block without state).
-
-    Discrete (its inputs change only at the samples), so the compiled engine evaluates it once per
-    sample, not at every RK4 stage; kernel :func:`path_output` (a branch on the flag: the batched
-    methods call it run by run).
-
-    Parameters
-    ----------
-    bypass : bool
-        The observer and the controller receive the LSM result without W(s) (the literal rule
-        without W(s), a claim check); per run through ``Loop.simulate(params={"path": {"bypass": ...}})``.
-
-    Block signals: inputs ``c[0..3]`` (LSM result), ``w[0..3]`` (after W(s)); outputs ``theta[0..3]``.
-    """
-
-    inputs = signal_names("c", 4) + signal_names("w", 4)
-    outputs = signal_names("theta", 4)
-    states = ()
-    feedthrough = True
-    kernels = Kernels(output=path_output, update=copy_output, columns=False)
-
-    def __init__(self, bypass: bool = False):
-        self.bypass = check_bool("bypass", bypass)
-        self.kernel_params = PATH.pack(bypass=float(self.bypass))
 
 
 def build_loop(sit: Situation, paper: Paper = PAPER) -> Loop:
@@ -337,122 +141,6 @@ class SituationRun:
     diverged_step: np.ndarray = None
     b0: float = 0.0
     full_solved: np.ndarray = None      # (B,) batches in which situation 2's full regression (16) was solved
-
-
-def full_solved(rows, regression: str, log10_cond, rank) -> np.ndarray:
-    """Batches in which each run solved the full regression (16)/(10) (0 everywhere for the reduced (22)).
-
-    The literal and direct rules solve it every batch; the well-posed rule only where it passes the gate
-    (numerically full rank and column-scaled condition number <= the run's threshold, Theorem 1).
-    """
-    out = np.zeros(len(rows), dtype=int)
-    if regression != "full":
-        return out
-    for b, r in enumerate(rows):
-        lc, rk = log10_cond[:, b], rank[:, b]
-        ok = np.isfinite(lc)
-        if r.variant == "wellposed":
-            out[b] = int(np.sum(ok & (rk == 4) & (10.0 ** np.where(ok, lc, 0.0) <= r.threshold)))
-        elif r.variant in ("literal", "direct"):
-            out[b] = int(np.sum(ok))
-    return out
-
-
-def x3_true(sig, rows, paper, b0):
-    """True extended state at the samples: x3 = x2' − b0 u − XᵀΘ_used (ESO: Θ_used = 0).
-
-    Parameters
-    ----------
-    sig : dict of str -> ndarray, shape (n, B)
-        Signals ``x[0], x[1], u, level, xhat[0], xhat[1], theta[0..3]``.
-    rows : sequence of Row
-        The runs (their plant gain ``b``).
-    paper : Paper
-    b0 : float
-
-    Returns
-    -------
-    ndarray, shape (n, B)
-    """
-    b = np.array([r.b_plant for r in rows])
-    x1, x2, u = sig["x[0]"], sig["x[1]"], sig["u"]
-    x2dot = paper.theta1 * x1 + paper.theta2 * x2 + sig["level"] + b * u
-    f = sig["theta[0]"] * sig["xhat[0]"] + sig["theta[1]"] * sig["xhat[1]"] + sig["theta[2]"] * u + sig["theta[3]"]
-    return x2dot - b0 * u - f
-
-
-def _chunk_errors(sig, t, rows, paper, b0):
-    """|e| of every table metric at the chunk's samples, each (n, B) (the reference of :func:`_accumulate`)."""
-    x3 = x3_true(sig, rows, paper, b0)
-    return {
-        "est_x1": np.abs(sig["x[0]"] - sig["xhat[0]"]),
-        "est_x2": np.abs(sig["x[1]"] - sig["xhat[1]"]),
-        "est_x3": np.abs(x3 - sig["xhat[2]"]),
-        "est_x3_no_bu": np.abs(x3 - (paper.b - b0) * sig["u"] - sig["xhat[2]"]),
-        "track_x1": np.abs(np.sin(t)[:, None] - sig["x[0]"]),
-        "track_x2": np.abs(np.cos(t)[:, None] - sig["x[1]"]),
-    }, x3
-
-
-#: the metrics of :func:`_chunk_errors`, in the order of :func:`_accumulate`'s rows
-METRIC_ORDER = ("est_x1", "est_x2", "est_x3", "est_x3_no_bu", "track_x1", "track_x2")
-
-
-def _accumulate(x1, x2, xh1, xh2, xh3, u, level, th0, th1, th2, th3, t, w, b, b0, theta1, theta2, bb, t_step, h,
-                t_from, prev, has_prev, sums, wsums, sup):
-    """One pass over a chunk (``n`` samples, ``A`` runs): the |e| sums of :func:`_chunk_errors` (whole run and
-    window ``w``) and sup |Δx3/h| from ``t_from`` on (M, N of (5)/(8)), the θ4 step excluded, added in place; ``prev`` holds each run's last x3.
-
-    Signals are ``(n, A)`` (any strides); ``b`` (A,) the plant gains; ``bb = paper.b − b0``. Compiled with numba
-    (:func:`_accumulator`); the same function runs in Python.
-    """
-    n, A = x1.shape
-    for k in range(n):
-        r1, r2, tk = np.sin(t[k]), np.cos(t[k]), t[k]
-        skip = abs(tk - t_step) < 0.5 * h or tk < t_from
-        for j in range(A):
-            x2dot = theta1 * x1[k, j] + theta2 * x2[k, j] + level[k, j] + b[j] * u[k, j]
-            f = th0[k, j] * xh1[k, j] + th1[k, j] * xh2[k, j] + th2[k, j] * u[k, j] + th3[k, j]
-            x3 = x2dot - b0 * u[k, j] - f
-            e0 = abs(x1[k, j] - xh1[k, j])
-            e1 = abs(x2[k, j] - xh2[k, j])
-            e2 = abs(x3 - xh3[k, j])
-            e3 = abs(x3 - bb * u[k, j] - xh3[k, j])
-            e4 = abs(r1 - x1[k, j])
-            e5 = abs(r2 - x2[k, j])
-            sums[0, j] += e0
-            sums[1, j] += e1
-            sums[2, j] += e2
-            sums[3, j] += e3
-            sums[4, j] += e4
-            sums[5, j] += e5
-            if w[k]:
-                wsums[0, j] += e0
-                wsums[1, j] += e1
-                wsums[2, j] += e2
-                wsums[3, j] += e3
-                wsums[4, j] += e4
-                wsums[5, j] += e5
-            if (k > 0 or has_prev) and not skip:
-                d = abs(x3 - prev[j]) / h
-                if np.isfinite(d) and d > sup[j]:
-                    sup[j] = d
-            prev[j] = x3
-
-
-_ACC: list = []
-
-
-def _accumulator():
-    """:func:`_accumulate` compiled by numba (once per process; numba's disk cache keeps it across processes)."""
-    if not _ACC:
-        import numba
-
-        try:
-            _ACC.append(numba.njit(cache=True, error_model="numpy")(_accumulate))
-        except RuntimeError:  # no writable cache next to the source: compile, don't cache
-            _ACC.append(numba.njit(cache=False, error_model="numpy")(_accumulate))
-    return _ACC[0]
 
 
 _KEPT = ("x[0]", "x[1]", "xhat[0]", "xhat[1]", "xhat[2]", "u", "theta[0]", "theta[1]", "theta[2]", "theta[3]")

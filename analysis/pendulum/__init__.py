@@ -9,9 +9,12 @@ Model (§3.1): ``ẋ = A x + B u + Γ w``, ``y = C x + v``, ``x = [φ, φ']`` (r
 * :mod:`.loops` — §3.2/§5: the fuzzy closed loop (with and without the filter, and beyond the paper) in two noise
   regimes: the *main* one (T = 2 ms, σ_v = 0.5 mrad, σ_w = 0.5 rad/s² chosen independently: noise alone does not
   saturate the fuzzy inputs, no noise-free limit cycle) and the *literal* one of the previous report (T = 5 ms,
-  σ_v = 5 mrad, σ_w = √(Q/R)·σ_v);
-* :mod:`.quantities` — quantities, findings and the claims (:func:`.quantities.record_claims`, also used by
-  :func:`evaluate` and :func:`evaluate_many`, the plausible box's evaluation); :mod:`.figures` — the figures.
+  σ_v = 5 mrad, σ_w = √(Q/R)·σ_v); its blocks in :mod:`.blocks`, what the closed-loop part computes in
+  :mod:`.loop_data`, many points of the plausible box on one batch axis in :mod:`.box`;
+* :mod:`.verify_quantities` — the verify part's quantities and findings; :mod:`.regimes` — the closed-loop
+  metrics per case and the per-run comparisons; :mod:`.quantities` — the closed loop's quantities and findings;
+  :mod:`.claims` — the claims (:func:`.claims.record_claims`, also used by :func:`evaluate` and
+  :func:`evaluate_many`, the plausible box's evaluation); :mod:`.figures` — the figures.
 """
 
 from __future__ import annotations
@@ -23,7 +26,18 @@ from ctrl_analysis.reporting import sensitivity
 from ctrl_analysis.reporting.report import StudyContext, StudyInfo, StudyResult
 from ctrl_analysis.reporting.study import record_parameters, study_params
 
-from . import figures, loops, paper, quantities, verify
+from . import (
+    box,
+    claims,
+    figures,
+    loop_data,
+    loops,
+    paper,
+    quantities,
+    regimes,
+    verify,
+    verify_quantities,
+)
 
 __all__ = ["INFO", "MISSING", "evaluate", "run"]
 
@@ -77,13 +91,13 @@ def run(ctx: StudyContext, params=None) -> StudyResult:
 
     ctx.progress("verify part: ARE, Riccati ODE, printed P and K")
     v = verify.compute_verify(P)
-    quantities.record_verify(result, v)
+    verify_quantities.record_verify(result, v)
     result.missing = list(MISSING)  # the differing §4 gain cell is listed by the report, from its verdict
     _verify_figures(ctx, result, v)
 
-    seeds = loops.seeds_for(ctx.seed, L.runs)
+    seeds = loop_data.seeds_for(ctx.seed, L.runs)
     result.seeds = {"closed_loop": seeds}
-    d = loops.compute_loops(L, P.a21, seeds, progress=ctx.progress)
+    d = loop_data.compute_loops(L, P.a21, seeds, progress=ctx.progress)
     quantities.record_loop(result, d, v)
     _loop_figures(ctx, result, d)
 
@@ -117,8 +131,8 @@ BOX_METRICS = {"main": {"nofilter": _PAIRED, "filter": _PAIRED + ("settled_share
 def evaluate(params: dict, seeds=(0,)) -> StudyResult:
     """The §4 gain cells and every claim at ``params = {"verify": Verify, "loop": ClosedLoop}`` (the box's evaluation).
 
-    :func:`evaluate_many` of one point: the main run's recording functions (:func:`.quantities.record_gain_cells`,
-    :func:`.quantities.record_regime`, :func:`.quantities.record_claims`) on ``seeds``.
+    :func:`evaluate_many` of one point: the main run's recording functions (:func:`.verify_quantities.record_gain_cells`,
+    :func:`.regimes.record_regime`, :func:`.claims.record_claims`) on ``seeds``.
     """
     return evaluate_many([params], seeds)[0]
 
@@ -128,7 +142,7 @@ def evaluate_many(variants, seeds=(0,)) -> list:
 
     Every simulation the points need is run once (points of the two gain readings at the same reconstructions
     share their no-filter and steady-state-gain runs), all of them side by side on the batch axis
-    (:func:`.loops.simulate_points`); each point is then recorded and judged on its own.
+    (:func:`.box.simulate_points`); each point is then recorded and judged on its own.
     """
     seeds = tuple(int(s) for s in seeds)
     need, users = {}, {}
@@ -145,20 +159,20 @@ def evaluate_many(variants, seeds=(0,)) -> list:
 
     def measure(j, c):  # each simulation measured by every point that needs it, then dropped (memory: one chunk)
         for i, reg, case, p in users[keys[j]]:
-            got[(i, reg, case)] = (quantities.case_metrics(c, p, BOX_METRICS[reg][case]), c.light())
+            got[(i, reg, case)] = (regimes.case_metrics(c, p, BOX_METRICS[reg][case]), c.light())
 
     signals = ("phi", "dphi", "e", "ec", "u")  # what the claims' metrics read
-    loops.simulate_points([need[k] for k in keys], seeds, on_point=measure, keep=signals)
+    box.simulate_points([need[k] for k in keys], seeds, on_point=measure, keep=signals)
     out = []
     for i, prm in enumerate(variants):
         V, L = prm["verify"], prm["loop"]
         result = StudyResult(INFO)
-        quantities.record_gain_cells(result, V, *verify.gain_cells_data(V))
+        verify_quantities.record_gain_cells(result, V, *verify.gain_cells_data(V))
         for reg, p, lit in (("main", L, False), ("literal", L.literal(), True)):
             cases = BOX_METRICS[reg]
-            quantities.record_regime(result, {c: got[(i, reg, c)][1] for c in cases}, p, literal=lit, keys=cases,
+            regimes.record_regime(result, {c: got[(i, reg, c)][1] for c in cases}, p, literal=lit, keys=cases,
                                      metrics_={c: got[(i, reg, c)][0] for c in cases})
-        quantities.record_claims(result, L)
+        claims.record_claims(result, L)
         out.append(result)
     return out
 
@@ -217,11 +231,11 @@ def _per_run_figure(ctx, result, d, main_lab: str, lit_lab: str) -> None:
     names = {"overshoot": "step overshoot\n(overshoot claims)", "angle_rms": "oscillation: RMS of φ − r\n(oscillation claims)",
              "accel_rms": "control effort: RMS of u\n(fast-smooth: 'smoothly')", "chatter": "chatter: RMS of Δu\n(fast-smooth: 'smoothly')",
              "settling_time": "settling time\n(fast-smooth: 'quickly')"}
-    regimes = {}
+    changes = {}
     # the literal regime's claims are overshoot and oscillation only
     for lab, cases, q, keys in ((main_lab, d.main, p, tuple(names)), (lit_lab, d.literal, d.lit, tuple(names)[:2])):
-        ms = {c: quantities.case_metrics(cases[c], q, keys) for c in ("nofilter", "filter", "kf_ss")}
-        regimes[lab] = {names[k]: {lbl: quantities.paired_changes(ms["nofilter"][k], ms[c][k],
+        ms = {c: regimes.case_metrics(cases[c], q, keys) for c in ("nofilter", "filter", "kf_ss")}
+        changes[lab] = {names[k]: {lbl: regimes.paired_changes(ms["nofilter"][k], ms[c][k],
                                                                     q.t_end if k == "settling_time" else None)[0]
                                    for c, lbl in (("filter", "paper's K (α-β)"), ("kf_ss", "corrected: steady-state gain"))}
                         for k in keys}
@@ -230,7 +244,7 @@ def _per_run_figure(ctx, result, d, main_lab: str, lit_lab: str) -> None:
                   names["accel_rms"]: (-p.smooth_margin, f"−{p.smooth_margin:.0%} ('eliminates the jitter')"),
                   names["chatter"]: (-p.smooth_margin, f"−{p.smooth_margin:.0%} ('eliminates the jitter')"),
                   names["settling_time"]: (p.clear_margin, f"+{p.clear_margin:.0%} (not clearly later)")}
-    ctx.save_figure(result, figures.plot_per_run_changes(regimes, thresholds), "fig4_per_run_changes.png",
+    ctx.save_figure(result, figures.plot_per_run_changes(changes, thresholds), "fig4_per_run_changes.png",
                     caption="What the §5 and abstract claims are judged on, run by run (the paper reads them off a "
                             "single run): each Monte Carlo run's change of a measure with the filter against no filter "
                             "on the same noise, in % of the no-filter median, with the paper's K (the printed reading) "
@@ -248,7 +262,7 @@ def _loop_figures(ctx, result, d) -> None:
                             "and slices at fixed ec, with the paper's scaling gains Ke, Kec, Ku; the membership functions "
                             "and the rule table are not printed and are reconstructed (seven triangular terms, "
                             "U = sat(E + EC, ±3)).")
-    main_lab, lit_lab = quantities.regime_label(p, False), quantities.regime_label(d.lit, True)
+    main_lab, lit_lab = regimes.regime_label(p, False), regimes.regime_label(d.lit, True)
     ctx.save_figure(result, figures.plot_fig3_states({f"paper's K as a discrete α-β filter\n{main_lab}": m["filter"].noisy,
                                                       f"correct steady-state gain (beyond the paper)\n{main_lab}": m["kf_ss"].noisy,
                                                       f"paper's K as a discrete α-β filter\n{lit_lab}": lit["filter"].noisy}),
@@ -269,8 +283,8 @@ def _loop_figures(ctx, result, d) -> None:
                             "reads its claims off one such run, so the study judges them per run "
                             "(fig4_per_run_changes.png); the mean response averages the noise excursions away.")
     _per_run_figure(ctx, result, d, main_lab, lit_lab)
-    stats = {main_lab: {n: quantities.case_stats(result, n, False) for n in m},
-             lit_lab: {n: quantities.case_stats(result, n, True) for n in lit}}
+    stats = {main_lab: {n: regimes.case_stats(result, n, False) for n in m},
+             lit_lab: {n: regimes.case_stats(result, n, True) for n in lit}}
     short = {"nofilter": "no filter", "filter": "paper's K (α-β)", "kf": "time-varying KF", "kf_ss": "correct steady gain",
              "kf_ss_qr": "steady gain of Q/R = 2", "paper_continuous": "paper's continuous filter",
              "nonlinear.nofilter": "sin φ, no filter", "nonlinear.filter": "sin φ, paper's K"}

@@ -242,7 +242,7 @@ class ClosedLoop:
                                    sigma_w=math.sqrt(self.qr_paper) * self.literal_sigma_v)
 
 
-#: §2, §4, §5 and §6: what the paper asserts, judged in :func:`.quantities.record_claims`.
+#: §2, §4, §5 and §6: what the paper asserts, judged in :func:`.claims.record_claims`.
 C_OVERSHOOT = Claim("overshoot", "§5, Fig. 4", "With the suboptimal filter the output overshoot is clearly smaller")
 C_OSCILLATION = Claim("oscillation", "§5, §6, Fig. 4",
                       "With the suboptimal filter the output oscillation (jitter of the pendulum) is clearly smaller")

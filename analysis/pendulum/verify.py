@@ -4,7 +4,7 @@ Every interpretation of "the steady-state gain of the stated problem" that was t
 ARE, the printed ARE literally, discrete steady states over T × noise model × filter/predictor form
 × β convention, both a21 readings, Q and R as given or swapped), the printed 6×6 P checked as a
 covariance, and the stability of the printed filter. Data only: quantities and findings are in
-:mod:`.quantities`, figures in :mod:`.figures`.
+:mod:`.verify_quantities`, figures in :mod:`.figures`.
 """
 
 from __future__ import annotations

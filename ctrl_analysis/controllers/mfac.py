@@ -255,16 +255,13 @@ class CFDLLaw(KernelBlock, StaticBlock):
     Lu & Hou (2022), eq. (8) and (35); Hou & Jin (2013), §4.2.
     """
 
+    inputs, outputs = ("phi_hat", "y", "y_ref_next", "u_prev"), ("u",)
     kernels = Kernels(output=cfdl_law_output)
 
     def __init__(self, rho: float, lam: float):
         self.rho = _check_step("rho", rho)
         self.lam = float(check_positive("lam", lam, scalar=True))
         self.kernel_params = LAW.pack(rho=self.rho, lam=self.lam)
-        super().__init__(self._law, inputs=("phi_hat", "y", "y_ref_next", "u_prev"), outputs=("u",))
-
-    def _law(self, t, u):  # StaticBlock's fn (python-control): the kernel on the batch
-        return self.output(t, np.zeros((u.shape[0], 0)), u)
 
     def __repr__(self) -> str:
         return f"CFDLLaw(rho={self.rho:g}, lam={self.lam:g})"

@@ -381,38 +381,24 @@ class DiscreteBlock(Block):
 
 
 class StaticBlock(Block):
-    """A memoryless block ``y = fn(t, u)`` (a sum, a gain, a saturation, a reference generator).
+    """The protocol of a memoryless block: ``y = output(t, x, u, params)``, no state (``x`` has zero columns).
 
-    Parameters
-    ----------
-    fn : callable
-        ``fn(t, u) -> (B, p)`` with ``u`` of shape ``(B, m)``.
-    inputs, outputs : sequence of str
-        Signal names.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> add = StaticBlock(lambda t, u: u[:, :1] + u[:, 1:], inputs=("y", "v"), outputs=("y_meas",))
-    >>> add.output(0.0, np.zeros((2, 0)), np.array([[1.0, 0.5], [2.0, -1.0]]))
-    array([[1.5],
-           [1. ]])
+    A static block is a class that declares its :attr:`~Block.inputs` and :attr:`~Block.outputs` and
+    gets its output from kernels (``class Saturation(KernelBlock, StaticBlock)`` with
+    ``kernels = Kernels(output=...)``: the way that compiles, as :class:`StaticGain`) or from an
+    ``output`` method. It has direct feedthrough unless it says otherwise. A plain Python function
+    (a lambda) is wrapped by :class:`~ctrl_analysis.engine.function_block.FunctionBlock` instead:
+    ``StaticBlock(fn, inputs, outputs)``, which wrapped one before, is a ``TypeError`` that says so.
     """
 
     feedthrough = True
 
-    def __init__(self, fn: Callable, inputs, outputs):
-        if not callable(fn):
-            raise TypeError(f"fn must be callable, got {type(fn).__name__}")
-        self.fn = fn
-        self.inputs = check_names("inputs", inputs)
-        self.outputs = check_names("outputs", outputs)
-        if not self.outputs:
-            raise ValueError("outputs must name at least one signal")
-        self.feedthrough = bool(self.inputs)
-
-    def output(self, t, x, u, params=None) -> np.ndarray:
-        return self.fn(t, u)
+    def __new__(cls, *args, **kwargs):
+        if cls is StaticBlock and (args or kwargs):
+            raise TypeError("StaticBlock is the protocol of a stateless block, not a function wrapper: wrap a "
+                            "function with FunctionBlock(fn, inputs, outputs) (ctrl_analysis.engine.function_block), "
+                            "or write the block as a class (KernelBlock, StaticBlock) with an output kernel")
+        return super().__new__(cls, *args, **kwargs)
 
     def nlsys(self, dt=None, name: str | None = None, *, inputs=None, outputs=None):
         """This block as a static ``control.nlsys`` (``dt=None``: usable in continuous and discrete loops).
@@ -443,7 +429,7 @@ class StaticBlock(Block):
         return ct.nlsys(None, outfcn, inputs=ins, outputs=outs, name=name, dt=dt)
 
     def __repr__(self) -> str:
-        return f"StaticBlock(inputs={self.inputs}, outputs={self.outputs})"
+        return f"{type(self).__name__}(inputs={self.inputs}, outputs={self.outputs})"
 
 
 def gain_output(t, x, u, p, y):
@@ -557,7 +543,7 @@ class SampledBlock(DiscreteBlock):
     """A continuous block integrated over one sample with a fixed step, its input held: a discrete block.
 
     ``update`` advances ``block`` over ``[t, t + dt]`` with ``substeps`` steps of ``method``
-    (:func:`ctrl_analysis.simulate.rk4_step` or :func:`~ctrl_analysis.simulate.euler_step`, the
+    (:func:`ctrl_analysis.engine.integrators.rk4_step` or :func:`~ctrl_analysis.engine.integrators.euler_step`, the
     engine's own integrators), so ``SampledBlock(sys, dt).nlsys(dt)`` runs in python-control exactly
     as the engine runs ``sys``. Outputs are the continuous block's outputs at the sample instant.
 
@@ -568,7 +554,7 @@ class SampledBlock(DiscreteBlock):
         Sampling period (> 0).
     method : {"rk4", "euler"}
     substeps : int
-        Integration steps per sample (1 to :data:`~ctrl_analysis.simulate.MAX_SUBSTEPS`).
+        Integration steps per sample (1 to :data:`~ctrl_analysis.engine.integrators.MAX_SUBSTEPS`).
     """
 
     def __init__(self, block: ContinuousBlock, dt: float, method: str = "rk4", substeps: int = 1):

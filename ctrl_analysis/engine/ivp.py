@@ -1,4 +1,9 @@
-"""The smooth, deterministic path of the engine: a batch of runs integrated adaptively by solve_ivp."""
+"""Plain right-hand-side functions ``rhs(t, x, u, params)``: integrated adaptively, or wrapped for python-control.
+
+:func:`simulate_ivp` is the smooth, deterministic path of the engine: a batch of runs integrated
+adaptively by solve_ivp. :func:`continuous_nlsys` wraps the same batched ``rhs`` as a
+:class:`control.NonlinearIOSystem`. (A loop of blocks runs through :class:`~ctrl_analysis.engine.loop.Loop`.)
+"""
 
 from __future__ import annotations
 
@@ -6,10 +11,18 @@ from collections.abc import Callable
 
 import numpy as np
 
-from .._validate import check_callable, check_finite, check_in, check_positive
+from .._validate import (
+    check_callable,
+    check_finite,
+    check_in,
+    check_int,
+    check_names,
+    check_positive,
+)
+from .blocks import MAX_SIGNALS
 from .simresult import SimResult, _check_bound, _prepare
 
-__all__ = ["simulate_ivp"]
+__all__ = ["continuous_nlsys", "simulate_ivp"]
 
 _IVP_METHODS = ("RK45", "RK23", "DOP853", "Radau", "BDF", "LSODA")
 
@@ -130,3 +143,51 @@ def simulate_ivp(
     div_step = np.where(diverged, bad_k.argmax(axis=0), -1)
     return SimResult(t=t_eval, x=xs, u=None, y=None, diverged=diverged, diverged_step=div_step,
                      bound=bound, info=info)
+
+
+def _signal_spec(name: str, value):
+    """A signal count (0 to MAX_SIGNALS) or a list of names, as :func:`control.nlsys` takes them."""
+    if isinstance(value, (list, tuple, str)):
+        return check_names(name, value)
+    return check_int(name, value, minimum=0, maximum=MAX_SIGNALS)
+
+
+def continuous_nlsys(rhs: Callable, *, states, inputs, outputs=None, output: Callable | None = None,
+                     params=None, name: str | None = None):
+    """Wrap a batched right-hand side as a :class:`control.NonlinearIOSystem` (``control.nlsys``).
+
+    python-control calls the update function with 1-D ``x`` and ``u``; they are lifted to a batch of
+    one, so the same ``rhs`` serves the engine and :func:`control.interconnect`.
+
+    Parameters
+    ----------
+    rhs : callable
+        ``rhs(t, x, u, params)`` accepting ``x`` of shape ``(1, n)`` and ``u`` of shape ``(1, m)``.
+    states, inputs, outputs : int or list of str
+        Signal counts or names, as for :func:`control.nlsys`.
+    output : callable, optional
+        ``output(t, x, u, params)`` (batched like ``rhs``); default: the full state.
+
+    Returns
+    -------
+    control.NonlinearIOSystem
+    """
+    import control as ct
+
+    check_callable("rhs", rhs, "rhs(t, x, u, params)")
+    check_callable("output", output, "output(t, x, u, params)", optional=True)
+    states, inputs = _signal_spec("states", states), _signal_spec("inputs", inputs)
+    outputs = None if outputs is None else _signal_spec("outputs", outputs)
+
+    def updfcn(t, x, u, p):
+        return np.asarray(rhs(t, np.atleast_2d(x), np.atleast_2d(u), p if p else params)).reshape(-1)
+
+    outfcn = None
+    if output is not None:
+        def outfcn(t, x, u, p):
+            return np.asarray(output(t, np.atleast_2d(x), np.atleast_2d(u), p if p else params)).reshape(-1)
+
+    if outputs is None:
+        outputs = states
+    return ct.nlsys(updfcn, outfcn, states=states, inputs=inputs, outputs=outputs, name=name)
+

@@ -20,7 +20,7 @@ import numpy as np
 
 from .._validate import check_array, check_finite, check_in, check_int, check_positive, finite_result
 from ..engine.blocks import DiscreteBlock, StaticBlock
-from ..engine.integrators import MAX_SUBSTEPS
+from ..engine.integrators import MAX_SUBSTEPS, STEPPERS
 from ..engine.kernels import KernelBlock, Kernels, Layout, as_int, jitable
 from .lowpass import LowPassFilter
 
@@ -205,7 +205,7 @@ class TrackingDifferentiator(KernelBlock, DiscreteBlock):
         Filtering factor of :func:`fhan`, ``> 0``; default ``h`` (Han's choice without extra
         filtering).
     substeps : int
-        TD steps (each of length ``h``) per sample, from 1 to :data:`~ctrl_analysis.simulate.MAX_SUBSTEPS`.
+        TD steps (each of length ``h``) per sample, from 1 to :data:`~ctrl_analysis.engine.integrators.MAX_SUBSTEPS`.
     x0 : array_like, shape (2,), optional
         Initial ``(x1, x2)`` (default zero).
     feedthrough : bool
@@ -353,8 +353,6 @@ def softened_setpoint(softener, r, h: float, *, method: str = "zoh") -> np.ndarr
     ValueError
         If ``r`` is not a finite 1-D array, or the TD's sample period differs from ``h``.
     """
-    from ..simulate import simulate_sampled
-
     h = float(check_positive("h", h, scalar=True))
     r = np.asarray(check_finite("r", r), dtype=float)
     if r.ndim != 1 or r.size < 1:
@@ -367,9 +365,14 @@ def softened_setpoint(softener, r, h: float, *, method: str = "zoh") -> np.ndarr
             finite_result("h (with the softener's omega)", lambda: (sysd.A, sysd.B))
             resp = ct.forced_response(sysd, T=h * np.arange(r.size), U=r)
             return np.asarray(resp.states).T.reshape(r.size, softener.order).copy()
-        res = simulate_sampled(softener.rhs, np.zeros(softener.order),
-                               h, r.size, noise=r[:, None, None], method=method)
-        return res.x[:-1, 0, :]
+        # the fixed-step recursion q_(k+1) = step(q_k, r_k), r_k held over the step (one run; the engine's
+        # integrators, so the same numbers as a Loop of the block: tests/lib/test_lowpass.py)
+        step, q = STEPPERS[method], np.zeros((1, softener.order))
+        theta = np.empty((r.size, softener.order))
+        for k in range(r.size):
+            theta[k] = q[0]
+            q = step(softener.rhs, k * h, q, r[k:k + 1, None], h)
+        return theta
     if isinstance(softener, TrackingDifferentiator):
         if not np.isclose(softener.dt, h, rtol=1e-12, atol=0.0):
             raise ValueError(f"softener.dt (substeps * h) must equal h={h}, got {softener.dt}")

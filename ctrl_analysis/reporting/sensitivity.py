@@ -366,8 +366,9 @@ def _prune(runner, box, out, segments, refine, decide) -> None:
     for seg in segments:
         if seg["kind"] != "nearest":
             continue
-        moved = set(box.changed(seg["b"]))
+        moved = box.changed(seg["b"])  # {name: value}, in the box's dimension order
         ranked = [d["reconstruction"] for d in out[seg["claim"]]["drivers"] if d["reconstruction"] in moved]
+        # the rest in the box's order: a set's order of strings changes with each process's hash seed
         ranked += [name for name in moved if name not in ranked]
         for k in sorted({k for k in (1, 2, 3, 5, 8) if k < len(ranked)}):
             keep = set(ranked[:k])

@@ -292,3 +292,49 @@ def test_a_chosen_none_is_a_level_of_its_own():
     assert box.chosen[0] == pytest.approx(1 / 6) and box.changed(box.chosen) == {}
     assert box.params_at([0.1])["u"].delta is None and box.params_at([0.5])["u"].delta == 5e-3
     assert box.distance(box.chosen, [0.1]) == 0.0 and box.distance(box.chosen, [0.9]) == 0.5
+
+
+_PRUNE_SCRIPT = """
+import sys
+import numpy as np
+sys.path.insert(0, "tests/lib")
+from test_box import Toy
+from ctrl_analysis.reporting import sensitivity
+from ctrl_analysis.reporting.box import Box
+
+box = Box({"toy": Toy()})
+u = np.where(np.asarray(box.chosen) < 0.5, 1.0, 0.0)  # a point where every reconstruction moved
+assert len(box.changed(u)) == 4
+
+class Runner:
+    box, calls = box, []
+
+    def run(self, points):
+        self.calls.append(points)
+        return [{"claims": {"c": True}} for _ in points]  # never flips: no bisection follows
+
+runner = Runner()
+seg = {"kind": "nearest", "claim": "c", "b": u, "algorithm": None, "va": True}
+sensitivity._prune(runner, box, {"c": {"drivers": [{"reconstruction": "toy.b"}]}}, [seg], 0, None)
+print([list(box.changed(c)) for c, _ in runner.calls[0]])
+"""
+
+
+def test_the_reconstructions_a_nearest_flip_keeps_do_not_depend_on_the_hash_seed():
+    """Past the ranked drivers, the flip search keeps the moved reconstructions in the box's order. It took them
+    from a set of names, whose order changes with each process's string-hash seed: meso's box exploration
+    (claims' boundary, nearest flip, depends_on) differed from one run of the same commit to the next."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[2]
+    seen = set()
+    for seed in ("1", "2", "3", "4"):
+        env = {**os.environ, "PYTHONHASHSEED": seed, "PYTHONPATH": str(root)}
+        out = subprocess.run([sys.executable, "-c", _PRUNE_SCRIPT], capture_output=True, text=True, cwd=root,
+                             env=env, timeout=120, check=True).stdout.strip()
+        seen.add(out)
+    # driver first, then the box's order k, a, (b,) rule: k = 1, 2, 3 reconstructions kept
+    assert seen == {"[['toy.b'], ['toy.k', 'toy.b'], ['toy.k', 'toy.a', 'toy.b']]"}

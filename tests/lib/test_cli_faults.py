@@ -31,7 +31,7 @@ STUDY = '''
 import os
 import time
 from ctrl_analysis.reporting.report import StudyInfo, StudyResult
-from ctrl_analysis.simulate import run_seeds
+from ctrl_analysis.noise import run_seeds
 
 INFO = StudyInfo(name=__name__.split(".")[-1], seed_file="s.txt", paper="P", reproduces="r")
 

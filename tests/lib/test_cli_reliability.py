@@ -117,7 +117,7 @@ NAN_TOLERANCE_CALLS = [
 def test_nan_tolerance_does_not_hang():
     # one subprocess with a timeout: before the fix the first and third calls never returned
     lines = ["from math import nan",
-             "from ctrl_analysis.simulate import simulate_ivp",
+             "from ctrl_analysis.engine.ivp import simulate_ivp",
              "from ctrl_analysis.estimators.kalman import riccati_trajectory, discrete_steady_state_batch"]
     for call in NAN_TOLERANCE_CALLS:
         lines += ["try:", f"    {call}", "    print('returned')", "except ValueError as exc:", "    print(exc)"]

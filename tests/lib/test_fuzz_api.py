@@ -32,11 +32,11 @@ from ctrl_analysis import (
     cli,
     cluster,
     metrics,
+    noise,
     parallel,
     plants,
     polynomials,
     progress,
-    simulate,
     streaming,
     taskpool,
 )
@@ -51,7 +51,17 @@ from ctrl_analysis.arena import record as arena_record
 from ctrl_analysis.arena import report_section as arena_report_section
 from ctrl_analysis.controllers import differential_feedback as hodf
 from ctrl_analysis.controllers import fuzzy, golden_section, mfac, pd, pid
-from ctrl_analysis.engine import blocks, integrators, numpy_engine, plan, processes
+from ctrl_analysis.engine import (
+    blocks,
+    function_block,
+    integrators,
+    ivp,
+    memory,
+    numpy_engine,
+    plan,
+    processes,
+    simresult,
+)
 from ctrl_analysis.engine import codegen as _kernels
 from ctrl_analysis.engine import jit as engine_jit
 from ctrl_analysis.engine import kernels as engine_kernels
@@ -136,10 +146,6 @@ PPD = dict(eta=0.5, mu=1.0, epsilon=1e-5, phi0=2.0, phi_reset=0.5, y0=0.0, u0=0.
 
 def _rhs(t, x, u, params):
     return -x
-
-
-def _step(k, x, w, params):
-    return 0.5 * x
 
 
 def _pair(x):
@@ -269,7 +275,7 @@ def _finding(id, text):
 
 
 def _draw_noise(seeds, n_steps):
-    return simulate.draw_noise(seeds, n_steps, simulate.gaussian_noise(1.0))
+    return noise.draw_noise(seeds, n_steps, noise.gaussian_noise(1.0))
 
 
 def _staged(target):
@@ -313,7 +319,7 @@ def build_cases(tmp):
         ("repeated_pole_coefficients", polynomials.repeated_pole_coefficients, dict(m=3, omega=2.0),
          dict(m=INT + [-1], omega=REAL)),
         # blocks and loops
-        ("StaticBlock", blocks.StaticBlock, dict(fn=lambda t, u: u, inputs=("a",), outputs=("b",)),
+        ("FunctionBlock", function_block.FunctionBlock, dict(fn=lambda t, u: u, inputs=("a",), outputs=("b",)),
          dict(fn=CALLABLE, inputs=[None, 3, ["a", 3]], outputs=[None, 3, [1.5]])),
         ("StaticGain", blocks.StaticGain, dict(D=[[1.0, -1.0]], inputs=("r", "y"), outputs=("e",)),
          dict(D=ARR + [[1.0, 2.0], [[1.0]], np.ones((2, 2, 2)), [[NAN, 1.0]]], inputs=[None, 3, ["a", 3]],
@@ -535,27 +541,19 @@ def build_cases(tmp):
         ("resonance_peak", metrics.resonance_peak, dict(sys=TF1, omega=None),
          dict(sys=[3.0, "tf", None], omega=opt(ARR) + [[-1.0, 1.0], [NAN, 1.0]])),
         # simulation engine
-        ("run_seeds", simulate.run_seeds, dict(base_seed=0, runs=3), dict(base_seed=INT + [-1], runs=INT + [0, HUGE])),
-        ("uniform_noise", simulate.uniform_noise, dict(low=-1.0, high=1.0), dict(low=["abc", None, NAN], high=REAL + [-2.0])),
-        ("gaussian_noise", simulate.gaussian_noise, dict(std=1.0, mean=0.0),
+        ("run_seeds", noise.run_seeds, dict(base_seed=0, runs=3), dict(base_seed=INT + [-1], runs=INT + [0, HUGE])),
+        ("uniform_noise", noise.uniform_noise, dict(low=-1.0, high=1.0), dict(low=["abc", None, NAN], high=REAL + [-2.0])),
+        ("gaussian_noise", noise.gaussian_noise, dict(std=1.0, mean=0.0),
          dict(std=VNONNEG + [[1.0, -1.0]], mean=["abc", None, NAN])),
         ("draw_noise", _draw_noise,
          dict(seeds=[1, 2], n_steps=10), dict(seeds=[[], None, ["a"], [1.5], [-1]], n_steps=INT + [0])),
-        ("simulate_sampled", simulate.simulate_sampled,
-         dict(rhs=_rhs, x0=[1.0, 0.0], h=0.1, n_steps=5, method="rk4", substeps=1, t0=0.0, bound=1e8),
-         dict(rhs=CALLABLE, x0=ARR + [[NAN, 0.0], np.ones((2, 2, 2))], h=POS, n_steps=INT + [0], method=CHOICE,
-              substeps=INT + [0, HUGE], t0=REAL, bound=["abc", None, NAN, -INF, 0.0, [1.0]], controller=[3.0, "f"],
-              observe=[3.0, "f"], seeds=[[1, 2, 3], 5])),
-        ("simulate_discrete", simulate.simulate_discrete, dict(step=_step, x0=[1.0], n_steps=5, bound=1e8),
-         dict(step=CALLABLE, x0=ARR + [[NAN]], n_steps=INT + [0], bound=["abc", None, NAN, -INF, 0.0],
-              observe=[3.0, "f"], seeds=[[1, 2], 5])),
-        ("simulate_ivp", simulate.simulate_ivp, dict(rhs=_rhs, x0=[1.0], t_eval=[0.0, 0.5, 1.0], rtol=1e-6, atol=1e-9),
+        ("simulate_ivp", ivp.simulate_ivp, dict(rhs=_rhs, x0=[1.0], t_eval=[0.0, 0.5, 1.0], rtol=1e-6, atol=1e-9),
          dict(rhs=CALLABLE, x0=ARR + [[NAN]], t_eval=ARR + [[1.0, 0.0], [0.0], [NAN, 1.0]], rtol=POS, atol=POS,
               bound=["abc", None, NAN, -INF, 0.0], method=CHOICE, u=[3.0, "f"])),
-        ("continuous_nlsys", simulate.continuous_nlsys, dict(rhs=_rhs, states=2, inputs=1),
+        ("continuous_nlsys", ivp.continuous_nlsys, dict(rhs=_rhs, states=2, inputs=1),
          dict(rhs=CALLABLE, output=[3.0, "f"])),
-        ("chunk_bounds", simulate.chunk_bounds, dict(runs=10, size=3), dict(runs=INT + [-1], size=INT + [0])),
-        ("check_result_memory", simulate.check_result_memory, dict(nbytes=10.0, limit=100.0, where="x"),
+        ("chunk_bounds", memory.chunk_bounds, dict(runs=10, size=3), dict(runs=INT + [-1], size=INT + [0])),
+        ("check_result_memory", memory.check_result_memory, dict(nbytes=10.0, limit=100.0, where="x"),
          dict(nbytes=NONNEG, limit=POS)),
         # parallel and progress
         ("chunk_slices(large n)", parallel.chunk_slices, dict(n=HUGE, chunks=4), dict(chunk_size=[1, 1000])),
@@ -949,6 +947,8 @@ NOT_FUZZED = {
     sensitivity_module.Exploration: "the record explore() returns (explore and apply are fuzzed)",
     blocks.Block: "abstract base class without constructor arguments",
     blocks.ContinuousBlock: "abstract base class without constructor arguments",
+    blocks.StaticBlock: "protocol without constructor arguments; given some, a TypeError naming FunctionBlock "
+                        "(test_function_block.py)",
     blocks.DiscreteBlock: "abstract base class without constructor arguments (run/nlsys are fuzzed above)",
     loop_mod.Placed: "record built by place(), which is fuzzed",
     engine_kernels.KernelBlock: "mixin without constructor arguments (the blocks using it are fuzzed)",
@@ -980,9 +980,9 @@ NOT_FUZZED = {
     engine_params.take: "internal half of Loop.simulate(params=...), whose params are fuzzed",
     engine_params.chunk_functions: "the numpy engine's internals, called with the plan and values it made",
     loop_mod.LoopResponse: "result record built by Loop.simulate",
-    simulate.SimResult: "result record built by the simulators",
-    simulate.euler_step: "per-step integrator, unchecked by design",
-    simulate.rk4_step: "per-step integrator, unchecked by design",
+    simresult.SimResult: "result record built by the simulators",
+    integrators.euler_step: "per-step integrator, unchecked by design",
+    integrators.rk4_step: "per-step integrator, unchecked by design",
     continuous.riccati_rhs: "per-step right-hand side, unchecked by design",
     continuous.ContinuousSteadyState: "result record",
     discrete.DiscreteSteadyState: "result record",
@@ -1064,7 +1064,7 @@ def _names_argument(message: str, arg: str) -> bool:
 
 
 def test_every_public_callable_is_fuzzed_or_excused(tmp_path):
-    wrapped = {_new_figure: report.new_figure, _staged: report.staged_directory, _draw_noise: simulate.draw_noise}
+    wrapped = {_new_figure: report.new_figure, _staged: report.staged_directory, _draw_noise: noise.draw_noise}
     covered = {id(wrapped.get(fn, fn)) for _, fn, _, _ in build_cases(tmp_path)} | {id(obj) for obj in NOT_FUZZED}
     missing = sorted(name for key, name in _public_callables().items() if key not in covered)
     assert not missing, "public callables neither fuzzed nor listed in NOT_FUZZED:\n" + "\n".join(missing)
@@ -1144,10 +1144,10 @@ def semantic_cases():
         ("metrics.settling_time of a signal NaN at one sample",
          lambda: metrics.settling_time(t5, [0.0, 1.0, NAN, 1.0, 1.0], 1.0), "y", lambda r: r == 3.0),
         ("simulate_ivp with a model that yields NaN from the start",
-         lambda: simulate.simulate_ivp(_ivp_nan_always, [1.0], [0.0, 0.5, 1.0]), "rhs",
+         lambda: ivp.simulate_ivp(_ivp_nan_always, [1.0], [0.0, 0.5, 1.0]), "rhs",
          lambda r: bool(r.diverged[0]) and r.diverged_step[0] == 0 and np.isnan(r.x).all()),
         ("simulate_ivp with a model that yields NaN (two runs)",
-         lambda: simulate.simulate_ivp(_ivp_nan_model, [[1.0], [2.0]], [0.0, 0.5, 1.0]), "rhs",
+         lambda: ivp.simulate_ivp(_ivp_nan_model, [[1.0], [2.0]], [0.0, 0.5, 1.0]), "rhs",
          lambda r: bool(np.all(r.diverged)) and list(r.diverged_step) == [1, 1] and np.isnan(r.x[1:]).all()),
         ("numpy engine, per-run parameters, a chunked call",
          lambda: _engines_agree(rows=5, runs=5, chunk_runs=2), "runs", bool),

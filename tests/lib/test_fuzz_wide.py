@@ -48,26 +48,29 @@ def test_every_valid_rule_names_a_generated_input():
 
 # -- the fixes, each on its own -----------------------------------------------------------------------------------
 def test_sizes_that_would_hang_are_refused_up_front():
-    from ctrl_analysis import simulate
     from ctrl_analysis.controllers.fuzzy import FuzzyController, sum_rule_table
+    from ctrl_analysis.engine.ivp import continuous_nlsys
+    from ctrl_analysis.engine.memory import chunk_bounds
+    from ctrl_analysis.noise import draw_noise, gaussian_noise
     from ctrl_analysis.reporting.report import new_figure
 
     with pytest.raises(ValueError, match="runs=1000000000000 in chunks of size=3"):
-        simulate.chunk_bounds(10**12, 3)
+        chunk_bounds(10**12, 3)
     with pytest.raises(ValueError, match="nrows must be <= 100"):
         new_figure(nrows=10**4)
     with pytest.raises(ValueError, match="states must be <= "):
-        simulate.continuous_nlsys(lambda t, x, u, p: -x, states=10**12, inputs=1)
+        continuous_nlsys(lambda t, x, u, p: -x, states=10**12, inputs=1)
     with pytest.raises(ValueError, match="n_grid must be <= "):
         FuzzyController(sum_rule_table(7), Ke=1.0, Kec=1.0, Ku=1.0, n_grid=10**12)
     with pytest.raises(MemoryError, match=r"draw_noise\(n_steps=1000000000000"):
-        simulate.draw_noise([1], 10**12, simulate.gaussian_noise(1.0))
+        draw_noise([1], 10**12, gaussian_noise(1.0))
 
 
 def test_a_huge_batch_is_refused_before_its_states_are_allocated():
+    import control as ct
+
     from ctrl_analysis import plants
     from ctrl_analysis.engine import loop as loop_mod
-    import control as ct
 
     loop = loop_mod.Loop([loop_mod.place(plants.DiscreteLTI(ct.tf([1.0], [1.0, 1.0]), 0.1), "plant")], dt=0.1)
     with pytest.raises(MemoryError, match=r"Loop.simulate\(n_steps=3, runs=1000000000000\)"):
@@ -123,7 +126,11 @@ def test_a_stiff_riccati_trajectory_is_refused_in_bounded_time():
 def test_reporting_arguments_are_checked_by_name():
     from ctrl_analysis.reporting import report, study
     from ctrl_analysis.reporting.claims import plausible_text
-    from ctrl_analysis.reporting.verdicts import central_interval, claim_verdict, digits_tolerance
+    from ctrl_analysis.reporting.verdicts import (
+        central_interval,
+        claim_verdict,
+        digits_tolerance,
+    )
 
     with pytest.raises(TypeError, match="out_dir"):
         report.StudyContext(out_dir=None)

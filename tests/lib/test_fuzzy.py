@@ -164,7 +164,7 @@ def test_controller_runs_in_python_control():
     np.testing.assert_allclose(np.ravel(resp.outputs), fc.evaluate(e, ec), rtol=0, atol=1e-12)
 
 
-# ------------------------------------------------------------------ compiled kernels (twins of the numpy methods)
+# ---------------------------------------------- the kernels, called per point (the numpy methods derive from them)
 def _per_point(fn, p, e, ec, n_out=1):
     out = np.empty((e.size, n_out))
     for k in range(e.size):

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from ctrl_analysis.controllers.golden_section import GoldenSectionController
-from ctrl_analysis.engine.blocks import StaticBlock
+from ctrl_analysis.engine.function_block import FunctionBlock
 from ctrl_analysis.engine.loop import Loop, place
 from ctrl_analysis.plants import DiscreteLTI
 
@@ -14,7 +14,7 @@ F1, F2, G0 = 1.8, -0.85, 0.1  # x(k+1) = f1 x(k) + f2 x(k-1) + g0 u(k): DC gain 
 
 def golden_loop(ctrl, dt=0.01):
     plant = DiscreteLTI(ct.tf([G0, 0.0], [1.0, -F1, -F2], True), dt)  # x(k+1) = f1 x + f2 x(k-1) + g0 u(k)
-    params = StaticBlock(lambda t, u: np.tile([F1, F2, G0], (u.shape[0], 1)), (), ("f1", "f2", "g0"))
+    params = FunctionBlock(lambda t, u: np.tile([F1, F2, G0], (u.shape[0], 1)), (), ("f1", "f2", "g0"))
     return Loop([place(plant, "plant", inputs=["u"], outputs=["y"]), place(params, "theta"),
                  place(ctrl, "ctrl", inputs=["y", "r", "f1", "f2", "g0"], outputs=["u"])], dt)
 

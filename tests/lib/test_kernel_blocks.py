@@ -14,7 +14,7 @@ import control as ct
 import numpy as np
 import pytest
 
-from analysis.pendulum.loops import BackwardDifference, CartPendulum
+from analysis.pendulum.blocks import BackwardDifference, CartPendulum
 from ctrl_analysis.arena.interface import _AlphaBetaGamma, _LowPass
 from ctrl_analysis.engine import codegen as _kernels
 from ctrl_analysis.engine.blocks import StaticGain

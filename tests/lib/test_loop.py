@@ -8,13 +8,13 @@ from ctrl_analysis.engine.blocks import (
     ContinuousBlock,
     DiscreteBlock,
     SampledBlock,
-    StaticBlock,
     StaticGain,
 )
+from ctrl_analysis.engine.function_block import FunctionBlock
 from ctrl_analysis.engine.loop import Loop, place
 from ctrl_analysis.estimators.differential import DifferentialEstimator
 from ctrl_analysis.estimators.kalman import AlphaBetaFilter, kalata_gains
-from ctrl_analysis.simulate import draw_noise, gaussian_noise, run_seeds
+from ctrl_analysis.noise import draw_noise, gaussian_noise, run_seeds
 
 
 class Oscillator(ContinuousBlock):
@@ -71,7 +71,7 @@ def test_continuous_block_engine_equals_control_interconnect():
 def test_discrete_block_engine_equals_control_interconnect():
     T = 0.1
     alpha, beta = kalata_gains(0.3)
-    noisy = StaticBlock(lambda t, u: u[:, :1] + u[:, 1:], inputs=("pos", "v"), outputs=("y",))
+    noisy = FunctionBlock(lambda t, u: u[:, :1] + u[:, 1:], inputs=("pos", "v"), outputs=("y",))
     loop = Loop([place(DoubleIntegrator(T), "plant"), place(noisy, "sensor"),
                  place(AlphaBetaFilter(alpha, beta, T), "filter")], dt=T,
                 outputs=["pos", "xhat[0]", "xhat[1]"])
@@ -144,7 +144,7 @@ def test_a_block_with_state_that_declares_no_states_is_a_clear_error():
 def test_batch_equals_stacked_single_runs_bit_for_bit():
     T = 0.1
     alpha, beta = kalata_gains(0.3)
-    noisy = StaticBlock(lambda t, u: u[:, :1] + u[:, 1:], inputs=("pos", "v"), outputs=("y",))
+    noisy = FunctionBlock(lambda t, u: u[:, :1] + u[:, 1:], inputs=("pos", "v"), outputs=("y",))
     loop = Loop([place(DoubleIntegrator(T), "plant"), place(noisy, "sensor"),
                  place(AlphaBetaFilter(alpha, beta, T), "filter")], dt=T)
     seeds = run_seeds(0, 5)
@@ -195,8 +195,8 @@ def test_divergence_is_flagged_per_run():
 
 
 def test_wiring_errors_are_clear():
-    a = StaticBlock(lambda t, u: u, inputs=("b",), outputs=("a",))
-    b = StaticBlock(lambda t, u: u, inputs=("a",), outputs=("b",))
+    a = FunctionBlock(lambda t, u: u, inputs=("b",), outputs=("a",))
+    b = FunctionBlock(lambda t, u: u, inputs=("a",), outputs=("b",))
     with pytest.raises(ValueError, match="algebraic loop"):
         Loop([place(a, "A"), place(b, "B")], dt=1.0)
     with pytest.raises(ValueError, match="produced by both"):
@@ -230,7 +230,7 @@ def test_feedback_loop_plant_before_its_controller():
         def rhs(self, t, x, u, params=None):
             return u.copy()
 
-    gain = StaticBlock(lambda t, u: -3.0 * u, inputs=("y",), outputs=("u",))
+    gain = FunctionBlock(lambda t, u: -3.0 * u, inputs=("y",), outputs=("u",))
     loop = Loop([place(Integrator(), "plant"), place(gain, "ctrl")], dt=0.01)
     res = loop.simulate(100)
     # x' = -3 x, x(0) = 1: one RK4 step multiplies by the degree-4 Taylor polynomial of exp(-3h)

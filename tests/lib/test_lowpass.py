@@ -4,8 +4,9 @@ import control as ct
 import numpy as np
 import pytest
 
+from ctrl_analysis.engine.integrators import rk4_step
+from ctrl_analysis.engine.loop import Loop, place
 from ctrl_analysis.estimators.lowpass import DiscreteLowPass, LowPassFilter
-from ctrl_analysis.simulate import simulate_sampled
 
 
 @pytest.mark.parametrize("order", [1, 2, 3, 5])
@@ -36,9 +37,11 @@ def test_digital_step_matches_control_step_response(order):
 def test_rhs_with_engine_matches_step_response():
     W = LowPassFilter(1.8)
     h = 0.003
-    res = simulate_sampled(W.rhs, np.zeros(2), h, 1000, noise=np.ones((1000, 1, 1)))
-    ref = ct.step_response(W.tf, T=res.t).outputs
-    np.testing.assert_allclose(res.x[:, 0, 0], ref, atol=1e-9)  # RK4 error at h*ω = 0.005
+    x = [np.zeros((1, 2))]
+    for k in range(1000):
+        x.append(rk4_step(W.rhs, k * h, x[-1], np.ones((1, 1)), h))
+    ref = ct.step_response(W.tf, T=h * np.arange(1001)).outputs
+    np.testing.assert_allclose(np.stack(x)[:, 0, 0], ref, atol=1e-9)  # RK4 error at h*ω = 0.005
 
 
 def test_vector_batch_filtering_and_initial():
@@ -75,9 +78,21 @@ def test_prefilter_states_are_the_derivatives_of_its_step_response(method):
     for k in range(3):
         ref = ct.step_response(pf.derivative_tf(k), t).outputs
         np.testing.assert_allclose(theta[:, k], ref, atol=1e-8, err_msg=f"v^({k})")
-    # the engine integrating pf.rhs (batch of 2) agrees too
-    res = simulate_sampled(pf.rhs, np.zeros(3), h, n, noise=np.ones((n, 2, 1)))
-    np.testing.assert_allclose(res.x[:-1, 1], theta, atol=1e-8)
+
+
+@pytest.mark.parametrize("method", ["rk4", "euler"])
+def test_prefilter_fixed_step_states_equal_a_loop_of_the_block_bit_for_bit(method):
+    """softened_setpoint's fixed-step recursion (before: the removed runner simulate_sampled, a Loop of
+    pf.rhs on the numpy engine) gives the numbers of a Loop of the block itself, to the last bit."""
+    from ctrl_analysis.estimators.tracking import softened_setpoint
+
+    pf, h = LowPassFilter(4.0, 3), 0.01
+    r = np.random.default_rng(3).normal(size=300)
+    theta = softened_setpoint(pf, r, h, method=method)
+    res = Loop([place(pf, "pf")], h, method=method).simulate(r.size, inputs={"u": r})
+    loop = np.stack([res[f"w[{k}]"][:-1, 0] for k in range(3)], axis=-1)
+    np.testing.assert_array_equal(theta, loop)
+    assert not np.allclose(theta[:, 2], 0.0)  # the input moved every state
 
 
 def test_bad_input():

@@ -13,11 +13,12 @@ from ctrl_analysis.controllers.mfac import (
     ikf_mfac,
     mfac_controller,
 )
-from ctrl_analysis.engine.blocks import DiscreteBlock, StaticBlock
+from ctrl_analysis.engine.blocks import DiscreteBlock
+from ctrl_analysis.engine.function_block import FunctionBlock
 from ctrl_analysis.engine.loop import Loop, place
 from ctrl_analysis.estimators.kalman import ImprovedKalmanFilter
 from ctrl_analysis.estimators.tracking import TrackingDifferentiator
-from ctrl_analysis.simulate import draw_noise, gaussian_noise, run_seeds
+from ctrl_analysis.noise import draw_noise, gaussian_noise, run_seeds
 
 
 class StaticGainPlant(DiscreteBlock):
@@ -162,7 +163,7 @@ def closed_loop(scheme):
     filt = {"td": TrackingDifferentiator(300.0, 0.01, 0.02, substeps=3, x0=(1.0, 0.0), feedthrough=True),
             "td_lag": TrackingDifferentiator(300.0, 0.01, 0.02, substeps=3, x0=(1.0, 0.0)),
             "ikf": ImprovedKalmanFilter(0.05, 0.1, y0=1.0, P0=0.0)}.get(scheme)
-    meas = StaticBlock(lambda t, u: u[:, :1] + u[:, 1:2], inputs=("y", "v"), outputs=("y_m",))
+    meas = FunctionBlock(lambda t, u: u[:, :1] + u[:, 1:2], inputs=("y", "v"), outputs=("y_m",))
     blocks = [place(CubicPlant(), "plant"), place(meas, "meas")]
     blocks += ikf_mfac(est, law, filt) if scheme == "ikf" else mfac_controller(est, law, filt)
     return Loop(blocks, dt=1.0)

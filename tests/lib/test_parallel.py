@@ -7,17 +7,11 @@ import pytest
 
 from ctrl_analysis import cluster, parallel, progress
 from ctrl_analysis.engine.blocks import ContinuousBlock
+from ctrl_analysis.engine.integrators import rk4_step
 from ctrl_analysis.engine.loop import Loop, place
+from ctrl_analysis.engine.memory import check_result_memory, chunk_bounds
 from ctrl_analysis.estimators.differential import DifferentialEstimator
-from ctrl_analysis.simulate import (
-    check_result_memory,
-    chunk_bounds,
-    draw_noise,
-    gaussian_noise,
-    run_seeds,
-    simulate_sampled,
-    uniform_noise,
-)
+from ctrl_analysis.noise import draw_noise, gaussian_noise, run_seeds, uniform_noise
 
 N_STEPS = 200
 
@@ -66,8 +60,10 @@ def sweep_fn(points, seeds):
         dx[:, 1] = -k * xx[:, 0] - 0.4 * xx[:, 1] + u[:, 0]
         return dx
 
-    res = simulate_sampled(rhs, x, 0.01, N_STEPS, noise=noise, seeds=seeds)
-    return np.sqrt(np.mean(res.x[:, :, 0] ** 2, axis=0))
+    xs = [x]
+    for n in range(N_STEPS):  # RK4 with the noise held over each sample
+        xs.append(rk4_step(rhs, 0.01 * n, xs[-1], noise[n], 0.01))
+    return np.sqrt(np.mean(np.stack(xs)[:, :, 0] ** 2, axis=0))
 
 
 def test_monte_carlo_in_two_processes_equals_one_process_bit_for_bit():
@@ -289,24 +285,6 @@ def test_loop_chunked_batch_equals_unchunked_bit_for_bit():
     assert list(kept.signals) == ["y"] and kept.x is None and np.array_equal(kept["y"], whole["y"])
     with pytest.raises(ValueError, match="names unknown signal 'nope'"):
         loop.simulate(N_STEPS, inputs=inputs, keep=["nope"])
-
-
-def test_simulate_sampled_chunked_equals_unchunked_and_refuses_a_controller():
-    seeds = run_seeds(0, 5)
-    pts = {"k": np.linspace(1, 5, 5), "x0": np.ones(5)}
-    whole = sweep_fn(pts, seeds)
-    noise = draw_noise(seeds, N_STEPS, uniform_noise([-0.1, -0.01], [0.1, 0.01]))
-
-    def rhs(t, x, u, params=None):
-        return np.stack([x[:, 1], -4.0 * x[:, 0] + u[:, 0]], axis=1)
-
-    a = simulate_sampled(rhs, np.ones(2), 0.01, N_STEPS, noise=noise, seeds=seeds)
-    b = simulate_sampled(rhs, np.ones(2), 0.01, N_STEPS, noise=noise, seeds=seeds, chunk_runs=2)
-    assert np.array_equal(a.x, b.x) and np.array_equal(a.u, b.u) and b.seeds == seeds
-    assert whole.shape == (5,)
-    with pytest.raises(ValueError, match="chunk_runs must be None"):
-        simulate_sampled(rhs, np.ones(2), 0.01, 10, noise=noise, chunk_runs=2,
-                         controller=lambda k, t, x, w: w)
 
 
 def test_result_too_large_raises_a_memory_error_that_says_what_to_do():

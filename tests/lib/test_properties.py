@@ -7,6 +7,8 @@ import pytest
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
+from ctrl_analysis.engine.blocks import ContinuousBlock
+from ctrl_analysis.engine.loop import Loop, place
 from ctrl_analysis.estimators.differential import DifferentialEstimator
 from ctrl_analysis.estimators.kalman import (
     care_residual,
@@ -16,13 +18,7 @@ from ctrl_analysis.estimators.kalman import (
     random_walk_gain,
 )
 from ctrl_analysis.estimators.kalman._checks import check_detectable
-from ctrl_analysis.simulate import (
-    draw_noise,
-    gaussian_noise,
-    run_seeds,
-    simulate_sampled,
-    uniform_noise,
-)
+from ctrl_analysis.noise import draw_noise, gaussian_noise, run_seeds, uniform_noise
 from ctrl_analysis.symbolic.differential import MAX_ORDER
 
 SETTINGS = settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
@@ -96,18 +92,32 @@ def _oscillator(t, x, u, params):
     return np.stack([x[:, 1], -x[:, 0] - 0.4 * x[:, 1] + np.tanh(u[:, 0]) + u[:, 1]], axis=1)
 
 
+class _Oscillator(ContinuousBlock):
+    """:func:`_oscillator` as a block driven by the held noise ``w[0]``, ``w[1]``."""
+
+    inputs, outputs, states = ("w[0]", "w[1]"), ("x[0]", "x[1]"), ("x[0]", "x[1]")
+
+    def rhs(self, t, x, u, params=None):
+        return _oscillator(t, x, u, params)
+
+
+def _run(x0, noise, method):
+    loop = Loop([place(_Oscillator(), "osc")], 0.05, method=method)
+    return loop.simulate(50, inputs={"w[0]": noise[:, :, 0], "w[1]": noise[:, :, 1]}, x0={"osc": x0}).x
+
+
 @SETTINGS
 @given(base=st.integers(0, 2**32 - 1), runs=st.integers(1, 5), method=st.sampled_from(["rk4", "euler"]),
        x0=st.tuples(finite, finite))
 def test_a_batch_equals_its_stacked_single_runs(base, runs, method, x0):
     seeds = run_seeds(base, runs)
     noise = draw_noise(seeds, 50, uniform_noise(-1.0, 1.0), gaussian_noise(0.3))
-    batch = simulate_sampled(_oscillator, x0, 0.05, 50, noise=noise, method=method, seeds=seeds)
+    batch = _run(np.broadcast_to(np.asarray(x0, dtype=float), (runs, 2)), noise, method)
     for b, seed in enumerate(seeds):
         single_noise = draw_noise([seed], 50, uniform_noise(-1.0, 1.0), gaussian_noise(0.3))
         np.testing.assert_array_equal(single_noise[:, 0], noise[:, b])
-        single = simulate_sampled(_oscillator, x0, 0.05, 50, noise=single_noise, method=method, seeds=[seed])
-        np.testing.assert_array_equal(single.x[:, 0], batch.x[:, b])
+        single = _run(x0, single_noise, method)
+        np.testing.assert_array_equal(single[:, 0], batch[:, b])
 
 
 @SETTINGS

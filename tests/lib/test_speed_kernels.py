@@ -11,7 +11,7 @@ from ctrl_analysis.engine.kernels import BlockKernel, copy_output
 from ctrl_analysis.engine.loop import Loop, place
 from ctrl_analysis.estimators.differential import DifferentialEstimator, sigma_rhs
 from ctrl_analysis.estimators.eso import ExtendedStateObserver, eso_rhs
-from ctrl_analysis.simulate import draw_noise, gaussian_noise, run_seeds
+from ctrl_analysis.noise import draw_noise, gaussian_noise, run_seeds
 
 
 def osc_rhs(t, x, u, p, dx):

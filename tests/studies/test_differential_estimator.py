@@ -30,9 +30,9 @@ from analysis.differential_estimator.paper import (
     printed_eq9_gain,
 )
 from ctrl_analysis.estimators.differential import DifferentialEstimator
+from ctrl_analysis.noise import run_seeds
 from ctrl_analysis.reporting.report import StudyContext, StudyResult, write_results_json
 from ctrl_analysis.reporting.study import missing_plausible
-from ctrl_analysis.simulate import run_seeds
 from ctrl_analysis.symbolic.differential import breakaway_gain
 
 

@@ -15,9 +15,9 @@ from analysis.ikf_mfac.plants import (
     reference_next,
 )
 from analysis.ikf_mfac.quantities import metrics_of, table1_consistency
+from ctrl_analysis.noise import run_seeds
 from ctrl_analysis.reporting.report import StudyInfo, StudyResult
 from ctrl_analysis.reporting.study import missing_plausible, record_parameters
-from ctrl_analysis.simulate import run_seeds
 
 
 def test_plant_switch_and_r_with_matlab_round():

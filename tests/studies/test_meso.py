@@ -24,10 +24,10 @@ from analysis.meso.paper import (
     TABLE_DECIMALS,
 )
 from ctrl_analysis.identification import batch_least_squares
+from ctrl_analysis.noise import run_seeds
 from ctrl_analysis.reporting.report import StudyContext, write_results_json
 from ctrl_analysis.reporting.study import missing_plausible
 from ctrl_analysis.reporting.verdicts import digits_tolerance
-from ctrl_analysis.simulate import run_seeds
 
 
 def test_equivalent_theta_is_the_closed_loop_projection():
@@ -339,7 +339,7 @@ def test_compiled_accumulation_equals_the_numpy_errors():
     """The chunk's table sums, window sums and sup |Δx3/h| in one compiled pass (_accumulate) = the numpy reference
     (_chunk_errors, the sup of the finite differences outside the θ4 step and before t_from skipped), on strided
     signals as the loop returns them, NaN included."""
-    from analysis.meso import loops
+    from analysis.meso import chunk_errors, loops
 
     rng = np.random.default_rng(4)
     n, B, S = 400, 5, len(loops._STORED)
@@ -350,12 +350,12 @@ def test_compiled_accumulation_equals_the_numpy_errors():
     t = 29.1 + PAPER.h * np.arange(n)                               # the θ4 step at 30 s inside the chunk
     w = (t >= 29.4) & (t < 29.7)
     sums, wsums, sup, prev = np.zeros((6, B)), np.zeros((6, B)), np.zeros(B), rng.normal(size=B)
-    loops._accumulator()(sig["x[0]"], sig["x[1]"], sig["xhat[0]"], sig["xhat[1]"], sig["xhat[2]"], sig["u"],
-                         sig["level"], sig["theta[0]"], sig["theta[1]"], sig["theta[2]"], sig["theta[3]"], t, w,
-                         np.array([r.b_plant for r in rows]), 3.0, PAPER.theta1, PAPER.theta2, PAPER.b - 3.0,
-                         PAPER.t_step, PAPER.h, 29.2, prev.copy(), True, sums, wsums, sup)
-    err, x3 = loops._chunk_errors(sig, t, rows, PAPER, 3.0)
-    for i, m in enumerate(loops.METRIC_ORDER):
+    chunk_errors._accumulator()(sig["x[0]"], sig["x[1]"], sig["xhat[0]"], sig["xhat[1]"], sig["xhat[2]"], sig["u"],
+                                sig["level"], sig["theta[0]"], sig["theta[1]"], sig["theta[2]"], sig["theta[3]"], t, w,
+                                np.array([r.b_plant for r in rows]), 3.0, PAPER.theta1, PAPER.theta2, PAPER.b - 3.0,
+                                PAPER.t_step, PAPER.h, 29.2, prev.copy(), True, sums, wsums, sup)
+    err, x3 = chunk_errors._chunk_errors(sig, t, rows, PAPER, 3.0)
+    for i, m in enumerate(chunk_errors.METRIC_ORDER):
         np.testing.assert_allclose(sums[i], err[m].sum(axis=0), rtol=1e-12)
         np.testing.assert_allclose(wsums[i], err[m][w].sum(axis=0), rtol=1e-12)
     d = np.abs(np.diff(np.vstack([prev[None], x3]), axis=0)) / PAPER.h
@@ -411,7 +411,7 @@ def test_kernels_with_per_run_rows_equal_the_blocks_built_for_each_run(compiled)
     """Plant, (M)ESO, path and Gram update: the batched methods on per-run parameter rows (as the engine
     passes ``params=``) = each run's own block = its kernel run alone (plain or jitted); the (M)ESO
     equals the library's ESO with the model as its known part, bit for bit."""
-    from analysis.meso.loops import ModelledESO, ParameterPath, Plant
+    from analysis.meso.blocks import ModelledESO, ParameterPath, Plant
     from ctrl_analysis.engine.codegen import _jit
     from ctrl_analysis.engine.stepcheck import unchecked
     from ctrl_analysis.estimators.eso import ExtendedStateObserver

@@ -8,7 +8,16 @@ import numpy as np
 import pytest
 
 from analysis import pendulum as pm
-from analysis.pendulum import loops, paper, quantities, verify
+from analysis.pendulum import (
+    box,
+    claims,
+    loops,
+    paper,
+    regimes,
+    verify,
+    verify_quantities,
+)
+from analysis.pendulum.blocks import BackwardDifference, CartPendulum
 from ctrl_analysis.reporting.report import StudyContext, write_results_json
 from ctrl_analysis.reporting.study import missing_plausible
 from ctrl_analysis.symbolic.riccati import second_order_gain
@@ -48,8 +57,8 @@ def test_interpretations_contain_the_continuous_gain_and_miss_the_paper():
     np.testing.assert_allclose([cont.alpha, cont.beta], second_order_gain(V.a21, V.Q / V.R), rtol=1e-9)
     assert rows == sorted(rows, key=lambda g: g.error)
     # the printed K is not reproduced, by far: the band is half a unit of the third printed decimal (0.950: 0.053 %)
-    assert quantities.gain_tolerances(V) == pytest.approx((0.0005 / 0.950, 0.0005 / 0.863))
-    assert rows[0].error > 100 * max(quantities.gain_tolerances(V))
+    assert verify_quantities.gain_tolerances(V) == pytest.approx((0.0005 / 0.950, 0.0005 / 0.863))
+    assert rows[0].error > 100 * max(verify_quantities.gain_tolerances(V))
     f = [g for g in rows if g.kind == "discrete" and g.T == 0.01 and g.noise == "sampled" and not g.swapped
          and g.form == "filter" and g.beta_rule == "beta = T k2"][0]
     _F, ss = verify._discrete(V.a21, V.Q, V.R, 0.01, "sampled")
@@ -111,10 +120,10 @@ def test_run_smoke(small_run):
         for m in ("overshoot", "overshoot_noise_only", "overshoot_noise_free", "overshoot_mean_response",
                   "settling_time", "angle_rms", "accel_rms", "chatter", "sat_e", "sat_ec"):
             assert f"cl.{case}.{m}" in ids and f"literal.{case}.{m}" in ids
-    for m in quantities.PAIRED:
-        assert quantities.cid(m) in ids
-    for m in quantities.PAIRED_LITERAL:
-        assert quantities.cid(m, literal=True) in ids
+    for m in regimes.PAIRED:
+        assert regimes.cid(m) in ids
+    for m in regimes.PAIRED_LITERAL:
+        assert regimes.cid(m, literal=True) in ids
     for qid in ("ss.gain_alpha", "ss.gain_beta", "ss.gain_continuous", "sec5.step_deg"):
         assert result.get(qid).verdict == "differs"
     # the paper's 5.7325° for 0.1 rad is a check of its own arithmetic (an erratum), not a reproduction cell
@@ -155,17 +164,18 @@ def test_loop_equals_python_control_interconnect():
     """The no-filter loop with the plant as a SampledBlock runs the same in Loop and in control.interconnect."""
     import control as ct
 
-    from ctrl_analysis.engine.blocks import SampledBlock, StaticBlock
+    from ctrl_analysis.engine.blocks import SampledBlock
+    from ctrl_analysis.engine.function_block import FunctionBlock
     from ctrl_analysis.engine.loop import Loop, place
 
     p = dataclasses.replace(L, t_end=0.25, n_lookup=31)
     N = int(round(p.t_end / p.T))
     rng = np.random.default_rng(0)
     w, v = rng.normal(scale=p.sigma_w, size=N), rng.normal(scale=p.sigma_v, size=N)
-    blocks = [place(SampledBlock(loops.CartPendulum(V.a21, p.b2), p.T, substeps=p.substeps), "plant"),
-              place(StaticBlock(lambda t, u: u[:, :1] + u[:, 1:], ("phi", "v"), ("y",)), "sensor"),
-              place(StaticBlock(lambda t, u: u[:, :1] - u[:, 1:], ("r", "y"), ("e",)), "error"),
-              place(loops.BackwardDifference(p.T), "diff"), place(loops.fuzzy_controller(p), "fuzzy")]
+    blocks = [place(SampledBlock(CartPendulum(V.a21, p.b2), p.T, substeps=p.substeps), "plant"),
+              place(FunctionBlock(lambda t, u: u[:, :1] + u[:, 1:], ("phi", "v"), ("y",)), "sensor"),
+              place(FunctionBlock(lambda t, u: u[:, :1] - u[:, 1:], ("r", "y"), ("e",)), "error"),
+              place(BackwardDifference(p.T), "diff"), place(loops.fuzzy_controller(p), "fuzzy")]
     loop = Loop(blocks, p.T, outputs=["phi", "u"])
     res = loop.simulate(N, inputs={"r": p.step, "w": w, "v": v})
     engine = loops.simulate_case(p, V.a21, [0], noise=False)  # continuous plant, same loop, no noise
@@ -202,7 +212,7 @@ def test_noise_saturates_the_rate_input_only_in_the_literal_regime():
     p = dataclasses.replace(L, t_end=1.2, t_ss=0.7)
     for q, lo, hi in ((p, 0.0, 0.02), (p.literal(), 0.3, 0.7)):
         cases = loops.compute_regime(q, V.a21, [1, 2, 3], ("nofilter", "kf_ss"))
-        m = {n: quantities.case_metrics(c, q) for n, c in cases.items()}
+        m = {n: regimes.case_metrics(c, q) for n, c in cases.items()}
         assert lo <= np.mean(m["nofilter"]["sat_ec"]) <= hi
         assert np.mean(m["kf_ss"]["sat_ec"]) < 0.01  # the correct steady-state gain removes it
         # the noise-free run rides in the batch and equals a separate noise-free simulation
@@ -246,7 +256,7 @@ def test_points_on_one_batch_equal_single_simulations():
            (dataclasses.replace(base, T=0.0011, sigma_v=1e-3), V.a21, "kf-ss"),
            (dataclasses.replace(base, T=0.0045), V.a21, "alpha-beta")]  # one chunk with 0.0033: padded rows
     seeds = [3, 4, 5]
-    got = loops.simulate_points(pts, seeds, ratio=1.5)
+    got = box.simulate_points(pts, seeds, ratio=1.5)
     for (p, a21, kind), c in zip(pts, got):
         ref = loops.simulate_case(p, a21, seeds, filter_kind=kind, noise_free_extra=True)
         assert c.noisy.phi.shape == (round(p.t_end / p.T) + 1, 3)
@@ -264,13 +274,13 @@ def test_batched_gains_equal_the_filters_built_one_by_one():
     F2, g2 = loops.sampled_pendulum(V.a21, p.T)
     np.testing.assert_allclose(F2, F, rtol=1e-12)
     np.testing.assert_allclose(g2, g, rtol=1e-10)
-    (a1, b1, _, bvec), (a2, b2, _, _) = loops.ab_gains([(p, V.a21, "kf-ss"), (p, V.a21, "alpha-beta")])
+    (a1, b1, _, bvec), (a2, b2, _, _) = box.ab_gains([(p, V.a21, "kf-ss"), (p, V.a21, "alpha-beta")])
     ss = loops.build_filter("kf-ss", p, V.a21)
     np.testing.assert_allclose([a1, b1], [ss.alpha, ss.beta], rtol=1e-9)
     np.testing.assert_allclose(bvec, g * p.b2, rtol=1e-10)
     assert (a2, b2) == p.K_printed
     with pytest.raises(ValueError, match="kind must be"):
-        loops.ab_gains([(p, V.a21, "kf")])
+        box.ab_gains([(p, V.a21, "kf")])
 
 
 def test_box_evaluates_many_points_as_one_by_one():
@@ -315,22 +325,22 @@ def test_median_interval_and_per_run_overshoot_use_the_library_statistics():
     rng = np.random.default_rng(4)
     for n in (6, 16, 48, 100):
         d = rng.normal(-0.1, 0.3, n)
-        st = quantities.Paired.of(d)
+        st = regimes.Paired.of(d)
         ci = quantile_test(d, q=0.0, p=0.5).confidence_interval(0.95)
         assert (st.lo, st.hi) == (pytest.approx(ci.low), pytest.approx(ci.high))
         assert st.median == pytest.approx(np.median(d)) and st.share == pytest.approx(np.mean(d < 0))
         assert st.resolved == (not ci.low <= 0 <= ci.high)
-    assert quantities.Paired.of([0.1, -0.2, 0.3]).floor == np.inf  # too few runs for an interval
+    assert regimes.Paired.of([0.1, -0.2, 0.3]).floor == np.inf  # too few runs for an interval
     phi = np.cumsum(rng.normal(0.01, 0.02, (50, 4)), axis=0)
     final = np.array([0.3, 0.4, 0.5, 0.2])
     expect = [metrics.overshoot(None, phi[:, k], final[k]) for k in range(4)]
-    np.testing.assert_allclose(quantities._peak_over_final(phi, final), expect, rtol=1e-12)
+    np.testing.assert_allclose(regimes._peak_over_final(phi, final), expect, rtol=1e-12)
 
 
 def test_a_change_below_its_noise_floor_is_untestable_never_fails():
     from ctrl_analysis.reporting.report import StudyResult
 
-    P = quantities.Paired.of
+    P = regimes.Paired.of
     rng = np.random.default_rng(0)
     noise = P(rng.normal(0.0, 1.0, 40))  # no effect: the interval holds zero
     clear = P(rng.normal(-0.5, 0.1, 40))
@@ -339,7 +349,7 @@ def test_a_change_below_its_noise_floor_is_untestable_never_fails():
 
     def judged(parts):
         res = StudyResult(pm.INFO)
-        return quantities._claim(res, paper.C_OVERSHOOT, quantities._judge_all(parts), [], "").holds
+        return claims._claim(res, paper.C_OVERSHOOT, claims._judge_all(parts), [], "").holds
 
     assert judged([(noise.median < 0, noise)]) is None
     assert judged([(True, clear), (noise.median < 0, noise)]) is None

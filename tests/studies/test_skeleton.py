@@ -13,9 +13,10 @@ from analysis._skeleton import INFO, run
 from analysis._skeleton.loops import build_loop, simulate
 from analysis._skeleton.paper import EXAMPLE, QUICK
 from ctrl_analysis.engine.blocks import StaticBlock, StaticGain
+from ctrl_analysis.engine.function_block import FunctionBlock
+from ctrl_analysis.noise import run_seeds
 from ctrl_analysis.reporting.report import StudyContext, write_results_json
 from ctrl_analysis.reporting.study import missing_plausible
-from ctrl_analysis.simulate import run_seeds
 
 SMALL = dataclasses.replace(QUICK, t_end=5.5)
 
@@ -34,12 +35,12 @@ def test_noise_free_loop_matches_python_control():
 
 
 def test_loop_follows_contributing_no_lambda_and_picklable():
-    # CONTRIBUTING: static sums are a StaticGain (or a named block), never StaticBlock(lambda ...), so the
+    # CONTRIBUTING: static sums are a StaticGain (or a named block), never FunctionBlock(lambda ...), so the
     # loop can go to worker processes (and compile once its blocks have kernels)
     loop = build_loop(SMALL)
     static = [p for p in loop.placed if isinstance(p.block, StaticBlock)]
     assert [p.name for p in static] == ["sensor"]
-    assert all(type(p.block) is not StaticBlock for p in static)
+    assert not any(isinstance(p.block, FunctionBlock) for p in static)
     assert isinstance(static[0].block, StaticGain) and static[0].block.D.tolist() == [[1.0, 1.0]]
     pickle.loads(pickle.dumps(loop))
 

@@ -189,7 +189,7 @@ def alpha_beta_output(t, x, u, p, y):
 
     Scalar-indexed: the kernel of one run and, on a batch's transposed arrays, the block's numpy
     method. With an empty ``x`` (a static corrector placed after a predictor that holds the
-    state, see ``analysis/pendulum/loops.split_filter``) the prediction is read from ``u[0:2]`` and
+    state, see ``analysis/pendulum/blocks.split_filter``) the prediction is read from ``u[0:2]`` and
     ``y(k)`` from ``u[2]``.
 
     Parameters
