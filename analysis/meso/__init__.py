@@ -100,6 +100,7 @@ def _sensitivity(ctx, result, sims, an, box_seeds, horizons) -> None:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         sens = sensitivity.explore(claims.evaluate, params, names=names, batch=claims.evaluate_many,
+                                   jobs=ctx.jobs, scheduler=ctx.scheduler,
                                    **(sensitivity.QUICK if ctx.quick else BOX), note="")
     note = (f"the noise-free runs, and at a noise-on point {len(box_seeds)} noise runs (the main run's first seeds: "
             "common random numbers); each run simulated once and shared by every point that needs it"
