@@ -19,6 +19,7 @@ _EXPORTS = {
     **dict.fromkeys(("Block", "ContinuousBlock", "DiscreteBlock", "SampledBlock", "StaticBlock", "StaticGain",
                      "UnitDelay", "signal_names"), ".engine.blocks"),
     **dict.fromkeys(("Loop", "LoopResponse", "place"), ".engine.loop"),
+    **dict.fromkeys(("Execution", "Save"), ".engine.policies"),
     **dict.fromkeys(("draw_noise", "gaussian_noise", "run_seeds", "uniform_noise"), ".noise"),
 }
 

@@ -37,6 +37,7 @@ from ._validate import (
     check_names,
     check_positive,
 )
+from .engine import Execution, Save
 from .engine.blocks import MAX_SIGNALS, ContinuousBlock, DiscreteBlock, signal_names
 from .engine.integrators import MAX_SUBSTEPS, STEPPERS, euler_step, rk4_step
 from .engine.ivp import simulate_ivp
@@ -274,8 +275,9 @@ def simulate_sampled(
         blocks.append(_recorder(lambda k, t, xk, uk: observe(k, t, xk, uk if k < n_steps else None),
                                 x_sig + u_sig + ("k",), len(x_sig), rows))
     res = Loop(blocks, h, method=method, substeps=substeps).simulate(
-        n_steps, inputs=inputs, x0={"plant": x}, runs=B, keep=u_sig, engine="numpy", t0=t0, bound=bound,
-        store_states=store_states, chunk_runs=size, progress=False)
+        n_steps, inputs=inputs, x0={"plant": x}, runs=B,
+        save=Save(keep=u_sig, states=store_states),
+        execution=Execution(engine="numpy", bound=bound, chunk_runs=size, progress=False), t0=t0)
     return _result(res, u_sig, rows, seeds, bound)
 
 
@@ -332,8 +334,9 @@ def simulate_discrete(
     if observe is not None:
         rows = [[] for _ in range(n_steps)]
         blocks.append(_recorder(lambda k, t, xk, wk: observe(k, xk, wk), x_sig + w_sig + ("k",), len(x_sig), rows))
-    res = Loop(blocks, 1.0).simulate(n_steps, inputs=inputs, x0={"step": x}, runs=B, keep=(), engine="numpy",
-                                     bound=bound, store_states=store_states, chunk_runs=B, progress=False)
+    res = Loop(blocks, 1.0).simulate(n_steps, inputs=inputs, x0={"step": x}, runs=B,
+                                     save=Save(keep=(), states=store_states),
+                                     execution=Execution(engine="numpy", bound=bound, chunk_runs=B, progress=False))
     return _result(res, (), rows, seeds, bound)
 
 

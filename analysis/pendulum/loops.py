@@ -28,6 +28,7 @@ from ctrl_analysis.controllers.fuzzy import (
     FuzzyLookupController,
     sum_rule_table,
 )
+from ctrl_analysis.engine import Execution, Save
 from ctrl_analysis.engine.blocks import (
     ContinuousBlock,
     DiscreteBlock,
@@ -308,7 +309,8 @@ def simulate_case(p, a21: float, seeds, *, filter_kind=None, nonlinear=False, ph
         w, v = (np.concatenate([x, np.zeros((N, 1))], axis=1) for x in (w, v))
         B += 1
     x0 = {"plant": np.tile([phi0, 0.0], (B, 1)) if np.ndim(phi0) == 0 else np.stack([phi0, 0 * phi0], 1)}
-    res = loop.simulate(N, inputs={"r": p.step, "w": w, "v": v}, x0=x0, runs=B, bound=p.bound, engine=engine)
+    res = loop.simulate(N, inputs={"r": p.step, "w": w, "v": v}, x0=x0, runs=B,
+                        execution=Execution(bound=p.bound, engine=engine))
     # a pendulum past |φ| = π/2 has fallen: counted as diverged from that step on (the linear model would not stop)
     fell = np.abs(res["phi"]) >= np.pi / 2
     first_fall = np.where(fell.any(axis=0), np.argmax(fell, axis=0), np.iinfo(np.int64).max)
@@ -636,8 +638,8 @@ def _simulate_chunk(loop, pts, seeds, step, bound, filtered, out, where, on_poin
         params["diff"] = {"T": rep(Ts)}
     keep = (["phi", "dphi", "y", "e", "ec", "u"] + (["xhat[0]", "xhat[1]"] if filtered else [])) if keep is None \
         else ["phi"] + [k for k in keep if k != "phi" and (filtered or not k.startswith("xhat"))]
-    res = loop.simulate(N, inputs={"r": step, "w": w, "v": v}, params=params, runs=B, bound=bound, keep=keep,
-                        store_states=False)
+    res = loop.simulate(N, inputs={"r": step, "w": w, "v": v}, params=params, runs=B,
+                        save=Save(keep=keep, states=False), execution=Execution(bound=bound))
     for j, (p, _, _) in enumerate(pts):
         n, sl = Ns[j], slice(j * per, (j + 1) * per)
         T = p.T
