@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._validate import check_array, check_finite, check_int
+from .engines import kept_columns
 from .memory import RESULT_BYTES, check_result_memory
 from .params import resolve, runs_of, take
 
@@ -217,8 +218,6 @@ def resolve_batch(plan, n_steps, *, inputs=None, x0=None, params=None, runs=None
     if seeds is not None and len(seeds) != B:
         raise ValueError(f"seeds must have one entry per run ({B}), got {len(seeds)}")
     if save is not None:
-        from .engines import kept_columns
-
         width = kept_columns(plan, save.keep)[1].size + (plan.n_states if save.states else 0)
         nbytes = 8 * (n_steps // save.every + 1) * max(width, 1) * B
         if nbytes > RESULT_BYTES:
@@ -226,6 +225,7 @@ def resolve_batch(plan, n_steps, *, inputs=None, x0=None, params=None, runs=None
     variants = resolve(plan, params, B) if params is not None else {}  # validated here, before any work
     t = t0 + plan.dt * np.arange(n_steps + 1)
     # a callable input returning one value per run is sliced with its chunk
-    per_run = frozenset(s for s, f in funcs.items() if np.ndim(f(t[0])) == 1 and np.size(f(t[0])) == B > 1)
+    per_run = frozenset(s for s, f in funcs.items() if np.ndim(f(t[0])) == 1 and np.size(f(t[0])) == B > 1) \
+        if funcs else frozenset()
     return Batch(n_steps=n_steps, t=t, held=held, funcs=funcs, per_run_funcs=per_run,
                  x0=_x0(plan, x0 or {}, B, variants), variants=variants, params=params, seeds=seeds, B=B)

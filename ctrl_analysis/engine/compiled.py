@@ -231,21 +231,26 @@ def run_compiled(plan, runner, t, held, bound, rec, lo=0):
     H, HC = _held_matrix(runs_, n_steps, B, col)
     HS, HCS = _held_matrix(shared, n_steps, None, col)
     xs_arg = _NO_XS if rec.xs is None else rec.xs
-    X = np.array(x, dtype=float, order="C")  # a copy, stepped in place by the runner
+    # the record's own states (a C-contiguous block of rows) are stepped in place: they end as the final states,
+    # as the numpy path leaves them (final_states, chunk carry-over)
+    X = x if x.flags.c_contiguous and x.dtype == np.float64 else np.array(x, dtype=float, order="C")
     run(n_steps, t, plan.dt / plan.substeps, plan.substeps, X, H, HC, HS, HCS, S0,
         rec.keep, rec.every, rec.store, xs_arg, float(bound), rec.diverged, rec.div_step, rec.div_where, PS, *P)
-    x[...] = X  # the final state, as the numpy path leaves it (final_states, chunk carry-over)
+    if X is not x:
+        x[...] = X
 
 
 _NO_XS = np.empty((0, 0, 0))
 _NO_COLS = np.empty(0, dtype=np.intp)
+_NO_SHARED = np.empty((1, 1))
+_NO_RUNS = np.empty((1, 1, 1))
 
 
 def _held_matrix(items, n_steps, B, col):
     """Held inputs as one array: ``(k, N+1, B)`` per run (``B`` given) or ``(N+1, k)`` shared; and their columns."""
     k = max(len(items), 1)
-    if not items:
-        return np.empty((n_steps + 1, k) if B is None else (k, n_steps + 1, B)), _NO_COLS
+    if not items:  # the runner reads no row of it (it loops over the empty columns)
+        return (_NO_SHARED if B is None else _NO_RUNS), _NO_COLS
     H = np.empty((n_steps + 1, k) if B is None else (k, n_steps + 1, B))
     for j, (_, a) in enumerate(items):
         m = min(a.shape[0], n_steps + 1)

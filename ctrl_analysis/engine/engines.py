@@ -136,9 +136,11 @@ def _allocate(plan, batch, save) -> Record:
     n_kept = batch.n_steps // save.every + 1
     keep = kept_columns(plan, save.keep)[1]
     B = batch.B
+    flags = np.empty((2, B), dtype=int)
+    flags.fill(-1)
     return Record(keep, save.every, np.empty((n_kept, B, keep.size)),
                   np.empty((n_kept, B, plan.n_states)) if save.states else None,
-                  batch.x0.copy(), np.zeros(B, dtype=bool), np.full(B, -1, dtype=int), np.full(B, -1, dtype=int))
+                  batch.x0.copy(), np.zeros(B, dtype=bool), flags[0], flags[1])
 
 
 def _respond(plan, batch, save, rec, bound) -> LoopResponse:
@@ -250,6 +252,11 @@ class CompiledEngine:
         from .compiled import run_compiled
 
         rec = _allocate(plan, batch, save)
+        if batch.B == 1 and execution.chunk_runs is None and (execution.progress is False or (
+                execution.progress is None and batch.n_steps < AUTO_BAR_WORK)):
+            # one run, no bar: one call, no chunking or views (the fixed cost of a python-control-style call)
+            run_compiled(plan, self.runner, batch.t, batch.held, execution.bound, rec)
+            return _respond(plan, batch, save, rec, execution.bound)
         with _Progress(batch, execution) as progress:
             for lo, hi in _chunks(plan, batch, save, execution):
                 # one call per chunk, or (with progress) about 20 calls over its runs (runs are independent:
