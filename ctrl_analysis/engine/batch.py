@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._validate import check_array, check_finite, check_int
+from .blocks import Block
 from .engines import kept_columns
 from .memory import RESULT_BYTES, check_result_memory
 from .params import resolve, runs_of, take
@@ -129,14 +130,19 @@ def _inputs(plan, inputs, n_steps, runs):
 
 
 def _default_x0(plan) -> np.ndarray:
-    """Every block's ``initial_state()`` as one row (computed once per plan: its blocks are fixed)."""
-    row = plan.cache.get("x0")
-    if row is None:
-        row = np.empty(plan.n_states)
-        for p in plan.placed:
-            if p.name in plan.slices:
-                row[plan.slices[p.name]] = np.asarray(p.block.initial_state(), dtype=float).reshape(-1)
-        plan.cache["x0"] = row
+    """Every block's ``initial_state()`` as one row (asked at every call: a block's attributes may change)."""
+    row = np.empty(plan.n_states)
+    for p in plan.placed:
+        sl = plan.slices.get(p.name)
+        if sl is not None and sl.stop > sl.start:
+            if type(p.block).initial_state is Block.initial_state:
+                row[sl] = 0.0  # Block's default, zeros: one per state of the plan's slice
+                continue
+            v = np.asarray(p.block.initial_state(), dtype=float).reshape(-1)
+            if v.shape != (sl.stop - sl.start,) or not np.isfinite(v).all():
+                raise ValueError(f"x0[{p.name!r}]: the block's initial_state() must be finite, with one value "
+                                 f"per state, got {v}")
+            row[sl] = v
     return row
 
 

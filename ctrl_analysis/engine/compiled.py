@@ -38,11 +38,40 @@ def compiled_for(plan, engine, funcs, variants):
     if not funcs and not variants:
         memo = plan.cache.get("runner")
         if memo is not None:
-            return memo
+            fresh = _fresh_params(plan, memo)
+            if fresh is not None:
+                return fresh
     found = _compiled_for(plan, engine, funcs, variants or {})
     if found is not None and not funcs and not variants:
-        plan.cache["runner"] = found
+        plan.cache["runner"] = found + (_kernel_functions(plan),)
+        return found
     return found
+
+
+def _kernel_functions(plan):
+    """Each block's kernel functions, or ``None`` if a block has no kernel now."""
+    from .codegen import kernel_of
+
+    ks = [kernel_of(p.block) for p in plan.placed]
+    return None if any(k is None for k in ks) else tuple((k.output, k.update, k.rhs) for k in ks)
+
+
+def _fresh_params(plan, memo):
+    """The cached runner with the blocks' current parameter vectors (a block's attributes may have been changed
+    since), or ``None`` when a block's kernel functions or parameter sizes changed (then the runner is found anew)."""
+    from .codegen import kernel_of
+
+    run, P, per_run, functions = memo
+    fresh = []
+    for p, Pi, fn in zip(plan.placed, P, functions):
+        k = kernel_of(p.block)
+        if k is None or (k.output, k.update, k.rhs) != fn:
+            return None
+        a = k.params
+        if type(a) is not np.ndarray or a.dtype != np.float64 or a.ndim != 1 or a.shape[0] != Pi.shape[1]:
+            return None
+        fresh.append(a.reshape(1, -1) if a.flags.c_contiguous else np.ascontiguousarray(a).reshape(1, -1))
+    return run, fresh, per_run
 
 
 def _compiled_for(plan, engine, funcs, variants):

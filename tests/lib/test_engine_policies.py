@@ -141,3 +141,14 @@ def test_the_compiled_path_reads_no_private_attribute_of_a_loop():
     for name in ("compiled.py", "codegen.py", "engines.py", "numpy_engine.py", "batch.py"):
         text = (engine / name).read_text()
         assert "loop._" not in text and "_plan()" not in text, name
+
+
+def test_a_block_changed_after_a_call_is_simulated_as_it_is_now():
+    """The runner is found once per loop, but the parameters and initial states are read at every call."""
+    blk = Leak(a=0.5)
+    loop = Loop([place(blk, "leak")], dt=1.0)
+    before = loop.simulate(3, inputs={"u": 1.0})
+    blk.kernel_params, blk.x0 = np.array([0.9]), 2.0
+    after = loop.simulate(3, inputs={"u": 1.0})
+    fresh = Loop([place(Leak(a=0.9, x0=2.0), "leak")], dt=1.0).simulate(3, inputs={"u": 1.0})
+    assert np.array_equal(after["y"], fresh["y"]) and not np.array_equal(before["y"], after["y"])
