@@ -59,12 +59,11 @@ def _kernel_functions(plan):
 def _fresh_params(plan, memo):
     """The cached runner with the blocks' current parameter vectors (a block's attributes may have been changed
     since), or ``None`` when a block's kernel functions or parameter sizes changed (then the runner is found anew)."""
-    from .codegen import kernel_of
-
     run, P, per_run, functions = memo
     fresh = []
     for p, Pi, fn in zip(plan.placed, P, functions):
-        k = kernel_of(p.block)
+        own = getattr(p.block, "kernel", None)  # codegen.kernel_of, without importing it at every call
+        k = own() if callable(own) else None
         if k is None or (k.output, k.update, k.rhs) != fn:
             return None
         a = k.params

@@ -17,6 +17,7 @@ from typing import Protocol
 
 import numpy as np
 
+from .compiled import compiled_for, run_compiled
 from .memory import CHUNK_BYTES, chunk_bounds
 from .response import LoopResponse
 
@@ -249,8 +250,6 @@ class CompiledEngine:
         -------
         LoopResponse
         """
-        from .compiled import run_compiled
-
         rec = _allocate(plan, batch, save)
         if batch.B == 1 and execution.chunk_runs is None and (execution.progress is False or (
                 execution.progress is None and batch.n_steps < AUTO_BAR_WORK)):
@@ -292,7 +291,5 @@ def select_engine(plan, batch, execution) -> Engine:
     -------
     Engine
     """
-    from .compiled import compiled_for
-
     runner = compiled_for(plan, execution.engine, batch.funcs, batch.variants)
     return NUMPY if runner is None else CompiledEngine(runner)
