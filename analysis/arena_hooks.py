@@ -27,6 +27,7 @@ from dataclasses import replace
 import numpy as np
 
 from ctrl_analysis.arena.claims import ClaimCheck
+from ctrl_analysis.engine import Execution
 
 __all__ = ["CLAIM_CHECKS", "de_example1", "meso_situation1", "register"]
 
@@ -67,7 +68,8 @@ def de_example1(seed: int, dt: float, n: int) -> tuple:
     K = (start + n) * sub
     xi = draw(EX1, [seed], n_steps=K, h=h)[:, :, 0]  # ξ held over each step (η is the arena's noise)
     plant = Plant19(EX1)
-    res = Loop([place(plant, "plant")], h, method=EX1.method).simulate(K, inputs={"xi": xi}, progress=False)
+    res = Loop([place(plant, "plant")], h, method=EX1.method).simulate(K, inputs={"xi": xi},
+                                                                       execution=Execution(progress=False))
     steps = np.arange(start * sub, K)
     x = np.column_stack([res.signals["x[0]"][steps, 0], res.signals["x[1]"][steps, 0]])
     x2dot = np.array([plant.rhs(h * k, x[i:i + 1], xi[k:k + 1])[0, 1] for i, k in enumerate(steps)])

@@ -35,6 +35,7 @@ from bench_example1 import (
     float_loop,
 )
 
+from ctrl_analysis.engine import Execution, Save
 from ctrl_analysis.noise import draw_noise, run_seeds, uniform_noise
 
 NAME = "Example 1, user block (engine)"
@@ -52,7 +53,7 @@ def run(T=2.0, repeat=5, B=1000):
     from ctrl_analysis.engine import codegen as _kernels
 
     c0 = _kernels.compile_seconds()
-    loop.simulate(2, inputs={"xi": 0.0, "eta": 0.0, "uc": 0.0}, engine="compiled")
+    loop.simulate(2, inputs={"xi": 0.0, "eta": 0.0, "uc": 0.0}, execution=Execution(engine="compiled"))
     t_engine_compile = _kernels.compile_seconds() - c0
 
     def inputs(b):
@@ -66,9 +67,9 @@ def run(T=2.0, repeat=5, B=1000):
     }
     for every in (1, 10, 100):
         fns[f"engine (compiled), B = {B}, keep 6 signals, every = {every}"] = (
-            B, lambda every=every: loop.simulate(n, inputs=inputs(B), keep=KEEP, every=every, store_states=False))
+            B, lambda every=every: loop.simulate(n, inputs=inputs(B), save=Save(keep=KEEP, every=every, states=False)))
     fns[f"engine (compiled), B = {B}, keep nothing (final state)"] = (
-        B, lambda: loop.simulate(n, inputs=inputs(B), keep=[], store_states=False))
+        B, lambda: loop.simulate(n, inputs=inputs(B), save=Save(keep=[], states=False)))
     # the first call of the every = 1 row, in this fresh process: its 96 MB result is first-touch memory
     first = f"engine (compiled), B = {B}, keep 6 signals, every = 1"
     t0 = time.perf_counter()

@@ -33,6 +33,7 @@ import _common  # noqa: F401  (single-threaded BLAS, repository on sys.path)
 import numpy as np
 from _common import Row, median_time, round_robin
 
+from ctrl_analysis.engine import Execution, Save
 from ctrl_analysis.engine.blocks import ContinuousBlock, signal_names
 from ctrl_analysis.engine.integrators import rk4_step
 from ctrl_analysis.engine.kernels import KernelBlock, Kernels, Layout
@@ -264,7 +265,8 @@ def run(T=2.0, io_T=0.05, repeat=3, sizes=(1, 100, 1000)):
     notes.append(f"numba compile time of the reference: {t_compile:.2f} s (first call; cached on disk afterwards)")
     keep = ["x[0]", "x[1]", "xhat[0]", "xhat[1]", "eso_xhat[0]", "eso_xhat[1]"]  # what the study's quantities need
     c0 = _kernels.compile_seconds()
-    loop.simulate(2, inputs={"xi": 0.0, "eta": 0.0, "uc": 0.0}, engine="compiled")  # compile (or load) once
+    loop.simulate(2, inputs={"xi": 0.0, "eta": 0.0, "uc": 0.0},
+                  execution=Execution(engine="compiled"))  # compile (or load) once
     notes.append(f"compiled engine: generating + compiling (or loading from the disk cache) the loop runner "
                  f"took {_kernels.compile_seconds() - c0:.2f} s, not counted in the rows")
     fns = {"py": py, "ref": compiled}
@@ -272,8 +274,8 @@ def run(T=2.0, io_T=0.05, repeat=3, sizes=(1, 100, 1000)):
         for B in sizes:
             def sim(B=B, engine=engine):
                 inputs = {"xi": noise[:, :B, 0], "eta": noise[:, :B, 1], "uc": 0.0}
-                return loop.simulate(n, inputs=inputs, runs=B, seeds=seeds[:B], engine=engine, store_signals=keep,
-                                     store_states=False)
+                return loop.simulate(n, inputs=inputs, runs=B, seeds=seeds[:B],
+                                     save=Save(keep=keep, states=False), execution=Execution(engine=engine))
 
             fns[engine, B] = sim
     timed = round_robin(fns, repeat)  # every method once per round: load changes hit all alike
@@ -285,7 +287,8 @@ def run(T=2.0, io_T=0.05, repeat=3, sizes=(1, 100, 1000)):
             t_B, res_by[engine, B] = timed[engine, B]
             rows.append(Row(NAME, f"engine `Loop` ({engine}), B = {B}", B, t_B))
     # the single-run trace every other method is checked against: numpy engine, states kept
-    res1 = loop.simulate(n, inputs={"xi": noise[:, :1, 0], "eta": noise[:, :1, 1], "uc": 0.0}, engine="numpy")
+    res1 = loop.simulate(n, inputs={"xi": noise[:, :1, 0], "eta": noise[:, :1, 1], "uc": 0.0},
+                         execution=Execution(engine="numpy"))
     xf_eng = final_state(res1)
     err_eng = engine_errors(res1)[0]
     err_big = engine_errors(res_by["compiled", max(sizes)])

@@ -20,6 +20,7 @@ _EXPORTS = {
                      "UnitDelay", "signal_names"), ".engine.blocks"),
     "FunctionBlock": ".engine.function_block",
     **dict.fromkeys(("Loop", "LoopResponse", "place"), ".engine.loop"),
+    **dict.fromkeys(("Execution", "Save"), ".engine.policies"),
     **dict.fromkeys(("draw_noise", "gaussian_noise", "run_seeds", "uniform_noise"), ".noise"),
 }
 

@@ -155,10 +155,11 @@ def _run_study_here(name, out, runs, seed, quick, jobs, scheduler, verbose=True)
     try:
         ctx = StudyContext(out_dir=staged, runs=runs, seed=seed, quick=quick, progress=_progress(name, verbose),
                            jobs=jobs, scheduler=scheduler)
-        t0, started = time.perf_counter(), time.time()
+        t0, started, cpu = time.perf_counter(), time.time(), time.process_time()
         result = load_study(name).run(ctx, params=None)  # the study's chosen values (analysis/__init__.py)
         result.runtime_s = time.perf_counter() - t0
-        trace_event({"kind": "study", "study": name, "start": started, "end": time.time(), "jobs": jobs})
+        trace_event({"kind": "study", "study": name, "start": started, "end": time.time(), "cpu_start": cpu,
+                     "cpu_end": time.process_time(), "jobs": jobs})
         # what the command line asked for, beside the study's own settings
         result.settings["cli"] = dict(record["run"])
         write_results_json(result, staged)

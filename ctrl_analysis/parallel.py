@@ -195,7 +195,7 @@ def map_chunks(fn: Callable, args: Sequence, *, jobs: int = 1, scheduler=None, d
                     if own:
                         _close(client)
             return out
-        submitted, times = time.time(), [None] * len(args)
+        submitted, cpu, times = time.time(), time.process_time(), [None] * len(args)
 
         def one(i, timed_value):
             out[i], times[i] = timed_value[0], timed_value[1:]
@@ -213,7 +213,8 @@ def map_chunks(fn: Callable, args: Sequence, *, jobs: int = 1, scheduler=None, d
             where = "processes"
             _map_on_processes(fn, args, jobs, one)
         trace_event({"kind": "map", "study": _CONTEXT["label"], "where": where, "submitted": submitted,
-                     "returned": time.time(), "calls": times})
+                     "returned": time.time(), "cpu_submitted": cpu, "cpu_returned": time.process_time(),
+                     "calls": times})
     return out
 
 

@@ -16,7 +16,9 @@ waits for a worker that waits for it.
 
 With ``CTRL_ANALYSIS_TRACE=DIR`` every process of a run appends what it did to ``DIR/<pid>.jsonl``
 (:func:`trace_event`): each study's start and end, and each ``map_chunks`` call's submission, return and
-its calls' starts and ends (``time.time``, one clock for all processes), wherever they ran. This is what
+its calls' starts and ends (``time.time``, one clock for all processes), wherever they ran, with CPU seconds
+(``time.process_time``) beside them: a trace recorded with more processes than cores still says what each
+piece of work costs. This is what
 ``benchmarks/scaling.py`` replays for other numbers of workers.
 """
 
@@ -101,13 +103,13 @@ def _worker_init(parent: int) -> None:
 
 
 def _timed_call(blob: bytes):
-    """``fn(arg)`` from cloudpickled bytes, with when it started and ended (``time.time``)."""
+    """``fn(arg)`` from cloudpickled bytes, with when it started and ended (``time.time``) and its CPU seconds."""
     import pickle
 
-    start = time.time()
+    start, cpu = time.time(), time.process_time()
     fn, arg = pickle.loads(blob)
     value = _timed(fn, arg)[0]
-    return value, start, time.time()
+    return value, start, time.time(), time.process_time() - cpu
 
 
 def _timed(fn, arg):
@@ -121,13 +123,13 @@ def _timed(fn, arg):
     Returns
     -------
     tuple
-        The value, and ``time.time()`` before and after.
+        The value, ``time.time()`` before and after, and the CPU seconds of this process meanwhile.
     """
     outer = _STATE["in_call"]
     _STATE["in_call"] = True
-    start = time.time()
+    start, cpu = time.time(), time.process_time()
     try:
-        return fn(arg), start, time.time()
+        return fn(arg), start, time.time(), time.process_time() - cpu
     finally:
         _STATE["in_call"] = outer
 
@@ -271,12 +273,12 @@ def map_on_pool(fn, args: list, done_one) -> list:
     args : list
         One argument per call.
     done_one : callable
-        ``done_one(i, (value, start, end))``, called here as each call finishes.
+        ``done_one(i, (value, start, end, cpu))``, called here as each call finishes.
 
     Returns
     -------
     list
-        ``(fn(a), start, end)`` for every ``a``.
+        ``(fn(a), start, end, cpu)`` for every ``a``.
 
     Raises
     ------

@@ -48,6 +48,7 @@ import tempfile
 import time
 from dataclasses import dataclass
 from pathlib import Path
+from ctrl_analysis.engine import Execution
 
 HERE = Path(__file__).resolve().parent
 for _p in (HERE, HERE / "lib"):
@@ -195,8 +196,9 @@ def extra_cases(tmp):
     def simulate(engine):
         def call(n_steps=3, inputs=None, runs=2, bound=1e8, t0=0.0, params=None, x0=None, chunk_runs=None):
             loop = table._loop(dt=0.1)
-            return loop.simulate(n_steps, inputs={"u": 1.0} if inputs is None else inputs, runs=runs, bound=bound,
-                                 t0=t0, params=params, x0=x0, chunk_runs=chunk_runs, engine=engine)
+            return loop.simulate(n_steps, inputs={"u": 1.0} if inputs is None else inputs, runs=runs,
+                                 execution=Execution(bound=bound, chunk_runs=chunk_runs, engine=engine),
+                                 t0=t0, params=params, x0=x0)
 
         return call
 
@@ -207,7 +209,7 @@ def extra_cases(tmp):
             loop = table.loop_mod.Loop([table.loop_mod.place(ikf, "f")], dt=1.0)
             params = {"f": {"Q": np.linspace(0.1, 0.5, 3) if Q is None else Q, "R": 1.0 if R is None else R}}
             inputs = {"y_m": np.ones((4, 3)) if y_m is None else y_m, "dy_model": 0.0}
-            return loop.simulate(4, inputs=inputs, params=params, engine=engine)
+            return loop.simulate(4, inputs=inputs, params=params, execution=Execution(engine=engine))
 
         return call
 

@@ -21,6 +21,7 @@ import numpy as np
 
 from ctrl_analysis._validate import check_finite, check_names
 from ctrl_analysis.controllers.golden_section import GoldenSectionController
+from ctrl_analysis.engine import Execution, Save
 from ctrl_analysis.engine.blocks import DiscreteBlock, StaticBlock, StaticGain
 from ctrl_analysis.engine.kernels import KernelBlock, Kernels, Layout
 from ctrl_analysis.engine.loop import Loop, place
@@ -447,8 +448,8 @@ def simulate_specs(specs, runs: int, seed: int, *, keep=SIGNALS, plant=None, noi
             params["stats"] = {"w": np.repeat(np.array([STATS_WEIGHTS[specs[i][1]] for i in chunk]), runs, axis=0)}
             B = len(chunk) * runs
             res = loop.simulate(n, inputs={"v": np.tile(v, (1, len(chunk))), "r": key.reference}, runs=B, x0=x0,
-                                params=params, store_states=False, keep=list(keep), seeds=seeds * len(chunk),
-                                engine=engine)
+                                params=params, save=Save(states=False, keep=list(keep)),
+                                execution=Execution(engine=engine), seeds=seeds * len(chunk))
             for j, i in enumerate(chunk):
                 sl = slice(j * runs, (j + 1) * runs)
                 d = {s: res[s][:, sl] for s in keep}

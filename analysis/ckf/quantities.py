@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ctrl_analysis.engine import Execution, Save
 from ctrl_analysis.engine.loop import Loop, place
 from ctrl_analysis.estimators.kalman import (
     CharacteristicKalmanFilter,
@@ -357,7 +358,8 @@ def open_loop(block, signals, output):
     outs = (output,) + tuple(f"_{o}" for o in block.outputs[1:])
     loop = Loop([place(block, "b", inputs=list(signals), outputs=list(outs))], dt=1.0)
     N, B = next(iter(signals.values())).shape
-    res = loop.simulate(N - 1, inputs=signals, runs=B, store_states=False, keep=[output], bound=np.inf)
+    res = loop.simulate(N - 1, inputs=signals, runs=B, save=Save(states=False, keep=[output]),
+                        execution=Execution(bound=np.inf))
     return res[output]
 
 

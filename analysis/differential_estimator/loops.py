@@ -20,6 +20,7 @@ from ctrl_analysis._validate import check_finite
 from ctrl_analysis.controllers.differential_feedback import (
     HighOrderDifferentialFeedback,
 )
+from ctrl_analysis.engine import Execution, Save
 from ctrl_analysis.engine.blocks import (
     ContinuousBlock,
     StaticGain,
@@ -284,8 +285,9 @@ def simulate_signals(loop: Loop, n_steps: int, keep, *, inputs, runs: int, chunk
     for k0 in range(0, n_steps, chunk):
         n = min(chunk, n_steps - k0)
         ins = {s: (v[k0:k0 + n + 1] if isinstance(v, np.ndarray) and v.ndim else v) for s, v in inputs.items()}
-        res = loop.simulate(n, inputs=ins, x0=x0, runs=runs, t0=k0 * loop.dt, params=params, bound=bound,
-                            seeds=seeds, keep=list(keep), store_states=False)
+        res = loop.simulate(n, inputs=ins, x0=x0, runs=runs, t0=k0 * loop.dt, params=params,
+                            save=Save(keep=list(keep), states=False), execution=Execution(bound=bound),
+                            seeds=seeds)
         for s in keep:
             out[s][k0:k0 + n + 1] = res[s]
         new = res.diverged & ~diverged

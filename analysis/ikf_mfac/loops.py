@@ -13,6 +13,7 @@ from ctrl_analysis.controllers.mfac import (
     PPDEstimator,
     mfac_controller,
 )
+from ctrl_analysis.engine import Execution, Save
 from ctrl_analysis.engine.blocks import StaticGain
 from ctrl_analysis.engine.loop import Loop, place
 from ctrl_analysis.estimators.kalman import ImprovedKalmanFilter
@@ -171,7 +172,7 @@ def run_scheme(ex: Example, scheme: str, v: np.ndarray, engine: str = "auto") ->
     keep = _STORED + (("y_f",) if scheme in _FILTERED else ())
     res = loop.simulate(n_steps, t0=float(ks), inputs={"v": v[ks - 1:], "y_ref_next": reference_next(ex.reference, k_eng)},
                         x0={"plant": plant_start_state(plant, ex.y_init, ex.u_init, ks)}, params=params,
-                        bound=BOUND, store_states=False, engine=engine, store_signals=keep)
+                        save=Save(states=False, keep=keep), execution=Execution(bound=BOUND, engine=engine))
     B = v.shape[1]
     head = np.full((ks - 1, B), ex.y_init)
     y = np.vstack([head, res["y"]])
@@ -254,8 +255,8 @@ def run_batch(exs, scheme: str, vs, engine: str = "auto", keep=("y",)) -> Scheme
     k_eng = ks + np.arange(n - ks + 1)
     x0["plant"] = plant_start_state(plant, ex.y_init, ex.u_init, ks)
     res = loop.simulate(n - ks, t0=float(ks), inputs={"v": v[ks - 1:], "y_ref_next": reference_next(ex.reference, k_eng)},
-                        x0=x0, params=params, bound=BOUND, store_states=False, engine=engine,
-                        store_signals=tuple(keep))
+                        x0=x0, params=params, save=Save(states=False, keep=tuple(keep)),
+                        execution=Execution(bound=BOUND, engine=engine))
     B = v.shape[1]
     head = np.full((ks - 1, B), ex.y_init)
     empty = np.empty((0, B))

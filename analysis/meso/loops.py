@@ -23,6 +23,7 @@ import numpy as np
 
 from ctrl_analysis.controllers.pd import PDFeedforward
 from ctrl_analysis.engine.blocks import signal_names
+from ctrl_analysis.engine import Execution, Save
 from ctrl_analysis.engine.loop import Loop, place
 from ctrl_analysis.estimators.lowpass import LowPassFilter
 from ctrl_analysis.noise import draw_noise, uniform_noise
@@ -276,8 +277,8 @@ def _step(loop, n, inputs, x0, params, act, B, t0, bound):
     for the runs not stepped) and the divergence flags and steps of all ``B`` runs.
     """
     if act.size == B:
-        res = loop.simulate(n, inputs=inputs, x0=x0, runs=B, t0=t0, params=params, bound=bound,
-                            store_states=False, keep=_STORED)
+        res = loop.simulate(n, inputs=inputs, x0=x0, runs=B, t0=t0, params=params,
+                            save=Save(states=False, keep=_STORED), execution=Execution(bound=bound))
         return {s: res[s][:n] for s in res.signals}, res.final_states, res.diverged, res.diverged_step
     div, div_step = np.zeros(B, dtype=bool), np.full(B, -1)
     states = {name: np.full((B,) + np.shape(x)[1:], np.nan) for name, x in x0.items()}
@@ -286,7 +287,7 @@ def _step(loop, n, inputs, x0, params, act, B, t0, bound):
     sub_in = {k: (v[:, act] if np.ndim(v) == 2 else v) for k, v in inputs.items()}
     sub_params = {blk: {k: np.asarray(v)[act] for k, v in ps.items()} for blk, ps in params.items()}
     res = loop.simulate(n, inputs=sub_in, x0={k: v[act] for k, v in x0.items()}, runs=act.size, t0=t0,
-                        params=sub_params, bound=bound, store_states=False, keep=_STORED)
+                        params=sub_params, save=Save(states=False, keep=_STORED), execution=Execution(bound=bound))
     for name, x in res.final_states.items():
         if name not in states:
             states[name] = np.full((B,) + x.shape[1:], np.nan)

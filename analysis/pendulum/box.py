@@ -11,6 +11,7 @@ import functools
 
 import numpy as np
 
+from ctrl_analysis.engine import Execution, Save
 from ctrl_analysis.engine.blocks import StaticGain
 from ctrl_analysis.engine.loop import Loop, place
 from ctrl_analysis.estimators.kalman import AlphaBetaFilter
@@ -170,8 +171,8 @@ def _simulate_chunk(loop, pts, seeds, step, bound, filtered, out, where, on_poin
         params["diff"] = {"T": rep(Ts)}
     keep = (["phi", "dphi", "y", "e", "ec", "u"] + (["xhat[0]", "xhat[1]"] if filtered else [])) if keep is None \
         else ["phi"] + [k for k in keep if k != "phi" and (filtered or not k.startswith("xhat"))]
-    res = loop.simulate(N, inputs={"r": step, "w": w, "v": v}, params=params, runs=B, bound=bound, keep=keep,
-                        store_states=False)
+    res = loop.simulate(N, inputs={"r": step, "w": w, "v": v}, params=params, runs=B,
+                        save=Save(keep=keep, states=False), execution=Execution(bound=bound))
     for j, (p, _, _) in enumerate(pts):
         n, sl = Ns[j], slice(j * per, (j + 1) * per)
         T = p.T

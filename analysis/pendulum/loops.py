@@ -29,6 +29,7 @@ from ctrl_analysis.controllers.fuzzy import (
     sum_rule_table,
 )
 from ctrl_analysis.engine.blocks import StaticGain
+from ctrl_analysis.engine import Execution
 from ctrl_analysis.engine.loop import Loop, place
 from ctrl_analysis.estimators.kalman import (
     AlphaBetaFilter,
@@ -172,7 +173,8 @@ def simulate_case(p, a21: float, seeds, *, filter_kind=None, nonlinear=False, ph
         w, v = (np.concatenate([x, np.zeros((N, 1))], axis=1) for x in (w, v))
         B += 1
     x0 = {"plant": np.tile([phi0, 0.0], (B, 1)) if np.ndim(phi0) == 0 else np.stack([phi0, 0 * phi0], 1)}
-    res = loop.simulate(N, inputs={"r": p.step, "w": w, "v": v}, x0=x0, runs=B, bound=p.bound, engine=engine)
+    res = loop.simulate(N, inputs={"r": p.step, "w": w, "v": v}, x0=x0, runs=B,
+                        execution=Execution(bound=p.bound, engine=engine))
     # a pendulum past |φ| = π/2 has fallen: counted as diverged from that step on (the linear model would not stop)
     fell = np.abs(res["phi"]) >= np.pi / 2
     first_fall = np.where(fell.any(axis=0), np.argmax(fell, axis=0), np.iinfo(np.int64).max)

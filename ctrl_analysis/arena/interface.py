@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .._validate import check_finite, check_in, check_positive
+from ..engine import Execution, Save
 from ..engine.blocks import DiscreteBlock, signal_names
 from ..engine.kernels import KernelBlock, Kernels
 from ..engine.loop import Loop, place
@@ -359,8 +360,9 @@ def estimate(fam, P, y, dt: float, *, engine: str = "auto") -> np.ndarray:
         dy = np.zeros_like(y)
         dy[1:] = np.diff(y, axis=0) / dt  # backward difference (y_k - y_(k-1)) / dt
         inputs = {"_u[0]": y, "_u[1]": dy}
-    res = loop.simulate(N, inputs=inputs, store_states=False, store_signals=list(outs[:k]), chunk_runs=B,
-                        engine=engine, progress=False, bound=np.inf, params={"est": per_run})
+    res = loop.simulate(N, inputs=inputs, save=Save(states=False, keep=list(outs[:k])),
+                        execution=Execution(chunk_runs=B, engine=engine, progress=False, bound=np.inf),
+                        params={"est": per_run})
     out = np.empty((N, B, k))
     for j, s in enumerate(outs[:k]):
         out[:, :, j] = res.signals[s][:N]

@@ -292,7 +292,7 @@ def _gen_source(blocks, order, stage, discrete, continuous, nc, method, n_signal
             add(f"                for j in range({nc}):")
             add("                    x[j] = RK4_END(x[j], acc[j], h)")
         else:
-            # ctrl_analysis.simulate.euler_step
+            # ctrl_analysis.engine.integrators.euler_step
             for i in stage:
                 L.extend(call(i, "out", "tau", "x", None, " " * 16))
             for i in continuous:
@@ -328,12 +328,14 @@ def _view(vec, cols) -> str:
     return f"{vec}[{cols[0]}:{cols[0] + len(cols)}]" if len(cols) else f"{vec}[0:0]"
 
 
-def compiled_runner(loop, kernels: dict):
-    """The numba runner of ``loop`` (generated once per structure and process) and its constant arguments.
+def compiled_runner(plan, kernels: dict):
+    """The numba runner of a loop's ``plan`` (generated once per structure and process).
 
     Parameters
     ----------
-    loop : Loop
+    plan : Plan
+        The loop's plan (:attr:`Loop.plan <ctrl_analysis.engine.loop.Loop.plan>`): its placed blocks, signal
+        columns, evaluation groups and integrator.
     kernels : dict of block name -> BlockKernel
         Every block's kernel.
 
@@ -343,32 +345,24 @@ def compiled_runner(loop, kernels: dict):
         ``run(n_steps, t, h, substeps, X0, H, HC, HS, HCS, S0, KEEP, EVERY, store, xs, bound, diverged, div_step,
         div_where, PS, *P)``:
         ``H`` holds the per-run inputs ``(., N+1, B)`` at signal columns ``HC``, ``HS`` the inputs
-        shared by every run ``(N+1, .)`` at columns ``HCS``.
-    consts : dict
-        ``IC<i>``/``OC<i>`` index arrays are baked into the runner; ``P`` lists the parameter vectors.
+        shared by every run ``(N+1, .)`` at columns ``HCS``; ``P`` lists the parameter rows.
     """
     import numba
 
-    plan = loop._plan()
     col = plan.col
-    names = [p.name for p in loop.placed]
+    names = [p.name for p in plan.placed]
     blocks = []
-    for p in loop.placed:
-        sl = loop.slices.get(p.name, slice(0, 0))
+    for p in plan.placed:
+        sl = plan.slices.get(p.name, slice(0, 0))
         blocks.append({"ic": [col[s] for s in p.inputs], "oc": [col[s] for s in p.outputs],
                        "np": len(p.outputs), "sl": (sl.start, sl.stop)})
-    idx = {n: i for i, n in enumerate(names)}
-    stage_set = {e[0] for e in plan.stage}
-    stage = [idx[p.name] for p in loop.stage_order if p.block in stage_set]
-    order = [idx[p.name] for p in loop.order]
-    discrete = [idx[p.name] for p in loop.discrete]
-    continuous = [idx[p.name] for p in loop.continuous]
+    order, stage, discrete, continuous = (list(plan.index[k]) for k in ("order", "stage", "discrete", "continuous"))
     key = (tuple((tuple(b["ic"]), tuple(b["oc"]), b["sl"]) for b in blocks), tuple(order), tuple(stage),
-           tuple(discrete), tuple(continuous), loop.n_continuous, loop.method,
+           tuple(discrete), tuple(continuous), plan.n_continuous, plan.method,
            tuple((kernels[n].output, kernels[n].rhs, kernels[n].update) for n in names))
     if key not in _RUNNERS:
         t0 = time.perf_counter()
-        src = _gen_source(blocks, order, stage, discrete, continuous, loop.n_continuous, loop.method, len(plan.names))
+        src = _gen_source(blocks, order, stage, discrete, continuous, plan.n_continuous, plan.method, len(plan.names))
         from .integrators import is_bad, rk4_acc, rk4_end, rk4_point
 
         fns = {"RK4_POINT": rk4_point, "RK4_ACC": rk4_acc, "RK4_END": rk4_end, "IS_BAD": is_bad}

@@ -10,34 +10,81 @@ from __future__ import annotations
 import numpy as np
 
 
-def compiled_for(loop, engine, funcs, variants):
+def compiled_for(plan, engine, funcs, variants):
     """The compiled runner and the kernels' parameters, or ``None`` for the numpy path.
 
-    ``variants`` (block name -> :class:`~ctrl_analysis.engine.params.Variant`) are the run-time
-    parameters: a changed block's kernel, or per-run parameter rows.
+    Parameters
+    ----------
+    plan : Plan
+        The loop's plan (:attr:`Loop.plan <ctrl_analysis.engine.loop.Loop.plan>`).
+    engine : {"auto", "numpy", "compiled"}
+    funcs : dict
+        The callable inputs (they need the numpy path).
+    variants : dict of str -> Variant or None
+        The run-time parameters (:mod:`ctrl_analysis.engine.params`): a changed block's kernel, or
+        per-run parameter rows.
 
     Returns
     -------
     tuple or None
         ``(run, P, per_run)``: the runner, each block's parameters as ``(1, n_p)`` (shared) or
-        ``(B, n_p)`` rows, and whether each block's are per run.
+        ``(B, n_p)`` rows, and whether each block's are per run. Without run-time parameters it is
+        found once per plan (its blocks are fixed) and kept in ``plan.cache``.
     """
     import os
 
     if engine == "numpy" or (engine == "auto" and os.environ.get("CTRL_ANALYSIS_ENGINE") == "numpy"):
         return None
+    if not funcs and not variants:
+        memo = plan.cache.get("runner")
+        if memo is not None:
+            fresh = _fresh_params(plan, memo)
+            if fresh is not None:
+                return fresh
+    found = _compiled_for(plan, engine, funcs, variants or {})
+    if found is not None and not funcs and not variants:
+        plan.cache["runner"] = found + (_kernel_functions(plan),)
+        return found
+    return found
+
+
+def _kernel_functions(plan):
+    """Each block's kernel functions, or ``None`` if a block has no kernel now."""
+    from .codegen import kernel_of
+
+    ks = [kernel_of(p.block) for p in plan.placed]
+    return None if any(k is None for k in ks) else tuple((k.output, k.update, k.rhs) for k in ks)
+
+
+def _fresh_params(plan, memo):
+    """The cached runner with the blocks' current parameter vectors (a block's attributes may have been changed
+    since), or ``None`` when a block's kernel functions or parameter sizes changed (then the runner is found anew)."""
+    run, P, per_run, functions = memo
+    fresh = []
+    for p, Pi, fn in zip(plan.placed, P, functions):
+        own = getattr(p.block, "kernel", None)  # codegen.kernel_of, without importing it at every call
+        k = own() if callable(own) else None
+        if k is None or (k.output, k.update, k.rhs) != fn:
+            return None
+        a = k.params
+        if type(a) is not np.ndarray or a.dtype != np.float64 or a.ndim != 1 or a.shape[0] != Pi.shape[1]:
+            return None
+        fresh.append(a.reshape(1, -1) if a.flags.c_contiguous else np.ascontiguousarray(a).reshape(1, -1))
+    return run, fresh, per_run
+
+
+def _compiled_for(plan, engine, funcs, variants):
     # imported here: _kernels re-exports kernels of the estimators, which `import ctrl_analysis` must not load
     from .codegen import available, compiled_runner, kernel_of
-    
+
     why = None
     if not available():
         why = "numba is not installed"
     elif funcs:
         why = "callable inputs need the numpy path"
     kernels = {}
-    variants = variants or {}
     if why is None:
-        for p in loop.placed:
+        for p in plan.placed:
             v = variants.get(p.name)
             if v is not None and v.groups is not None and v.rows is None:
                 why = f"block {p.name!r} ({type(p.block).__name__}) has per-run parameters but no kernel"
@@ -56,24 +103,24 @@ def compiled_for(loop, engine, funcs, variants):
     if why is not None:
         if engine == "compiled":
             raise ValueError(f"engine='compiled' is not possible for this loop: {why}")
-        _tell_slow_path(loop, why)
+        _tell_slow_path(plan, why)
         return None
-    if variants or getattr(loop, "_kernels_checked", None) is not loop.placed:
-        check_kernel_reads(loop, kernels)
+    if variants or not plan.cache.get("kernels_checked"):
+        check_kernel_reads(plan, kernels)
         if not variants:
-            loop._kernels_checked = loop.placed  # once per loop: its blocks (and their parameters) are fixed
+            plan.cache["kernels_checked"] = True  # once per loop: its blocks (and their parameters) are fixed
     try:
-        run = compiled_runner(loop, kernels)
+        run = compiled_runner(plan, kernels)
     except Exception as exc:  # a kernel numba cannot compile: say so, and use the numpy path under "auto"
         if engine == "compiled":
             raise
         import warnings
 
         warnings.warn(f"compiled engine unavailable for this loop ({type(exc).__name__}: {exc}); "
-                      "using the numpy engine", RuntimeWarning, stacklevel=3)
+                      "using the numpy engine", RuntimeWarning, stacklevel=6)
         return None
-    P = [_params_2d(p.name, kernels[p.name].params) for p in loop.placed]
-    return run, P, [np.ndim(kernels[p.name].params) == 2 for p in loop.placed]
+    P = [_params_2d(p.name, kernels[p.name].params) for p in plan.placed]
+    return run, P, [np.ndim(kernels[p.name].params) == 2 for p in plan.placed]
 
 
 class SlowPathWarning(RuntimeWarning):
@@ -90,20 +137,21 @@ _REMEDY = {
 }
 
 
-def _tell_slow_path(loop, why: str) -> None:
-    """Warn once per loop that it runs on the numpy engine: which block (or input) and what would make it compile."""
-    if getattr(loop, "_slow_path_told", False):
+def _tell_slow_path(plan, why: str) -> None:
+    """Warn once per loop (its plan) that it runs on the numpy engine: which block (or input) would compile how."""
+    if plan.cache.get("slow_path_told"):
         return
-    loop._slow_path_told = True
+    plan.cache["slow_path_told"] = True
     import warnings
 
     remedy = next((r for key, r in _REMEDY.items() if key in why), "")
     warnings.warn(f"this loop runs on the numpy engine, often 10-100x slower than compiled: {why}"
                   + (f"; to compile it, {remedy}" if remedy else "")
-                  + " (engine='numpy' chooses the numpy engine without this warning)", SlowPathWarning, stacklevel=4)
+                  + " (execution=Execution(engine='numpy') chooses the numpy engine without this warning)",
+                  SlowPathWarning, stacklevel=7)
 
 
-def check_kernel_reads(loop, kernels: dict) -> None:
+def check_kernel_reads(plan, kernels: dict) -> None:
     """Call every kernel once in Python on vectors of the engine's sizes: an out-of-range index, or a write into the inputs, is an error.
 
     Compiled code does not check bounds, so a kernel reading a parameter slot its block did not
@@ -116,7 +164,8 @@ def check_kernel_reads(loop, kernels: dict) -> None:
 
     Parameters
     ----------
-    loop : Loop
+    plan : Plan
+        The loop's plan (its placed blocks).
     kernels : dict of block name -> BlockKernel
 
     Raises
@@ -127,7 +176,7 @@ def check_kernel_reads(loop, kernels: dict) -> None:
     """
     import warnings
 
-    for p in loop.placed:
+    for p in plan.placed:
         k = kernels[p.name]
         params = np.asarray(k.params, dtype=float)
         rows = [params] if params.ndim != 2 else [params[0], params[-1]]
@@ -168,35 +217,68 @@ def _params_2d(name, params):
     return np.ascontiguousarray(a[None, :] if a.ndim == 1 else a)
 
 
-def run_compiled(loop, runner, plan, n_steps, t, x, held, bound, keep_cols, store, xs, diverged, div_step, div_where,
-                 lo=0, every=1):
-    """One chunk through the compiled runner, writing into the result slices (every ``every``-th sample).
+def run_compiled(plan, runner, t, held, bound, rec, lo=0):
+    """One chunk through the compiled runner, writing into the chunk's record (every ``rec.every``-th sample).
 
-    ``lo`` is the chunk's first run within the call: per-run parameter rows ``lo:lo+B`` are its runs'.
+    Parameters
+    ----------
+    plan : Plan
+    runner : tuple
+        ``(run, P, per_run)`` from :func:`compiled_for`.
+    t : numpy.ndarray, shape (N+1,)
+    held : dict of str -> numpy.ndarray
+        The chunk's held inputs.
+    bound : float
+    rec : Record
+        The chunk's part of the record (:class:`~ctrl_analysis.engine.engines.Record`); ``rec.x``
+        holds the initial states and receives the final ones.
+    lo : int
+        The chunk's first run within the call: per-run parameter rows ``lo:lo+B`` are its runs'.
     """
     run, P, per_run = runner
+    x = rec.x
     B = x.shape[0]
-    P = [Pi[lo:lo + B] if pr else Pi[:1] for Pi, pr in zip(P, per_run)]
-    PS = np.array(per_run, dtype=np.intp)
+    n_steps = t.shape[0] - 1
+    if any(per_run):
+        P = [Pi[lo:lo + B] if pr else Pi[:1] for Pi, pr in zip(P, per_run)]
+    PS = plan.cache.get(("PS", tuple(per_run)))
+    if PS is None:
+        PS = plan.cache[("PS", tuple(per_run))] = np.array(per_run, dtype=np.intp)
     col = plan.col
     S0 = np.zeros(len(plan.names))
+    shared, runs_ = [], []
     for s, a in held.items():
         if a.ndim == 0:
             S0[col[s]] = a
+        elif a.ndim == 2:
+            runs_.append((s, a))
+        else:
+            shared.append((s, a))
     # inputs that differ per run, (., N+1, B) (each a block copy of its (N, B) record), and inputs
     # shared by every run, (N+1, .): a shared record is not copied B times
-    H, HC = _held_matrix([(s, a) for s, a in held.items() if a.ndim == 2], n_steps, B, col)
-    HS, HCS = _held_matrix([(s, a) for s, a in held.items() if a.ndim == 1], n_steps, None, col)
-    xs_arg = np.empty((0, 0, 0)) if xs is None else xs
-    X = np.array(x, dtype=float, order="C")  # a copy, stepped in place by the runner
-    run(n_steps, t, loop.dt / loop.substeps, loop.substeps, X, H, HC, HS, HCS, S0,
-        keep_cols, every, store, xs_arg, float(bound), diverged, div_step, div_where, PS, *P)
-    x[...] = X  # the final state, as the numpy path leaves it (final_states, chunk carry-over)
+    H, HC = _held_matrix(runs_, n_steps, B, col)
+    HS, HCS = _held_matrix(shared, n_steps, None, col)
+    xs_arg = _NO_XS if rec.xs is None else rec.xs
+    # the record's own states (a C-contiguous block of rows) are stepped in place: they end as the final states,
+    # as the numpy path leaves them (final_states, chunk carry-over)
+    X = x if x.flags.c_contiguous and x.dtype == np.float64 else np.array(x, dtype=float, order="C")
+    run(n_steps, t, plan.dt / plan.substeps, plan.substeps, X, H, HC, HS, HCS, S0,
+        rec.keep, rec.every, rec.store, xs_arg, float(bound), rec.diverged, rec.div_step, rec.div_where, PS, *P)
+    if X is not x:
+        x[...] = X
+
+
+_NO_XS = np.empty((0, 0, 0))
+_NO_COLS = np.empty(0, dtype=np.intp)
+_NO_SHARED = np.empty((1, 1))
+_NO_RUNS = np.empty((1, 1, 1))
 
 
 def _held_matrix(items, n_steps, B, col):
     """Held inputs as one array: ``(k, N+1, B)`` per run (``B`` given) or ``(N+1, k)`` shared; and their columns."""
     k = max(len(items), 1)
+    if not items:  # the runner reads no row of it (it loops over the empty columns)
+        return (_NO_SHARED if B is None else _NO_RUNS), _NO_COLS
     H = np.empty((n_steps + 1, k) if B is None else (k, n_steps + 1, B))
     for j, (_, a) in enumerate(items):
         m = min(a.shape[0], n_steps + 1)

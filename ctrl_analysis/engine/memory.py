@@ -79,5 +79,6 @@ def check_result_memory(nbytes: float, limit: float, where: str) -> None:
     if nbytes > limit:
         raise MemoryError(
             f"{where} would store {nbytes / 2**30:.1f} GiB of trajectories (limit {limit / 2**30:.1f} GiB, half "
-            f"the physical memory): pass store_states=False and keep fewer signals, or split the runs with "
+            f"the physical memory): pass save=Save(states=False, keep=[...]) with fewer signals, or split the "
+            f"runs with "
             f"ctrl_analysis.parallel.map_chunks and reduce each chunk to the quantities you need")

@@ -14,39 +14,35 @@ from .integrators import STEPPERS, _flag_divergence
 __all__ = ["run_numpy"]
 
 
-def run_numpy(loop, plan, n_steps, t, x, held, funcs, bound, keep_cols, stored, flags, progress):
-    """Step one chunk of runs on the numpy engine, writing into the result slices.
+def run_numpy(plan, t, held, funcs, bound, rec, progress):
+    """Step one chunk of runs on the numpy engine, writing into the chunk's record.
 
     Parameters
     ----------
-    loop : Loop
     plan : Plan
         The chunk's plan: its entries hold the per-step functions to call
         (:func:`~ctrl_analysis.engine.params.chunk_functions`).
-    n_steps : int
     t : numpy.ndarray, shape (n_steps + 1,)
-    x : numpy.ndarray, shape (B, n)
-        The chunk's initial states (a view into the caller's array): it holds the final states on return.
+        The sample instants.
     held : dict of str -> numpy.ndarray
         External inputs given as arrays (scalar, ``(N+1,)`` or ``(N+1, B)``).
     funcs : dict of str -> callable
         External inputs given as functions of time.
     bound : float
         Divergence bound (:func:`~ctrl_analysis.engine.integrators.is_bad`).
-    keep_cols : numpy.ndarray of int
-        The signal columns stored.
-    stored : tuple
-        ``(store, xs, every)``: the chunk's signal and state records and the decimation.
-    flags : tuple
-        ``(diverged, div_step, div_where)`` of the chunk's runs, set in place (``div_where``: the state index, or
-        the number of states plus the signal's column, that first went bad).
+    rec : Record
+        The chunk's part of the record (:class:`~ctrl_analysis.engine.engines.Record`): its stored
+        signals (columns ``rec.keep``, every ``rec.every``-th sample) and states, divergence flags
+        (``div_where``: the state index, or the number of states plus the signal's column, that
+        first went bad) and, in ``rec.x``, the initial states, replaced by the final ones.
     progress : callable or None
         Called with run-samples as they complete.
     """
-    diverged, div_step, div_where = flags
+    n_steps = t.shape[0] - 1
+    x_out = x = rec.x
+    diverged, div_step, div_where = rec.diverged, rec.div_step, rec.div_where
     n_states = x.shape[1]
-    x_out = x
-    store, xs, every = stored
+    store, xs, every, keep_cols = rec.store, rec.xs, rec.every, rec.keep
     B = x.shape[0]
     col = plan.col
     S = np.zeros((B, len(plan.names)))  # every signal at the current instant or stage
@@ -59,9 +55,9 @@ def run_numpy(loop, plan, n_steps, t, x, held, funcs, bound, keep_cols, stored, 
     fcols = [(col[s], f) for s, f in funcs.items()]
     order, stage, discrete, continuous = plan.order, plan.stage, plan.discrete, plan.continuous
     store_all = keep_cols.size == S.shape[1] and np.array_equal(keep_cols, np.arange(S.shape[1]))
-    step = STEPPERS[loop.method]
-    h = loop.dt / loop.substeps
-    nc = loop.n_continuous
+    step = STEPPERS[plan.method]
+    h = plan.dt / plan.substeps
+    nc = plan.n_continuous
     tick = max(1, n_steps // 100)
 
     def evaluate(blocks, tau, xx):  # the chunk's unchecked block functions (chunk_functions)
@@ -108,7 +104,7 @@ def run_numpy(loop, plan, n_steps, t, x, held, funcs, bound, keep_cols, stored, 
                 x_next = x
             if nc:
                 xc, tau = x[:, :nc], tk
-                for _ in range(loop.substeps):
+                for _ in range(plan.substeps):
                     xc = step(stage_rhs, tau, xc, None, h, None)
                     tau += h
                 if discrete:

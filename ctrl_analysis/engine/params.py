@@ -123,7 +123,8 @@ def runs_of(loop, params) -> int | None:
 
     Parameters
     ----------
-    loop : Loop
+    loop : Loop or Plan
+        Its placed blocks (``placed``).
     params : dict or None
 
     Returns
@@ -167,7 +168,8 @@ def resolve(loop, params, B: int) -> dict:
 
     Parameters
     ----------
-    loop : Loop
+    loop : Loop or Plan
+        Its placed blocks (``placed``).
     params : dict of block name -> dict of parameter name -> value, or None
     B : int
         Runs of the batch.
@@ -239,7 +241,8 @@ def take(params, B: int, loop, lo: int, hi: int):
     params : dict or None
         As :meth:`~ctrl_analysis.engine.loop.Loop.simulate` takes it (already checked by :func:`resolve`).
     B : int
-    loop : Loop
+    loop : Loop or Plan
+        Its placed blocks (``placed``).
     lo, hi : int
 
     Returns

@@ -7,7 +7,7 @@ entry ``(block or its per-step function, input columns, output columns, state sl
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -36,6 +36,24 @@ class Plan:
     discrete, continuous : tuple of entries
         The blocks updated once per sample, and those integrated.
 
+    placed : tuple of Placed
+        The loop's blocks as placed (name, block, signals), in the loop's order.
+    index : dict of str -> tuple of int
+        For ``order``, ``stage``, ``discrete`` and ``continuous``: the positions in ``placed`` of
+        their blocks (the compiled engine's view of the same plan).
+    dt, method, substeps : float, str, int
+        The loop's sampling period and integrator.
+    n_states, n_continuous : int
+        Width of the state vector, and of its continuous part (first).
+    slices : dict of str -> slice
+        Each block's part of the state vector.
+    external, outlist : tuple of str
+        The loop's external inputs and reported outputs.
+    state_names, where_names : tuple of str
+        ``block.state`` of every state; and how a divergence names each state and then each signal.
+    cache : dict
+        Per-loop memo of the engines (a compiled runner and its checks), never part of equality.
+
     An entry is ``(block, ic, oc, sl)``: the block (or, in a chunk's plan, its per-step
     function), its input and output columns (a slice when contiguous, else an index array) and
     its slice of the state vector.
@@ -47,6 +65,19 @@ class Plan:
     stage: tuple
     discrete: tuple
     continuous: tuple
+    placed: tuple = ()
+    index: dict = field(default_factory=dict)
+    dt: float = 1.0
+    method: str = "rk4"
+    substeps: int = 1
+    n_states: int = 0
+    n_continuous: int = 0
+    slices: dict = field(default_factory=dict)
+    external: tuple = ()
+    outlist: tuple = ()
+    state_names: tuple = ()
+    where_names: tuple = ()
+    cache: dict = field(default_factory=dict, compare=False, repr=False)
 
 
 def make_plan(loop) -> Plan:
@@ -82,8 +113,16 @@ def make_plan(loop) -> Plan:
         needed.add(p.name)
         if p.block.feedthrough:
             todo.extend(p.inputs)
-    stage = [entries[p.name] for p in loop.stage_order if p.name in needed]
-    return Plan(names=tuple(names), col=col, order=tuple(entries[p.name] for p in loop.order), stage=tuple(stage),
-                discrete=tuple(entries[p.name] for p in loop.discrete),
-                continuous=tuple(entries[p.name] for p in loop.continuous))
+    stage = [p for p in loop.stage_order if p.name in needed]
+    groups = {"order": loop.order, "stage": stage, "discrete": loop.discrete, "continuous": loop.continuous}
+    position = {p.name: i for i, p in enumerate(loop.placed)}
+    state_names = tuple(f"{p.name}.{s}" for p in loop.continuous + loop.discrete for s in p.block.states)
+    owner = {s: p.name for p in loop.placed for s in p.outputs}
+    where = tuple(f"{owner[s]}.{s} (output of block {owner[s]!r})" if s in owner else f"{s} (an input of the loop)"
+                  for s in names)
+    return Plan(names=tuple(names), col=col, **{k: tuple(entries[p.name] for p in g) for k, g in groups.items()},
+                placed=tuple(loop.placed), index={k: tuple(position[p.name] for p in g) for k, g in groups.items()},
+                dt=loop.dt, method=loop.method, substeps=loop.substeps, n_states=loop.n_states,
+                n_continuous=loop.n_continuous, slices=dict(loop.slices), external=tuple(loop.external),
+                outlist=tuple(loop.outlist), state_names=state_names, where_names=state_names + where)
 

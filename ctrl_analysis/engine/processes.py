@@ -13,7 +13,7 @@ from ..parallel import _CLUSTER, _cluster_workers, chunk_slices, map_chunks
 __all__ = ["simulate_chunks"]
 
 
-def simulate_chunks(loop, jobs: int, n_steps: int, held: dict, x, opts: dict, seeds):
+def simulate_chunks(loop, batch, save, execution):
     """:meth:`Loop.simulate <ctrl_analysis.engine.loop.Loop.simulate>` with its batch split over ``jobs`` processes.
 
     The chunks' responses are joined into one, equal bit for bit to ``jobs=1`` (runs are independent).
@@ -21,44 +21,38 @@ def simulate_chunks(loop, jobs: int, n_steps: int, held: dict, x, opts: dict, se
     Parameters
     ----------
     loop : Loop
-    jobs : int
-        Processes.
-    n_steps : int
-    held : dict of str -> ndarray
-        The external inputs, as :meth:`Loop.simulate` prepared them (``(N+1,)`` or ``(N+1, B)``).
-    x : ndarray, shape (B, n)
-        Initial states of the whole batch.
-    opts : dict
-        The remaining keyword arguments of :meth:`Loop.simulate` (``params`` is cut to each chunk's runs).
-    seeds : list or None
-        Recorded in the response.
+        Picklable: each process simulates its chunk of runs with it.
+    batch : Batch
+        The whole batch (:func:`~ctrl_analysis.engine.batch.resolve_batch`); each chunk gets its
+        runs' inputs, initial states, parameters and seeds (:meth:`Batch.take`).
+    save : Save
+    execution : Execution
+        ``jobs`` processes; each chunk runs with ``jobs=1`` and no progress bar of its own.
 
     Returns
     -------
     LoopResponse
     """
-    from .params import take
+    from dataclasses import replace
+
     from .response import LoopResponse
 
-    tasks = []
+    plan = loop.plan
+    jobs = execution.jobs
     chunks = jobs if _CLUSTER["client"] is None else max(jobs, _cluster_workers())
-    for sl in chunk_slices(x.shape[0], chunks=chunks):
-        inputs = {s: (a[:, sl] if a.ndim == 2 else a) for s, a in held.items()}
-        x0 = {name: x[sl, bsl] for name, bsl in loop.slices.items()}
-        tasks.append((loop, n_steps, dict(opts, inputs=inputs, x0=x0, runs=sl.stop - sl.start, progress=False,
-                                          params=take(opts["params"], x.shape[0], loop, sl.start, sl.stop))))
+    inner = replace(execution, jobs=1, progress=False)
+    tasks = [(loop, batch.n_steps, dict(batch.take(plan, sl.start, sl.stop), save=save, execution=inner))
+             for sl in chunk_slices(batch.B, chunks=chunks)]
     parts = map_chunks(_simulate_task, tasks, jobs=min(jobs, len(tasks)), desc="batch chunks")
     first = parts[0]
     xs = None if first.x is None else np.concatenate([p.x for p in parts], axis=1)
     x_final = None if first.x_final is None else np.concatenate([p.x_final for p in parts], axis=0)
     signals = {s: np.concatenate([p.signals[s] for p in parts], axis=1) for s in first.signals}
-    return LoopResponse(t=first.t, x=xs, u=None, y=None,
-                        diverged=np.concatenate([p.diverged for p in parts]),
+    return LoopResponse(t=first.t, x=xs, diverged=np.concatenate([p.diverged for p in parts]),
                         diverged_step=np.concatenate([p.diverged_step for p in parts]),
                         diverged_where=np.concatenate([p.diverged_where for p in parts]), where_names=first.where_names,
-                        seeds=None if seeds is None else list(seeds), bound=first.bound, signals=signals,
-                        slices=dict(loop.slices), external=loop.external, outlist=loop.outlist,
-                        state_names=first.state_names, x_final=x_final)
+                        seeds=batch.seeds, bound=first.bound, signals=signals, slices=plan.slices,
+                        external=plan.external, outlist=plan.outlist, state_names=first.state_names, x_final=x_final)
 
 
 def _simulate_task(task):

@@ -5,30 +5,63 @@ from __future__ import annotations
 import numpy as np
 
 from .._validate import check_int
-from .simresult import SimResult
 
 __all__ = ["LoopResponse"]
 
 
-class LoopResponse(SimResult):
-    """A :class:`~ctrl_analysis.simulate.SimResult` that also keeps every signal by name.
+class LoopResponse:
+    """What a :class:`~ctrl_analysis.engine.loop.Loop` simulation returns: every signal by name, over the batch.
+
+    Parameters
+    ----------
+    t : numpy.ndarray, shape (N+1,)
+        The stored sample instants.
+    x : numpy.ndarray, shape (N+1, B, n) or None
+        The states at those instants (``None`` when not stored, ``Save(states=False)``).
+    diverged : numpy.ndarray of bool, shape (B,)
+    diverged_step : numpy.ndarray of int, shape (B,)
+        First step index at which the run left the bound or went non-finite (``-1`` if never).
+    signals : dict of str -> numpy.ndarray, shape (N+1, B)
+        Every kept signal at every stored instant (external inputs included).
+    slices : dict of str -> slice
+        Each block's part of the state vector.
+    external, outlist : tuple of str
+        The loop's external inputs and reported outputs.
+    state_names : sequence of str
+        ``block.state`` of every state, in state-vector order.
+    seeds : list or None
+        Per-run seeds, as recorded.
+    bound : float
+        The divergence bound used.
+    x_final : numpy.ndarray, shape (B, n), optional
+        The states at the last instant (also when the trajectory is not stored).
+    diverged_where : numpy.ndarray of int, shape (B,), optional
+        Per run: the index in ``where_names`` of the state or signal that first went bad (-1: none).
+    where_names : sequence of str, optional
+        How a divergence names each state, then each signal.
 
     Attributes
     ----------
-    signals : dict of str -> ndarray, shape (N+1, B)
-        Every signal at every sample instant (external inputs included).
+    signals, t, x, diverged, diverged_step, seeds, bound, x_final, diverged_where, where_names
+        As given.
+    info : dict
+        Free-form notes a caller may add.
     states : dict of str -> ndarray, shape (N+1, B, n)
         Each block's states (views into ``x``), when stored.
     final_states : dict of str -> ndarray, shape (B, n)
-        Each block's state at the last instant (also when the trajectory is not stored), e.g. the
-        ``x0`` of a continuation.
+        Each block's state at the last instant, e.g. the ``x0`` of a continuation.
     """
 
-    def __init__(self, *, signals, slices, external, outlist, state_names, x_final=None, diverged_where=None,
-                 where_names=None, **kw):
-        super().__init__(**kw)
-        #: per run: the index in ``where_names`` of the state or signal that first went bad (-1: none)
-        self.diverged_where = (np.full(self.runs, -1, dtype=int) if diverged_where is None
+    def __init__(self, *, t, x, diverged, diverged_step, signals, slices, external, outlist, state_names, seeds=None,
+                 bound=np.inf, x_final=None, diverged_where=None, where_names=None):
+        self.t = t
+        self.x = x
+        self.diverged = diverged
+        self.diverged_step = diverged_step
+        self.seeds = seeds
+        self.bound = bound
+        self.info = {}
+        self.diverged_where = (np.full(diverged.size, -1, dtype=int) if diverged_where is None
                                else np.asarray(diverged_where, dtype=int))
         self.where_names = list(where_names or [])
         self.signals = signals
@@ -36,7 +69,31 @@ class LoopResponse(SimResult):
         self._slices = slices
         self.external = external
         self.outlist = outlist
-        self.state_names = state_names
+        self.state_names = list(state_names)
+
+    def __repr__(self) -> str:
+        return (f"LoopResponse(runs={self.runs}, instants={len(self.t)}, signals={list(self.signals)}, "
+                f"diverged={int(self.diverged.sum())})")
+
+    @property
+    def ok(self) -> np.ndarray:
+        """Mask of runs that stayed finite and bounded.
+
+        Returns
+        -------
+        numpy.ndarray of bool, shape (B,)
+        """
+        return ~self.diverged
+
+    @property
+    def runs(self) -> int:
+        """Number of runs in the batch.
+
+        Returns
+        -------
+        int
+        """
+        return int(self.diverged.size)
 
     @property
     def states(self) -> dict:
@@ -73,10 +130,12 @@ class LoopResponse(SimResult):
         -------
         list of dict
         """
-        out = super().divergences()
-        for rec in out:
-            code = int(self.diverged_where[rec["run"]])
-            rec["where"] = self.where_names[code] if 0 <= code < len(self.where_names) else None
+        out = []
+        for b in np.flatnonzero(self.diverged):
+            k, code = int(self.diverged_step[b]), int(self.diverged_where[b])
+            out.append({"run": int(b), "step": k, "t": float(self.t[min(k, len(self.t) - 1)]),
+                        "seed": None if self.seeds is None else self.seeds[b],
+                        "where": self.where_names[code] if 0 <= code < len(self.where_names) else None})
         return out
 
     def __getitem__(self, name: str) -> np.ndarray:

@@ -1,8 +1,6 @@
-"""The record every batch runner returns (:class:`SimResult`) and the checks the runners share.
+"""The record :func:`~ctrl_analysis.engine.ivp.simulate_ivp` returns (:class:`SimResult`) and its argument checks.
 
-Its own module so that :mod:`ctrl_analysis.simulate` (fixed-step runners) and
-:mod:`ctrl_analysis.engine.ivp` (the adaptive runner, re-exported by ``simulate``) both import it without
-importing each other: ``import ctrl_analysis.engine.ivp`` works as a program's first import.
+(:class:`~ctrl_analysis.engine.response.LoopResponse`, what ``Loop.simulate`` returns, is its own class.)
 """
 
 from __future__ import annotations

@@ -26,6 +26,7 @@ from ctrl_analysis.arena.tuning import (
     pareto_front,
     tune_family,
 )
+from ctrl_analysis.engine import Execution
 from ctrl_analysis.engine.loop import Loop, place
 from ctrl_analysis.estimators.differential import DifferentialEstimator
 from ctrl_analysis.estimators.eso import ExtendedStateObserver
@@ -125,7 +126,7 @@ def test_interface_equals_the_library_block_run_alone(name):
         inputs["u"] = 0.0
     if name == "difflp":
         inputs["u[1]"] = np.concatenate([[0.0], np.diff(y[:, b]) / DT])
-    res = loop.simulate(y.shape[0], inputs=inputs, engine="numpy", progress=False)
+    res = loop.simulate(y.shape[0], inputs=inputs, execution=Execution(engine="numpy", progress=False))
     for j, s in enumerate(outs):
         assert np.allclose(est[:, b, j], res.signals[s][:-1, 0], rtol=1e-12, atol=1e-12), s
 

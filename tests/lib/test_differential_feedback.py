@@ -9,6 +9,7 @@ from ctrl_analysis.controllers.differential_feedback import (
     gains_from_poles,
     hurwitz_roots,
 )
+from ctrl_analysis.engine import Execution
 from ctrl_analysis.engine.blocks import ContinuousBlock, StaticBlock
 from ctrl_analysis.engine.loop import Loop, place
 
@@ -115,10 +116,11 @@ def test_per_run_gains_equal_single_blocks():
                  place(HighOrderDifferentialFeedback(Ks[0]), "ctrl", inputs=["v", "dv", "ddv", "x[0]", "x[1]", "x[2]"])],
                 dt=1e-2, outputs=["x[0]", "u"])
     ins = {"v": 1.0, "dv": 0.0, "ddv": 0.0}
-    runs = loop.simulate(300, inputs=ins, runs=3, params={"ctrl": {"K": Ks}}, engine="numpy")
+    runs = loop.simulate(300, inputs=ins, runs=3, params={"ctrl": {"K": Ks}}, execution=Execution(engine="numpy"))
     for b, K in enumerate(Ks):
         alone = Loop([place(Chain(), "plant"), place(HighOrderDifferentialFeedback(K), "ctrl",
                                                      inputs=["v", "dv", "ddv", "x[0]", "x[1]", "x[2]"])],
-                     dt=1e-2, outputs=["x[0]", "u"]).simulate(300, inputs=ins, runs=1, engine="numpy")
+                     dt=1e-2, outputs=["x[0]", "u"]).simulate(300, inputs=ins, runs=1,
+                                                              execution=Execution(engine="numpy"))
         assert np.array_equal(runs["u"][:, b], alone["u"][:, 0])
     assert not np.array_equal(runs["u"][:, 0], runs["u"][:, 1])

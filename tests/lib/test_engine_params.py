@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from ctrl_analysis.engine import Execution, Save
 from ctrl_analysis.engine.blocks import DiscreteBlock
 from ctrl_analysis.engine.kernels import KernelBlock, Kernels, Layout
 from ctrl_analysis.engine.loop import Loop, place
@@ -25,18 +26,19 @@ def _sigma_loop(a=2.0):
 @pytest.mark.parametrize("engine", ["numpy", "compiled"])
 def test_per_run_parameters_equal_single_runs_through_chunks(engine):
     y = _y(A.size)
-    res = _sigma_loop().simulate(N, inputs={"y": y}, params={"sigma": {"a": A}}, engine=engine)
+    res = _sigma_loop().simulate(N, inputs={"y": y}, params={"sigma": {"a": A}}, execution=Execution(engine=engine))
     for b, a in enumerate(A):
-        alone = _sigma_loop(a).simulate(N, inputs={"y": y[:, b]}, engine=engine)
+        alone = _sigma_loop(a).simulate(N, inputs={"y": y[:, b]}, execution=Execution(engine=engine))
         assert np.array_equal(res.x[:, b], alone.x[:, 0]), f"run {b} (a = {a}) differs from the block built with a"
-    chunked = _sigma_loop().simulate(N, inputs={"y": y}, params={"sigma": {"a": A}}, engine=engine, chunk_runs=3)
+    chunked = _sigma_loop().simulate(N, inputs={"y": y}, params={"sigma": {"a": A}},
+                                     execution=Execution(engine=engine, chunk_runs=3))
     assert np.array_equal(chunked.x, res.x)
 
 
 def test_per_run_parameters_through_processes():
     y = _y(A.size)
     one = _sigma_loop().simulate(N, inputs={"y": y}, params={"sigma": {"a": A}})
-    two = _sigma_loop().simulate(N, inputs={"y": y}, params={"sigma": {"a": A}}, jobs=2)
+    two = _sigma_loop().simulate(N, inputs={"y": y}, params={"sigma": {"a": A}}, execution=Execution(jobs=2))
     assert np.array_equal(one.x, two.x)
 
 
@@ -101,7 +103,8 @@ def test_kernel_block_derived_methods_equal_the_compiled_engine_and_a_hand_compu
     u = np.cos(0.1 * np.arange(N + 1))[:, None] * np.array([[1.0, -2.0, 0.5]])
     a = np.array([0.2, 0.7, 1.3])
     loop = Loop([place(cls(), "lag")], dt=1.0)
-    res = {e: loop.simulate(N, inputs={"u": u}, params={"lag": {"a": a}}, engine=e) for e in ("numpy", "compiled")}
+    res = {e: loop.simulate(N, inputs={"u": u}, params={"lag": {"a": a}},
+                            execution=Execution(engine=e)) for e in ("numpy", "compiled")}
     assert np.array_equal(res["numpy"].x, res["compiled"].x)
     x = np.zeros(3)  # the recursion by hand, run by run
     for k in range(N):
@@ -126,14 +129,16 @@ def test_kernel_block_validates_run_time_values_with_its_constructor_and_serves_
 @pytest.mark.parametrize("every", [1, 7])
 def test_keep_and_every_store_the_decimated_signals_of_the_full_run(engine, every):
     y = _y(3)
-    full = _sigma_loop().simulate(N, inputs={"y": y}, engine=engine)
-    some = _sigma_loop().simulate(N, inputs={"y": y}, engine=engine, keep=["xhat[1]"], every=every, store_states=False)
+    full = _sigma_loop().simulate(N, inputs={"y": y}, execution=Execution(engine=engine))
+    some = _sigma_loop().simulate(N, inputs={"y": y},
+                                  save=Save(keep=["xhat[1]"], every=every, states=False),
+                                  execution=Execution(engine=engine))
     assert list(some.signals) == ["xhat[1]"] and some.x is None
     assert np.array_equal(some.t, full.t[::every]) and some.t.size == N // every + 1
     assert np.array_equal(some["xhat[1]"], full["xhat[1]"][::every])
     assert np.array_equal(some.x_final, full.x[-1])  # the final state whatever is stored
     with pytest.raises(ValueError, match="every must be"):
-        _sigma_loop().simulate(N, inputs={"y": y}, every=0)
+        _sigma_loop().simulate(N, inputs={"y": y}, save=Save(every=0))
 
 
 @pytest.mark.parametrize("engine", ["numpy", "compiled"])
@@ -147,12 +152,14 @@ def test_per_run_initial_states_and_substeps_equal_single_runs(engine):
     subs = np.array([1, 2, 3])
     loop = Loop([place(TrackingDifferentiator(r=50.0, h=0.01), "td")], dt=0.01)
     (name,) = loop.external
-    both = loop.simulate(30, inputs={name: u}, params={"td": {"x0": x0s, "substeps": subs}}, engine=engine)
+    both = loop.simulate(30, inputs={name: u}, params={"td": {"x0": x0s, "substeps": subs}},
+                         execution=Execution(engine=engine))
     assert both.runs == 3  # the batch size comes from the per-run values
     for b in range(3):
         one = Loop([place(TrackingDifferentiator(r=50.0, h=0.01, x0=x0s[b], substeps=int(subs[b])), "td")],
-                   dt=0.01).simulate(30, inputs={name: u}, engine=engine)
+                   dt=0.01).simulate(30, inputs={name: u}, execution=Execution(engine=engine))
         np.testing.assert_array_equal(both.states["td"][:, b], one.states["td"][:, 0])
     # a value for a None-default argument that the constructor takes whole is shared, not per run
-    shared = loop.simulate(30, inputs={name: u}, params={"td": {"x0": [1.0, 0.0]}}, runs=3, engine=engine)
+    shared = loop.simulate(30, inputs={name: u}, params={"td": {"x0": [1.0, 0.0]}}, runs=3,
+                           execution=Execution(engine=engine))
     assert np.all(shared.states["td"][0] == [1.0, 0.0])

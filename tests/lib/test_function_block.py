@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 import ctrl_analysis
+from ctrl_analysis.engine import Execution
 from ctrl_analysis.engine.blocks import StaticBlock, StaticGain
 from ctrl_analysis.engine.function_block import FunctionBlock
 from ctrl_analysis.engine.loop import Loop, place
@@ -15,7 +16,8 @@ def test_function_block_wraps_a_function_and_runs_in_a_loop_like_the_gain():
     np.testing.assert_array_equal(diff.output(0.0, np.zeros((2, 0)), np.array([[1.0, 0.25], [0.0, 2.0]])),
                                   [[0.75], [-2.0]])
     r, y = np.linspace(0.0, 1.0, 6), np.cos(np.arange(6.0))
-    via_fn = Loop([place(diff, "e")], 0.1).simulate(6, inputs={"r": r, "y": y}, engine="numpy")
+    via_fn = Loop([place(diff, "e")], 0.1).simulate(6, inputs={"r": r, "y": y},
+                                                  execution=Execution(engine="numpy"))
     gain = StaticGain([[1.0, -1.0]], ("r", "y"), ("e",))
     via_gain = Loop([place(gain, "e")], 0.1).simulate(6, inputs={"r": r, "y": y})
     np.testing.assert_array_equal(via_fn["e"], via_gain["e"])

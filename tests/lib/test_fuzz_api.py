@@ -51,14 +51,17 @@ from ctrl_analysis.arena import record as arena_record
 from ctrl_analysis.arena import report_section as arena_report_section
 from ctrl_analysis.controllers import differential_feedback as hodf
 from ctrl_analysis.controllers import fuzzy, golden_section, mfac, pd, pid
+from ctrl_analysis.engine import batch as engine_batch
 from ctrl_analysis.engine import (
     blocks,
+    engines,
     function_block,
     integrators,
     ivp,
     memory,
     numpy_engine,
     plan,
+    policies,
     processes,
     simresult,
 )
@@ -68,6 +71,7 @@ from ctrl_analysis.engine import kernels as engine_kernels
 from ctrl_analysis.engine import loop as loop_mod
 from ctrl_analysis.engine import params as engine_params
 from ctrl_analysis.engine import stepcheck as _stepcheck
+from ctrl_analysis.engine import Execution
 from ctrl_analysis.estimators import differential as de
 from ctrl_analysis.estimators import eso, lowpass, tracking
 from ctrl_analysis.estimators.kalman import (
@@ -244,7 +248,8 @@ def _loop_interconnect(name):
 
 def _response_timeresponse(run):
     # the numpy engine: what is fuzzed is to_timeresponse's argument, not worth a compiled loop structure
-    return _loop(dt=0.1).simulate(3, inputs={"u": 1.0}, runs=2, engine="numpy").to_timeresponse(run)
+    return _loop(dt=0.1).simulate(3, inputs={"u": 1.0}, runs=2,
+                                  execution=Execution(engine="numpy")).to_timeresponse(run)
 
 
 def _fuzzy_surface(n_e, n_ec):
@@ -338,15 +343,20 @@ def build_cases(tmp):
         ("Loop(blocks)", loop_mod.Loop, dict(blocks=[loop_mod.place(PLANT, "plant")], dt=0.1),
          dict(blocks=[None, 3, [], [3.0], [loop_mod.place(PLANT, "p"), loop_mod.place(PLANT, "p")]])),
         ("Loop.simulate", _loop_simulate,
-         dict(n_steps=3, inputs={"u": 1.0}, x0=None, runs=2, t0=0.0, bound=1e8, store_states=True, seeds=None,
-              keep=None, chunk_runs=None, max_bytes=None, progress=None, engine="numpy", jobs=1),
+         dict(n_steps=3, inputs={"u": 1.0}, x0=None, runs=2, t0=0.0, seeds=None, save=None,
+              execution=Execution(engine="numpy")),
          dict(n_steps=INT + [0], inputs=[3, {"nonsense": 1.0}, {"u": "abc"}, {"u": np.ones(7)}, {"u": NAN}],
               x0=[3, {"nonsense": [0.0]}, {"plant": [NAN]}, {"plant": [1.0, 2.0, 3.0]}],
-              runs=opt(INT) + [0], t0=REAL, bound=["abc", None, NAN, -INF, 0.0, [1.0]], store_states=BOOL,
-              seeds=[[1, 2, 3], 5], keep=[3, ["nonsense"]], chunk_runs=opt(INT) + [0],
-              max_bytes=opt(POS), progress=[3.0, "f"], engine=CHOICE, jobs=INT + [0],
+              runs=opt(INT) + [0], t0=REAL, seeds=[[1, 2, 3], 5], save=[3, "abc", {"keep": ["y"]}],
+              execution=[3, "numpy", {"engine": "numpy"}],
               params=[3, "abc", {"nonsense": {}}, {"plant": 3}, {"plant": {"nonsense": 1.0}},
                       {"plant": {"dt": [0.1, 0.2, 0.3]}}, {"plant": {"dt": -1.0}}, {"plant": {"dt": NAN}}])),
+        ("Save", policies.Save, dict(keep=None, every=1, states=True),
+         dict(keep=[3, [3], "y y"], every=INT + [0, -1], states=BOOL)),
+        ("Execution", policies.Execution,
+         dict(engine="auto", jobs=1, chunk_runs=None, max_bytes=None, progress=None, bound=1e8),
+         dict(engine=CHOICE, jobs=INT + [0], chunk_runs=opt(INT) + [0], max_bytes=opt(POS), progress=[3.0, "f"],
+              bound=["abc", None, NAN, -INF, 0.0, [1.0]])),
         ("Layout", _layout, dict(fields=("a", ("b", 2))),
          dict(fields=[(3,), ("a", "a"), ("1x",), (("a", -1),), (("a", "x"),)])),
         ("Layout.pack", _layout_pack, dict(a=1.0, b=[1.0, 2.0]),
@@ -961,7 +971,17 @@ NOT_FUZZED = {
     engine_jit.source_key: "engine plumbing: the runner cache gives it the loop's kernels",
     pid.pid_output: "per-step kernel, unchecked by design",
     integrators.is_bad: "per-step divergence test, unchecked by design",
-    numpy_engine.run_numpy: "internal half of Loop.simulate(engine='numpy'), whose arguments are fuzzed",
+    numpy_engine.run_numpy: "internal half of Loop.simulate(execution=Execution(engine='numpy')), whose arguments "
+                            "are fuzzed",
+    engines.NumpyEngine: "no constructor arguments; run() takes the plan, batch and policies Loop.simulate made",
+    engines.CompiledEngine: "built by select_engine from a runner it found; run() as NumpyEngine's",
+    engines.Engine: "a typing.Protocol (the engines' contract)",
+    engines.Record: "record of result arrays built by the engines",
+    engines.kept_columns: "internal half of Loop.simulate(save=Save(keep=...)), whose keep is fuzzed",
+    engines.select_engine: "internal half of Loop.simulate(execution=...), whose engine is fuzzed",
+    engine_batch.Batch: "record built by resolve_batch",
+    engine_batch.resolve_batch: "internal half of Loop.simulate: its inputs, x0, params, runs, seeds and t0 are fuzzed "
+                                "through Loop.simulate",
     plan.Plan: "record built by make_plan",
     plan.make_plan: "built from a Loop, whose constructor is fuzzed",
     integrators.rk4_point: "per-step integrator formula, unchecked by design",
@@ -1011,7 +1031,8 @@ NOT_FUZZED = {
     parallel.use_cluster: "connects to a Dask cluster; its address checks are check_scheduler_address's (fuzzed), "
                           "an unreachable one is tested in tests/lib/test_cli_cluster.py",
     parallel.picklable: "any object is a valid argument (the answer is the check)",
-    processes.simulate_chunks: "internal half of Loop.simulate(jobs > 1), whose arguments are fuzzed",
+    processes.simulate_chunks: "internal half of Loop.simulate(execution=Execution(jobs > 1)), whose arguments are "
+                               "fuzzed",
     progress.NullBar: "no constructor arguments",
     report.versions: "no arguments",
     fuzzy.triangular_memberships: "per-step arithmetic of FuzzyController.output, unchecked by design",
@@ -1097,8 +1118,8 @@ def _engines_agree(rows, runs, chunk_runs):
     inputs = {s: np.ones((4, runs)) for s in loop.external}
     for engine in ("numpy", "compiled"):
         try:
-            outcome[engine] = loop.simulate(4, inputs=inputs, params=params, engine=engine,
-                                            chunk_runs=chunk_runs)["y_hat"]
+            outcome[engine] = loop.simulate(4, inputs=inputs, params=params,
+                                            execution=Execution(engine=engine, chunk_runs=chunk_runs))["y_hat"]
         except ValueError as exc:
             outcome[engine] = str(exc)
     a, b = outcome["numpy"], outcome["compiled"]
@@ -1128,7 +1149,7 @@ def semantic_cases():
     return [
         ("compiled kernel reading an unfilled parameter slot",
          lambda: loop_mod.Loop([loop_mod.place(_ReadsUnfilledSlot(), "b")], dt=1.0).simulate(
-             3, inputs={"u": 1.0}, engine="compiled"), "kernel", None),
+             3, inputs={"u": 1.0}, execution=Execution(engine="compiled")), "kernel", None),
         ("DiscreteLTI.update with a state of the wrong width",
          lambda: PLANT.update(0.0, np.zeros((2, 3)), np.ones((2, 1))), "x", None),
         ("DiscreteLTI.output with an input of the wrong width",

@@ -18,6 +18,7 @@ from hang import limit
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 import fuzz_wide  # noqa: E402
+from ctrl_analysis.engine import Execution
 
 SAMPLE = 800
 
@@ -74,11 +75,11 @@ def test_a_huge_batch_is_refused_before_its_states_are_allocated():
 
     loop = loop_mod.Loop([loop_mod.place(plants.DiscreteLTI(ct.tf([1.0], [1.0, 1.0]), 0.1), "plant")], dt=0.1)
     with pytest.raises(MemoryError, match=r"Loop.simulate\(n_steps=3, runs=1000000000000\)"):
-        loop.simulate(3, inputs={"u": 1.0}, runs=10**12, engine="numpy")
+        loop.simulate(3, inputs={"u": 1.0}, runs=10**12, execution=Execution(engine="numpy"))
     with pytest.raises(TypeError, match="seeds must be an integer"):
-        loop.simulate(3, inputs={"u": 1.0}, runs=2, seeds=[math.nan, 2], engine="numpy")
+        loop.simulate(3, inputs={"u": 1.0}, runs=2, seeds=[math.nan, 2], execution=Execution(engine="numpy"))
     with pytest.raises(TypeError, match=r"inputs\['u'\] must be a number"):
-        loop.simulate(3, inputs={"u": np.ones(3) + 1j}, engine="numpy")
+        loop.simulate(3, inputs={"u": np.ones(3) + 1j}, execution=Execution(engine="numpy"))
 
 
 def test_complex_and_bool_values_are_not_real_numbers():

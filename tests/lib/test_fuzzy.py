@@ -10,6 +10,7 @@ from ctrl_analysis.controllers.fuzzy import (
     piecewise_linear_centroid,
     sum_rule_table,
 )
+from ctrl_analysis.engine import Execution
 from ctrl_analysis.estimators.kalman import (
     AlphaBetaFilter,
     DiscreteKalmanFilter,
@@ -267,7 +268,8 @@ def test_fuzzy_and_filter_blocks_in_a_loop_compiled_equal_numpy():
     loop = Loop([place(kf, "kf"), place(ab, "ab", outputs=("ab0", "ab1")), place(err, "err"),
                  place(FuzzyLookupController(_fc(), 31), "table", outputs=("u_table",)),
                  place(_fc(n_grid=41), "mamdani", outputs=("u_mamdani",))], 0.1)
-    res = {eng: loop.simulate(N, inputs={"y": y, "u": np.sin(y)}, runs=B, engine=eng) for eng in ("numpy", "compiled")}
+    res = {eng: loop.simulate(N, inputs={"y": y, "u": np.sin(y)}, runs=B,
+                              execution=Execution(engine=eng)) for eng in ("numpy", "compiled")}
     a, b = res["numpy"], res["compiled"]
     for s in ("xhat[0]", "xhat[1]", "ab0", "ab1", "u_table", "u_mamdani"):
         assert np.array_equal(a[s], b[s]), s

@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from ctrl_analysis.controllers.golden_section import GoldenSectionController
+from ctrl_analysis.engine import Execution
 from ctrl_analysis.engine.function_block import FunctionBlock
 from ctrl_analysis.engine.loop import Loop, place
 from ctrl_analysis.plants import DiscreteLTI
@@ -62,7 +63,7 @@ def test_golden_section_loop_runs_in_control_interconnect():
                  place(GoldenSectionController(k_I=0.02, c2=0.9, mu=0.1), "ctrl")], 0.01)
     r = 2.0 + np.sign(np.sin(0.05 * np.arange(200)))
     ext = {"r": r, "f1": np.full(200, F1), "f2": np.full(200, F2), "g0": np.full(200, G0)}
-    res = loop.simulate(199, inputs=ext, engine="numpy")
+    res = loop.simulate(199, inputs=ext, execution=Execution(engine="numpy"))
     sys = loop.interconnect()
     assert sys.isdtime()
     resp = ct.input_output_response(sys, res.t, np.stack([ext[s] for s in loop.external]), X0=res.x[0, 0])
@@ -116,7 +117,9 @@ def test_adaptive_loop_compiled_equals_numpy_engine_bit_for_bit():
               outputs=["u"])], dt)
     v = 0.1 * np.random.default_rng(12).normal(size=(1001, 3))
     ext = {"v": v, "r": np.where(np.arange(1001) < 500, 3.0, 1.0)}
-    a, b = loop.simulate(1000, inputs=ext, engine="numpy"), loop.simulate(1000, inputs=ext, engine="compiled")
+    a, b = loop.simulate(1000, inputs=ext,
+                         execution=Execution(engine="numpy")), loop.simulate(1000, inputs=ext,
+                                                                             execution=Execution(engine="compiled"))
     assert np.array_equal(a.x, b.x)
     for s in a.signals:
         assert np.array_equal(a[s], b[s]), s

@@ -6,6 +6,7 @@ import control as ct
 import numpy as np
 import pytest
 
+from ctrl_analysis.engine import Execution
 from ctrl_analysis.engine.blocks import DiscreteBlock
 from ctrl_analysis.engine.loop import Loop, place
 from ctrl_analysis.identification import (
@@ -162,7 +163,8 @@ def arx_loop(rls, dt=0.1):
 
 def test_rls_block_recovers_second_order_arx():
     u = np.random.default_rng(5).standard_normal((400, 3))
-    res = arx_loop(RecursiveLeastSquaresBlock(3, forgetting=1.0, P0=1e4)).simulate(399, inputs={"u": u}, engine="numpy")
+    res = arx_loop(RecursiveLeastSquaresBlock(3, forgetting=1.0, P0=1e4)).simulate(399, inputs={"u": u},
+                                                                                   execution=Execution(engine="numpy"))
     theta = np.stack([res["a1"][-1], res["a2"][-1], res["b1"][-1]], axis=1)
     # exact data: only the prior P0 = 1e4 I biases the estimate, by ~ 1 / (P0 Σ h²) ≪ 1e-4
     np.testing.assert_allclose(theta, np.tile(ARX, (3, 1)), atol=1e-4)
@@ -230,7 +232,8 @@ def test_arx_regressor_lags_and_bad_input():
 def test_rls_loop_runs_in_control_interconnect():
     loop = arx_loop(RecursiveLeastSquaresBlock(3, forgetting=0.99, P0=100.0, lower=[-2, -2, 0], upper=[2, 2, 1]))
     u = np.random.default_rng(8).standard_normal(60)
-    res = loop.simulate(59, inputs={"u": u}, engine="numpy")  # compiled = numpy: test_golden_section's adaptive loop
+    res = loop.simulate(59, inputs={"u": u},
+                        execution=Execution(engine="numpy"))  # compiled = numpy: test_golden_section's adaptive loop
     sys = loop.interconnect()
     assert sys.isdtime()
     resp = ct.input_output_response(sys, res.t, u[None, :], X0=res.x[0, 0])

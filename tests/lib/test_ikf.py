@@ -4,6 +4,7 @@ import control as ct
 import numpy as np
 import pytest
 
+from ctrl_analysis.engine import Execution
 from ctrl_analysis.estimators.kalman import ImprovedKalmanFilter, random_walk_gain
 from ctrl_analysis.symbolic.riccati import derive_random_walk_gain
 
@@ -65,7 +66,7 @@ def test_per_run_q_on_the_batch_axis_equals_single_runs():
     Qs = np.array([0.01, 0.1, 1.0])
     loop = Loop([place(ImprovedKalmanFilter(Qs[0], 0.5), "f", outputs=["yh", "K", "P"])], dt=1.0)
     grid = loop.simulate(N, inputs={"y_m": u[:, :, 0], "dy_model": u[:, :, 1]}, params={"f": {"Q": Qs}},
-                         bound=np.inf)
+                         execution=Execution(bound=np.inf))
     for b, q in enumerate(Qs):
         one, _ = ImprovedKalmanFilter(q, 0.5).run(u[:N, b:b + 1])
         np.testing.assert_array_equal(grid["yh"][:N, b], one[:, 0, 0])

@@ -4,6 +4,7 @@ import control as ct
 import numpy as np
 import pytest
 
+from ctrl_analysis.engine import Execution
 from ctrl_analysis.estimators.kalman import (
     CharacteristicKalmanFilter,
     LinearKalmanFilter,
@@ -117,7 +118,8 @@ def test_ckf_and_plant_run_in_control_interconnect():
     rng = np.random.default_rng(3)
     ext = {"u": rng.normal(size=120), "y_v": rng.normal(size=120), "f1": np.full(120, F1),
            "f2": np.full(120, F2), "g0": np.full(120, G0)}
-    res = loop.simulate(119, inputs=ext, engine="numpy")  # compiled = numpy: test_golden_section's adaptive loop
+    res = loop.simulate(119, inputs=ext,
+                        execution=Execution(engine="numpy"))  # compiled = numpy: test_golden_section's adaptive loop
     resp = ct.input_output_response(loop.interconnect(), res.t, np.stack([ext[s] for s in loop.external]),
                                     X0=res.x[0, 0])
     np.testing.assert_allclose(res.to_timeresponse(0).outputs, resp.outputs, rtol=1e-10, atol=1e-12)

@@ -17,6 +17,7 @@ import pytest
 from analysis.pendulum.blocks import BackwardDifference, CartPendulum
 from ctrl_analysis.arena.interface import _AlphaBetaGamma, _LowPass
 from ctrl_analysis.engine import codegen as _kernels
+from ctrl_analysis.engine import Execution
 from ctrl_analysis.engine.blocks import StaticGain
 from ctrl_analysis.engine.kernels import KernelBlock
 from ctrl_analysis.engine.loop import Loop, place
@@ -146,7 +147,7 @@ def test_every_block_in_a_loop_numpy_engine_equals_compiled_bit_for_bit(continuo
     loop, per_run = _side_by_side(continuous)
     N = 25
     inputs = {s: rng.standard_normal((N + 1, B)) for s in loop.external}
-    res = {e: loop.simulate(N, inputs=inputs, runs=B, params=per_run, engine=e, bound=np.inf)
+    res = {e: loop.simulate(N, inputs=inputs, runs=B, params=per_run, execution=Execution(engine=e, bound=np.inf))
            for e in ("numpy", "compiled")}
     differ = []
     for p in loop.placed:
@@ -161,7 +162,7 @@ def test_every_block_in_a_loop_numpy_engine_equals_compiled_bit_for_bit(continuo
                 one_block = p.block.with_params(**{k: v[b] for k, v in per_run[p.name].items()})
                 alone = loop_with(one_block, loop.dt)
                 one = alone.simulate(N, inputs={f"in{j}": inputs[s][:, b:b + 1] for j, s in enumerate(p.inputs)},
-                                     runs=1, bound=np.inf, engine="numpy")
+                                     runs=1, execution=Execution(bound=np.inf, engine="numpy"))
                 if not np.array_equal(one.x[:, 0], res["compiled"].x[:, b, sl], equal_nan=True):
                     differ.append(f"{BLOCKS[i][0]} run {b} alone")
     assert differ == []
@@ -257,4 +258,4 @@ def test_a_row_kernel_outside_its_vectors_is_a_clear_error_on_every_path(runs, r
     loop = Loop([place(_outside_block(read), "blk")], dt=1.0)
     for engine in ("numpy", "auto"):
         with pytest.raises(ValueError, match=r"\(Outside\): its kernel update 'upd' reads or writes outside its vectors"):
-            loop.simulate(5, inputs={"u": np.ones((6, runs))}, engine=engine)
+            loop.simulate(5, inputs={"u": np.ones((6, runs))}, execution=Execution(engine=engine))

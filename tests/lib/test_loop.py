@@ -4,6 +4,7 @@ import control as ct
 import numpy as np
 import pytest
 
+from ctrl_analysis.engine import Execution, Save
 from ctrl_analysis.engine.blocks import (
     ContinuousBlock,
     DiscreteBlock,
@@ -188,7 +189,8 @@ def test_divergence_is_flagged_per_run():
         def update(self, t, x, u, params=None):
             return x * u
 
-    res = Loop([place(Growth(), "g")], dt=1.0).simulate(30, inputs={"g": np.array([[0.5, 10.0]] * 30)}, bound=1e6)
+    res = Loop([place(Growth(), "g")], dt=1.0).simulate(30, inputs={"g": np.array([[0.5, 10.0]] * 30)},
+                                                        execution=Execution(bound=1e6))
     assert res.diverged.tolist() == [False, True]
     assert res.diverged_step[1] == 7  # 10^7 > 1e6 first at step 7
     assert np.isnan(res["x"][-1, 1]) and res["x"][-1, 0] == pytest.approx(0.5**30)
@@ -266,7 +268,7 @@ def test_block_without_feedthrough_may_come_before_the_producer_of_its_input():
 def test_continuation_from_final_states_equals_one_run():
     loop = Loop([place(Oscillator(2.0), "plant"), place(_Gain(), "k")], dt=0.01)
     whole = loop.simulate(100, runs=2)
-    first = loop.simulate(50, runs=2, store_states=False)
+    first = loop.simulate(50, runs=2, save=Save(states=False))
     assert first.x is None
     second = loop.simulate(50, runs=2, x0=first.final_states, t0=first.t[-1])
     np.testing.assert_array_equal(second["y"], whole["y"][50:])
@@ -362,7 +364,7 @@ def test_a_signal_that_is_not_finite_is_a_diverged_run_named_by_its_block(engine
     # was not reported as diverged
     u = np.where(np.arange(11)[:, None] >= np.array([3, 99, 7])[None, :], -1.0, 1.0)  # run 1 never goes negative
     stateless = Loop([place(_sqrt_block(), "root")], dt=0.1)
-    res = stateless.simulate(10, inputs={"u": u}, engine=engine)
+    res = stateless.simulate(10, inputs={"u": u}, execution=Execution(engine=engine))
     assert res.diverged.tolist() == [True, False, True] and res.diverged_step.tolist() == [3, -1, 7]
     recs = res.divergences()
     assert [r["where"] for r in recs] == ["root.y (output of block 'root')"] * 2 and recs[0]["t"] == pytest.approx(0.3)
@@ -371,7 +373,7 @@ def test_a_signal_that_is_not_finite_is_a_diverged_run_named_by_its_block(engine
 
     loop = Loop([place(_sqrt_block(), "root"), place(UnitDelay(), "delay", inputs=["y"], outputs=["y_prev"])],
                 dt=0.1)
-    res = loop.simulate(10, inputs={"u": u}, engine=engine)
+    res = loop.simulate(10, inputs={"u": u}, execution=Execution(engine=engine))
     assert res.diverged.tolist() == [True, False, True] and res.diverged_step.tolist() == [3, -1, 7]
     assert res.divergences()[0]["where"] == "root.y (output of block 'root')"
     assert np.all(np.isnan(res.final_states["delay"][[0, 2]])) and np.isfinite(res.final_states["delay"][1]).all()
@@ -383,12 +385,12 @@ def test_the_engines_agree_on_where_and_when_a_run_diverged():
     u = np.where(np.arange(21)[:, None] >= np.array([4, 50, 13, 2])[None, :], -1.0, 1.0)
     loop = Loop([place(_sqrt_block(), "root"), place(UnitDelay(), "delay", inputs=["y"], outputs=["y_prev"])],
                 dt=0.1)
-    a, b = (loop.simulate(20, inputs={"u": u}, engine=e) for e in ("numpy", "compiled"))
+    a, b = (loop.simulate(20, inputs={"u": u}, execution=Execution(engine=e)) for e in ("numpy", "compiled"))
     assert a.divergences() == b.divergences()
     np.testing.assert_array_equal(a["y_prev"], b["y_prev"])
     # a state that leaves the bound names the state
     grow = Loop([place(UnitDelay(), "delay", inputs=["g"], outputs=["d"]),
                  place(StaticGain([[10.0]], inputs=("d",), outputs=("g",)), "gain")], dt=1.0)
     for engine in ("numpy", "compiled"):
-        res = grow.simulate(30, x0={"delay": np.ones((2, 1))}, runs=2, bound=1e6, engine=engine)
+        res = grow.simulate(30, x0={"delay": np.ones((2, 1))}, runs=2, execution=Execution(bound=1e6, engine=engine))
         assert res.diverged.all() and res.divergences()[0]["where"] == "delay.u_prev"

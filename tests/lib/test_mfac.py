@@ -13,6 +13,7 @@ from ctrl_analysis.controllers.mfac import (
     ikf_mfac,
     mfac_controller,
 )
+from ctrl_analysis.engine import Execution
 from ctrl_analysis.engine.blocks import DiscreteBlock
 from ctrl_analysis.engine.function_block import FunctionBlock
 from ctrl_analysis.engine.loop import Loop, place
@@ -289,7 +290,8 @@ def test_every_mfac_block_in_one_loop_compiled_equals_numpy_engine_bit_for_bit()
     ref = np.where(np.arange(n + 1) < n // 2, 1.0, -1.0)
     params = {"law": {"rho": rng.uniform(0.3, 1.0, B)}, "law2": {"lam": rng.uniform(1.0, 3.0, B)},
               "filter": {"Q": Qs}}
-    runs = {e: loop.simulate(n, inputs={"v": v, "y_ref_next": ref}, params=params, engine=e, bound=1e4)
+    runs = {e: loop.simulate(n, inputs={"v": v, "y_ref_next": ref}, params=params,
+                             execution=Execution(engine=e, bound=1e4))
             for e in ("numpy", "compiled")}
     a, c = runs["numpy"], runs["compiled"]
     assert not a.diverged.any() and np.array_equal(a.diverged, c.diverged)

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from ctrl_analysis import cluster, parallel, progress
+from ctrl_analysis.engine import Execution, Save
 from ctrl_analysis.engine.blocks import ContinuousBlock
 from ctrl_analysis.engine.integrators import rk4_step
 from ctrl_analysis.engine.loop import Loop, place
@@ -250,7 +251,7 @@ def test_an_unpicklable_loops_batches_warn_once_per_process(monkeypatch):
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         for _ in range(3):  # a study's three batches of one loop: the same sentence once
-            loop.simulate(20, inputs={"w": noise[:, :, 0], "v": noise[:, :, 1]}, jobs=2)
+            loop.simulate(20, inputs={"w": noise[:, :, 0], "v": noise[:, :, 1]}, execution=Execution(jobs=2))
     said = [w for w in caught if "needs a picklable loop" in str(w.message)]
     assert len(said) == 1 and said[0].category is RuntimeWarning
 
@@ -264,7 +265,7 @@ def test_a_loop_with_a_lambda_runs_in_worker_processes_bit_for_bit(monkeypatch):
     inputs = {"w": noise[:, :, 0], "v": noise[:, :, 1]}
     with warnings.catch_warnings():
         warnings.filterwarnings("error", message=".*needs a picklable loop")
-        two = loop.simulate(20, inputs=inputs, jobs=2)
+        two = loop.simulate(20, inputs=inputs, execution=Execution(jobs=2))
     one = loop.simulate(20, inputs=inputs)
     np.testing.assert_array_equal(two.x, one.x)
     assert parallel.map_chunks(lambda a: a * 2, [1, 2, 3], jobs=2) == [2, 4, 6]
@@ -276,19 +277,19 @@ def test_loop_chunked_batch_equals_unchunked_bit_for_bit():
     loop = Loop([place(Damped(), "plant"), place(DifferentialEstimator(3, 4.0), "sigma")], dt=0.01)
     inputs = {"w": noise[:, :, 0], "v": noise[:, :, 1]}
     whole = loop.simulate(N_STEPS, inputs=inputs)
-    for kw in ({"chunk_runs": 3}, {"max_bytes": 1.0}):
+    for kw in ({"execution": Execution(chunk_runs=3)}, {"execution": Execution(max_bytes=1.0)}):
         part = loop.simulate(N_STEPS, inputs=inputs, **kw)
         assert np.array_equal(whole.x, part.x)
         for s in whole.signals:
             assert np.array_equal(whole[s], part[s])
-    kept = loop.simulate(N_STEPS, inputs=inputs, keep=["y"], store_states=False, chunk_runs=2)
+    kept = loop.simulate(N_STEPS, inputs=inputs, save=Save(keep=["y"], states=False), execution=Execution(chunk_runs=2))
     assert list(kept.signals) == ["y"] and kept.x is None and np.array_equal(kept["y"], whole["y"])
     with pytest.raises(ValueError, match="names unknown signal 'nope'"):
-        loop.simulate(N_STEPS, inputs=inputs, keep=["nope"])
+        loop.simulate(N_STEPS, inputs=inputs, save=Save(keep=["nope"]))
 
 
 def test_result_too_large_raises_a_memory_error_that_says_what_to_do():
-    with pytest.raises(MemoryError, match="store_states=False.*map_chunks"):
+    with pytest.raises(MemoryError, match="states=False.*map_chunks"):
         check_result_memory(15 * 2**30, 4 * 2**30, "Loop.simulate")
     check_result_memory(1.0, 4 * 2**30, "Loop.simulate")
 
@@ -317,19 +318,20 @@ def test_long_simulation_shows_its_own_labelled_bar_and_counts_every_run_sample(
     ins = {"u[1]": 0.0, "u[2]": 1.0}
     for engine, m in (("numpy", 200), ("compiled", n)):
         counted = []
-        ref = loop.simulate(m, inputs={"u[0]": u[:m], **ins}, engine=engine, progress=False, store_states=False)
-        got = loop.simulate(m, inputs={"u[0]": u[:m], **ins}, engine=engine, progress=counted.append,
-                            chunk_runs=300, store_states=False)
+        ref = loop.simulate(m, inputs={"u[0]": u[:m], **ins}, save=Save(states=False),
+                            execution=Execution(engine=engine, progress=False))
+        got = loop.simulate(m, inputs={"u[0]": u[:m], **ins}, save=Save(states=False),
+                            execution=Execution(engine=engine, progress=counted.append, chunk_runs=300))
         assert sum(counted) == B * m and len(counted) > 4, engine  # several updates, all the work
         assert np.array_equal(ref["w[0]"], got["w[0]"]), engine  # progress never changes the numbers
     monkeypatch.setenv("CTRL_ANALYSIS_PROGRESS", "1")
     progress.set_context("mystudy", None)
     try:
         capsys.readouterr()
-        loop.simulate(n, inputs={"u[0]": u, **ins}, store_states=False, keep=[])  # progress=None: own bar
+        loop.simulate(n, inputs={"u[0]": u, **ins}, save=Save(states=False, keep=[]))  # progress=None: own bar
         err = capsys.readouterr().err
         assert f"mystudy: {B} runs x {n} samples" in err
-        loop.simulate(n - 1, inputs={"u[0]": u[:-1, :10], **ins}, store_states=False)  # short: no bar
+        loop.simulate(n - 1, inputs={"u[0]": u[:-1, :10], **ins}, save=Save(states=False))  # short: no bar
         assert "runs x" not in capsys.readouterr().err
     finally:
         progress.set_context()
@@ -351,7 +353,7 @@ def test_loop_simulate_with_jobs_equals_one_process_bit_for_bit():
     kw = {"inputs": {"w": noise[:, :, 0], "v": noise[:, :, 1]}, "seeds": seeds,
           "x0": {"plant": np.column_stack([np.linspace(0, 1, 9), np.zeros(9)])}}
     one = loop.simulate(N_STEPS, **kw)
-    two = loop.simulate(N_STEPS, jobs=2, **kw)
+    two = loop.simulate(N_STEPS, execution=Execution(jobs=2), **kw)
     assert np.array_equal(one.x, two.x) and two.seeds == seeds and two.runs == 9
     for s in one.signals:
         assert np.array_equal(one[s], two[s])

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from ctrl_analysis.controllers.pd import PDFeedforward, bandwidth_gains
+from ctrl_analysis.engine import Execution
 
 
 def test_bandwidth_gains():
@@ -147,7 +148,7 @@ def test_compiled_loop_with_the_law_equals_the_numpy_loop():
                  place(theta, "model"), place(pd, "pd")], 0.01)
     t = 0.01 * np.arange(201)
     ins = {"r[0]": np.sin(t), "r[1]": np.cos(t), "r[2]": -np.sin(t)}
-    a = loop.simulate(200, inputs=ins, runs=3, engine="numpy")
-    b = loop.simulate(200, inputs=ins, runs=3, engine="compiled")
+    a = loop.simulate(200, inputs=ins, runs=3, execution=Execution(engine="numpy"))
+    b = loop.simulate(200, inputs=ins, runs=3, execution=Execution(engine="compiled"))
     assert np.array_equal(a["u"], b["u"]) and np.abs(a["u"]).max() > 0.1
     assert np.array_equal(a.final_states["pd"], b.final_states["pd"])

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from ctrl_analysis.controllers.pid import DiscretePID
+from ctrl_analysis.engine import Execution
 from ctrl_analysis.engine.loop import Loop, place
 
 T = 0.05
@@ -50,7 +51,8 @@ def test_engines_agree_bit_for_bit_and_per_run_gains_equal_single_blocks():
     e = _error()[:, None] * np.array([[1.0, 2.0, -1.0]])
     kp = np.array([0.5, 1.0, 4.0])
     loop = Loop([place(DiscretePID(ki=1.0, kd=0.05, T=T, Tf=0.01, u_min=-2.0, u_max=2.0), "pid")], dt=T)
-    res = {eng: loop.simulate(e.shape[0] - 1, inputs={"e": e}, params={"pid": {"kp": kp}}, engine=eng)
+    res = {eng: loop.simulate(e.shape[0] - 1, inputs={"e": e}, params={"pid": {"kp": kp}},
+                              execution=Execution(engine=eng))
            for eng in ("numpy", "compiled")}
     assert np.array_equal(res["numpy"]["u"], res["compiled"]["u"])
     for b in range(3):

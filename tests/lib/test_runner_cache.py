@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 from hang import limit
 
+from ctrl_analysis.engine import Execution
 from ctrl_analysis.engine.blocks import DiscreteBlock
 from ctrl_analysis.engine.jit import cacheable, source_key
 from ctrl_analysis.engine.kernels import KernelBlock, Kernels
@@ -66,7 +67,7 @@ def test_a_changed_helper_or_layout_gives_its_own_runner(tmp_path, monkeypatch, 
     ys = []
     for mod in (first, other):
         loop = Loop([place(_block(mod), "acc")], dt=1.0)
-        res = {e: loop.simulate(3, inputs={"u": 1.0}, engine=e) for e in ("numpy", "compiled")}
+        res = {e: loop.simulate(3, inputs={"u": 1.0}, execution=Execution(engine=e)) for e in ("numpy", "compiled")}
         np.testing.assert_array_equal(res["compiled"].x, res["numpy"].x)
         ys.append(res["compiled"].x[-1, 0, 0])
     # three steps of 1 (gain v, a = p[0] = 1), then of 2 (gain 2v, or a = p[1] = 2); a stale runner gives 3 again
@@ -75,6 +76,7 @@ def test_a_changed_helper_or_layout_gives_its_own_runner(tmp_path, monkeypatch, 
 
 EXECD = """
 import numpy as np
+from ctrl_analysis.engine import Execution
 from ctrl_analysis.engine.blocks import DiscreteBlock
 from ctrl_analysis.engine.kernels import KernelBlock, Kernels, Layout
 from ctrl_analysis.engine.loop import Loop, place
@@ -108,7 +110,7 @@ class Acc(KernelBlock, DiscreteBlock):
 
 
 loop = Loop([place(Acc(), "acc")], dt=1.0)
-print(loop.simulate(3, inputs={"u": 10.0}, engine="compiled").x[-1, 0, 0])  # 2, 4, 6
+print(loop.simulate(3, inputs={"u": 10.0}, execution=Execution(engine="compiled")).x[-1, 0, 0])  # 2, 4, 6
 """
 
 

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from ctrl_analysis.engine import codegen as _kernels
+from ctrl_analysis.engine import Execution, Save
 from ctrl_analysis.engine.blocks import ContinuousBlock, DiscreteBlock
 from ctrl_analysis.engine.codegen import kernel_of
 from ctrl_analysis.engine.compiled import compiled_for
@@ -123,17 +124,18 @@ def test_compiled_loop_equals_numpy_loop_bit_for_bit_without_pow():
     noise = draw_noise(seeds, 300, gaussian_noise([0.3, 0.01]))
     inputs = {"w": noise[:, :, 0], "v": noise[:, :, 1]}
     loop = sigma_loop()
-    a = loop.simulate(300, inputs=inputs, engine="numpy")
-    b = loop.simulate(300, inputs=inputs, engine="compiled")
+    a = loop.simulate(300, inputs=inputs, execution=Execution(engine="numpy"))
+    b = loop.simulate(300, inputs=inputs, execution=Execution(engine="compiled"))
     assert np.array_equal(a.x, b.x)
     for s in a.signals:
         assert np.array_equal(a[s], b[s]), s
-    one = loop.simulate(300, inputs={"w": noise[:, 3:4, 0], "v": noise[:, 3:4, 1]}, engine="compiled")
+    one = loop.simulate(300, inputs={"w": noise[:, 3:4, 0], "v": noise[:, 3:4, 1]},
+                        execution=Execution(engine="compiled"))
     assert np.array_equal(one.x[:, 0], b.x[:, 3])
     assert _kernels.compile_seconds() >= 0.0
     # without stored states the final state still comes back (chunk carry-over), on both paths
-    fa = loop.simulate(300, inputs=inputs, engine="numpy", store_states=False).final_states
-    fb = loop.simulate(300, inputs=inputs, engine="compiled", store_states=False).final_states
+    fa = loop.simulate(300, inputs=inputs, save=Save(states=False), execution=Execution(engine="numpy")).final_states
+    fb = loop.simulate(300, inputs=inputs, save=Save(states=False), execution=Execution(engine="compiled")).final_states
     for name, sl in loop.slices.items():
         assert np.array_equal(fa[name], a.x[-1][:, sl]) and np.array_equal(fb[name], a.x[-1][:, sl]), name
 
@@ -143,10 +145,10 @@ def test_compiled_loop_with_han_eso_agrees_and_is_batch_independent():
     noise = draw_noise(seeds, 400, gaussian_noise([0.3, 0.001]))
     loop = Loop([place(KOsc(), "plant"), place(han_eso(), "eso", inputs=["y", "uc"])], dt=1e-3)
     inputs = {"w": noise[:, :, 0], "v": noise[:, :, 1], "uc": 0.2}
-    a = loop.simulate(400, inputs=inputs, engine="numpy")
+    a = loop.simulate(400, inputs=inputs, execution=Execution(engine="numpy"))
     b = loop.simulate(400, inputs=inputs)  # auto: every block has a kernel
     np.testing.assert_allclose(b.x, a.x, rtol=0, atol=1e-9)
-    c = loop.simulate(400, inputs=inputs, chunk_runs=4)
+    c = loop.simulate(400, inputs=inputs, execution=Execution(chunk_runs=4))
     assert np.array_equal(b.x, c.x) and np.array_equal(b["y"], c["y"])
     one = loop.simulate(400, inputs={"w": noise[:, 5:, 0], "v": noise[:, 5:, 1], "uc": 0.2})
     assert np.array_equal(one.x[:, 0], b.x[:, 5])
@@ -157,8 +159,8 @@ def test_compiled_loop_flags_divergence_like_the_numpy_loop():
     w = np.zeros((200, 2))
     w[:, 1] = 1e-300  # run 1 starts the same; the bound decides
     x0 = {"plant": np.array([[1e-6, 0.0], [1.0, 0.0]])}
-    a = loop.simulate(200, inputs={"w": 0.0, "v": w}, x0=x0, bound=1e3, engine="numpy")
-    b = loop.simulate(200, inputs={"w": 0.0, "v": w}, x0=x0, bound=1e3, engine="compiled")
+    a = loop.simulate(200, inputs={"w": 0.0, "v": w}, x0=x0, execution=Execution(bound=1e3, engine="numpy"))
+    b = loop.simulate(200, inputs={"w": 0.0, "v": w}, x0=x0, execution=Execution(bound=1e3, engine="compiled"))
     assert a.diverged.all() and np.array_equal(a.diverged_step, b.diverged_step)
     assert a.diverged_step[1] < a.diverged_step[0]
     assert np.array_equal(np.isnan(a.x), np.isnan(b.x))
@@ -167,13 +169,13 @@ def test_compiled_loop_flags_divergence_like_the_numpy_loop():
 def test_compiled_engine_says_why_it_cannot_run():
     loop = Loop([place(DifferentialEstimator(3, 4.0), "sigma")], dt=0.01)
     with pytest.raises(ValueError, match="callable inputs"):
-        loop.simulate(5, inputs={"y": lambda t: 1.0}, engine="compiled")
+        loop.simulate(5, inputs={"y": lambda t: 1.0}, execution=Execution(engine="compiled"))
     meso = ExtendedStateObserver([3.0, 2.0], known=_no_model)  # a Python model term: no kernel
     osc = Loop([place(KOsc(), "plant"), place(meso, "s")], dt=0.1)
     with pytest.raises(ValueError, match="block 's' .* has no kernel"):
-        osc.simulate(5, inputs={"w": 0.0, "v": 0.0, "u": 0.0}, engine="compiled")
+        osc.simulate(5, inputs={"w": 0.0, "v": 0.0, "u": 0.0}, execution=Execution(engine="compiled"))
     with pytest.raises(ValueError, match="engine"):
-        osc.simulate(5, inputs={"w": 0.0, "v": 0.0, "u": 0.0}, engine="fast")
+        osc.simulate(5, inputs={"w": 0.0, "v": 0.0, "u": 0.0}, execution=Execution(engine="fast"))
 
 
 def _no_model(t, x, u, params=None):
@@ -204,14 +206,14 @@ def test_auto_engine_falls_back_to_numpy_with_a_warning_when_a_kernel_does_not_c
         res = loop.simulate(10, inputs={"f": 1.0})
     np.testing.assert_allclose(res["y"][-1, 0], 1 - np.exp(-1.0), rtol=1e-6)
     with pytest.raises(Exception, match="(?i)typing|type"):
-        loop.simulate(10, inputs={"f": 1.0}, engine="compiled")
+        loop.simulate(10, inputs={"f": 1.0}, execution=Execution(engine="compiled"))
 
 
 def test_environment_can_make_auto_mean_numpy(monkeypatch):
     loop = sigma_loop()
     monkeypatch.setenv("CTRL_ANALYSIS_ENGINE", "numpy")
-    assert compiled_for(loop, "auto", {}, None) is None
-    assert compiled_for(loop, "compiled", {}, None) is not None  # an explicit request still compiles
+    assert compiled_for(loop.plan, "auto", {}, None) is None
+    assert compiled_for(loop.plan, "compiled", {}, None) is not None  # an explicit request still compiles
 
 
 def test_study_kernels_are_the_numpy_methods():
@@ -251,15 +253,15 @@ def test_per_run_params_follow_their_runs_through_chunks_and_processes():
     params = {"plant": {"k": k}, "sw": {"D": D}}
     noise = draw_noise(run_seeds(1, 5), 300, gaussian_noise([0.0, 0.1]))
     inputs = {"w": 0.0, "v": noise[:, :, 1]}
-    a = loop.simulate(300, inputs=inputs, params=params, engine="numpy")
-    b = loop.simulate(300, inputs=inputs, params=params, engine="compiled")
-    c = loop.simulate(300, inputs=inputs, params=params, engine="compiled", chunk_runs=2)
-    d = loop.simulate(300, inputs=inputs, params=params, engine="compiled", jobs=2)
-    e = loop.simulate(300, inputs=inputs, params=params, engine="numpy", chunk_runs=2)
+    a = loop.simulate(300, inputs=inputs, params=params, execution=Execution(engine="numpy"))
+    b = loop.simulate(300, inputs=inputs, params=params, execution=Execution(engine="compiled"))
+    c = loop.simulate(300, inputs=inputs, params=params, execution=Execution(engine="compiled", chunk_runs=2))
+    d = loop.simulate(300, inputs=inputs, params=params, execution=Execution(engine="compiled", jobs=2))
+    e = loop.simulate(300, inputs=inputs, params=params, execution=Execution(engine="numpy", chunk_runs=2))
     for r in (b, c, d, e):
         assert np.array_equal(a.x, r.x) and np.array_equal(a["ym"], r["ym"])
     for i in range(5):  # run i = the loop with run i's values, alone
-        alone = loop.simulate(300, inputs={"w": 0.0, "v": noise[:, i, 1]}, engine="compiled",
+        alone = loop.simulate(300, inputs={"w": 0.0, "v": noise[:, i, 1]}, execution=Execution(engine="compiled"),
                               params={"plant": {"k": k[i]}, "sw": {"D": D[i]}})
         assert np.array_equal(alone.x[:, 0], a.x[:, i])
     # each run oscillates at its own frequency sqrt(k) (damped, c = 0.4): zero crossings of x ~ 2 f T
@@ -268,7 +270,8 @@ def test_per_run_params_follow_their_runs_through_chunks_and_processes():
     assert np.array_equal(a["ym"][:, 1], a["y"][:, 1]) and not np.array_equal(a["ym"][:, 0], a["y"][:, 0])
     for runs in (4, 6):  # values for 5 runs: a batch of another size is refused, not silently cut
         with pytest.raises(ValueError, match=f"the batch's {runs} runs"):
-            loop.simulate(300, inputs={"w": 0.0, "v": 0.0}, runs=runs, params=params, engine="compiled")
+            loop.simulate(300, inputs={"w": 0.0, "v": 0.0}, runs=runs, params=params,
+                          execution=Execution(engine="compiled"))
 
 
 def test_static_gain_kernel_equals_its_numpy_output():
@@ -301,11 +304,11 @@ def test_discrete_lowpass_kernel_runs_the_compiled_engine_like_numpy():
     loop = Loop([place(f, "W")], dt=0.01)
     noise = draw_noise(run_seeds(2, 4), 200, gaussian_noise([1.0, 1.0, 1.0]))
     inputs = {f"u[{c}]": noise[:, :, c] for c in range(3)}
-    a = loop.simulate(200, inputs=inputs, engine="numpy")
-    b = loop.simulate(200, inputs=inputs, engine="compiled")
+    a = loop.simulate(200, inputs=inputs, execution=Execution(engine="numpy"))
+    b = loop.simulate(200, inputs=inputs, execution=Execution(engine="compiled"))
     assert np.array_equal(a.x, b.x) and np.array_equal(a["w[2]"], b["w[2]"])
     # unit DC gain: a constant input is reached (ZOH of W(s) is exact for a held input)
-    c = loop.simulate(400, inputs={f"u[{i}]": 1.0 for i in range(3)}, runs=1, engine="compiled")
+    c = loop.simulate(400, inputs={f"u[{i}]": 1.0 for i in range(3)}, runs=1, execution=Execution(engine="compiled"))
     np.testing.assert_allclose(c["w[1]"][-1], 1.0, atol=1e-6)
 
 
@@ -336,7 +339,7 @@ class CheckedKernel(ContinuousBlock):
 def test_kernels_are_checked_in_python_before_they_run_compiled(rhs, message):
     loop = Loop([place(CheckedKernel(rhs), "b")], dt=0.1)
     with pytest.raises(ValueError, match=message):
-        loop.simulate(5, inputs={"f": 1.0}, engine="compiled")
+        loop.simulate(5, inputs={"f": 1.0}, execution=Execution(engine="compiled"))
 
 
 @pytest.mark.parametrize("method", ["rk4", "euler"])
@@ -350,11 +353,11 @@ def test_heap_scratch_and_euler_give_the_numpy_numbers(monkeypatch, method):
         return Loop([place(KOsc(), "plant"), place(DifferentialEstimator(3, 4.0), "sigma"),
                      place(KAcc(0.01), "acc", inputs=["xhat[0]"])], dt=0.01, method=method, substeps=2)
 
-    a = mk().simulate(120, inputs=inputs, engine="numpy")
-    b = mk().simulate(120, inputs=inputs, engine="compiled")
+    a = mk().simulate(120, inputs=inputs, execution=Execution(engine="numpy"))
+    b = mk().simulate(120, inputs=inputs, execution=Execution(engine="compiled"))
     monkeypatch.setattr(_kernels, "STACK_VALUES", 0)
     monkeypatch.setattr(_kernels, "_RUNNERS", {})
-    c = mk().simulate(120, inputs=inputs, engine="compiled")
+    c = mk().simulate(120, inputs=inputs, execution=Execution(engine="compiled"))
     for r in (b, c):
         assert np.array_equal(a.x, r.x)
         for s in a.signals:

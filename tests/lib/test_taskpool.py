@@ -55,7 +55,9 @@ def test_drivers_send_their_chunks_to_the_one_pool_in_order_and_traced(tmp_path,
     # the owner's map of the two drivers ("processes") and each driver's map on the pool; no worker writes
     assert sorted((e["where"], len(e["calls"])) for e in events) == [("pool", 5), ("pool", 7), ("processes", 2)]
     for e in events:
-        assert all(e["submitted"] <= s + 1e-3 and s <= t <= e["returned"] + 1e-3 for s, t in e["calls"])
+        assert all(e["submitted"] <= s + 1e-3 and s <= t <= e["returned"] + 1e-3 and 0 <= c <= t - s + 1e-2
+                   for s, t, c in e["calls"])
+        assert e["cpu_submitted"] <= e["cpu_returned"]
     assert not taskpool.pool_available() and taskpool._ENV not in os.environ
 
 

@@ -29,6 +29,7 @@ from analysis.differential_estimator.paper import (
     han_eso_gains,
     printed_eq9_gain,
 )
+from ctrl_analysis.engine import Execution
 from ctrl_analysis.estimators.differential import DifferentialEstimator
 from ctrl_analysis.noise import run_seeds
 from ctrl_analysis.reporting.report import StudyContext, StudyResult, write_results_json
@@ -78,7 +79,8 @@ def test_example1_loop_is_batch_invariant_and_matches_interconnect():
         np.testing.assert_array_equal(sig[s][:, 1], alone[s][:, 0])  # chunked, batched == one run alone
     # Σ alone, noise-free: the engine's RK4 equals python-control's interconnect
     loop = loops.example1_loop(p, [])
-    res = loop.simulate(300, inputs={"xi": 0.0, "eta": 0.0}, engine="numpy")  # no loop structure to compile
+    res = loop.simulate(300, inputs={"xi": 0.0, "eta": 0.0},
+                        execution=Execution(engine="numpy"))  # no loop structure to compile
     sys = loop.interconnect()
     resp = ct.input_output_response(sys, res.t, np.zeros((2, res.t.size)), X0=np.zeros(sys.nstates),
                                     solve_ivp_kwargs={"rtol": 1e-10, "atol": 1e-12})
