@@ -246,6 +246,16 @@ RULES = [
      ["monte_carlo.seeds", "sweep.seeds"]),
     ("a grid's parameter names are free (fn reads the names the grid gives); a single number is one value",
      "unknown", ["sweep.grid"]),
+    # streaming accumulators
+    ("a chunk of any number of runs (runs on axis 0): fewer runs than the starting chunk is a smaller chunk",
+     "shorter longer", ["Moments.add.values", "Quantiles.add.values", "Histogram.add.values",
+                        "Keep.add.values"]),
+    ("Keep keeps the chosen runs' traces as they are, NaN and inf included (documented): a figure draws "
+     "a diverged run too", "inf-entry nan-entry", ["Keep.add.values"]),
+    ("vectorised: a list of quantiles (or percentiles) gives one answer each, as numpy's quantile does",
+     "list longer shorter", ["Quantiles.quantile.q", "Quantiles.percentile.p"]),
+    ("the bound on a sketch's bytes for n runs is an integer formula, exact for any n (Python integers): "
+     "nothing is allocated by it", "giant huge", ["Quantiles.bytes_bound.n", "Quantiles.error_bound.n"]),
 ]
 
 
