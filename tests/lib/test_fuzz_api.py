@@ -52,6 +52,8 @@ from ctrl_analysis.engine import blocks, integrators, numpy_engine, plan, proces
 from ctrl_analysis.engine import codegen as _kernels
 from ctrl_analysis.engine import jit as engine_jit
 from ctrl_analysis.engine import kernels as engine_kernels
+from ctrl_analysis.engine import layout as engine_layout
+from ctrl_analysis.engine import matrix as engine_matrix
 from ctrl_analysis.engine import loop as loop_mod
 from ctrl_analysis.engine import params as engine_params
 from ctrl_analysis.engine import stepcheck as _stepcheck
@@ -229,6 +231,14 @@ def _layout_pack(**kw):
     return engine_kernels.Layout("a", ("b", 2)).pack(**kw)
 
 
+def _layout_sized(**kw):
+    return engine_kernels.Layout("n", ("a", "n"), ("F", ("n", "n"))).sized(**kw)
+
+
+def _layout_pack_sized(**kw):
+    return engine_kernels.Layout("n", ("a", "n")).pack(**kw)
+
+
 def _loop_interconnect(name):
     return _loop(dt=0.1).interconnect(name)
 
@@ -339,7 +349,11 @@ def build_cases(tmp):
               params=[3, "abc", {"nonsense": {}}, {"plant": 3}, {"plant": {"nonsense": 1.0}},
                       {"plant": {"dt": [0.1, 0.2, 0.3]}}, {"plant": {"dt": -1.0}}, {"plant": {"dt": NAN}}])),
         ("Layout", _layout, dict(fields=("a", ("b", 2))),
-         dict(fields=[(3,), ("a", "a"), ("1x",), (("a", -1),), (("a", "x"),)])),
+         dict(fields=[(3,), ("a", "a"), ("1x",), (("a", -1),), (("a", "x"),), (("a", "n"), "n"),
+                      ("n", "m", ("a", ("n", "m"))), ("n", ("a", ("n", "n", "n"))), (("n", 2), ("a", "n"))])),
+        ("Layout.sized", _layout_sized, dict(n=2), dict(n=[-1, 1.5, "abc", None, NAN, True])),
+        ("Layout.pack (sized)", _layout_pack_sized, dict(n=2, a=[1.0, 2.0]),
+         dict(n=[-1, 1.5, "abc", NAN], a=[[1.0], [1.0, 2.0, 3.0], None])),
         ("Layout.pack", _layout_pack, dict(a=1.0, b=[1.0, 2.0]),
          dict(a=["abc", None, [1.0, 2.0]], b=[3.0, "abc", [1.0, 2.0, 3.0]])),
         ("Loop.interconnect", _loop_interconnect, dict(name="sys"), dict(name=[3])),
@@ -906,6 +920,11 @@ NOT_FUZZED = {
     engine_kernels.scratch: "per-step helper of kernels (space to work in), unchecked by design",
     engine_kernels.gather: "per-step helper of kernels (a table entry at a computed index), unchecked by design",
     engine_kernels.jitable: "decorator: any function is a valid argument",
+    engine_layout.offset: "per-step helper of kernels (a layout field's offset for the size read from p), unchecked "
+                          "by design",
+    **{getattr(engine_matrix, name): "per-step matrix helper of kernels (views and products), unchecked by design; "
+                                     "tests/lib/test_engine_matrix.py checks it against numpy"
+       for name in engine_matrix.__all__},
     engine_params.Variant: "record built by resolve",
     engine_params.resolve: "internal half of Loop.simulate(params=...), whose params are fuzzed",
     engine_params.split: "internal half of Loop.simulate(params=...), whose params are fuzzed",
