@@ -81,6 +81,7 @@ def test_views_write_through_on_one_run_and_on_the_columns():
     with pytest.raises(IndexError, match="run past"):
         mx.matrix(v, 8, 2, 3)
     assert mx.scratch_matrix(2, 3, 0.0).shape == (2, 3) and mx.scratch_matrix(2, 3, np.zeros(5)).shape == (2, 3, 5)
+    assert mx.scratch_matrices(4, 2, 3, np.zeros(5)).shape == (4, 2, 3, 5)
 
 
 # ------------------------------------------------------------------ products, in their order
