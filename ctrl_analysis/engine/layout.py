@@ -174,7 +174,12 @@ class Layout:
             If a name is missing or unknown, or a value has the wrong shape, is not a number or is NaN.
         """
         if self.size_name is not None and self.size_name in values:
-            return self.sized(**{self.size_name: values[self.size_name]}).pack(**values)
+            try:
+                return self.sized(**{self.size_name: values[self.size_name]}).pack(**values)
+            except ValueError as exc:
+                if "must have shape" not in str(exc):
+                    raise
+                raise ValueError(f"{exc} ({self.size_name} = {values[self.size_name]!r:.40})") from None
         unknown = sorted(set(values) - set(self.names))
         missing = [n for n in self.names if n not in values]
         if unknown or missing:
