@@ -73,8 +73,7 @@ def matrix(v, o, n, m):
     s = v[o:o + n * m]
     if s.shape[0] != n * m:
         raise IndexError(f"matrix: {n}x{m} entries from offset {o} run past the vector's {v.shape[0]} entries")
-    step = s.strides[0]
-    return np.lib.stride_tricks.as_strided(s, shape=(n, m) + s.shape[1:], strides=(m * step, step) + s.strides[1:])
+    return s.reshape((n, m) + s.shape[1:])  # splitting the first axis: always a view, never a copy
 
 
 def scratch_matrix(n, m, like):
