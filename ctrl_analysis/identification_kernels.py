@@ -16,7 +16,8 @@ projection the identity), ``lower`` (n), ``upper`` (n)); state ``[θ (n), R row 
 
 from __future__ import annotations
 
-from .engine.kernels import Layout, jitable
+from .engine.kernels import Layout, jitable, offset
+from .engine.matrix import matrix, symmetrize, trace, vector
 
 __all__: list = []  # kernels: reached through the blocks' kernel() methods
 
@@ -69,14 +70,13 @@ def arx_output(t, x, u, p, y):
         y[1 + na + j] = x[ns + d + j]
 
 
-#: The fixed head of the RLS kernels' parameters; the bounds follow (:func:`rls_layout`).
-RLS_HEAD = Layout("n", "forgetting", "max_trace", "projected")
-RLS_AT = RLS_HEAD.at  # offsets, a numba constant
-_RLS_BOUNDS = RLS_HEAD.size
+#: The parameters of the RLS kernels for ``n`` parameters: the head, then the bounds ``lower``, ``upper``.
+RLS_LAYOUT = Layout("n", "forgetting", "max_trace", "projected", ("lower", "n"), ("upper", "n"))
+RLS_AT = RLS_LAYOUT.at  # offsets, a numba constant
 
 
 def rls_layout(n: int) -> Layout:
-    """The parameters of the RLS kernels for ``n`` parameters: :data:`RLS_HEAD`, then ``lower``, ``upper`` (n each).
+    """The parameters of the RLS kernels for ``n`` parameters: :data:`RLS_LAYOUT` for this ``n``.
 
     Parameters
     ----------
@@ -86,36 +86,38 @@ def rls_layout(n: int) -> Layout:
     -------
     Layout
     """
-    return Layout(*zip(RLS_HEAD.names, RLS_HEAD.shapes), ("lower", n), ("upper", n))
+    return RLS_LAYOUT.sized(n=n)
 
 
 @jitable
 def rls_gain(x, u, p, out):
-    """``R(k−1) h(k)`` into ``out[:n]``; returns ``hᵀ R h + λ`` and the innovation ``z − hᵀ θ(k−1)``."""
+    """``R(k−1) h(k)`` into ``out[:n]``; returns ``λ + hᵀ R h`` and the innovation ``z − hᵀ θ(k−1)``."""
     n = int(p[RLS_AT.n])
+    theta, R, h = vector(x, 0, n), matrix(x, n, n, n), vector(u, 1, n)
+    # R h, hᵀ R h and hᵀ θ written out in two passes (this kernel runs for every run and sample: calling
+    # mat_vec and dot here measured 1.3x slower compiled)
     for i in range(n):
         acc = 0.0
         for j in range(n):
-            acc = acc + x[n + i * n + j] * u[1 + j]
+            acc = acc + R[i, j] * h[j]  # (R h)[i]
         out[i] = acc
-    hPh = 0.0
-    hth = 0.0
+    hRh, hth = 0.0, 0.0
     for i in range(n):
-        hPh = hPh + u[1 + i] * out[i]
-        hth = hth + u[1 + i] * x[i]
-    return p[RLS_AT.forgetting] + hPh, u[0] - hth
+        hRh = hRh + h[i] * out[i]
+        hth = hth + h[i] * theta[i]
+    return p[RLS_AT.forgetting] + hRh, u[0] - hth
 
 
 @jitable
 def _rls_theta(x, p, out, den, innov):
     """``θ(k) = Π[θ(k−1) + D(k) (z − hᵀ θ(k−1))]``, ``D = R h / den``, from ``R h`` in ``out[:n]`` (overwritten)."""
     n = int(p[RLS_AT.n])
-    lo, hi = _RLS_BOUNDS, _RLS_BOUNDS + n  # the offsets of rls_layout's lower, upper
+    lower, upper = vector(p, offset(RLS_AT.lower, n), n), vector(p, offset(RLS_AT.upper, n), n)
     for i in range(n):
         v = x[i] + out[i] / den * innov
         # projection onto the box lower <= θ <= upper (NaN stays NaN, as np.clip; infinite bounds: identity)
-        v = p[lo + i] if v < p[lo + i] else v
-        out[i] = p[hi + i] if v > p[hi + i] else v
+        v = lower[i] if v < lower[i] else v
+        out[i] = upper[i] if v > upper[i] else v
 
 
 def rls_update(t, x, u, p, x_next):
@@ -136,26 +138,22 @@ def rls_update(t, x, u, p, x_next):
     """
     n = int(p[RLS_AT.n])
     lam = p[RLS_AT.forgetting]
+    R, R_new = matrix(x, n, n, n), matrix(x_next, n, n, n)
     den, innov = rls_gain(x, u, p, x_next)  # R h in x_next[:n] until θ(k) overwrites it
-    # R(k) = (R − D (R h)ᵀ) / λ with D = R h / den, then symmetrised: 0.5 (R(k) + R(k)ᵀ)
+    Rh = vector(x_next, 0, n)
     for i in range(n):
-        d = x_next[i] / den
+        d = Rh[i] / den  # D = R h / den
         for j in range(n):
-            x_next[n + i * n + j] = (x[n + i * n + j] - d * x_next[j]) / lam
-    for i in range(n):
-        for j in range(i, n):
-            v = 0.5 * (x_next[n + i * n + j] + x_next[n + j * n + i])
-            x_next[n + i * n + j] = v
-            x_next[n + j * n + i] = v
+            R_new[i, j] = (R[i, j] - d * Rh[j]) / lam  # R(k) = (R − D (R h)ᵀ) / λ
+    symmetrize(R_new)  # R(k) = 0.5 (R(k) + R(k)ᵀ)
     # anti-windup: trace R(k) <= max_trace, R(k) scaled by min(1, max_trace / trace) (NaN propagates, as
     # np.minimum); a scale of 1 (no cap) is exact. Conditional expressions, not if statements, keep numba lean.
-    tr = 0.0
-    for i in range(n):
-        tr = tr + x_next[n + i * n + i]
+    tr = trace(R_new)
     s = p[RLS_AT.max_trace] / tr if p[RLS_AT.max_trace] > 0.0 else 1.0
     s = 1.0 if s >= 1.0 else s
-    for i in range(n * n):
-        x_next[n + i] = x_next[n + i] * s
+    for i in range(n):
+        for j in range(n):
+            R_new[i, j] = R_new[i, j] * s
     _rls_theta(x, p, x_next, den, innov)
 
 

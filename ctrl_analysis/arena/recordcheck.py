@@ -386,7 +386,7 @@ def _check_bounds(t, y, d1, eps: float, L: float, *, where: str, names: tuple) -
         problems.append(f"{ne} {eps:.3g} is far below the record's own noise: the spread of its third differences "
                         f"gives ε ≈ {e_hat:.3g} ({_times(e_hat / eps)} the bound); state a bound near it")
     if sure["accel"] > FACTOR * L:
-        problems.append(f"{nl} {L:.3g} is far below what the record shows: beyond its noise, its smoothed second "
+        problems.append(f"{nl} {L:.3g} is far below what the record's y shows: beyond its noise, its smoothed second "
                         f"differences reach |f''| ≈ {sure['accel']:.3g} ({_times(sure['accel'] / L)} the bound, at "
                         f"t ≈ {t[0] + sure['accel_time']:.4g} s over {sure['accel_scale_s']:.3g} s); state a bound "
                         "near it (or, if that is a spike or a jump, remove it: it is beyond the noise bound)")
@@ -488,7 +488,7 @@ def check_record(t, y, d1, eps: float, L: float, *, where: str = "the record",
     >>> check_record(t, y, None, 0.01, 1e-6)  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    ValueError: the record: L 1e-06 is far below what the record shows: ...
+    ValueError: the record: L 1e-06 is far below what the record's y shows: ...
     """
     t, y, d1, eps, L = _check_arrays(t, y, d1, eps, L)
     if not isinstance(where, str) or not isinstance(names, tuple) or len(names) != 2 \

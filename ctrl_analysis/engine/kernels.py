@@ -47,15 +47,15 @@ array([[0.5],
 
 from __future__ import annotations
 
-from collections import namedtuple
 from collections.abc import Callable
 from typing import ClassVar, NamedTuple
 
 import numpy as np
 
-from .._validate import check_array
+from .layout import Layout, offset
 
-__all__ = ["BlockKernel", "KernelBlock", "Kernels", "Layout", "as_int", "copy_output", "gather", "jitable", "scratch"]
+__all__ = ["BlockKernel", "KernelBlock", "Kernels", "Layout", "as_int", "copy_output", "gather", "jitable", "offset",
+           "scratch"]
 
 
 class BlockKernel(NamedTuple):
@@ -228,124 +228,6 @@ def _compiled_scratch_gather():
 
 
 _compiled_scratch_gather()
-
-
-class Layout:
-    """Names and shapes of a block's kernel parameters, packed into one float vector.
-
-    Parameters
-    ----------
-    *fields : str or (str, int or tuple of int)
-        The parameters in vector order: a name (a scalar) or ``(name, shape)``; a matrix is packed
-        row-major.
-
-    Attributes
-    ----------
-    at : namedtuple of int
-        The offset of each parameter in the vector; an array's first entry. Kernels read
-        ``p[AT.eta]``, ``p[AT.gains + i]`` with ``AT = LAYOUT.at`` at module level: numba takes that
-        namedtuple as a compile-time constant (a ``Layout`` object it cannot type).
-    size : int
-        Length of the packed vector.
-
-    Raises
-    ------
-    ValueError
-        If a name repeats, is not an identifier, or a shape is negative.
-
-    Examples
-    --------
-    >>> L = Layout("eta", ("gains", 3), ("F", (2, 2)))
-    >>> L.at, L.size
-    (at(eta=0, gains=1, F=4), 8)
-    >>> L.pack(eta=0.5, gains=[1, 2, 3], F=np.eye(2))
-    array([0.5, 1. , 2. , 3. , 1. , 0. , 0. , 1. ])
-    """
-
-    def __init__(self, *fields):
-        names, shapes = [], []
-        for f in fields:
-            try:
-                name, shape = (f, ()) if isinstance(f, str) else f
-                shape = (shape,) if isinstance(shape, (int, np.integer)) else tuple(shape)
-            except (TypeError, ValueError):
-                raise TypeError(f"fields: each field must be a name or (name, shape), got {f!r:.80}") from None
-            if not isinstance(name, str) or not name.isidentifier():
-                raise ValueError(f"fields: a parameter name must be an identifier, got {name!r}")
-            if not all(isinstance(s, (int, np.integer)) and not isinstance(s, bool) for s in shape):
-                raise TypeError(f"fields: the shape of {name!r} must be an int or a tuple of ints, got {shape!r:.80}")
-            if any(s < 0 for s in shape):
-                raise ValueError(f"fields: the shape of {name!r} must not be negative, got {shape}")
-            names.append(name)
-            shapes.append(shape)
-        if len(set(names)) != len(names):
-            raise ValueError(f"fields: parameter names must be unique, got {names}")
-        self.names, self.shapes = tuple(names), tuple(shapes)
-        offsets, start = [], 0
-        for s in self.shapes:
-            offsets.append(start)
-            start += int(np.prod(s, dtype=int))
-        self.size = start
-        self.at = namedtuple("at", self.names)(*offsets)
-
-    def pack(self, **values) -> np.ndarray:
-        """The parameter vector from one value per name (shapes checked).
-
-        Parameters
-        ----------
-        **values : float or array_like
-            Every parameter of the layout, by name.
-
-        Returns
-        -------
-        numpy.ndarray, shape (size,)
-
-        Raises
-        ------
-        ValueError
-            If a name is missing or unknown, or a value has the wrong shape, is not a number or is NaN.
-        """
-        unknown = sorted(set(values) - set(self.names))
-        missing = [n for n in self.names if n not in values]
-        if unknown or missing:
-            raise ValueError(f"pack needs exactly the layout's parameters {list(self.names)}: "
-                             f"missing {missing}, unknown {unknown}")
-        out = np.empty(self.size)
-        for name, shape, lo in zip(self.names, self.shapes, self.at):
-            try:
-                v = check_array(name, values[name])
-            except TypeError:
-                v = None
-            if v is None or values[name] is None or np.isnan(v).any():
-                raise ValueError(f"parameter {name!r} must be a number or an array of numbers (no NaN), "
-                                 f"got {values[name]!r:.80}")
-            if v.shape != shape:
-                raise ValueError(f"parameter {name!r} must have shape {shape}, got {v.shape}")
-            out[lo:lo + v.size] = v.reshape(-1)
-        return out
-
-    def unpack(self, p) -> dict:
-        """The parameters of a packed vector, by name (arrays in their declared shapes).
-
-        Parameters
-        ----------
-        p : array_like, shape (size,)
-
-        Returns
-        -------
-        dict of str -> float or numpy.ndarray
-        """
-        p = np.asarray(p, dtype=float)
-        if p.shape != (self.size,):
-            raise ValueError(f"p must have shape ({self.size},), got {p.shape}")
-        out = {}
-        for name, shape, lo in zip(self.names, self.shapes, self.at):
-            n = int(np.prod(shape, dtype=int))
-            out[name] = float(p[lo]) if shape == () else p[lo:lo + n].reshape(shape).copy()
-        return out
-
-    def __repr__(self) -> str:
-        return "Layout(" + ", ".join(n if s == () else f"({n!r}, {s})" for n, s in zip(self.names, self.shapes)) + ")"
 
 
 class Kernels(NamedTuple):

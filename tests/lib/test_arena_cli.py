@@ -159,7 +159,7 @@ def _arena(args, capsys):
 
 
 @pytest.mark.parametrize("values, eps, L, message", [
-    (1.0, "0.01", "1e-6", "--accel-bound 1e-06 is far below what the record shows: beyond its noise, its smoothed "
+    (1.0, "0.01", "1e-6", "--accel-bound 1e-06 is far below what the record's y shows: beyond its noise, its smoothed "
                           "second differences reach |f''| ≈ 0.8"),
     (1.0, "1e-8", "1", "--noise-bound 1e-08 is far below the record's own noise: the spread of its third differences "
                        "gives ε ≈ 0.011"),

@@ -56,7 +56,7 @@ def test_noise_alone_shows_no_curvature_and_a_quantiser_its_step():
 
 @pytest.mark.parametrize("eps, L, message", [
     (1e-8, 1.0, "eps 1e-08 is far below the record's own noise: the spread of its third differences gives ε ≈ 0.011"),
-    (0.01, 1e-6, "L 1e-06 is far below what the record shows: beyond its noise, its smoothed second differences "
+    (0.01, 1e-6, "L 1e-06 is far below what the record's y shows: beyond its noise, its smoothed second differences "
                  "reach |f''| ≈ 0.8"),
     (1e4, 1.0, "the bounds' time scale √(ε/L) = 100 s is longer than the record (5.99 s)"),
 ], ids=["noise-too-small", "accel-too-small", "noise-too-large"])

@@ -68,6 +68,8 @@ from ctrl_analysis.engine import (
 from ctrl_analysis.engine import codegen as _kernels
 from ctrl_analysis.engine import jit as engine_jit
 from ctrl_analysis.engine import kernels as engine_kernels
+from ctrl_analysis.engine import layout as engine_layout
+from ctrl_analysis.engine import matrix as engine_matrix
 from ctrl_analysis.engine import loop as loop_mod
 from ctrl_analysis.engine import params as engine_params
 from ctrl_analysis.engine import stepcheck as _stepcheck
@@ -242,6 +244,14 @@ def _layout_pack(**kw):
     return engine_kernels.Layout("a", ("b", 2)).pack(**kw)
 
 
+def _layout_sized(**kw):
+    return engine_kernels.Layout("n", ("a", "n"), ("F", ("n", "n"))).sized(**kw)
+
+
+def _layout_pack_sized(**kw):
+    return engine_kernels.Layout("n", ("a", "n")).pack(**kw)
+
+
 def _loop_interconnect(name):
     return _loop(dt=0.1).interconnect(name)
 
@@ -358,7 +368,11 @@ def build_cases(tmp):
          dict(engine=CHOICE, jobs=INT + [0], chunk_runs=opt(INT) + [0], max_bytes=opt(POS), progress=[3.0, "f"],
               bound=["abc", None, NAN, -INF, 0.0, [1.0]])),
         ("Layout", _layout, dict(fields=("a", ("b", 2))),
-         dict(fields=[(3,), ("a", "a"), ("1x",), (("a", -1),), (("a", "x"),)])),
+         dict(fields=[(3,), ("a", "a"), ("1x",), (("a", -1),), (("a", "x"),), (("a", "n"), "n"),
+                      ("n", "m", ("a", ("n", "m"))), ("n", ("a", ("n", "n", "n"))), (("n", 2), ("a", "n"))])),
+        ("Layout.sized", _layout_sized, dict(n=2), dict(n=[-1, 1.5, "abc", None, NAN, True])),
+        ("Layout.pack (sized)", _layout_pack_sized, dict(n=2, a=[1.0, 2.0]),
+         dict(n=[-1, 1.5, "abc", NAN], a=[[1.0], [1.0, 2.0, 3.0], None])),
         ("Layout.pack", _layout_pack, dict(a=1.0, b=[1.0, 2.0]),
          dict(a=["abc", None, [1.0, 2.0]], b=[3.0, "abc", [1.0, 2.0, 3.0]])),
         ("Loop.interconnect", _loop_interconnect, dict(name="sys"), dict(name=[3])),
@@ -999,6 +1013,11 @@ NOT_FUZZED = {
     engine_kernels.scratch: "per-step helper of kernels (space to work in), unchecked by design",
     engine_kernels.gather: "per-step helper of kernels (a table entry at a computed index), unchecked by design",
     engine_kernels.jitable: "decorator: any function is a valid argument",
+    engine_layout.offset: "per-step helper of kernels (a layout field's offset for the size read from p), unchecked "
+                          "by design",
+    **{getattr(engine_matrix, name): "per-step matrix helper of kernels (views and products), unchecked by design; "
+                                     "tests/lib/test_engine_matrix.py checks it against numpy"
+       for name in engine_matrix.__all__},
     engine_params.Variant: "record built by resolve",
     engine_params.resolve: "internal half of Loop.simulate(params=...), whose params are fuzzed",
     engine_params.split: "internal half of Loop.simulate(params=...), whose params are fuzzed",

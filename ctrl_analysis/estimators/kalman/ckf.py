@@ -6,7 +6,18 @@ import numpy as np
 
 from ..._validate import check_finite, check_matrix, check_positive
 from ...engine.blocks import DiscreteBlock, signal_names
-from ...engine.kernels import KernelBlock, Kernels, Layout, as_int, jitable
+from ...engine.kernels import KernelBlock, Kernels, Layout, as_int, jitable, offset
+from ...engine.matrix import (
+    dot,
+    mat_mul,
+    mat_mul_t,
+    mat_mul_t_add,
+    mat_vec,
+    matrix,
+    scratch_matrices,
+    scratch_matrix,
+    vector,
+)
 
 __all__ = ["CharacteristicKalmanFilter", "LinearKalmanFilter"]
 
@@ -190,16 +201,13 @@ class CharacteristicKalmanFilter(KernelBlock, DiscreteBlock):
         return f"CharacteristicKalmanFilter(R={self.R:g})"
 
 
-#: The fixed head of a :class:`LinearKalmanFilter`'s kernel parameters (its arrays follow: :func:`lkf_layout`).
-LKF_HEAD = Layout("n", "R")
-LKF_AT = LKF_HEAD.at
-_LKF_ARRAYS = LKF_HEAD.size
+#: The kernel parameters of a :class:`LinearKalmanFilter` of any order ``n``: ``n, R``, then ``F, G, H, Q``.
+LKF_LAYOUT = Layout("n", "R", ("F", ("n", "n")), ("G", "n"), ("H", "n"), ("Q", ("n", "n")))
+LKF_AT = LKF_LAYOUT.at
 
 
 def lkf_layout(n: int) -> Layout:
-    """The kernel parameters of an ``n``-state :class:`LinearKalmanFilter`: :data:`LKF_HEAD`, then ``F, G, H, Q``.
-
-    The matrices are row-major; a kernel reads ``n`` and finds the arrays with :func:`_lkf_at`.
+    """The kernel parameters of an ``n``-state :class:`LinearKalmanFilter`: :data:`LKF_LAYOUT` for this ``n``.
 
     Parameters
     ----------
@@ -210,64 +218,44 @@ def lkf_layout(n: int) -> Layout:
     -------
     Layout
     """
-    return Layout(*zip(LKF_HEAD.names, LKF_HEAD.shapes), ("F", (n, n)), ("G", n), ("H", n), ("Q", (n, n)))
+    return LKF_LAYOUT.sized(n=n)
 
 
 @jitable
-def _lkf_at(p):
-    """``(n, F, G, H, Q)``: the order ``n`` read from ``p`` and the offsets of :func:`lkf_layout` ``(n)``'s arrays."""
+def _lkf_params(p):
+    """``(n, F, G, H, Q)``: the order read from ``p`` and views of :data:`LKF_LAYOUT`'s arrays."""
     n = as_int(p[LKF_AT.n])
-    F = _LKF_ARRAYS
-    return n, F, F + n * n, F + n * n + n, F + n * n + 2 * n
+    return (n, matrix(p, offset(LKF_AT.F, n), n, n), vector(p, offset(LKF_AT.G, n), n),
+            vector(p, offset(LKF_AT.H, n), n), matrix(p, offset(LKF_AT.Q, n), n, n))
 
 
 @jitable
-def _lkf_filter(x, u, p, W):
-    """Prediction, gain and correction of :class:`LinearKalmanFilter` for one run, into the scratch ``W``.
+def _lkf_filter(x, u, p, M, V):
+    """Prediction, gain and correction of :class:`LinearKalmanFilter` into the scratch ``M``, ``V``.
 
-    ``W = [FP or (I − K H) P(k|k−1) (n·n), P(k|k−1) (n·n), K (n), x̂(k) (n)]``; returns nothing.
+    ``M[0] = F P``, ``M[1] = P(k|k−1)``; ``V[0] = K(k)``, ``V[1] = x̂(k)``.
     """
-    n, F, G, H, Q = _lkf_at(p)
-    Pp, K, xf = n * n, 2 * n * n, 2 * n * n + n  # offsets in W
-    # x̂(k|k−1) = F x̂(k−1) + G u(k−1)
+    n, F, G, H, Q = _lkf_params(p)
+    xh, P = vector(x, 0, n), matrix(x, n, n, n)  # x̂(k−1), P(k−1)
+    FP, Pp, K, xf = M[0], M[1], V[0], V[1]
+    mat_vec(F, xh, xf)                           # x̂(k|k−1) = F x̂(k−1) + G u(k−1)
     for i in range(n):
-        acc = 0.0
-        for j in range(n):
-            acc += p[F + i * n + j] * x[j]
-        W[xf + i] = acc + u[1] * p[G + i]
-    # P(k|k−1) = F P Fᵀ + Q
+        xf[i] = xf[i] + u[1] * G[i]
+    mat_mul(F, P, FP)
+    mat_mul_t_add(FP, F, Q, Pp)                  # P(k|k−1) = F P Fᵀ + Q
+    mat_vec(Pp, H, K)                            # P(k|k−1) Hᵀ
+    S = dot(K, H, 0.0)                           # H P(k|k−1) Hᵀ
+    yp = dot(xf, H, 0.0)                         # H x̂(k|k−1)
     for i in range(n):
-        for k in range(n):
-            acc = 0.0
-            for j in range(n):
-                acc += p[F + i * n + j] * x[n + j * n + k]
-            W[i * n + k] = acc
-    for i in range(n):
-        for m in range(n):
-            acc = 0.0
-            for k in range(n):
-                acc += W[i * n + k] * p[F + m * n + k]
-            W[Pp + i * n + m] = acc + p[Q + i * n + m]
-    # K = P(k|k−1) Hᵀ / (H P(k|k−1) Hᵀ + R);  x̂(k) = x̂(k|k−1) + K (y − H x̂(k|k−1))
-    S = 0.0
-    yp = 0.0
-    for i in range(n):
-        acc = 0.0
-        for j in range(n):
-            acc += W[Pp + i * n + j] * p[H + j]
-        W[K + i] = acc
-        S += acc * p[H + i]
-        yp += W[xf + i] * p[H + i]
-    for i in range(n):
-        W[K + i] = W[K + i] / (S + p[LKF_AT.R])
-        W[xf + i] = W[xf + i] + W[K + i] * (u[0] - yp)
+        K[i] = K[i] / (S + p[LKF_AT.R])          # K = P(k|k−1) Hᵀ / (H P(k|k−1) Hᵀ + R)
+        xf[i] = xf[i] + K[i] * (u[0] - yp)       # x̂(k) = x̂(k|k−1) + K (y − H x̂(k|k−1))
 
 
 def lkf_update(t, x, u, p, x_next):
     """The update of :class:`LinearKalmanFilter`: ``[x̂(k), P(k)]``, P(k) in Joseph form.
 
-    Scalar indexing only (one run in the compiled engine, the batch's columns in the batched
-    methods); the scratch ``W`` takes the shape of ``x``'s trailing axes.
+    One run in the compiled engine, the batch's columns in the batched methods
+    (:mod:`ctrl_analysis.engine.matrix`; the scratch takes the shape of a per-run value, ``u[0]``).
 
     Parameters
     ----------
@@ -278,28 +266,23 @@ def lkf_update(t, x, u, p, x_next):
     u : numpy.ndarray
         ``[y(k), u(k−1)]``.
     p : numpy.ndarray
-        :func:`lkf_layout` ``(n)``: ``n, R, F, G, H, Q`` (matrices row-major).
+        :data:`LKF_LAYOUT`: ``n, R, F, G, H, Q`` (matrices row-major).
     x_next : numpy.ndarray
         Written in place.
     """
-    n, _, _, H, _ = _lkf_at(p)
-    Pp, K, xf = n * n, 2 * n * n, 2 * n * n + n
-    W = np.empty((2 * n * n + 2 * n,) + x.shape[1:])
-    _lkf_filter(x, u, p, W)
-    # P(k) = (I − K H) P(k|k−1) (I − K H)ᵀ + K R Kᵀ
+    n, _, _, H, _ = _lkf_params(p)
+    M, V = scratch_matrices(4, n, n, u[0]), scratch_matrix(2, n, u[0])  # two allocations for the intermediates
+    _lkf_filter(x, u, p, M, V)
+    Pp, IKH, IKHP, K, xf = M[1], M[2], M[3], V[0], V[1]
     for i in range(n):
-        x_next[i] = W[xf + i]
-        for k in range(n):
-            acc = 0.0
-            for j in range(n):
-                acc += ((1.0 if i == j else 0.0) - W[K + i] * p[H + j]) * W[Pp + j * n + k]
-            W[i * n + k] = acc
+        x_next[i] = xf[i]
+        for j in range(n):
+            IKH[i, j] = (1.0 if i == j else 0.0) - K[i] * H[j]  # I − K H
+    mat_mul(IKH, Pp, IKHP)
+    P_new = mat_mul_t(IKHP, IKH, matrix(x_next, n, n, n))      # P(k) = (I − K H) P(k|k−1) (I − K H)ᵀ
     for i in range(n):
-        for m in range(n):
-            acc = 0.0
-            for k in range(n):
-                acc += W[i * n + k] * ((1.0 if m == k else 0.0) - W[K + m] * p[H + k])
-            x_next[n + i * n + m] = acc + p[LKF_AT.R] * W[K + i] * W[K + m]
+        for j in range(n):
+            P_new[i, j] = P_new[i, j] + p[LKF_AT.R] * K[i] * K[j]  # + K R Kᵀ
 
 
 def lkf_output(t, x, u, p, y):
@@ -312,13 +295,10 @@ def lkf_output(t, x, u, p, y):
     y : numpy.ndarray
         ``[ŷ]``, written in place.
     """
-    n, _, _, H, _ = _lkf_at(p)
-    W = np.empty((2 * n * n + 2 * n,) + x.shape[1:])
-    _lkf_filter(x, u, p, W)
-    acc = 0.0
-    for i in range(n):
-        acc += W[2 * n * n + n + i] * p[H + i]
-    y[0] = acc
+    n, _, _, H, _ = _lkf_params(p)
+    V = scratch_matrix(2, n, u[0])
+    _lkf_filter(x, u, p, scratch_matrices(2, n, n, u[0]), V)
+    y[0] = dot(V[1], H, 0.0)                     # ŷ = H x̂(k)
 
 
 class LinearKalmanFilter(KernelBlock, DiscreteBlock):
@@ -328,7 +308,7 @@ class LinearKalmanFilter(KernelBlock, DiscreteBlock):
     reference a characteristic-model filter replaces when the plant is unknown. Its cost per step
     grows as ``n³`` (the covariance propagation), against a constant for the 2-state
     :class:`CharacteristicKalmanFilter`. One sample (the kernels :func:`lkf_output` /
-    :func:`lkf_update` write the products out element by element)::
+    :func:`lkf_update` write these lines with the loops of :mod:`ctrl_analysis.engine.matrix`)::
 
         x̂(k|k−1) = F x̂(k−1) + G u(k−1)
         P(k|k−1) = F P(k−1) Fᵀ + Q
@@ -383,7 +363,7 @@ class LinearKalmanFilter(KernelBlock, DiscreteBlock):
         self.P0 = _check_covariance("P0", P0, n, definite=True)
         self.x0 = np.zeros(n) if x0 is None else check_finite("x0", np.ravel(x0), shape=(n,))
         self.n = n
-        self.kernel_params = lkf_layout(n).pack(n=n, R=self.R, F=self.F, G=self.G, H=self.H, Q=self.Q)
+        self.kernel_params = LKF_LAYOUT.pack(n=n, R=self.R, F=self.F, G=self.G, H=self.H, Q=self.Q)
         self.states = signal_names("xhat", n) + tuple(f"P[{i}][{j}]" for i in range(n) for j in range(n))
 
     def initial_state(self) -> np.ndarray:

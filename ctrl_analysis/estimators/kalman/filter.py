@@ -6,23 +6,20 @@ import numpy as np
 
 from ..._validate import check_finite, check_matrix, check_positive
 from ...engine.blocks import DiscreteBlock, signal_names
-from ...engine.kernels import KernelBlock, Kernels, Layout, as_int, jitable
+from ...engine.kernels import KernelBlock, Kernels, Layout, as_int, jitable, offset, scratch
+from ...engine.matrix import add_mat_mul_t, dot, mat_mul, mat_vec, matrix, scratch_matrix, sub_dot, vector
 
 __all__ = ["DiscreteKalmanFilter"]
 
 
-#: The fixed head of a :class:`DiscreteKalmanFilter`'s kernel parameters: the order, the input
-#: switch (1 with ``b``) and ``R``; the arrays follow (:func:`kalman_layout`).
-HEAD = Layout("n", "has_b", "R")
-AT = HEAD.at
-_ARRAYS = HEAD.size
+#: The kernel parameters of a :class:`DiscreteKalmanFilter` of any order ``n``: the order, the input
+#: switch (1 with ``b``), ``R``, then ``h, F, Qd, b`` (``b`` zeros without an input; matrices row-major).
+LAYOUT = Layout("n", "has_b", "R", ("h", "n"), ("F", ("n", "n")), ("Qd", ("n", "n")), ("b", "n"))
+AT = LAYOUT.at
 
 
 def kalman_layout(n: int) -> Layout:
-    """The kernel parameters of an ``n``-state :class:`DiscreteKalmanFilter`: :data:`HEAD`, then ``h, F, Qd, b``.
-
-    The matrices are row-major; ``b`` is zeros without an input. A kernel reads ``n`` and finds the
-    arrays with :func:`_kf_at`.
+    """The kernel parameters of an ``n``-state :class:`DiscreteKalmanFilter`: :data:`LAYOUT` for this ``n``.
 
     Parameters
     ----------
@@ -33,22 +30,24 @@ def kalman_layout(n: int) -> Layout:
     -------
     Layout
     """
-    return Layout(*zip(HEAD.names, HEAD.shapes), ("h", n), ("F", (n, n)), ("Qd", (n, n)), ("b", n))
+    return LAYOUT.sized(n=n)
 
 
 @jitable
-def _kf_at(p):
-    """``(n, h, F, Qd, b)``: the order read from ``p`` and the offsets of :func:`kalman_layout` ``(n)``'s arrays."""
+def _kf_params(p):
+    """``(n, h, F, Qd, b)``: the order read from ``p`` and views of :data:`LAYOUT`'s arrays."""
     n = as_int(p[AT.n])
-    return n, _ARRAYS, _ARRAYS + n, _ARRAYS + n + n * n, _ARRAYS + n + 2 * n * n
+    return (n, vector(p, offset(AT.h, n), n), matrix(p, offset(AT.F, n), n, n), matrix(p, offset(AT.Qd, n), n, n),
+            vector(p, offset(AT.b, n), n))
 
 
 def kalman_output(t, x, u, p, y):
     """The output of :class:`DiscreteKalmanFilter`: ``x̂(k|k) = x̂(k|k−1) + K(k) (y(k) − h x̂(k|k−1))``.
 
-    Scalar indexing only: one run in the compiled engine, the batch's columns in the batched methods.
-    With an empty ``x`` (a static corrector placed after a predictor that holds the state) the
-    state is read from ``u[0 : n + n²]`` and ``y(k)`` from ``u[n + n²]``.
+    One run in the compiled engine, the batch's columns in the batched methods
+    (:mod:`ctrl_analysis.engine.matrix`). With an empty ``x`` (a static corrector placed after a
+    predictor that holds the state) the state is read from ``u[0 : n + n²]`` and ``y(k)`` from
+    ``u[n + n²]``.
 
     Parameters
     ----------
@@ -59,35 +58,24 @@ def kalman_output(t, x, u, p, y):
     u : numpy.ndarray
         ``[y, (u)]``, or ``[state, y]`` when ``x`` is empty.
     p : numpy.ndarray
-        :func:`kalman_layout` ``(n)``.
+        :data:`LAYOUT`.
     y : numpy.ndarray, shape (n,)
         The estimate ``x̂(k|k)``, written in place.
     """
-    n, h, _, _, _ = _kf_at(p)
+    n, h, _, _, _ = _kf_params(p)
     s, o = (x, 0) if x.shape[0] > 0 else (u, n + n * n)
-    S = p[AT.R]  # S(k) = h P hᵀ + R
+    xp, P = vector(s, 0, n), matrix(s, n, n, n)  # x̂(k|k−1), P(k|k−1)
+    Ph = mat_vec(P, h, y)                        # P hᵀ (in y until x̂(k|k) overwrites it)
+    S = dot(h, Ph, p[AT.R])                      # S(k) = R + h P hᵀ
+    r = sub_dot(u[o], h, xp)                     # innovation y(k) − h x̂(k|k−1)
     for i in range(n):
-        ph = 0.0
-        for j in range(n):
-            ph = ph + s[n + i * n + j] * p[h + j]
-        S = S + p[h + i] * ph
-    r = u[o]  # innovation y(k) − h x̂(k|k−1)
-    for i in range(n):
-        r = r - p[h + i] * s[i]
-    for i in range(n):
-        ph = 0.0
-        for j in range(n):
-            ph = ph + s[n + i * n + j] * p[h + j]
-        y[i] = s[i] + (ph / S) * r  # K(k) = P hᵀ / S(k)
+        y[i] = xp[i] + (Ph[i] / S) * r           # x̂(k|k) = x̂(k|k−1) + K r,  K = P hᵀ / S
 
 
 def kalman_update(t, x, u, p, x_next):
     """The update of :class:`DiscreteKalmanFilter` (the correction, then the prediction).
 
-    ``x̂(k+1|k) = F x̂(k|k) + b u(k)``, ``P(k+1|k) = F (P − K S Kᵀ) Fᵀ + Qd``.
-
-    The gain and the innovation (those of :func:`kalman_output`) are recomputed where needed
-    instead of being stored: no scratch space.
+    ``x̂(k+1|k) = F x̂(k|k) + b u(k)``, ``P(k+1|k) = Qd + F (P − K S Kᵀ) Fᵀ``.
 
     Parameters
     ----------
@@ -96,37 +84,26 @@ def kalman_update(t, x, u, p, x_next):
     x_next : numpy.ndarray, shape (n + n²,)
         The next state, written in place.
     """
-    n, h, oF, oQ, ob = _kf_at(p)
-    S = p[AT.R]
+    n, h, F, Qd, b = _kf_params(p)
+    xp, P = vector(x, 0, n), matrix(x, n, n, n)  # x̂(k|k−1), P(k|k−1)
+    x_new, P_new = vector(x_next, 0, n), matrix(x_next, n, n, n)
+    K, xf = scratch(n, u[0]), scratch(n, u[0])
+    Pf, FPf = scratch_matrix(n, n, u[0]), scratch_matrix(n, n, u[0])
+    mat_vec(P, h, K)                             # P hᵀ
+    S = dot(h, K, p[AT.R])                       # S(k) = R + h P hᵀ
+    r = sub_dot(u[0], h, xp)                     # innovation y(k) − h x̂(k|k−1)
     for i in range(n):
-        ph = 0.0
-        for j in range(n):
-            ph = ph + x[n + i * n + j] * p[h + j]
-        S = S + p[h + i] * ph
-    r = u[0]
+        K[i] = K[i] / S                          # K(k) = P hᵀ / S(k)
+        xf[i] = xp[i] + K[i] * r                 # x̂(k|k) = x̂(k|k−1) + K r
+    mat_vec(F, xf, x_new)                        # x̂(k+1|k) = F x̂(k|k) (+ b u(k))
+    if as_int(p[AT.has_b]):
+        for i in range(n):
+            x_new[i] = x_new[i] + u[1] * b[i]
     for i in range(n):
-        r = r - p[h + i] * x[i]
-    for i in range(n):  # x̂(k+1|k) = F x̂(k|k) + b u(k)
-        acc = 0.0
         for j in range(n):
-            ph = 0.0
-            for m in range(n):
-                ph = ph + x[n + j * n + m] * p[h + m]
-            acc = acc + p[oF + i * n + j] * (x[j] + (ph / S) * r)
-        x_next[i] = acc + u[1] * p[ob + i] if as_int(p[AT.has_b]) else acc
-    for i in range(n):  # P(k+1|k) = F P(k|k) Fᵀ + Qd, P(k|k) = P − K S Kᵀ
-        for j in range(n):
-            acc = 0.0 + p[oQ + i * n + j]
-            for k in range(n):
-                fp = 0.0
-                for m in range(n):
-                    km, kk = 0.0, 0.0
-                    for q in range(n):
-                        km = km + x[n + m * n + q] * p[h + q]
-                        kk = kk + x[n + k * n + q] * p[h + q]
-                    fp = fp + p[oF + i * n + m] * (x[n + m * n + k] - (km / S) * (kk / S) * S)
-                acc = acc + fp * p[oF + j * n + k]
-            x_next[n + i * n + j] = acc
+            Pf[i, j] = P[i, j] - K[i] * K[j] * S  # P(k|k) = P(k|k−1) − K S Kᵀ
+    mat_mul(F, Pf, FPf)
+    add_mat_mul_t(Qd, FPf, F, P_new)             # P(k+1|k) = Qd + F P(k|k) Fᵀ
 
 
 class DiscreteKalmanFilter(KernelBlock, DiscreteBlock):
@@ -143,8 +120,8 @@ class DiscreteKalmanFilter(KernelBlock, DiscreteBlock):
         x̂(k+1|k)  = F x̂(k|k) + b u(k)
         P(k+1|k)  = F P(k|k) Fᵀ + Qd                 update
 
-    The kernels :func:`kalman_output` and :func:`kalman_update` write the products out element by
-    element (``n`` is small), so a run is bit-identical whatever the batch size. As ``k`` grows, ``K(k)`` tends to the filter-form steady-state gain
+    The kernels :func:`kalman_output` and :func:`kalman_update` write these lines with the loops of
+    :mod:`ctrl_analysis.engine.matrix` (``n`` is small), so a run is bit-identical whatever the batch size. As ``k`` grows, ``K(k)`` tends to the filter-form steady-state gain
     of :func:`~ctrl_analysis.estimators.kalman.discrete_steady_state`.
 
     Parameters
@@ -195,7 +172,7 @@ class DiscreteKalmanFilter(KernelBlock, DiscreteBlock):
             raise ValueError(f"P0 must be positive semidefinite (a covariance), got {self.P0.tolist()}")
         self.outputs = signal_names("xhat", n)
         self.states = signal_names("xpred", n) + tuple(f"P[{i}][{j}]" for i in range(n) for j in range(n))
-        self.kernel_params = kalman_layout(n).pack(n=n, has_b=0.0 if self.b is None else 1.0, R=self.R, h=self.h,
+        self.kernel_params = LAYOUT.pack(n=n, has_b=0.0 if self.b is None else 1.0, R=self.R, h=self.h,
                                                    F=self.F, Qd=self.Qd, b=np.zeros(n) if self.b is None else self.b)
 
     def initial_state(self) -> np.ndarray:
