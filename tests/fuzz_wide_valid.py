@@ -252,6 +252,10 @@ RULES = [
                         "Keep.add.values"]),
     ("Keep keeps the chosen runs' traces as they are, NaN and inf included (documented): a figure draws "
      "a diverged run too", "inf-entry nan-entry", ["Keep.add.values"]),
+    ("documented: the bound for 0 runs is 0 (an empty accumulator)", "zero", ["Quantiles.error_bound.n",
+                                                                              "Quantiles.bytes_bound.n"]),
+    ("documented: NaN where count <= ddof, as numpy's var with too few values (a valid question, no answer)",
+     "huge giant", ["Moments.var.ddof"]),
     ("vectorised: a list of quantiles (or percentiles) gives one answer each, as numpy's quantile does",
      "list longer shorter", ["Quantiles.quantile.q", "Quantiles.percentile.p"]),
     ("the bound on a sketch's bytes for n runs is an integer formula, exact for any n (Python integers): "

@@ -150,7 +150,7 @@ class Layout:
             whole = float(n) == int(n) and int(n) >= 0
         except (TypeError, ValueError, OverflowError):
             whole = False
-        if not whole or isinstance(n, bool):
+        if not whole or isinstance(n, (bool, str, bytes)):
             raise ValueError(f"size {self.size_name!r} must be a whole number >= 0, got {n!r:.80}")
         n = int(n)
         return Layout(*[(name, tuple(n if d == self.size_name else d for d in s))

@@ -165,7 +165,7 @@ def _arena(args, capsys):
                        "gives ε ≈ 0.011"),
     (1.0, "1e4", "1", "the bounds' time scale √(ε/L) = 100 s is longer than the record (5.99 s)"),
     (1.0, "0.01", "1e-300", "--accel-bound is 1e-300, outside the magnitudes 1e-50 to 1e+50"),
-    (1e200, "0.01", "1", "the largest |measurement| is 1.01e+200, outside the magnitudes 1e-50 to 1e+50"),
+    (1e200, "0.01", "1", "the largest |measurement| (y) is 1.01e+200, outside the magnitudes 1e-50 to 1e+50"),
 ], ids=["accel-1e6-too-small", "noise-1e6-too-small", "noise-1e6-too-large", "bound-1e-300", "values-1e200"])
 def test_bounds_the_record_contradicts_are_one_line_and_nothing_written(tmp_path, capsys, values, eps, L, message):
     t = 0.01 * np.arange(600)

@@ -94,7 +94,7 @@ def test_a_spike_beyond_the_noise_bound_is_located():
 
 
 @pytest.mark.parametrize("scale_y, eps, L, message", [
-    (1e200, 0.01, 1.0, "the record: the largest |measurement| is 1.01e+200, outside the magnitudes 1e-50 to 1e+50"),
+    (1e200, 0.01, 1.0, "the record: the largest |measurement| (y) is 1.01e+200, outside the magnitudes 1e-50 to 1e+50"),
     (1.0, 1e-300, 1e-300, "eps is 1e-300, outside the magnitudes 1e-50 to 1e+50 in which the arena's arithmetic "
                           "stays finite (the record's own estimates: ε ≈ 0.0114"),
 ], ids=["values-1e200", "bounds-1e-300"])
