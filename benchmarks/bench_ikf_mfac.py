@@ -137,7 +137,7 @@ def run(repeat=3, runs=200, float_runs=20, sizes=(1, 100)):
     worst = {}
     for key, (_, res) in timed.items():
         w = 0.0
-        for (ex, _, _), r, y in zip(work, res, ys):
+        for (ex, _, _), r, y in zip(work, res, ys, strict=True):
             m = min(float_runs, r.y.shape[1])
             ref = reference(ex.reference, ex.n)
             ok = ~r.diverged[:m]
@@ -145,7 +145,7 @@ def run(repeat=3, runs=200, float_runs=20, sizes=(1, 100)):
             w = max(w, float(np.max(np.abs(e_eng - e_flt) / e_flt, initial=0.0)))
         worst[key] = w
     same = all(np.array_equal(a.y, b.y, equal_nan=True)
-               for a, b in zip(timed["numpy", runs][1], timed["compiled", runs][1]))
+               for a, b in zip(timed["numpy", runs][1], timed["compiled", runs][1], strict=True))
     n = len(work)
     rows = [Row(NAME, f"float loop (plain Python), {float_runs} runs a scheme", n * float_runs, t_flt,
                 f"reference (runs 0..{float_runs - 1})")]

@@ -24,7 +24,6 @@ import os
 import re
 import threading
 
-
 from ._validate import check_int, check_positive, check_str
 
 __all__ = ["WORKER_TIMEOUT", "ClusterError", "active_cluster", "check_scheduler_address", "default_jobs",
@@ -237,7 +236,7 @@ def silence_dask_logs():
         lg.setLevel(logging.CRITICAL + 1)
 
     def undo():
-        for lg, level in zip(loggers, levels):
+        for lg, level in zip(loggers, levels, strict=True):
             lg.setLevel(level)
 
     return undo

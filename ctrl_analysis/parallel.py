@@ -309,11 +309,11 @@ def grid_points(grid: dict) -> dict:
     for name in grid:
         check_str("grid", name)
     axes = [np.asarray(v, dtype=float).reshape(-1) for v in grid.values()]
-    for name, a in zip(grid, axes):
+    for name, a in zip(grid, axes, strict=True):
         if a.size == 0:
             raise ValueError(f"grid[{name!r}] must hold at least one value")
     mesh = np.meshgrid(*axes, indexing="ij")
-    return {name: m.reshape(-1) for name, m in zip(grid, mesh)}
+    return {name: m.reshape(-1) for name, m in zip(grid, mesh, strict=True)}
 
 
 def _sweep_chunk(task):

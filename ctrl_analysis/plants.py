@@ -30,7 +30,7 @@ def lti_layout(n: int) -> Layout:
     -------
     Layout
     """
-    return Layout(*zip(HEAD.names, HEAD.shapes), ("A", (n, n)), ("B", n), ("C", n))
+    return Layout(*zip(HEAD.names, HEAD.shapes, strict=True), ("A", (n, n)), ("B", n), ("C", n))
 
 
 @jitable

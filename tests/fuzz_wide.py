@@ -48,6 +48,7 @@ import tempfile
 import time
 from dataclasses import dataclass
 from pathlib import Path
+
 from ctrl_analysis.engine import Execution
 
 HERE = Path(__file__).resolve().parent

@@ -86,10 +86,10 @@ def evaluate_many(points) -> list:
         by_run.setdefault((k[3], k[4]), []).append(k)
     for (runs, seed), ks in by_run.items():
         data = simulate_specs([(k[0], k[1], k[2]) for k in ks], runs, seed, keep=BOX_SIGNALS)
-        for k, d in zip(ks, data):
+        for k, d in zip(ks, data, strict=True):
             _remember(k, qty.case_metrics(d, k[0], k[1]))
     out = []
-    for params, ks in zip(points, keys):
+    for params, ks in zip(points, keys, strict=True):
         p = params[""]
         result = StudyResult(INFO)
         record_main(result, {case: _CACHE[k] for case, k in ks.items()}, p, _order(p.plant), params["claims"])

@@ -282,7 +282,7 @@ def _q_sweep(result, p, data, m):
     sweep = qty.q_sweep(data["lpf"], p, Q_SWEEP)
     ok = m["lpf"]["ok"]
     lpf = {k: float(np.mean(m["lpf"][f"filter_rmse_{k}"][ok])) for k in ("transient", "steady")}
-    both = [q for q, a, b in zip(Q_SWEEP, sweep["transient"], sweep["steady"])
+    both = [q for q, a, b in zip(Q_SWEEP, sweep["transient"], sweep["steady"], strict=True)
             if a < lpf["transient"] and b < lpf["steady"]]
     result.finding("q-sweep", f"The CKF's process noise Q = q I trades the transient against the steady stage: run "
                    f"alone on the LPF case's records, its transient RMS error is "

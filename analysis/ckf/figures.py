@@ -97,7 +97,7 @@ def plot_steady_compare(data, t0, run=0):
     """Fig. 8: steady-stage true output (one panel) and control (one panel per filter, same scale), LPF vs CKF."""
     fig, (ax, *ax_us) = new_figure(3, 1, size=(9.0, 7.0), sharex=True,
                                    title=f"Fig. 8: steady stage ({t0:g} s on), LPF vs CKF: output and control (run {run})")
-    for case, ax_u in zip(("lpf", "ckf"), ax_us):
+    for case, ax_u in zip(("lpf", "ckf"), ax_us, strict=True):
         d = data[case]
         m = d["t"] >= t0
         ax.plot(d["t"][m], d["y"][m, run], color=COLORS[case], lw=0.7, label=NAMES[case])
@@ -149,7 +149,7 @@ def plot_parameters(d, windows, fits, whole_fit, theta0=None, ablation=None, box
                            title="Fig. 10 (beyond the paper): identified characteristic-model parameters (CKF case), "
                                  "live vs frozen-Φ ablation")
     t = d["t"]
-    for i, (ax, name) in enumerate(zip(axes, ("f1", "f2", "g0"))):
+    for i, (ax, name) in enumerate(zip(axes, ("f1", "f2", "g0"), strict=True)):
         v = d[name]
         ax.fill_between(t, np.percentile(v, 10, axis=1), np.percentile(v, 90, axis=1), color="tab:blue", alpha=0.2,
                         label="live RLS, 10-90 % of runs")

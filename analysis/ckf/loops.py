@@ -495,4 +495,4 @@ def simulate_cases(p, runs: int, seed: int, *, options=None, plant=None, noise_s
         keys = [((o, c), (p, c, o)) for o in options for c in CASES]
     data = simulate_specs([s for _, s in keys], runs, seed, keep=keep, plant=plant, noise_std=noise_std,
                           engine=engine)
-    return {k: d for (k, _), d in zip(keys, data)}
+    return {k: d for (k, _), d in zip(keys, data, strict=True)}

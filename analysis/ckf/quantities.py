@@ -97,7 +97,7 @@ def case_metrics(d, p, case) -> dict:
     from .loops import STATS_SUMS, T_TRANSIENT, stats_scale
 
     t = d["t"][:-1]  # the samples the sums hold
-    S = dict(zip(STATS_SUMS, np.asarray(d["stats"], dtype=float).T / stats_scale(p)))
+    S = dict(zip(STATS_SUMS, np.asarray(d["stats"], dtype=float).T / stats_scale(p), strict=True))
     count = lambda a, b=np.inf: max(int(np.count_nonzero(window(t, a, b))), 1)
     n_st = count(p.t_steady)
     dy, du = S["dy_st"] / n_st, S["du_st"] / n_st

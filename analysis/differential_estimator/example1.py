@@ -135,7 +135,7 @@ def main_quantities(result: StudyResult, p: Example1, d: dict) -> None:
     err, ok = d["err"], d["ok"]
     if d["diverged"].any():
         result.finding("ex1-divergence", f"Example 1 runs diverged (run, step): "
-                       f"{list(zip(np.flatnonzero(d['diverged']).tolist(), d['step'][d['diverged']].tolist()))}")
+                       f"{list(zip(np.flatnonzero(d['diverged']).tolist(), d['step'][d['diverged']].tolist(), strict=True))}")
     for who, name, paper in (("sigma", "Σ (n0 = 5, a = 7)", p.sigma_err), ("eso", "Han's NESO, textbook gains",
                                                                           p.eso_err)):
         for i in (0, 1):
@@ -371,7 +371,7 @@ def n0_sweep(result: StudyResult, p: Example1, d: dict, n0_values=(2, 3, 4, 5, 6
     out = {}
     for mode in modes:
         a = [p.a if mode == "fixed_a" else p.a * d["bw_sigma"] / sigma_bandwidth(n0, p.a) for n0 in n0_values]
-        zs = path.estimates_many([DifferentialEstimator(n0, a_n).ss for n0, a_n in zip(n0_values, a)])
+        zs = path.estimates_many([DifferentialEstimator(n0, a_n).ss for n0, a_n in zip(n0_values, a, strict=True)])
         out[mode] = np.array([np.mean(_errors(x, z)[ok], axis=0) for z in zs])
         for i in (0, 1):
             result.quantity(f"ex1.n0_sweep.{mode}.err_x{i + 1}", f"Example 1, Σ with n0 = {n0_values[0]}.."

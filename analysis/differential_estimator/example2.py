@@ -174,7 +174,7 @@ def simulate(p: Example2, seeds, a_new: float, runs: int, *, traces: bool = True
     m = len(presets)
     G = np.meshgrid(p.sweep_b1, p.sweep_b2, p.sweep_b3, indexing="ij")
     per = runs + G[0].size
-    b = tuple(np.tile(np.r_[np.full(runs, nom), g.ravel()], m) for nom, g in zip((p.b1, p.b2, p.b3), G))
+    b = tuple(np.tile(np.r_[np.full(runs, nom), g.ravel()], m) for nom, g in zip((p.b1, p.b2, p.b3), G, strict=True))
     n = int(round(p.T / p.h))
     r = setpoint(p, n)
     theta = softened_square_wave(p.omega, r, p.h)

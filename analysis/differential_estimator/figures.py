@@ -40,7 +40,7 @@ def plot_root_locus(est: DifferentialEstimator, *, printed_K: float | None = Non
     p_min = DifferentialEstimator(n0, a, k_min, allow_unstable=True).poles if k_min > 0 else np.array([])
     crossing = p_min[np.abs(p_min.real) < 1e-6 * max(1.0, a)]
     views = [((2.5 * s_b, -0.3 * s_b), (1.2 * s_b, -1.2 * s_b)), ((-1.9 * a, 0.8 * a), (-1.5 * a, 1.5 * a))]
-    for panel, (ax, (xlim, ylim)) in enumerate(zip(axes, views)):
+    for panel, (ax, (xlim, ylim)) in enumerate(zip(axes, views, strict=True)):
         for j in range(loci.shape[1]):
             ax.plot(loci[:, j].real, loci[:, j].imag, color="C0", lw=1.3,
                     label="root locus, K from 0 to ∞" if j == 0 else None)
@@ -176,7 +176,7 @@ def plot_tradeoff(trade: dict, sigma_point, title: str):
         axis.loglog([sigma_point[0]], [sigma_point[1]], "*", color="k", ms=17, mfc="none", mew=1.3, zorder=2,
                     label=f"Σ as in the paper (a = 7): {bw_s:.0f} rad/s")
         box = dict(boxstyle="round,pad=0.15", fc="w", ec="none", alpha=0.85)
-        for bw, (e1, e2), inside in zip(bws, curves["sigma"], near):
+        for bw, (e1, e2), inside in zip(bws, curves["sigma"], near, strict=True):
             if inside == zoom:
                 axis.annotate(f"{bw:.0f}", (e1, e2), textcoords="offset points", xytext=(-8, 6), ha="right",
                               fontsize=8, color="C0", bbox=box, zorder=6)
@@ -279,7 +279,7 @@ def plot_stability_map(b1s, b2s, b3s, maps, title: str):
     i1, i2 = np.meshgrid(np.arange(len(b1s)), np.arange(len(b2s)), indexing="ij")
     offsets = np.linspace(-0.25, 0.25, len(b3s))
     counts = np.zeros(len(OUTCOMES), dtype=int)
-    for ax, (label, outcome, lin) in zip(axes, maps):
+    for ax, (label, outcome, lin) in zip(axes, maps, strict=True):
         ax.grid(False)
         im = ax.imshow(lin.T, origin="lower", cmap="RdBu_r", norm=norm, aspect="auto",
                        extent=(-0.5, len(b1s) - 0.5, -0.5, len(b2s) - 0.5))
@@ -292,7 +292,7 @@ def plot_stability_map(b1s, b2s, b3s, maps, title: str):
                            linewidths=0.8, zorder=3)
         for code, _, _, name in OUTCOMES:
             n_here.append(f"{int(np.sum(outcome == code))} {name.split(' ')[0]}")
-        for i, j in zip(i1.ravel(), i2.ravel()):
+        for i, j in zip(i1.ravel(), i2.ravel(), strict=True):
             dark = abs(float(norm(lin[i, j])) - 0.5) > 0.3
             ax.text(i, j - 0.3, f"{lin[i, j]:+.2f}", fontsize=7, ha="center", va="center", color="w" if dark else "0.1")
         ax.set_xticks(range(len(b1s)), [f"{v:g}" for v in b1s])

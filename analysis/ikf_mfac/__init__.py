@@ -87,7 +87,7 @@ def run(ctx: StudyContext, params=None) -> StudyResult:
     per_run = {}
     for key in examples:
         per_run[key] = {s: metrics_of(all_runs[key][s]) for s in SCHEMES}
-        where = {s: [f"run {b} at k = {k}" for b, k in zip(np.flatnonzero(r.diverged), r.diverged_step[r.diverged])]
+        where = {s: [f"run {b} at k = {k}" for b, k in zip(np.flatnonzero(r.diverged), r.diverged_step[r.diverged], strict=True)]
                  for s, r in all_runs[key].items()}
         record_table1(result, key, per_run[key], where)
         record_noise_margin(result, key, SWEEPS[key]["noise"], {s: sweeps[key][s]["noise"] for s in SCHEMES},

@@ -83,7 +83,7 @@ def _simulate(requests: list) -> list:
     """
     keys = [_key(ex, s, std, seeds, what) for ex, s, std, seeds, what in requests]
     missing = {}
-    for k, r in zip(keys, requests):
+    for k, r in zip(keys, requests, strict=True):
         if k not in _CACHE:
             missing.setdefault(k, r)
     if len(_CACHE) + len(missing) > _CACHE_SIZE:
@@ -98,7 +98,7 @@ def _simulate(requests: list) -> list:
         runs = run_batch([r[0] for r in reqs], scheme, vs)
         e, snr = metrics_of(runs)
         start = 0
-        for k, (ex, _, _, seeds, what) in zip(gkeys, reqs):
+        for k, (ex, _, _, seeds, what) in zip(gkeys, reqs, strict=True):
             sl = slice(start, start + len(seeds))
             start += len(seeds)
             if what is None:
@@ -195,7 +195,7 @@ def evaluate_many(variants: list) -> list:
         need = [(i, key, j, s) for i in todo for j in range(len(levels[key])) for s in schemes
                 if rows[i][key][s][j] is None]
         got = _simulate([(variants[i][k], s, levels[k][j], runs, None) for i, k, j, s in need])
-        for (i, k, j, s), (e, _) in zip(need, got):
+        for (i, k, j, s), (e, _) in zip(need, got, strict=True):
             rows[i][k][s][j] = e
     results = []
     for i, v in enumerate(variants):

@@ -54,7 +54,7 @@ def _plot_runs(ax, x, rows, color, label: str, short: str | None = None, **kw) -
     if hollow.any():
         ax.plot(x[hollow], mean[hollow], kw["marker"], mfc="white", mec=color, mew=1.5, ms=kw.get("ms", 8) + 2,
                 ls="none")
-        for xi, mi, b, n in zip(x[hollow], mean[hollow], bad[hollow], (n_ok + bad)[hollow]):
+        for xi, mi, b, n in zip(x[hollow], mean[hollow], bad[hollow], (n_ok + bad)[hollow], strict=True):
             ax.annotate(f"{int(b)}/{int(n)} div.", (xi, mi), textcoords="offset points", xytext=(5, 4), fontsize=7,
                         color=color)
     parts = [f"{int(b)}/{int(n_ok[i] + b)} at {x[i]:g}" + ("" if ordinary[i] or hollow[i] else " (left out)")
@@ -85,8 +85,8 @@ def plot_fig2(k, y_ref, outputs: dict, R, runs: int, diverged, rejection, rise, 
     a1.legend(loc="lower left", fontsize=8)
     R = np.asarray(R, dtype=float)
     div = np.asarray(diverged)
-    rows_f = [(f, 0.0, runs - d, d) for f, d in zip(rejection, div)]
-    rows_r = [(r, 0.0, runs - d, d) for r, d in zip(rise, div)]
+    rows_f = [(f, 0.0, runs - d, d) for f, d in zip(rejection, div, strict=True)]
+    rows_r = [(r, 0.0, runs - d, d) for r, d in zip(rise, div, strict=True)]
     notes = [_plot_runs(a2, R, rows_f, "tab:blue", f"rejection: steady RMS of y − y* (k = {steady[0]}..{steady[1]}), left axis",
                         short="per R")]
     a2.set(xscale="log", xlabel="R (measurement-noise variance of the IKF)", ylabel="steady RMS of y − y*")
@@ -94,7 +94,7 @@ def plot_fig2(k, y_ref, outputs: dict, R, runs: int, diverged, rejection, rise, 
     _plot_runs(tw, R, rows_r, "tab:red", f"response: start-up rise to y = {rise_level:g} (samples from k = 3), right axis",
                ls="--")
     tw.set_ylabel("start-up rise (samples)")
-    for Ri, d in zip(R, div):
+    for Ri, d in zip(R, div, strict=True):
         if 2 * d >= runs:
             a2.axvspan(Ri / 1.3, Ri * 1.3, color="0.85")
             a2.text(Ri, 0.5, f"{d} of {runs}\nruns diverged", transform=a2.get_xaxis_transform(), ha="center",
@@ -123,7 +123,7 @@ def plot_outputs(fig_no: int, title: str, k, y_ref, ys: dict):
     """Fig. 3 / 5: reference and the true output of each scheme for one run, one panel per scheme (same axes)."""
     fig, axes = new_figure(len(SCHEMES), 1, size=(10.0, 8.0), sharex=True, sharey=True,
                            title=f"Fig. {fig_no} — {title}")
-    for ax, s in zip(axes, SCHEMES):
+    for ax, s in zip(axes, SCHEMES, strict=True):
         ax.plot(k, y_ref, "k--", lw=1.0, label="y*(k)")
         ax.plot(k, ys[s], lw=0.8, color=COLORS[s], label=f"{SCHEME_LABELS[s]} y(k)")
         ax.set_ylabel("y(k)")
@@ -136,7 +136,7 @@ def plot_errors(fig_no: int, title: str, k, y_ref, ys: dict):
     """Fig. 4 / 6: |y*(k) − y(k)| of each scheme for one run, one panel per scheme."""
     fig, axes = new_figure(len(SCHEMES), 1, size=(10.0, 7.0), sharex=True, sharey=True,
                            title=f"Fig. {fig_no} — {title}")
-    for ax, s in zip(axes, SCHEMES):
+    for ax, s in zip(axes, SCHEMES, strict=True):
         ax.plot(k, np.abs(y_ref - ys[s]), lw=0.7, color=COLORS[s], label=SCHEME_LABELS[s])
         ax.set_ylabel("|e*(k)|")
         _legend(ax)
@@ -148,7 +148,7 @@ def plot_spread(per_run: dict, runs: int):
     """Monte Carlo spread of RMSE per scheme (violins), Table 1's values as red marks."""
     fig, axes = new_figure(1, 2, size=(11.0, 4.5),
                            title=f"Table 1 — RMSE per scheme over {runs} seeded runs (violins), paper's value (red ×)")
-    for ax, key, name in zip(axes, ("ex1", "ex2"), ("Example 1 (constant y*)", "Example 2 (varying y*)")):
+    for ax, key, name in zip(axes, ("ex1", "ex2"), ("Example 1 (constant y*)", "Example 2 (varying y*)"), strict=True):
         data = [per_run[key][s][0][np.isfinite(per_run[key][s][0])] for s in SCHEMES]
         pos = np.arange(1, len(SCHEMES) + 1)
         ax.violinplot([d if d.size else [np.nan] for d in data], positions=pos, showmedians=True)
@@ -163,7 +163,7 @@ def plot_noise_sweep(levels, sweeps: dict, paper_levels: dict):
     """RMSE per scheme against the measurement-noise std (beyond the paper), one panel per example."""
     fig, axes = new_figure(1, 2, size=(12.0, 4.8), title="RMSE of the four schemes against the noise std σ_v "
                                                            f"(mean of the healthy seeded runs; {_RULE})")
-    for ax, key in zip(axes, ("ex1", "ex2")):
+    for ax, key in zip(axes, ("ex1", "ex2"), strict=True):
         notes = [_plot_runs(ax, levels[key], sweeps[key][s]["noise"], COLORS[s], SCHEME_LABELS[s], **MARKERS[s])
                  for s in SCHEMES]
         ax.axvline(paper_levels[key], color="k", ls=":", lw=1, label="paper's σ_v")
@@ -176,7 +176,7 @@ def plot_noise_sweep(levels, sweeps: dict, paper_levels: dict):
 def plot_ratio_sweep(sweeps: dict, paper_q: dict):
     """IKF-MFAC RMSE and K∞ against Q/R (beyond the paper), one panel per example."""
     fig, axes = new_figure(1, 2, size=(12.0, 4.8), title=f"IKF-MFAC: mean RMSE and steady gain K∞ against Q/R ({_RULE})")
-    for ax, key in zip(axes, ("ex1", "ex2")):
+    for ax, key in zip(axes, ("ex1", "ex2"), strict=True):
         name = "Example 1" if key == "ex1" else "Example 2"
         note = _ratio_axes(ax, sweeps[key], name)
         ax.axvline(paper_q[key], color="k", ls=":", lw=1)
@@ -221,7 +221,7 @@ def td_scan_lowest(d: dict, mfac: float) -> dict:
         ``count``, ``rmse``, ``change`` (relative to MFAC, %) of the lowest clean count (None without one);
         ``below``: the clean counts more than :data:`EQUAL` below MFAC; ``equal``: those within it.
     """
-    clean = [(n, m) for n, m, b in zip(d["counts"], d["rmse"], d["diverged"]) if not b and np.isfinite(m)]
+    clean = [(n, m) for n, m, b in zip(d["counts"], d["rmse"], d["diverged"], strict=True) if not b and np.isfinite(m)]
     if not clean:
         return {"count": None, "rmse": None, "change": None, "below": [], "equal": []}
     n, m = min(clean, key=lambda t: t[1])
@@ -262,10 +262,10 @@ def plot_td_scan(scan: dict, chosen: dict, mfac: dict):
     fig, axes = new_figure(1, 2, size=(12.5, 5.4), title="TD-MFAC against the TD steps per control sample (not printed)"
                                                            f" on Table 1's seeds\n({_RULE}; a mean off the top is "
                                                            "printed at the edge)")
-    for ax, key in zip(axes, ("ex1", "ex2")):
+    for ax, key in zip(axes, ("ex1", "ex2"), strict=True):
         d = scan[key]
         n, runs = np.asarray(d["counts"]), d["runs"]
-        rows = [(m, 0.0, runs - b, b) for m, b in zip(d["rmse"], d["diverged"])]
+        rows = [(m, 0.0, runs - b, b) for m, b in zip(d["rmse"], d["diverged"], strict=True)]
         _plot_runs(ax, n, rows, "tab:orange", "TD-MFAC mean RMSE (left axis)")
         ax.axhline(mfac[key], color="tab:gray", ls="-", lw=1, label=f"plain MFAC {mfac[key]:.4f}")
         ax.axhline(TABLE1[key]["rmse"]["td_mfac"], color="tab:red", ls=":", lw=1.2,
@@ -282,7 +282,7 @@ def plot_td_scan(scan: dict, chosen: dict, mfac: dict):
         ax.set(xscale="log", xlabel="TD steps per sample (log scale)", ylabel="mean RMSE",
                ylim=(0.9 * min(np.nanmin(np.asarray(d["rmse"])[ok]) if ok.any() else mfac[key],
                                TABLE1[key]["rmse"]["td_mfac"]), top))
-        for ni, m in zip(n[ok], np.asarray(d["rmse"])[ok]):
+        for ni, m in zip(n[ok], np.asarray(d["rmse"])[ok], strict=True):
             if m > top:
                 ax.annotate(f"{m:.3g} ↑", (ni, top), textcoords="offset points", xytext=(0, -12), ha="center",
                             fontsize=7, color="tab:orange")

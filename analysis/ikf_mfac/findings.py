@@ -130,7 +130,7 @@ def record_reset_erratum(result, ex1) -> None:
 def _first_clean(counts, div) -> int | None:
     """The smallest count from which every count scanned has no diverged run (None if the largest loses runs)."""
     best = None
-    for n, d in sorted(zip(counts, div), reverse=True):
+    for n, d in sorted(zip(counts, div, strict=True), reverse=True):
         if d:
             break
         best = n
@@ -177,7 +177,7 @@ def record_td_scan(result, scans: dict, chosen: dict) -> dict:
         mf = result.get(f"{key}.mfac.rmse").value
         texts.append(f"{name}: one step per sample diverges in {int((~ok).sum())} of {runs} runs; with x1 after the "
                      "sample's steps the diverged runs per count are "
-                     + ", ".join(f"{n}: {d}" for n, d in zip(counts, div))
+                     + ", ".join(f"{n}: {d}" for n, d in zip(counts, div, strict=True))
                      + (f", so every count from {clean} up is clean" if clean else ", and the largest count still "
                         "loses runs")
                      + (f"; the count used, {chosen[key]}, loses {div[c]} and gives TD-MFAC a mean RMSE of {mean[c]:.4f} "
@@ -224,7 +224,7 @@ def record_where_ikf_wins(result, sweeps: dict, ratio: dict, grids: dict) -> Non
             n_all[key] = n_all.get(key, 0) + len(points)
             parts.append(f"{name}, {label}: lowest at {', '.join(win) or 'none'}; not at {', '.join(lose) or 'none'}")
         div = [f"{L[sc]} {n} at {lab} = {pt:g}" for lab, param in (("σ_v", "noise"), ("ρ", "rho"), ("λ", "lam"))
-               for sc in SCHEMES for pt, row in zip(grids[key][param], sweeps[key][sc][param]) if (n := row[3])]
+               for sc in SCHEMES for pt, row in zip(grids[key][param], sweeps[key][sc][param], strict=True) if (n := row[3])]
         if div:
             parts.append(f"{name}, diverged runs (excluded from the means): {', '.join(div)}")
         q, rm = ratio[key]["q"], [r[0] for r in ratio[key]["rmse"]]

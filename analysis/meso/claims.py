@@ -405,7 +405,7 @@ def _judge_observers(result, readings, alg) -> None:
     law = (3, 2, 1)
     slopes = [_v(result, f"leso.eps_slope.x{i}") for i in (1, 2, 3)]
     tol = readings.exponent_tolerance
-    result.claim(_CLAIM["eps-law"], all(abs(s / k - 1) <= tol for s, k in zip(slopes, law)),
+    result.claim(_CLAIM["eps-law"], all(abs(s / k - 1) <= tol for s, k in zip(slopes, law, strict=True)),
                  evidence=[f"leso.eps_slope.x{i}" for i in (1, 2, 3)],
                  note=f"fitted log-log slopes of the ESO's mean |e_i| against ε: {_vec(slopes)} against the law "
                       f"{list(law)} (read as confirmed within {tol:.0%} of the exponent)")

@@ -267,7 +267,7 @@ def plot_theta(sim: SituationRun, key: str, runs: list, title: str, max_points: 
         ax.set_xlabel("time t (s)")
     handles, labels = [], []
     for ax in axes.ravel():
-        for h, lab in zip(*ax.get_legend_handles_labels()):
+        for h, lab in zip(*ax.get_legend_handles_labels(), strict=True):
             if lab not in labels:
                 handles.append(h)
                 labels.append(lab)
@@ -292,7 +292,7 @@ def plot_identifiability(per_sit: dict, threshold: float):
     """
     fig, axes = new_figure(1, 2, size=(13, 5.5), title="Identifiability of each LSM batch (Theorem 1): condition "
                                                        "number of the column-scaled regression matrix (no paper figure)")
-    for ax, (name, (tb, series, gated)) in zip(np.atleast_1d(axes), per_sit.items()):
+    for ax, (name, (tb, series, gated)) in zip(np.atleast_1d(axes), per_sit.items(), strict=True):
         for values, label, style in series:
             if isinstance(values, tuple):
                 lo, med, hi = values

@@ -138,7 +138,7 @@ def _identifiability(result, s1, s2, horizons, gate) -> None:
     eq = equivalent_theta(true_end, PAPER.b)
     dir_th = s2.theta_batch[:, idir, 2]
     dir_th = dir_th[np.isfinite(dir_th)]
-    passes = dict(zip(gate["grid"], gate["passes"]))
+    passes = dict(zip(gate["grid"], gate["passes"], strict=True))
     result.finding(
         "situation2-not-identifiable",
         "Situation 2's full parameter vector is not identifiable from closed-loop data with ξ = sin t, contrary to the "

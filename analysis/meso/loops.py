@@ -22,8 +22,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ctrl_analysis.controllers.pd import PDFeedforward
-from ctrl_analysis.engine.blocks import signal_names
 from ctrl_analysis.engine import Execution, Save
+from ctrl_analysis.engine.blocks import signal_names
 from ctrl_analysis.engine.loop import Loop, place
 from ctrl_analysis.estimators.lowpass import LowPassFilter
 from ctrl_analysis.noise import draw_noise, uniform_noise
@@ -328,7 +328,7 @@ def _join(outs, parts, rows) -> SituationRun:
         return np.concatenate([getattr(o, name) for o in outs], axis=axis)
 
     def renumber(name):
-        return {b + sl.start: v for o, sl in zip(outs, parts) for b, v in getattr(o, name).items()}
+        return {b + sl.start: v for o, sl in zip(outs, parts, strict=True) for b, v in getattr(o, name).items()}
 
     return SituationRun(
         rows=rows, t=first.t, n_window=first.n_window, t_batch=first.t_batch, b0=first.b0,

@@ -38,8 +38,8 @@ def plot_riccati_convergence(t, trajectories: dict, P_bar, a21: float, Q: float,
     entries = [((0, 0), "p11 = var φ̃  (rad²)"), ((0, 1), "p12 = cov(φ̃, φ̃')  (rad²/s)"),
                ((1, 1), "p22 = var φ̃'  (rad²/s²)")]
     colors = [f"C{k}" for k in range(len(trajectories))]
-    for ax, ((r, c), label) in zip(axes.ravel()[:3], entries):
-        for color, (name, P) in zip(colors, trajectories.items()):
+    for ax, ((r, c), label) in zip(axes.ravel()[:3], entries, strict=True):
+        for color, (name, P) in zip(colors, trajectories.items(), strict=True):
             ax.plot(t, P[:, r, c], color=color, label=name)
         ax.axhline(P_bar[r, c], color="k", ls="--", lw=1.2, label=f"P̄ = {P_bar[r, c]:.5g}")
         ax.set_xlabel("t (s)")
@@ -48,7 +48,7 @@ def plot_riccati_convergence(t, trajectories: dict, P_bar, a21: float, Q: float,
         ax.set_ylim(bottom=1.0)
         ax.legend(fontsize=7, loc="lower right")
     ax = axes.ravel()[3]
-    for color, (name, P) in zip(colors, trajectories.items()):
+    for color, (name, P) in zip(colors, trajectories.items(), strict=True):
         err = np.linalg.norm(P - P_bar, axis=(1, 2)) / np.linalg.norm(P_bar)
         ax.semilogy(t, np.maximum(err, 1e-16), color=color, label=name)
     ax.set_xlabel("t (s)")
@@ -257,7 +257,7 @@ def plot_saturation(stats: dict, labels: dict):
                                            ("sat_ec", "C3", "ec (rate) saturated"))):
             v = [np.nan if st[n][m][0] is None else 100 * st[n][m][0] for n in names]
             ax.barh(y + (0.2 if j == 0 else -0.2), v, height=0.38, color=col, label=lab)
-            for yi, vi in zip(y, v):
+            for yi, vi in zip(y, v, strict=True):
                 ax.text(0 if np.isnan(vi) else vi, yi + (0.2 if j == 0 else -0.2),
                         " diverged" if np.isnan(vi) else f" {vi:.2g} %", va="center", fontsize=7)
         ax.set_yticks(y, [labels.get(n, n) for n in names], fontsize=8)
@@ -361,7 +361,7 @@ def plot_per_run_changes(regimes: dict, thresholds: dict):
                                  "(boxes: quartiles, whiskers 5-95 %, dots: runs)")
     axes = np.atleast_1d(axes)
     colors = ("C0", "C2")
-    for ax, row in zip(axes, rows):
+    for ax, row in zip(axes, rows, strict=True):
         measures = list(regimes[row])
         labels = list(dict.fromkeys(lab for m in measures for lab in regimes[row][m]))
         width = 0.8 / len(labels)

@@ -28,8 +28,8 @@ from ctrl_analysis.controllers.fuzzy import (
     FuzzyLookupController,
     sum_rule_table,
 )
-from ctrl_analysis.engine.blocks import StaticGain
 from ctrl_analysis.engine import Execution
+from ctrl_analysis.engine.blocks import StaticGain
 from ctrl_analysis.engine.loop import Loop, place
 from ctrl_analysis.estimators.kalman import (
     AlphaBetaFilter,

@@ -129,7 +129,7 @@ def algebraic_derivative(y, windows, degrees, dt: float) -> np.ndarray:
     degrees = _integers("degrees", degrees, B, minimum=1, maximum=2)
     windows = np.maximum(windows, degrees + 1)
     out = np.empty((N, B, 3))
-    for W, d in {(int(a), int(b)) for a, b in zip(windows, degrees)}:
+    for W, d in {(int(a), int(b)) for a, b in zip(windows, degrees, strict=True)}:
         cols = np.flatnonzero((windows == W) & (degrees == d))
         w = algebraic_weights(W, d, dt)
         padded = np.concatenate([np.repeat(y[:1, cols], W - 1, axis=0), y[:, cols]])

@@ -123,7 +123,7 @@ def _loser_errors(lo, cases, table, setup) -> tuple:
 
     name, params = lo[0], np.asarray(lo[1], dtype=float)
     m = evaluate((name, setup, tuple(cases), [(i, params) for i in range(len(cases))], "auto"))
-    label = f"{name} fixed at " + ", ".join(f"{p.name} = {v:g}" for p, v in zip(family(name).params, params))
+    label = f"{name} fixed at " + ", ".join(f"{p.name} = {v:g}" for p, v in zip(family(name).params, params, strict=True))
     return label, m[:, 1]
 
 
@@ -183,7 +183,7 @@ def judge_claims(result, cases, table, setup, checks=None) -> list:
                     label, el = _loser_errors(lo, run, table, setup)
                     ratio = el / ew
                     wins_all.append(ratio > 1.0)
-                    evidence[f"{label} / {w}"] = {c.key: float(r) for c, r in zip(run, ratio)}
+                    evidence[f"{label} / {w}"] = {c.key: float(r) for c, r in zip(run, ratio, strict=True)}
                     parts.append(f"RMS error of f̂', {label} / {w}: {np.min(ratio):.2f}..{np.max(ratio):.2f} "
                                  f"(median {np.median(ratio):.2f}; {w} better in {int(np.sum(ratio > 1))} of "
                                  f"{len(run)})")

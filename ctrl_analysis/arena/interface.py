@@ -228,9 +228,9 @@ def _abg_gains(lam: np.ndarray) -> tuple:
     DARE solve for the values not seen before; cached per ``Λ``)."""
     new = sorted({float(x) for x in lam} - _ABG_CACHE.keys())
     if new:
-        for x, *g in zip(new, *alpha_beta_gamma_gains(np.array(new))):
+        for x, *g in zip(new, *alpha_beta_gamma_gains(np.array(new)), strict=True):
             _ABG_CACHE[x] = tuple(float(v) for v in g)
-    return tuple(np.array(v) for v in zip(*(_ABG_CACHE[float(x)] for x in lam)))
+    return tuple(np.array(v) for v in zip(*(_ABG_CACHE[float(x)] for x in lam), strict=True))
 
 
 #: Λ -> (α, β, γ), filled by :func:`_abg_gains`

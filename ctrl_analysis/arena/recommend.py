@@ -170,7 +170,7 @@ def run_arena(ctx: StudyContext, settings: ArenaSettings | None = None) -> tuple
         tuned[name] = r
         adv = _adversarial(name, cases, [b["worst"][0] for b in r["best"]], s.setup)
         table[name] = {}
-        for c, b, a in zip(cases, r["best"], adv):
+        for c, b, a in zip(cases, r["best"], adv, strict=True):
             bound = lower_bound(c.eps, c.L)
             table[name][c.key] = {"params": b["worst"][0].tolist(), "worst": b["worst"][1][0],
                                   "rms_params": b["rms"][0].tolist(), "rms": b["rms"][1][1],
@@ -190,7 +190,7 @@ def _record(result, s, cases, table, tunings):
             row = table[name][c.key]
             cid = f"{c.signal}.{c.noise}.{c.eps:g}.{name}"
             result.quantity(f"{cid}.worst", f"{c.key}, {name}: tuned worst-case |f̂' - f'|", row["worst"],
-                            unit="1/s", note=f"params {dict(zip([p.name for p in family(name).params], row['params']))}")
+                            unit="1/s", note=f"params {dict(zip([p.name for p in family(name).params], row['params'], strict=True))}")
             result.quantity(f"{cid}.adv_ratio", f"{c.key}, {name}: adversarial worst case / 2√(εL)", row["adv_ratio"],
                             unit="")
     result.quantity("tunings", "configurations evaluated (tunings)", float(tunings), unit="")
@@ -201,7 +201,7 @@ def _record(result, s, cases, table, tunings):
     spread = ("every family's median ratio is 1.00: a converged estimator fed the common measurement (the ramp) "
               "returns the ramp's slope at t*, midway between the two true derivatives, so the construction gives "
               "them all exactly the bound and ranks none of them" if np.all(np.abs(med - 1) < 0.005) else
-              "median ratios " + ", ".join(f"{n} {m:.2f}" for n, m in zip(fams, med)))
+              "median ratios " + ", ".join(f"{n} {m:.2f}" for n, m in zip(fams, med, strict=True)))
     result.finding("causality-check",
                    f"Causality check of the bound's adversarial construction, not evidence that the estimators are "
                    f"good: on the two signals of the proof (measurements identical up to t*, derivatives 4√(εL) apart "
@@ -221,7 +221,7 @@ def _record(result, s, cases, table, tunings):
             win = rank[0]
             mid = keys[len(keys) // 2]
             params = dict(zip([p.name for p in family(win).params],
-                              [float(f"{v:.4g}") for v in table[win][mid]["params"]]))
+                              [float(f"{v:.4g}") for v in table[win][mid]["params"]], strict=True))
             margin = score[rank[1]] / score[win] if len(rank) > 1 else 1.0
             result.finding(f"recommend-{sig}-{noi}",
                            f"For {sig} signals with {noi} noise use {family(win).label}: mean worst-case error "
@@ -405,7 +405,7 @@ def recommend_for_record(t, y, d1, eps: float, L: float, *, rounds: int = 2, job
                                  f"record (ε = {eps:.3g}, L = {L:.3g}, dt = {setup.dt:.3g} s); the arena cannot "
                                  "rank it")
             out.append({"family": fam.name, "label": fam.label, "params": dict(zip([p.name for p in fam.params],
-                                                                                   v.tolist())),
+                                                                                   v.tolist(), strict=True)),
                         "worst": float(m[0]), "ratio": float(m[0] / lower_bound(eps, L))})
     finally:
         tuning._USER_RECORDS.pop(case, None)

@@ -197,7 +197,7 @@ def _smooth_steps(rng, t, integrate: bool):
     f, f1, f2 = np.zeros_like(t), np.zeros_like(t), np.zeros_like(t)
     T = t[-1] if t.size else 1.0
     for ti, h, w in zip(np.sort(rng.uniform(0.1 * T, 0.8 * T, 3)), rng.choice([-1, 1], 3) * rng.uniform(0.5, 1, 3),
-                        rng.uniform(0.4, 1.2, 3)):
+                        rng.uniform(0.4, 1.2, 3), strict=True):
         u = np.clip((t - ti) / w, 0.0, 1.0)
         inside = (t > ti) & (t < ti + w)
         S = 0.5 * (1 - np.cos(np.pi * u))
@@ -289,7 +289,7 @@ def _built_in(kind: str, rng, t) -> tuple:
     if kind == "chirp":
         return _chirp(rng, t)
     return [sum(x) for x in zip(*(_scaled(g, 1.0) for g in
-                                   (_sines(rng, t), _smooth_steps(rng, t, False), _smooth_steps(rng, t, True))))]
+                                   (_sines(rng, t), _smooth_steps(rng, t, False), _smooth_steps(rng, t, True))), strict=True)]
 
 
 def add_noise(kind: str, f, eps: float, seed: int) -> np.ndarray:

@@ -374,9 +374,9 @@ def tune_family(name: str, cases, setup: Setup, *, rounds: int = 3, engine: str 
             if len(zs):
                 vals = param_values(fam, zs, cases[ci], setup)
                 configs += [(ci, v) for v in vals]
-                owners += [(ci, z, v) for z, v in zip(zs, vals)]
+                owners += [(ci, z, v) for z, v in zip(zs, vals, strict=True)]
         metrics = _run(name, setup, cases, configs, engine, jobs, scheduler, desc)
-        for (ci, z, v), m in zip(owners, metrics):
+        for (ci, z, v), m in zip(owners, metrics, strict=True):
             evaluated[ci].append((z, v, m))
         return metrics
 

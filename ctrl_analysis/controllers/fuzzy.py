@@ -216,7 +216,7 @@ def _no_update(t, x, u, p, x_next):
 
 #: The fixed head of :func:`mamdani_output`'s parameters: :data:`SCALING`, sizes, term widths; the
 #: arrays of :func:`mamdani_layout` follow.
-MAMDANI = Layout(*zip(SCALING.names, SCALING.shapes), "n_e", "n_ec", "n_u", "n_grid", "w_e", "w_ec")
+MAMDANI = Layout(*zip(SCALING.names, SCALING.shapes, strict=True), "n_e", "n_ec", "n_u", "n_grid", "w_e", "w_ec")
 AT = MAMDANI.at  # parameter offsets, a numba constant
 _M_ARRAYS = MAMDANI.size
 
@@ -234,7 +234,7 @@ def mamdani_layout(n_e: int, n_ec: int, n_u: int, n_grid: int) -> Layout:
     -------
     Layout
     """
-    return Layout(*zip(MAMDANI.names, MAMDANI.shapes), ("c_e", n_e), ("c_ec", n_ec), ("rules", (n_e, n_ec)),
+    return Layout(*zip(MAMDANI.names, MAMDANI.shapes, strict=True), ("c_e", n_e), ("c_ec", n_ec), ("rules", (n_e, n_ec)),
                   ("z", n_grid), ("mu_u", (n_grid, n_u)))
 
 
@@ -294,7 +294,7 @@ def mamdani_output(t, x, u, p, y):
 
 #: The fixed head of :func:`lookup_output`'s parameters: :data:`SCALING`, grid sizes, first points and
 #: steps; the table ``U`` (``n_e × n_ec``, row-major) follows (:func:`lookup_layout`).
-LOOKUP = Layout(*zip(SCALING.names, SCALING.shapes), "n_e", "n_ec", "E0", "EC0", "dE", "dEC")
+LOOKUP = Layout(*zip(SCALING.names, SCALING.shapes, strict=True), "n_e", "n_ec", "E0", "EC0", "dE", "dEC")
 LT = LOOKUP.at  # parameter offsets, a numba constant
 _L_ARRAYS = LOOKUP.size
 
@@ -311,7 +311,7 @@ def lookup_layout(n_e: int, n_ec: int) -> Layout:
     -------
     Layout
     """
-    return Layout(*zip(LOOKUP.names, LOOKUP.shapes), ("U", (n_e, n_ec)))
+    return Layout(*zip(LOOKUP.names, LOOKUP.shapes, strict=True), ("U", (n_e, n_ec)))
 
 
 def lookup_output(t, x, u, p, y):

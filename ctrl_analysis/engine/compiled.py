@@ -61,7 +61,7 @@ def _fresh_params(plan, memo):
     since), or ``None`` when a block's kernel functions or parameter sizes changed (then the runner is found anew)."""
     run, P, per_run, functions = memo
     fresh = []
-    for p, Pi, fn in zip(plan.placed, P, functions):
+    for p, Pi, fn in zip(plan.placed, P, functions, strict=True):
         own = getattr(p.block, "kernel", None)  # codegen.kernel_of, without importing it at every call
         k = own() if callable(own) else None
         if k is None or (k.output, k.update, k.rhs) != fn:
@@ -240,7 +240,7 @@ def run_compiled(plan, runner, t, held, bound, rec, lo=0):
     B = x.shape[0]
     n_steps = t.shape[0] - 1
     if any(per_run):
-        P = [Pi[lo:lo + B] if pr else Pi[:1] for Pi, pr in zip(P, per_run)]
+        P = [Pi[lo:lo + B] if pr else Pi[:1] for Pi, pr in zip(P, per_run, strict=True)]
     PS = plan.cache.get(("PS", tuple(per_run)))
     if PS is None:
         PS = plan.cache[("PS", tuple(per_run))] = np.array(per_run, dtype=np.intp)

@@ -154,7 +154,7 @@ class Layout:
             raise ValueError(f"size {self.size_name!r} must be a whole number >= 0, got {n!r:.80}")
         n = int(n)
         return Layout(*[(name, tuple(n if d == self.size_name else d for d in s))
-                        for name, s in zip(self.names, self.shapes)])
+                        for name, s in zip(self.names, self.shapes, strict=True)])
 
     def pack(self, **values) -> np.ndarray:
         """The parameter vector from one value per name (shapes checked; a size field sets the arrays' shapes).
@@ -186,7 +186,7 @@ class Layout:
             raise ValueError(f"pack needs exactly the layout's parameters {list(self.names)}: "
                              f"missing {missing}, unknown {unknown}")
         out = np.empty(self.size)
-        for name, shape, lo in zip(self.names, self.shapes, self.at):
+        for name, shape, lo in zip(self.names, self.shapes, self.at, strict=True):
             try:
                 v = check_array(name, values[name])
             except TypeError:
@@ -216,13 +216,13 @@ class Layout:
         if p.shape != (self.size,):
             raise ValueError(f"p must have shape ({self.size},), got {p.shape}")
         out = {}
-        for name, shape, lo in zip(self.names, self.shapes, self.at):
+        for name, shape, lo in zip(self.names, self.shapes, self.at, strict=True):
             n = int(np.prod(shape, dtype=int))
             out[name] = float(p[lo]) if shape == () else p[lo:lo + n].reshape(shape).copy()
         return out
 
     def __repr__(self) -> str:
-        return "Layout(" + ", ".join(n if s == () else f"({n!r}, {s})" for n, s in zip(self.names, self.shapes)) + ")"
+        return "Layout(" + ", ".join(n if s == () else f"({n!r}, {s})" for n, s in zip(self.names, self.shapes, strict=True)) + ")"
 
 
 def offset(o, n):

@@ -34,7 +34,6 @@ from __future__ import annotations
 import functools
 from dataclasses import dataclass
 
-
 from .._validate import check_in, check_int, check_names, check_positive, check_str
 from .batch import resolve_batch
 from .blocks import Block, ContinuousBlock, DiscreteBlock, check_states_declared

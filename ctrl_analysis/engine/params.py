@@ -208,7 +208,7 @@ def resolve(loop, params, B: int) -> dict:
         blocks = [_rebuild(block, {**shared, **{k: v[b] for k, v in per_run.items()}}, where) for b in first.tolist()]
         order = np.argsort(inverse, kind="stable")
         cuts = np.searchsorted(inverse[order], np.arange(1, len(blocks)))
-        groups = tuple(zip(blocks, (g.astype(np.intp) for g in np.split(order, cuts))))
+        groups = tuple(zip(blocks, (g.astype(np.intp) for g in np.split(order, cuts)), strict=True))
         out[name] = Variant(blocks[0], rows=_kernel_rows(blocks, inverse, per_run, where), groups=groups)
     return out
 

@@ -18,7 +18,7 @@ conventional ESO, which lumps the known part into the extended state.
 
 from __future__ import annotations
 
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
 
@@ -131,7 +131,7 @@ def eso_layout(m: int) -> Layout:
     -------
     Layout
     """
-    return Layout(*zip(HEAD.names, HEAD.shapes), ("L", m), ("alpha", m), ("delta_pow", m))
+    return Layout(*zip(HEAD.names, HEAD.shapes, strict=True), ("L", m), ("alpha", m), ("delta_pow", m))
 
 
 @jitable(inline="always")  # also called inside other kernels (meso's ESO with a model term)
@@ -292,7 +292,7 @@ class ExtendedStateObserver(KernelBlock, ContinuousBlock):
     # ------------------------------------------------------------------------------------------
 
     @classmethod
-    def from_epsilon(cls, n: int, epsilon: float, beta, **kw) -> "ExtendedStateObserver":
+    def from_epsilon(cls, n: int, epsilon: float, beta, **kw) -> ExtendedStateObserver:
         """High-gain form ``L_i = beta_i / epsilon**i`` (paper eq. (29) with ``g_i(e) = beta_i e``).
 
         Parameters
@@ -319,7 +319,7 @@ class ExtendedStateObserver(KernelBlock, ContinuousBlock):
         return _from_gains(cls, "beta and epsilon", lambda: beta / epsilon**i, kw)
 
     @classmethod
-    def from_bandwidth(cls, n: int, omega_o: float, **kw) -> "ExtendedStateObserver":
+    def from_bandwidth(cls, n: int, omega_o: float, **kw) -> ExtendedStateObserver:
         """Bandwidth form: all poles at ``-omega_o``, ``L_i = C(n+1, i) omega_o**i``.
 
         Parameters

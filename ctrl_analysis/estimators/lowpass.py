@@ -42,7 +42,7 @@ def lowpass_layout(m: int) -> Layout:
     -------
     Layout
     """
-    return Layout(*zip(HEAD.names, HEAD.shapes), ("coeffs", m))
+    return Layout(*zip(HEAD.names, HEAD.shapes, strict=True), ("coeffs", m))
 
 
 def lowpass_rhs(t, x, u, p, dx):
@@ -201,7 +201,7 @@ class LowPassFilter(KernelBlock, ContinuousBlock):
         return (finite_result("h (with omega)", lambda: np.asarray(sysd.A)),
                 finite_result("h (with omega)", lambda: np.asarray(sysd.B)[:, 0]))
 
-    def digital(self, h: float, channels: int = 1, initial=None) -> "DiscreteLowPass":
+    def digital(self, h: float, channels: int = 1, initial=None) -> DiscreteLowPass:
         """A :class:`DiscreteLowPass` with sample period ``h`` filtering ``channels`` signals.
 
         Parameters
@@ -242,7 +242,7 @@ def digital_layout(m: int) -> Layout:
     -------
     Layout
     """
-    return Layout(*zip(DIGITAL_HEAD.names, DIGITAL_HEAD.shapes), ("Ad", (m, m)), ("Bd", m))
+    return Layout(*zip(DIGITAL_HEAD.names, DIGITAL_HEAD.shapes, strict=True), ("Ad", (m, m)), ("Bd", m))
 
 
 def lowpass_update(t, x, u, p, x_next):

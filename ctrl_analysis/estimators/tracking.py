@@ -313,7 +313,7 @@ class TDStep(KernelBlock, StaticBlock):
     feedthrough = True
     kernels = Kernels(output=td_step_output)
 
-    def __init__(self, td: "TrackingDifferentiator"):
+    def __init__(self, td: TrackingDifferentiator):
         if not isinstance(td, TrackingDifferentiator):
             raise TypeError(f"td must be a TrackingDifferentiator, got {type(td).__name__}")
         self.kernel_params = td.kernel_params

@@ -269,7 +269,7 @@ class Box:
         -------
         dict
         """
-        return {d.name: d.value(x) for d, x in zip(self.dims, np.asarray(u, dtype=float))}
+        return {d.name: d.value(x) for d, x in zip(self.dims, np.asarray(u, dtype=float), strict=True)}
 
     def params_at(self, u, algorithm: str | None = None) -> dict:
         """The study's ``params`` with every dimension at coordinate ``u`` and the algorithm axis at ``algorithm``.
@@ -285,7 +285,7 @@ class Box:
         dict
         """
         changes: dict = {}
-        for d, x in zip(self.dims, np.asarray(u, dtype=float)):
+        for d, x in zip(self.dims, np.asarray(u, dtype=float), strict=True):
             if math.isfinite(x):
                 changes.setdefault(d.prefix, {})[d.field] = d.value(x)
         if algorithm is not None and algorithm != self.algorithm:
@@ -404,7 +404,7 @@ class Box:
         dict
         """
         out = {}
-        for d, x in zip(self.dims, np.asarray(u, dtype=float)):
+        for d, x in zip(self.dims, np.asarray(u, dtype=float), strict=True):
             v = d.value(x)
             if not _same(v, d.chosen):
                 out[d.name] = _json(v)
@@ -454,5 +454,5 @@ def first_order(box, U, y) -> list:
     noise = float(np.quantile(null, 0.95))
     rows = [{"reconstruction": d.name, "S1": round(float(v), 3), "noise": round(noise, 3),
              "significant": bool(v >= 0.05 and v > noise)}
-            for d, v in zip(box.dims, s1) if math.isfinite(float(v))]
+            for d, v in zip(box.dims, s1, strict=True) if math.isfinite(float(v))]
     return sorted(rows, key=lambda r: -r["S1"])

@@ -90,7 +90,7 @@ def search_cells(runner, box, U, per, cell_steps, search_rounds, bisect) -> dict
     pts = []
     for a in algos:
         pts.append((box.chosen, a, per[a][0]))
-        pts += [(u, a, o) for u, o in zip(U, per[a][1:])]
+        pts += [(u, a, o) for u, o in zip(U, per[a][1:], strict=True)]
     # a cell no sampled point reaches: the chosen point's one-at-a-time neighbours along each set of alternatives
     # (another integrator, another reading) join the points searched from. A printed number often sits next to
     # the chosen values, where a sample spread over every combination of alternatives rarely lands
@@ -101,7 +101,7 @@ def search_cells(runner, box, U, per, cell_steps, search_rounds, bisect) -> dict
                 u = box.chosen.copy()
                 u[i] = (k + 0.5) / len(d.levels)
                 neighbours.append(u)
-        pts += [(u, main, o) for u, o in zip(neighbours, runner.run([(u, main) for u in neighbours]))]
+        pts += [(u, main, o) for u, o in zip(neighbours, runner.run([(u, main) for u in neighbours]), strict=True)]
     near = {id(u) for u in neighbours}
     segments, searches = [], []
     for qid in base["cells"]:
@@ -179,14 +179,14 @@ def _prune(runner, box, U, per, out) -> None:
             singles.append((qid, {name}, _point(box, entry["reached_at"], {name}), entry["algorithm"]))
     outs = runner.run([(u, a) for _, _, u, a in singles])
     needless: dict = {}
-    for (qid, names, _, _), o in zip(singles, outs):
+    for (qid, names, _, _), o in zip(singles, outs, strict=True):
         s = o["cells"].get(qid)
         if s is not None and s["in_band"]:
             needless.setdefault(qid, set()).update(names)
     combined = [(qid, _point(box, out[qid]["reached_at"], names), out[qid]["algorithm"])
                 for qid, names in needless.items()]
     outs = runner.run([(u, a) for _, u, a in combined])
-    for (qid, u, _), o in zip(combined, outs):
+    for (qid, u, _), o in zip(combined, outs, strict=True):
         s = o["cells"].get(qid)
         if s is not None and s["in_band"]:
             out[qid]["reached_at"] = box.changed(u)
@@ -217,8 +217,8 @@ def _straddles(box, states) -> list:
     keys = box.discrete_keys(pts)
     algs = [states[i][1] for i in ok]
     g = gaps[ok]
-    group = {k: i for i, k in enumerate(dict.fromkeys(zip(algs, keys)))}
-    code = np.array([group[k] for k in zip(algs, keys)])
+    group = {k: i for i, k in enumerate(dict.fromkeys(zip(algs, keys, strict=True)))}
+    code = np.array([group[k] for k in zip(algs, keys, strict=True)])
     mask = (g[:, None] * g[None, :] < 0) & (code[:, None] == code[None, :])
     mask = np.triu(mask, 1)
     if not mask.any():
@@ -269,7 +269,7 @@ def _search(runner, box, U, per, out, searches, rounds) -> None:
             break
         outs = runner.run([(u, main) for _, u in batch])
         moved = set()
-        for (qid, u), o in zip(batch, outs):
+        for (qid, u), o in zip(batch, outs, strict=True):
             st, e = state[qid], out[qid]
             e["search"]["evaluations"] += 1
             s = o["cells"].get(qid)

@@ -11,7 +11,6 @@ import math
 import platform
 from dataclasses import dataclass, field
 
-
 from .._validate import (
     check_in,
     check_nonnegative,

@@ -144,7 +144,7 @@ class _Runner:
             # process, each on a contiguous share of the points
             n = min(self.jobs if self.parallel else 1, len(variants))
             cuts = np.linspace(0, len(variants), n + 1).round().astype(int)
-            chunks = [(self.batch, variants[a:b]) for a, b in zip(cuts[:-1], cuts[1:]) if b > a]
+            chunks = [(self.batch, variants[a:b]) for a, b in zip(cuts[:-1], cuts[1:], strict=True) if b > a]
             if self.parallel and len(chunks) > 1:
                 parts = map_chunks(_batch_task, chunks, jobs=self.jobs, scheduler=self.scheduler,
                                    desc="plausible box")
@@ -194,9 +194,9 @@ def _bisect(runner, segments, steps, decide) -> list:
         if not active:
             break
         mids = [runner.box.interpolate(s["a"], s["b"], 0.5) for s in active]
-        outs = runner.run([(m, s["algorithm"]) for m, s in zip(mids, active)])
+        outs = runner.run([(m, s["algorithm"]) for m, s in zip(mids, active, strict=True)])
         still = []
-        for s, m, o in zip(active, mids, outs):
+        for s, m, o in zip(active, mids, outs, strict=True):
             side = decide(s, o)
             if side == "done":
                 s["hit"], s["hit_outcome"] = m, o
@@ -372,11 +372,11 @@ def _prune(runner, box, out, segments, refine, decide) -> None:
         ranked += [name for name in moved if name not in ranked]
         for k in sorted({k for k in (1, 2, 3, 5, 8) if k < len(ranked)}):
             keep = set(ranked[:k])
-            c = np.array([b if d.name in keep else a for d, a, b in zip(box.dims, box.chosen, seg["b"])])
+            c = np.array([b if d.name in keep else a for d, a, b in zip(box.dims, box.chosen, seg["b"], strict=True)])
             tries.append((seg, k, c))
     outs = runner.run([(c, seg["algorithm"]) for seg, _, c in tries])
     best: dict = {}
-    for (seg, k, c), o in zip(tries, outs):
+    for (seg, k, c), o in zip(tries, outs, strict=True):
         v = o["claims"].get(seg["claim"])
         if v is not None and v != seg["va"] and (id(seg) not in best or k < best[id(seg)][0]):
             best[id(seg)] = (k, c, seg)

@@ -50,7 +50,7 @@ def plot_sensitivity(result: StudyResult, top: int = 8):
                                      f"({result.sensitivity.get('samples')} points of a Latin hypercube, all "
                                      f"{result.sensitivity.get('dimensions')} reconstructions varied jointly)")
     y = np.arange(len(claims))[::-1]
-    for yi, c in zip(y, claims):
+    for yi, c in zip(y, claims, strict=True):
         s = c.box["support"]
         v = c.verdict
         if s["holds"] is None:
@@ -63,7 +63,7 @@ def plot_sensitivity(result: StudyResult, top: int = 8):
     algo = result.sensitivity.get("algorithm") or {}
     other = {"printed": "corrected", "corrected": "printed"}.get(algo.get("chosen"))
     if other:
-        for yi, c in zip(y, claims):
+        for yi, c in zip(y, claims, strict=True):
             s = ((c.box.get("by_algorithm") or {}).get(other) or {}).get("support") or {}
             if s.get("holds") is not None:
                 ax.plot(100 * s["holds"], yi, "D", mfc="white", mec="k", ms=6, zorder=5, clip_on=False)

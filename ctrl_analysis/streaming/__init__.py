@@ -29,9 +29,9 @@ import math
 
 import numpy as np
 
+from .._validate import check_finite, check_in, check_int
 from . import _sketch
 from ._accumulator import Accumulator
-from .._validate import check_finite, check_in, check_int
 
 __all__ = ["Moments", "Quantiles", "Counts", "Histogram", "Keep"]
 

@@ -114,7 +114,7 @@ def merge_levels(levels: list, compactions: list, other_levels: list, other_comp
     k : int
         The values a level holds before it compacts.
     """
-    for h, (buf, c) in enumerate(zip(list(other_levels), list(other_compactions))):
+    for h, (buf, c) in enumerate(zip(list(other_levels), list(other_compactions), strict=True)):
         if h == len(levels):
             levels.append(np.empty((buf.shape[0], 0)))
             compactions.append(0)

@@ -17,7 +17,7 @@ Each result is a sympy expression and, where useful, a plain numeric function.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cache
 
 import numpy as np
 import sympy as sp
@@ -125,7 +125,7 @@ def characteristic_polynomial(n: int, high_gain: bool = True) -> sp.Expr:
     return _characteristic_polynomial(_order(n), check_bool("high_gain", high_gain))
 
 
-@lru_cache(maxsize=None)
+@cache
 def _characteristic_polynomial(n: int, high_gain: bool) -> sp.Expr:
     A, _, _ = observer_matrices(n, high_gain)
     return sp.expand(sp.Matrix(A).charpoly(S).as_expr())
@@ -218,7 +218,7 @@ def error_transfer_functions(n: int, high_gain: bool = False) -> tuple:
     return _error_transfer_functions(_order(n, MAX_TRANSFER_ORDER), check_bool("high_gain", high_gain))
 
 
-@lru_cache(maxsize=None)
+@cache
 def _error_transfer_functions(n: int, high_gain: bool) -> tuple:
     A, E, _ = observer_matrices(n, high_gain)
     m = n + 1
@@ -246,7 +246,7 @@ def error_dc_gains(n: int) -> tuple:
     return _error_dc_gains(_order(n, MAX_TRANSFER_ORDER))
 
 
-@lru_cache(maxsize=None)
+@cache
 def _error_dc_gains(n: int) -> tuple:
     return tuple(sp.simplify(sp.limit(g, S, 0)) for g in error_transfer_functions(n, high_gain=True))
 

@@ -8,9 +8,9 @@ together with a plain numeric function (``sympy.lambdify``). The numeric counter
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import lru_cache
-from typing import Callable
 
 import numpy as np
 import sympy as sp

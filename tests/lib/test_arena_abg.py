@@ -16,7 +16,7 @@ def test_gains_are_the_dare_solution_of_the_constant_acceleration_model():
     F = np.array([[1, T, T * T / 2], [0, 1, T], [0, 0, 1]])
     G = np.array([[T * T / 2], [T], [1.0]])
     a, b, g = alpha_beta_gamma_gains(LAMBDAS)
-    for lam, ai, bi, gi in zip(LAMBDAS, a, b, g):
+    for lam, ai, bi, gi in zip(LAMBDAS, a, b, g, strict=True):
         sigma_w = lam / T**2  # Λ = σ_w T² / σ_v with σ_v = 1
         K = discrete_steady_state(F, [[1, 0, 0]], G, sigma_w**2, 1.0).K_filter.ravel()
         assert np.allclose(K, [ai, bi / T, gi / (2 * T * T)], rtol=1e-8)

@@ -15,8 +15,8 @@ CASES = [Case("sines", "uniform", e, 2.0, (5,)) for e in (0.005, 0.01, 0.02)]
 
 
 def _table(sigma, neso):
-    return {"sigma": {c.key: {"rms": s} for c, s in zip(CASES, sigma)},
-            "neso": {c.key: {"rms": v} for c, v in zip(CASES, neso)}}
+    return {"sigma": {c.key: {"rms": s} for c, s in zip(CASES, sigma, strict=True)},
+            "neso": {c.key: {"rms": v} for c, v in zip(CASES, neso, strict=True)}}
 
 
 def _check(**kw):
@@ -39,7 +39,7 @@ def test_verdict_follows_from_every_case(sigma, neso, verdict):
     assert (f["id"], f["claim"], f["claim_verdict"]) == ("claim-demo-a-beats-b", "demo/a-beats-b", verdict)
     ratios = list(f["evidence"]["neso / sigma"].values())
     assert ratios == pytest.approx(np.array(neso) / np.array(sigma))
-    assert f"sigma better in {sum(n > s for s, n in zip(sigma, neso))} of 3" in f["text"]
+    assert f"sigma better in {sum(n > s for s, n in zip(sigma, neso, strict=True))} of 3" in f["text"]
 
 
 def test_untestable_when_the_claim_or_its_classes_are_not_in_the_arena():

@@ -210,7 +210,7 @@ def test_a_bound_looser_than_the_record_is_a_warning_recorded_beside_the_records
 
 def test_a_byte_order_mark_keeps_the_first_row(tmp_path):
     t = 0.01 * np.arange(40)
-    body = "\n".join(f"{a!r},{b!r}" for a, b in zip(t.tolist(), np.sin(t).tolist())) + "\n"
+    body = "\n".join(f"{a!r},{b!r}" for a, b in zip(t.tolist(), np.sin(t).tolist(), strict=True)) + "\n"
     for name, text in (("bom.csv", body), ("bom_header.csv", "time,y\n" + body)):
         (tmp_path / name).write_text("\ufeff" + text, encoding="utf-8")
         tt, y, _ = read_record(tmp_path / name)

@@ -128,7 +128,7 @@ def test_products_follow_their_stated_order_bit_for_bit(compiled):
     outs = [np.empty((n, m)), np.empty((n, n)), np.empty((n, n)), np.empty((n, n)), np.empty(n), np.empty((n, n))]
     d, r, tr = fn(A, B, C, x, *outs)
     AB, ABt_C, C_ABt, Ax = _loops(A, B, C, x)
-    for got, want in zip([outs[0], outs[2], outs[3], outs[4]], [AB, ABt_C, C_ABt, Ax]):
+    for got, want in zip([outs[0], outs[2], outs[3], outs[4]], [AB, ABt_C, C_ABt, Ax], strict=True):
         np.testing.assert_array_equal(got, want)
     np.testing.assert_allclose(outs[1], A @ A.T, rtol=1e-14)
     np.testing.assert_array_equal(outs[5], 0.5 * (C + C.T))
@@ -150,5 +150,5 @@ def test_products_on_the_columns_equal_each_run_bit_for_bit():
     for b in range(runs):
         one = [np.empty((n, m)), np.empty((n, n)), np.empty((n, n)), np.empty((n, n)), np.empty(n), np.empty((n, n))]
         assert _all(A[b], B[b], C[b], x[b], *one) == (d[b], r[b], tr[b])
-        for c, o in zip(cols, one):
+        for c, o in zip(cols, one, strict=True):
             np.testing.assert_array_equal(c[..., b], o)

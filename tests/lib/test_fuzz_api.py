@@ -41,7 +41,6 @@ from ctrl_analysis import (
     taskpool,
 )
 from ctrl_analysis import identification as ident
-from ctrl_analysis.streaming import _accumulator, _sketch
 from ctrl_analysis.arena import claims, signals
 from ctrl_analysis.arena import cli as arena_cli
 from ctrl_analysis.arena import figures as arena_figures
@@ -51,8 +50,8 @@ from ctrl_analysis.arena import record as arena_record
 from ctrl_analysis.arena import report_section as arena_report_section
 from ctrl_analysis.controllers import differential_feedback as hodf
 from ctrl_analysis.controllers import fuzzy, golden_section, mfac, pd, pid
-from ctrl_analysis.engine import batch as engine_batch
 from ctrl_analysis.engine import (
+    Execution,
     blocks,
     engines,
     function_block,
@@ -65,15 +64,15 @@ from ctrl_analysis.engine import (
     processes,
     simresult,
 )
+from ctrl_analysis.engine import batch as engine_batch
 from ctrl_analysis.engine import codegen as _kernels
 from ctrl_analysis.engine import jit as engine_jit
 from ctrl_analysis.engine import kernels as engine_kernels
 from ctrl_analysis.engine import layout as engine_layout
-from ctrl_analysis.engine import matrix as engine_matrix
 from ctrl_analysis.engine import loop as loop_mod
+from ctrl_analysis.engine import matrix as engine_matrix
 from ctrl_analysis.engine import params as engine_params
 from ctrl_analysis.engine import stepcheck as _stepcheck
-from ctrl_analysis.engine import Execution
 from ctrl_analysis.estimators import differential as de
 from ctrl_analysis.estimators import eso, lowpass, tracking
 from ctrl_analysis.estimators.kalman import (
@@ -92,6 +91,7 @@ from ctrl_analysis.reporting import sensitivity as sensitivity_module
 from ctrl_analysis.reporting.box import Box, Dimension, first_order
 from ctrl_analysis.reporting.study import algorithm as study_algorithm
 from ctrl_analysis.reporting.verdicts import claim_verdict, printed_tolerance
+from ctrl_analysis.streaming import _accumulator, _sketch
 from ctrl_analysis.symbolic import differential as sym_de
 from ctrl_analysis.symbolic import eso as sym_eso
 from ctrl_analysis.symbolic import riccati as sym_ric

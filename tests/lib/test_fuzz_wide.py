@@ -18,6 +18,7 @@ from hang import limit
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 import fuzz_wide  # noqa: E402
+
 from ctrl_analysis.engine import Execution
 
 SAMPLE = 800

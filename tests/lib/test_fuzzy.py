@@ -116,7 +116,7 @@ def test_agrees_with_scikit_fuzzy():
     mf_ec = [fuzz.trimf(x_in, [c - fc.w_ec, c, c + fc.w_ec]) for c in fc.c_ec]
     mf_u = [fuzz.trimf(fc.z, [c - fc.w_u, c, c + fc.w_u]) for c in fc.c_u]
     rng = np.random.default_rng(5)
-    for E, EC in zip(rng.uniform(-6, 6, 12), rng.uniform(-6, 6, 12)):
+    for E, EC in zip(rng.uniform(-6, 6, 12), rng.uniform(-6, 6, 12), strict=True):
         le = [fuzz.interp_membership(x_in, m, E) for m in mf_e]
         lc = [fuzz.interp_membership(x_in, m, EC) for m in mf_ec]
         agg = np.zeros_like(fc.z)

@@ -21,7 +21,7 @@ def textbook_kf(y, u_prev, P0):
     """The standard equations with numpy matrices (P = (I − K C) P⁻, not the Joseph form)."""
     Phi, Gam, C = np.array([[F1, F2], [1.0, 0.0]]), np.array([G0, 0.0]), np.array([[1.0, 0.0]])
     x, P, out, Ps = np.zeros(2), P0.copy(), [], []
-    for yk, uk in zip(y, u_prev):
+    for yk, uk in zip(y, u_prev, strict=True):
         xp = Phi @ x + Gam * uk
         Pp = Phi @ P @ Phi.T + Q
         K = Pp @ C.T / (C @ Pp @ C.T + R)

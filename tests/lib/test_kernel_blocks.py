@@ -16,8 +16,8 @@ import pytest
 
 from analysis.pendulum.blocks import BackwardDifference, CartPendulum
 from ctrl_analysis.arena.interface import _AlphaBetaGamma, _LowPass
-from ctrl_analysis.engine import codegen as _kernels
 from ctrl_analysis.engine import Execution
+from ctrl_analysis.engine import codegen as _kernels
 from ctrl_analysis.engine.blocks import StaticGain
 from ctrl_analysis.engine.kernels import KernelBlock
 from ctrl_analysis.engine.loop import Loop, place

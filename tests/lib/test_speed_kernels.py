@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from ctrl_analysis.engine import codegen as _kernels
 from ctrl_analysis.engine import Execution, Save
+from ctrl_analysis.engine import codegen as _kernels
 from ctrl_analysis.engine.blocks import ContinuousBlock, DiscreteBlock
 from ctrl_analysis.engine.codegen import kernel_of
 from ctrl_analysis.engine.compiled import compiled_for

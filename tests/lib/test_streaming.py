@@ -237,7 +237,7 @@ def test_empty_chunks_change_nothing():
         plain = cls(**options).add(x[:25]).add(x[25:])
         padded = cls(**options).add(np.zeros(0)).add(x[:25]).add(np.zeros(0)).add(x[25:])
         assert plain.count == padded.count == 40, cls
-        for a, b in zip(read(plain), read(padded)):
+        for a, b in zip(read(plain), read(padded), strict=True):
             assert np.array_equal(a, b), cls
 
 

@@ -41,7 +41,7 @@ def test_beta_331_is_bandwidth_20():
     m = bandwidth_match((3, 3, 1), epsilon=0.05)
     assert m.is_bandwidth and m.c == 1 and m.omega_o == 20
     # symbolically (s + 1/eps)^3 equals the characteristic polynomial with beta = (3, 3, 1)
-    p = characteristic_polynomial(2).subs(dict(zip(beta_symbols(2), (3, 3, 1))))
+    p = characteristic_polynomial(2).subs(dict(zip(beta_symbols(2), (3, 3, 1), strict=True)))
     assert sp.simplify(p - sp.expand((S + 1 / EPS) ** 3)) == 0
     assert sp.expand(bandwidth_polynomial(2, 20) - (S**3 + 60 * S**2 + 1200 * S + 8000)) == 0
 
@@ -63,8 +63,8 @@ def test_error_tfs_match_python_control(n):
     obs = ExtendedStateObserver(L)
     sym = error_transfer_functions(n)
     Ls = sp.symbols(f"L1:{n + 2}", positive=True)
-    for g_sym, g_num in zip(sym, obs.disturbance_error_tf()):
-        f = sp.lambdify(S, g_sym.subs(dict(zip(Ls, L))))
+    for g_sym, g_num in zip(sym, obs.disturbance_error_tf(), strict=True):
+        f = sp.lambdify(S, g_sym.subs(dict(zip(Ls, L, strict=True))))
         for w in (0.3, 2.0, 40.0):
             np.testing.assert_allclose(complex(f(1j * w)), complex(g_num(1j * w)), rtol=1e-10)
 

@@ -42,7 +42,7 @@ def test_closed_form_gain_matches_numeric_are(a21, Q, R):
 def test_closed_form_structure():
     d = derive_second_order_gain()
     # the chosen root satisfies the three scalar ARE equations identically
-    subs = dict(zip(sp.symbols("p11 p12 p22", real=True), [d.p[0, 0], d.p[0, 1], d.p[1, 1]]))
+    subs = dict(zip(sp.symbols("p11 p12 p22", real=True), [d.p[0, 0], d.p[0, 1], d.p[1, 1]], strict=True))
     for eq in d.equations:
         val = eq.subs(subs)
         for a, q in [(26.1, 2.0), (-1.0, 0.3), (0.0, 5.0)]:

@@ -42,7 +42,7 @@ def test_fhan_odd_bounded_and_vectorised():
     np.testing.assert_allclose(fhan(-x1, -x2, 3.0, 0.05), -f, rtol=0, atol=1e-12)
     assert np.all(np.abs(f) <= 3.0 + 1e-12)
     # element-wise equals the scalar calls
-    np.testing.assert_allclose(f[:5], [fhan(a, b, 3.0, 0.05) for a, b in zip(x1[:5], x2[:5])], rtol=1e-14)
+    np.testing.assert_allclose(f[:5], [fhan(a, b, 3.0, 0.05) for a, b in zip(x1[:5], x2[:5], strict=True)], rtol=1e-14)
 
 
 @pytest.mark.parametrize("bad", [0.0, -1.0, np.nan])
@@ -164,7 +164,7 @@ def test_td_kernel_is_the_numpy_method_and_fhan_compiles_to_the_same_bits(compil
         scalar = numba.njit(lambda a, b: _fhan(a, b, 300.0, 0.02))
     else:
         scalar = lambda a, b: _fhan(a, b, 300.0, 0.02)  # noqa: E731
-    assert np.array_equal([scalar(a, b) for a, b in zip(x1, x2)], _fhan(x1, x2, 300.0, 0.02), equal_nan=True)
+    assert np.array_equal([scalar(a, b) for a, b in zip(x1, x2, strict=True)], _fhan(x1, x2, 300.0, 0.02), equal_nan=True)
 
 
 @pytest.mark.parametrize("compiled", [False, True])

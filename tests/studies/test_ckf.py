@@ -153,7 +153,7 @@ def test_the_box_evaluates_many_points_on_one_batch_exactly_as_one_by_one():
     points = [_point(x, seed=4) for x in (p, q, o2)] + [_point(p, dataclasses.replace(READINGS, z_significant=1.0), 4)]
     ckf._CACHE.clear()
     many = ckf.evaluate_many(points)
-    for pt, r in zip(points, many):
+    for pt, r in zip(points, many, strict=True):
         ckf._CACHE.clear()
         one = ckf.evaluate(pt)
         assert [(c.claim.id, c.holds) for c in r.claims] == [(c.claim.id, c.holds) for c in one.claims]
@@ -161,7 +161,7 @@ def test_the_box_evaluates_many_points_on_one_batch_exactly_as_one_by_one():
     # and a spec run among others equals the loop built for that point alone (no per-run parameters)
     specs = [(p, "ckf", "lpf"), (q, "ckf", "raw"), (q, "nofilter", "raw"), (p, "lpf", "lpf")]
     both = simulate_specs(specs, 2, 7)
-    for spec, d in zip(specs, both):
+    for spec, d in zip(specs, both, strict=True):
         alone = simulate_cases(spec[0], 2, 7, options=(spec[2],))[(spec[2], spec[1])]
         for s in SIGNALS:
             np.testing.assert_array_equal(alone[s], d[s], err_msg=f"{spec[1]} {s}")
@@ -252,7 +252,7 @@ def test_fig10_draws_every_bound_of_the_projection_box():
     d = ckf.simulate_study(p, 2, 0)[p.id_signal]["ckf"]
     fig = figures.plot_parameters(d, [(0.0, 6.0)], np.zeros((1, 3)), np.zeros(3), theta0=p.theta0, ablation=d,
                                   box=(p.lower, p.upper))
-    for ax, lo, hi in zip(fig.axes, p.lower, p.upper):
+    for ax, lo, hi in zip(fig.axes, p.lower, p.upper, strict=True):
         labels = [line.get_label() for line in ax.get_lines()]
         assert f"projection box, lower bound {lo:g}" in labels and f"projection box, upper bound {hi:g}" in labels
     assert fig.axes[2].get_yscale() == "log"  # ĝ0 and its lower bound a decade below the plant's fit both show

@@ -223,7 +223,7 @@ def test_a_claim_is_judged_run_by_run_and_a_share_within_its_noise_floor_is_unte
 def test_fig2_claim_needs_both_trends_in_each_run_and_no_lost_run():
     def judged(div, rejection, rise, runs=10):
         fig2 = [(np.arange(runs) < d, np.where(np.arange(runs) < d, np.nan, f), np.where(np.arange(runs) < d, np.nan, r))
-                for d, f, r in zip(div, rejection, rise)]
+                for d, f, r in zip(div, rejection, rise, strict=True)]
         return _judged(fig2=fig2, runs=runs).get_claim("fig2-larger-r").holds
 
     assert judged((0, 0, 0), (0.06, 0.05, 0.04), (7, 8, 11))
@@ -286,7 +286,7 @@ def test_many_parameter_sets_in_one_batch_equal_each_run_alone():
         vs = [noise_draws(base, [i, i + 10]) for i in range(3)]
         for scheme in SCHEMES:
             batch = run_batch(exs, scheme, vs, engine="numpy")
-            for i, (ex, v) in enumerate(zip(exs, vs)):
+            for i, (ex, v) in enumerate(zip(exs, vs, strict=True)):
                 alone = run_scheme(ex, scheme, v, engine="numpy")
                 np.testing.assert_array_equal(batch.y[:, 2 * i:2 * i + 2], alone.y)
             assert not np.array_equal(batch.y[:, :2], batch.y[:, 2:4])
@@ -328,12 +328,12 @@ def test_many_points_at_once_equal_point_by_point_and_the_noise_claim_stops_only
     points = [box.params_at(u, a) for u, a in ((box.chosen, "corrected"), (box.sample(4, 7)[1], "printed"))]
     points.append({**params, "ex1": dataclasses.replace(EX1, rearm=False, Q=0.03)})
     many = evaluate_many(points)
-    for p, r in zip(points, many):
+    for p, r in zip(points, many, strict=True):
         assert _outcome(evaluate(p)) == _outcome(r)
     assert "Only Table 1" not in many[2].get_claim("ikf-best-every-noise").note
     # the full evaluation (every scheme at every level) gives the same verdict
     levels = {"ex1": mc.levels_ex1, "ex2": mc.levels_ex2}
-    for p, r in zip(points, many):
+    for p, r in zip(points, many, strict=True):
         rows = {k: {s: [e for e, _ in _simulate([(p[k], s, lv, mc.runs, None) for lv in levels[k]])] for s in SCHEMES}
                 for k in levels}
         full = StudyResult(StudyInfo("ikf-mfac", "", "", ""))

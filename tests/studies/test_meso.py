@@ -202,7 +202,7 @@ def test_short_run_writes_every_quantity_with_unit_and_policy(tmp_path):
     bad = meso.findings.differing_cells(result)
     items = not_reproduced(data)
     assert len(items) == len(bad) + len(data["missing"]) and len(bad) > 0
-    assert all(i.startswith(q.cell + " (") for i, q in zip(items, bad))
+    assert all(i.startswith(q.cell + " (") for i, q in zip(items, bad, strict=False))  # the differing cells come first
     assert all("(not a cell)" in m for m in data["missing"])
 
 
@@ -311,7 +311,7 @@ def test_many_points_at_once_equal_each_point_alone():
         CACHE.clear()
         alone.append(evaluate(p))
     CACHE.clear()
-    for a, b in zip(together, alone):
+    for a, b in zip(together, alone, strict=True):
         assert [c.holds for c in a.claims] == [c.holds for c in b.claims]
         for q in a.quantities:
             if q.paper is not None:

@@ -257,7 +257,7 @@ def test_points_on_one_batch_equal_single_simulations():
            (dataclasses.replace(base, T=0.0045), V.a21, "alpha-beta")]  # one chunk with 0.0033: padded rows
     seeds = [3, 4, 5]
     got = box.simulate_points(pts, seeds, ratio=1.5)
-    for (p, a21, kind), c in zip(pts, got):
+    for (p, a21, kind), c in zip(pts, got, strict=True):
         ref = loops.simulate_case(p, a21, seeds, filter_kind=kind, noise_free_extra=True)
         assert c.noisy.phi.shape == (round(p.t_end / p.T) + 1, 3)
         np.testing.assert_allclose(c.noisy.t, ref.t, rtol=1e-12)
@@ -296,7 +296,7 @@ def test_box_evaluates_many_points_as_one_by_one():
     assert variants[1]["loop"].gain_reading == "steady-state" and variants[0]["loop"].gain_reading == "paper"
     seeds = tuple(range(4))
     many = pm.evaluate_many(variants, seeds)
-    for v, r in zip(variants, many):
+    for v, r in zip(variants, many, strict=True):
         alone = pm.evaluate(v, seeds)
         assert [(c.claim.id, c.holds) for c in r.claims] == [(c.claim.id, c.holds) for c in alone.claims]
         assert r.get("cl.filter.angle_rms").value == pytest.approx(alone.get("cl.filter.angle_rms").value, rel=1e-12)
