@@ -182,7 +182,8 @@ def engine_errors(res):
     """The study's quantities from a LoopResponse: mean |x1 - z1|, |x2 - z2|, |x1 - x̂1|, |x2 - x̂2| per run."""
     x1, x2 = res["x[0]"], res["x[1]"]
     return np.stack([np.mean(np.abs(x1 - res["xhat[0]"]), axis=0), np.mean(np.abs(x2 - res["xhat[1]"]), axis=0),
-                     np.mean(np.abs(x1 - res["eso_xhat[0]"]), axis=0), np.mean(np.abs(x2 - res["eso_xhat[1]"]), axis=0)],
+                     np.mean(np.abs(x1 - res["eso_xhat[0]"]), axis=0),
+                     np.mean(np.abs(x2 - res["eso_xhat[1]"]), axis=0)],
                     axis=1)
 
 

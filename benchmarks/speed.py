@@ -65,7 +65,8 @@ def main(argv=None) -> None:
             timed("reproduce all --quick, cold (empty caches)", [*cli, "--quick", "--out", str(tmp / "quick0")], env)
             timed("reproduce all --quick, warm", [*cli, "--quick", "--out", str(tmp / "quick")], env)
         if not args.skip_tests:
-            timed(f"python -m pytest -q -n {n} (caches of the runs above)", [sys.executable, "-m", "pytest", "-q", "-n", str(n),
+            timed(f"python -m pytest -q -n {n} (caches of the runs above)",
+                  [sys.executable, "-m", "pytest", "-q", "-n", str(n),
                                                         "-p", "no:cacheprovider"], env)
 
 

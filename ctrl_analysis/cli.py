@@ -236,7 +236,8 @@ def _check_targets(out: Path, names: list[str]) -> None:
                               f"it is not replaced: move it away or choose another --out")
         if target.is_dir() and not (target / "results.json").exists() and any(target.iterdir()):
             raise _UsageError(f"--out {str(out)!r} holds a folder {name!r} with files but no results.json, so "
-                              f"ctrl-analysis did not write it; it is not replaced: move it away or choose another --out")
+                              f"ctrl-analysis did not write it; it is not replaced: move it away or choose another "
+                              f"--out")
 
 
 #: Resident memory of a process that has imported every study (numpy, scipy, control, matplotlib, numba):

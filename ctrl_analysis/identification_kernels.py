@@ -21,7 +21,8 @@ from .engine.matrix import matrix, symmetrize, trace, vector
 
 __all__: list = []  # kernels: reached through the blocks' kernel() methods
 
-#: Parameters of :class:`~ctrl_analysis.identification.ArxRegressor` (orders and lag, structural: one value for every run).
+# : Parameters of :class:`~ctrl_analysis.identification.ArxRegressor` (orders and lag, structural: one value for every
+# run).
 ARX = Layout("na", "nb", "lag")
 ARX_AT = ARX.at  # offsets, a numba constant
 

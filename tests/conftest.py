@@ -27,7 +27,8 @@ def _scale_time_limits(config, items) -> None:
 
 #: Long tests that mostly wait (on subprocesses, a Dask cluster, stand-in studies that sleep) start right
 #: after the end-to-end run, so the other worker's short tests fill the time instead of queueing behind them.
-EARLY = ("test_reproduce_all_quick_writes_valid_results", "test_a_study_on_a_real_cluster_equals_the_run_in_one_process",
+EARLY = ("test_reproduce_all_quick_writes_valid_results",
+         "test_a_study_on_a_real_cluster_equals_the_run_in_one_process",
          "test_interrupts_and_kills_at_several_points_leave_report_and_results_in_agreement",
          "test_two_runs_into_one_folder_do_not_interleave")
 

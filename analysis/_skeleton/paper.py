@@ -58,7 +58,9 @@ class Example:
                                                   "what a textbook design would pick", scale="log", points=5))
     t_settle: float = reconstructed(5.0, "steady state not defined; from 5 τ the filter's lag error "
                                          "ẏ/ω_f < 7e-4 is negligible beside the filtered noise",
-                                    plausible=span(3.0, 5.0, "3 τ to 5 τ (95 % to 99.3 % of the step) are the usual 'steady state' choices",
+                                    plausible=span(3.0, 5.0,
+                                                   "3 τ to 5 τ (95 % to 99.3 % of the step) are the usual 'steady "
+                                                   "state' choices",
                                                    points=3))
     y_at_tau: float = printed(0.6321, "textbook: unit-step response at t = τ, 1 − e^−1 ≈ 0.6321")
 

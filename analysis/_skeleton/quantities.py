@@ -47,7 +47,8 @@ def record_noise(result: StudyResult, p: Example, res) -> None:
     per_run = rmse(res["y"][w], res["y_hat"][w])
     mean, std, n_ok = mean_std(per_run, res.ok)
     paper = p.sigma_v * p.noise_ratio
-    result.quantity("filter.noise_std", "steady-state RMS of y_hat − y (the filtered noise std)", float(mean), paper=float(paper),
+    result.quantity("filter.noise_std", "steady-state RMS of y_hat − y (the filtered noise std)", float(mean),
+                    paper=float(paper),
                     std=float(std), runs=n_ok, tolerance=0.05, unit="",
                     note=f"{int(w.sum())} samples per run from t = {p.t_settle:g} s")
     result.finding("noise-reduction",

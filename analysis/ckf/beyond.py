@@ -42,7 +42,8 @@ def on_bounds(d, p, ok=None) -> dict:
         first = [float(t[np.argmax(on[:, b])]) for b in range(on.shape[1]) if hit[b]]
         out[n] = {"share": float(on.mean()) if on.size else 0.0, "runs_hit": float(hit.mean()) if hit.size else 0.0,
                   "first": float(np.median(first)) if first else None,
-                  "which": "lower" if on_lo.sum() >= on_hi.sum() else "upper", "bound": lo if on_lo.sum() >= on_hi.sum() else hi}
+                  "which": "lower" if on_lo.sum() >= on_hi.sum() else "upper",
+                  "bound": lo if on_lo.sum() >= on_hi.sum() else hi}
     out["any"] = float(any_on.mean()) if any_on is not None and any_on.size else 0.0
     return out
 
@@ -84,7 +85,8 @@ def ablation(result, p, data, data_f, m_f):
     bounds = on_bounds(d, p)
     prog = drift(d, p)
     for n in qty.PARAMS:
-        result.quantity(f"ident.{n}_on_bound", f"share of the samples with {qty.HAT[n]} on a bound of the projection box "
+        result.quantity(f"ident.{n}_on_bound",
+                        f"share of the samples with {qty.HAT[n]} on a bound of the projection box "
                         "(CKF case, whole run)", bounds[n]["share"], runs=int(ok.sum()), unit="")
         result.quantity(f"ident.{n}_late_vs_peak", f"{qty.HAT[n]}: change over the last {prog['step']:g} s against the "
                         f"largest {prog['step']:g}-s change after the first (0: converged, 1: still moving at its "
@@ -114,7 +116,8 @@ def ablation(result, p, data, data_f, m_f):
         f"{g0['which']} bound {g0['bound']:g} in {g0['runs_hit']:.0%} of the runs (median first time "
         f"{g0['first'] if g0['first'] is not None else float('nan'):.2f} s) and stays near it: exactly on it in "
         f"{g0['share']:.1%} of all samples, within a factor 2 of it in {near:.0%}; over the steady stage it "
-        f"averages {g0_steady:.5f} ({g0_steady / p.lower[2]:.2g}x the bound), {fit[:, 2].mean() / g0_steady:.0f}x below "
+        f"averages {g0_steady:.5f} ({g0_steady / p.lower[2]:.2g}x the bound), {fit[:, 2].mean() / g0_steady:.0f}x "
+        f"below "
         f"the noise-free LS fit of the true plant ({fit[:, 2].mean():.5f}). On a bound of the box (every bound, ĝ0's "
         f"included): f̂1 {bounds['f1']['share']:.1%}, f̂2 {bounds['f2']['share']:.1%}, ĝ0 {g0['share']:.1%} of the "
         f"samples, any parameter {bounds['any']:.1%}. At {p.t_end:g} s: f̂1 = {live['f1_final']:.4f}, "
@@ -203,7 +206,8 @@ def _options(ctx, result, p):
     result.finding("projection-box", f"Switching Wu's projection off changes the CKF's steady RMS error from "
                    f"{rms(d_proj):.4g} to {rms(d_free):.4g} ({p.option_runs} runs, {p_opt.t_end:g} s, identification "
                    f"from '{p.id_signal}'). With the box, ĝ0 is on its lower bound {p.lower[2]:g} in "
-                   f"{on['g0']['share']:.1%} of the samples after reaching it in {on['g0']['runs_hit']:.0%} of the runs "
+                   f"{on['g0']['share']:.1%} of the samples after reaching it in {on['g0']['runs_hit']:.0%} of the "
+                   f"runs "
                    f"(f̂1 {on['f1']['share']:.1%}, f̂2 {on['f2']['share']:.1%}); without it ĝ0 goes below that bound "
                    f"in {below:.0%} of the samples (lowest {float(d_free['g0'].min()):.3g}). The largest change of "
                    "each estimate between the two, against its mean size with the box: "
@@ -243,7 +247,8 @@ def _nofilter_identification(result, p, runs):
         f"nofilter_id), the no-filter loop loses the reference under Wu's projection box: {a['track']:.0%} of the "
         f"runs track, steady output RMS error {a['y_rmse']:.3g} (median; {p.option_runs} runs, {p.t_end:g} s), f̂1 on "
         f"the box's lower bound {p.lower[0]:g} in {a['f1_on']:.0%} of the samples. Without the box it tracks "
-        f"({b['track']:.0%} of the runs, RMS error {b['y_rmse']:.3g}), but its control RMS is {b['u_rms']:.3g}, against "
+        f"({b['track']:.0%} of the runs, RMS error {b['y_rmse']:.3g}), but its control RMS is {b['u_rms']:.3g}, "
+        f"against "
         f"{float(np.median(np.sqrt(ml['u_var']))):.3g} identified from the LPF output and the printed "
         f"{p.u_rms_nofilter:g}. The study's chosen no-filter loop therefore identifies from the filtered loops' "
         "signal, an LPF output run beside it and never fed back: it is not filter-free, only its feedback is "
@@ -272,7 +277,8 @@ def _full_order(result, p, data):
                    f"CKF: steady RMS error {f_s:.3g} against {c_s:.3g} ({c_s / f_s:.0f}x), transient (0-10 s) "
                    f"{f_t:.3g} against {c_t:.3g} ({c_t / f_t:.0f}x), on the same records; it costs {cost:.3g}x the "
                    f"CKF's multiplications per step. Its steady error stays far below the CKF's across its process "
-                   f"noise q = 1e-4 .. 1 ({other[1e-4]:.3g} .. {other[1.0]:.3g} on the first {n} runs; chosen {p.kf_Q:g}). The paper's case "
+                   f"noise q = 1e-4 .. 1 ({other[1e-4]:.3g} .. {other[1.0]:.3g} on the first {n} runs; chosen "
+                   f"{p.kf_Q:g}). The paper's case "
                    "for the CKF is therefore not accuracy but that it needs neither the plant's order nor its "
                    "parameters; its accuracy is limited by the 2nd-order model's one-step prediction error "
                    f"(steady {result.get('ident.pred_rmse_steady').value:.3g} per step, finding identification-live).")
@@ -310,11 +316,14 @@ def _second_plant(ctx, result, p):
     t = terms["ckf"]
     eff = p.k_I / (t["c2_share"] * (1 - p.c2))
     result.finding(
-        "plant2-offset", f"On the second plant the CKF loop's output averages {t['y']:.3g} over the steady stage instead "
+        "plant2-offset",
+        f"On the second plant the CKF loop's output averages {t['y']:.3g} over the steady stage instead "
         f"of {p.reference:g}, still rising at the end ({t['y_end']:.3g} over the last tenth of the run; frozen-Φ "
-        f"ablation: {fro['y']:.3g}, identified gain {fro['gain']:.3g}), because the identified static gain ĝ0 / (1 − f̂1 − f̂2) = {t['gain']:.3g} overestimates the plant's 1, and "
+        f"ablation: {fro['y']:.3g}, identified gain {fro['gain']:.3g}), because the identified static gain ĝ0 / (1 − "
+        f"f̂1 − f̂2) = {t['gain']:.3g} overestimates the plant's 1, and "
         f"the leaky logic integral cannot make up the difference: in the steady stage the maintaining-tracking term "
-        f"gives u0 = {t['u0']:.3g} (≈ {p.reference:g} / {t['gain']:.3g}), the golden-section term {t['ul']:.3g} and the "
+        f"gives u0 = {t['u0']:.3g} (≈ {p.reference:g} / {t['gain']:.3g}), the golden-section term {t['ul']:.3g} and "
+        f"the "
         f"integral {t['ui']:.3g} (u = {t['u']:.3g}). The integral leaks (c = c2 = {p.c2:g}) in {t['c2_share']:.0%} of "
         f"the steps, so it settles at about −k_I e / ({t['c2_share']:.2f} (1 − c2)) = {eff:.3g} · (−e): a finite gain "
         f"on the offset of the fed-back signal e = {t['e']:.3g}. The fed-back CKF output itself sits {t['bias']:+.3g} "

@@ -96,7 +96,8 @@ def plot_transient(d, case, fig_no, t1=10.0, run=0, t_filter=None):
 def plot_steady_compare(data, t0, run=0):
     """Fig. 8: steady-stage true output (one panel) and control (one panel per filter, same scale), LPF vs CKF."""
     fig, (ax, *ax_us) = new_figure(3, 1, size=(9.0, 7.0), sharex=True,
-                                   title=f"Fig. 8: steady stage ({t0:g} s on), LPF vs CKF: output and control (run {run})")
+                                   title=f"Fig. 8: steady stage ({t0:g} s on), LPF vs CKF: output and control (run "
+                                   f"{run})")
     for case, ax_u in zip(("lpf", "ckf"), ax_us, strict=True):
         d = data[case]
         m = d["t"] >= t0
@@ -237,7 +238,8 @@ def save_all(ctx, result, p, data, data_f, extra, ident):
                             "stage, zoomed in; Table 1's output mean and variance summarise them.")
     ctx.save_figure(result, plot_transient(data["lpf"], "lpf", 6, t_filter=p.t_filter), "fig6_lpf_transient.png",
                     caption="Redraws the paper's Fig. 6: the LPF's output against the true output and the measurement "
-                            "in the transient (0-10 s); the LPF lags. Dotted line: 2 s, from when the filtered signal is fed back.")
+                            "in the transient (0-10 s); the LPF lags. Dotted line: 2 s, from when the filtered signal "
+                            "is fed back.")
     d = data["ckf"]
     early = d["t"] < p.t_filter - 1e-9
     moved = max(float(np.abs(d[n][early] - p.theta0[i]).max()) for i, n in enumerate(("f1", "f2")))
@@ -252,13 +254,16 @@ def save_all(ctx, result, p, data, data_f, extra, ident):
                             f"{g0['first'] if g0['first'] is not None else float('nan'):.2f} s; Fig. 10).")
     ctx.save_figure(result, plot_steady_compare(data, p.t_steady), "fig8_steady_lpf_vs_ckf.png",
                     caption="Redraws the paper's Fig. 8: steady-stage true output (top, both filters) and control with "
-                            "the LPF (middle) and with the CKF (bottom), the two control panels on one scale; the paper "
+                            "the LPF (middle) and with the CKF (bottom), the two control panels on one scale; the "
+                            "paper "
                             "claims both are steadier with the CKF (claims steady-output, steady-control).")
     ctx.save_figure(result, plot_filter_error(data, t_filter=p.t_filter), "fig9_filter_error.png",
                     caption="Redraws the paper's Fig. 9: filter error (filtered minus true output) of the LPF and the "
                             "CKF; left, the transient 0-10 s on a linear axis; right, the whole run on a "
-                            "symmetric-log axis (linear within ±1). Dotted line: 2 s, from when the filters are fed back. "
-                            "The paper claims the CKF's error is smaller in both stages (claims transient, steady); the "
+                            "symmetric-log axis (linear within ±1). Dotted line: 2 s, from when the filters are fed "
+                            "back. "
+                            "The paper claims the CKF's error is smaller in both stages (claims transient, steady); "
+                            "the "
                             "transient claim is judged from 2 s on, where the two filters compete in the loop (before, "
                             "both loops feed back the measurement).")
     wins = [(a, a + 10.0) for a in np.arange(0.0, p.t_end, 10.0)]
@@ -267,9 +272,11 @@ def save_all(ctx, result, p, data, data_f, extra, ident):
                                             ablation=data_f["ckf"], box=(p.lower, p.upper) if p.project else None),
                     "fig10_identified_parameters.png",
                     caption="Beyond the paper: the identified f̂1, f̂2, ĝ0 of the characteristic model over time (CKF "
-                            "case, live identification: band and mean; frozen-Φ ablation: dashed) against the noise-free "
+                            "case, live identification: band and mean; frozen-Φ ablation: dashed) against the "
+                            "noise-free "
                             "least-squares fit of the true plant on 10-s windows and on the whole steady stage; dotted "
-                            "red: θ0; grey: the bounds of the projection box (ĝ0 on a log axis). f̂1 and f̂2 drift the whole "
+                            "red: θ0; grey: the bounds of the projection box (ĝ0 on a log axis). f̂1 and f̂2 drift "
+                            "the whole "
                             f"run without settling; ĝ0 reaches its lower bound {p.lower[2]:g} (median first time "
                             f"{g0['first'] if g0['first'] is not None else float('nan'):.2f} s) and stays near it "
                             f"(steady-stage mean {bounds['g0_steady']:.2g}), "
@@ -283,7 +290,10 @@ def save_all(ctx, result, p, data, data_f, extra, ident):
     ctx.save_figure(result, plot_second_plant(extra["data2"], name, p.reference, p.t_steady, t_filter=p.t_filter),
                     "fig12_second_plant.png",
                     caption=f"Beyond the paper: the three loops on a second plant, {name} (lightly damped, ζ = 0.15, "
-                            "with a 0.1 s delay as a 2nd-order Padé; unit DC gain): true outputs over the whole run (top), the "
-                            "steady stage zoomed with the steady means over all runs (middle) and filter errors on a symmetric-log axis (bottom). The outputs stay "
-                            "below the reference 10 over the steady stage, the CKF loop lowest and still rising at 100 s: finding plant2-offset computes why.")
+                            "with a 0.1 s delay as a 2nd-order Padé; unit DC gain): true outputs over the whole run "
+                            "(top), the "
+                            "steady stage zoomed with the steady means over all runs (middle) and filter errors on a "
+                            "symmetric-log axis (bottom). The outputs stay "
+                            "below the reference 10 over the steady stage, the CKF loop lowest and still rising at "
+                            "100 s: finding plant2-offset computes why.")
 

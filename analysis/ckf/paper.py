@@ -141,7 +141,8 @@ class CKFStudy:
         plausible=span(1.0, 5.0, "time constants 1 s to 0.2 s: all lag visibly in the transient (the paper's Fig. 6) "
                                  "and smooth the steady state", scale="log"))
     lpf_order: int = reconstructed(1, "LPF order not printed; first order, the simplest digital LPF",
-                                   plausible=choices((2,), "a second-order digital LPF (double pole at the same cut-off)"))
+                                   plausible=choices((2,),
+                                                     "a second-order digital LPF (double pole at the same cut-off)"))
     runs: int = reconstructed(100, "Monte Carlo runs; the paper shows one run",
                               plausible=fixed("more runs only narrow the error bars"))
     option_runs: int = reconstructed(20, "runs of the comparison of identification options and of the "
@@ -156,7 +157,8 @@ class CKFStudy:
                                     plausible=fixed("a setting of the box's evaluations; its own baseline uses it too"))
     kf_Q: float = reconstructed(0.01, "process noise of the full-order KF that knows the plant, as an input "
                                 "disturbance: Q = q b bᵀ (b the discrete input vector), q = 0.01 (std 0.1, 1 % of "
-                                "the steady control); the plant is deterministic, a small Q keeps the gain from vanishing",
+                                "the steady control); the plant is deterministic, a small Q keeps the gain from "
+                                "vanishing",
                                 plausible=fixed("enters no claim (the cost claim counts operations); its effect on "
                                                 "the full-order KF's accuracy is reported in finding full-order-kf"))
     kf_P0: float = reconstructed(1.0, "initial covariance of the full-order KF",

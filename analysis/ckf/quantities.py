@@ -266,7 +266,8 @@ def identification(result, d, p, prefix="", tag=""):
                note=f"θ0 = {p.theta0}")
         out[f"{n}_travel"] = (float(np.mean(travel[ok])), float(np.max(travel[ok])))
     for n in PARAMS:
-        record(result, f"{prefix}ident.{n}_final", f"{tag}identified {HAT[n]} at {p.t_end:g} s (CKF case)", d[n][-1], ok)
+        record(result, f"{prefix}ident.{n}_final", f"{tag}identified {HAT[n]} at {p.t_end:g} s (CKF case)", d[n][-1],
+               ok)
         out[f"{n}_final"] = float(np.mean(d[n][-1][ok]))
     for span, (a, b) in {"transient": (p.t_filter, 10.0), "steady": (p.t_steady, np.inf)}.items():
         v = prediction_error(d, a, b)
@@ -292,7 +293,8 @@ def offset_terms(d, p):
     """Steady-stage means of the control law's terms in one case: why the output settles where it does.
 
     Returns ``{"y_end", "y", "u", "bias", "u0", "ul", "ui", "gain", "c2_share", "e"}``: output and control means, the
-    steady bias of the fed-back signal (``y_end``: the output mean over the last tenth of the run) (fed back minus true output), the maintaining-
+    steady bias of the fed-back signal (``y_end``: the output mean over the last tenth of the run) (fed back minus true
+    output), the maintaining-
     tracking, golden-section and logic-integral terms (eq. 17-19, recomputed from the records), the identified
     static gain ĝ0 / (1 − f̂1 − f̂2) and the share of steps in which the integral leaks (c = c2).
     """
@@ -308,7 +310,8 @@ def offset_terms(d, p):
     leak = e * (e - e_prev) <= 0.0
     mean = lambda v: float(np.mean(v[m]))
     end = window(d["t"], 0.9 * d["t"][-1])
-    return {"y_end": float(np.mean(d["y"][end][:, ok])), "y": mean(d["y"][:, ok]), "u": mean(d["u"][:, ok]), "bias": mean(d["y_fb"][:, ok] - d["y"][:, ok]), "u0": mean(u0), "ul": mean(ul), "ui": mean(ui),
+    return {"y_end": float(np.mean(d["y"][end][:, ok])), "y": mean(d["y"][:, ok]), "u": mean(d["u"][:, ok]),
+            "bias": mean(d["y_fb"][:, ok] - d["y"][:, ok]), "u0": mean(u0), "ul": mean(ul), "ui": mean(ui),
             "gain": float(np.mean(g0[m]) / (1.0 - np.mean(f1[m]) - np.mean(f2[m]))), "c2_share": mean(leak),
             "e": mean(e)}
 
@@ -388,7 +391,8 @@ def q_sweep(d, p, qs, runs=10):
 
 
 #: Comparisons behind the claims: claim id -> (per-run number, case the CKF is compared with, what it is).
-COMPARED = {"transient": ("filter_rmse_transient_used", "lpf", "filter error from when the filters are fed back to 10 s"),
+COMPARED = {"transient": ("filter_rmse_transient_used", "lpf",
+                          "filter error from when the filters are fed back to 10 s"),
             "steady": ("filter_rmse_steady", "lpf", "filter error in the steady stage"),
             "steady-output": ("y_var", "lpf", "steady output variance"),
             "steady-control": ("u_var", "lpf", "steady control variance")}
@@ -470,7 +474,8 @@ def judge_claims(result, p, r=READINGS, prefix="", m=None):
     out = {}
     for key, (q, other, what) in COMPARED.items():
         c = comps[key]
-        ev = [f"{prefix}ckf.{q}", f"{prefix}{other}.{q}", f"{prefix}cmp.{key}.share", f"{prefix}cmp.{key}.median_change"]
+        ev = [f"{prefix}ckf.{q}", f"{prefix}{other}.{q}", f"{prefix}cmp.{key}.share",
+              f"{prefix}cmp.{key}.median_change"]
         broken = _not_tracking(m, p, r, TRACKING[key])
         note = (_share_text(c, f"the CKF's {what} is smaller than the {TABLE1_ROWS[other]}'s")
                 + ("" if c["median"] is None else f"; median paired change {c['median']:+.1%}"))

@@ -26,7 +26,8 @@ __all__ = ["INFO", "run"]
 INFO = StudyInfo(
     name='differential-estimator',
     seed_file='002_a1e12cd95cff3523.txt',
-    paper='Qi, Chen, Xue & Yuan 2004, a new differential state estimator and controller for nonlinear stochastic systems',
+    paper='Qi, Chen, Xue & Yuan 2004, a new differential state estimator and controller for nonlinear stochastic '
+    'systems',
     reproduces='eq. (9) check, Fig. 1 root locus, Fig. 2 Bode, Examples 1-2 (Fig. 3-5), robustness map, '
                'a fair ESO-vs-Σ comparison',
 )
@@ -43,7 +44,8 @@ MISSING = [
 def run(ctx: StudyContext, params=None) -> StudyResult:
     """Reproduce the study: linear part, Example 1 (+ fair comparison), Example 2 (+ robustness), claims, sensitivity.
 
-    ``params`` overrides the settings (:func:`ctrl_analysis.reporting.study.study_params`): ``"linear"``, ``"ex1"``, ``"ex2"``,
+    ``params`` overrides the settings (:func:`ctrl_analysis.reporting.study.study_params`): ``"linear"``, ``"ex1"``,
+    ``"ex2"``,
     ``"claims"`` (defaults :data:`.paper.LINEAR`, :data:`.paper.EX1`, :data:`.paper.EX2`, :data:`.paper.READINGS`;
     with ``--quick`` shorter Examples 1-2 and a coarser Example 2 grid), each an object or a dict of its fields.
     """
@@ -105,19 +107,25 @@ def _linear(ctx, result, lin):
         title=f"Fig. 1  Root locus of G(s) = K(s+{a:g})^{n0 - 1}/s^{n0} (n0 = {n0}, a = {a:g}); "
               "× = closed-loop poles at the design gain")
     ctx.save_figure(result, fig, "fig1_root_locus.png",
-                    caption=f"Redraws the paper's Fig. 1: root locus of Σ's loop G(s) = K(s+a)^(n0−1)/s^n0 for n0 = {n0}, "
-                            f"a = {a:g}, with the closed-loop poles at the design gain (the breakaway point s = −n0 a); "
+                    caption=f"Redraws the paper's Fig. 1: root locus of Σ's loop G(s) = K(s+a)^(n0−1)/s^n0 for n0 = "
+                    f"{n0}, "
+                            f"a = {a:g}, with the closed-loop poles at the design gain (the breakaway point s = −n0 "
+                            f"a); "
                             "see the check 'breakaway point' and the erratum on eq. (9)'s exponent.")
     est2 = DifferentialEstimator(lin.fig2_n0, lin.fig2_a)
     ctx.save_figure(result, figures.plot_bode(est2, title=f"Fig. 2  Bode plot of Φ(s), y → z₁ (n0 = {est2.n0}, "
                                                           f"a = {est2.a:g}, K = {est2.K:.4g})"), "fig2_bode.png",
-                    caption="Redraws the paper's Fig. 2: Bode plot of Σ's transfer function Φ(s) from the measurement y "
-                            "to the estimate z1; a low-pass with unit DC gain (its −3 dB bandwidth and resonance peak are "
-                            "quantities 'Fig. 2: -3 dB bandwidth of Φ' and 'Fig. 2: resonance peak of |Φ|'; claim lowpass).")
+                    caption="Redraws the paper's Fig. 2: Bode plot of Σ's transfer function Φ(s) from the measurement "
+                    "y "
+                            "to the estimate z1; a low-pass with unit DC gain (its −3 dB bandwidth and resonance peak "
+                            "are "
+                            "quantities 'Fig. 2: -3 dB bandwidth of Φ' and 'Fig. 2: resonance peak of |Φ|'; claim "
+                            "lowpass).")
     ctx.save_figure(result, figures.plot_normalised_magnitude(lin.table_n0, title="Beyond the paper: |Φ(jω)| of Σ "
                     "at the design gain, against ω/a, n0 = 2..8"), "extra_phi_magnitude_vs_n0.png",
                     caption="Beyond the paper: |Φ(jω)| of Σ at the design gain against the normalised frequency ω/a "
-                            "for n0 = 2 to 8; the bandwidth scales with a, and n0 sets the bandwidth ω_b/a and the resonance "
+                            "for n0 = 2 to 8; the bandwidth scales with a, and n0 sets the bandwidth ω_b/a and the "
+                            "resonance "
                             "peak; every n0 rolls off at the same −20 dB/decade (Φ has relative degree 1; finding "
                             "lowpass-claim).")
 
@@ -139,21 +147,28 @@ def _example1(ctx, result, p, runs):
                     f"estimate z2 (n0 = {p.n0}, a = {p.a:g}; seed {seeds[b]})", r"$\hat x_2 = z_2$ (Σ)"),
                     "fig3_sigma_x2.png",
                     caption="Redraws the paper's Fig. 3 (Example 1): the true x2 and Σ's estimate z2 (state reading) "
-                            "in one run, the error, and a 0.5 s zoom; its mean error over the runs is the §4 Example 1 Σ "
+                            "in one run, the error, and a 0.5 s zoom; its mean error over the runs is the §4 Example "
+                            "1 Σ "
                             "|ε̄2| cell.")
     ctx.save_figure(result, figures.plot_x2(t, s["x[1]"][:, b], s["eso[0][1]"][:, b], f"Fig. 4 — Example 1: x2 and "
                     f"Han's nonlinear ESO estimate (textbook gains; seed {seeds[b]})", r"$\hat x_2$ (ESO)"),
                     "fig4_eso_x2.png",
                     caption="Redraws the paper's Fig. 4 (Example 1): the true x2 and the estimate of Han's nonlinear "
-                            "ESO with textbook gains (the paper prints none) in the same run, the error, and a 0.5 s zoom "
-                            "where the high-frequency noise that fills the full-length traces is resolved; its mean error "
+                            "ESO with textbook gains (the paper prints none) in the same run, the error, and a 0.5 s "
+                            "zoom "
+                            "where the high-frequency noise that fills the full-length traces is resolved; its mean "
+                            "error "
                             "is the ESO |ε̄2| cell.")
     sp = np.mean(d["err"]["sigma"][d["ok"]], axis=0)
-    ctx.save_figure(result, figures.plot_tradeoff(trade, sp, f"Beyond the paper, Example 1: mean x2 error against mean x1 "
-                    f"error over the −3 dB bandwidth\n(Σ and ESOs, {int(d['ok'].sum())} runs each)"), "ex1_tradeoff.png",
+    ctx.save_figure(result,
+                    figures.plot_tradeoff(trade, sp, f"Beyond the paper, Example 1: mean x2 error against mean x1 "
+                    f"error over the −3 dB bandwidth\n(Σ and ESOs, {int(d['ok'].sum())} runs each)"),
+                    "ex1_tradeoff.png",
                     caption="Beyond the paper (the fair comparison): mean x2 error against mean x1 error for Σ "
-                            "(sweeping a; labels give its −3 dB bandwidth) and the linear ESO (sweeping ω_o), with Han's "
-                            "fal ESO at two tunings (textbook gains; Σ's bandwidth) and Σ as in the paper (star). Lower "
+                            "(sweeping a; labels give its −3 dB bandwidth) and the linear ESO (sweeping ω_o), with "
+                            "Han's "
+                            "fal ESO at two tunings (textbook gains; Σ's bandwidth) and Σ as in the paper (star). "
+                            "Lower "
                             "left is better; points at equal bandwidth compare the observers fairly (findings "
                             "ex1-fair-equal-bandwidth, ex1-tradeoff).")
 
@@ -178,8 +193,10 @@ def _example2(ctx, result, p, runs):
                     "setpoint, output and estimates under controller (18), as printed (a = 5) and preset a = "
                     f"{lin['a_new']:g}"), f"fig5_tracking_a5_and_a{lin['a_new']:g}.png",
                     caption="Redraws the paper's Fig. 5 (Example 2): setpoint, output x1 and Σ's estimates x̂ against "
-                            f"the true states under controller (18), in the paper's configuration (a = {p.a:g}) and with "
-                            f"the study's preset a = {lin['a_new']:g} beside it (one run each). In the paper's configuration x1 "
+                            f"the true states under controller (18), in the paper's configuration (a = {p.a:g}) and "
+                            f"with "
+                            f"the study's preset a = {lin['a_new']:g} beside it (one run each). In the paper's "
+                            f"configuration x1 "
                             "oscillates about v (the linearised loop is unstable, finding ex2-literal-unstable); only "
                             "the preset tracks v.")
     n = len(t) - 1

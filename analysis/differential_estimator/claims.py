@@ -125,7 +125,8 @@ def _sigma_beats_eso_fair(result, r):
                  note=f"ESOs tuned to Σ's -3 dB bandwidth ({value_of(result, 'ex1.fair.sigma_bandwidth'):.4g} rad/s): "
                       + "; ".join(f"{k} error ÷ Σ's error {v[0]:.3f} (x1), {v[1]:.3f} (x2)" for k, v in ratios.items())
                       + f". Smallest ratio {worst[0]:.3f} ({worst[1]}, x{worst[2] + 1}); the claim needs every ratio "
-                        f"at least {r.fair_margin:g} (a smaller gap is a tie). At the paper's tuning the ESO's x2 error is "
+                        f"at least {r.fair_margin:g} (a smaller gap is a tie). At the paper's tuning the ESO's x2 "
+                        f"error is "
                       + (f"{paper_tuning:.1f}×" if paper_tuning is not None else "diverged, not a multiple of")
                       + " Σ's: the gap there comes from the bandwidth, not from Σ's structure.")
 
@@ -135,7 +136,8 @@ def _eso_diverges(result, p):
     frac = np.atleast_1d(value_of(result, ids[0]))
     result.claim(_BY_ID["eso-diverges"], bool(np.max(frac) > 0), ids,
                  note=f"Han's step-size gains designed for a step 4× and 8× shorter than the simulation's: "
-                      f"{' and '.join(f'{v:.0%}' for v in frac)} of the runs diverge within 0.3 s (the claim needs some "
+                      f"{' and '.join(f'{v:.0%}' for v in frac)} of the runs diverge within 0.3 s (the claim needs "
+                      f"some "
                       "bad tuning to diverge). The linearised observer is Hurwitz; it is the integrator that goes "
                       "unstable (finding ex1-eso-divergence).")
 
@@ -161,7 +163,8 @@ def _ex2_tracks(result, p):
                       f"linearised at the origin has max Re λ = {max_re:+.3g} 1/s, and in simulation {share:.0%} of "
                       f"{runs} runs settle (half peak-to-peak of x1 - v over the last quarter below {p.ripple_tol:g}; "
                       + (f"mean {amp:.3g}" if amp is not None else "the runs diverge")
-                      + "). Judged run by run, as Fig. 5 shows one run: the claim needs a stable linearisation and more "
+                      + "). Judged run by run, as Fig. 5 shows one run: the claim needs a stable linearisation and "
+                      "more "
                         "than half the runs settled."
                       + ("" if fast is None else " The study's stable preset (Σ a raised until every eigenvalue has "
                          f"Re <= -1) leaves a ripple of {fast:.3g}."))

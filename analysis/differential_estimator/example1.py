@@ -24,7 +24,8 @@ from ctrl_analysis.reporting.report import StudyResult
 from . import loops
 from .paper import Example1
 
-__all__ = ["draw", "ex1_cell", "sigma_bandwidth", "quantity_ms", "linearised_eso", "eso_bandwidth", "equal_bandwidth_tuning", "simulate",
+__all__ = ["draw", "ex1_cell", "sigma_bandwidth", "quantity_ms", "linearised_eso", "eso_bandwidth",
+           "equal_bandwidth_tuning", "simulate",
            "main_quantities", "sensitivities", "fair_comparison", "n0_sweep", "eso_divergence"]
 
 
@@ -158,7 +159,8 @@ def main_quantities(result: StudyResult, p: Example1, d: dict) -> None:
     # the paper compared one run of each observer (Fig. 3-4): the claim is judged run by run
     better = ~ok | np.all(np.where(ok[:, None], ratio, 0.0) > 1.0, axis=1)
     result.quantity("ex1.sigma_beats_eso.share_of_runs", "Example 1: share of the runs in which Σ's mean errors are "
-                    "below the ESO's on both states (a run where the ESO diverged counts as Σ's)", float(np.mean(better)),
+                    "below the ESO's on both states (a run where the ESO diverged counts as Σ's)",
+                    float(np.mean(better)),
                     runs=int(ok.size), unit="",
                     note="the paper compared one run of each observer (Fig. 3-4); a run that diverged is the ESO's "
                          "(the estimators do not act on the plant, and Σ is a stable linear filter)")
@@ -168,7 +170,8 @@ def main_quantities(result: StudyResult, p: Example1, d: dict) -> None:
     result.finding(
         "ex1-eso-citation",
         "Example 1's comparison observer is Han's nonlinear ESO (ref. [8], Han 1995), not ref. [7] to which the paper "
-        "attributes it, and none of its parameters is printed. The comparison observer is attributed to ref. [7] (Harris, Wu & Gan, neurofuzzy state estimators), but the "
+        "attributes it, and none of its parameters is printed. The comparison observer is attributed to ref. [7] "
+        "(Harris, Wu & Gan, neurofuzzy state estimators), but the "
         "text describes Han's nonlinear extended state observer, ref. [8] (Han 1995); the paper prints none of its "
         "parameters (β0i, δ, the fal exponents). The study uses Han's textbook defaults (exponents 1, 0.5, 0.25, "
         "step-size rule for the gains, δ = h; Han 2008).")
@@ -263,7 +266,8 @@ def _errors(x, est_out) -> np.ndarray:
     return np.stack([mean_abs_error(x[:, :, i], z) for i, z in enumerate(est_out)], axis=1)
 
 
-def fair_comparison(result: StudyResult, p: Example1, d: dict, tradeoff: bool = True, check: bool = True) -> dict | None:
+def fair_comparison(result: StudyResult, p: Example1, d: dict, tradeoff: bool = True,
+                    check: bool = True) -> dict | None:
     """ESO vs Σ at equal −3 dB bandwidth, and (``tradeoff``) the x1-error/x2-error trade-off over the bandwidth; quantities ``ex1.fair.*``, ``ex1.tradeoff.*``.
 
     ``check`` records the linear path's check against the engine (Σ both ways); the box evaluations skip it.
@@ -421,7 +425,8 @@ def eso_divergence(result: StudyResult, p: Example1, seeds, T: float = 0.3, fact
     h_bad = p.h / factors[0]
     lin = linearised_eso(eso)
     result.quantity("ex1.bad_eso.diverged_fraction", f"Example 1, Han's ESO with gains for a step "
-                    f"{' and '.join(f'{f}×' for f in factors)} shorter than the RK4 step h = {p.h * 1e3:g} ms: fraction "
+                    f"{' and '.join(f'{f}×' for f in factors)} shorter than the RK4 step h = {p.h * 1e3:g} ms: "
+                    f"fraction "
                     f"of runs diverged (|state| > {p.bound:g}) within {q.T:g} s, per factor",
                     [float(np.mean(runs[f][1])) for f in factors], runs=len(seeds), unit="",
                     note=f"factor {factors[0]}: first divergence at step "

@@ -21,7 +21,8 @@ from . import loops
 from .example1 import quantity_ms
 from .paper import Example2, setpoint
 
-__all__ = ["PRESETS", "softened_square_wave", "stable_estimator_a", "controller_scale_threshold", "literal_eigenvalues", "linear_analysis", "simulate", "quantities",
+__all__ = ["PRESETS", "softened_square_wave", "stable_estimator_a", "controller_scale_threshold",
+           "literal_eigenvalues", "linear_analysis", "simulate", "quantities",
            "nonminimum_phase", "oscillation"]
 
 
@@ -260,7 +261,8 @@ def _findings(result, p, d, lin, maps, err, amp, freq) -> None:
         "ex2-literal-simulation",
         f"Simulated as printed, x1 settles into a limit cycle around v (half peak-to-peak "
         f"{np.mean(amp[:runs][ok_l]):.3g} at {np.mean(freq[:runs][ok_l]):.2f} Hz) instead of tracking it. "
-        f"Simulated as printed, {int((~ok_l).sum())} of {runs} runs diverge (bound {p.bound:g}): the linear instability "
+        f"Simulated as printed, {int((~ok_l).sum())} of {runs} runs diverge (bound {p.bound:g}): the linear "
+        f"instability "
         f"is caught by the nonlinear damping -b3 x3|x3| and x1 settles into a limit cycle around v with half "
         f"peak-to-peak amplitude {np.mean(amp[:runs][ok_l]):.3g} at {np.mean(freq[:runs][ok_l]):.2f} Hz (the "
         f"linearised unstable pair {pair.real:+.1f} ± {abs(pair.imag):.1f}j rad/s, i.e. "
@@ -276,7 +278,8 @@ def _findings(result, p, d, lin, maps, err, amp, freq) -> None:
         f"The robustness claim holds for the stable preset, not for the printed loop: "
         f"{np.mean(fast['stable']) * 100:.0f} % against {np.mean(lit['stable']) * 100:.0f} % of the {per - runs} "
         f"(b1, b2, b3) grid points settle. "
-        f"The paper claims 'strong robustness to parameter changes': with the fast_estimator preset {np.mean(fast['stable']) * 100:.0f} % "
+        f"The paper claims 'strong robustness to parameter changes': with the fast_estimator preset "
+        f"{np.mean(fast['stable']) * 100:.0f} % "
         f"of the {per - runs} grid points settle (b1 > 0: {np.mean(fast['stable'][b1s > 0]) * 100:.0f} %); the "
         f"linearisation at the origin is stable on {np.mean(fast['lin'] < 0) * 100:.0f} % of the (b1, b2) grid (max Re "
         f"from {fast['lin'].min():.2f} to {fast['lin'].max():.2f}). As printed (a = 5) the linearisation is stable at "
@@ -308,7 +311,8 @@ def nonminimum_phase(result: StudyResult, p: Example2) -> None:
     result.quantity("ex2.plant.rhp_zeros", f"Example 2: zeros of the linearised plant u → x1 in the closed right "
                     f"half-plane, b2 = {p.b2:g}, b1 = {p.b1:g} and b1 ∈ {list(p.sweep_b1)} (count, all b1)",
                     int(sum(np.sum(z.real >= 0) for z in zeros)), unit="",
-                    note=f"control.StateSpace.zeros() (invariant zeros): {sum(z.size for z in zeros)} finite zeros in all; the plant "
+                    note=f"control.StateSpace.zeros() (invariant zeros): {sum(z.size for z in zeros)} finite zeros in "
+                    f"all; the plant "
                          "is minimum phase for every b1 (an unstable pole is not a right-half-plane zero)")
     result.finding(
         "ex2-nonminimum-phase",

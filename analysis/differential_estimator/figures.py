@@ -162,7 +162,8 @@ def plot_tradeoff(trade: dict, sigma_point, title: str):
     near = (bws >= bw_s / 2) & (bws <= 2.5 * bw_s)
     pts = np.vstack([curves["sigma"][near], curves["leso"][near], fal["equal_bw"][None], np.asarray(sigma_point)[None]])
     lo, hi = pts.min(axis=0) / 1.12, pts.max(axis=0) * 1.15
-    fal_style = {"textbook": ("^", "Han's fal ESO, step-size gains for h' = 1 ms (the paper's tuning as reconstructed)"),
+    fal_style = {"textbook": ("^",
+                              "Han's fal ESO, step-size gains for h' = 1 ms (the paper's tuning as reconstructed)"),
                  "equal_bw": ("v", "Han's fal ESO tuned to Σ's bandwidth")}
     for axis, zoom in ((ax, False), (az, True)):
         axis.loglog(curves["sigma"][:, 0], curves["sigma"][:, 1], "o-", color="C0", ms=6, zorder=3,

@@ -109,7 +109,8 @@ def eq9_checks(result: StudyResult, L: Linear) -> dict:
     result.finding(
         "eq9-exponent",
         f"Eq. (9)'s exponent n must read n0: only K = n0^n0 a/(n0-1)^(n0-1) puts a double pole at the breakaway "
-        f"point s = -n0 a (sympy, for general n0 and a). Eq. (9) is printed K = n0^n a/(n0-1)^(n0-1). Solving dK/ds = 0 on K(s) = -s^n0/(s+a)^(n0-1) "
+        f"point s = -n0 a (sympy, for general n0 and a). Eq. (9) is printed K = n0^n a/(n0-1)^(n0-1). Solving dK/ds = "
+        f"0 on K(s) = -s^n0/(s+a)^(n0-1) "
         f"with sympy for general n0, a gives dK/ds · (s + a)^n0/s^(n0-1) = {sp.sstr(d.dK_ds_reduced)}, so "
         f"besides s = 0 (K = 0) the only critical point, the breakaway (strictly a break-in: K has a minimum "
         f"there, d2K/ds2 = {sp.sstr(d.second_derivative)} > 0) is s = {sp.sstr(d.breakaway)} as the paper says, "
@@ -218,6 +219,7 @@ def controller_poles(result: StudyResult, L: Linear) -> None:
         "ex2.controller_poles", "Example 2: roots of s^3 + 39 s^2 + 506 s + 2184 (controller (18))",
         roots.real, paper=list(L.ex2_poles), tolerance=1e-6, unit="1/s", cell="§4 Example 2: roots -12, -13, -14",
         note=f"A check of the paper's arithmetic (not a reproduced cell); the printed roots are integers, 1e-6 covers "
-             f"numpy.roots' rounding; max |Im| = {np.abs(roots.imag).max():.1e}. Read as polynomial coefficients, the printed "
+             f"numpy.roots' rounding; max |Im| = {np.abs(roots.imag).max():.1e}. Read as polynomial coefficients, the "
+             f"printed "
              f"K = [2184, 506, 39, 1] runs from s^0 to s^3 (the trailing 1 is the coefficient of s^3); the study "
              f"applies K = [2184, 506, 39] (reconstruction ex2.K).")

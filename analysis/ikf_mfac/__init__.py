@@ -44,14 +44,16 @@ __all__ = ["INFO", "SWEEPS", "run"]
 INFO = StudyInfo(
     name='ikf-mfac',
     seed_file='000_1281acf4834e65d1.txt',
-    paper='Lu & Hou 2022, model-free adaptive control with disturbance rejection based on a modified Kalman filter (IKF-MFAC)',
+    paper='Lu & Hou 2022, model-free adaptive control with disturbance rejection based on a modified Kalman filter '
+    '(IKF-MFAC)',
     reproduces='Table 1 (RMSE/SNR of MFAC, TD-MFAC, D-MFAC, IKF-MFAC, Monte Carlo), Fig. 2-6, the paper\'s claims '
                '(rankings, Fig. 2, noise levels) judged run by run over the plausible box, steady IKF gain, '
                'TD step count, sweeps over noise, Q/R, rho and lambda',
 )
 
 #: Grids of the sweeps beyond the paper.
-_GAINS = {"q": (0.03, 0.1, 0.3, 1.0, 3.0, 10.0, 30.0), "rho": (0.2, 0.4, 0.6, 0.8, 1.0), "lam": (0.5, 1.0, 2.0, 4.0, 8.0)}
+_GAINS = {"q": (0.03, 0.1, 0.3, 1.0, 3.0, 10.0, 30.0), "rho": (0.2, 0.4, 0.6, 0.8, 1.0),
+          "lam": (0.5, 1.0, 2.0, 4.0, 8.0)}
 SWEEPS = {"ex1": {"noise": (0.02, 0.05, 0.1, 0.2, 0.3, 0.4), **_GAINS},
           "ex2": {"noise": (0.25, 0.5, 1.0, 1.5, 2.0), **_GAINS}}
 #: TD step counts scanned (x1 after the steps) on Table 1's seeds, around and above each chosen count.
@@ -62,8 +64,10 @@ TD_COUNTS = {"ex1": (1, 2, 4, 8, 12, 16, 17, 18, 19, 20, 24, 32, 48, 64),
 def run(ctx: StudyContext, params=None) -> StudyResult:
     """Reproduce Table 1 and Fig. 2-6 by Monte Carlo, judge the claims over the plausible box, and beyond the paper.
 
-    ``params`` overrides the settings (:func:`ctrl_analysis.reporting.study.study_params`): ``"ex1"``, ``"ex2"`` (the examples,
-    :data:`.paper.EX1`, :data:`.paper.EX2`) and ``"fig2"`` (:data:`.paper.FIG2`), each an object or a dict of its fields.
+    ``params`` overrides the settings (:func:`ctrl_analysis.reporting.study.study_params`): ``"ex1"``, ``"ex2"`` (the
+    examples,
+    :data:`.paper.EX1`, :data:`.paper.EX2`) and ``"fig2"`` (:data:`.paper.FIG2`), each an object or a dict of its
+    fields.
     """
     result = StudyResult(INFO)
     chosen = study_params({"ex1": EX1, "ex2": EX2, "fig2": FIG2}, params, result)
@@ -87,7 +91,8 @@ def run(ctx: StudyContext, params=None) -> StudyResult:
     per_run = {}
     for key in examples:
         per_run[key] = {s: metrics_of(all_runs[key][s]) for s in SCHEMES}
-        where = {s: [f"run {b} at k = {k}" for b, k in zip(np.flatnonzero(r.diverged), r.diverged_step[r.diverged], strict=True)]
+        where = {s: [f"run {b} at k = {k}" for b,
+                     k in zip(np.flatnonzero(r.diverged), r.diverged_step[r.diverged], strict=True)]
                  for s, r in all_runs[key].items()}
         record_table1(result, key, per_run[key], where)
         record_noise_margin(result, key, SWEEPS[key]["noise"], {s: sweeps[key][s]["noise"] for s in SCHEMES},
@@ -160,8 +165,10 @@ def _figures(ctx, result, chosen, all_runs, per_run, sweeps, ratio, seeds, fig2_
                        f"a fixed Q = {ex1.Q:g} (the paper's R values and Example 1's Q are not in the paper text: "
                        "reconstructed). Left: the output of one run per R. Right: what the paper's Fig. 2 claims, "
                        f"measured over {runs2} runs per R: the disturbance rejection (steady RMS of y − y* over k = "
-                       f"{fig2p.steady[0]}..{fig2p.steady[1]}, smaller = stronger) and the response speed (samples from "
-                       f"k = 3 until y first reaches {fig2p.rise_level:g}, larger = slower); an R at which at least half "
+                       f"{fig2p.steady[0]}..{fig2p.steady[1]}, smaller = stronger) and the response speed (samples "
+                       f"from "
+                       f"k = 3 until y first reaches {fig2p.rise_level:g}, larger = slower); an R at which at least "
+                       f"half "
                        "the runs diverge is shaded and its count printed (claim fig2-larger-r).")
     for key, (fo, fe), kind in (("ex1", (3, 4), "constant"), ("ex2", (5, 6), "time-varying")):
         r = all_runs[key]
@@ -186,7 +193,9 @@ def _figures(ctx, result, chosen, all_runs, per_run, sweeps, ratio, seeds, fig2_
                                            {k: result.get(f"{k}.mfac.rmse").value for k in examples}),
                     "td_substeps_scan.png", dpi=dpi,
                     caption=F.td_scan_caption(td_scan, {k: result.get(f"{k}.mfac.rmse").value for k in examples}))
-    ctx.save_figure(result, F.plot_noise_sweep({k: SWEEPS[k]["noise"] for k in examples}, sweeps, {"ex1": ex1.noise_std, "ex2": ex2.noise_std}),
+    ctx.save_figure(result,
+                    F.plot_noise_sweep({k: SWEEPS[k]["noise"] for k in examples}, sweeps,
+                                       {"ex1": ex1.noise_std, "ex2": ex2.noise_std}),
                "beyond_rmse_vs_noise.png", dpi=dpi,
                caption="Beyond the paper: mean RMSE of the four schemes against the measurement-noise std in "
                        "both examples (the paper's level marked), every other parameter at the example's value "
@@ -197,7 +206,8 @@ def _figures(ctx, result, chosen, all_runs, per_run, sweeps, ratio, seeds, fig2_
                "beyond_rmse_vs_q_over_r.png", dpi=dpi,
                caption="Beyond the paper: IKF-MFAC's mean RMSE against the IKF's q = Q/R in both examples, with "
                        f"the ratio used marked (Example 2: the paper's Q/R = {ex2.Q:g}/{ex2.R:g}; Example 1: "
-                       "reconstructed, not printed) and the steady gain K∞(q) on a second axis; Q is varied at the example's R; "
+                       "reconstructed, not printed) and the steady gain K∞(q) on a second axis; Q is varied at the "
+                       "example's R; "
                        "points with diverged runs follow the 80 % rule of the other sweeps.")
     ctx.save_figure(result, F.plot_gain_sweep(_GAINS, sweeps, {"rho": ex1.rho, "lam": ex1.lam}),
                "beyond_rmse_vs_rho_lambda.png", dpi=dpi,

@@ -173,7 +173,8 @@ def evaluate_many(variants: list) -> list:
     outs = _simulate(reqs)
     tables, figs, pos = [], [], 0
     for v in variants:
-        tables.append({k: {s: outs[pos + 4 * i + j] for j, s in enumerate(SCHEMES)} for i, k in enumerate(("ex1", "ex2"))})
+        tables.append({k: {s: outs[pos + 4 * i + j] for j, s in enumerate(SCHEMES)} for i,
+                       k in enumerate(("ex1", "ex2"))})
         pos += 8
         figs.append(outs[pos:pos + len(v["fig2"].R)])
         pos += len(v["fig2"].R)

@@ -87,11 +87,13 @@ def plot_fig2(k, y_ref, outputs: dict, R, runs: int, diverged, rejection, rise, 
     div = np.asarray(diverged)
     rows_f = [(f, 0.0, runs - d, d) for f, d in zip(rejection, div, strict=True)]
     rows_r = [(r, 0.0, runs - d, d) for r, d in zip(rise, div, strict=True)]
-    notes = [_plot_runs(a2, R, rows_f, "tab:blue", f"rejection: steady RMS of y − y* (k = {steady[0]}..{steady[1]}), left axis",
+    notes = [_plot_runs(a2, R, rows_f, "tab:blue",
+                        f"rejection: steady RMS of y − y* (k = {steady[0]}..{steady[1]}), left axis",
                         short="per R")]
     a2.set(xscale="log", xlabel="R (measurement-noise variance of the IKF)", ylabel="steady RMS of y − y*")
     tw = a2.twinx()
-    _plot_runs(tw, R, rows_r, "tab:red", f"response: start-up rise to y = {rise_level:g} (samples from k = 3), right axis",
+    _plot_runs(tw, R, rows_r, "tab:red",
+               f"response: start-up rise to y = {rise_level:g} (samples from k = 3), right axis",
                ls="--")
     tw.set_ylabel("start-up rise (samples)")
     for Ri, d in zip(R, div, strict=True):
@@ -175,7 +177,8 @@ def plot_noise_sweep(levels, sweeps: dict, paper_levels: dict):
 
 def plot_ratio_sweep(sweeps: dict, paper_q: dict):
     """IKF-MFAC RMSE and K∞ against Q/R (beyond the paper), one panel per example."""
-    fig, axes = new_figure(1, 2, size=(12.0, 4.8), title=f"IKF-MFAC: mean RMSE and steady gain K∞ against Q/R ({_RULE})")
+    fig, axes = new_figure(1, 2, size=(12.0, 4.8),
+                           title=f"IKF-MFAC: mean RMSE and steady gain K∞ against Q/R ({_RULE})")
     for ax, key in zip(axes, ("ex1", "ex2"), strict=True):
         name = "Example 1" if key == "ex1" else "Example 2"
         note = _ratio_axes(ax, sweeps[key], name)

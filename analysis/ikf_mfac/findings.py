@@ -57,7 +57,8 @@ def record_ranking(result, per_run: dict) -> None:
         result.finding(f"{key}-ranking",
                        f"{name}: order by mean RMSE here {' < '.join(L[s] for s in order)}; Table 1's "
                        f"{' < '.join(L[s] for s in paper)} ({'same' if order == paper else 'different'}). Fraction "
-                       f"of runs with the lower RMSE: {pairs}.", evidence={"order": order, "paper": paper, "pairs": frac})
+                       f"of runs with the lower RMSE: {pairs}.",
+                       evidence={"order": order, "paper": paper, "pairs": frac})
 
 
 def record_steady_gain(result, ex2, n: int) -> None:
@@ -67,7 +68,8 @@ def record_steady_gain(result, ex2, n: int) -> None:
     ikf = ImprovedKalmanFilter(ex2.Q, ex2.R, P0=ex2.P0)
     y, _ = ikf.run(np.zeros((n, 2)))
     result.quantity("ikf.steady_gain", "IKF steady-state gain K∞ at Example 2's Q = 0.15, R = 0.75", float(k_sym),
-                    unit="", note=f"K∞ = {d.K_canonical} with q = Q/R = {ex2.Q / ex2.R:g} (sympy, depends on Q/R only); "
+                    unit="",
+                    note=f"K∞ = {d.K_canonical} with q = Q/R = {ex2.Q / ex2.R:g} (sympy, depends on Q/R only); "
                                   f"the IKF block's K(N) = {y[-1, 0, 1]:.12f}, random_walk_gain = "
                                   f"{random_walk_gain(ex2.Q, ex2.R):.12f}")
 
@@ -118,7 +120,8 @@ def record_reset_erratum(result, ex1) -> None:
         driven += [f"{c.claim.id} ({d['S1']:.2f}, {d['reconstruction']})" for d in (c.box or {}).get("drivers") or []
                    if d["reconstruction"] in {f"{k}.phi_reset" for k in read} and d["S1"] >= 0.1]
     result.finding("eq7-reset-value",
-                   f"Eq. (7) resets the PPD estimate to its initial value φ̂(1) = {ex1.phi0:g}, but Example 1's text sets "
+                   f"Eq. (7) resets the PPD estimate to its initial value φ̂(1) = {ex1.phi0:g}, but Example 1's text "
+                   f"sets "
                    f"the reset value to {ex1.phi_reset:g} (Example 2's parameters are 'similar'). The study uses the "
                    f"text's {ex1.phi_reset:g}; eq. (7)'s {ex1.phi0:g} is a dimension of the plausible box in both "
                    "examples (ex1.phi_reset, ex2.phi_reset), so every claim is judged under both readings"
@@ -180,7 +183,8 @@ def record_td_scan(result, scans: dict, chosen: dict) -> dict:
                      + ", ".join(f"{n}: {d}" for n, d in zip(counts, div, strict=True))
                      + (f", so every count from {clean} up is clean" if clean else ", and the largest count still "
                         "loses runs")
-                     + (f"; the count used, {chosen[key]}, loses {div[c]} and gives TD-MFAC a mean RMSE of {mean[c]:.4f} "
+                     + (f"; the count used, {chosen[key]}, loses {div[c]} and gives TD-MFAC a mean RMSE of "
+                        f"{mean[c]:.4f} "
                         f"against plain MFAC's {mf:.4f}" if c is not None else "")
                      + f"; at {counts[-1]} steps TD-MFAC's RMSE is {mean[-1]:.4f}"
                      + ("; with x1 taken before the steps (a one-sample lag) the diverged runs are "
@@ -224,7 +228,8 @@ def record_where_ikf_wins(result, sweeps: dict, ratio: dict, grids: dict) -> Non
             n_all[key] = n_all.get(key, 0) + len(points)
             parts.append(f"{name}, {label}: lowest at {', '.join(win) or 'none'}; not at {', '.join(lose) or 'none'}")
         div = [f"{L[sc]} {n} at {lab} = {pt:g}" for lab, param in (("σ_v", "noise"), ("ρ", "rho"), ("λ", "lam"))
-               for sc in SCHEMES for pt, row in zip(grids[key][param], sweeps[key][sc][param], strict=True) if (n := row[3])]
+               for sc in SCHEMES for pt,
+               row in zip(grids[key][param], sweeps[key][sc][param], strict=True) if (n := row[3])]
         if div:
             parts.append(f"{name}, diverged runs (excluded from the means): {', '.join(div)}")
         q, rm = ratio[key]["q"], [r[0] for r in ratio[key]["rmse"]]

@@ -170,7 +170,8 @@ def run_scheme(ex: Example, scheme: str, v: np.ndarray, engine: str = "auto") ->
     plant = loop.placed[0].block
     k_eng = ks + np.arange(n_steps + 1)
     keep = _STORED + (("y_f",) if scheme in _FILTERED else ())
-    res = loop.simulate(n_steps, t0=float(ks), inputs={"v": v[ks - 1:], "y_ref_next": reference_next(ex.reference, k_eng)},
+    res = loop.simulate(n_steps, t0=float(ks),
+                        inputs={"v": v[ks - 1:], "y_ref_next": reference_next(ex.reference, k_eng)},
                         x0={"plant": plant_start_state(plant, ex.y_init, ex.u_init, ks)}, params=params,
                         save=Save(states=False, keep=keep), execution=Execution(bound=BOUND, engine=engine))
     B = v.shape[1]
@@ -254,7 +255,8 @@ def run_batch(exs, scheme: str, vs, engine: str = "auto", keep=("y",)) -> Scheme
     plant = loop.placed[0].block
     k_eng = ks + np.arange(n - ks + 1)
     x0["plant"] = plant_start_state(plant, ex.y_init, ex.u_init, ks)
-    res = loop.simulate(n - ks, t0=float(ks), inputs={"v": v[ks - 1:], "y_ref_next": reference_next(ex.reference, k_eng)},
+    res = loop.simulate(n - ks, t0=float(ks),
+                        inputs={"v": v[ks - 1:], "y_ref_next": reference_next(ex.reference, k_eng)},
                         x0=x0, params=params, save=Save(states=False, keep=tuple(keep)),
                         execution=Execution(bound=BOUND, engine=engine))
     B = v.shape[1]

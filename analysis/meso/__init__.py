@@ -37,7 +37,8 @@ INFO = StudyInfo(
 def run(ctx: StudyContext, params=None) -> StudyResult:
     """Reproduce the linear analysis, situations 1 and 2 (Tables 2-3, Fig. 3-6), the claims and the findings.
 
-    ``params`` overrides the settings (:func:`ctrl_analysis.reporting.study.study_params`): ``{"analysis": Analysis}`` or a
+    ``params`` overrides the settings (:func:`ctrl_analysis.reporting.study.study_params`): ``{"analysis": Analysis}``
+    or a
     dict of its fields (default :data:`.paper.ANALYSIS`, or :data:`.paper.QUICK` with --quick: runs, horizons,
     grids, the box's noise runs). The paper's values and reconstructions (:data:`.paper.PAPER`, the situations, the
     readings) are not run-time parameters of this study: its modules read them directly, and the plausible box
@@ -59,9 +60,11 @@ def run(ctx: StudyContext, params=None) -> StudyResult:
     ctx.progress("linear observer analysis")
     lin = linear.analyse(PAPER, an.eps_grid)
     ctx.save_figure(result, figures.plot_error_bode(lin), "leso_error_bode.png",
-                    caption="Beyond the paper: Bode magnitude of the linear ESO's estimation errors e1, e2, e3 driven by "
+                    caption="Beyond the paper: Bode magnitude of the linear ESO's estimation errors e1, e2, e3 driven "
+                    "by "
                             "dx3/dt (the derivative of the total disturbance) at the paper's ε and β = (3, 3, 1); the "
-                            "flat low-frequency levels (DC gains ε³/β₃, β₁ε²/β₃, β₂ε/β₃) are the ε-powers of law (4)/(7) "
+                            "flat low-frequency levels (DC gains ε³/β₃, β₁ε²/β₃, β₂ε/β₃) are the ε-powers of law "
+                            "(4)/(7) "
                             "(quantities leso.*).")
 
     sims = {}
@@ -78,8 +81,10 @@ def run(ctx: StudyContext, params=None) -> StudyResult:
 
     sc = quantities.eps_scaling(sims["s1"], an)
     ctx.save_figure(result, figures.plot_eps_scaling(sc, lin), "leso_eps_scaling.png",
-                    caption="Beyond the paper: mean |e_i| of the ESO in situation 1 against ε on log-log axes, noise-free "
-                            "loop (left) and the steady noise std per ε (right), with reference lines of the slopes law "
+                    caption="Beyond the paper: mean |e_i| of the ESO in situation 1 against ε on log-log axes, "
+                    "noise-free "
+                            "loop (left) and the steady noise std per ε (right), with reference lines of the slopes "
+                            "law "
                             "(4)/(7) predicts; checks §5's claim that a larger ε lowers the noise sensitivity "
                             "(quantities leso.eps_slope.*, leso.noise_std.*).")
     out = claims.record(result, sims, lin, sc, horizons, an)
@@ -150,17 +155,27 @@ def _figures(ctx, result, sims) -> None:
         noisy = list(series)[1]
         ctx.save_figure(result, figures.plot_situation(sim, series, title, smooth={noisy: 1.0}), sit.figs[0],
                         caption=f"Redraws the paper's Fig. {fig_no[0]} (situation {key[1]}): the control input u, the "
-                                "tracking error and the estimation errors e1-e3 of the ESO and the well-posed MESO at equal "
-                                "ε and PD gains, with the measurement noise off (left) and on (middle, one run; there the "
-                                "estimation errors are drawn faint with their 1-s centred moving average in bold, since the "
+                                "tracking error and the estimation errors e1-e3 of the ESO and the well-posed MESO at "
+                                "equal "
+                                "ε and PD gains, with the measurement noise off (left) and on (middle, one run; there "
+                                "the "
+                                "estimation errors are drawn faint with their 1-s centred moving average in bold, "
+                                "since the "
                                 "noise band of one observer would hide the other's error). The y-ranges of these two "
-                                "columns show the steady behaviour (1.2 × the 99.9th percentile of |e| outside the start-up "
-                                "and the 4 s after the θ4 step at 30 s); the peaks they clip are written in each panel and "
-                                "drawn at full scale, noise off, in the right column (its time axis is broken between the "
-                                "start-up and the step; the two observers are identical until the first identification batch ends, so only "
-                                "one trace shows there). The ESO is drawn wide and faint beneath the MESO, whose control "
-                                "input nearly coincides with it. x1 itself is not drawn: it lies on the reference to within the "
-                                "tracking error of the second row. Compare the size of the MESO's and the ESO's errors with "
+                                "columns show the steady behaviour (1.2 × the 99.9th percentile of |e| outside the "
+                                "start-up "
+                                "and the 4 s after the θ4 step at 30 s); the peaks they clip are written in each "
+                                "panel and "
+                                "drawn at full scale, noise off, in the right column (its time axis is broken between "
+                                "the "
+                                "start-up and the step; the two observers are identical until the first "
+                                "identification batch ends, so only "
+                                "one trace shows there). The ESO is drawn wide and faint beneath the MESO, whose "
+                                "control "
+                                "input nearly coincides with it. x1 itself is not drawn: it lies on the reference to "
+                                "within the "
+                                "tracking error of the second row. Compare the size of the MESO's and the ESO's "
+                                "errors with "
                                 f"Table {2 if key == 's1' else 3}; long traces are thinned.")
         runs = [(pick(rows, "meso", "wellposed", True)[0], "MESO well-posed (noise on)", c["meso"]),
                 (pick(rows, "meso", "literal", True)[0], "MESO Table-1 literal (noise on)", c["literal"]),
@@ -172,13 +187,15 @@ def _figures(ctx, result, sims) -> None:
                  f"({sit.N * PAPER.h:g} s)")
         ctx.save_figure(result, figures.plot_theta(sim, key, runs, title), sit.figs[1],
                         caption=f"Redraws the paper's Fig. {fig_no[1]} (situation {key[1]}): the four LSM-identified "
-                                "parameters Θ of d(t) after each batch (markers) and the smoothed Θ in use (lines) against their "
+                                "parameters Θ of d(t) after each batch (markers) and the smoothed Θ in use (lines) "
+                                "against their "
                                 "true values (dashed"
                                 + ("; dotted: the trajectory-equivalent Θ, since θ3 is not identifiable in closed loop"
                                    if key == "s2" else "") + "), for the "
                                 "well-posed MESO, the Table-1 literal accumulation and the literal rule without W(s)"
                                 + (" and the direct rule (10)" if key == "s2" else "") + ". A diverged run's trace "
-                                "stops where it diverged; y-ranges are fixed around the truth, so diverging traces leave the "
+                                "stops where it diverged; y-ranges are fixed around the truth, so diverging traces "
+                                "leave the "
                                 "panel" + ("; θ3 is 0 by construction in situation 1, whose reduced regression (22) "
                                 "does not identify it" if key == "s1" else "") + " (quantities " + key + ".theta_final, " + key
                                 + ".literal.*).")
@@ -186,7 +203,8 @@ def _figures(ctx, result, sims) -> None:
                     "identifiability.png",
                     caption="Beyond the paper: condition number of each LSM batch's regression (Theorem 1's "
                             "identifiability) over time, per situation and identification variant, against the "
-                            "study's threshold (horizontal line, situation 2 only). The gate acts only on situation 2's "
+                            "study's threshold (horizontal line, situation 2 only). The gate acts only on situation "
+                            "2's "
                             "well-posed full regression (16): a batch above it falls back to the reduced regression "
                             "with θ3 held; situation 1's reduced regression (22) and the literal and direct variants "
                             "are not gated. The threshold admits situation 2's start-up batch and rejects the later, "
@@ -201,7 +219,8 @@ def _cond_series(sims) -> dict:
         rows = sim.rows
         on = 10.0 ** sim.log10_cond[:, pick(rows, "meso", "wellposed", True)]
         series = [((np.nanmin(on, axis=1), np.nanmedian(on, axis=1), np.nanmax(on, axis=1)),
-                   f"well-posed, noise on ({on.shape[1]} runs)", {"color": "tab:blue", "ls": "-", "marker": "o", "ms": 3})]
+                   f"well-posed, noise on ({on.shape[1]} runs)",
+                   {"color": "tab:blue", "ls": "-", "marker": "o", "ms": 3})]
         styles = {"wellposed": ("well-posed, noise off", "tab:cyan", "--", "s"),
                   "literal": ("Table-1 literal, noise off", "tab:orange", "-.", "^"),
                   "direct": ("direct (10), noise off", "tab:purple", ":", "D")}

@@ -73,7 +73,8 @@ METRIC_ORDER = ("est_x1", "est_x2", "est_x3", "est_x3_no_bu", "track_x1", "track
 def _accumulate(x1, x2, xh1, xh2, xh3, u, level, th0, th1, th2, th3, t, w, b, b0, theta1, theta2, bb, t_step, h,
                 t_from, prev, has_prev, sums, wsums, sup):
     """One pass over a chunk (``n`` samples, ``A`` runs): the |e| sums of :func:`_chunk_errors` (whole run and
-    window ``w``) and sup |Δx3/h| from ``t_from`` on (M, N of (5)/(8)), the θ4 step excluded, added in place; ``prev`` holds each run's last x3.
+    window ``w``) and sup |Δx3/h| from ``t_from`` on (M, N of (5)/(8)), the θ4 step excluded, added in place; ``prev``
+    holds each run's last x3.
 
     Signals are ``(n, A)`` (any strides); ``b`` (A,) the plant gains; ``bb = paper.b − b0``. Compiled with numba
     (:func:`_accumulator`); the same function runs in Python.

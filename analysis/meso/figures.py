@@ -35,7 +35,8 @@ def plot_error_bode(lin):
     """
     w = np.logspace(-2, 3.5, 600)
     fig, (ax_m, ax_p) = new_figure(2, 1, size=(8.5, 6.5), sharex=True,
-                                   title=f"Linear ESO (6) / MESO (29) error dynamics, ε = {PAPER.epsilon:g}, β = (3, 3, 1): "
+                                   title=f"Linear ESO (6) / MESO (29) error dynamics, ε = {PAPER.epsilon:g}, β = (3, "
+                                   f"3, 1): "
                                          "Bode plots of disturbance → estimation error (no paper figure)")
     for i, g in enumerate(lin.observer.disturbance_error_tf(), start=1):
         c = np.squeeze(ct.frequency_response(g, w).complex)
@@ -161,7 +162,8 @@ def plot_situation(sim: SituationRun, series: dict, title: str, max_points: int 
                 if r == 0 and np.any(steady & fin):
                     lo, hi = np.min(y[steady & fin]), np.max(y[steady & fin])
                     urange = [min(urange[0], lo), max(urange[1], hi)]
-                lims[r] = max(lims[r], float(np.percentile(np.abs(y[steady & fin]), 99.9)) if np.any(steady & fin) else 0)
+                lims[r] = max(lims[r],
+                              float(np.percentile(np.abs(y[steady & fin]), 99.9)) if np.any(steady & fin) else 0)
                 peaks[r] = max(peaks[r], float(np.max(np.abs(y[~steady & fin]), initial=0.0)))
                 if c == 0:
                     for w in windows:

@@ -142,7 +142,8 @@ def _identifiability(result, s1, s2, horizons, gate) -> None:
     result.finding(
         "situation2-not-identifiable",
         "Situation 2's full parameter vector is not identifiable from closed-loop data with ξ = sin t, contrary to the "
-        "paper's Fig. 6 and its claim that Theorem 1 removes the need for excitation: once the loop tracks, x1 ≈ sin t, "
+        "paper's Fig. 6 and its claim that Theorem 1 removes the need for excitation: once the loop tracks, x1 ≈ sin "
+        "t, "
         "x2 ≈ cos t and u = −((1+θ1)x1 + θ2x2 + θ4)/b all lie in span{sin t, cos t, 1}, so the 4-column regression has "
         "rank 3 up to transients and noise. Column-scaled condition numbers per batch: situation 1 (3 columns, noise "
         f"on) {_summary(c1)}; situation 2 (16), noise off (exact, from the raw batch) first {c_off[0]:.3g}, last "
@@ -150,7 +151,8 @@ def _identifiability(result, s1, s2, horizons, gate) -> None:
         f"batch {_summary(c_on)}. "
         f"The well-posed identification therefore converges to the trajectory-equivalent Θ_eq = {eq.round(3).tolist()} "
         f"(θ3·u folded into x1, x2, 1), reached: {np.round(th_fin, 3).tolist()} (mean of {len(iw_on)} noise runs), not "
-        f"to the true {np.round(true_end, 6).tolist()}; {passes[PAPER.cond_threshold]} of {gate['total']} situation-2 batches "
+        f"to the true {np.round(true_end, 6).tolist()}; {passes[PAPER.cond_threshold]} of {gate['total']} situation-2 "
+        f"batches "
         f"passed the identifiability gate (cond <= {PAPER.cond_threshold:g}"
         + (": one per run, the start-up batch" if passes[PAPER.cond_threshold] == len(iw_on) + 1
            and np.all(s2.full_solved[iw_on] == 1) else "")
@@ -200,7 +202,8 @@ def _x3_reference(result, s2) -> None:
     K = len(s2.t)
     result.finding(
         "table3-x3-reference",
-        f"Table 3's x3 errors are explained by a reference that omits the (b − b0)u = 0.95u part of the extended state: "
+        f"Table 3's x3 errors are explained by a reference that omits the (b − b0)u = 0.95u part of the extended "
+        f"state: "
         f"ESO (noise off) {_fmt(b_.value)} against 1.3x1 − 1.6x2 + θ4 versus paper {a.paper}, but {_fmt(a.value)} "
         f"against the true extended state d + (b − b0)u; MESO {_fmt(bm.value)} vs {_fmt(am.value)} (paper {am.paper}). "
         f"The large, nearly equal x3 errors of both observers in Table 3 are therefore the omitted 0.95|u|, not "
@@ -339,6 +342,7 @@ def missing(result: StudyResult) -> list:
     out = []
     out.append("Fig. 6 (not a cell): convergence of θ3 to 0.95 in situation 2 — not identifiable in closed loop "
                "(situation2-not-identifiable)")
-    out.append("Table 1's literal accumulation with W(s) (not a cell): does not converge in situation 1 and diverges in "
+    out.append("Table 1's literal accumulation with W(s) (not a cell): does not converge in situation 1 and diverges "
+               "in "
                "situation 2; the tables use the well-posed variant (table1-accumulation-diverges)")
     return out

@@ -219,7 +219,8 @@ def _simulate_rows(sit, rows, T, paper, window, keep, exact, bound, progress) ->
     out.exact_cond = {b: [] for b in exact}
     out.exact_rank = {b: [] for b in exact}
     # per-run initial states of plant and observer (Row.x0, Row.xhat0); the other blocks start at their defaults
-    x0 = {"plant": np.array([r.x0 for r in rows], dtype=float), "observer": np.array([r.xhat0 for r in rows], dtype=float)}
+    x0 = {"plant": np.array([r.x0 for r in rows], dtype=float),
+          "observer": np.array([r.xhat0 for r in rows], dtype=float)}
     k0, x3_last, tb, thb, lc, rk = 0, np.full(B, np.nan), [], [], [], []
     b_plant = np.array([r.b_plant for r in rows], dtype=float)
     while k0 < K:

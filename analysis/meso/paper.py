@@ -69,18 +69,22 @@ class Paper:
     control_sampling: str = reconstructed(
         "u_k from the estimates at t_k, held (ZOH)",
         "(30) is continuous; u must be sampled to use the previous sample inside XᵀΘ as eq. (12) requires",
-        plausible=fixed("a sampled law is forced by eq. (12) (the previous sample inside XᵀΘ); a law re-evaluated at every RK4 stage would differ by O(h ω_c) = 3 % of a step's change, far below the MESO/ESO gaps the claims rest on"))
+        plausible=fixed("a sampled law is forced by eq. (12) (the previous sample inside XᵀΘ); a law re-evaluated at "
+                        "every RK4 stage would differ by O(h ω_c) = 3 % of a step's change, far below the MESO/ESO "
+                        "gaps the claims rest on"))
     eq12_previous_sample: str = reconstructed(
         "controller: Θ_used(t_k)ᵀ [x̂1(t_{k-1}), x̂2(t_{k-1}), u_{k-1}, 1]; observer: Θ_used(t_k)ᵀ [x̂1(t), "
         "x̂2(t), u_k, 1]",
         "X contains u itself; eq. (12) breaks the algebraic loop with the previous sample in the control "
         "law; inside the observer the held u_k is already known, so no delay is needed there",
-        plausible=fixed("eq. (12) prescribes the previous sample in the control law; inside the observer the held u_k is known exactly, so there is no other reading that keeps the loop causal"))
+        plausible=fixed("eq. (12) prescribes the previous sample in the control law; inside the observer the held u_k "
+                        "is known exactly, so there is no other reading that keeps the loop causal"))
     kbar_reference_index: str = reconstructed(
         "K̄_j = b0 u_j + Σ_l k_l x̂_jl (ξ at t_j, the smoothed Θ actually used in u_j)",
         "eq. (12)/(14) write x*_{j+1} and Σ_m Θ_m (unsmoothed); with W(s) in the loop the identity "
         "b0 u_j = K̄_j − Σ k_l x̂_jl only holds with the Θ used in u_j and ξ at t_j",
-        plausible=fixed("the only indexing for which b0 u_j = K̄_j − Σ k_l x̂_jl holds exactly; any other makes the regression (16) inconsistent by construction, not a plausible reading"))
+        plausible=fixed("the only indexing for which b0 u_j = K̄_j − Σ k_l x̂_jl holds exactly; any other makes the "
+                        "regression (16) inconsistent by construction, not a plausible reading"))
     lowpass_discretisation: str = reconstructed(
         "exact ZOH of W(s), input = latest LSM result, held",
         "the LSM result changes only at batch ends, so the exact discretisation equals the continuous filter",
@@ -88,7 +92,8 @@ class Paper:
     disturbance_step: str = reconstructed(
         "θ4 = 1.8 from the sample at t = 30 s on",
         "(31)/(32) switch at t = 30 s; 30 s is a sample instant and a batch boundary in both situations",
-        plausible=fixed("30 s is a sample instant of the 3-ms grid and a batch boundary; there is no other reading of (31)/(32)"))
+        plausible=fixed("30 s is a sample instant of the 3-ms grid and a batch boundary; there is no other reading of "
+                        "(31)/(32)"))
     situation2_plant: str = reconstructed(
         "b - b0",
         "situation 2's plant is x2' = 1.3 x1 − 1.6 x2 (+1.8) + 3.95 u with b0 = 3, i.e. the printed 0.95 u is the "

@@ -516,7 +516,8 @@ def _larger_eps(result, s1, readings) -> None:
     ratio = noise_std(PAPER, e) / noise_std(PAPER, PAPER.epsilon)
     result.quantity("s1.meso_eps_larger.noise_std_ratio", f"steady noise std of e1, e2, e3 at ε = {e:g} relative to "
                     f"ε = {PAPER.epsilon:g}", ratio, unit="",
-                    note="linear error dynamics driven by the measurement noise (control.dlyap), the same for ESO and MESO")
+                    note="linear error dynamics driven by the measurement noise (control.dlyap), the same for ESO and "
+                    "MESO")
 
 
 def gate_passes(sim: SituationRun, thresholds) -> tuple:
@@ -550,9 +551,11 @@ def _gate_quantities(result, s2) -> dict:
     """Sensitivity of situation 2's identifiability gate: batches passing per threshold, reruns at other thresholds."""
     grid = GATE_GRID
     passes, total, cond = gate_passes(s2, grid)
-    result.quantity("s2.gate_passes", f"situation 2: batches passing the identifiability gate for thresholds {list(grid)} "
+    result.quantity("s2.gate_passes",
+                    f"situation 2: batches passing the identifiability gate for thresholds {list(grid)} "
                     f"(of {total})", passes, unit="batches",
-                    note=f"the study's threshold is {PAPER.cond_threshold:g}; well-posed runs, noise on and off; column-scaled cond of "
+                    note=f"the study's threshold is {PAPER.cond_threshold:g}; well-posed runs, noise on and off; "
+                    f"column-scaled cond of "
                          f"(16); lowest cond seen {np.min(cond):.4g}")
     base = pick(s2.rows, "meso", "wellposed", False)[0]
     out = {"grid": grid, "passes": passes, "total": total, "cond": cond, "reruns": {}}

@@ -131,7 +131,8 @@ BOX_METRICS = {"main": {"nofilter": _PAIRED, "filter": _PAIRED + ("settled_share
 def evaluate(params: dict, seeds=(0,)) -> StudyResult:
     """The §4 gain cells and every claim at ``params = {"verify": Verify, "loop": ClosedLoop}`` (the box's evaluation).
 
-    :func:`evaluate_many` of one point: the main run's recording functions (:func:`.verify_quantities.record_gain_cells`,
+    :func:`evaluate_many` of one point: the main run's recording functions
+    (:func:`.verify_quantities.record_gain_cells`,
     :func:`.regimes.record_regime`, :func:`.claims.record_claims`) on ``seeds``.
     """
     return evaluate_many([params], seeds)[0]
@@ -192,7 +193,8 @@ def _missing_gain(result: StudyResult) -> str:
     """The "Not reproduced" item of the differing §4 cell, from the recorded gains."""
     q, a, b = (result.get(i) for i in ("ss.gain_continuous", "ss.gain_alpha", "ss.gain_beta"))
     return (f"§4's gain K = {q.paper} is not reproduced ({q.verdict}): the continuous steady-state gain of the stated "
-            f"problem (Q = 100, R = 50) is [{q.value[0]:.4g}, {q.value[1]:.4g}], and the closest of the interpretations "
+            f"problem (Q = 100, R = 50) is [{q.value[0]:.4g}, {q.value[1]:.4g}], and the closest of the "
+            f"interpretations "
             f"tried (discrete α-β over sampling periods, filter/predictor form, both a21, Q and R swapped) gives "
             f"({a.value:.3g}, {b.value:.3g}), outside the {q.tolerance:.0%} tolerance (finding gain-not-reproducible)")
 
@@ -219,7 +221,8 @@ def _verify_figures(ctx, result, v) -> None:
                     caption="Beyond the paper (§4 gives no frequency response): Bode plots of what the correct "
                             "steady-state filter passes from the measured angle to the estimated angle and rate "
                             "(u held at 0), with the pendulum's unstable pole √a21 dotted, to show the filter's "
-                            "bandwidth against it. The low-frequency gain of φ̂/y is k2/(k2 − a21) (2.0 and 1.9 here, about 6 dB), not 1, "
+                            "bandwidth against it. The low-frequency gain of φ̂/y is k2/(k2 − a21) (2.0 and 1.9 here, "
+                            "about 6 dB), not 1, "
                             "because a constant angle with u = 0 is not a motion of the pendulum; in the loop the "
                             "filter also takes u.")
 
@@ -228,8 +231,10 @@ def _per_run_figure(ctx, result, d, main_lab: str, lit_lab: str) -> None:
     """The distributions the per-run claims are judged on: each run's change against no filter, paper's K and the
     corrected gain."""
     p = d.p
-    names = {"overshoot": "step overshoot\n(overshoot claims)", "angle_rms": "oscillation: RMS of φ − r\n(oscillation claims)",
-             "accel_rms": "control effort: RMS of u\n(fast-smooth: 'smoothly')", "chatter": "chatter: RMS of Δu\n(fast-smooth: 'smoothly')",
+    names = {"overshoot": "step overshoot\n(overshoot claims)",
+             "angle_rms": "oscillation: RMS of φ − r\n(oscillation claims)",
+             "accel_rms": "control effort: RMS of u\n(fast-smooth: 'smoothly')",
+             "chatter": "chatter: RMS of Δu\n(fast-smooth: 'smoothly')",
              "settling_time": "settling time\n(fast-smooth: 'quickly')"}
     changes = {}
     # the literal regime's claims are overshoot and oscillation only
@@ -237,7 +242,8 @@ def _per_run_figure(ctx, result, d, main_lab: str, lit_lab: str) -> None:
         ms = {c: regimes.case_metrics(cases[c], q, keys) for c in ("nofilter", "filter", "kf_ss")}
         changes[lab] = {names[k]: {lbl: regimes.paired_changes(ms["nofilter"][k], ms[c][k],
                                                                     q.t_end if k == "settling_time" else None)[0]
-                                   for c, lbl in (("filter", "paper's K (α-β)"), ("kf_ss", "corrected: steady-state gain"))}
+                                   for c,
+                                   lbl in (("filter", "paper's K (α-β)"), ("kf_ss", "corrected: steady-state gain"))}
                         for k in keys}
     thresholds = {names["overshoot"]: (-p.clear_margin, f"−{p.clear_margin:.0%} ('clearly')"),
                   names["angle_rms"]: (-p.clear_margin, f"−{p.clear_margin:.0%} ('clearly')"),
@@ -248,7 +254,8 @@ def _per_run_figure(ctx, result, d, main_lab: str, lit_lab: str) -> None:
                     caption="What the §5 and abstract claims are judged on, run by run (the paper reads them off a "
                             "single run): each Monte Carlo run's change of a measure with the filter against no filter "
                             "on the same noise, in % of the no-filter median, with the paper's K (the printed reading) "
-                            "and with the corrected steady-state gain, and the change each claim asks for at the chosen "
+                            "and with the corrected steady-state gain, and the change each claim asks for at the "
+                            "chosen "
                             "reading of 'clearly' and 'eliminates the jitter' (dashed). A claim holds where the median "
                             "run passes that line and the 95 % interval of the median excludes zero.")
 
@@ -259,17 +266,20 @@ def _loop_figures(ctx, result, d) -> None:
     ctx.save_figure(result, figures.plot_control_surface(table.E, table.EC, table.U, p.Ku, p.Ke, p.Kec),
                     "sec3_fuzzy_control_surface.png",
                     caption="The §3.2 fuzzy controller as built: control surface u(e, ec) on the quantised universes "
-                            "and slices at fixed ec, with the paper's scaling gains Ke, Kec, Ku; the membership functions "
+                            "and slices at fixed ec, with the paper's scaling gains Ke, Kec, Ku; the membership "
+                            "functions "
                             "and the rule table are not printed and are reconstructed (seven triangular terms, "
                             "U = sat(E + EC, ±3)).")
     main_lab, lit_lab = regimes.regime_label(p, False), regimes.regime_label(d.lit, True)
-    ctx.save_figure(result, figures.plot_fig3_states({f"paper's K as a discrete α-β filter\n{main_lab}": m["filter"].noisy,
+    ctx.save_figure(result,
+                    figures.plot_fig3_states({f"paper's K as a discrete α-β filter\n{main_lab}": m["filter"].noisy,
                                                       f"correct steady-state gain (beyond the paper)\n{main_lab}": m["kf_ss"].noisy,
                                                       f"paper's K as a discrete α-β filter\n{lit_lab}": lit["filter"].noisy}),
                     "fig3_states_filtering.png",
                     caption="Redraws the paper's Fig. 3: angle and rate before filtering (measured y and its backward "
                             "difference, grey dots) and after (the filter estimate, blue line) with the true states "
-                            "(dashed), one run after the 0.1 rad step; below each, the error before and the error after "
+                            "(dashed), one run after the 0.1 rad step; below each, the error before and the error "
+                            "after "
                             "in separate panels on the same scale, so that neither hides the other. With the paper's K "
                             "(α = 0.950) the angle estimate nearly repeats the measurement; the correct steady-state "
                             "gain removes most of the noise.")
@@ -277,15 +287,18 @@ def _loop_figures(ctx, result, d) -> None:
                           "correct steady-state gain (beyond)": cases["kf_ss"]}
     ctx.save_figure(result, figures.plot_fig4_output({main_lab: cols(m), lit_lab: cols(lit)}, p.step),
                     "fig4_output_filtering.png",
-                    caption="Redraws the paper's Fig. 4: the angle φ(t) after the 0.1 rad step without a filter and with "
-                            "the two filters, in the main regime (top) and the literal regime (bottom): run 0, the mean "
+                    caption="Redraws the paper's Fig. 4: the angle φ(t) after the 0.1 rad step without a filter and "
+                    "with "
+                            "the two filters, in the main regime (top) and the literal regime (bottom): run 0, the "
+                            "mean "
                             "± 1 std band over the Monte Carlo runs and the noise-free response (dashed). The paper "
                             "reads its claims off one such run, so the study judges them per run "
                             "(fig4_per_run_changes.png); the mean response averages the noise excursions away.")
     _per_run_figure(ctx, result, d, main_lab, lit_lab)
     stats = {main_lab: {n: regimes.case_stats(result, n, False) for n in m},
              lit_lab: {n: regimes.case_stats(result, n, True) for n in lit}}
-    short = {"nofilter": "no filter", "filter": "paper's K (α-β)", "kf": "time-varying KF", "kf_ss": "correct steady gain",
+    short = {"nofilter": "no filter", "filter": "paper's K (α-β)", "kf": "time-varying KF",
+             "kf_ss": "correct steady gain",
              "kf_ss_qr": "steady gain of Q/R = 2", "paper_continuous": "paper's continuous filter",
              "nonlinear.nofilter": "sin φ, no filter", "nonlinear.filter": "sin φ, paper's K"}
     ctx.save_figure(result, figures.plot_saturation(stats, short), "beyond_saturation.png",
@@ -294,16 +307,20 @@ def _loop_figures(ctx, result, d) -> None:
                             "the literal regime, and the steady cart-acceleration RMS (holding φ = r needs ≈ 1 m/s²).")
     ctx.save_figure(result, figures.plot_qr_sweep(d.qr, p.qr_paper ** 0.5, p.sigma_w / p.sigma_v, p.K_printed[0]),
                     "beyond_qr_sweep.png",
-                    caption="Beyond the paper: σ_w varied independently of σ_v (main σ_v and T): the steady error of the "
+                    caption="Beyond the paper: σ_w varied independently of σ_v (main σ_v and T): the steady error of "
+                    "the "
                             "angle the controller receives and the closed-loop angle error without filter, with the "
-                            "paper's K and with the steady-state gain optimal for each ratio, and the optimal α against "
+                            "paper's K and with the steady-state gain optimal for each ratio, and the optimal α "
+                            "against "
                             "the paper's 0.950. The paper's Q/R (√2) and the main regime's ratio are marked.")
     est = {"paper's K, discrete α-β": m["filter"].noisy, "time-varying KF": m["kf"].noisy,
-           "correct steady-state gain": m["kf_ss"].noisy, "paper's continuous filter as printed": m["paper_continuous"].noisy}
+           "correct steady-state gain": m["kf_ss"].noisy,
+           "paper's continuous filter as printed": m["paper_continuous"].noisy}
     ctx.save_figure(result, figures.plot_beyond(est, d.angles, {"linear model": d.recovered[False],
                                                                 "sin φ model": d.recovered[True]}, p.T),
                     "beyond_filters_and_recovery.png",
                     caption="Beyond the paper (main regime): the angle estimation error of each filter in the loop "
-                            "(paper's K as α-β, time-varying KF, correct steady-state gain, the paper's continuous filter "
+                            "(paper's K as α-β, time-varying KF, correct steady-state gain, the paper's continuous "
+                            "filter "
                             "as printed), and the largest initial angle the loop recovers from with the linear and the "
                             "sin φ model.")

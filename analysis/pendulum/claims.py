@@ -150,12 +150,16 @@ def _fast_smooth(result: StudyResult, p) -> None:
     smooth = [(None if not x.n else x.median <= -p.smooth_margin, x) for x in (se, sc)]
     _claim(result, C.C_SETTLES, _judge_all([(quick, None)] + smooth),
            [cid("settling_time"), cid("accel_rms"), cid("chatter"), qid("filter", "settled_share"),
-            qid("nofilter", "accel_rms"), qid("filter", "accel_rms"), qid("nofilter", "chatter"), qid("filter", "chatter")],
+            qid("nofilter", "accel_rms"), qid("filter", "accel_rms"), qid("nofilter", "chatter"),
+            qid("filter", "chatter")],
            f"with {gw} (main regime). Quickly: {share or 0:.0%} of the runs settle into the ±{p.settle_band:.0%} band "
            f"(at least {p.settled_share_min:.0%} required) and " + _describe(stt, "settling time")
            + f", required not clearly later (median change at most +{p.clear_margin:.0%}): "
-           + ("yes" if quick else "no") + ". Smoothly ('eliminates the jitter'): " + _describe(se, "control effort (RMS of u)")
-           + "; " + _describe(sc, "chatter (RMS of Δu)") + f"; required a median change of at most −{p.smooth_margin:.0%} "
+           + ("yes" if quick else "no") + ". Smoothly ('eliminates the jitter'): " + _describe(se,
+                                                                                               "control effort (RMS "
+                                                                                               "of u)")
+           + "; " + _describe(sc,
+                              "chatter (RMS of Δu)") + f"; required a median change of at most −{p.smooth_margin:.0%} "
            f"for both; RMS of u {_val(result, qid('filter', 'accel_rms'))} vs {_val(result, qid('nofilter', 'accel_rms'))} "
            "(finding control-chatter: what holding φ = r needs).")
 
@@ -165,7 +169,8 @@ def _other_claims(result: StudyResult, p) -> None:
     C = _paper
     gw = _gain_word(p)
     for claim, lit in ((C.C_STABILISES, False), (C.C_STABILISES_LIT, True)):
-        ev = [qid("filter", "angle_rms", lit), qid("filter", "settling_time_noise_free", lit), qid("filter", "settling_time", lit)]
+        ev = [qid("filter", "angle_rms", lit), qid("filter", "settling_time_noise_free", lit),
+              qid("filter", "settling_time", lit)]
         q0, q1, q2 = (result.get(e) for e in ev)
         result.claim(claim, not q0.runs_diverged and q1.value is not None, evidence=ev,
                      note=f"with {gw}: {q0.runs_diverged} of {q0.runs} runs diverged; the noise-free step settles at "
@@ -178,12 +183,14 @@ def _other_claims(result: StudyResult, p) -> None:
                  note="the continuous steady-state gain of Q = 100, R = 50 is "
                       + f"{np.round(result.get(cells[0]).value, 3).tolist()} and the closest of the interpretations "
                       f"tried is ({result.get(cells[1]).value:.3f}, {result.get(cells[2]).value:.3f}); verdicts "
-                      + ", ".join(f"{c}: {x}" for c, x in v.items()) + " (band: half a unit of the third printed decimal)")
+                      + ", ".join(f"{c}: {x}" for c,
+                                  x in v.items()) + " (band: half a unit of the third printed decimal)")
     a, b = qid("kf_ss", "angle_rms"), qid("filter", "angle_rms")
     qa, qb = result.get(a), result.get(b)
     near = None if qa.value is None or qb.value is None else bool(qb.value <= (1 + p.near_margin) * qa.value)
     result.claim(C.C_NEAR_OPTIMAL, near, evidence=[e for e in (b, a, qid("kf", "angle_rms")) if _has(result, e)],
-                 note=f"steady angle RMS {_val(result, b)} with {gw} vs {_val(result, a)} with the optimal filter in its "
+                 note=f"steady angle RMS {_val(result, b)} with {gw} vs {_val(result, a)} with the optimal filter in "
+                 f"its "
                       f"steady state (the steady-state Kalman gain; within {p.near_margin:.0%} required)"
                       + (f"; the time-varying Kalman filter gives {_val(result, qid('kf', 'angle_rms'))} in the same "
                          "window (its gain has converged)" if _has(result, qid("kf", "angle_rms")) else "")

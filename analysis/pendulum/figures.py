@@ -33,7 +33,8 @@ def _drop_log_minor_ticks(fig) -> None:
 def plot_riccati_convergence(t, trajectories: dict, P_bar, a21: float, Q: float, R: float):
     """Entries of P(t) from several P(0), with P̄ dashed, and the relative distance to P̄."""
     fig, axes = new_figure(2, 2, size=(10.0, 7.0),
-                           title=f"§2/§4 Riccati ODE Ṗ = AP + PAᵀ − PCᵀR⁻¹CP + ΓQΓᵀ: P(t) from four P(0), and the ARE solution P̄; "
+                           title=f"§2/§4 Riccati ODE Ṗ = AP + PAᵀ − PCᵀR⁻¹CP + ΓQΓᵀ: P(t) from four P(0), and the ARE "
+                           f"solution P̄; "
                                  f"a21 = {a21:.4g} s⁻², Q = {Q:g}, R = {R:g}")
     entries = [((0, 0), "p11 = var φ̃  (rad²)"), ((0, 1), "p12 = cov(φ̃, φ̃')  (rad²/s)"),
                ((1, 1), "p22 = var φ̃'  (rad²/s²)")]
@@ -68,8 +69,10 @@ def plot_filter_bode(filters: dict, omega, plant_poles=None):
     import control as ct
 
     fig, axes = new_figure(2, 2, size=(10.0, 6.5), sharex=True,
-                           title="Beyond the paper (§4 gives no frequency response): what the correct steady-state filter passes\n"
-                                 "Bode of the Kalman–Bucy filter x̂' = (A − KC) x̂ + K y (u = 0), y → x̂, K computed here")
+                           title="Beyond the paper (§4 gives no frequency response): what the correct steady-state "
+                           "filter passes\n"
+                                 "Bode of the Kalman–Bucy filter x̂' = (A − KC) x̂ + K y (u = 0), y → x̂, K computed "
+                                 "here")
     for k, (name, sys) in enumerate(filters.items()):
         resp = ct.frequency_response(sys, omega, squeeze=False)
         for out, (unit, col) in enumerate((("φ̂/y (–)", 0), ("φ̂'/y (1/s)", 1))):
@@ -85,7 +88,8 @@ def plot_filter_bode(filters: dict, omega, plant_poles=None):
         for k, w in enumerate(plant_poles):
             for ax in axes.ravel():
                 ax.axvline(w, color=f"C{k}", ls=":", lw=1.0,
-                           label=f"pendulum pole √a21 = {w:.3g} rad/s" if ax is axes[0, 0] or ax is axes[0, 1] else None)
+                           label=f"pendulum pole √a21 = {w:.3g} rad/s" if ax is axes[0, 0] or ax is axes[0,
+                                                                                                         1] else None)
     for ax in axes[0]:
         ax.legend(fontsize=7, loc="lower left")
     _drop_log_minor_ticks(fig)
@@ -111,7 +115,8 @@ def plot_gain_interpretations(rows: list, K_paper, closest, a21_printed: float):
         (axes[2], lambda g: g.kind == "discrete" and g.beta_rule == "beta = T k2",
          "(c) discrete, dimensionless α and β = T·k2 (Kalata)", "α = k1  (–)", "β = T·k2  (–)"),
     )
-    styles = {"continuous": ("s", "C0", "continuous filter ARE"), "printed ARE (literal)": ("D", "C1", "printed ARE literally"),
+    styles = {"continuous": ("s", "C0", "continuous filter ARE"),
+              "printed ARE (literal)": ("D", "C1", "printed ARE literally"),
               "filter": ("o", "C2", "filter form K"), "predictor": ("^", "C4", "predictor form L = FK")}
     for ax, sel, title, xlabel, ylabel in panels:
         sub = [g for g in rows if sel(g)]

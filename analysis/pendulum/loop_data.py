@@ -30,7 +30,8 @@ __all__ = ["LoopData", "compute_loops", "qr_sweep", "seeds_for"]
 
 def qr_sweep(p, a21: float, seeds) -> dict:
     """Beyond the paper: σ_w/σ_v swept at the main σ_v and T; per ratio, the steady angle-estimate error RMS and the
-    steady angle RMS of no filter, the paper's K and the steady-state gain optimal for that ratio, and its α; the share of
+    steady angle RMS of no filter, the paper's K and the steady-state gain optimal for that ratio, and its α; the share
+    of
     healthy (not diverged) runs each mean is taken over."""
     ratios = np.geomspace(p.qr_sweep[0], p.qr_sweep[1], int(p.qr_sweep[2]))
     names = ("nofilter", "filter", "kf_ss")

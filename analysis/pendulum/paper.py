@@ -86,7 +86,8 @@ class Verify:
     T_grid: tuple = reconstructed((0.001, 0.002, 0.005, 0.01, 0.02, 0.05, 0.1),
                                   "sampling periods tried when looking for an interpretation that reproduces K (s)",
                                   plausible=fixed("a search grid; the continuous sweep T_sweep covers every T between"))
-    T_sweep: tuple = reconstructed((1e-3, 0.5, 200), "range and resolution of the continuous sweep of T (s), evidence only",
+    T_sweep: tuple = reconstructed((1e-3, 0.5, 200),
+                                   "range and resolution of the continuous sweep of T (s), evidence only",
                                    plausible=fixed("a search grid reported as evidence; no cell or claim reads it"))
     riccati_t_end: float = 2.5
     riccati_n_t: int = 301

@@ -56,19 +56,25 @@ def _record_step_and_noise(result: StudyResult, p, lit, verify: VerifyData) -> N
         evidence={"printed": verify.P.step_deg_printed, "computed": deg}, kind="erratum")
     Q, R = verify.P.Q, verify.P.R
     P11 = float(verify.cont.P[0, 0])
-    result.quantity("noise.paper_R_angle_std", f"angle-noise std per sample implied by R = 50 (held over T = {p.T:g} s)",
-                    math.sqrt(R / p.T), unit="rad", note=f"√(R/T); read as a per-sample variance instead: √R = {math.sqrt(R):.3g} rad")
+    result.quantity("noise.paper_R_angle_std",
+                    f"angle-noise std per sample implied by R = 50 (held over T = {p.T:g} s)",
+                    math.sqrt(R / p.T), unit="rad",
+                    note=f"√(R/T); read as a per-sample variance instead: √R = {math.sqrt(R):.3g} rad")
     result.finding(
         "noise-plausibility",
         f"Q = {Q:g} and R = {R:g} are not plausible noise intensities for an angle in radians. As white-noise "
         f"intensities sampled at T = {p.T:g} s the angle measurement noise would have std √(R/T) = {math.sqrt(R / p.T):.3g} rad "
-        f"per sample and the angular-acceleration noise std √(Q/T) = {math.sqrt(Q / p.T):.3g} rad/s²; read as per-sample "
-        f"variances, √R = {math.sqrt(R):.3g} rad = {math.degrees(math.sqrt(R)):.0f}°; even the optimal filter's steady-state "
+        f"per sample and the angular-acceleration noise std √(Q/T) = {math.sqrt(Q / p.T):.3g} rad/s²; read as "
+        f"per-sample "
+        f"variances, √R = {math.sqrt(R):.3g} rad = {math.degrees(math.sqrt(R)):.0f}°; even the optimal filter's "
+        f"steady-state "
         f"angle error would have std √P̄11 = {math.sqrt(P11):.3g} rad. The study therefore simulates two named regimes "
-        f"with physical noise held over each sample: the main regime T = {p.T * 1e3:g} ms, σ_v = {p.sigma_v * 1e3:g} mrad, "
+        f"with physical noise held over each sample: the main regime T = {p.T * 1e3:g} ms, σ_v = {p.sigma_v * 1e3:g} "
+        f"mrad, "
         f"σ_w = {p.sigma_w:.3g} rad/s² chosen independently (σ_w/σ_v = {p.sigma_w / p.sigma_v:.3g} s⁻², so the paper's "
         f"Q/R = {Q / R:g} is not optimal by construction), and the literal regime of the previous report T = "
-        f"{lit.T * 1e3:g} ms, σ_v = {lit.sigma_v * 1e3:g} mrad, σ_w = √(Q/R)·σ_v = {lit.sigma_w:.3g} rad/s² (the paper's "
+        f"{lit.T * 1e3:g} ms, σ_v = {lit.sigma_v * 1e3:g} mrad, σ_w = √(Q/R)·σ_v = {lit.sigma_w:.3g} rad/s² (the "
+        f"paper's "
         "Q/R optimal by construction).",
         evidence={"sigma_v_paper_intensity": math.sqrt(R / p.T), "sigma_w_paper_intensity": math.sqrt(Q / p.T),
                   "P11_bar": P11, "main": {"T": p.T, "sigma_v": p.sigma_v, "sigma_w": p.sigma_w},
@@ -112,7 +118,8 @@ def _record_checks(result: StudyResult, d) -> None:
         + f". A steady-state RMS of u above {u_eq:.3g} m/s² is a limit cycle of the sampled loop (the rate "
         f"gain of the fuzzy surface is large for the period). The main regime uses T = {p.T:g} s, below the limit "
         f"cycle; the literal regime keeps T = {d.lit.T:g} s.",
-        evidence={"settled": {str(k): v for k, v in per.items()}, "u_rms_steady": {str(k): v for k, v in u_late.items()},
+        evidence={"settled": {str(k): v for k, v in per.items()},
+                  "u_rms_steady": {str(k): v for k, v in u_late.items()},
                   "phi_peak_to_peak": {str(k): v for k, v in amp.items()}, "u_equilibrium": u_eq})
     for literal, cases, q in ((False, d.main, p), (True, d.literal, d.lit)):
         quiet = cases["nofilter"].quiet
@@ -121,7 +128,8 @@ def _record_checks(result: StudyResult, d) -> None:
                         f"noise-free steady RMS of u over the |u| that holds φ = r at rest (1 = no limit cycle), "
                         f"{regime_label(q, literal)}", u_rms / u_eq, unit="",
                         note=f"RMS of u over t ≥ {p.t_ss:g} s = {u_rms:.3g} m/s², a21·r/b2 = {u_eq:.3g} m/s²")
-    result.quantity("fuzzy.lookup_max_error", f"largest |lookup − direct inference| over a 97×97 grid of e ∈ [−0.1, 0.1] rad, "
+    result.quantity("fuzzy.lookup_max_error",
+                    f"largest |lookup − direct inference| over a 97×97 grid of e ∈ [−0.1, 0.1] rad, "
                     f"ec ∈ [−1.5, 1.5] rad/s ({p.n_lookup}×{p.n_lookup} query table, bilinear)", d.lookup_error,
                     unit="m/s²", note=f"output range ±{p.Ku * p.output_range:g} m/s²")
 
@@ -152,7 +160,8 @@ def _record_regimes(result: StudyResult, d, stats) -> None:
             f"{regime_label(q, reg == 'literal')}: rate input ec saturated in "
             + ", ".join(f"{st[c]['sat_ec'][0]:.1%} ({c})" for c in st if c in ("nofilter", "filter", "kf_ss"))
             + " of the steady samples, angle input e in at most "
-            f"{max(st[c]['sat_e'][0] or 0 for c in ('nofilter', 'filter', 'kf_ss')):.1%}; backward-difference noise std √2·σ_v/T = "
+            f"{max(st[c]['sat_e'][0] or 0 for c in ('nofilter', 'filter', 'kf_ss')):.1%}; backward-difference noise "
+            f"std √2·σ_v/T = "
             f"{math.sqrt(2) * q.sigma_v / q.T:.3g} rad/s against the ±{q.input_range / q.Kec:g} rad/s full scale; "
             f"acceleration RMS {_fmt_stat(st['nofilter']['accel_rms'], 'm/s²')} without filter, "
             f"{_fmt_stat(st['filter']['accel_rms'], 'm/s²')} with the paper's K, "
@@ -179,7 +188,8 @@ def _record_overshoot_per_run(result: StudyResult, d, stats) -> None:
             f"{_fmt_stat(st['filter']['overshoot'], '%')} with the paper's K; over an equally long window without "
             f"a step {_fmt_stat(st['nofilter']['overshoot_noise_only'], '%')} and "
             f"{_fmt_stat(st['filter']['overshoot_noise_only'], '%')}; noise-free "
-            f"{_fmt_stat(st['nofilter']['overshoot_noise_free'], '%')} and {_fmt_stat(st['filter']['overshoot_noise_free'], '%')}; "
+            f"{_fmt_stat(st['nofilter']['overshoot_noise_free'], '%')} and "
+            f"{_fmt_stat(st['filter']['overshoot_noise_free'], '%')}; "
             f"the mean response over the runs {_fmt_stat(st['nofilter']['overshoot_mean_response'], '%')} and "
             f"{_fmt_stat(st['filter']['overshoot_mean_response'], '%')} against its own noise floor "
             f"{_fmt_stat(st['nofilter']['overshoot_mean_response_floor'], '%')} and "
@@ -236,12 +246,14 @@ def _record_offset(result: StudyResult, d, stats) -> None:
     st = stats["main"]
     result.finding(
         "steady-offset",
-        f"The reconstructed fuzzy loop settles noise-free at φ = r + {off:.3g} rad ({100 * off / d.p.step:.2g} % of the "
+        f"The reconstructed fuzzy loop settles noise-free at φ = r + {off:.3g} rad ({100 * off / d.p.step:.2g} % of "
+        f"the "
         "step), approaching it without a peak, so a peak measured against r would count this offset as overshoot. "
         f"Holding the pendulum at φ = r needs u = −a21·r/b2 = {-d.a21 * d.p.step / d.p.b2:.3g} m/s², which the PD-like "
         "surface only produces with a nonzero error. The study measures the overshoot against each response's own "
         f"final value (noise-free overshoot {_fmt_stat(st['nofilter']['overshoot_noise_free'], '%')} without filter, "
-        f"{_fmt_stat(st['filter']['overshoot_noise_free'], '%')} with the paper's K); the mean steady offset under noise "
+        f"{_fmt_stat(st['filter']['overshoot_noise_free'], '%')} with the paper's K); the mean steady offset under "
+        f"noise "
         f"is {_fmt_stat(st['nofilter']['steady_offset'], 'rad')} without filter and "
         f"{_fmt_stat(st['filter']['steady_offset'], 'rad')} with the paper's K (main regime).",
         evidence={"noise_free_offset": off, "u_hold": -d.a21 * d.p.step / d.p.b2})
@@ -255,15 +267,18 @@ def _record_qr_sweep(result: StudyResult, d) -> None:
     best = r[near]
     alpha = np.asarray(qr["alpha_opt"])
     k = np.flatnonzero(np.diff(np.sign(alpha - p.K_printed[0])))
-    r_alpha = float(np.exp(np.interp(p.K_printed[0], alpha[k[0]:k[0] + 2], np.log(r[k[0]:k[0] + 2])))) if k.size else None
+    r_alpha = float(np.exp(np.interp(p.K_printed[0], alpha[k[0]:k[0] + 2],
+                                     np.log(r[k[0]:k[0] + 2])))) if k.size else None
     result.quantity("beyond.qr_sweep.paper_K_near_optimal_ratios",
-                    f"σ_w/σ_v ratios (s⁻²) at which the paper's K estimates the angle within {p.near_margin:.0%} of the "
+                    f"σ_w/σ_v ratios (s⁻²) at which the paper's K estimates the angle within {p.near_margin:.0%} of "
+                    f"the "
                     f"optimal steady-state gain (swept {r[0]:.3g}-{r[-1]:.3g}, main σ_v and T)",
                     [float(best.min()), float(best.max())] if best.size else None, unit="1/s²",
                     note=f"{best.size} of {r.size} ratios; the paper's Q/R = {p.qr_paper:g} is σ_w/σ_v = "
                          f"{math.sqrt(p.qr_paper):.3g}, the main regime's {p.sigma_w / p.sigma_v:.3g}")
     result.quantity("beyond.qr_sweep.ratio_alpha_paper",
-                    f"σ_w/σ_v (s⁻²) at which the optimal steady-state α equals the paper's {p.K_printed[0]} (T = {p.T:g} s)",
+                    f"σ_w/σ_v (s⁻²) at which the optimal steady-state α equals the paper's {p.K_printed[0]} (T = "
+                    f"{p.T:g} s)",
                     r_alpha, unit="1/s²", note="log-interpolated on the sweep grid; None if outside it")
     at = {name: float(np.interp(np.log(p.sigma_w / p.sigma_v), np.log(r), v)) for name, v in est.items()}
     result.finding(
@@ -274,7 +289,8 @@ def _record_qr_sweep(result: StudyResult, d) -> None:
         + (f"for ratios {best.min():.3g}-{best.max():.3g} s⁻²" if best.size else "at none of the ratios")
         + (f", and the optimal α reaches {p.K_printed[0]} at σ_w/σ_v ≈ {r_alpha:.3g} s⁻²" if r_alpha else "")
         + f". At the paper's Q/R (σ_w/σ_v = {math.sqrt(p.qr_paper):.3g}) the optimal α is {alpha[0]:.3g}; at the main "
-        f"regime's ratio the angle-estimate error RMS is {at['filter']:.3g} rad with the paper's K, {at['kf_ss']:.3g} rad "
+        f"regime's ratio the angle-estimate error RMS is {at['filter']:.3g} rad with the paper's K, {at['kf_ss']:.3g} "
+        f"rad "
         f"with the optimal gain and {at['nofilter']:.3g} rad without filter.",
         evidence={"ratios": r, "alpha_opt": alpha, "est": est, "angle": qr["angle"]})
 
@@ -285,7 +301,8 @@ def _record_beyond(result: StudyResult, d, stats) -> None:
     result.quantity("beyond.kf_ss.gain", f"steady-state (α, β = T·k2) of the simulated noise at T = {p.T:g} s, used in "
                     "the kf_ss case (main regime)", [a, b], unit="",
                     note=f"discrete DARE of the exact sampled model (held noise, σ_w/σ_v = {p.sigma_w / p.sigma_v:.3g} s⁻²); "
-                         f"as a gain K = [α, β/T] = [{a:.4g}, {b / p.T:.4g}] (–, 1/s), against the paper's [0.950, 0.863]")
+                         f"as a gain K = [α, β/T] = [{a:.4g}, {b / p.T:.4g}] (–, 1/s), against the paper's [0.950, "
+                         f"0.863]")
     a, b = d.kf_ss_qr_gain
     result.quantity("beyond.kf_ss_qr.gain", f"steady-state (α, β = T·k2) of the paper's Q/R = {p.qr_paper:g} at "
                     f"T = {p.T:g} s, used in the kf_ss_qr case", [a, b], unit="",
@@ -299,7 +316,8 @@ def _record_beyond(result: StudyResult, d, stats) -> None:
         + (f" (first at t = {first * p.T:.3g} s)" if first is not None else "")
         + ": its estimation error grows with the unstable filter pole whatever the controller does. The time-varying "
         f"Kalman filter and the correct steady-state gain give angle RMS {_fmt_stat(stats['kf']['angle_rms'], 'rad')} "
-        f"and {_fmt_stat(stats['kf_ss']['angle_rms'], 'rad')}, overshoot {_fmt_stat(stats['kf']['overshoot'], '%')} and "
+        f"and {_fmt_stat(stats['kf_ss']['angle_rms'], 'rad')}, overshoot {_fmt_stat(stats['kf']['overshoot'], '%')} "
+        f"and "
         f"{_fmt_stat(stats['kf_ss']['overshoot'], '%')}: after its transient the time-varying filter's gain is the "
         "steady-state one.",
         evidence={"diverged_runs": int(pc.diverged.sum()), "first_step": first})

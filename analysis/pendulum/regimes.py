@@ -31,7 +31,8 @@ METRICS = {
     "overshoot_mean_response_floor": (("noise floor of the mean-response overshoot: the same peak statistic of the "
                                        "run-averaged φ over an equally long steady window from t_ss (no step "
                                        "there)"), "%"),
-    "overshoot_noise_free": ("step overshoot of the noise-free response (peak for t < t_tr above its final value)", "%"),
+    "overshoot_noise_free": ("step overshoot of the noise-free response (peak for t < t_tr above its final value)",
+                             "%"),
     "steady_offset": ("steady-state offset: mean of φ − r over the steady-state window", "rad"),
     "settling_time": ("settling time of φ into the band, per run (runs that settle and stay)", "s"),
     "settled_share": ("fraction of the runs that settle into the band and stay there", ""),

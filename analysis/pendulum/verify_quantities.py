@@ -134,7 +134,8 @@ def _record_continuous(result: StudyResult, d: VerifyData) -> None:
         "PA + AᵀP − PCᵀR⁻¹CP + ΓQΓᵀ = 0 with A and Aᵀ exchanged; the filter equation of §1 is "
         "AP + PAᵀ − PCᵀR⁻¹CP + ΓQΓᵀ = 0. The filter solution P̄ leaves a residual of "
         f"{np.max(np.abs(printed_res)):.4g} in the printed equation; the printed equation's stabilising "
-        f"solution (the one that makes Aᵀ − KC Hurwitz) gives K = {fmt_vec(lit.K)} and filter poles eig(A − KC) = {fmt_vec(np.sort(lit_poles.real))} "
+        f"solution (the one that makes Aᵀ − KC Hurwitz) gives K = {fmt_vec(lit.K)} and filter poles eig(A − KC) = "
+        f"{fmt_vec(np.sort(lit_poles.real))} "
         "(unstable). Neither is the printed K.",
         evidence={"P_literal": lit.P, "K_literal": lit.K.ravel(), "poles_A_minus_KC": np.sort(lit_poles.real),
                   "residual_of_P_bar_in_printed_equation": printed_res},
@@ -210,11 +211,13 @@ def _record_interpretations(result: StudyResult, d: VerifyData) -> None:
         "gain-not-reproducible",
         f"K = [0.950, 0.863]ᵀ is not reproduced by any of {len(rows)} interpretations. Closest: {closest.name} "
         f"→ (α, β) = ({closest.alpha:.4f}, {closest.beta:.4f}), max relative error {closest.error:.1%} "
-        f"(band: half a unit of the third printed decimal, {min(gain_tolerances(P)):.2%}). Sweeping T over [{P.T_sweep[0]:g}, {P.T_sweep[1]:g}] s ({P.T_sweep[2]} log-spaced values) the best "
+        f"(band: half a unit of the third printed decimal, {min(gain_tolerances(P)):.2%}). Sweeping T over "
+        f"[{P.T_sweep[0]:g}, {P.T_sweep[1]:g}] s ({P.T_sweep[2]} log-spaced values) the best "
         f"is {sweep_best.error:.1%} at T = {sweep_best.T:.3g} s ({sweep_best.name}), a sampling period far too "
         f"long for a pendulum with a pole at {math.sqrt(a21):.2f} rad/s. Continuous gains: "
         + "; ".join(f"{g.name} → ({g.alpha:.4g}, {g.beta:.4g})" for g in non_discrete)
-        + " (Q and R swapped: see evidence). As a classical α-β pair it is not a steady-state (Kalata) pair either: for α = 0.950 the "
+        + " (Q and R swapped: see evidence). As a classical α-β pair it is not a steady-state (Kalata) pair either: "
+        "for α = 0.950 the "
         f"steady-state β would be {kal_beta:.3f}; the implied tracking index β/√(1−α) = {lam_implied:.3f} gives "
         f"(α, β) = ({kalata_gains(lam_implied)[0]:.3f}, {kalata_gains(lam_implied)[1]:.3f}). Closest rows:\n\n"
         + "\n".join(table),
@@ -244,7 +247,8 @@ def _record_printed_filter(result: StudyResult, d: VerifyData) -> None:
         "Read instead as a discrete α-β filter (K = [α, β/T]) on the sampled pendulum it is stable: the "
         "spectral radius of (I − KH)e^{AT} is "
         + ", ".join(f"{max(abs(f.poles)):.4f} (T = {T:g} s)" for T, f in abf.items())
-        + f" (a complex pair with |z|² = det = 1 − α); as a classical α-β tracker (a21 = 0) the pair is stable (Jury: 0 < α < 2, 0 < β < 4 − 2α: "
+        + f" (a complex pair with |z|² = det = 1 − α); as a classical α-β tracker (a21 = 0) the pair is stable (Jury: "
+        f"0 < α < 2, 0 < β < 4 − 2α: "
         f"{alpha_beta_stable(*P.K_printed)}).",
         evidence={k: v for k, v in poles.items()} | {
             f"spectral_radius_discrete_T={T:g}": float(max(abs(f.poles))) for T, f in abf.items()},
@@ -258,17 +262,20 @@ def _record_discrete(result: StudyResult, d: VerifyData) -> None:
     lam_implied = float(tracking_index_from_gains(*P.K_printed))
     # --- discrete α-β gains and Kalata --------------------------------------------------------
     result.quantity("ab.alpha", f"discrete steady-state α = K_filter[0] (T = {T:g} s, a21 = g·B, sampled noise)",
-                    alpha, unit="", note=f"predictor form L = FK = {fmt_vec(dss.L_predictor)} (what control.dlqe returns)")
+                    alpha, unit="",
+                    note=f"predictor form L = FK = {fmt_vec(dss.L_predictor)} (what control.dlqe returns)")
     result.quantity("ab.beta", f"discrete steady-state β = T·K_filter[1] (T = {T:g} s, a21 = g·B, sampled noise)",
                     beta, unit="", note=f"K_filter = {fmt_vec(dss.K_filter)}")
-    result.quantity("ab.tracking_index", f"Kalata tracking index Λ = σ_w T²/σ_v = √(Q/R)·T² (T = {T:g} s)", Lam, unit="",
+    result.quantity("ab.tracking_index", f"Kalata tracking index Λ = σ_w T²/σ_v = √(Q/R)·T² (T = {T:g} s)", Lam,
+                    unit="",
                     note=f"Kalata gains at this Λ (double integrator, a21 = 0): α = {ka:.4g}, β = {kb:.4g}")
     result.finding(
         "alpha-beta-kalata",
         f"Discrete steady state at T = {T:g} s (a21 = g·B, exact noise sampling, Rd = R/T): filter-form "
         f"K = {fmt_vec(dss.K_filter)} → α = {alpha:.4g}, β = T·k2 = {beta:.4g}; control.dlqe's predictor gain "
         f"L = FK = {fmt_vec(dss.L_predictor)}. For the double integrator (a21 = 0) with the same noise "
-        f"(DWNA model, σ_w² = Q/T, σ_v² = R/T) the tracking index is Λ = √(Q/R)·T² = {Lam:.3g} and Kalata's closed form "
+        f"(DWNA model, σ_w² = Q/T, σ_v² = R/T) the tracking index is Λ = √(Q/R)·T² = {Lam:.3g} and Kalata's closed "
+        f"form "
         f"gives α = {ka:.4g}, β = {kb:.4g}, identical to the discrete Riccati solution ({a0:.4g}, {b0:.4g}). "
         f"The pendulum's unstable pole (a21 = {a21:.3g}) raises α by a factor {alpha / ka:.2g}: Kalata's "
         "relations describe the α-β tracker, not this plant. The printed (0.950, 0.863) has an implied Λ ≈ "

@@ -78,7 +78,8 @@ class ClaimCheck:
             if not isinstance(lo, str):
                 row = np.asarray(check_finite("losers parameters", lo[1]), dtype=float)
                 if row.shape != (len(fam.params),):
-                    raise ValueError(f"losers parameters of {fam.name} must have {len(fam.params)} entries, got {lo[1]!r}")
+                    raise ValueError(f"losers parameters of {fam.name} must have {len(fam.params)} entries, got "
+                                     f"{lo[1]!r}")
         for sig in self.signals:
             check_str("signals", sig)
         check_str("statement", self.statement)
@@ -123,7 +124,8 @@ def _loser_errors(lo, cases, table, setup) -> tuple:
 
     name, params = lo[0], np.asarray(lo[1], dtype=float)
     m = evaluate((name, setup, tuple(cases), [(i, params) for i in range(len(cases))], "auto"))
-    label = f"{name} fixed at " + ", ".join(f"{p.name} = {v:g}" for p, v in zip(family(name).params, params, strict=True))
+    label = f"{name} fixed at " + ", ".join(f"{p.name} = {v:g}" for p,
+                                            v in zip(family(name).params, params, strict=True))
     return label, m[:, 1]
 
 

@@ -73,7 +73,9 @@ def _sample(s, cases, table):
     t = setup.dt * np.arange(setup.n)
     k = setup.k_from  # the scored window only (the start-up peaking is not scored and would hide it)
     t, d1 = t[k:], d1[k:]
-    fig, axes = new_figure(2, 1, title=f"Best 3 estimators of f' on one {case.signal} record ({case.noise}, ε = {case.eps:g}), "
+    fig, axes = new_figure(2, 1,
+                           title=f"Best 3 estimators of f' on one {case.signal} record ({case.noise}, ε = "
+                           f"{case.eps:g}), "
                                        f"after the {setup.transient:g} s transient",
                            size=(9, 6), sharex=True)
     axes = np.array(axes).reshape(2, 1)

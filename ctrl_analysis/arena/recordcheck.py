@@ -371,7 +371,8 @@ def _check_bounds(t, y, d1, eps: float, L: float, *, where: str, names: tuple) -
     dt = float(np.median(np.diff(t)))
     duration = float(t[-1] - t[0])
     for name, v in (("the largest |time| (t)", float(np.max(np.abs(t)))), ("the time step (t)", dt),
-                    ("the record's duration (t)", duration), ("the largest |measurement| (y)", float(np.max(np.abs(y)))),
+                    ("the record's duration (t)", duration),
+                    ("the largest |measurement| (y)", float(np.max(np.abs(y)))),
                     *((("the largest |derivative| (d1)", float(np.max(np.abs(d1)))),) if d1 is not None else ())):
         _scale(f"{where}: {name}", v)
     est = record_estimates(y, dt, d1=d1)

@@ -289,7 +289,8 @@ def _built_in(kind: str, rng, t) -> tuple:
     if kind == "chirp":
         return _chirp(rng, t)
     return [sum(x) for x in zip(*(_scaled(g, 1.0) for g in
-                                   (_sines(rng, t), _smooth_steps(rng, t, False), _smooth_steps(rng, t, True))), strict=True)]
+                                   (_sines(rng, t), _smooth_steps(rng, t, False), _smooth_steps(rng, t, True))),
+                                   strict=True)]
 
 
 def add_noise(kind: str, f, eps: float, seed: int) -> np.ndarray:

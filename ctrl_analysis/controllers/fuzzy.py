@@ -234,7 +234,8 @@ def mamdani_layout(n_e: int, n_ec: int, n_u: int, n_grid: int) -> Layout:
     -------
     Layout
     """
-    return Layout(*zip(MAMDANI.names, MAMDANI.shapes, strict=True), ("c_e", n_e), ("c_ec", n_ec), ("rules", (n_e, n_ec)),
+    return Layout(*zip(MAMDANI.names, MAMDANI.shapes, strict=True), ("c_e", n_e), ("c_ec", n_ec),
+                  ("rules", (n_e, n_ec)),
                   ("z", n_grid), ("mu_u", (n_grid, n_u)))
 
 

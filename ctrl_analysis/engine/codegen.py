@@ -29,7 +29,8 @@ library block). A block that writes its own ``kernel()`` beside numpy methods ke
 the pair equal (``tests/lib/test_speed_kernels.py``).
 
 The generated runner is cached in memory per loop structure and process, and on disk (numba's
-cache, :func:`~ctrl_analysis.engine.jit.cache_dir`); numba's compile time (a few seconds per structure on a cold cache) is
+cache, :func:`~ctrl_analysis.engine.jit.cache_dir`); numba's compile time (a few seconds per structure on a cold cache)
+is
 reported by :func:`compile_seconds`.
 """
 

@@ -222,7 +222,8 @@ class Layout:
         return out
 
     def __repr__(self) -> str:
-        return "Layout(" + ", ".join(n if s == () else f"({n!r}, {s})" for n, s in zip(self.names, self.shapes, strict=True)) + ")"
+        return "Layout(" + ", ".join(n if s == () else f"({n!r}, {s})" for n,
+                                     s in zip(self.names, self.shapes, strict=True)) + ")"
 
 
 def offset(o, n):

@@ -239,7 +239,8 @@ class Box:
         random. A scrambled Sobol' sample spreads the points more evenly, but its coordinates are paired by
         structure: at 64 points a reconstruction that cannot act then shows a first-order index above the
         permutation test's chance level on about a third of the claims (11 of 30 seeded toy claims with 12 idle
-        reconstructions), against 2 of 30 with a Latin hypercube, where the permutation test's null (the verdict independent of the coordinate)
+        reconstructions), against 2 of 30 with a Latin hypercube, where the permutation test's null (the verdict
+        independent of the coordinate)
         holds (:func:`first_order`).
 
         Parameters

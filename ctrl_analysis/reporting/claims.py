@@ -241,7 +241,8 @@ def sensitivity_lines(results: dict) -> list[str]:
         lines += ["", "Printed cells outside their band at the chosen values but reached inside the box:", ""]
         for q in reached:
             b = q["box"]
-            where = ", ".join(f"`{k}` = {_short(v)}" for k, v in (b.get("reached_at") or {}).items()) or "the chosen values"
+            where = ", ".join(f"`{k}` = {_short(v)}" for k,
+                              v in (b.get("reached_at") or {}).items()) or "the chosen values"
             how = {"sample": "a sample", "neighbour": "switching one alternative of the chosen values",
                    "bisection": "bisection between samples on either side",
                    "search": "the local search"}.get(b.get("how"), b.get("how"))

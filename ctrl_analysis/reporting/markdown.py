@@ -235,7 +235,8 @@ def paper_tables(results: dict) -> list[str]:
     if text_cells:
         lines += ["**Values printed in the text:**", "", "| paper cell | paper | reproduced | unit | tolerance |",
                   "|---|---|---|---|---|"]
-        lines += [f"| {_cell(c)} | {_fmt(q['paper'], digits=_digits(q))} | {_cell(_reproduced(q))} | {_cell(q.get('unit')) or '—'} | "
+        lines += [f"| {_cell(c)} | {_fmt(q['paper'], digits=_digits(q))} | {_cell(_reproduced(q))} | "
+                  f"{_cell(q.get('unit')) or '—'} | "
                   f"{_fmt_tolerance(q)} |" for c, q in text_cells]
         lines.append("")
     return lines
@@ -454,7 +455,8 @@ def _study_section(r: dict, this_run: dict, failed: dict, claim_links: dict | No
     lines += sensitivity_lines(r)
     if r["reconstructions"]:
         lines += ["### Reconstructions", "",
-                  "Values the paper does not print (or prints wrongly), why they were chosen, and their plausible range:",
+                  "Values the paper does not print (or prints wrongly), why they were chosen, and their plausible "
+                  "range:",
                   ""]
         lines += [f"- **{c['name']}** = `{_cell(_fmt(c['value']))}` — {_shorten_lists(c['why'])} *Plausible:* "
                   f"{plausible_text(c.get('plausible'))}"

@@ -1,7 +1,8 @@
 """What a study is handed (StudyContext), results.json writing and its schema check, and the figure style.
 
 The result records themselves (:class:`Quantity`, :class:`StudyResult`, computed verdicts) are in
-:mod:`ctrl_analysis.reporting.results` and re-exported here; REPORT.md is written by :mod:`ctrl_analysis.reporting.markdown`
+:mod:`ctrl_analysis.reporting.results` and re-exported here; REPORT.md is written by
+:mod:`ctrl_analysis.reporting.markdown`
 (import it from there: this module does not import it, so the two form no import circle).
 """
 
@@ -240,7 +241,8 @@ def validate_results(data: dict) -> dict:
     verdict recomputed from the record, ``paper`` None for ``new``, ``value`` None for ``diverged``;
     ids are unique and a paper cell has at most one primary quantity; ``captions``, when present, map
     figures of the study to non-empty strings; ``claims``, when present, have a verdict in
-    :data:`CLAIM_VERDICTS` that follows from their base verdict and ``support`` (the policy's thresholds), and cite recorded
+    :data:`CLAIM_VERDICTS` that follows from their base verdict and ``support`` (the policy's thresholds), and cite
+    recorded
     quantities. Verdicts are recomputed under the stated policy (``percentile`` from ``interval``,
     ``derived`` from the quantity named by ``derived_from``, else ``tolerance``).
 

@@ -90,7 +90,8 @@ def plot_sensitivity(result: StudyResult, top: int = 8):
         bx.set_xticks(range(len(names)), names, rotation=35, ha="right", fontsize=8)
         bx.set_yticks(range(len(claims)), labels, fontsize=8)
         bx.grid(False)
-        fig.colorbar(im, ax=bx, label="first-order Sobol' index of the verdict\n(shown where above what chance reaches)")
+        fig.colorbar(im, ax=bx,
+                     label="first-order Sobol' index of the verdict\n(shown where above what chance reaches)")
         bx.set_title("What drives each verdict (blank: the claim does not flip)", fontsize=10)
     else:
         bx.text(0.5, 0.5, "no claim flips anywhere in the box:\nno reconstruction drives a verdict",

@@ -51,7 +51,8 @@ def _params(fam, runs=3):
 
 # ------------------------------------------------------------------ algebraic yardstick, by hand
 def test_algebraic_weights_match_hand_computation():
-    # W = 2, d = 1: the backward difference; W = 3, d = 1: (y_k - y_(k-2)) / 2T; W = 3, d = 2: (3y_k - 4y_(k-1) + y_(k-2)) / 2T
+    # W = 2, d = 1: the backward difference; W = 3, d = 1: (y_k - y_(k-2)) / 2T; W = 3, d = 2: (3y_k - 4y_(k-1) +
+    # y_(k-2)) / 2T
     assert np.allclose(algebraic_weights(2, 1, 0.5)[1], [2.0, -2.0])
     assert np.allclose(algebraic_weights(3, 1, 1.0)[1], [0.5, 0.0, -0.5])
     assert np.allclose(algebraic_weights(3, 2, 1.0)[1], [1.5, -2.0, 0.5])
@@ -99,7 +100,8 @@ def _library_block(name, row):
     if name == "sigma":
         return DifferentialEstimator(3, row[0]), ("y",), ("xhat[0]", "xhat[1]")
     if name in ("leso2", "leso3"):
-        return ExtendedStateObserver.from_bandwidth(1 if name == "leso2" else 2, row[0]), ("y", "u"), ("xhat[0]", "xhat[1]")
+        return ExtendedStateObserver.from_bandwidth(1 if name == "leso2" else 2, row[0]), ("y", "u"), ("xhat[0]",
+                                                                                                       "xhat[1]")
     if name == "neso":
         alpha = np.array([1.0, 0.5, 0.25])
         gains = np.array([3 * row[0], 3 * row[0] ** 2, row[0] ** 3]) * row[1] ** (1 - alpha)

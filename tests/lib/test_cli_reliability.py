@@ -42,7 +42,8 @@ def test_sigint_leaves_previous_output_intact(tmp_path):
     for name, data in files.items():
         (old / name).write_bytes(data)
     proc = subprocess.Popen([sys.executable, "-m", "ctrl_analysis.cli", "reproduce", "meso", "--quick", "--verbose",
-                             "--out", str(tmp_path)], cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                             "--out", str(tmp_path)], cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                             text=True,
                             preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))  # Ctrl-C live in the
     # child even when the suite was started in the background by a shell without job control (SIGINT ignored)
     first = proc.stderr.readline()  # the study has started once it reports progress

@@ -113,7 +113,8 @@ def test_per_run_gains_equal_single_blocks():
     """Gains per run (``Loop.simulate(params={"ctrl": {"K": ...}})``) give each run the loop of its own block."""
     Ks = np.array([[6.0, 11.0, 6.0], [24.0, 26.0, 9.0], [6.0, 11.0, 6.0]])  # poles -1,-2,-3 and -2,-3,-4
     loop = Loop([place(Chain(), "plant"),
-                 place(HighOrderDifferentialFeedback(Ks[0]), "ctrl", inputs=["v", "dv", "ddv", "x[0]", "x[1]", "x[2]"])],
+                 place(HighOrderDifferentialFeedback(Ks[0]), "ctrl",
+                       inputs=["v", "dv", "ddv", "x[0]", "x[1]", "x[2]"])],
                 dt=1e-2, outputs=["x[0]", "u"])
     ins = {"v": 1.0, "dv": 0.0, "ddv": 0.0}
     runs = loop.simulate(300, inputs=ins, runs=3, params={"ctrl": {"K": Ks}}, execution=Execution(engine="numpy"))

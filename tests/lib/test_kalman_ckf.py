@@ -155,7 +155,8 @@ def test_ckf_lti_and_full_kf_kernels_equal_the_numpy_methods(compiled):
     k = ckf.kernel()
     assert np.array_equal(kernel_runs(jit(k.update), k.params, x, u, 5), ckf.update(0.3, x, u))
     assert np.array_equal(kernel_runs(jit(k.output), k.params, x, u, 2), ckf.output(0.3, x, u))
-    for plant in (DiscreteLTI(ct.tf([2.0, 4.0], [1.0, 3.0, 2.0, 0.5]), 0.05), DiscreteLTI(ct.tf([1.0, 0.5], [1.0, 2.0]), 0.1)):
+    for plant in (DiscreteLTI(ct.tf([2.0, 4.0], [1.0, 3.0, 2.0, 0.5]), 0.05),
+                  DiscreteLTI(ct.tf([1.0, 0.5], [1.0, 2.0]), 0.1)):
         xp, up = rng.normal(size=(30, plant.n_states)), rng.normal(size=(30, 1))
         k = plant.kernel()
         assert np.array_equal(kernel_runs(jit(k.update), k.params, xp, up, plant.n_states), plant.update(0.3, xp, up))

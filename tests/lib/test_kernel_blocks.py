@@ -257,5 +257,6 @@ def test_a_row_kernel_outside_its_vectors_is_a_clear_error_on_every_path(runs, r
     # outside the vectors used to corrupt memory ("double free or corruption") or return garbage (5e-321)
     loop = Loop([place(_outside_block(read), "blk")], dt=1.0)
     for engine in ("numpy", "auto"):
-        with pytest.raises(ValueError, match=r"\(Outside\): its kernel update 'upd' reads or writes outside its vectors"):
+        with pytest.raises(ValueError,
+                           match=r"\(Outside\): its kernel update 'upd' reads or writes outside its vectors"):
             loop.simulate(5, inputs={"u": np.ones((6, runs))}, execution=Execution(engine=engine))

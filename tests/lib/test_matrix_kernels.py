@@ -325,7 +325,8 @@ def test_loops_equal_the_old_kernels_bit_for_bit(name, engine):
         res = {}
         for key, blk in (("new", new), ("old", old)):
             loop = Loop([place(blk, "blk")], 0.1)
-            res[key] = loop.simulate(N, inputs=ext, params={"blk": {pname: per_run}}, execution=Execution(engine=engine))
+            res[key] = loop.simulate(N, inputs=ext, params={"blk": {pname: per_run}},
+                                     execution=Execution(engine=engine))
         for s in res["new"].signals:
             np.testing.assert_array_equal(res["new"].signals[s], res["old"].signals[s], err_msg=s)
         for s in res["new"].final_states:

@@ -41,7 +41,8 @@ def test_the_result_records_what_was_overridden():
 
 
 @pytest.mark.parametrize("params, error, match", [
-    ({"ex2": Example()}, ValueError, r"params names 'ex2', not a parameter object of this study; it takes \['claims', 'ex1'\]"),
+    ({"ex2": Example()}, ValueError,
+     r"params names 'ex2', not a parameter object of this study; it takes \['claims', 'ex1'\]"),
     ({"ex1": {"R": 1.0}}, ValueError, r"params\['ex1'\] names fields \['R'\] that Example does not have"),
     ({"ex1": Readings()}, TypeError, r"params\['ex1'\] must be a Example or a dict of its fields, got Readings"),
     ([("ex1", Example())], TypeError, "params must be a dict"),

@@ -164,7 +164,8 @@ def test_td_kernel_is_the_numpy_method_and_fhan_compiles_to_the_same_bits(compil
         scalar = numba.njit(lambda a, b: _fhan(a, b, 300.0, 0.02))
     else:
         scalar = lambda a, b: _fhan(a, b, 300.0, 0.02)  # noqa: E731
-    assert np.array_equal([scalar(a, b) for a, b in zip(x1, x2, strict=True)], _fhan(x1, x2, 300.0, 0.02), equal_nan=True)
+    assert np.array_equal([scalar(a, b) for a, b in zip(x1, x2, strict=True)], _fhan(x1, x2, 300.0, 0.02),
+                          equal_nan=True)
 
 
 @pytest.mark.parametrize("compiled", [False, True])

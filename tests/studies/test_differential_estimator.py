@@ -396,7 +396,8 @@ def test_quick_run_smoke(tmp_path):
     ex2 = replace(EX2, T=1.0, sweep_b1=(-10.0, 0.0, 10.0), sweep_b2=(2.0,), sweep_b3=(1.0,))
     result = run(ctx, params={"ex1": replace(EX1, T=0.4, t_sens=0.2), "ex2": ex2})
     ids = {q.id for q in result.quantities}
-    assert {"eq9.gain_K", "ex1.sigma.mean_abs_err_x1", "ex1.eso_over_sigma_x2", "ex1.fair.equal_bw.leso.mean_abs_err_x2",
+    assert {"eq9.gain_K", "ex1.sigma.mean_abs_err_x1", "ex1.eso_over_sigma_x2",
+            "ex1.fair.equal_bw.leso.mean_abs_err_x2",
             "ex1.tradeoff.sigma.err_x2", "ex1.n0_sweep.fixed_a.err_x1", "ex2.literal.max_real_eig",
             "ex2.sweep.fraction_stable", "ex2.sweep.literal.fraction_stable", "ex2.plant.rhp_zeros"} <= ids
     # every quantity with a paper value names its cell, except the checks; the ESO/Σ ratios are not printed
@@ -431,5 +432,6 @@ def test_quick_run_smoke(tmp_path):
 
     bad = [q for q in data["quantities"] if q.get("primary") and q["verdict"] in ("differs", "diverged")]
     items = not_reproduced(data)
-    assert all(m.startswith(q["cell"] + " (") for m, q in zip(items, bad, strict=False))  # items: the differing cells first, then the missing ones
+    assert all(m.startswith(q["cell"] + " (") for m,
+               q in zip(items, bad, strict=False))  # items: the differing cells first, then the missing ones
     assert len(items) == len(bad) + 2 and len(data["missing"]) == 2

@@ -222,7 +222,8 @@ def test_a_claim_is_judged_run_by_run_and_a_share_within_its_noise_floor_is_unte
 
 def test_fig2_claim_needs_both_trends_in_each_run_and_no_lost_run():
     def judged(div, rejection, rise, runs=10):
-        fig2 = [(np.arange(runs) < d, np.where(np.arange(runs) < d, np.nan, f), np.where(np.arange(runs) < d, np.nan, r))
+        fig2 = [(np.arange(runs) < d, np.where(np.arange(runs) < d, np.nan, f),
+                 np.where(np.arange(runs) < d, np.nan, r))
                 for d, f, r in zip(div, rejection, rise, strict=True)]
         return _judged(fig2=fig2, runs=runs).get_claim("fig2-larger-r").holds
 

@@ -9,7 +9,8 @@ import numpy as np
 
 from ..._validate import check_finite, check_matrix, finite_result
 
-__all__ = ["controllability_matrix", "observability_matrix", "controllability_rank", "observability_rank", "check_controllable", "check_observable", "check_detectable"]
+__all__ = ["controllability_matrix", "observability_matrix", "controllability_rank", "observability_rank",
+           "check_controllable", "check_observable", "check_detectable"]
 
 
 # --------------------------------------------------------------------------------------------

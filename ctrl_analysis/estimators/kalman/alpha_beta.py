@@ -8,7 +8,8 @@ from ..._validate import check_bool, check_finite, check_matrix, check_positive,
 from ...engine.blocks import DiscreteBlock
 from ...engine.kernels import KernelBlock, Kernels, Layout, as_int, jitable
 
-__all__ = ["alpha_beta_from_gain", "gain_from_alpha_beta", "tracking_index", "tracking_index_from_gains", "kalata_gains", "alpha_beta_stable", "AlphaBetaFilter"]
+__all__ = ["alpha_beta_from_gain", "gain_from_alpha_beta", "tracking_index", "tracking_index_from_gains",
+           "kalata_gains", "alpha_beta_stable", "AlphaBetaFilter"]
 
 
 # --------------------------------------------------------------------------------------------
@@ -126,7 +127,8 @@ def kalata_gains(Lambda):
     They are the filter-form steady-state Kalman gains ``[α, β/T]`` of the discrete
     white-noise-acceleration model (see :func:`tracking_index`) and satisfy
     ``β²/(1 − α) = Λ²`` and ``(α + β/2)² = 2β``. Derived in
-    :func:`ctrl_analysis.symbolic.riccati.derive_kalata_gains` (numeric: :func:`ctrl_analysis.symbolic.riccati.kalata_gains_closed_form`).
+    :func:`ctrl_analysis.symbolic.riccati.derive_kalata_gains` (numeric:
+    :func:`ctrl_analysis.symbolic.riccati.kalata_gains_closed_form`).
 
     Parameters
     ----------

@@ -11,7 +11,8 @@ import scipy.linalg
 from ..._validate import check_finite, check_matrix, check_positive, finite_result
 from ._checks import _covariance, _prepare, _riccati_solution, _sym, _system
 
-__all__ = ["ContinuousSteadyState", "continuous_steady_state", "continuous_steady_state_gain", "care_residual", "riccati_rhs", "riccati_trajectory"]
+__all__ = ["ContinuousSteadyState", "continuous_steady_state", "continuous_steady_state_gain", "care_residual",
+           "riccati_rhs", "riccati_trajectory"]
 
 
 # --------------------------------------------------------------------------------------------

@@ -26,7 +26,8 @@ from ._checks import (
     _system,
 )
 
-__all__ = ["DiscreteSteadyState", "discrete_steady_state", "discrete_steady_state_batch", "dare_residual", "discretize_noise"]
+__all__ = ["DiscreteSteadyState", "discrete_steady_state", "discrete_steady_state_batch", "dare_residual",
+           "discretize_noise"]
 
 
 # --------------------------------------------------------------------------------------------

@@ -23,7 +23,8 @@ def random_walk_gain(Q, R):
         K∞ = (−q + √(q² + 4q)) / 2,
 
     a function of ``Q/R`` only (derived in
-    :func:`ctrl_analysis.symbolic.riccati.derive_random_walk_gain`, numeric :func:`ctrl_analysis.symbolic.riccati.random_walk_gain_closed_form`).
+    :func:`ctrl_analysis.symbolic.riccati.derive_random_walk_gain`, numeric
+    :func:`ctrl_analysis.symbolic.riccati.random_walk_gain_closed_form`).
 
     Parameters
     ----------
