@@ -5,11 +5,12 @@ from __future__ import annotations
 import numpy as np
 
 from .._validate import check_int
+from .simresult import BatchRuns
 
 __all__ = ["LoopResponse"]
 
 
-class LoopResponse:
+class LoopResponse(BatchRuns):
     """What a :class:`~ctrl_analysis.engine.loop.Loop` simulation returns: every signal by name, over the batch.
 
     Parameters
@@ -76,26 +77,6 @@ class LoopResponse:
                 f"diverged={int(self.diverged.sum())})")
 
     @property
-    def ok(self) -> np.ndarray:
-        """Mask of runs that stayed finite and bounded.
-
-        Returns
-        -------
-        numpy.ndarray of bool, shape (B,)
-        """
-        return ~self.diverged
-
-    @property
-    def runs(self) -> int:
-        """Number of runs in the batch.
-
-        Returns
-        -------
-        int
-        """
-        return int(self.diverged.size)
-
-    @property
     def states(self) -> dict:
         """Each block's state trajectory (views into ``x``; empty when states were not stored).
 
@@ -130,13 +111,11 @@ class LoopResponse:
         -------
         list of dict
         """
-        out = []
-        for b in np.flatnonzero(self.diverged):
-            k, code = int(self.diverged_step[b]), int(self.diverged_where[b])
-            out.append({"run": int(b), "step": k, "t": float(self.t[min(k, len(self.t) - 1)]),
-                        "seed": None if self.seeds is None else self.seeds[b],
-                        "where": self.where_names[code] if 0 <= code < len(self.where_names) else None})
-        return out
+        return super().divergences()
+
+    def _where(self, b: int) -> dict:
+        code = int(self.diverged_where[b])
+        return {"where": self.where_names[code] if 0 <= code < len(self.where_names) else None}
 
     def __getitem__(self, name: str) -> np.ndarray:
         try:

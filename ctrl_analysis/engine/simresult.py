@@ -12,11 +12,53 @@ import numpy as np
 from .._validate import check_array, check_real
 from ..noise import _check_seeds
 
-__all__ = ["SimResult"]
+__all__ = ["BatchRuns", "SimResult"]
+
+
+class BatchRuns:
+    """What a batch's result says about its runs, from ``diverged``, ``diverged_step``, ``t`` and ``seeds``."""
+
+    @property
+    def ok(self) -> np.ndarray:
+        """Mask of runs that stayed finite and bounded.
+
+        Returns
+        -------
+        numpy.ndarray of bool, shape (B,)
+        """
+        return ~self.diverged
+
+    @property
+    def runs(self) -> int:
+        """Number of runs in the batch.
+
+        Returns
+        -------
+        int
+        """
+        return int(self.diverged.size)
+
+    def divergences(self) -> list[dict]:
+        """One record per diverged run: ``run`` (index), ``step``, ``t`` and ``seed``, and what :meth:`_where` adds.
+
+        Returns
+        -------
+        list of dict
+        """
+        out = []
+        for b in np.flatnonzero(self.diverged):
+            k = int(self.diverged_step[b])
+            out.append({"run": int(b), "step": k, "t": float(self.t[min(k, len(self.t) - 1)]),
+                        "seed": None if self.seeds is None else self.seeds[b]} | self._where(int(b)))
+        return out
+
+    def _where(self, b: int) -> dict:
+        """More about run ``b``'s divergence (nothing here)."""
+        return {}
 
 
 @dataclass
-class SimResult:
+class SimResult(BatchRuns):
     """Trajectories of a batch of runs.
 
     Attributes
@@ -45,40 +87,6 @@ class SimResult:
     seeds: list | None = None
     bound: float = np.inf
     info: dict = field(default_factory=dict)
-
-    @property
-    def ok(self) -> np.ndarray:
-        """Mask of runs that stayed finite and bounded."""
-        return ~self.diverged
-
-    @property
-    def runs(self) -> int:
-        """Number of runs in the batch.
-
-        Returns
-        -------
-        int
-        """
-        return int(self.diverged.size)
-
-    def divergences(self) -> list[dict]:
-        """One record per diverged run.
-
-        Returns
-        -------
-        list of dict
-            ``run`` (index), ``step``, ``t`` and ``seed`` of each diverged run.
-        """
-        out = []
-        for b in np.flatnonzero(self.diverged):
-            k = int(self.diverged_step[b])
-            out.append({
-                "run": int(b),
-                "step": k,
-                "t": float(self.t[min(k, len(self.t) - 1)]),
-                "seed": None if self.seeds is None else self.seeds[b],
-            })
-        return out
 
 
 def _check_bound(bound) -> float:
