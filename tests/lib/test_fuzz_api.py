@@ -1045,6 +1045,7 @@ NOT_FUZZED = {
     engine_params.chunk_functions: "the numpy engine's internals, called with the plan and values it made",
     loop_mod.LoopResponse: "result record built by Loop.simulate",
     simresult.SimResult: "result record built by the simulators",
+    simresult.BatchRuns: "the results' shared properties (ok, runs, divergences): no arguments",
     integrators.euler_step: "per-step integrator, unchecked by design",
     integrators.rk4_step: "per-step integrator, unchecked by design",
     continuous.riccati_rhs: "per-step right-hand side, unchecked by design",
