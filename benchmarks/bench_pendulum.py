@@ -102,7 +102,7 @@ def engine_rows(p, a21, seeds, repeat):
     out = {}
     for eng, batches in ENGINES:
         for B in batches:
-            out[eng, B] = best_of(lambda: loops.simulate_case(p, a21, seeds[:B], engine=eng), repeat)
+            out[eng, B] = best_of(lambda B=B, eng=eng: loops.simulate_case(p, a21, seeds[:B], engine=eng), repeat)
     return out, compile_s
 
 
@@ -133,8 +133,8 @@ def run(repeat=3, t_end=1.0):
     for B in (1, 100):
         u = np.stack([rng.uniform(-0.1, 0.1, B), rng.uniform(-1.5, 1.5, B)], axis=1)
         x, n = np.zeros((B, 0)), (200 if B == 1 else 20)
-        td, ud = best_of(lambda: [direct.output(0.0, x, u) for _ in range(n)][-1], repeat)
-        tl, ul = best_of(lambda: [table.output(0.0, x, u) for _ in range(n)][-1], repeat)
+        td, ud = best_of(lambda x=x, u=u, n=n: [direct.output(0.0, x, u) for _ in range(n)][-1], repeat)
+        tl, ul = best_of(lambda x=x, u=u, n=n: [table.output(0.0, x, u) for _ in range(n)][-1], repeat)
         notes.append(f"one fuzzy evaluation, B = {B}: direct Mamdani {td / n * 1e6:.0f} µs, query table "
                      f"{tl / n * 1e6:.0f} µs ({td / tl:.0f}x); max |difference| {np.max(np.abs(ud - ul)):.3g} m/s²")
     return rows, t_float, None, notes
@@ -155,8 +155,8 @@ def main(argv=None):
         u = np.stack([rng.uniform(-0.1, 0.1, B), rng.uniform(-1.5, 1.5, B)], axis=1)
         x = np.zeros((B, 0))
         n = 2000 if B == 1 else 200
-        td, ud = best_of(lambda: [direct.output(0.0, x, u) for _ in range(n)][-1], args.repeat)
-        tl, ul = best_of(lambda: [table.output(0.0, x, u) for _ in range(n)][-1], args.repeat)
+        td, ud = best_of(lambda x=x, u=u, n=n: [direct.output(0.0, x, u) for _ in range(n)][-1], args.repeat)
+        tl, ul = best_of(lambda x=x, u=u, n=n: [table.output(0.0, x, u) for _ in range(n)][-1], args.repeat)
         print(f"   B = {B:3d}: direct {td / n * 1e6:8.1f} µs, lookup {tl / n * 1e6:6.1f} µs, "
               f"ratio {td / tl:6.1f}; max |difference| {np.max(np.abs(ud - ul)):.3g} m/s²")
 

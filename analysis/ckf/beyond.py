@@ -101,8 +101,11 @@ def ablation(result, p, data, data_f, m_f):
     s_live = live["f1_final"] + live["f2_final"]
     mv = {n: prog["moves"][n] for n in qty.PARAMS}
     st = prog["step"]
-    state = lambda n: (f"still moving as fast as in any earlier {st:g} s" if prog["late_vs_peak"][n] > 0.5 else
-                       "slowing but not settled" if prog["late_vs_peak"][n] > 0.1 else "settled")
+
+    def state(n):
+        return (f"still moving as fast as in any earlier {st:g} s" if prog["late_vs_peak"][n] > 0.5 else
+                "slowing but not settled" if prog["late_vs_peak"][n] > 0.1 else "settled")
+
     result.finding(
         "identification-live",
         f"With the reconstructed RLS settings (P0 = {p.P0_rls:g}, λ = {p.forgetting:g}, trace cap {p.max_trace:g}) "
@@ -164,7 +167,10 @@ def _options(ctx, result, p):
                                           prefix="ident." if proj else "ident.noproj.",
                                           tag="" if proj else "no projection: ")
             for proj in (True, False)}
-    track = lambda proj, o, c=None: bias[proj][(o, "track") if c is None else (o, "track", c)]
+
+    def track(proj, o, c=None):
+        return bias[proj][(o, "track") if c is None else (o, "track", c)]
+
     m_raw = qty.metrics(runs[False]["raw"], p_opt)
     comps = qty.comparisons(m_raw, p_opt)
     best = max(ID_OPTIONS, key=lambda o: (track(True, o), -abs(bias[True][(o, "g0")])))
@@ -197,7 +203,10 @@ def _options(ctx, result, p):
     qty.record_metrics(result, m_free, p_opt, prefix="noproj.", tag="no projection: ")
     d_proj, d_free = runs[True][p.id_signal]["ckf"], noproj["ckf"]
     m = qty.window(d_proj["t"], p.t_steady)
-    rms = lambda d: float(np.mean(np.sqrt(np.mean((d["y_ckf"][m] - d["y"][m]) ** 2, axis=0))))
+
+    def rms(d):
+        return float(np.mean(np.sqrt(np.mean((d["y_ckf"][m] - d["y"][m]) ** 2, axis=0))))
+
     shift = {n: float(np.abs(d_free[n] - d_proj[n]).max()) for n in qty.PARAMS}
     scale = {n: float(np.abs(d_proj[n]).mean()) for n in qty.PARAMS}
     below = float(np.mean(d_free["g0"] < p.lower[2]))

@@ -380,7 +380,10 @@ def run_params(sel) -> dict:
 
 def _point_params(ps, runs):
     """Per-run block parameters and initial states of the points ``ps`` (each repeated over ``runs`` runs)."""
-    rep = lambda vals: np.repeat(np.asarray(vals, dtype=float), runs, axis=0)
+
+    def rep(vals):
+        return np.repeat(np.asarray(vals, dtype=float), runs, axis=0)
+
     inf = np.full(3, np.inf)
     lo = rep([p.lower if p.project else -inf for p in ps])
     hi = rep([p.upper if p.project else inf for p in ps])

@@ -98,7 +98,10 @@ def case_metrics(d, p, case) -> dict:
 
     t = d["t"][:-1]  # the samples the sums hold
     S = dict(zip(STATS_SUMS, np.asarray(d["stats"], dtype=float).T / stats_scale(p), strict=True))
-    count = lambda a, b=np.inf: max(int(np.count_nonzero(window(t, a, b))), 1)
+
+    def count(a, b=np.inf):
+        return max(int(np.count_nonzero(window(t, a, b))), 1)
+
     n_st = count(p.t_steady)
     dy, du = S["dy_st"] / n_st, S["du_st"] / n_st
     m = {"ok": np.asarray(d["ok"]), "y_mean": p.reference + dy, "y_var": np.maximum(S["dy2_st"] / n_st - dy * dy, 0.0),
@@ -308,7 +311,10 @@ def offset_terms(d, p):
     ul = -(p.l1 * f1 * e + p.l2 * f2 * e_prev) / (g0 + p.mu)
     ui = d["u"][:, ok] - u0 - ul
     leak = e * (e - e_prev) <= 0.0
-    mean = lambda v: float(np.mean(v[m]))
+
+    def mean(v):
+        return float(np.mean(v[m]))
+
     end = window(d["t"], 0.9 * d["t"][-1])
     return {"y_end": float(np.mean(d["y"][end][:, ok])), "y": mean(d["y"][:, ok]), "u": mean(d["u"][:, ok]),
             "bias": mean(d["y_fb"][:, ok] - d["y"][:, ok]), "u0": mean(u0), "ul": mean(ul), "ui": mean(ui),

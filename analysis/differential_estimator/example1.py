@@ -243,7 +243,10 @@ def _half_step(result: StudyResult, p: Example1, d: dict) -> dict:
     noise_h = np.concatenate([np.repeat(noise[:n_win], 2, axis=0), draw(p, seeds, n_half)], axis=1)
     runs = len(seeds)
     out, div_h, _ = loops.simulate_example1(ph, list(seeds) * 2, noise_h, [])
-    e = lambda s, k: np.stack([s["x[0]"][:k], s["x[1]"][:k]], 2) - np.stack([s["sig[0]"][:k], s["sig[1]"][:k]], 2)
+
+    def e(s, k):
+        return np.stack([s["x[0]"][:k], s["x[1]"][:k]], 2) - np.stack([s["sig[0]"][:k], s["sig[1]"][:k]], 2)
+
     err_h = np.mean(np.abs(e(out, n_half)[::2]), axis=0)  # the 1 ms instants of the window
     err_m = np.mean(np.abs(e(sig, n_win)), axis=0)
     ratios = {}

@@ -40,7 +40,7 @@ def plot_root_locus(est: DifferentialEstimator, *, printed_K: float | None = Non
     p_min = DifferentialEstimator(n0, a, k_min, allow_unstable=True).poles if k_min > 0 else np.array([])
     crossing = p_min[np.abs(p_min.real) < 1e-6 * max(1.0, a)]
     views = [((2.5 * s_b, -0.3 * s_b), (1.2 * s_b, -1.2 * s_b)), ((-1.9 * a, 0.8 * a), (-1.5 * a, 1.5 * a))]
-    for panel, (ax, (xlim, ylim)) in enumerate(zip(axes, views, strict=True)):
+    for _panel, (ax, (xlim, ylim)) in enumerate(zip(axes, views, strict=True)):
         for j in range(loci.shape[1]):
             ax.plot(loci[:, j].real, loci[:, j].imag, color="C0", lw=1.3,
                     label="root locus, K from 0 to ∞" if j == 0 else None)

@@ -98,7 +98,7 @@ def _simulate(requests: list) -> list:
         runs = run_batch([r[0] for r in reqs], scheme, vs)
         e, snr = metrics_of(runs)
         start = 0
-        for k, (ex, _, _, seeds, what) in zip(gkeys, reqs, strict=True):
+        for k, (_ex, _, _, seeds, what) in zip(gkeys, reqs, strict=True):
             sl = slice(start, start + len(seeds))
             start += len(seeds)
             if what is None:

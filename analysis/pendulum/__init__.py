@@ -283,8 +283,11 @@ def _loop_figures(ctx, result, d) -> None:
                             "in separate panels on the same scale, so that neither hides the other. With the paper's K "
                             "(α = 0.950) the angle estimate nearly repeats the measurement; the correct steady-state "
                             "gain removes most of the noise.")
-    cols = lambda cases: {"no filter": cases["nofilter"], "paper's K as a discrete α-β filter": cases["filter"],
-                          "correct steady-state gain (beyond)": cases["kf_ss"]}
+
+    def cols(cases):
+        return {"no filter": cases["nofilter"], "paper's K as a discrete α-β filter": cases["filter"],
+                "correct steady-state gain (beyond)": cases["kf_ss"]}
+
     ctx.save_figure(result, figures.plot_fig4_output({main_lab: cols(m), lit_lab: cols(lit)}, p.step),
                     "fig4_output_filtering.png",
                     caption="Redraws the paper's Fig. 4: the angle φ(t) after the 0.1 rad step without a filter and "

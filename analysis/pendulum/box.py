@@ -124,7 +124,7 @@ def simulate_points(points, seeds, *, ratio: float = 1.25, on_point=None, keep=N
     seeds = tuple(int(s) for s in seeds)
     out = [None] * len(points)
     groups: dict = {}
-    for i, (p, a21, kind) in enumerate(points):
+    for i, (p, _a21, kind) in enumerate(points):
         key = (kind is not None, _fuzzy_key(p), p.substeps, p.step, p.bound)
         groups.setdefault(key, []).append(i)
     for (filtered, fkey, substeps, step, bound), idx in groups.items():

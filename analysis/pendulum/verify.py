@@ -317,7 +317,7 @@ def compute_verify(P: Verify = VERIFY) -> VerifyData:
 
     omega = np.geomspace(P.bode_omega[0], P.bode_omega[1], int(P.bode_omega[2]))
     bode = {}
-    for name, a, ss_ in (("a21 = g·B = %.4g" % a21, a21, cont), ("a21 = 2.6149", P.a21_printed, s["cont_alt"])):
+    for name, a, ss_ in ((f"a21 = g·B = {a21:.4g}", a21, cont), ("a21 = 2.6149", P.a21_printed, s["cont_alt"])):
         Aa = pendulum_matrices(a)[0]
         bode[f"{name}, K = {fmt_vec(ss_.K)}"] = ct.ss(Aa - ss_.K @ s["C"], ss_.K, np.eye(2), np.zeros((2, 1)))
     return VerifyData(P=P, a21=a21, **s, t=t, traj=traj, end_err=end_err, Pcheck=Pcheck, rows=rows,

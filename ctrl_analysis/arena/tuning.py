@@ -405,7 +405,7 @@ def tune_family(name: str, cases, setup: Setup, *, rounds: int = 3, engine: str 
             start = [len(e) for e in evaluated]
             run(cand, f"{name}: refine {r + 1}/{rounds} ({METRICS[cost]})")
             for ci in range(len(cases)):
-                for z, v, m in evaluated[ci][start[ci]:]:
+                for z, _v, m in evaluated[ci][start[ci]:]:
                     if m[cost] < best[cost][ci][1][cost]:
                         best[cost][ci] = [z, m]
         step = step / 2

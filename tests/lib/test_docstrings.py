@@ -239,7 +239,9 @@ def test_the_check_finds_what_it_should():
         def helper():
             return a
 
-    check = lambda fn: _check_routine(fn, inspect.getdoc(fn), bound=False)
+    def check(fn):
+        return _check_routine(fn, inspect.getdoc(fn), bound=False)
+
     assert check(documented) == []
     assert check(no_returns) == ["no Returns section"]
     assert check(two_line_summary) == ["summary is not one line (second line not blank)"]

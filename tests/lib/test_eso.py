@@ -180,7 +180,7 @@ def test_nonlinear_eso_runs_and_converges():
     assert np.all(np.isfinite(e))
     assert np.mean(e[1000:, 0]) < 1e-2
     with pytest.raises(ValueError, match="linear"):
-        obs.ss
+        _ = obs.ss
 
 
 # ---------------------------------------------------------------------------------------------

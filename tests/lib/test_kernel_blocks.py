@@ -129,7 +129,7 @@ def _side_by_side(continuous: bool):
     Block ``i`` is named ``b{i}``; its inputs are ``in{i}_{j}``, its outputs ``out{i}_{j}``.
     """
     placed, per_run = [], {}
-    for i, (name, block, pr) in enumerate(BLOCKS):
+    for i, (_name, block, pr) in enumerate(BLOCKS):
         if (block.kernel().rhs is not None) != continuous:
             continue
         placed.append(place(block, f"b{i}", inputs=[f"in{i}_{j}" for j in range(len(block.inputs))],
