@@ -79,7 +79,7 @@ def compiled_loop():
 
 
 def pc_system(dt, w):
-    """python-control: the discrete LTI map of two RK4 substeps of the linear ESO (exactly the engine's arithmetic map)."""
+    """python-control: the discrete LTI map of two RK4 substeps of the linear ESO (the engine's arithmetic map)."""
     import control as ct
 
     A = np.array([[-3 * w, 1, 0], [-3 * w**2, 0, 1], [-(w**3), 0, 0]])

@@ -1,4 +1,4 @@
-"""Dask clusters for :mod:`ctrl_analysis.parallel`: the address checked, a process-wide cluster, failures in bounded time.
+"""Dask clusters for :mod:`ctrl_analysis.parallel`: the address checked, a process-wide cluster, bounded-time failures.
 
 :func:`use_cluster` connects to a cluster once and makes it process-wide: while it is active every
 :func:`~ctrl_analysis.parallel.map_chunks` call without a ``scheduler`` (or with the one the cluster was made from)

@@ -383,7 +383,7 @@ _RLS_HOLD_KERNELS = Kernels(output=kern.rls_hold_output, update=kern.rls_update,
 
 
 class RecursiveLeastSquares:
-    """Recursive least squares as an estimator object that keeps its state: :meth:`step` one sample, :meth:`run` a record.
+    """Recursive least squares as an estimator object that keeps its state: :meth:`step` a sample, :meth:`run` a record.
 
     The equations are :class:`RecursiveLeastSquaresBlock`'s, stepped by its own per-sample code:
     this object holds a block and its state ``[θ, vec R]``. In a :class:`~ctrl_analysis.engine.loop.Loop`,

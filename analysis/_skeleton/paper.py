@@ -66,7 +66,7 @@ class Example:
 
     @property
     def noise_ratio(self) -> float:
-        """Printed noise-reduction ratio of the first-order digital low-pass, ``√((1 − a)/(1 + a))``, ``a = e^(−ω_f h)``."""
+        """Printed noise-reduction ratio of the first-order digital low-pass, ``√((1 − a)/(1 + a))``, a = e^(−ω_f h)."""
         a = math.exp(-self.omega_f * self.h)
         return math.sqrt((1.0 - a) / (1.0 + a))
 

@@ -94,7 +94,7 @@ AT = SWITCH.at
 
 
 def gated_gain_output(t, x, u, p, y):
-    """``y = u[0]`` before ``t_on``, then ``y = Σ_j w_j u_j`` (summed left to right); the kernel of :class:`FeedbackSwitch`.
+    """``y = u[0]`` before ``t_on``, then ``y = Σ_j w_j u_j`` (summed left to right); :class:`FeedbackSwitch`'s kernel.
 
     Parameters
     ----------

@@ -1,4 +1,4 @@
-"""Study `differential-estimator`: Qi, Chen, Xue & Yuan 2004, a new differential state estimator and controller for nonlinear stochastic systems.
+"""Study `differential-estimator`: Qi, Chen, Xue & Yuan 2004, a differential state estimator for nonlinear systems.
 
 Modules: :mod:`.paper` (printed values and reconstructions), :mod:`.loops` (the loops of Examples
 1-2 from library blocks), :mod:`.linear_checks`, :mod:`.example1`, :mod:`.example2` (quantities

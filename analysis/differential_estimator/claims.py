@@ -143,7 +143,7 @@ def _eso_diverges(result, p):
 
 
 def _recorded(result, id_):
-    """The value of quantity ``id_``, None when it is diverged or not computed (a box evaluation skips the stable preset)."""
+    """The value of quantity ``id_``, None when diverged or not computed (a box evaluation skips the stable preset)."""
     try:
         return value_of(result, id_)
     except KeyError:

@@ -271,7 +271,7 @@ def _errors(x, est_out) -> np.ndarray:
 
 def fair_comparison(result: StudyResult, p: Example1, d: dict, tradeoff: bool = True,
                     check: bool = True) -> dict | None:
-    """ESO vs Σ at equal −3 dB bandwidth, and (``tradeoff``) the x1-error/x2-error trade-off over the bandwidth; quantities ``ex1.fair.*``, ``ex1.tradeoff.*``.
+    """ESO vs Σ at equal −3 dB bandwidth, (``tradeoff``) the x1/x2 error trade-off: ``ex1.fair.*``, ``ex1.tradeoff.*``.
 
     ``check`` records the linear path's check against the engine (Σ both ways); the box evaluations skip it.
     """
@@ -368,7 +368,7 @@ def _tradeoff(result, p, d, x, bw_s, bw_e, tune, err_l) -> dict:
 
 def n0_sweep(result: StudyResult, p: Example1, d: dict, n0_values=(2, 3, 4, 5, 6, 7, 8),
              modes=("fixed_a", "equal_bw")) -> dict:
-    """"Larger n0 is more accurate" (remark (2)): Σ errors for n0 = 2..8 at a = 7 and (``modes``) at Σ(5, 7)'s bandwidth.
+    """"Larger n0 is more accurate" (remark (2)): Σ errors, n0 = 2..8, at a = 7 and (``modes``) at Σ(5, 7)'s bandwidth.
 
     The finding ``ex1-n0`` is recorded when both modes are computed.
     """
@@ -414,7 +414,7 @@ def n0_sweep(result: StudyResult, p: Example1, d: dict, n0_values=(2, 3, 4, 5, 6
 
 
 def eso_divergence(result: StudyResult, p: Example1, seeds, T: float = 0.3, factors=(4, 8)) -> dict:
-    """"Badly chosen ESO parameters diverge": Han's rule for a step ``factors``× shorter than the simulation's, run at h.
+    """"Badly chosen ESO parameters diverge": Han's rule for a step ``factors``× shorter than the simulation's, at h.
 
     The finding describes the first factor; quantity ``ex1.bad_eso.diverged_fraction`` holds one fraction per factor.
     """

@@ -27,7 +27,7 @@ __all__ = ["PRESETS", "softened_square_wave", "stable_estimator_a", "controller_
 
 
 def stable_estimator_a(p: Example2, a_max: float = 200.0) -> tuple[float, float]:
-    """Smallest integer ``a >= p.a`` whose linearised loop has every eigenvalue at Re <= -p.stable_margin, and the bisected boundary."""
+    """Least integer ``a >= p.a`` whose linearised loop has all eigenvalues at Re <= -p.stable_margin; the boundary."""
     def f(a):
         return loops.max_real_eig(loops.example2_linear(p, a))
 
@@ -44,7 +44,7 @@ def stable_estimator_a(p: Example2, a_max: float = 200.0) -> tuple[float, float]
 
 
 def controller_scale_threshold(p: Example2, scales=None) -> dict:
-    """Max Re of the linearised loop when every controller pole is scaled by ``c`` (``k_i -> c^i k_i``; Σ as printed)."""
+    """Max Re of the linearised loop, every controller pole scaled by ``c`` (``k_i -> c^i k_i``; Σ as printed)."""
     scales = np.linspace(0.02, 1.0, 50) if scales is None else np.asarray(scales)
     pw = np.arange(len(p.K), 0, -1)
     vals = np.array([loops.max_real_eig(loops.example2_linear(replace(p, K=tuple(np.array(p.K) * c**pw))))
@@ -56,7 +56,7 @@ def controller_scale_threshold(p: Example2, scales=None) -> dict:
 
 
 def literal_eigenvalues(result: StudyResult, p: Example2) -> np.ndarray:
-    """Eigenvalues of the printed loop linearised at the origin (sorted, largest real part first); quantity ``ex2.literal.max_real_eig``."""
+    """Eigenvalues of the printed loop linearised at 0 (largest Re first); quantity ``ex2.literal.max_real_eig``."""
     eig = np.linalg.eigvals(loops.example2_linear(p))
     eig = eig[np.lexsort((eig.imag, -eig.real))]
     result.quantity("ex2.literal.max_real_eig", f"Example 2 as printed (Σ a = {p.a:g}, K = [2184, 506, 39]): max Re of "
@@ -201,7 +201,7 @@ def simulate(p: Example2, seeds, a_new: float, runs: int, *, traces: bool = True
 
 
 def quantities(result: StudyResult, p: Example2, d: dict, lin: dict | None) -> dict:
-    """Per-preset quantities ``ex2.<preset>.*`` and ``ex2.sweep.*`` (findings too unless ``lin`` is None); returns the stability maps."""
+    """Quantities ``ex2.<preset>.*``, ``ex2.sweep.*`` (findings unless ``lin`` is None); returns the stability maps."""
     sig, ok, per, runs = d["sig"], d["ok"], d["per"], d["runs"]
     n = sig["x[0]"].shape[0] - 1
     v = d["theta"][:, 0]
@@ -298,7 +298,7 @@ def _plant_abcd(b1: float, b2: float):
 
 
 def nonminimum_phase(result: StudyResult, p: Example2) -> None:
-    """The paper's "non-minimum phase for b1 > 0": poles and zeros of the linearised plant u -> x1 = 1/(s³ + b2 s - b1)."""
+    """The paper's "non-minimum phase for b1 > 0": poles and zeros of the linearised plant 1/(s³ + b2 s - b1)."""
     rows = {}
     for b1 in p.sweep_b1:
         poles = np.roots([1.0, 0.0, p.b2, -b1])

@@ -161,7 +161,7 @@ def eq5_checks(result: StudyResult, L: Linear) -> None:
 
 
 def lowpass_checks(result: StudyResult, L: Linear) -> list:
-    """Fig. 2 bandwidth and peak (quantities ``fig2.*``), the design table, findings ``lowpass-claim``, ``eq12-limit``."""
+    """Fig. 2 bandwidth and peak (``fig2.*``), the design table, findings ``lowpass-claim``, ``eq12-limit``."""
     est2 = DifferentialEstimator(L.fig2_n0, L.fig2_a)
     row2 = design_row(L.fig2_n0, L.fig2_a)
     dc, hf = float(ct.dcgain(est2.tf)), float(abs(est2.tf(1e6j)))

@@ -166,7 +166,7 @@ def han_eso(p: Example1, tuning_h: float | None = None) -> ExtendedStateObserver
 
 
 def example1_loop(p: Example1, esos=None, *, method: str | None = None, h: float | None = None) -> Loop:
-    """Plant (19) + sensor + Σ (outputs ``sig[i]``) + ESOs (ESO ``j``'s outputs ``eso[j][i]``), external ``xi``, ``eta``, ``u_eso``.
+    """Plant (19) + sensor + Σ (outputs ``sig[i]``) + ESOs (outputs ``eso[j][i]``), external ``xi``, ``eta``, ``u_eso``.
 
     Parameters
     ----------
@@ -230,7 +230,7 @@ def _reading_gain(est: DifferentialEstimator, reading: str) -> np.ndarray:
 
 
 def example2_params(p: Example2, a, b, *, sigma_reading=None) -> dict:
-    """Per-run values of :func:`example2_loop`'s blocks for :meth:`Loop.simulate <ctrl_analysis.engine.loop.Loop.simulate>`.
+    """Per-run values of :func:`example2_loop`'s blocks for :meth:`~ctrl_analysis.engine.loop.Loop.simulate`.
 
     Parameters
     ----------

@@ -53,7 +53,7 @@ class Linear:
 
 
 def han_eso_gains(h: float) -> tuple[float, float, float]:
-    """Han's step-size rule for the third-order nonlinear ESO: ``β01 = 1/h``, ``β02 = 1/(1.6 h^1.5)``, ``β03 = 1/(8.6 h^2.2)``.
+    """Han's step rule for the 3rd-order nonlinear ESO: ``β01 = 1/h``, ``β02 = 1/(1.6 h^1.5)``, ``β03 = 1/(8.6 h^2.2)``.
 
     Parameters
     ----------

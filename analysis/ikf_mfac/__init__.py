@@ -1,4 +1,4 @@
-"""Study `ikf-mfac`: Lu & Hou 2022, model-free adaptive control with disturbance rejection based on a modified Kalman filter (IKF-MFAC).
+"""Study `ikf-mfac`: Lu & Hou 2022, MFAC with disturbance rejection based on a modified Kalman filter (IKF-MFAC).
 
 The paper's values and reconstructions are in :mod:`.paper`, the plants in :mod:`.plants`, the
 closed loops (library blocks wired by :class:`~ctrl_analysis.engine.loop.Loop`) in :mod:`.loops`, the
@@ -151,7 +151,7 @@ def _sensitivity(ctx, result, seeds, chosen) -> None:
 
 
 def _figures(ctx, result, chosen, all_runs, per_run, sweeps, ratio, seeds, fig2_first, td_scan) -> None:
-    """Fig. 2-6, the TD step scan, the Monte Carlo spread, the sweeps and the sensitivity (low resolution with --quick)."""
+    """Fig. 2-6, the TD step scan, the Monte Carlo spread, the sweeps and the sensitivity (low resolution: --quick)."""
     ex1, ex2, fig2p = chosen["ex1"], chosen["ex2"], chosen["fig2"]
     examples = {"ex1": ex1, "ex2": ex2}
     dpi = 70 if ctx.quick else 120

@@ -68,7 +68,7 @@ def _key(ex: Example, scheme: str, *rest) -> tuple:
 
 
 def _unit(n: int, seeds: tuple) -> np.ndarray:
-    """Standard normal draws of ``seeds``, shape ``(n, B)``: ``0.0 + std * z`` is :func:`~.loops.noise_draws` bit for bit."""
+    """Standard normal draws of ``seeds``, shape ``(n, B)``: ``0.0 + std * z`` equals :func:`~.loops.noise_draws`."""
     k = (n, seeds)
     if k not in _UNIT:
         _UNIT[k] = draw_noise(list(seeds), n, gaussian_noise(1.0))[:, :, 0]

@@ -22,7 +22,7 @@ L = SCHEME_LABELS
 
 
 def record_consistency(result, n1: int, n2: int) -> list[dict]:
-    """Checks ``check.<key>.<scheme>.snr_from_rmse`` (printed SNR against the SNR its printed RMSE implies) and an erratum."""
+    """Checks ``check.<key>.<scheme>.snr_from_rmse`` (printed SNR vs the SNR its printed RMSE implies), an erratum."""
     rows = table1_consistency(n1, n2)
     for r in rows:
         key, s = ("ex1" if "constant" in r["cell"] else "ex2"), next(k for k, v in SCHEME_LABELS.items()

@@ -1,4 +1,4 @@
-"""The four closed loops of §4 (MFAC, TD-MFAC, D-MFAC, IKF-MFAC) built from library blocks, and their Monte Carlo runs."""
+"""The four closed loops of §4 (MFAC, TD-MFAC, D-MFAC, IKF-MFAC) from library blocks, and their Monte Carlo runs."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Monte Carlo runs, Table 1, its internal consistency, the ranking, and the sweeps beyond the paper; findings from computed numbers."""
+"""Monte Carlo runs, Table 1, its consistency, the ranking, the sweeps beyond the paper; findings from the numbers."""
 
 from __future__ import annotations
 

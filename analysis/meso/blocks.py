@@ -88,7 +88,7 @@ class Plant(KernelBlock, ContinuousBlock):
 
 
 def _eso_vector(paper: Paper, epsilon: float) -> np.ndarray:
-    """The parameter vector of :func:`~ctrl_analysis.engine.codegen.eso_rhs` for the linear ESO (29) at ε, its b0 slot 0."""
+    """The parameter vector of :func:`~ctrl_analysis.engine.codegen.eso_rhs` for the linear ESO (29) at ε, b0 slot 0."""
     return kernel_of(ExtendedStateObserver.from_epsilon(paper.n, epsilon, paper.beta, b0=0.0)).params
 
 

@@ -222,7 +222,7 @@ def _x3(sim, b):
 
 
 def plot_theta(sim: SituationRun, key: str, runs: list, title: str, max_points: int = 3000):
-    """Fig. 4 / Fig. 6: identified Θ per batch (markers) and the Θ in use (lines, after W(s) unless bypassed) vs the truth.
+    """Fig. 4 / Fig. 6: identified Θ per batch (markers), the Θ in use (lines, after W(s) unless bypassed), the truth.
 
     A diverged run's lines stop at its divergence (marked ×).
 

@@ -385,7 +385,7 @@ def _held_outputs(t, x, u, p, y):
 
 
 class BatchIdentification(KernelBlock, DiscreteBlock):
-    """Batch least squares every ``N`` samples on the MESO's estimates (a discrete block; the variant per run at the batch end).
+    """Batch least squares every ``N`` samples on the MESO's estimates (discrete block; the variant per run at the end).
 
     The block's per-sample update only accumulates the batch's Gram matrix of φ (kernel
     :func:`gram_update`; the batched methods are derived from it). The batch-end solve

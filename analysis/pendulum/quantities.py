@@ -240,7 +240,7 @@ def _record_chatter(result: StudyResult, d, stats) -> None:
 
 
 def _record_offset(result: StudyResult, d, stats) -> None:
-    """The steady offset of the fuzzy loop: what a peak measured against r (not the final value) would call overshoot."""
+    """The steady offset of the fuzzy loop: what a peak measured against r (not the final value) calls overshoot."""
     q = d.main["nofilter"].quiet
     off = float(np.mean(q.phi[q.t >= d.p.t_ss, 0]) - d.p.step)
     st = stats["main"]

@@ -101,7 +101,7 @@ def regime_label(p, literal: bool) -> str:
 
 
 def qid(case: str, metric: str, literal: bool = False) -> str:
-    """Quantity id of a closed-loop metric: ``cl.<case>`` (main, paper's cases), ``beyond.<case>``, ``literal.<case>``."""
+    """Quantity id of a closed-loop metric: ``cl.<case>`` (main, the paper's), ``beyond.<case>``, ``literal.<case>``."""
     prefix = "literal" if literal else ("cl" if case in ("nofilter", "filter") else "beyond")
     return f"{prefix}.{case}.{metric}"
 

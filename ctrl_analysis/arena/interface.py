@@ -217,7 +217,7 @@ class _AlphaBetaGamma(KernelBlock, DiscreteBlock):
 
 
 class _LowPass(DiscreteLowPass):
-    """:class:`~ctrl_analysis.estimators.lowpass.DiscreteLowPass` built from its corner frequency ``omega`` (a number, so it can differ per run)."""
+    """:class:`~ctrl_analysis.estimators.lowpass.DiscreteLowPass` from its corner ``omega`` (a number, per run)."""
 
     def __init__(self, omega: float, h: float, order: int = 2, channels: int = 2):
         super().__init__(LowPassFilter(omega, order), h, channels=channels)

@@ -1,4 +1,4 @@
-"""Controllers as blocks: the MFAC family, golden-section adaptive control, high-order differential feedback, PD, PID, fuzzy."""
+"""Controllers as blocks: the MFAC family, golden-section adaptive, high-order differential feedback, PD, PID, fuzzy."""
 
 from .differential_feedback import (
     HighOrderDifferentialFeedback,

@@ -112,7 +112,7 @@ def _block_sums(z, oz, dz, mu, lo, m, acc):
 
 @jitable
 def _centroid(z, oz, mu, n):
-    """Centroid ``∫ z μ dz / ∫ μ dz`` of the piecewise-linear set ``mu[0 .. n − 1]`` on the uniform grid ``z[oz:oz + n]``.
+    """Centroid ``∫ z μ dz / ∫ μ dz`` of the piecewise-linear ``mu[0 .. n − 1]`` on the uniform grid ``z[oz:oz + n]``.
 
     The one source of the centroid; ``mu[g]`` is a number (one run) or a row of the batch's columns. Its
     two sums over the ``n − 1`` segments are taken as ``np.sum`` takes them along a row (:data:`_PW_BLOCK`,
@@ -241,7 +241,7 @@ def mamdani_layout(n_e: int, n_ec: int, n_u: int, n_grid: int) -> Layout:
 
 @jitable
 def _mamdani_at(p):
-    """Sizes read from ``p``, offsets of :func:`mamdani_layout`'s arrays: ``(n_e, n_ec, n_u, n_grid, c_e, c_ec, rules, z, mu_u)``."""
+    """Sizes from ``p``, offsets of the layout's arrays: ``(n_e, n_ec, n_u, n_grid, c_e, c_ec, rules, z, mu_u)``."""
     n_e, n_ec, n_u, n_g = as_int(p[AT.n_e]), as_int(p[AT.n_ec]), as_int(p[AT.n_u]), as_int(p[AT.n_grid])
     o_r = _M_ARRAYS + n_e + n_ec
     o_z = o_r + n_e * n_ec
@@ -570,7 +570,7 @@ class FuzzyLookupController(_FuzzyBlock):
         self._unit_params = self._pack(1.0, 1.0, 1.0)
 
     def _pack(self, Ke, Kec, Ku) -> np.ndarray:
-        """The parameter vector of :func:`lookup_output` with the factors ``Ke``, ``Kec``, ``Ku``: the grid and the table."""
+        """The parameter vector of :func:`lookup_output` with factors ``Ke``, ``Kec``, ``Ku``: grid and table."""
         fc = self.controller
         return lookup_layout(self.E.size, self.EC.size).pack(
             Ke=Ke, Kec=Kec, Ku=Ku, X_e=fc.X_e, X_ec=fc.X_ec, n_e=self.E.size, n_ec=self.EC.size,

@@ -1,4 +1,4 @@
-"""Golden-section adaptive control with maintaining tracking and a logic integral, on a 2nd-order characteristic model."""
+"""Golden-section adaptive control with maintaining tracking and a logic integral, on a 2nd-order model."""
 
 from __future__ import annotations
 

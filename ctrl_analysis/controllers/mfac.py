@@ -1,4 +1,4 @@
-"""Model-free adaptive control (compact-form dynamic linearisation): PPD estimator, control laws, and their compositions as discrete blocks.
+"""Model-free adaptive control (compact-form dynamic linearisation): PPD estimator, control laws, their blocks.
 
 Blocks (each batched, under the protocol of :mod:`ctrl_analysis.engine.blocks`) for any SISO discrete
 plant ``y(k+1) = f(y(k), ..., u(k), ...)`` whose (possibly filtered) output ``y_f`` the controller

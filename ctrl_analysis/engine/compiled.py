@@ -1,4 +1,4 @@
-"""The compiled path of :meth:`Loop.simulate <ctrl_analysis.engine.loop.Loop.simulate>`: choosing it, per-run parameters, running a chunk.
+"""The compiled path of :meth:`~ctrl_analysis.engine.loop.Loop.simulate`: choosing it, per-run parameters, a chunk.
 
 The runner itself is generated and compiled by :mod:`ctrl_analysis.engine.codegen`. Per-run parameters
 are run-time values (``Loop.simulate(params=...)``, :mod:`ctrl_analysis.engine.params`): one kernel
@@ -152,7 +152,7 @@ def _tell_slow_path(plan, why: str) -> None:
 
 
 def check_kernel_reads(plan, kernels: dict) -> None:
-    """Call every kernel once in Python on vectors of the engine's sizes: an out-of-range index, or a write into the inputs, is an error.
+    """Call every kernel once in Python on vectors of the engine's sizes: an out-of-range index or input write fails.
 
     Compiled code does not check bounds, so a kernel reading a parameter slot its block did not
     fill (or a state, input or output beyond the block's) would return garbage; the same function

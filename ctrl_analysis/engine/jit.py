@@ -1,4 +1,4 @@
-"""numba plumbing shared by the compiled engine and the kernel-first blocks: jitted kernels, generated modules, their cache.
+"""numba plumbing shared by the compiled engine and the kernel-first blocks: jitted kernels, generated modules, cache.
 
 * :func:`_jit` compiles a kernel (``inline="always"``, so it disappears into whatever calls it);
 * :func:`_runner_module` imports generated source from a file in :func:`cache_dir` named by a hash
@@ -23,7 +23,7 @@ _JIT: dict = {}
 
 
 def _jit(fn):
-    """``fn`` compiled by numba as a kernel (``inline="always"``, cached on disk next to its source when it has one), once per process."""
+    """``fn`` compiled by numba as a kernel (``inline="always"``, disk-cached beside its source), once per process."""
     import numba
 
     if fn not in _JIT:

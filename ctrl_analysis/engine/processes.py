@@ -1,4 +1,4 @@
-"""A batch of :meth:`Loop.simulate <ctrl_analysis.engine.loop.Loop.simulate>` split over processes or a Dask cluster's workers.
+"""A batch of :meth:`~ctrl_analysis.engine.loop.Loop.simulate` split over processes or a Dask cluster's workers.
 
 The chunks' responses are joined into one, equal bit for bit to one process (runs are
 independent); per-run inputs, initial states and run-time parameters are cut with each chunk.

@@ -54,7 +54,7 @@ def sigma_rhs(t, z, u, p, dz):
 
 
 def sigma_corrected_output(t, z, u, p, y):
-    """Eq. (11), the corrected reading: ``x̂_1 = z_1``, ``x̂_i = z_i + a_(i-1) (y - z_1)``; arguments as :func:`sigma_rhs`.
+    """Eq. (11), corrected reading: ``x̂_1 = z_1``, ``x̂_i = z_i + a_(i-1) (y - z_1)``; arguments as :func:`sigma_rhs`.
 
     Parameters
     ----------

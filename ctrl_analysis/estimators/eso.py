@@ -136,7 +136,7 @@ def eso_layout(m: int) -> Layout:
 
 @jitable(inline="always")  # also called inside other kernels (meso's ESO with a model term)
 def eso_rhs(t, x, u, p, dx):
-    """(Nonlinear) ESO: ``x̂_i' = L_i g_i(e) + x̂_(i+1)``, ``+ b0 u`` in row n, ``e = y - x̂_1``; the kernel of :class:`ExtendedStateObserver`.
+    """(Nonlinear) ESO: ``x̂_i' = L_i g_i(e) + x̂_(i+1)``, ``+ b0 u`` in row n, ``e = y - x̂_1``; the ESO block's kernel.
 
     ``g_i(e) = e`` (linear) or Han's ``fal(e, alpha_i, delta)``. fal branches on the error (its
     linear zone), so the batched methods of a fal ESO call it run by run (``Kernels(columns=False)``);

@@ -262,7 +262,7 @@ class TrackingDifferentiator(KernelBlock, DiscreteBlock):
         return self.x0.copy()
 
     def step_block(self):
-        """The sample's steps as a static block (inputs ``v``, ``x[0]``, ``x[1]``; outputs ``x[0]``, ``x[1]`` after them).
+        """The sample's steps as a static block (inputs ``v``, ``x[0]``, ``x[1]``; outputs ``x[0]``, ``x[1]`` after).
 
         With two :class:`~ctrl_analysis.engine.blocks.UnitDelay` blocks holding its outputs it is
         this TD with feedthrough, computing the steps once per sample where the block's output and

@@ -91,7 +91,7 @@ def cell(text) -> str:
 
 
 def check_results(name: str, results) -> None:
-    """Raise ``TypeError`` naming ``name`` unless ``results`` is a results.json dict (``study``, ``quantities`` list)."""
+    """Raise ``TypeError`` naming ``name`` unless ``results`` is a results.json dict (``study``, ``quantities``)."""
     if not isinstance(results, dict) or not isinstance(results.get("quantities"), list) \
             or not isinstance(results.get("study"), str):
         raise TypeError(f"{name} must be a results.json dict with 'study' and a 'quantities' list, got {results!r:.80}")

@@ -254,7 +254,7 @@ def test_per_run_parameters_equal_single_blocks():
 
 
 def test_fuzzy_and_filter_blocks_in_a_loop_compiled_equal_numpy():
-    """One loop (one compiled structure): Kalman and α-β filters, an error gain, the lookup and the Mamdani controllers."""
+    """One loop (one compiled structure): Kalman and α-β filters, an error gain, lookup and Mamdani controllers."""
     from ctrl_analysis.engine.blocks import StaticGain
     from ctrl_analysis.engine.loop import Loop, place
 

@@ -106,7 +106,7 @@ def test_modules_hold_one_topic(path):
 
 
 def _import_graph(lazy: bool) -> dict:
-    """``{module: {modules of ctrl_analysis it imports}}`` read from the source (``lazy``: also imports inside functions)."""
+    """``{module: {ctrl_analysis modules it imports}}`` from the source (``lazy``: imports inside functions too)."""
     import ast
 
     pkg = ROOT / "ctrl_analysis"

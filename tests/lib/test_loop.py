@@ -1,4 +1,4 @@
-"""Tests of the block protocols (ctrl_analysis.engine.blocks) and the batched interconnect (ctrl_analysis.engine.loop)."""
+"""Tests of the block protocols (ctrl_analysis.engine.blocks) and the batched interconnect (engine.loop)."""
 
 import control as ct
 import numpy as np

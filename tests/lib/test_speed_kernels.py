@@ -217,7 +217,7 @@ def test_environment_can_make_auto_mean_numpy(monkeypatch):
 
 
 def test_study_kernels_are_the_numpy_methods():
-    """Kernels of study blocks (differential-estimator's plant (19) and its sensor, a StaticGain), run by run in plain Python."""
+    """Kernels of study blocks (differential-estimator's plant (19), its sensor, a StaticGain), run in plain Python."""
     from analysis.differential_estimator.loops import Plant19, sensor
     from analysis.differential_estimator.paper import EX1
 

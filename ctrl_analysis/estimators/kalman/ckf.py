@@ -1,4 +1,4 @@
-"""The characteristic-model Kalman filter (2 states, driven by identified parameters) and a full-order reference filter."""
+"""The characteristic-model Kalman filter (2 states, driven by identified parameters) and a full-order reference."""
 
 from __future__ import annotations
 
