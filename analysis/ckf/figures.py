@@ -228,11 +228,11 @@ def save_all(ctx, result, p, data, data_f, extra, ident):
         extra_words = (" (an LPF run beside the loop, not fed back: the no-filter loop's feedback is unfiltered, its "
                        "identification is not; finding nofilter-identification)" if case == "nofilter" and own == "lpf"
                        else "")
+        loop = "without a filter" if case == "nofilter" else "with the " + TABLE1_ROWS[case]
         ctx.save_figure(result, plot_case(data[case], case, no), f"fig{no}_{case}.png",
                         caption=f"Redraws the paper's Fig. {no}: true output, measurement and control of the "
-                                f"golden-section loop {'without a filter' if case == 'nofilter' else 'with the ' + TABLE1_ROWS[case]}"
-                                f" over the whole run (one run, {id_note.get(own, own)}{extra_words}); the plant is "
-                                "the study's reconstruction.")
+                                f"golden-section loop {loop} over the whole run (one run, "
+                                f"{id_note.get(own, own)}{extra_words}); the plant is the study's reconstruction.")
     ctx.save_figure(result, plot_steady_outputs(data, p.t_steady), "fig5_steady_outputs.png",
                     caption="Redraws the paper's Fig. 5: the three true outputs (no filter, LPF, CKF) in the steady "
                             "stage, zoomed in; Table 1's output mean and variance summarise them.")
@@ -255,17 +255,14 @@ def save_all(ctx, result, p, data, data_f, extra, ident):
     ctx.save_figure(result, plot_steady_compare(data, p.t_steady), "fig8_steady_lpf_vs_ckf.png",
                     caption="Redraws the paper's Fig. 8: steady-stage true output (top, both filters) and control with "
                             "the LPF (middle) and with the CKF (bottom), the two control panels on one scale; the "
-                            "paper "
-                            "claims both are steadier with the CKF (claims steady-output, steady-control).")
+                            "paper claims both are steadier with the CKF (claims steady-output, steady-control).")
     ctx.save_figure(result, plot_filter_error(data, t_filter=p.t_filter), "fig9_filter_error.png",
                     caption="Redraws the paper's Fig. 9: filter error (filtered minus true output) of the LPF and the "
                             "CKF; left, the transient 0-10 s on a linear axis; right, the whole run on a "
                             "symmetric-log axis (linear within ±1). Dotted line: 2 s, from when the filters are fed "
-                            "back. "
-                            "The paper claims the CKF's error is smaller in both stages (claims transient, steady); "
-                            "the "
-                            "transient claim is judged from 2 s on, where the two filters compete in the loop (before, "
-                            "both loops feed back the measurement).")
+                            "back. The paper claims the CKF's error is smaller in both stages (claims transient, "
+                            "steady); the transient claim is judged from 2 s on, where the two filters compete in the "
+                            "loop (before, both loops feed back the measurement).")
     wins = [(a, a + 10.0) for a in np.arange(0.0, p.t_end, 10.0)]
     fits = np.array([noise_free_fit(d, p, a, b)[0].mean(0) for a, b in wins])
     ctx.save_figure(result, plot_parameters(d, wins, fits, noise_free_fit(d, p)[0].mean(0), theta0=p.theta0,
@@ -273,13 +270,11 @@ def save_all(ctx, result, p, data, data_f, extra, ident):
                     "fig10_identified_parameters.png",
                     caption="Beyond the paper: the identified f̂1, f̂2, ĝ0 of the characteristic model over time (CKF "
                             "case, live identification: band and mean; frozen-Φ ablation: dashed) against the "
-                            "noise-free "
-                            "least-squares fit of the true plant on 10-s windows and on the whole steady stage; dotted "
-                            "red: θ0; grey: the bounds of the projection box (ĝ0 on a log axis). f̂1 and f̂2 drift "
-                            "the whole "
-                            f"run without settling; ĝ0 reaches its lower bound {p.lower[2]:g} (median first time "
-                            f"{g0['first'] if g0['first'] is not None else float('nan'):.2f} s) and stays near it "
-                            f"(steady-stage mean {bounds['g0_steady']:.2g}), "
+                            "noise-free least-squares fit of the true plant on 10-s windows and on the whole steady "
+                            "stage; dotted red: θ0; grey: the bounds of the projection box (ĝ0 on a log axis). f̂1 and "
+                            f"f̂2 drift the whole run without settling; ĝ0 reaches its lower bound {p.lower[2]:g} "
+                            f"(median first time {g0['first'] if g0['first'] is not None else float('nan'):.2f} s) and "
+                            f"stays near it (steady-stage mean {bounds['g0_steady']:.2g}), "
                             f"{bounds['g0_fit'] / bounds['g0_steady']:.0f}x below the plant's fit (finding "
                             "identification-live).")
     ctx.save_figure(result, plot_q_sweep(Q_SWEEP, extra["sweep"], extra["lpf"]), "fig11_q_sweep.png",
@@ -291,9 +286,8 @@ def save_all(ctx, result, p, data, data_f, extra, ident):
                     "fig12_second_plant.png",
                     caption=f"Beyond the paper: the three loops on a second plant, {name} (lightly damped, ζ = 0.15, "
                             "with a 0.1 s delay as a 2nd-order Padé; unit DC gain): true outputs over the whole run "
-                            "(top), the "
-                            "steady stage zoomed with the steady means over all runs (middle) and filter errors on a "
-                            "symmetric-log axis (bottom). The outputs stay "
-                            "below the reference 10 over the steady stage, the CKF loop lowest and still rising at "
-                            "100 s: finding plant2-offset computes why.")
+                            "(top), the steady stage zoomed with the steady means over all runs (middle) and filter "
+                            "errors on a symmetric-log axis (bottom). The outputs stay below the reference 10 over the "
+                            "steady stage, the CKF loop lowest and still rising at 100 s: finding plant2-offset "
+                            "computes why.")
 

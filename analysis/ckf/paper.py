@@ -162,7 +162,8 @@ class CKFStudy:
                                 plausible=fixed("enters no claim (the cost claim counts operations); its effect on "
                                                 "the full-order KF's accuracy is reported in finding full-order-kf"))
     kf_P0: float = reconstructed(1.0, "initial covariance of the full-order KF",
-                                 plausible=fixed("enters no claim; affects only the first samples of the full-order KF"))
+                                 plausible=fixed("enters no claim; affects only the first samples of the "
+                                                 "full-order KF"))
     frozen_rls: tuple = reconstructed(
         (1e-3, 0.999, 3e-3), "the frozen-Φ ablation (the study's previous RLS settings): (P0, λ, trace cap); "
         "f̂1, f̂2 stay at θ0, only ĝ0 moves",

@@ -135,8 +135,8 @@ def main_quantities(result: StudyResult, p: Example1, d: dict) -> None:
     """Quantities ``ex1.{sigma,eso}.*``, the ESO/Σ ratios, the estimate reading; findings."""
     err, ok = d["err"], d["ok"]
     if d["diverged"].any():
-        result.finding("ex1-divergence", f"Example 1 runs diverged (run, step): "
-                       f"{list(zip(np.flatnonzero(d['diverged']).tolist(), d['step'][d['diverged']].tolist(), strict=True))}")
+        where = list(zip(np.flatnonzero(d["diverged"]).tolist(), d["step"][d["diverged"]].tolist(), strict=True))
+        result.finding("ex1-divergence", f"Example 1 runs diverged (run, step): {where}")
     for who, name, paper in (("sigma", "Σ (n0 = 5, a = 7)", p.sigma_err), ("eso", "Han's NESO, textbook gains",
                                                                           p.eso_err)):
         for i in (0, 1):
@@ -335,7 +335,8 @@ def _tradeoff(result, p, d, x, bw_s, bw_e, tune, err_l) -> dict:
     m_l = np.mean(err_l[ok], axis=0)
     result.finding(
         "ex1-fair-equal-bandwidth",
-        f"Tuned to Σ's −3 dB bandwidth, a linear ESO's mean errors are {m_l[0] / m_s[0]:.2f}× and {m_l[1] / m_s[1]:.2f}× "
+        f"Tuned to Σ's −3 dB bandwidth, a linear ESO's mean errors are {m_l[0] / m_s[0]:.2f}× and "
+        f"{m_l[1] / m_s[1]:.2f}× "
         f"Σ's (x1, x2) and Han's fal ESO's {fal['equal_bw'][0] / m_s[0]:.2f}× and {fal['equal_bw'][1] / m_s[1]:.2f}×: "
         f"no order-of-magnitude gap. "
         f"Han's textbook ESO (step-size gains for h = 1 ms) linearised inside |e| < δ has a −3 dB bandwidth of "

@@ -214,6 +214,7 @@ def _figures(ctx, result, chosen, all_runs, per_run, sweeps, ratio, seeds, fig2_
                caption="Beyond the paper: mean RMSE of the four schemes against MFAC's step factor ρ and weight "
                        "λ (Example 1's printed values marked; Example 2 only says 'similar'), showing where IKF-MFAC's "
                        "advantage depends on the tuning; a mean over at least 80 % of the runs is a filled point, over "
-                       "50-80 % a hollow annotated one, at least half diverged is left out; counts in the panel titles.")
+                       "50-80 % a hollow annotated one, at least half diverged is left out; counts in the panel "
+                       "titles.")
     ctx.save_figure(result, sensitivity.plot_sensitivity(result), "sensitivity.png", dpi=dpi,
                     caption=sensitivity.caption(result, result.sensitivity.get("note", "")))

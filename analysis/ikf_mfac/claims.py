@@ -240,7 +240,8 @@ def _fig2(result, fig2: list) -> None:
     _judge(result, "fig2-larger-r", [(shows, stronger & slower)],
            ["fig2.R", "fig2.diverged_runs", "fig2.rejection", "fig2.rise"],
            f"Over the R values where the run stays healthy, the rejection measure falls in "
-           f"{100 * np.mean(f_ok) if f_ok else 0:.0f} % and the rise lengthens in {100 * np.mean(r_ok) if r_ok else 0:.0f} "
+           f"{100 * np.mean(f_ok) if f_ok else 0:.0f} % and the rise lengthens in "
+           f"{100 * np.mean(r_ok) if r_ok else 0:.0f} "
            f"% of the {len(f_ok)} runs healthy at two R or more. Means over the healthy runs: {pts}"
            + (f"; at R = {', '.join(lost)} runs diverged: rejection does not keep growing with R, the loop is lost"
               if lost else "") + ".")
@@ -322,6 +323,7 @@ def judge_claims(result, table: dict, noise: dict, fig2: list, skipped: str = ""
            ["ex2.td_mfac.rmse", "ex2.ikf_mfac.rmse", "ex2.d_mfac.rmse"],
            f"TD-MFAC alone in {100 * np.mean(t[('ex2', 'td_mfac')] < t[('ex2', 'd_mfac')]):.0f} %, IKF-MFAC alone in "
            f"{100 * np.mean(t[('ex2', 'ikf_mfac')] < t[('ex2', 'd_mfac')]):.0f} %. Mean RMSE: TD-MFAC "
-           f"{_fmt(r[('ex2', 'td_mfac')])}, IKF-MFAC {_fmt(r[('ex2', 'ikf_mfac')])}, D-MFAC {_fmt(r[('ex2', 'd_mfac')])}.")
+           f"{_fmt(r[('ex2', 'td_mfac')])}, IKF-MFAC {_fmt(r[('ex2', 'ikf_mfac')])}, D-MFAC "
+           f"{_fmt(r[('ex2', 'd_mfac')])}.")
     _fig2(result, fig2)
     _noise(result, noise["levels"], noise["rows"], skipped)

@@ -30,7 +30,8 @@ def record_consistency(result, n1: int, n2: int) -> list[dict]:
         result.check(f"check.{key}.{s}.snr_from_rmse", f"{r['cell']}: SNR implied by the printed RMSE {r['rmse']}",
                      float(r["snr_implied"]), paper=r["snr_printed"], unit="dB", cell=f"{r['cell']} against its RMSE",
                      tolerance=r["rounding_db"] / abs(r["snr_printed"]),
-                     note="SNR = 10 lg(mean y*²) − 20 lg RMSE; tolerance: the 4-decimal rounding of both printed values")
+                     note="SNR = 10 lg(mean y*²) − 20 lg RMSE; tolerance: the 4-decimal rounding of both printed "
+                          "values")
     bad = [r for r in rows if abs(r["diff_db"]) > r["rounding_db"]]
     worst = max(rows, key=lambda r: abs(r["diff_db"]))
     parts = [f"{r['cell']}: printed {r['snr_printed']:.4f} dB, implied by RMSE {r['rmse']:.4f} is "
@@ -98,8 +99,9 @@ def record_rearm(result, key: str, ex, variant: tuple) -> None:
                     runs_diverged=int((~ok).sum()), derived_from=rid, unit="dB",
                     cell=table1_cell(key, "d_mfac", "snr"), primary=False,
                     note="the other reading of eq. (36), derived from its RMSE")
+    other = "set at the first entry only" if ex.rearm else "re-armed"
     result.finding(f"{key}-d-mfac-rearm", f"{name}: D-MFAC's mean RMSE is {used.value:.4f} with k_m re-armed at "
-                   f"every entry into the band and {m:.4f} with k_m {'set at the first entry only' if ex.rearm else 're-armed'}, "
+                   f"every entry into the band and {m:.4f} with k_m {other}, "
                    f"against Table 1's {paper} (the rule '{closer}' is closer; Table 1's value lies above "
                    f"{q.percentile:.1f} % of that rule's runs). Eq. (36) does not say which; the study uses "
                    f"'{'re-armed at every entry' if ex.rearm else 'first entry only'}', and the plausible box "

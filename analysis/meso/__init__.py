@@ -143,10 +143,11 @@ def _figures(ctx, result, sims) -> None:
     for key, sim in sims.items():
         sit, rows = SITUATIONS[key], sim.rows
         fig_no = (3, 4) if key == "s1" else (5, 6)
+        seed = rows[pick(rows, "eso", "none", True)[0]].seed
         series = {"noise off": [
                       (pick(rows, "eso", "none", False)[0], "ESO", c["eso"]),
                       (pick(rows, "meso", "wellposed", False)[0], "MESO (well-posed LSM)", c["meso"])],
-                  f"noise on, 0.002·U[−1, 1] (the paper's setting; run seed {rows[pick(rows, 'eso', 'none', True)[0]].seed})": [
+                  f"noise on, 0.002·U[−1, 1] (the paper's setting; run seed {seed})": [
                       (pick(rows, "eso", "none", True)[0], "ESO", c["eso"]),
                       (pick(rows, "meso", "wellposed", True)[0], "MESO (well-posed LSM)", c["meso"])]}
         title = (f"Fig. {fig_no[0]} (situation {key[1]}, b0 = {sit.b0:g}, b = {PAPER.b:g}): PD control with ESO "
@@ -195,10 +196,10 @@ def _figures(ctx, result, sims) -> None:
                                 "well-posed MESO, the Table-1 literal accumulation and the literal rule without W(s)"
                                 + (" and the direct rule (10)" if key == "s2" else "") + ". A diverged run's trace "
                                 "stops where it diverged; y-ranges are fixed around the truth, so diverging traces "
-                                "leave the "
-                                "panel" + ("; θ3 is 0 by construction in situation 1, whose reduced regression (22) "
-                                "does not identify it" if key == "s1" else "") + " (quantities " + key + ".theta_final, " + key
-                                + ".literal.*).")
+                                "leave the panel"
+                                + ("; θ3 is 0 by construction in situation 1, whose reduced regression (22) "
+                                   "does not identify it" if key == "s1" else "")
+                                + " (quantities " + key + ".theta_final, " + key + ".literal.*).")
     ctx.save_figure(result, figures.plot_identifiability(_cond_series(sims), PAPER.cond_threshold),
                     "identifiability.png",
                     caption="Beyond the paper: condition number of each LSM batch's regression (Theorem 1's "

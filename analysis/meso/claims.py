@@ -337,7 +337,8 @@ def _judge_tables(result, paper, per_run, alg) -> None:
                     + ("—" if b["share"] is None else f"{b['share']:.0%}") + f" of {b['runs']} noise runs (judged "
                     "as holding when in at least half); median MESO/ESO − 1: ")
         else:
-            head = f"noise-free run (the tables' reading): the MESO is below the ESO in {len(lower)}/5 columns; MESO/ESO − 1: "
+            head = (f"noise-free run (the tables' reading): the MESO is below the ESO in {len(lower)}/5 columns; "
+                    "MESO/ESO − 1: ")
         note = (f"{SITUATIONS[key].table}, {alg}: " + head
                 + "; ".join(f"{m} {100 * c:+.0f} %" if c is not None else f"{m} —"
                             for m, c in b["median_change"].items()))
@@ -391,8 +392,8 @@ def _judge_observers(result, readings, alg) -> None:
     ok = [m for m in METRICS if _v(result, f"s1.nonoise.meso_eps_larger.{m}") <= _v(result, f"s1.nonoise.eso.{m}")]
     ratio = np.asarray(_v(result, "s1.meso_eps_larger.noise_std_ratio"))
     result.claim(_CLAIM["larger-eps"], len(ok) == 5 and bool(np.all(ratio < 1)),
-                 evidence=[f"s1.nonoise.meso_eps_larger.{m}" for m in METRICS] + [f"s1.nonoise.eso.{m}" for m in METRICS]
-                 + ["s1.meso_eps_larger.noise_std_ratio"],
+                 evidence=[f"s1.nonoise.meso_eps_larger.{m}" for m in METRICS]
+                 + [f"s1.nonoise.eso.{m}" for m in METRICS] + ["s1.meso_eps_larger.noise_std_ratio"],
                  note=f"{alg}, situation 1, noise off: the MESO at ε = {e:g} is at least as accurate as the ESO at "
                       f"ε = {PAPER.epsilon:g} in {len(ok)}/5 columns ({', '.join(ok) or 'none'}); its noise std is "
                       f"×{_vec(ratio)} (e1, e2, e3). The whole-run mean includes the first batch, where the MESO is "

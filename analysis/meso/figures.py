@@ -292,8 +292,9 @@ def plot_identifiability(per_sit: dict, threshold: float):
     -------
     matplotlib.figure.Figure
     """
-    fig, axes = new_figure(1, 2, size=(13, 5.5), title="Identifiability of each LSM batch (Theorem 1): condition "
-                                                       "number of the column-scaled regression matrix (no paper figure)")
+    title = ("Identifiability of each LSM batch (Theorem 1): condition number of the column-scaled regression "
+             "matrix (no paper figure)")
+    fig, axes = new_figure(1, 2, size=(13, 5.5), title=title)
     for ax, (name, (tb, series, gated)) in zip(np.atleast_1d(axes), per_sit.items(), strict=True):
         for values, label, style in series:
             if isinstance(values, tuple):

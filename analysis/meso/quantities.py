@@ -88,7 +88,8 @@ def linear_quantities(result: StudyResult, lin, sc: dict) -> None:
                         f"log-log slope of mean |e_{i + 1}| vs ε (law (4)/(7): {lin.law[i]})",
                         float(sc["slope"][i]), unit="",
                         note=f"ESO in the noise-free situation-1 loop, ε ∈ {sc['eps'].tolist()}, mean over "
-                             f"[{sc['window'][0]:g}, {sc['window'][1]:g}) s: {np.array2string(sc['err'][:, i], precision=3)}")
+                             f"[{sc['window'][0]:g}, {sc['window'][1]:g}) s: "
+                             f"{np.array2string(sc['err'][:, i], precision=3)}")
         result.quantity(f"leso.noise_std.x{i + 1}",
                         f"steady std of e_{i + 1} caused by the measurement noise, per ε {lin.eps.tolist()}",
                         lin.noise_std[:, i], unit=units[i],
@@ -566,10 +567,12 @@ def _gate_quantities(result, s2) -> dict:
                         "the last batch, noise off", None if s2.diverged[i] else s2.theta_batch[-1, i],
                         diverged=bool(s2.diverged[i]), runs=1, unit="[1/s², 1/s, 1, 1/s²]",
                         note=f"threshold {PAPER.cond_threshold:g}: {np.round(s2.theta_batch[-1, base], 4).tolist()}"
-                             + (f"; diverged at t = {first_divergence(s2, [i]):.2f} s: no value" if s2.diverged[i] else ""))
+                             + (f"; diverged at t = {first_divergence(s2, [i]):.2f} s: no value"
+                                if s2.diverged[i] else ""))
         result.quantity(f"s2.gate{g:g}.track_x1", f"situation 2, well-posed MESO with gate threshold {g:g}: mean "
                         "|e| track_x1, noise off", None if s2.diverged[i] else _one(s2, i, "track_x1"),
                         diverged=bool(s2.diverged[i]), runs=1, unit="",
                         note=f"threshold {PAPER.cond_threshold:g}: {_one(s2, base, 'track_x1'):.4g}"
-                             + (f"; diverged at t = {first_divergence(s2, [i]):.2f} s: no value" if s2.diverged[i] else ""))
+                             + (f"; diverged at t = {first_divergence(s2, [i]):.2f} s: no value"
+                                if s2.diverged[i] else ""))
     return out

@@ -271,10 +271,10 @@ def _loop_figures(ctx, result, d) -> None:
                             "and the rule table are not printed and are reconstructed (seven triangular terms, "
                             "U = sat(E + EC, ±3)).")
     main_lab, lit_lab = regimes.regime_label(p, False), regimes.regime_label(d.lit, True)
-    ctx.save_figure(result,
-                    figures.plot_fig3_states({f"paper's K as a discrete α-β filter\n{main_lab}": m["filter"].noisy,
-                                                      f"correct steady-state gain (beyond the paper)\n{main_lab}": m["kf_ss"].noisy,
-                                                      f"paper's K as a discrete α-β filter\n{lit_lab}": lit["filter"].noisy}),
+    states = {f"paper's K as a discrete α-β filter\n{main_lab}": m["filter"].noisy,
+              f"correct steady-state gain (beyond the paper)\n{main_lab}": m["kf_ss"].noisy,
+              f"paper's K as a discrete α-β filter\n{lit_lab}": lit["filter"].noisy}
+    ctx.save_figure(result, figures.plot_fig3_states(states),
                     "fig3_states_filtering.png",
                     caption="Redraws the paper's Fig. 3: angle and rate before filtering (measured y and its backward "
                             "difference, grey dots) and after (the filter estimate, blue line) with the true states "

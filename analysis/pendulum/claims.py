@@ -113,7 +113,8 @@ def _per_run_claims(result: StudyResult, p) -> None:
                f"per-run step overshoot (peak for t < {p.t_tr:g} s above the run's own final value) with {gw} against "
                f"no filter on the same noise ({'literal' if lit else 'main'} regime); "
                + _describe(st, "overshoot") + f"; 'clearly' read as a median change of at least −{p.clear_margin:.0%}; "
-               f"per run {_val(result, qid('filter', 'overshoot', lit))} vs {_val(result, qid('nofilter', 'overshoot', lit))}, "
+               f"per run {_val(result, qid('filter', 'overshoot', lit))} vs "
+               f"{_val(result, qid('nofilter', 'overshoot', lit))}, "
                f"noise-only window {_val(result, qid('filter', 'overshoot_noise_only', lit))} vs "
                f"{_val(result, qid('nofilter', 'overshoot_noise_only', lit))}, noise-free "
                f"{_val(result, qid('filter', 'overshoot_noise_free', lit))} vs "
@@ -134,7 +135,8 @@ def _per_run_claims(result: StudyResult, p) -> None:
            f"RMS error (steady window, per run) of what the controller receives against the true state, {gw} vs the "
            "raw measurement and its backward difference (main regime); "
            + _describe(sa, "angle") + "; " + _describe(sr, "rate")
-           + f"; means {_val(result, ids[2])} vs {_val(result, ids[0])} and {_val(result, ids[3])} vs {_val(result, ids[1])}.")
+           + f"; means {_val(result, ids[2])} vs {_val(result, ids[0])} and {_val(result, ids[3])} vs "
+             f"{_val(result, ids[1])}.")
 
 
 def _fast_smooth(result: StudyResult, p) -> None:
@@ -155,13 +157,13 @@ def _fast_smooth(result: StudyResult, p) -> None:
            f"with {gw} (main regime). Quickly: {share or 0:.0%} of the runs settle into the ±{p.settle_band:.0%} band "
            f"(at least {p.settled_share_min:.0%} required) and " + _describe(stt, "settling time")
            + f", required not clearly later (median change at most +{p.clear_margin:.0%}): "
-           + ("yes" if quick else "no") + ". Smoothly ('eliminates the jitter'): " + _describe(se,
-                                                                                               "control effort (RMS "
-                                                                                               "of u)")
-           + "; " + _describe(sc,
-                              "chatter (RMS of Δu)") + f"; required a median change of at most −{p.smooth_margin:.0%} "
-           f"for both; RMS of u {_val(result, qid('filter', 'accel_rms'))} vs {_val(result, qid('nofilter', 'accel_rms'))} "
-           "(finding control-chatter: what holding φ = r needs).")
+           + ("yes" if quick else "no") + ". Smoothly ('eliminates the jitter'): "
+           + _describe(se, "control effort (RMS of u)")
+           + "; " + _describe(sc, "chatter (RMS of Δu)")
+           + f"; required a median change of at most −{p.smooth_margin:.0%} "
+             f"for both; RMS of u {_val(result, qid('filter', 'accel_rms'))} vs "
+             f"{_val(result, qid('nofilter', 'accel_rms'))} "
+             "(finding control-chatter: what holding φ = r needs).")
 
 
 def _other_claims(result: StudyResult, p) -> None:

@@ -250,8 +250,8 @@ C_OSCILLATION = Claim("oscillation", "§5, §6, Fig. 4",
 C_SEPARATES = Claim("true-state", "§5, Fig. 3",
                     "The filter separates from the noisy measurement a state closer to the true state")
 C_SETTLES = Claim("fast-smooth", "abstract, §1, §6",
-                  "With the filter the pendulum is controlled quickly and smoothly (快速平稳): the filter eliminates the "
-                  "jitter (抖动) that noise brings to the fuzzy control")
+                  "With the filter the pendulum is controlled quickly and smoothly (快速平稳): the filter "
+                  "eliminates the jitter (抖动) that noise brings to the fuzzy control")
 C_STABILISES = Claim("stabilises", "§5, §6", "The fuzzy controller with the filter balances the pendulum after the "
                                              "0.1 rad step")
 C_GAIN = Claim("steady-state-gain", "§4", "The steady-state gain of the stated problem is K = [0.950, 0.863]")

@@ -51,7 +51,8 @@ def _record_step_and_noise(result: StudyResult, p, lit, verify: VerifyData) -> N
     result.finding(
         "step-degrees",
         f"§5 converts the 0.1 rad step to {verify.P.step_deg_printed}°, but 0.1·180/π = {deg:.4f}° "
-        f"(difference {verify.P.step_deg_printed - deg:.4f}°, relative {relative_error(deg, verify.P.step_deg_printed):.1e}). "
+        f"(difference {verify.P.step_deg_printed - deg:.4f}°, "
+        f"relative {relative_error(deg, verify.P.step_deg_printed):.1e}). "
         "An arithmetic slip of the paper, listed with the checks; the simulated step is 0.1 rad.",
         evidence={"printed": verify.P.step_deg_printed, "computed": deg}, kind="erratum")
     Q, R = verify.P.Q, verify.P.R
@@ -63,19 +64,16 @@ def _record_step_and_noise(result: StudyResult, p, lit, verify: VerifyData) -> N
     result.finding(
         "noise-plausibility",
         f"Q = {Q:g} and R = {R:g} are not plausible noise intensities for an angle in radians. As white-noise "
-        f"intensities sampled at T = {p.T:g} s the angle measurement noise would have std √(R/T) = {math.sqrt(R / p.T):.3g} rad "
-        f"per sample and the angular-acceleration noise std √(Q/T) = {math.sqrt(Q / p.T):.3g} rad/s²; read as "
-        f"per-sample "
-        f"variances, √R = {math.sqrt(R):.3g} rad = {math.degrees(math.sqrt(R)):.0f}°; even the optimal filter's "
-        f"steady-state "
-        f"angle error would have std √P̄11 = {math.sqrt(P11):.3g} rad. The study therefore simulates two named regimes "
-        f"with physical noise held over each sample: the main regime T = {p.T * 1e3:g} ms, σ_v = {p.sigma_v * 1e3:g} "
-        f"mrad, "
-        f"σ_w = {p.sigma_w:.3g} rad/s² chosen independently (σ_w/σ_v = {p.sigma_w / p.sigma_v:.3g} s⁻², so the paper's "
-        f"Q/R = {Q / R:g} is not optimal by construction), and the literal regime of the previous report T = "
-        f"{lit.T * 1e3:g} ms, σ_v = {lit.sigma_v * 1e3:g} mrad, σ_w = √(Q/R)·σ_v = {lit.sigma_w:.3g} rad/s² (the "
-        f"paper's "
-        "Q/R optimal by construction).",
+        f"intensities sampled at T = {p.T:g} s the angle measurement noise would have std "
+        f"√(R/T) = {math.sqrt(R / p.T):.3g} rad per sample and the angular-acceleration noise std "
+        f"√(Q/T) = {math.sqrt(Q / p.T):.3g} rad/s²; read as per-sample variances, √R = {math.sqrt(R):.3g} rad = "
+        f"{math.degrees(math.sqrt(R)):.0f}°; even the optimal filter's steady-state angle error would have std "
+        f"√P̄11 = {math.sqrt(P11):.3g} rad. The study therefore simulates two named regimes with physical noise held "
+        f"over each sample: the main regime T = {p.T * 1e3:g} ms, σ_v = {p.sigma_v * 1e3:g} mrad, "
+        f"σ_w = {p.sigma_w:.3g} rad/s² chosen independently (σ_w/σ_v = {p.sigma_w / p.sigma_v:.3g} s⁻², so the "
+        f"paper's Q/R = {Q / R:g} is not optimal by construction), and the literal regime of the previous report "
+        f"T = {lit.T * 1e3:g} ms, σ_v = {lit.sigma_v * 1e3:g} mrad, σ_w = √(Q/R)·σ_v = {lit.sigma_w:.3g} rad/s² "
+        "(the paper's Q/R optimal by construction).",
         evidence={"sigma_v_paper_intensity": math.sqrt(R / p.T), "sigma_w_paper_intensity": math.sqrt(Q / p.T),
                   "P11_bar": P11, "main": {"T": p.T, "sigma_v": p.sigma_v, "sigma_w": p.sigma_w},
                   "literal": {"T": lit.T, "sigma_v": lit.sigma_v, "sigma_w": lit.sigma_w}})
@@ -300,9 +298,9 @@ def _record_beyond(result: StudyResult, d, stats) -> None:
     a, b = d.kf_ss_gain
     result.quantity("beyond.kf_ss.gain", f"steady-state (α, β = T·k2) of the simulated noise at T = {p.T:g} s, used in "
                     "the kf_ss case (main regime)", [a, b], unit="",
-                    note=f"discrete DARE of the exact sampled model (held noise, σ_w/σ_v = {p.sigma_w / p.sigma_v:.3g} s⁻²); "
-                         f"as a gain K = [α, β/T] = [{a:.4g}, {b / p.T:.4g}] (–, 1/s), against the paper's [0.950, "
-                         f"0.863]")
+                    note=f"discrete DARE of the exact sampled model (held noise, "
+                         f"σ_w/σ_v = {p.sigma_w / p.sigma_v:.3g} s⁻²); as a gain K = [α, β/T] = "
+                         f"[{a:.4g}, {b / p.T:.4g}] (–, 1/s), against the paper's [0.950, 0.863]")
     a, b = d.kf_ss_qr_gain
     result.quantity("beyond.kf_ss_qr.gain", f"steady-state (α, β = T·k2) of the paper's Q/R = {p.qr_paper:g} at "
                     f"T = {p.T:g} s, used in the kf_ss_qr case", [a, b], unit="",

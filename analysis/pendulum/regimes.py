@@ -317,7 +317,8 @@ def _record_case(result: StudyResult, name: str, c, p, literal: bool, m: dict, k
             runs, diverged = int(ok.size), int((~ok).sum())
             note = f"{where}; mean ± std over {n} of {ok.size} runs"
             if key == "settling_time" and n < ok.sum():
-                note += f" ({int(ok.sum() - n)} runs did not stay in the ±{p.settle_band:.0%} band for the last {p.settle_hold:g} s)"
+                note += (f" ({int(ok.sum() - n)} runs did not stay in the ±{p.settle_band:.0%} band for the last "
+                         f"{p.settle_hold:g} s)")
         if diverged:
             steps = run.diverged_step[~ok] if not key.endswith("noise_free") else c.quiet.diverged_step[:1]
             note += f"; {diverged} diverged (first at t = {int(np.min(steps)) * p.T:.3g} s), excluded"
