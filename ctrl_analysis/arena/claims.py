@@ -190,8 +190,9 @@ def judge_claims(result, cases, table, setup, checks=None) -> list:
                                  f"(median {np.median(ratio):.2f}; {w} better in {int(np.sum(ratio > 1))} of "
                                  f"{len(run)})")
             verdict = _verdict(np.concatenate(wins_all))
+            signals = ", ".join(sorted({c.signal for c in run}))
             text = (f"{study} claim '{cid}' — {chk.statement}: {VERDICT_TEXT[verdict]}. Each family tuned to its "
-                    f"best RMS error on {len(run)} case{'s' if len(run) != 1 else ''} ({', '.join(sorted({c.signal for c in run}))}): "
+                    f"best RMS error on {len(run)} case{'s' if len(run) != 1 else ''} ({signals}): "
                     + "; ".join(parts) + f". Reading: {chk.how}.")
         result.finding(fid, text, evidence, claim=chk.claim, claim_verdict=verdict)
         out.append((chk.claim, verdict))

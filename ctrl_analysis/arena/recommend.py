@@ -189,9 +189,9 @@ def _record(result, s, cases, table, tunings):
         for name in fams:
             row = table[name][c.key]
             cid = f"{c.signal}.{c.noise}.{c.eps:g}.{name}"
+            params = dict(zip([p.name for p in family(name).params], row["params"], strict=True))
             result.quantity(f"{cid}.worst", f"{c.key}, {name}: tuned worst-case |f̂' - f'|", row["worst"],
-                            unit="1/s",
-                            note=f"params {dict(zip([p.name for p in family(name).params], row['params'], strict=True))}")
+                            unit="1/s", note=f"params {params}")
             result.quantity(f"{cid}.adv_ratio", f"{c.key}, {name}: adversarial worst case / 2√(εL)", row["adv_ratio"],
                             unit="")
     result.quantity("tunings", "configurations evaluated (tunings)", float(tunings), unit="")

@@ -160,8 +160,9 @@ def _uniform_grid(t) -> float:
     """The step of a uniform grid starting at 0 (a registered class is generated on ``t_k = k dt``)."""
     dt = float(t[1] - t[0]) if t.size > 1 else 1.0
     if t[0] != 0.0 or dt <= 0 or not np.allclose(np.diff(t), dt, rtol=1e-9, atol=0.0):
+        lo, hi = (np.min(np.diff(t)), np.max(np.diff(t))) if t.size > 1 else (0, 0)
         raise ValueError(f"t must be uniform samples k dt from 0 for a registered signal class, got t[0] = {t[0]:g} "
-                         f"and steps {np.min(np.diff(t)) if t.size > 1 else 0:g}..{np.max(np.diff(t)) if t.size > 1 else 0:g}")
+                         f"and steps {lo:g}..{hi:g}")
     return dt
 
 

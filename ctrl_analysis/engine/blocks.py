@@ -485,7 +485,8 @@ class StaticGain(KernelBlock, StaticBlock):
             raise ValueError("outputs must name at least one signal")
         if D.shape != (len(outs), len(ins)):
             raise ValueError(f"D must have shape (p, m) = ({len(outs)}, {len(ins)}) (outputs, inputs), got "
-                             f"{D.shape}; a gain per run is given to Loop.simulate(params={{name: {{'D': (B, p, m)}}}})")
+                             f"{D.shape}; a gain per run is given to "
+                             "Loop.simulate(params={name: {'D': (B, p, m)}})")
         self.D = D
         self.inputs, self.outputs, self.feedthrough = ins, outs, bool(ins)
         self.kernel_params = Layout(("D", D.shape)).pack(D=D)  # the kernel's parameters: D, row-major

@@ -131,7 +131,8 @@ class SlowPathWarning(RuntimeWarning):
 _REMEDY = {
     "no kernel": ("write it as a kernel block (a Layout and scalar kernels, CONTRIBUTING.md 'Add a block'), or a "
                   "sum/difference/selection as StaticGain"),
-    "per-run parameters but no kernel": "write it as a kernel block, whose per-run parameters the compiled engine reads",
+    "per-run parameters but no kernel": ("write it as a kernel block, whose per-run parameters the compiled engine "
+                                         "reads"),
     "callable inputs": "give the input as an array of its samples, shape (N,) or (N, B)",
     "numba is not installed": "install numba",
 }

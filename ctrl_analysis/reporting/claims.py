@@ -190,8 +190,8 @@ def checks_and_errata(results: dict) -> list[str]:
              "Algebraic identities and the paper's own arithmetic, not counted as reproduced cells:", ""]
     if checks:
         lines += ["| check | paper | computed | unit | verdict | note |", "|---|---|---|---|---|---|"]
-        lines += [f"| {_cell(q['label'])} | {_short(q['paper'])} | {_short(q['value'])} | {_cell(q.get('unit')) or '—'} "
-                  f"| {q['verdict']} | {_cell(q.get('note'))} |" for q in checks]
+        lines += [f"| {_cell(q['label'])} | {_short(q['paper'])} | {_short(q['value'])} "
+                  f"| {_cell(q.get('unit')) or '—'} | {q['verdict']} | {_cell(q.get('note'))} |" for q in checks]
         lines.append("")
     lines += [f"- **Erratum** — {_cell(f['text'])}" for f in errata]
     return lines + ([""] if errata else [])

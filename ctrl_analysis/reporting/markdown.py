@@ -95,7 +95,8 @@ def summary_table(results: dict) -> str:
             cell += " (primary)"
         rows.append(
             f"| `{q['id']}` | {_cell(q['label'])} | {cell} | {_fmt(q['paper'])} | {_fmt(q['value'], std)}{_runs(q)} "
-            f"| {_cell(q.get('unit')) or '—'} | {_rule(q)} | {q['verdict']}{' (check)' if q.get('kind') == 'check' else ''} "
+            f"| {_cell(q.get('unit')) or '—'} | {_rule(q)} "
+            f"| {q['verdict']}{' (check)' if q.get('kind') == 'check' else ''} "
             f"| {note} |"
         )
     return "\n".join(rows)
@@ -294,7 +295,8 @@ def study_summary(results: dict, n_findings: int = 3) -> list[str]:
             parts.append(f"{c} (all runs diverged)")
         else:
             err = _signed_error(q["value"], q["paper"]) if q["value"] is not None else np.inf
-            pct = "" if not np.isfinite(err) else (f", {100 * err:+.0f} %" if abs(err) >= 0.01 else f", {100 * err:+.2g} %")
+            pct = ("" if not np.isfinite(err) else
+                   f", {100 * err:+.0f} %" if abs(err) >= 0.01 else f", {100 * err:+.2g} %")
             parts.append(f"{c} ({_fmt(q['value'], digits=_digits(q))} vs {_fmt(q['paper'], digits=_digits(q))}{pct})")
     if len(bad) > 6:
         parts.append(f"and {len(bad) - 6} more")

@@ -431,8 +431,8 @@ def apply(result: StudyResult, exploration: Exploration) -> None:
         b = entry["baseline"]
         if b != (None if c.holds is None else ("holds" if c.holds else "fails")):
             c.note = (c.note + " " if c.note else "") + (
-                f"The box exploration's own evaluation at the chosen values ({exploration.summary['note'] or 'its own settings'}) "
-                f"judges it {b or 'untestable'}.")
+                "The box exploration's own evaluation at the chosen values "
+                f"({exploration.summary['note'] or 'its own settings'}) judges it {b or 'untestable'}.")
     for q in result.quantities:
         entry = exploration.cells.get(q.id)
         if entry is not None:

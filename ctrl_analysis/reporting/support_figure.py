@@ -73,7 +73,8 @@ def plot_sensitivity(result: StudyResult, top: int = 8):
     ax.set_yticks(y, labels, fontsize=8)
     ax.set_xlim(0, 118)
     ax.set_xlabel("support: share of the plausible box where the claim holds (%)\n"
-                  f"dotted: the policy's thresholds ({100 * SUPPORT_LOW:.0f} % fails, {100 * SUPPORT_HIGH:.0f} % holds)")
+                  f"dotted: the policy's thresholds ({100 * SUPPORT_LOW:.0f} % fails, "
+                  f"{100 * SUPPORT_HIGH:.0f} % holds)")
     ax.set_title("Support of each claim (± standard error)" + (
         f"\nbars: the {algo['chosen']} algorithm, \u25c7: the {other} one" if other else ""), fontsize=10)
     if names:
