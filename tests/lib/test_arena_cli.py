@@ -56,7 +56,8 @@ def test_tiny_arena_writes_valid_results(tmp_path):
     write_results_json(result, tmp_path)
     data = validate_results(json.loads((tmp_path / "results.json").read_text()))
     ids = {q["id"] for q in data["quantities"]}
-    assert "sines.uniform.0.01.leso2.adv_ratio" in ids and raw["tunings"] == 9 + 5 * 2  # grids: 9 bandwidths; 5 windows x 2 degrees
+    # grids: 9 bandwidths; 5 windows x 2 degrees
+    assert "sines.uniform.0.01.leso2.adv_ratio" in ids and raw["tunings"] == 9 + 5 * 2
     assert all(q["unit"] is not None for q in data["quantities"])
     adv = [q["value"] for q in data["quantities"] if q["id"].endswith("adv_ratio")]
     assert min(adv) >= 1 - 1e-9
@@ -262,7 +263,8 @@ def test_quick_with_a_file_as_out_and_a_bad_scheduler_are_refused_before_any_wor
     monkeypatch.setattr(recommend, "run_arena", no_work)
     (tmp_path / "FILE").write_text("x")
     code, _, err = _arena(["--quick", "--out", str(tmp_path / "FILE")], capsys)
-    assert code == 2 and err == f"ctrl-analysis: error: --out must be a directory, got the file {str(tmp_path / 'FILE')!r}\n"
+    assert code == 2
+    assert err == f"ctrl-analysis: error: --out must be a directory, got the file {str(tmp_path / 'FILE')!r}\n"
     code, _, err = _arena(["--quick", "--scheduler", "nonsense", "--out", str(tmp_path / "D")], capsys)
     assert code == 2 and err.count("\n") == 1 and "got 'nonsense'" in err and "Traceback" not in err
     assert not (tmp_path / "D").exists()

@@ -156,8 +156,8 @@ def _consistent(out: Path, committed_by=None) -> None:
                 assert row.startswith(f"yes (quick) | {cli['seed']} | default |"), (name, row, cli)
                 assert data["quantities"][0]["value"] == cli["seed"]
             else:  # stale: the base seed and runs of the run that wrote the file, read from it
-                assert row.startswith(f"**no — stale** (results of an earlier run, quick) | {cli['seed']} | default |"), \
-                    (name, row, cli)
+                stale = f"**no — stale** (results of an earlier run, quick) | {cli['seed']} | default |"
+                assert row.startswith(stale), (name, row, cli)
     leftovers = [p.name for p in out.iterdir() if p.name.startswith(".") and p.name != ".ctrl-analysis.lock"]
     if committed_by is not None:
         assert not leftovers, leftovers
@@ -278,7 +278,8 @@ def test_another_studys_unreadable_results_json_is_left_out_of_the_report_not_co
     assert main(["reproduce", names[0], "--out", str(tmp_path), "--seed", "4"]) == 0
     captured = capsys.readouterr()
     err = captured.err.strip().splitlines()
-    assert len(err) == 1 and err[0].startswith(f"ctrl-analysis: warning: REPORT.md leaves out {names[1]}, not run now: ")
+    assert len(err) == 1
+    assert err[0].startswith(f"ctrl-analysis: warning: REPORT.md leaves out {names[1]}, not run now: ")
     assert f"is not a results record of {names[1]}" in err[0]
     assert captured.out.strip().splitlines()[-1].startswith("ctrl-analysis: 1 of 1 studies OK, 0 failed, ")
     report = (tmp_path / "REPORT.md").read_text()

@@ -1313,7 +1313,8 @@ def test_every_public_callable_rejects_bad_arguments_by_name(record_property, tm
     assert not problems, f"{len(problems)} of {tried} inputs:\n" + "\n".join(problems)
 
 
-if __name__ == "__main__":  # the totals with a watchdog of 20 s per input (hangs counted): python tests/lib/test_fuzz_api.py
+# the totals with a watchdog of 20 s per input (hangs counted): python tests/lib/test_fuzz_api.py
+if __name__ == "__main__":
     import tempfile
     from pathlib import Path
 

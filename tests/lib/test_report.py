@@ -78,7 +78,8 @@ def test_report_md_lists_tables_findings_figures(tmp_path):
     r.missing.append("part B")
     text = write_report_md([r.to_dict()], tmp_path).read_text()
     assert "| `x` | x |  | 1 | 2 | — | 50 % | differs |"  # printed "1": half a unit is 50 % in text
-    assert "- **a finding**" in text and text.count("\n| `x`") == 1 and "![fig1.png](demo/fig1.png)" in text and "part B" in text
+    assert "- **a finding**" in text and text.count("\n| `x`") == 1
+    assert "![fig1.png](demo/fig1.png)" in text and "part B" in text
 
 
 def test_context_runs_and_save_figure(tmp_path):

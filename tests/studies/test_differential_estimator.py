@@ -405,7 +405,8 @@ def test_quick_run_smoke(tmp_path):
     primaries = {q.cell for q in result.quantities if q.primary}
     assert len(primaries) == 4 and result.get("ex1.eso_over_sigma_x1").cell is None
     for q in result.quantities:
-        if q.cell is not None and q.kind == "reproduction":  # Example 1's cells come from one noisy run of the paper: percentile policy
+        # Example 1's cells come from one noisy run of the paper: percentile policy
+        if q.cell is not None and q.kind == "reproduction":
             assert q.policy == "percentile" and q.percentile is not None
     assert result.get("ex1.eso_over_sigma_x1").paper is None
     assert "0.0005769 / 0.00013179 = 4.38" in result.get("ex1.eso_over_sigma_x1").note

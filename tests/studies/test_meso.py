@@ -188,7 +188,8 @@ def test_short_run_writes_every_quantity_with_unit_and_policy(tmp_path):
             "conclusion3-theta4", "m-le-n", "literal-without-W"} <= set(found)
     # the counts in the sentence are computed, not typed
     n = meso.findings.noise_free_counts(result)
-    assert f"{n['closer_off']} of its {n['cells']} cells lie closer to the noise-free run" in found["tables-are-noise-free"]
+    sentence = f"{n['closer_off']} of its {n['cells']} cells lie closer to the noise-free run"
+    assert sentence in found["tables-are-noise-free"]
     assert len(data["reconstructions"]) >= 8
     # every claim of the paper judged, on evidence that was recorded; the sweep ran
     assert [c["id"] for c in data["claims"]] == [c.id for c in CLAIMS]
