@@ -25,8 +25,8 @@ def _pair(names: tuple[str, str], a, b, axis) -> tuple[np.ndarray, np.ndarray]:
     (which numpy would silently broadcast to ``(N, N)``) is not.
     """
     a, b = check_array(names[0], a), check_array(names[1], b)
-    if a.shape != b.shape and a.ndim and b.ndim and (a.ndim != b.ndim or any(m != n and 1 not in (m, n) for m,
-                                                                             n in zip(a.shape, b.shape, strict=True))):
+    if a.shape != b.shape and a.ndim and b.ndim and (
+            a.ndim != b.ndim or any(m != n and 1 not in (m, n) for m, n in zip(a.shape, b.shape, strict=True))):
         raise ValueError(f"{names[0]} and {names[1]} must have the same shape (or the same number of axes with "
                          f"length-1 axes to broadcast), got {a.shape} and {b.shape}")
     _check_axis(axis, max(a.ndim, b.ndim))

@@ -346,8 +346,8 @@ def _judge_tables(result, paper, per_run, alg) -> None:
             note += ("; untestable: the MESO never solved the full regression (16) — the gate rejected every batch, "
                      "so the paper's identification did not run")
         result.claim(_CLAIM[f"{key}-meso-better"], holds,
-                     evidence=[f"{key}.meso_better.share"] + [f"{key}.{o}.{m}" for o in ("meso",
-                                                                                         "eso") for m in METRICS],
+                     evidence=[f"{key}.meso_better.share"]
+                     + [f"{key}.{o}.{m}" for o in ("meso", "eso") for m in METRICS],
                      note=note)
 
 

@@ -185,15 +185,14 @@ def _other_claims(result: StudyResult, p) -> None:
                  note="the continuous steady-state gain of Q = 100, R = 50 is "
                       + f"{np.round(result.get(cells[0]).value, 3).tolist()} and the closest of the interpretations "
                       f"tried is ({result.get(cells[1]).value:.3f}, {result.get(cells[2]).value:.3f}); verdicts "
-                      + ", ".join(f"{c}: {x}" for c,
-                                  x in v.items()) + " (band: half a unit of the third printed decimal)")
+                      + ", ".join(f"{c}: {x}" for c, x in v.items())
+                      + " (band: half a unit of the third printed decimal)")
     a, b = qid("kf_ss", "angle_rms"), qid("filter", "angle_rms")
     qa, qb = result.get(a), result.get(b)
     near = None if qa.value is None or qb.value is None else bool(qb.value <= (1 + p.near_margin) * qa.value)
     result.claim(C.C_NEAR_OPTIMAL, near, evidence=[e for e in (b, a, qid("kf", "angle_rms")) if _has(result, e)],
                  note=f"steady angle RMS {_val(result, b)} with {gw} vs {_val(result, a)} with the optimal filter in "
-                 f"its "
-                      f"steady state (the steady-state Kalman gain; within {p.near_margin:.0%} required)"
+                      f"its steady state (the steady-state Kalman gain; within {p.near_margin:.0%} required)"
                       + (f"; the time-varying Kalman filter gives {_val(result, qid('kf', 'angle_rms'))} in the same "
                          "window (its gain has converged)" if _has(result, qid("kf", "angle_rms")) else "")
                       + "; 'at much less computation' holds by construction: a constant gain needs no covariance "

@@ -34,8 +34,7 @@ def plot_riccati_convergence(t, trajectories: dict, P_bar, a21: float, Q: float,
     """Entries of P(t) from several P(0), with P̄ dashed, and the relative distance to P̄."""
     fig, axes = new_figure(2, 2, size=(10.0, 7.0),
                            title=f"§2/§4 Riccati ODE Ṗ = AP + PAᵀ − PCᵀR⁻¹CP + ΓQΓᵀ: P(t) from four P(0), and the ARE "
-                           f"solution P̄; "
-                                 f"a21 = {a21:.4g} s⁻², Q = {Q:g}, R = {R:g}")
+                                 f"solution P̄; a21 = {a21:.4g} s⁻², Q = {Q:g}, R = {R:g}")
     entries = [((0, 0), "p11 = var φ̃  (rad²)"), ((0, 1), "p12 = cov(φ̃, φ̃')  (rad²/s)"),
                ((1, 1), "p22 = var φ̃'  (rad²/s²)")]
     colors = [f"C{k}" for k in range(len(trajectories))]
@@ -70,9 +69,8 @@ def plot_filter_bode(filters: dict, omega, plant_poles=None):
 
     fig, axes = new_figure(2, 2, size=(10.0, 6.5), sharex=True,
                            title="Beyond the paper (§4 gives no frequency response): what the correct steady-state "
-                           "filter passes\n"
-                                 "Bode of the Kalman–Bucy filter x̂' = (A − KC) x̂ + K y (u = 0), y → x̂, K computed "
-                                 "here")
+                                 "filter passes\n"
+                                 "Bode of the Kalman–Bucy filter x̂' = (A − KC) x̂ + K y (u = 0), y → x̂, K computed here")
     for k, (name, sys) in enumerate(filters.items()):
         resp = ct.frequency_response(sys, omega, squeeze=False)
         for out, (unit, col) in enumerate((("φ̂/y (–)", 0), ("φ̂'/y (1/s)", 1))):
@@ -87,9 +85,9 @@ def plot_filter_bode(filters: dict, omega, plant_poles=None):
     if plant_poles is not None:
         for k, w in enumerate(plant_poles):
             for ax in axes.ravel():
+                top = ax is axes[0, 0] or ax is axes[0, 1]
                 ax.axvline(w, color=f"C{k}", ls=":", lw=1.0,
-                           label=f"pendulum pole √a21 = {w:.3g} rad/s" if ax is axes[0, 0] or ax is axes[0,
-                                                                                                         1] else None)
+                           label=f"pendulum pole √a21 = {w:.3g} rad/s" if top else None)
     for ax in axes[0]:
         ax.legend(fontsize=7, loc="lower left")
     _drop_log_minor_ticks(fig)

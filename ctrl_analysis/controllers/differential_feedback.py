@@ -255,8 +255,8 @@ class HighOrderDifferentialFeedback(KernelBlock, StaticBlock):
         lead = np.broadcast_shapes(theta.shape[:-1], x_hat.shape[:-1])
         th = np.broadcast_to(theta, lead + (self.n,)).reshape(-1, self.n)
         xh = np.broadcast_to(x_hat[..., : self.n], lead + (self.n,)).reshape(-1, self.n)
-        return self.batched("output", 0.0, None, np.concatenate([th, xh], axis=1), self.kernel_params)[:,
-                                                                                                       0].reshape(lead)
+        out = self.batched("output", 0.0, None, np.concatenate([th, xh], axis=1), self.kernel_params)
+        return out[:, 0].reshape(lead)
 
     def closed_loop_chain(self) -> ct.StateSpace:
         """Closed loop of the chain of ``n`` integrators ``x^(n) = u`` under exact state feedback.

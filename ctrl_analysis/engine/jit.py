@@ -54,8 +54,8 @@ def cacheable(fns) -> bool:
     for fn in fns:
         py = getattr(fn, "py_func", fn)
         module = sys.modules.get(getattr(py, "__module__", None) or "")
-        if module is None or not getattr(module, "__file__", None) or getattr(py, "__globals__",
-                                                                              None) is not vars(module):
+        if (module is None or not getattr(module, "__file__", None)
+                or getattr(py, "__globals__", None) is not vars(module)):
             return False
     return True
 

@@ -143,8 +143,8 @@ def _compiled_views():
         def codegen(context, builder, sig, args):
             ary = make_array(sig.args[0])(context, builder, args[0])
             o = context.cast(builder, args[1], sig.args[1], types.intp)
-            dims = [context.cast(builder, d, sig.args[2].dtype, types.intp) for d in cgutils.unpack_tuple(builder,
-                                                                                                          args[2])]
+            dims = [context.cast(builder, d, sig.args[2].dtype, types.intp)
+                    for d in cgutils.unpack_tuple(builder, args[2])]
             step = builder.extract_value(ary.strides, 0)
             byte = ir.IntType(8).as_pointer()
             data = builder.bitcast(builder.gep(builder.bitcast(ary.data, byte), [builder.mul(o, step)]),

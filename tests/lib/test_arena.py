@@ -100,8 +100,8 @@ def _library_block(name, row):
     if name == "sigma":
         return DifferentialEstimator(3, row[0]), ("y",), ("xhat[0]", "xhat[1]")
     if name in ("leso2", "leso3"):
-        return ExtendedStateObserver.from_bandwidth(1 if name == "leso2" else 2, row[0]), ("y", "u"), ("xhat[0]",
-                                                                                                       "xhat[1]")
+        obs = ExtendedStateObserver.from_bandwidth(1 if name == "leso2" else 2, row[0])
+        return obs, ("y", "u"), ("xhat[0]", "xhat[1]")
     if name == "neso":
         alpha = np.array([1.0, 0.5, 0.25])
         gains = np.array([3 * row[0], 3 * row[0] ** 2, row[0] ** 3]) * row[1] ** (1 - alpha)

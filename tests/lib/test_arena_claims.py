@@ -89,8 +89,8 @@ def test_report_shows_the_arena_verdict_beside_the_study_claim(tmp_path):
     study.claim(Claim("other", "§5", "Something else"), True, ["q"])
     text = write_report_md([study.to_dict()], tmp_path,
                            claim_links={"demo/a-beats-b": "[arena: holds](#x)"}).read_text()
-    rows = {line.split("|")[1].strip(): line for line in text.splitlines() if line.startswith(("| A beats B",
-                                                                                               "| Something else"))}
+    rows = {line.split("|")[1].strip(): line for line in text.splitlines()
+            if line.startswith(("| A beats B", "| Something else"))}
     assert "[arena: holds](#x)" in rows["A beats B"] and "arena" not in rows["Something else"]
     with pytest.raises(ValueError, match="claim and claim_verdict"):
         StudyResult(INFO).finding("x", "text", claim="demo/a")

@@ -209,8 +209,8 @@ def test_the_no_filter_loop_identified_from_its_own_measurement():
 
 def test_the_printed_control_rms_is_reached_at_mu_068():
     """μ ≈ 0.68 (inside its plausible 0.5-2) puts the printed 1.27 inside the runs' band; μ = 1 does not."""
-    at = {mu: ckf.evaluate(_point(dataclasses.replace(PAPER, mu=mu), seed=0)).get("nofilter.u_rms") for mu in (0.678,
-                                                                                                               1.0)}
+    at = {mu: ckf.evaluate(_point(dataclasses.replace(PAPER, mu=mu), seed=0)).get("nofilter.u_rms")
+          for mu in (0.678, 1.0)}
     assert cell_state(at[0.678])["in_band"] and not cell_state(at[1.0])["in_band"]
 
 

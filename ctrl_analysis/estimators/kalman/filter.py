@@ -162,8 +162,8 @@ class DiscreteKalmanFilter(KernelBlock, DiscreteBlock):
         if self.h.shape != (n,):
             raise ValueError(f"h must have {n} entries to match F ({n}×{n}), got shape {np.shape(h)}")
         self.Qd = check_matrix("Qd", Qd, shape=(n, n))
-        if not np.allclose(self.Qd, self.Qd.T) or np.min(np.linalg.eigvalsh(self.Qd)) < -1e-12 * max(1.0,
-                                                                                                     np.abs(self.Qd).max()):
+        tol = -1e-12 * max(1.0, np.abs(self.Qd).max())
+        if not np.allclose(self.Qd, self.Qd.T) or np.min(np.linalg.eigvalsh(self.Qd)) < tol:
             raise ValueError(f"Qd must be symmetric positive semidefinite, got {self.Qd.tolist()}")
         self.R = check_positive("R", R, scalar=True)
         self.b = None if b is None else check_finite("b", np.ravel(b), shape=(n,))
