@@ -45,10 +45,9 @@ def main(argv=None) -> int:
         notes += [f"{bench.NAME}: {x}" for x in n]
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     head = (f"Python {platform.python_version()}, {os.cpu_count()} cores, load average {load:.1f} at the end; "
-            f"OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS')}; medians of {args.repeat} repeats; "
-            f"Example 1 over {args.T:g} s ({round(args.T / bench_example1.H)} RK4 steps); the study benchmarks (not "
-            f"the arena's) have no "
-            "compiled reference (— in the last ratio column)")
+            f"OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS')}; medians of {args.repeat} repeats; Example "
+            f"1 over {args.T:g} s ({round(args.T / bench_example1.H)} RK4 steps); the study benchmarks (not the "
+            "arena's) have no compiled reference (— in the last ratio column)")
     text = "\n".join([head, "", table(rows, base, comp), "", *[f"- {x}" for x in notes]])
     print(text)
     if args.readme:

@@ -108,31 +108,30 @@ def ablation(result, p, data, data_f, m_f):
 
     result.finding(
         "identification-live",
-        f"With the reconstructed RLS settings (P0 = {p.P0_rls:g}, λ = {p.forgetting:g}, trace cap {p.max_trace:g}) "
-        f"f̂1 and f̂2 leave θ0 = {p.theta0[:2]} but do not converge: they drift the whole run along f1 + f2 ≈ const "
-        f"(f̂1 + f̂2 = {s_live:.4f} at {p.t_end:g} s). f̂1 moves by {mv['f1'][min(1, len(mv['f1']) - 1)]:+.4f} over "
-        f"{st:g}-{2 * st:g} s and {mv['f1'][-1]:+.4f} over the last {st:g} s ({state('f1')}; f̂2 "
-        f"{mv['f2'][-1]:+.4f}, {state('f2')}); on average "
-        f"it travels {live['f1_travel'][0]:.3g} (at most {live['f1_travel'][1]:.3g}) from θ0 and f̂2 "
-        f"{live['f2_travel'][0]:.3g}, against at most {fro['f1_travel'][1]:.3g} and {fro['f2_travel'][1]:.3g} in the "
-        f"frozen-Φ ablation (P0, λ, cap = {p.frozen_rls}). ĝ0 falls from θ0's {p.theta0[2]:g} onto the box's "
-        f"{g0['which']} bound {g0['bound']:g} in {g0['runs_hit']:.0%} of the runs (median first time "
-        f"{g0['first'] if g0['first'] is not None else float('nan'):.2f} s) and stays near it: exactly on it in "
-        f"{g0['share']:.1%} of all samples, within a factor 2 of it in {near:.0%}; over the steady stage it "
-        f"averages {g0_steady:.5f} ({g0_steady / p.lower[2]:.2g}x the bound), {fit[:, 2].mean() / g0_steady:.0f}x "
-        f"below "
-        f"the noise-free LS fit of the true plant ({fit[:, 2].mean():.5f}). On a bound of the box (every bound, ĝ0's "
-        f"included): f̂1 {bounds['f1']['share']:.1%}, f̂2 {bounds['f2']['share']:.1%}, ĝ0 {g0['share']:.1%} of the "
-        f"samples, any parameter {bounds['any']:.1%}. At {p.t_end:g} s: f̂1 = {live['f1_final']:.4f}, "
-        f"f̂2 = {live['f2_final']:.4f}, ĝ0 = {live['g0_final']:.5f} (ablation: {fro['f1_final']:.4f}, "
-        f"{fro['f2_final']:.4f}, {fro['g0_final']:.5f}); the noise-free fit over the steady stage is "
-        f"({fit[:, 0].mean():.4f}, {fit[:, 1].mean():.4f}, {fit[:, 2].mean():.5f}), outside Wu's box, so what the RLS "
-        f"finds is a model with the plant's static gain ĝ0 / (1 − f̂1 − f̂2), not the plant's fit. One-step "
-        f"prediction RMS error of the identified model on the true output: transient {live['pred_transient']:.3g} "
-        f"(ablation {fro['pred_transient']:.3g}), steady stage {live['pred_steady']:.3g} (ablation "
-        f"{fro['pred_steady']:.3g}; lower bound, the noise-free fit: {result.get('fit.pred_rmse_steady').value:.3g}). "
-        f"Excitation: in the steady stage the regression is nearly collinear (column-scaled condition number of the "
-        f"noise-free fit up to {cond:.3g}), so the drift's rate is set by the trace cap (Fig. 10).",
+        f"With the reconstructed RLS settings (P0 = {p.P0_rls:g}, λ = {p.forgetting:g}, trace cap {p.max_trace:g}) f̂1 "
+        f"and f̂2 leave θ0 = {p.theta0[:2]} but do not converge: they drift the whole run along f1 + f2 ≈ const (f̂1 + "
+        f"f̂2 = {s_live:.4f} at {p.t_end:g} s). f̂1 moves by {mv['f1'][min(1, len(mv['f1']) - 1)]:+.4f} over "
+        f"{st:g}-{2 * st:g} s and {mv['f1'][-1]:+.4f} over the last {st:g} s ({state('f1')}; f̂2 {mv['f2'][-1]:+.4f}, "
+        f"{state('f2')}); on average it travels {live['f1_travel'][0]:.3g} (at most {live['f1_travel'][1]:.3g}) from "
+        f"θ0 and f̂2 {live['f2_travel'][0]:.3g}, against at most {fro['f1_travel'][1]:.3g} and "
+        f"{fro['f2_travel'][1]:.3g} in the frozen-Φ ablation (P0, λ, cap = {p.frozen_rls}). ĝ0 falls from θ0's "
+        f"{p.theta0[2]:g} onto the box's {g0['which']} bound {g0['bound']:g} in {g0['runs_hit']:.0%} of the runs "
+        f"(median first time {g0['first'] if g0['first'] is not None else float('nan'):.2f} s) and stays near it: "
+        f"exactly on it in {g0['share']:.1%} of all samples, within a factor 2 of it in {near:.0%}; over the steady "
+        f"stage it averages {g0_steady:.5f} ({g0_steady / p.lower[2]:.2g}x the bound), "
+        f"{fit[:, 2].mean() / g0_steady:.0f}x below the noise-free LS fit of the true plant ({fit[:, 2].mean():.5f}). "
+        f"On a bound of the box (every bound, ĝ0's included): f̂1 {bounds['f1']['share']:.1%}, f̂2 "
+        f"{bounds['f2']['share']:.1%}, ĝ0 {g0['share']:.1%} of the samples, any parameter {bounds['any']:.1%}. At "
+        f"{p.t_end:g} s: f̂1 = {live['f1_final']:.4f}, f̂2 = {live['f2_final']:.4f}, ĝ0 = {live['g0_final']:.5f} "
+        f"(ablation: {fro['f1_final']:.4f}, {fro['f2_final']:.4f}, {fro['g0_final']:.5f}); the noise-free fit over the "
+        f"steady stage is ({fit[:, 0].mean():.4f}, {fit[:, 1].mean():.4f}, {fit[:, 2].mean():.5f}), outside Wu's box, "
+        "so what the RLS finds is a model with the plant's static gain ĝ0 / (1 − f̂1 − f̂2), not the plant's fit. "
+        "One-step prediction RMS error of the identified model on the true output: transient "
+        f"{live['pred_transient']:.3g} (ablation {fro['pred_transient']:.3g}), steady stage {live['pred_steady']:.3g} "
+        f"(ablation {fro['pred_steady']:.3g}; lower bound, the noise-free fit: "
+        f"{result.get('fit.pred_rmse_steady').value:.3g}). Excitation: in the steady stage the regression is nearly "
+        f"collinear (column-scaled condition number of the noise-free fit up to {cond:.3g}), so the drift's rate is "
+        "set by the trace cap (Fig. 10).",
         evidence={"live": live, "frozen": fro, "fit": fit.mean(0).tolist(), "on_bound": bounds, "g0_near_bound": near,
                   "progress": {"times": prog["times"], "means": prog["means"], "late_vs_peak": prog["late_vs_peak"]}})
     bounds["g0_steady"], bounds["g0_fit"] = g0_steady, float(fit[:, 2].mean())
@@ -212,14 +211,13 @@ def _options(ctx, result, p):
     below = float(np.mean(d_free["g0"] < p.lower[2]))
     fin = {n: (float(d_free[n][-1].mean()), float(d_proj[n][-1].mean())) for n in qty.PARAMS}
     on = on_bounds(d_proj, dataclasses.replace(p_opt, project=True))
-    result.finding("projection-box", f"Switching Wu's projection off changes the CKF's steady RMS error from "
+    result.finding("projection-box", "Switching Wu's projection off changes the CKF's steady RMS error from "
                    f"{rms(d_proj):.4g} to {rms(d_free):.4g} ({p.option_runs} runs, {p_opt.t_end:g} s, identification "
                    f"from '{p.id_signal}'). With the box, ĝ0 is on its lower bound {p.lower[2]:g} in "
                    f"{on['g0']['share']:.1%} of the samples after reaching it in {on['g0']['runs_hit']:.0%} of the "
-                   f"runs "
-                   f"(f̂1 {on['f1']['share']:.1%}, f̂2 {on['f2']['share']:.1%}); without it ĝ0 goes below that bound "
-                   f"in {below:.0%} of the samples (lowest {float(d_free['g0'].min()):.3g}). The largest change of "
-                   "each estimate between the two, against its mean size with the box: "
+                   f"runs (f̂1 {on['f1']['share']:.1%}, f̂2 {on['f2']['share']:.1%}); without it ĝ0 goes below that "
+                   f"bound in {below:.0%} of the samples (lowest {float(d_free['g0'].min()):.3g}). The largest change "
+                   "of each estimate between the two, against its mean size with the box: "
                    + "; ".join(f"{qty.HAT[n]} {shift[n]:.3g} ({shift[n] / scale[n]:.0%} of {scale[n]:.3g})"
                                for n in qty.PARAMS)
                    + f". At {p_opt.t_end:g} s without / with the box: "
@@ -252,17 +250,16 @@ def _nofilter_identification(result, p, runs):
     a, b = out[True], out[False]
     result.finding(
         "nofilter-identification",
-        f"Identified from its own measurement (the reading of 'no filter', the printed algorithm of the axis "
-        f"nofilter_id), the no-filter loop loses the reference under Wu's projection box: {a['track']:.0%} of the "
-        f"runs track, steady output RMS error {a['y_rmse']:.3g} (median; {p.option_runs} runs, {p.t_end:g} s), f̂1 on "
-        f"the box's lower bound {p.lower[0]:g} in {a['f1_on']:.0%} of the samples. Without the box it tracks "
+        "Identified from its own measurement (the reading of 'no filter', the printed algorithm of the axis "
+        f"nofilter_id), the no-filter loop loses the reference under Wu's projection box: {a['track']:.0%} of the runs "
+        f"track, steady output RMS error {a['y_rmse']:.3g} (median; {p.option_runs} runs, {p.t_end:g} s), f̂1 on the "
+        f"box's lower bound {p.lower[0]:g} in {a['f1_on']:.0%} of the samples. Without the box it tracks "
         f"({b['track']:.0%} of the runs, RMS error {b['y_rmse']:.3g}), but its control RMS is {b['u_rms']:.3g}, "
-        f"against "
-        f"{float(np.median(np.sqrt(ml['u_var']))):.3g} identified from the LPF output and the printed "
+        f"against {float(np.median(np.sqrt(ml['u_var']))):.3g} identified from the LPF output and the printed "
         f"{p.u_rms_nofilter:g}. The study's chosen no-filter loop therefore identifies from the filtered loops' "
         "signal, an LPF output run beside it and never fed back: it is not filter-free, only its feedback is "
-        "unfiltered. Every claim and the printed cell are judged under both (the box's algorithm axis); the "
-        "scorecard says where a verdict holds only with the corrected, LPF-identified no-filter loop.",
+        "unfiltered. Every claim and the printed cell are judged under both (the box's algorithm axis); the scorecard "
+        "says where a verdict holds only with the corrected, LPF-identified no-filter loop.",
         evidence=out)
 
 
@@ -326,22 +323,20 @@ def _second_plant(ctx, result, p):
     eff = p.k_I / (t["c2_share"] * (1 - p.c2))
     result.finding(
         "plant2-offset",
-        f"On the second plant the CKF loop's output averages {t['y']:.3g} over the steady stage instead "
-        f"of {p.reference:g}, still rising at the end ({t['y_end']:.3g} over the last tenth of the run; frozen-Φ "
+        f"On the second plant the CKF loop's output averages {t['y']:.3g} over the steady stage instead of "
+        f"{p.reference:g}, still rising at the end ({t['y_end']:.3g} over the last tenth of the run; frozen-Φ "
         f"ablation: {fro['y']:.3g}, identified gain {fro['gain']:.3g}), because the identified static gain ĝ0 / (1 − "
-        f"f̂1 − f̂2) = {t['gain']:.3g} overestimates the plant's 1, and "
-        f"the leaky logic integral cannot make up the difference: in the steady stage the maintaining-tracking term "
-        f"gives u0 = {t['u0']:.3g} (≈ {p.reference:g} / {t['gain']:.3g}), the golden-section term {t['ul']:.3g} and "
-        f"the "
-        f"integral {t['ui']:.3g} (u = {t['u']:.3g}). The integral leaks (c = c2 = {p.c2:g}) in {t['c2_share']:.0%} of "
-        f"the steps, so it settles at about −k_I e / ({t['c2_share']:.2f} (1 − c2)) = {eff:.3g} · (−e): a finite gain "
-        f"on the offset of the fed-back signal e = {t['e']:.3g}. The fed-back CKF output itself sits {t['bias']:+.3g} "
-        f"above the true output (its model has the wrong static gain), so even without the leak (c2 = 1) the loop "
-        f"settles at {no_leak['y']:.4g}, its fed-back signal at {no_leak['y'] + no_leak['bias']:.4g} (bias "
-        f"{no_leak['bias']:+.3g}): most of the remaining offset is the CKF's bias. No filter "
-        f"and LPF settle at {terms['nofilter']['y']:.3g} and {terms['lpf']['y']:.3g} (identified gains "
-        f"{terms['nofilter']['gain']:.3g}, {terms['lpf']['gain']:.3g}); on the paper plant the CKF loop's identified "
-        f"gain is {home['gain']:.3g} and it settles at {home['y']:.4g}.",
+        f"f̂1 − f̂2) = {t['gain']:.3g} overestimates the plant's 1, and the leaky logic integral cannot make up the "
+        f"difference: in the steady stage the maintaining-tracking term gives u0 = {t['u0']:.3g} (≈ {p.reference:g} / "
+        f"{t['gain']:.3g}), the golden-section term {t['ul']:.3g} and the integral {t['ui']:.3g} (u = {t['u']:.3g}). "
+        f"The integral leaks (c = c2 = {p.c2:g}) in {t['c2_share']:.0%} of the steps, so it settles at about −k_I e / "
+        f"({t['c2_share']:.2f} (1 − c2)) = {eff:.3g} · (−e): a finite gain on the offset of the fed-back signal e = "
+        f"{t['e']:.3g}. The fed-back CKF output itself sits {t['bias']:+.3g} above the true output (its model has the "
+        f"wrong static gain), so even without the leak (c2 = 1) the loop settles at {no_leak['y']:.4g}, its fed-back "
+        f"signal at {no_leak['y'] + no_leak['bias']:.4g} (bias {no_leak['bias']:+.3g}): most of the remaining offset "
+        f"is the CKF's bias. No filter and LPF settle at {terms['nofilter']['y']:.3g} and {terms['lpf']['y']:.3g} "
+        f"(identified gains {terms['nofilter']['gain']:.3g}, {terms['lpf']['gain']:.3g}); on the paper plant the CKF "
+        f"loop's identified gain is {home['gain']:.3g} and it settles at {home['y']:.4g}.",
         evidence={"terms": terms, "paper_plant": home, "no_leak": no_leak, "frozen": fro})
     return data2, m2
 

@@ -156,9 +156,8 @@ class CKFStudy:
                                     "numbers); a claim's sign test over 20 runs resolves shares outside 0.28-0.72",
                                     plausible=fixed("a setting of the box's evaluations; its own baseline uses it too"))
     kf_Q: float = reconstructed(0.01, "process noise of the full-order KF that knows the plant, as an input "
-                                "disturbance: Q = q b bᵀ (b the discrete input vector), q = 0.01 (std 0.1, 1 % of "
-                                "the steady control); the plant is deterministic, a small Q keeps the gain from "
-                                "vanishing",
+                                "disturbance: Q = q b bᵀ (b the discrete input vector), q = 0.01 (std 0.1, 1 % of the "
+                                "steady control); the plant is deterministic, a small Q keeps the gain from vanishing",
                                 plausible=fixed("enters no claim (the cost claim counts operations); its effect on "
                                                 "the full-order KF's accuracy is reported in finding full-order-kf"))
     kf_P0: float = reconstructed(1.0, "initial covariance of the full-order KF",

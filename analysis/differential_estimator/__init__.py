@@ -125,9 +125,8 @@ def _linear(ctx, result, lin):
                     "at the design gain, against ω/a, n0 = 2..8"), "extra_phi_magnitude_vs_n0.png",
                     caption="Beyond the paper: |Φ(jω)| of Σ at the design gain against the normalised frequency ω/a "
                             "for n0 = 2 to 8; the bandwidth scales with a, and n0 sets the bandwidth ω_b/a and the "
-                            "resonance "
-                            "peak; every n0 rolls off at the same −20 dB/decade (Φ has relative degree 1; finding "
-                            "lowpass-claim).")
+                            "resonance peak; every n0 rolls off at the same −20 dB/decade (Φ has relative degree 1; "
+                            "finding lowpass-claim).")
 
 
 def _example1(ctx, result, p, runs):
@@ -148,17 +147,14 @@ def _example1(ctx, result, p, runs):
                     "fig3_sigma_x2.png",
                     caption="Redraws the paper's Fig. 3 (Example 1): the true x2 and Σ's estimate z2 (state reading) "
                             "in one run, the error, and a 0.5 s zoom; its mean error over the runs is the §4 Example "
-                            "1 Σ "
-                            "|ε̄2| cell.")
+                            "1 Σ |ε̄2| cell.")
     ctx.save_figure(result, figures.plot_x2(t, s["x[1]"][:, b], s["eso[0][1]"][:, b], f"Fig. 4 — Example 1: x2 and "
                     f"Han's nonlinear ESO estimate (textbook gains; seed {seeds[b]})", r"$\hat x_2$ (ESO)"),
                     "fig4_eso_x2.png",
                     caption="Redraws the paper's Fig. 4 (Example 1): the true x2 and the estimate of Han's nonlinear "
                             "ESO with textbook gains (the paper prints none) in the same run, the error, and a 0.5 s "
-                            "zoom "
-                            "where the high-frequency noise that fills the full-length traces is resolved; its mean "
-                            "error "
-                            "is the ESO |ε̄2| cell.")
+                            "zoom where the high-frequency noise that fills the full-length traces is resolved; its "
+                            "mean error is the ESO |ε̄2| cell.")
     sp = np.mean(d["err"]["sigma"][d["ok"]], axis=0)
     ctx.save_figure(result,
                     figures.plot_tradeoff(trade, sp, f"Beyond the paper, Example 1: mean x2 error against mean x1 "
@@ -166,11 +162,9 @@ def _example1(ctx, result, p, runs):
                     "ex1_tradeoff.png",
                     caption="Beyond the paper (the fair comparison): mean x2 error against mean x1 error for Σ "
                             "(sweeping a; labels give its −3 dB bandwidth) and the linear ESO (sweeping ω_o), with "
-                            "Han's "
-                            "fal ESO at two tunings (textbook gains; Σ's bandwidth) and Σ as in the paper (star). "
-                            "Lower "
-                            "left is better; points at equal bandwidth compare the observers fairly (findings "
-                            "ex1-fair-equal-bandwidth, ex1-tradeoff).")
+                            "Han's fal ESO at two tunings (textbook gains; Σ's bandwidth) and Σ as in the paper "
+                            "(star). Lower left is better; points at equal bandwidth compare the observers fairly "
+                            "(findings ex1-fair-equal-bandwidth, ex1-tradeoff).")
 
 
 def _example2(ctx, result, p, runs):
@@ -194,11 +188,9 @@ def _example2(ctx, result, p, runs):
                     f"{lin['a_new']:g}"), f"fig5_tracking_a5_and_a{lin['a_new']:g}.png",
                     caption="Redraws the paper's Fig. 5 (Example 2): setpoint, output x1 and Σ's estimates x̂ against "
                             f"the true states under controller (18), in the paper's configuration (a = {p.a:g}) and "
-                            f"with "
-                            f"the study's preset a = {lin['a_new']:g} beside it (one run each). In the paper's "
-                            f"configuration x1 "
-                            "oscillates about v (the linearised loop is unstable, finding ex2-literal-unstable); only "
-                            "the preset tracks v.")
+                            f"with the study's preset a = {lin['a_new']:g} beside it (one run each). In the paper's "
+                            "configuration x1 oscillates about v (the linearised loop is unstable, finding "
+                            "ex2-literal-unstable); only the preset tracks v.")
     n = len(t) - 1
     zoom = slice(n - int(round(2.0 / p.h)), n)
     b = pick[0]

@@ -135,11 +135,10 @@ def _eso_diverges(result, p):
     ids = ["ex1.bad_eso.diverged_fraction"]
     frac = np.atleast_1d(value_of(result, ids[0]))
     result.claim(_BY_ID["eso-diverges"], bool(np.max(frac) > 0), ids,
-                 note=f"Han's step-size gains designed for a step 4× and 8× shorter than the simulation's: "
+                 note="Han's step-size gains designed for a step 4× and 8× shorter than the simulation's: "
                       f"{' and '.join(f'{v:.0%}' for v in frac)} of the runs diverge within 0.3 s (the claim needs "
-                      f"some "
-                      "bad tuning to diverge). The linearised observer is Hurwitz; it is the integrator that goes "
-                      "unstable (finding ex1-eso-divergence).")
+                      "some bad tuning to diverge). The linearised observer is Hurwitz; it is the integrator that "
+                      "goes unstable (finding ex1-eso-divergence).")
 
 
 def _recorded(result, id_):

@@ -171,10 +171,9 @@ def main_quantities(result: StudyResult, p: Example1, d: dict) -> None:
         "ex1-eso-citation",
         "Example 1's comparison observer is Han's nonlinear ESO (ref. [8], Han 1995), not ref. [7] to which the paper "
         "attributes it, and none of its parameters is printed. The comparison observer is attributed to ref. [7] "
-        "(Harris, Wu & Gan, neurofuzzy state estimators), but the "
-        "text describes Han's nonlinear extended state observer, ref. [8] (Han 1995); the paper prints none of its "
-        "parameters (β0i, δ, the fal exponents). The study uses Han's textbook defaults (exponents 1, 0.5, 0.25, "
-        "step-size rule for the gains, δ = h; Han 2008).")
+        "(Harris, Wu & Gan, neurofuzzy state estimators), but the text describes Han's nonlinear extended state "
+        "observer, ref. [8] (Han 1995); the paper prints none of its parameters (β0i, δ, the fal exponents). The "
+        "study uses Han's textbook defaults (exponents 1, 0.5, 0.25, step-size rule for the gains, δ = h; Han 2008).")
     quantity_ms(result, "ex1.sigma.corrected.mean_abs_err_x2", "Example 1, Σ, eq. (11) corrected reading, "
                 "mean |x2 - x̂2|", err["sigma_corrected"], ok, unit="1/s",
                 note="x̂2 = z2 + a1 (y - z1): the measurement noise η enters with gain a1 = K")
@@ -428,10 +427,9 @@ def eso_divergence(result: StudyResult, p: Example1, seeds, T: float = 0.3, fact
     eso, div, step = runs[factors[0]]
     h_bad = p.h / factors[0]
     lin = linearised_eso(eso)
-    result.quantity("ex1.bad_eso.diverged_fraction", f"Example 1, Han's ESO with gains for a step "
+    result.quantity("ex1.bad_eso.diverged_fraction", "Example 1, Han's ESO with gains for a step "
                     f"{' and '.join(f'{f}×' for f in factors)} shorter than the RK4 step h = {p.h * 1e3:g} ms: "
-                    f"fraction "
-                    f"of runs diverged (|state| > {p.bound:g}) within {q.T:g} s, per factor",
+                    f"fraction of runs diverged (|state| > {p.bound:g}) within {q.T:g} s, per factor",
                     [float(np.mean(runs[f][1])) for f in factors], runs=len(seeds), unit="",
                     note=f"factor {factors[0]}: first divergence at step "
                          f"{int(step[div].min()) if div.any() else -1}; linearised poles "

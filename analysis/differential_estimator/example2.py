@@ -259,32 +259,30 @@ def _findings(result, p, d, lin, maps, err, amp, freq) -> None:
     amp_lit = maps["literal"]["amp"]
     result.finding(
         "ex2-literal-simulation",
-        f"Simulated as printed, x1 settles into a limit cycle around v (half peak-to-peak "
-        f"{np.mean(amp[:runs][ok_l]):.3g} at {np.mean(freq[:runs][ok_l]):.2f} Hz) instead of tracking it. "
-        f"Simulated as printed, {int((~ok_l).sum())} of {runs} runs diverge (bound {p.bound:g}): the linear "
-        f"instability "
-        f"is caught by the nonlinear damping -b3 x3|x3| and x1 settles into a limit cycle around v with half "
-        f"peak-to-peak amplitude {np.mean(amp[:runs][ok_l]):.3g} at {np.mean(freq[:runs][ok_l]):.2f} Hz (the "
-        f"linearised unstable pair {pair.real:+.1f} ± {abs(pair.imag):.1f}j rad/s, i.e. "
-        f"{abs(pair.imag) / (2 * np.pi):.2f} Hz), mean |v - x1| = {np.mean(err[:runs][ok_l]):.3g} and RMS u = "
-        f"{np.mean(rmse(sig['u'][:-1, :runs][:, ok_l], 0.0)):.3g}. Over the grid the limit-cycle amplitude is set by "
-        f"the damping b3: " + ", ".join(f"{amp_lit[:, :, k].min():.3g}-{amp_lit[:, :, k].max():.3g} at b3 = {b3:g}"
+        "Simulated as printed, x1 settles into a limit cycle around v (half peak-to-peak "
+        f"{np.mean(amp[:runs][ok_l]):.3g} at {np.mean(freq[:runs][ok_l]):.2f} Hz) instead of tracking it. Simulated as "
+        f"printed, {int((~ok_l).sum())} of {runs} runs diverge (bound {p.bound:g}): the linear instability is caught "
+        "by the nonlinear damping -b3 x3|x3| and x1 settles into a limit cycle around v with half peak-to-peak "
+        f"amplitude {np.mean(amp[:runs][ok_l]):.3g} at {np.mean(freq[:runs][ok_l]):.2f} Hz (the linearised unstable "
+        f"pair {pair.real:+.1f} ± {abs(pair.imag):.1f}j rad/s, i.e. {abs(pair.imag) / (2 * np.pi):.2f} Hz), mean |v - "
+        f"x1| = {np.mean(err[:runs][ok_l]):.3g} and RMS u = {np.mean(rmse(sig['u'][:-1, :runs][:, ok_l], 0.0)):.3g}. "
+        "Over the grid the limit-cycle amplitude is set by the damping b3: "
+        "" + ", ".join(f"{amp_lit[:, :, k].min():.3g}-{amp_lit[:, :, k].max():.3g} at b3 = {b3:g}"
                                          for k, b3 in enumerate(p.sweep_b3))
         + ". At large b3 a plot of the printed loop can look like tracking; the eigenvalues say it is not stable.")
     fast, lit = maps["fast_estimator"], maps["literal"]
     b1s = np.asarray(p.sweep_b1)
     result.finding(
         "ex2-robustness",
-        f"The robustness claim holds for the stable preset, not for the printed loop: "
-        f"{np.mean(fast['stable']) * 100:.0f} % against {np.mean(lit['stable']) * 100:.0f} % of the {per - runs} "
-        f"(b1, b2, b3) grid points settle. "
-        f"The paper claims 'strong robustness to parameter changes': with the fast_estimator preset "
-        f"{np.mean(fast['stable']) * 100:.0f} % "
-        f"of the {per - runs} grid points settle (b1 > 0: {np.mean(fast['stable'][b1s > 0]) * 100:.0f} %); the "
-        f"linearisation at the origin is stable on {np.mean(fast['lin'] < 0) * 100:.0f} % of the (b1, b2) grid (max Re "
-        f"from {fast['lin'].min():.2f} to {fast['lin'].max():.2f}). As printed (a = 5) the linearisation is stable at "
+        "The robustness claim holds for the stable preset, not for the printed loop: "
+        f"{np.mean(fast['stable']) * 100:.0f} % against {np.mean(lit['stable']) * 100:.0f} % of the {per - runs} (b1, "
+        "b2, b3) grid points settle. The paper claims 'strong robustness to parameter changes': with the "
+        f"fast_estimator preset {np.mean(fast['stable']) * 100:.0f} % of the {per - runs} grid points settle (b1 > 0: "
+        f"{np.mean(fast['stable'][b1s > 0]) * 100:.0f} %); the linearisation at the origin is stable on "
+        f"{np.mean(fast['lin'] < 0) * 100:.0f} % of the (b1, b2) grid (max Re from {fast['lin'].min():.2f} to "
+        f"{fast['lin'].max():.2f}). As printed (a = 5) the linearisation is stable at "
         f"{np.mean(lit['lin'] < 0) * 100:.0f} % of the grid points and {np.mean(lit['stable']) * 100:.0f} % of the "
-        f"points settle. The claim holds for the stable preset over the mapped range (|b1|, |b2| <= "
+        "points settle. The claim holds for the stable preset over the mapped range (|b1|, |b2| <= "
         f"{max(np.abs(b1s).max(), np.abs(np.asarray(p.sweep_b2)).max()):g}, b3 ∈ [{min(p.sweep_b3):g}, "
         f"{max(p.sweep_b3):g}]), not for the printed configuration. Robust stability is not robust accuracy: (18) has "
         f"no integral action, so the static term b1 x1 leaves an offset ≈ b1 v / k_3 (k_3 = {p.K[0]:g}); the preset's "

@@ -108,20 +108,19 @@ def eq9_checks(result: StudyResult, L: Linear) -> dict:
     p_pr = {m: DifferentialEstimator(n0, a, k, allow_unstable=True).poles for m, k in k_printed.items()}
     result.finding(
         "eq9-exponent",
-        f"Eq. (9)'s exponent n must read n0: only K = n0^n0 a/(n0-1)^(n0-1) puts a double pole at the breakaway "
-        f"point s = -n0 a (sympy, for general n0 and a). Eq. (9) is printed K = n0^n a/(n0-1)^(n0-1). Solving dK/ds = "
-        f"0 on K(s) = -s^n0/(s+a)^(n0-1) "
-        f"with sympy for general n0, a gives dK/ds · (s + a)^n0/s^(n0-1) = {sp.sstr(d.dK_ds_reduced)}, so "
-        f"besides s = 0 (K = 0) the only critical point, the breakaway (strictly a break-in: K has a minimum "
-        f"there, d2K/ds2 = {sp.sstr(d.second_derivative)} > 0) is s = {sp.sstr(d.breakaway)} as the paper says, "
-        f"and K(-n0 a) = {sp.sstr(d.gain)}, i.e. n0^n0 a/(n0-1)^(n0-1): the exponent of n0 must be n0, not n "
-        f"(derived/printed = {sp.sstr(ratio)}). The power of a (a^1) is right: a_n0 = K a^(n0-1) has units "
+        "Eq. (9)'s exponent n must read n0: only K = n0^n0 a/(n0-1)^(n0-1) puts a double pole at the breakaway point "
+        "s = -n0 a (sympy, for general n0 and a). Eq. (9) is printed K = n0^n a/(n0-1)^(n0-1). Solving dK/ds = 0 on "
+        "K(s) = -s^n0/(s+a)^(n0-1) with sympy for general n0, a gives dK/ds · (s + a)^n0/s^(n0-1) = "
+        f"{sp.sstr(d.dK_ds_reduced)}, so besides s = 0 (K = 0) the only critical point, the breakaway (strictly a "
+        f"break-in: K has a minimum there, d2K/ds2 = {sp.sstr(d.second_derivative)} > 0) is s = {sp.sstr(d.breakaway)} "
+        f"as the paper says, and K(-n0 a) = {sp.sstr(d.gain)}, i.e. n0^n0 a/(n0-1)^(n0-1): the exponent of n0 must be "
+        f"n0, not n (derived/printed = {sp.sstr(ratio)}). The power of a (a^1) is right: a_n0 = K a^(n0-1) has units "
         f"s^-n0, so K must have units 1/s like a. For n0 = 5, a = 2: derived K = {k_b:.6g} (closed-loop poles "
         f"{fmt_poles(p_pr[n0])}, double pole at -10 confirmed by python-control); printed with n = 4: K = "
-        f"{k_printed[4]:.6g}, poles {fmt_poles(p_pr[4])} (stable but no double pole, a lightly damped pair); "
-        f"n = 3: K = {k_printed[3]:.4g}, max Re = {p_pr[3].real.max():.3f}; n = 2: K = {k_printed[2]:.4g}, "
-        f"max Re = {p_pr[2].real.max():.3f} (unstable). Only n = n0 reproduces the stated double pole, so n is "
-        f"a typo (or lost subscript) for n0.",
+        f"{k_printed[4]:.6g}, poles {fmt_poles(p_pr[4])} (stable but no double pole, a lightly damped pair); n = 3: K "
+        f"= {k_printed[3]:.4g}, max Re = {p_pr[3].real.max():.3f}; n = 2: K = {k_printed[2]:.4g}, max Re = "
+        f"{p_pr[2].real.max():.3f} (unstable). Only n = n0 reproduces the stated double pole, so n is a typo (or lost "
+        "subscript) for n0.",
         evidence={"derived_gain": sp.sstr(d.gain), "derived_over_printed": sp.sstr(ratio), "K_derived": k_b,
                   "K_printed_by_n": k_printed,
                   "max_real_pole_by_n": {m: float(p.real.max()) for m, p in p_pr.items()}}, kind="erratum")
@@ -218,8 +217,7 @@ def controller_poles(result: StudyResult, L: Linear) -> None:
     result.check(
         "ex2.controller_poles", "Example 2: roots of s^3 + 39 s^2 + 506 s + 2184 (controller (18))",
         roots.real, paper=list(L.ex2_poles), tolerance=1e-6, unit="1/s", cell="§4 Example 2: roots -12, -13, -14",
-        note=f"A check of the paper's arithmetic (not a reproduced cell); the printed roots are integers, 1e-6 covers "
+        note="A check of the paper's arithmetic (not a reproduced cell); the printed roots are integers, 1e-6 covers "
              f"numpy.roots' rounding; max |Im| = {np.abs(roots.imag).max():.1e}. Read as polynomial coefficients, the "
-             f"printed "
-             f"K = [2184, 506, 39, 1] runs from s^0 to s^3 (the trailing 1 is the coefficient of s^3); the study "
-             f"applies K = [2184, 506, 39] (reconstruction ex2.K).")
+             "printed K = [2184, 506, 39, 1] runs from s^0 to s^3 (the trailing 1 is the coefficient of s^3); the "
+             "study applies K = [2184, 506, 39] (reconstruction ex2.K).")

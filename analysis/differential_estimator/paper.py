@@ -110,13 +110,11 @@ class Example1:
     eso_tuning_ratio: float = reconstructed(
         1.0, f"the paper prints no β0i; Han's step-size rule β01 = 1/h', β02 = 1/(1.6 h'^1.5), β03 = 1/(8.6 h'^2.2) "
              f"({HAN_2008}) for the simulation step, h' = h (ratio h'/h = 1); not tuned toward the paper's numbers",
-        plausible=span(1.0, 3.0, "the rule for a design step h' from the simulation step up to 3 steps (a slower, less "
-                                 "noise-sensitive ESO, as in Han's practice of a filter step h0 > h); below 1 the "
-                                 "gains "
-                                 "would be designed for a shorter step than the one simulated, against the rule's "
-                                 "intent "
-                                 "(at 1/4 and 1/8 of it the ESO diverges: claim eso-diverges). A ratio, so that the "
-                                 "design step follows the simulation step h, which the box varies too",
+        plausible=span(1.0, 3.0, "the rule for a design step h' from the simulation step up to 3 steps (a slower, "
+                                 "less noise-sensitive ESO, as in Han's practice of a filter step h0 > h); below 1 "
+                                 "the gains would be designed for a shorter step than the one simulated, against the "
+                                 "rule's intent (at 1/4 and 1/8 of it the ESO diverges: claim eso-diverges). A ratio, "
+                                 "so that the design step follows the simulation step h, which the box varies too",
                        scale="log", points=3))
     eso_delta: float | None = reconstructed(
         None, "δ of fal is unprinted; δ = h' (None) goes with Han's step-size rule",

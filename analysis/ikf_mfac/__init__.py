@@ -161,15 +161,13 @@ def _figures(ctx, result, chosen, all_runs, per_run, sweeps, ratio, seeds, fig2_
                                         result.get("fig2.diverged_runs").value, result.get("fig2.rejection").value,
                                         result.get("fig2.rise").value, ex1.Q, fig2p.rise_level, fig2p.steady),
                "fig2_ikf_q_over_r.png", dpi=dpi,
-               caption="Redraws the paper's Fig. 2: IKF-MFAC in Example 1 for measurement variances R increasing at "
-                       f"a fixed Q = {ex1.Q:g} (the paper's R values and Example 1's Q are not in the paper text: "
+               caption="Redraws the paper's Fig. 2: IKF-MFAC in Example 1 for measurement variances R increasing at a "
+                       f"fixed Q = {ex1.Q:g} (the paper's R values and Example 1's Q are not in the paper text: "
                        "reconstructed). Left: the output of one run per R. Right: what the paper's Fig. 2 claims, "
                        f"measured over {runs2} runs per R: the disturbance rejection (steady RMS of y − y* over k = "
                        f"{fig2p.steady[0]}..{fig2p.steady[1]}, smaller = stronger) and the response speed (samples "
-                       f"from "
-                       f"k = 3 until y first reaches {fig2p.rise_level:g}, larger = slower); an R at which at least "
-                       f"half "
-                       "the runs diverge is shaded and its count printed (claim fig2-larger-r).")
+                       f"from k = 3 until y first reaches {fig2p.rise_level:g}, larger = slower); an R at which at "
+                       "least half the runs diverge is shaded and its count printed (claim fig2-larger-r).")
     for key, (fo, fe), kind in (("ex1", (3, 4), "constant"), ("ex2", (5, 6), "time-varying")):
         r = all_runs[key]
         ys = {s: r[s].y[:, 0] for s in SCHEMES}
@@ -204,11 +202,10 @@ def _figures(ctx, result, chosen, all_runs, per_run, sweeps, ratio, seeds, fig2_
                        "is left out; the diverged counts are in the panel titles (claim ikf-best-every-noise).")
     ctx.save_figure(result, F.plot_ratio_sweep(ratio, {k: e.Q / e.R for k, e in examples.items()}),
                "beyond_rmse_vs_q_over_r.png", dpi=dpi,
-               caption="Beyond the paper: IKF-MFAC's mean RMSE against the IKF's q = Q/R in both examples, with "
-                       f"the ratio used marked (Example 2: the paper's Q/R = {ex2.Q:g}/{ex2.R:g}; Example 1: "
+               caption="Beyond the paper: IKF-MFAC's mean RMSE against the IKF's q = Q/R in both examples, with the "
+                       f"ratio used marked (Example 2: the paper's Q/R = {ex2.Q:g}/{ex2.R:g}; Example 1: "
                        "reconstructed, not printed) and the steady gain K∞(q) on a second axis; Q is varied at the "
-                       "example's R; "
-                       "points with diverged runs follow the 80 % rule of the other sweeps.")
+                       "example's R; points with diverged runs follow the 80 % rule of the other sweeps.")
     ctx.save_figure(result, F.plot_gain_sweep(_GAINS, sweeps, {"rho": ex1.rho, "lam": ex1.lam}),
                "beyond_rmse_vs_rho_lambda.png", dpi=dpi,
                caption="Beyond the paper: mean RMSE of the four schemes against MFAC's step factor ρ and weight "

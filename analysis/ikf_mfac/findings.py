@@ -123,9 +123,8 @@ def record_reset_erratum(result, ex1) -> None:
                    if d["reconstruction"] in {f"{k}.phi_reset" for k in read} and d["S1"] >= 0.1]
     result.finding("eq7-reset-value",
                    f"Eq. (7) resets the PPD estimate to its initial value φ̂(1) = {ex1.phi0:g}, but Example 1's text "
-                   f"sets "
-                   f"the reset value to {ex1.phi_reset:g} (Example 2's parameters are 'similar'). The study uses the "
-                   f"text's {ex1.phi_reset:g}; eq. (7)'s {ex1.phi0:g} is a dimension of the plausible box in both "
+                   f"sets the reset value to {ex1.phi_reset:g} (Example 2's parameters are 'similar'). The study uses "
+                   f"the text's {ex1.phi_reset:g}; eq. (7)'s {ex1.phi0:g} is a dimension of the plausible box in both "
                    "examples (ex1.phi_reset, ex2.phi_reset), so every claim is judged under both readings"
                    + (f"; the reading drives {', '.join(driven)}" if driven else
                       "; no claim's verdict has a first-order Sobol' index of 0.1 or more on it") + ".",
@@ -186,8 +185,7 @@ def record_td_scan(result, scans: dict, chosen: dict) -> dict:
                      + (f", so every count from {clean} up is clean" if clean else ", and the largest count still "
                         "loses runs")
                      + (f"; the count used, {chosen[key]}, loses {div[c]} and gives TD-MFAC a mean RMSE of "
-                        f"{mean[c]:.4f} "
-                        f"against plain MFAC's {mf:.4f}" if c is not None else "")
+                        f"{mean[c]:.4f} against plain MFAC's {mf:.4f}" if c is not None else "")
                      + f"; at {counts[-1]} steps TD-MFAC's RMSE is {mean[-1]:.4f}"
                      + ("; with x1 taken before the steps (a one-sample lag) the diverged runs are "
                         + ", ".join(f"{n}: {d}" for n, d in lag) if len(lag) > 1 else ""))

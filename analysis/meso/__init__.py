@@ -157,27 +157,18 @@ def _figures(ctx, result, sims) -> None:
         ctx.save_figure(result, figures.plot_situation(sim, series, title, smooth={noisy: 1.0}), sit.figs[0],
                         caption=f"Redraws the paper's Fig. {fig_no[0]} (situation {key[1]}): the control input u, the "
                                 "tracking error and the estimation errors e1-e3 of the ESO and the well-posed MESO at "
-                                "equal "
-                                "ε and PD gains, with the measurement noise off (left) and on (middle, one run; there "
-                                "the "
-                                "estimation errors are drawn faint with their 1-s centred moving average in bold, "
-                                "since the "
-                                "noise band of one observer would hide the other's error). The y-ranges of these two "
-                                "columns show the steady behaviour (1.2 × the 99.9th percentile of |e| outside the "
-                                "start-up "
-                                "and the 4 s after the θ4 step at 30 s); the peaks they clip are written in each "
-                                "panel and "
-                                "drawn at full scale, noise off, in the right column (its time axis is broken between "
-                                "the "
-                                "start-up and the step; the two observers are identical until the first "
-                                "identification batch ends, so only "
-                                "one trace shows there). The ESO is drawn wide and faint beneath the MESO, whose "
-                                "control "
-                                "input nearly coincides with it. x1 itself is not drawn: it lies on the reference to "
-                                "within the "
+                                "equal ε and PD gains, with the measurement noise off (left) and on (middle, one run; "
+                                "there the estimation errors are drawn faint with their 1-s centred moving average in "
+                                "bold, since the noise band of one observer would hide the other's error). The "
+                                "y-ranges of these two columns show the steady behaviour (1.2 × the 99.9th percentile "
+                                "of |e| outside the start-up and the 4 s after the θ4 step at 30 s); the peaks they "
+                                "clip are written in each panel and drawn at full scale, noise off, in the right "
+                                "column (its time axis is broken between the start-up and the step; the two observers "
+                                "are identical until the first identification batch ends, so only one trace shows "
+                                "there). The ESO is drawn wide and faint beneath the MESO, whose control input nearly "
+                                "coincides with it. x1 itself is not drawn: it lies on the reference to within the "
                                 "tracking error of the second row. Compare the size of the MESO's and the ESO's "
-                                "errors with "
-                                f"Table {2 if key == 's1' else 3}; long traces are thinned.")
+                                f"errors with Table {2 if key == 's1' else 3}; long traces are thinned.")
         runs = [(pick(rows, "meso", "wellposed", True)[0], "MESO well-posed (noise on)", c["meso"]),
                 (pick(rows, "meso", "literal", True)[0], "MESO Table-1 literal (noise on)", c["literal"]),
                 (pick(rows, "meso", "literal", False, bypass_w=True)[0], "Table-1 literal without W(s) (noise off)",
@@ -189,8 +180,7 @@ def _figures(ctx, result, sims) -> None:
         ctx.save_figure(result, figures.plot_theta(sim, key, runs, title), sit.figs[1],
                         caption=f"Redraws the paper's Fig. {fig_no[1]} (situation {key[1]}): the four LSM-identified "
                                 "parameters Θ of d(t) after each batch (markers) and the smoothed Θ in use (lines) "
-                                "against their "
-                                "true values (dashed"
+                                "against their true values (dashed"
                                 + ("; dotted: the trajectory-equivalent Θ, since θ3 is not identifiable in closed loop"
                                    if key == "s2" else "") + "), for the "
                                 "well-posed MESO, the Table-1 literal accumulation and the literal rule without W(s)"

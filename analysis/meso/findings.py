@@ -202,13 +202,12 @@ def _x3_reference(result, s2) -> None:
     K = len(s2.t)
     result.finding(
         "table3-x3-reference",
-        f"Table 3's x3 errors are explained by a reference that omits the (b − b0)u = 0.95u part of the extended "
-        f"state: "
-        f"ESO (noise off) {_fmt(b_.value)} against 1.3x1 − 1.6x2 + θ4 versus paper {a.paper}, but {_fmt(a.value)} "
-        f"against the true extended state d + (b − b0)u; MESO {_fmt(bm.value)} vs {_fmt(am.value)} (paper {am.paper}). "
-        f"The large, nearly equal x3 errors of both observers in Table 3 are therefore the omitted 0.95|u|, not "
-        f"estimation error. Reading 0.95u as an extra term on top of b = {PAPER.b:g} (total gain {PAPER.b + 0.95:g}) "
-        f"fits worse: ESO est_x3 {s2.sums['est_x3'][iB] / K:.4g} against its true extended state, "
+        "Table 3's x3 errors are explained by a reference that omits the (b − b0)u = 0.95u part of the extended "
+        f"state: ESO (noise off) {_fmt(b_.value)} against 1.3x1 − 1.6x2 + θ4 versus paper {a.paper}, but "
+        f"{_fmt(a.value)} against the true extended state d + (b − b0)u; MESO {_fmt(bm.value)} vs {_fmt(am.value)} "
+        f"(paper {am.paper}). The large, nearly equal x3 errors of both observers in Table 3 are therefore the omitted "
+        f"0.95|u|, not estimation error. Reading 0.95u as an extra term on top of b = {PAPER.b:g} (total gain "
+        f"{PAPER.b + 0.95:g}) fits worse: ESO est_x3 {s2.sums['est_x3'][iB] / K:.4g} against its true extended state, "
         f"{s2.sums['est_x3_no_bu'][iB] / K:.4g} against the reference without 0.95u, track_x1 "
         f"{s2.sums['track_x1'][iB] / K:.4g} (paper {result.get('s2.eso.track_x1').paper}, same-plant reading "
         f"{_fmt(result.get('s2.nonoise.eso.track_x1').value)}).")
@@ -343,6 +342,5 @@ def missing(result: StudyResult) -> list:
     out.append("Fig. 6 (not a cell): convergence of θ3 to 0.95 in situation 2 — not identifiable in closed loop "
                "(situation2-not-identifiable)")
     out.append("Table 1's literal accumulation with W(s) (not a cell): does not converge in situation 1 and diverges "
-               "in "
-               "situation 2; the tables use the well-posed variant (table1-accumulation-diverges)")
+               "in situation 2; the tables use the well-posed variant (table1-accumulation-diverges)")
     return out

@@ -219,12 +219,11 @@ def _verify_figures(ctx, result, v) -> None:
                                                      plant_poles=(v.a21 ** 0.5, v.P.a21_printed ** 0.5)),
                     "sec4_filter_bode.png",
                     caption="Beyond the paper (§4 gives no frequency response): Bode plots of what the correct "
-                            "steady-state filter passes from the measured angle to the estimated angle and rate "
-                            "(u held at 0), with the pendulum's unstable pole √a21 dotted, to show the filter's "
+                            "steady-state filter passes from the measured angle to the estimated angle and rate (u "
+                            "held at 0), with the pendulum's unstable pole √a21 dotted, to show the filter's "
                             "bandwidth against it. The low-frequency gain of φ̂/y is k2/(k2 − a21) (2.0 and 1.9 here, "
-                            "about 6 dB), not 1, "
-                            "because a constant angle with u = 0 is not a motion of the pendulum; in the loop the "
-                            "filter also takes u.")
+                            "about 6 dB), not 1, because a constant angle with u = 0 is not a motion of the pendulum; "
+                            "in the loop the filter also takes u.")
 
 
 def _per_run_figure(ctx, result, d, main_lab: str, lit_lab: str) -> None:
@@ -252,12 +251,11 @@ def _per_run_figure(ctx, result, d, main_lab: str, lit_lab: str) -> None:
                   names["settling_time"]: (p.clear_margin, f"+{p.clear_margin:.0%} (not clearly later)")}
     ctx.save_figure(result, figures.plot_per_run_changes(changes, thresholds), "fig4_per_run_changes.png",
                     caption="What the §5 and abstract claims are judged on, run by run (the paper reads them off a "
-                            "single run): each Monte Carlo run's change of a measure with the filter against no filter "
-                            "on the same noise, in % of the no-filter median, with the paper's K (the printed reading) "
-                            "and with the corrected steady-state gain, and the change each claim asks for at the "
-                            "chosen "
-                            "reading of 'clearly' and 'eliminates the jitter' (dashed). A claim holds where the median "
-                            "run passes that line and the 95 % interval of the median excludes zero.")
+                            "single run): each Monte Carlo run's change of a measure with the filter against no "
+                            "filter on the same noise, in % of the no-filter median, with the paper's K (the printed "
+                            "reading) and with the corrected steady-state gain, and the change each claim asks for at "
+                            "the chosen reading of 'clearly' and 'eliminates the jitter' (dashed). A claim holds "
+                            "where the median run passes that line and the 95 % interval of the median excludes zero.")
 
 
 def _loop_figures(ctx, result, d) -> None:
@@ -267,9 +265,8 @@ def _loop_figures(ctx, result, d) -> None:
                     "sec3_fuzzy_control_surface.png",
                     caption="The §3.2 fuzzy controller as built: control surface u(e, ec) on the quantised universes "
                             "and slices at fixed ec, with the paper's scaling gains Ke, Kec, Ku; the membership "
-                            "functions "
-                            "and the rule table are not printed and are reconstructed (seven triangular terms, "
-                            "U = sat(E + EC, ±3)).")
+                            "functions and the rule table are not printed and are reconstructed (seven triangular "
+                            "terms, U = sat(E + EC, ±3)).")
     main_lab, lit_lab = regimes.regime_label(p, False), regimes.regime_label(d.lit, True)
     states = {f"paper's K as a discrete α-β filter\n{main_lab}": m["filter"].noisy,
               f"correct steady-state gain (beyond the paper)\n{main_lab}": m["kf_ss"].noisy,
@@ -279,10 +276,9 @@ def _loop_figures(ctx, result, d) -> None:
                     caption="Redraws the paper's Fig. 3: angle and rate before filtering (measured y and its backward "
                             "difference, grey dots) and after (the filter estimate, blue line) with the true states "
                             "(dashed), one run after the 0.1 rad step; below each, the error before and the error "
-                            "after "
-                            "in separate panels on the same scale, so that neither hides the other. With the paper's K "
-                            "(α = 0.950) the angle estimate nearly repeats the measurement; the correct steady-state "
-                            "gain removes most of the noise.")
+                            "after in separate panels on the same scale, so that neither hides the other. With the "
+                            "paper's K (α = 0.950) the angle estimate nearly repeats the measurement; the correct "
+                            "steady-state gain removes most of the noise.")
 
     def cols(cases):
         return {"no filter": cases["nofilter"], "paper's K as a discrete α-β filter": cases["filter"],
@@ -324,6 +320,5 @@ def _loop_figures(ctx, result, d) -> None:
                     "beyond_filters_and_recovery.png",
                     caption="Beyond the paper (main regime): the angle estimation error of each filter in the loop "
                             "(paper's K as α-β, time-varying KF, correct steady-state gain, the paper's continuous "
-                            "filter "
-                            "as printed), and the largest initial angle the loop recovers from with the linear and the "
-                            "sin φ model.")
+                            "filter as printed), and the largest initial angle the loop recovers from with the linear "
+                            "and the sin φ model.")

@@ -159,12 +159,11 @@ def _record_regimes(result: StudyResult, d, stats) -> None:
             + ", ".join(f"{st[c]['sat_ec'][0]:.1%} ({c})" for c in st if c in ("nofilter", "filter", "kf_ss"))
             + " of the steady samples, angle input e in at most "
             f"{max(st[c]['sat_e'][0] or 0 for c in ('nofilter', 'filter', 'kf_ss')):.1%}; backward-difference noise "
-            f"std √2·σ_v/T = "
-            f"{math.sqrt(2) * q.sigma_v / q.T:.3g} rad/s against the ±{q.input_range / q.Kec:g} rad/s full scale; "
-            f"acceleration RMS {_fmt_stat(st['nofilter']['accel_rms'], 'm/s²')} without filter, "
+            f"std √2·σ_v/T = {math.sqrt(2) * q.sigma_v / q.T:.3g} rad/s against the ±{q.input_range / q.Kec:g} rad/s "
+            f"full scale; acceleration RMS {_fmt_stat(st['nofilter']['accel_rms'], 'm/s²')} without filter, "
             f"{_fmt_stat(st['filter']['accel_rms'], 'm/s²')} with the paper's K, "
-            f"{_fmt_stat(st['kf_ss']['accel_rms'], 'm/s²')} with the correct steady-state gain "
-            f"(holding φ = r needs {d.a21 * q.step / q.b2:.2g} m/s²)")
+            f"{_fmt_stat(st['kf_ss']['accel_rms'], 'm/s²')} with the correct steady-state gain (holding φ = r needs "
+            f"{d.a21 * q.step / q.b2:.2g} m/s²)")
     result.finding(
         "noise-saturation",
         "Noise alone saturates the fuzzy rate input in the literal regime but not in the main regime. "
@@ -245,14 +244,12 @@ def _record_offset(result: StudyResult, d, stats) -> None:
     result.finding(
         "steady-offset",
         f"The reconstructed fuzzy loop settles noise-free at φ = r + {off:.3g} rad ({100 * off / d.p.step:.2g} % of "
-        f"the "
-        "step), approaching it without a peak, so a peak measured against r would count this offset as overshoot. "
+        "the step), approaching it without a peak, so a peak measured against r would count this offset as overshoot. "
         f"Holding the pendulum at φ = r needs u = −a21·r/b2 = {-d.a21 * d.p.step / d.p.b2:.3g} m/s², which the PD-like "
         "surface only produces with a nonzero error. The study measures the overshoot against each response's own "
         f"final value (noise-free overshoot {_fmt_stat(st['nofilter']['overshoot_noise_free'], '%')} without filter, "
         f"{_fmt_stat(st['filter']['overshoot_noise_free'], '%')} with the paper's K); the mean steady offset under "
-        f"noise "
-        f"is {_fmt_stat(st['nofilter']['steady_offset'], 'rad')} without filter and "
+        f"noise is {_fmt_stat(st['nofilter']['steady_offset'], 'rad')} without filter and "
         f"{_fmt_stat(st['filter']['steady_offset'], 'rad')} with the paper's K (main regime).",
         evidence={"noise_free_offset": off, "u_hold": -d.a21 * d.p.step / d.p.b2})
 
@@ -269,8 +266,7 @@ def _record_qr_sweep(result: StudyResult, d) -> None:
                                      np.log(r[k[0]:k[0] + 2])))) if k.size else None
     result.quantity("beyond.qr_sweep.paper_K_near_optimal_ratios",
                     f"σ_w/σ_v ratios (s⁻²) at which the paper's K estimates the angle within {p.near_margin:.0%} of "
-                    f"the "
-                    f"optimal steady-state gain (swept {r[0]:.3g}-{r[-1]:.3g}, main σ_v and T)",
+                    f"the optimal steady-state gain (swept {r[0]:.3g}-{r[-1]:.3g}, main σ_v and T)",
                     [float(best.min()), float(best.max())] if best.size else None, unit="1/s²",
                     note=f"{best.size} of {r.size} ratios; the paper's Q/R = {p.qr_paper:g} is σ_w/σ_v = "
                          f"{math.sqrt(p.qr_paper):.3g}, the main regime's {p.sigma_w / p.sigma_v:.3g}")
@@ -288,8 +284,7 @@ def _record_qr_sweep(result: StudyResult, d) -> None:
         + (f", and the optimal α reaches {p.K_printed[0]} at σ_w/σ_v ≈ {r_alpha:.3g} s⁻²" if r_alpha else "")
         + f". At the paper's Q/R (σ_w/σ_v = {math.sqrt(p.qr_paper):.3g}) the optimal α is {alpha[0]:.3g}; at the main "
         f"regime's ratio the angle-estimate error RMS is {at['filter']:.3g} rad with the paper's K, {at['kf_ss']:.3g} "
-        f"rad "
-        f"with the optimal gain and {at['nofilter']:.3g} rad without filter.",
+        f"rad with the optimal gain and {at['nofilter']:.3g} rad without filter.",
         evidence={"ratios": r, "alpha_opt": alpha, "est": est, "angle": qr["angle"]})
 
 
@@ -315,8 +310,7 @@ def _record_beyond(result: StudyResult, d, stats) -> None:
         + ": its estimation error grows with the unstable filter pole whatever the controller does. The time-varying "
         f"Kalman filter and the correct steady-state gain give angle RMS {_fmt_stat(stats['kf']['angle_rms'], 'rad')} "
         f"and {_fmt_stat(stats['kf_ss']['angle_rms'], 'rad')}, overshoot {_fmt_stat(stats['kf']['overshoot'], '%')} "
-        f"and "
-        f"{_fmt_stat(stats['kf_ss']['overshoot'], '%')}: after its transient the time-varying filter's gain is the "
+        f"and {_fmt_stat(stats['kf_ss']['overshoot'], '%')}: after its transient the time-varying filter's gain is the "
         "steady-state one.",
         evidence={"diverged_runs": int(pc.diverged.sum()), "first_step": first})
     for nl, ok in d.recovered.items():

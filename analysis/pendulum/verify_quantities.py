@@ -130,13 +130,11 @@ def _record_continuous(result: StudyResult, d: VerifyData) -> None:
     # --- the printed ARE ----------------------------------------------------------------------
     result.finding(
         "are-sign-flipped",
-        "§4 prints 0 = −PA − AᵀP + PCᵀR⁻¹CP − ΓQΓᵀ, i.e. (×−1) the control-form Riccati equation "
-        "PA + AᵀP − PCᵀR⁻¹CP + ΓQΓᵀ = 0 with A and Aᵀ exchanged; the filter equation of §1 is "
-        "AP + PAᵀ − PCᵀR⁻¹CP + ΓQΓᵀ = 0. The filter solution P̄ leaves a residual of "
-        f"{np.max(np.abs(printed_res)):.4g} in the printed equation; the printed equation's stabilising "
-        f"solution (the one that makes Aᵀ − KC Hurwitz) gives K = {fmt_vec(lit.K)} and filter poles eig(A − KC) = "
-        f"{fmt_vec(np.sort(lit_poles.real))} "
-        "(unstable). Neither is the printed K.",
+        "§4 prints 0 = −PA − AᵀP + PCᵀR⁻¹CP − ΓQΓᵀ, i.e. (×−1) the control-form Riccati equation PA + AᵀP − PCᵀR⁻¹CP "
+        "+ ΓQΓᵀ = 0 with A and Aᵀ exchanged; the filter equation of §1 is AP + PAᵀ − PCᵀR⁻¹CP + ΓQΓᵀ = 0. The filter "
+        f"solution P̄ leaves a residual of {np.max(np.abs(printed_res)):.4g} in the printed equation; the printed "
+        f"equation's stabilising solution (the one that makes Aᵀ − KC Hurwitz) gives K = {fmt_vec(lit.K)} and filter "
+        f"poles eig(A − KC) = {fmt_vec(np.sort(lit_poles.real))} (unstable). Neither is the printed K.",
         evidence={"P_literal": lit.P, "K_literal": lit.K.ravel(), "poles_A_minus_KC": np.sort(lit_poles.real),
                   "residual_of_P_bar_in_printed_equation": printed_res},
         kind="erratum",
@@ -247,9 +245,8 @@ def _record_printed_filter(result: StudyResult, d: VerifyData) -> None:
         "Read instead as a discrete α-β filter (K = [α, β/T]) on the sampled pendulum it is stable: the "
         "spectral radius of (I − KH)e^{AT} is "
         + ", ".join(f"{max(abs(f.poles)):.4f} (T = {T:g} s)" for T, f in abf.items())
-        + f" (a complex pair with |z|² = det = 1 − α); as a classical α-β tracker (a21 = 0) the pair is stable (Jury: "
-        f"0 < α < 2, 0 < β < 4 − 2α: "
-        f"{alpha_beta_stable(*P.K_printed)}).",
+        + " (a complex pair with |z|² = det = 1 − α); as a classical α-β tracker (a21 = 0) the pair is stable (Jury: "
+        f"0 < α < 2, 0 < β < 4 − 2α: {alpha_beta_stable(*P.K_printed)}).",
         evidence={k: v for k, v in poles.items()} | {
             f"spectral_radius_discrete_T={T:g}": float(max(abs(f.poles))) for T, f in abf.items()},
     )
@@ -271,16 +268,15 @@ def _record_discrete(result: StudyResult, d: VerifyData) -> None:
                     note=f"Kalata gains at this Λ (double integrator, a21 = 0): α = {ka:.4g}, β = {kb:.4g}")
     result.finding(
         "alpha-beta-kalata",
-        f"Discrete steady state at T = {T:g} s (a21 = g·B, exact noise sampling, Rd = R/T): filter-form "
-        f"K = {fmt_vec(dss.K_filter)} → α = {alpha:.4g}, β = T·k2 = {beta:.4g}; control.dlqe's predictor gain "
-        f"L = FK = {fmt_vec(dss.L_predictor)}. For the double integrator (a21 = 0) with the same noise "
-        f"(DWNA model, σ_w² = Q/T, σ_v² = R/T) the tracking index is Λ = √(Q/R)·T² = {Lam:.3g} and Kalata's closed "
-        f"form "
-        f"gives α = {ka:.4g}, β = {kb:.4g}, identical to the discrete Riccati solution ({a0:.4g}, {b0:.4g}). "
-        f"The pendulum's unstable pole (a21 = {a21:.3g}) raises α by a factor {alpha / ka:.2g}: Kalata's "
-        "relations describe the α-β tracker, not this plant. The printed (0.950, 0.863) has an implied Λ ≈ "
-        f"{lam_implied:.2f} (β/√(1−α), although the pair is off the steady-state locus), which with "
-        f"Λ = √(Q/R)·T² would mean T ≈ {(lam_implied / math.sqrt(P.Q / P.R)) ** 0.5:.2f} s.",
+        f"Discrete steady state at T = {T:g} s (a21 = g·B, exact noise sampling, Rd = R/T): filter-form K = "
+        f"{fmt_vec(dss.K_filter)} → α = {alpha:.4g}, β = T·k2 = {beta:.4g}; control.dlqe's predictor gain L = FK = "
+        f"{fmt_vec(dss.L_predictor)}. For the double integrator (a21 = 0) with the same noise (DWNA model, σ_w² = Q/T, "
+        f"σ_v² = R/T) the tracking index is Λ = √(Q/R)·T² = {Lam:.3g} and Kalata's closed form gives α = {ka:.4g}, β = "
+        f"{kb:.4g}, identical to the discrete Riccati solution ({a0:.4g}, {b0:.4g}). The pendulum's unstable pole (a21 "
+        f"= {a21:.3g}) raises α by a factor {alpha / ka:.2g}: Kalata's relations describe the α-β tracker, not this "
+        f"plant. The printed (0.950, 0.863) has an implied Λ ≈ {lam_implied:.2f} (β/√(1−α), although the pair is off "
+        "the steady-state locus), which with Λ = √(Q/R)·T² would mean T ≈ "
+        f"{(lam_implied / math.sqrt(P.Q / P.R)) ** 0.5:.2f} s.",
         evidence={"K_filter": dss.K_filter.ravel(), "L_predictor": dss.L_predictor.ravel(),
                   "P_prior": dss.P_prior, "P_post": dss.P_post, "Lambda": Lam,
                   "kalata": [ka, kb], "dwna_dare": [a0, b0]},

@@ -237,8 +237,7 @@ def paper_tables(results: dict) -> list[str]:
         lines += ["**Values printed in the text:**", "", "| paper cell | paper | reproduced | unit | tolerance |",
                   "|---|---|---|---|---|"]
         lines += [f"| {_cell(c)} | {_fmt(q['paper'], digits=_digits(q))} | {_cell(_reproduced(q))} | "
-                  f"{_cell(q.get('unit')) or '—'} | "
-                  f"{_fmt_tolerance(q)} |" for c, q in text_cells]
+                  f"{_cell(q.get('unit')) or '—'} | {_fmt_tolerance(q)} |" for c, q in text_cells]
         lines.append("")
     return lines
 
