@@ -23,8 +23,7 @@ from ctrl_analysis.reporting.study import (
 )
 
 __all__ = ["Linear", "Example1", "Example2", "Readings", "LINEAR", "EX1", "EX2", "READINGS", "CLAIMS", "han_eso_gains",
-           "applied_gains",
-           "printed_eq9_gain", "printed_eq5_coefficients", "HAN_2008", "setpoint"]
+           "applied_gains", "printed_eq9_gain", "printed_eq5_coefficients", "HAN_2008", "setpoint"]
 
 #: The source of the ESO exponents and of the step-size gain rule (the paper prints neither).
 HAN_2008 = ("Han Jingqing, Active Disturbance Rejection Control Technique (自抗扰控制技术), National "

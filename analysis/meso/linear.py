@@ -65,8 +65,8 @@ def analyse(paper: Paper = PAPER, eps_grid=(0.1, 0.05, 0.025, 0.0125)) -> Linear
     """Bandwidth form (sympy), poles and error DC gains (python-control), noise std per ε."""
     obs = ExtendedStateObserver.from_epsilon(paper.n, paper.epsilon, paper.beta, b0=paper.b)
     match = bandwidth_match(paper.beta, epsilon=paper.epsilon)
-    p_sym = characteristic_polynomial(paper.n).subs(dict(zip(sp.symbols("beta1:4", positive=True), paper.beta,
-                                                             strict=True)))
+    betas = dict(zip(sp.symbols("beta1:4", positive=True), paper.beta, strict=True))
+    p_sym = characteristic_polynomial(paper.n).subs(betas)
     p_sym = sp.expand(p_sym.subs(sp.Symbol("epsilon", positive=True), sp.nsimplify(paper.epsilon)))
     dc = [float(np.real(g.dcgain())) for g in obs.disturbance_error_tf()]
     eps = np.asarray(eps_grid, dtype=float)

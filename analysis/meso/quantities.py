@@ -518,7 +518,7 @@ def _larger_eps(result, s1, readings) -> None:
     result.quantity("s1.meso_eps_larger.noise_std_ratio", f"steady noise std of e1, e2, e3 at ε = {e:g} relative to "
                     f"ε = {PAPER.epsilon:g}", ratio, unit="",
                     note="linear error dynamics driven by the measurement noise (control.dlyap), the same for ESO and "
-                    "MESO")
+                         "MESO")
 
 
 def gate_passes(sim: SituationRun, thresholds) -> tuple:
