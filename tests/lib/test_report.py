@@ -77,7 +77,7 @@ def test_report_md_lists_tables_findings_figures(tmp_path):
     r.figures.append("fig1.png")
     r.missing.append("part B")
     text = write_report_md([r.to_dict()], tmp_path).read_text()
-    assert "| `x` | x |  | 1 | 2 | — | 50 % | differs |"  # printed "1": half a unit is 50 % in text
+    assert "| `x` | x |  | 1 | 2 | — | 50 % | differs |" in text  # printed "1": half a unit is 50 %
     assert "- **a finding**" in text and text.count("\n| `x`") == 1
     assert "![fig1.png](demo/fig1.png)" in text and "part B" in text
 
