@@ -25,6 +25,7 @@ __all__ = [
     "check_path",
     "check_out_dir",
     "check_vector",
+    "check_seeds",
     "finite_result",
 ]
 
@@ -568,3 +569,26 @@ def finite_result(names: str, compute):
         raise ValueError(f"{names} overflow double precision (the result is not finite): use values of a "
                          f"smaller magnitude")
     return value
+
+
+def check_seeds(seeds) -> list:
+    """``seeds`` as a list of non-negative integers (one seed per run).
+
+    Parameters
+    ----------
+    seeds : sequence of int
+
+    Returns
+    -------
+    list of int
+
+    Raises
+    ------
+    TypeError
+        If ``seeds`` is a string or not a sequence.
+    ValueError
+        If a seed is not a non-negative integer.
+    """
+    if isinstance(seeds, (str, bytes)) or not hasattr(seeds, "__len__"):
+        raise TypeError(f"seeds must be a sequence of non-negative integers, got {seeds!r}")
+    return [check_int("seeds", s, minimum=0) for s in seeds]

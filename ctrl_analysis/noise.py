@@ -11,7 +11,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ._validate import check_finite, check_int
+from ._validate import check_finite, check_int, check_seeds
 from .engine.memory import RESULT_BYTES, check_result_memory
 
 __all__ = ["MAX_RUNS", "draw_noise", "gaussian_noise", "run_seeds", "uniform_noise"]
@@ -176,13 +176,6 @@ def gaussian_noise(std, mean=0.0) -> Callable:
     return sample
 
 
-def _check_seeds(seeds) -> list:
-    """A sequence of non-negative integer seeds."""
-    if isinstance(seeds, (str, bytes)) or not hasattr(seeds, "__len__"):
-        raise TypeError(f"seeds must be a sequence of non-negative integers, got {seeds!r}")
-    return [check_int("seeds", s, minimum=0) for s in seeds]
-
-
 def draw_noise(seeds, n_steps: int, *samplers: Callable) -> np.ndarray:
     """Draw the noise of every run up front: an array of shape ``(n_steps, B, m)``.
 
@@ -203,7 +196,7 @@ def draw_noise(seeds, n_steps: int, *samplers: Callable) -> np.ndarray:
     numpy.ndarray, shape (n_steps, B, m)
         ``m`` the total number of channels of the samplers.
     """
-    seeds = _check_seeds(seeds)
+    seeds = check_seeds(seeds)
     if not seeds:
         raise ValueError("seeds must contain at least one seed")
     n_steps = check_int("n_steps", n_steps, minimum=1)

@@ -38,7 +38,7 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from ._validate import check_int, check_str
+from ._validate import check_int, check_seeds, check_str
 from .cluster import (  # noqa: F401 - the cluster's public names, from here too
     _CLUSTER,
     WORKER_TIMEOUT,
@@ -55,7 +55,6 @@ from .cluster import (  # noqa: F401 - the cluster's public names, from here too
     silence_dask_logs,
     use_cluster,
 )
-from .noise import _check_seeds
 from .progress import _CONTEXT, bar
 from .taskpool import (
     _STATE,
@@ -282,7 +281,7 @@ def monte_carlo(fn: Callable, seeds: Sequence, *, jobs: int = 1, scheduler=None,
     -------
     The gathered result: what ``fn(list(seeds))`` returns in one process, bit for bit.
     """
-    seeds = _check_seeds(seeds)  # non-negative integers, as noise.draw_noise takes them
+    seeds = check_seeds(seeds)  # non-negative integers, as noise.draw_noise takes them
     if not seeds:
         raise ValueError("seeds must contain at least one seed")
     jobs = check_int("jobs", jobs, minimum=1)
@@ -351,7 +350,7 @@ def sweep(fn: Callable, grid: dict, seeds: Sequence, *, jobs: int = 1, scheduler
     jobs = check_int("jobs", jobs, minimum=1)
     if not callable(fn):
         raise TypeError(f"fn must be callable fn(points, seeds), got {fn!r}")
-    seeds = _check_seeds(seeds)
+    seeds = check_seeds(seeds)
     if not seeds:
         raise ValueError("seeds must contain at least one seed")
     pts = grid_points(grid)

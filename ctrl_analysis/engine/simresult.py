@@ -9,8 +9,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .._validate import check_array, check_real
-from ..noise import _check_seeds
+from .._validate import check_array, check_real, check_seeds
 
 __all__ = ["BatchRuns", "SimResult"]
 
@@ -101,7 +100,7 @@ def _prepare(x0, noise, seeds):
     """``x0`` as a ``(B, n)`` float array, the checked noise and seeds, and the batch size ``B``."""
     x0 = check_array("x0", x0)
     if seeds is not None:
-        seeds = _check_seeds(seeds)
+        seeds = check_seeds(seeds)
     if x0.ndim not in (1, 2) or x0.shape[-1] == 0:
         raise ValueError(f"x0 must have shape (n,) or (B, n) with n >= 1 states, got {x0.shape}")
     if not np.all(np.isfinite(x0)):
