@@ -67,7 +67,7 @@ def source_key(fn) -> str:
     it reads (``AT`` offsets of a :class:`~ctrl_analysis.engine.kernels.Layout`, module-level numbers,
     ``@jitable`` functions, numba's own dispatchers): a change in any of them must give another
     runner file, or numba's disk cache would hand back the runner compiled with the old ones. So
-    the key is the kernel's source followed by, for every global name its code (and the code of
+    the key is the kernel's module and name and its source, followed by, for every global name its code (and the code of
     functions nested in it) reads, that value's source if it is a function, recursively, or its
     ``repr`` if it is a number, a string or a tuple of them; modules (``np``, ``math``) are keyed by
     name only.
@@ -99,6 +99,9 @@ def source_key(fn) -> str:
             return
         seen.add(id(f))
         code, env = getattr(f, "__code__", None), getattr(f, "__globals__", {})
+        # where it lives too: numba's cache re-imports a runner's functions by module, so a kernel moved to
+        # another module (same source) must not get the runner cached with the old module's name
+        parts.append(f"{getattr(f, '__module__', None)}.{getattr(f, '__qualname__', None)}")
         try:
             parts.append(inspect.getsource(f))
         except Exception:  # noqa: BLE001 - no source (exec'd code: a notebook cell, a README example, whose

@@ -128,3 +128,44 @@ def test_a_kernel_without_a_module_file_is_not_disk_cached(tmp_path):
         out = subprocess.run([sys.executable, "-c", EXECD], env=env, capture_output=True, text=True, timeout=limit(300))
         assert out.returncode == 0, out.stderr[-2000:]
         assert out.stdout.split()[-1] == "6.0"
+
+
+MOVED = """
+import importlib, sys
+import numpy as np
+sys.path.insert(0, sys.argv[1])
+mod = importlib.import_module(sys.argv[2])
+from ctrl_analysis.engine import Execution
+from ctrl_analysis.engine.blocks import DiscreteBlock
+from ctrl_analysis.engine.kernels import KernelBlock, Kernels
+from ctrl_analysis.engine.loop import Loop, place
+
+
+class Acc(KernelBlock, DiscreteBlock):
+    inputs, outputs, states = ("u",), ("y",), ("y",)
+    kernels = Kernels(update=mod.update)
+
+    def __init__(self):
+        self.kernel_params = np.array([1.0])
+
+
+print(Loop([place(Acc(), "acc")], dt=1.0).simulate(3, inputs={"u": 1.0},
+                                                   execution=Execution(engine="compiled")).x[-1, 0, 0])
+"""
+
+
+def test_a_kernel_moved_to_another_module_does_not_load_the_old_modules_runner(tmp_path):
+    """Same source, another module (a package reorganised): the cached runner named the old module, which numba
+    re-imported and failed on (``No module named ...``); the module is part of the runner's key now."""
+    import os
+    import subprocess
+
+    env = dict(os.environ, CTRL_ANALYSIS_CACHE=str(tmp_path / "cache"))
+    text = textwrap.dedent(MODULE.format(helper="v", fields='"a"'))
+    for name in ("kmod_before_move", "kmod_after_move"):
+        (tmp_path / f"{name}.py").write_text(text)
+        out = subprocess.run([sys.executable, "-c", MOVED, str(tmp_path), name], env=env, capture_output=True,
+                             text=True, timeout=limit(300))
+        (tmp_path / f"{name}.py").unlink()  # moved away: the old module no longer exists
+        assert out.returncode == 0, out.stderr[-2000:]
+        assert out.stdout.split()[-1] == "3.0"
