@@ -16,8 +16,8 @@ projection the identity), ``lower`` (n), ``upper`` (n)); state ``[θ (n), R row 
 
 from __future__ import annotations
 
-from .engine.kernels import Layout, jitable, offset
-from .engine.matrix import matrix, symmetrize, trace, vector
+from ..engine.kernels import Layout, jitable, offset
+from ..engine.matrix import matrix, symmetrize, trace, vector
 
 __all__: list = []  # kernels: reached through the blocks' kernel() methods
 

@@ -20,10 +20,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import identification_kernels as kern
-from ._validate import check_bool, check_finite, check_int, check_positive, check_vector, finite_result
-from .engine.blocks import MAX_SIGNALS, DiscreteBlock, signal_names
-from .engine.kernels import KernelBlock, Kernels
+from .._validate import check_bool, check_finite, check_int, check_positive, check_vector, finite_result
+from ..engine.blocks import MAX_SIGNALS, DiscreteBlock, signal_names
+from ..engine.kernels import KernelBlock, Kernels
+from . import kernels as kern
 
 __all__ = [
     "ArxRegressor",
@@ -369,7 +369,7 @@ class RecursiveLeastSquaresBlock(KernelBlock, DiscreteBlock):
     def kernels(self) -> Kernels:
         """The RLS kernels: ``rls_update`` and ``rls_output`` (``rls_hold_output`` without feedthrough).
 
-        In :mod:`ctrl_analysis.identification_kernels`; run by run in the batched methods (the
+        In :mod:`ctrl_analysis.identification.kernels`; run by run in the batched methods (the
         projection and the trace cap branch per value).
         """
         return _RLS_KERNELS if self.feedthrough else _RLS_HOLD_KERNELS
