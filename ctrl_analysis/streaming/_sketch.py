@@ -54,7 +54,7 @@ def error_bound(n: int, k: int) -> float:
     float
         The largest ``E / n`` the sketch can reach after ``n`` values.
     """
-    return 0.0 if n <= k else math.ceil(math.log2(n / k)) / k
+    return _halvings(n, k) / k
 
 
 def levels_bound(n: int, k: int) -> int:
@@ -71,7 +71,12 @@ def levels_bound(n: int, k: int) -> int:
     -------
     int
     """
-    return 1 if n <= k else math.ceil(math.log2(n / k)) + 1
+    return _halvings(n, k) + 1
+
+
+def _halvings(n: int, k: int) -> int:
+    """How many times ``n`` values must be halved to fit in ``k``: ``ceil(log2(n / k))``, 0 for ``n <= k``."""
+    return 0 if n <= k else math.ceil(math.log2(n / k))
 
 
 def compact(levels: list, compactions: list, k: int) -> None:
