@@ -3,7 +3,7 @@
 :func:`resolve_batch` turns the call's ``inputs``, ``x0``, ``params``, ``runs`` and ``seeds`` into a
 :class:`Batch`: the held inputs and the callable ones, the initial-state matrix ``(B, n_states)``,
 the run-time parameters of every block they change (:class:`~ctrl_analysis.engine.params.Variant`:
-one kernel parameter row per run, or groups of runs), the seeds and the batch size ``B``. An
+one parameter row per run), the seeds and the batch size ``B``. An
 engine (:mod:`ctrl_analysis.engine.engines`) runs a plan over a batch; :meth:`Batch.take` cuts it to a
 chunk of runs, as the per-run inputs, initial states and parameters of a chunk in another process.
 """
@@ -162,9 +162,7 @@ def _x0(plan, x0, B, variants):
         n = plan.slices[p.name].stop - plan.slices[p.name].start
         if p.name not in x0:
             var = variants[p.name]
-            v = np.empty((B, n))
-            for block, idx in (var.groups or ((var.block, np.arange(B)),)):
-                v[idx] = np.asarray(block.initial_state(), dtype=float).reshape(-1)
+            v = var.x0 if var.x0 is not None else np.asarray(var.block.initial_state(), dtype=float).reshape(-1)
         else:
             v = np.asarray(x0[p.name], dtype=float)
         if v.shape not in ((n,), (B, n)):

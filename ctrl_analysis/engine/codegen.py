@@ -9,11 +9,11 @@ overhead on every operation, which dominates at small and medium batches. A bloc
 * ``output(t, x, u, p, y)``,
 
 writing their result into the last argument; ``x``, ``u`` are the run's state and input vectors
-and ``p`` a float64 parameter vector fixed when the block was built (``BlockKernel.params``). Values
+and ``p`` a float64 parameter vector fixed when the block was built (``Kernels.params``). Values
 that differ per run (a plant gain, an observer bandwidth, a case flag) are given to the simulation,
 ``Loop.simulate(params=...)`` (:mod:`ctrl_analysis.engine.params`): the engine passes the runner
 one parameter row per run and slices the rows with the batch's chunks and processes. A block gives
-its kernel with a method ``kernel() -> BlockKernel`` (or ``None``), which :func:`kernel_of` calls; the engine knows
+its kernel with a method ``kernel() -> Kernels`` (or ``None``), which :func:`kernel_of` calls; the engine knows
 no concrete block. When every block of a loop has a kernel, :meth:`Loop.simulate
 <ctrl_analysis.engine.loop.Loop.simulate>` (``engine="auto"`` or ``"compiled"``) generates one numba
 function for the whole loop — steps outermost and the batch's runs inside, the same sample/stage
@@ -38,9 +38,10 @@ from __future__ import annotations
 
 import inspect
 import time
+from typing import NamedTuple
 
 from .jit import _JIT, _jit, _runner_module, cacheable
-from .kernels import BlockKernel
+from .kernels import Kernels
 
 __all__ = ["available", "compile_seconds", "compiled_runner", "kernel_of"]
 
@@ -59,7 +60,7 @@ def available() -> bool:
     return True
 
 
-def kernel_of(block) -> BlockKernel | None:
+def kernel_of(block) -> Kernels | None:
     """The block's kernel: its own ``kernel()`` method, or ``None`` (numpy only).
 
     The engine knows no concrete block: a block that can run compiled says so through ``kernel()``.
@@ -70,7 +71,7 @@ def kernel_of(block) -> BlockKernel | None:
 
     Returns
     -------
-    BlockKernel or None
+    Kernels or None
     """
     own = getattr(block, "kernel", None)
     return own() if callable(own) else None
@@ -133,8 +134,24 @@ def _scratch_vector():
 STACK_VALUES = 4096
 
 
+class Wiring(NamedTuple):
+    """Where one placed block reads and writes in the generated runner.
+
+    Attributes
+    ----------
+    inputs, outputs : tuple of int
+        The signal columns (of ``S``) the block reads and writes.
+    states : tuple of (int, int)
+        Its slice ``(start, stop)`` of the loop's state vector (empty for a block without state).
+    """
+
+    inputs: tuple
+    outputs: tuple
+    states: tuple
+
+
 def _gen_source(blocks, order, stage, discrete, continuous, nc, method, n_signals):
-    """Python source of the runner (see :func:`compiled_runner`).
+    """Python source of the runner (see :func:`compiled_runner`), for the blocks' :class:`Wiring` in ``blocks``.
 
     Runs are stepped side by side (steps outermost, so the result rows are written in memory
     order; runs outermost was measured 1.5x slower at B = 1000, its strided stores miss the TLB).
@@ -174,24 +191,24 @@ def _gen_source(blocks, order, stage, discrete, continuous, nc, method, n_signal
     """
     L = []
     add = L.append
-    n = max([b["sl"][1] for b in blocks] + [0])  # states: the continuous ones first, x[:nc]
+    n = max([b.states[1] for b in blocks] + [0])  # states: the continuous ones first, x[:nc]
     rk4 = method == "rk4"
-    gathered = [i for i, b in enumerate(blocks) if not _consecutive(b["ic"])]
+    gathered = [i for i, b in enumerate(blocks) if not _consecutive(b.inputs)]
     values = n_signals + n + (n if discrete else 0) + 3 * nc + sum(
-        len(blocks[i]["ic"]) for i in gathered)
+        len(blocks[i].inputs) for i in gathered)
     new = "SCRATCH" if values <= STACK_VALUES else "np.empty"
 
     def call(i, kind, t, xv, out, ind):
         """Lines evaluating block ``i`` (``kind``: out / rhs / upd) on state vector ``xv``, into ``out``."""
         b = blocks[i]
-        lo, hi = b["sl"]
+        lo, hi = b.states
         if i in gathered:
-            lines = [f"UB{i}[{j}] = S[{c}]" for j, c in enumerate(b["ic"])]
+            lines = [f"UB{i}[{j}] = S[{c}]" for j, c in enumerate(b.inputs)]
             u = f"UB{i}"
         else:
-            lines, u = [], _view("S", b["ic"])
+            lines, u = [], _view("S", b.inputs)
         if kind == "out":
-            out = _view("S", b["oc"])
+            out = _view("S", b.outputs)
         else:
             out = f"{out}[{lo}:{hi}]"
         lines.append(f"K{i}_{kind}({t}, {xv}[{lo}:{hi}], {u}, P{i}[r{i}], {out})")
@@ -208,7 +225,7 @@ def _gen_source(blocks, order, stage, discrete, continuous, nc, method, n_signal
     add(f"    for j in range({n_signals}):")
     add("        S[j] = S0[j]")
     for i in gathered:
-        add(f"    UB{i} = {new}({len(blocks[i]['ic'])})  # block {i}'s inputs, not consecutive signals")
+        add(f"    UB{i} = {new}({len(blocks[i].inputs)})  # block {i}'s inputs, not consecutive signals")
     add(f"    x = {new}({n})  # the run's state at t_k; RK4 steps its continuous part in place")
     if discrete:
         add(f"    xn = {new}({n})  # the discrete states at t_k+1, xn[{nc}:]")
@@ -337,7 +354,7 @@ def compiled_runner(plan, kernels: dict):
     plan : Plan
         The loop's plan (:attr:`Loop.plan <ctrl_analysis.engine.loop.Loop.plan>`): its placed blocks, signal
         columns, evaluation groups and integrator.
-    kernels : dict of block name -> BlockKernel
+    kernels : dict of block name -> Kernels
         Every block's kernel.
 
     Returns
@@ -355,10 +372,9 @@ def compiled_runner(plan, kernels: dict):
     blocks = []
     for p in plan.placed:
         sl = plan.slices.get(p.name, slice(0, 0))
-        blocks.append({"ic": [col[s] for s in p.inputs], "oc": [col[s] for s in p.outputs],
-                       "np": len(p.outputs), "sl": (sl.start, sl.stop)})
+        blocks.append(Wiring(tuple(col[s] for s in p.inputs), tuple(col[s] for s in p.outputs), (sl.start, sl.stop)))
     order, stage, discrete, continuous = (list(plan.index[k]) for k in ("order", "stage", "discrete", "continuous"))
-    key = (tuple((tuple(b["ic"]), tuple(b["oc"]), b["sl"]) for b in blocks), tuple(order), tuple(stage),
+    key = (tuple(blocks), tuple(order), tuple(stage),
            tuple(discrete), tuple(continuous), plan.n_continuous, plan.method,
            tuple((kernels[n].output, kernels[n].rhs, kernels[n].update) for n in names))
     if key not in _RUNNERS:

@@ -9,6 +9,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from .kernels import KernelBlock
+
+_DERIVED = KernelBlock.kernel
 
 def compiled_for(plan, engine, funcs, variants):
     """The compiled runner and the kernels' parameters, or ``None`` for the numpy path.
@@ -62,11 +65,17 @@ def _fresh_params(plan, memo):
     run, P, per_run, functions = memo
     fresh = []
     for p, Pi, fn in zip(plan.placed, P, functions, strict=True):
-        own = getattr(p.block, "kernel", None)  # codegen.kernel_of, without importing it at every call
-        k = own() if callable(own) else None
-        if k is None or (k.output, k.update, k.rhs) != fn:
+        b = p.block
+        if type(b).kernel is _DERIVED:  # KernelBlock.kernel() without building its record: the same two reads
+            k, a = b.kernels, b.kernel_params
+        else:
+            own = getattr(b, "kernel", None)  # codegen.kernel_of, without importing it at every call
+            k = own() if callable(own) else None
+            if k is None:
+                return None
+            a = k.params
+        if (k.output, k.update, k.rhs) != fn:
             return None
-        a = k.params
         if type(a) is not np.ndarray or a.dtype != np.float64 or a.ndim != 1 or a.shape[0] != Pi.shape[1]:
             return None
         fresh.append(a.reshape(1, -1) if a.flags.c_contiguous else np.ascontiguousarray(a).reshape(1, -1))
@@ -86,13 +95,16 @@ def _compiled_for(plan, engine, funcs, variants):
     if why is None:
         for p in plan.placed:
             v = variants.get(p.name)
-            if v is not None and v.groups is not None and v.rows is None:
+            if v is not None and v.rows is not None and not v.block.kernel_rows:
                 why = f"block {p.name!r} ({type(p.block).__name__}) has per-run parameters but no kernel"
                 break
             k = kernel_of(p.block if v is None else v.block)
             if k is None:
                 why = f"block {p.name!r} ({type(p.block).__name__}) has no kernel"
                 break
+            if k.params is None:
+                raise ValueError(f"block {p.name!r} ({type(p.block).__name__}): its kernel() gave Kernels without "
+                                 f"params; give the block's parameter vector, Kernels(..., params=vector)")
             if v is not None and v.rows is not None:
                 k = k._replace(params=v.rows)
             elif np.ndim(k.params) != 1:
@@ -167,7 +179,7 @@ def check_kernel_reads(plan, kernels: dict) -> None:
     ----------
     plan : Plan
         The loop's plan (its placed blocks).
-    kernels : dict of block name -> BlockKernel
+    kernels : dict of block name -> Kernels
 
     Raises
     ------

@@ -7,7 +7,8 @@ generated numba function (:mod:`ctrl_analysis.engine.codegen`, :func:`~ctrl_anal
 Both step the batch in chunks of runs (:attr:`Execution.chunk_runs <ctrl_analysis.engine.policies.Execution>`,
 ``max_bytes``) and write into one :class:`Record`; :func:`select_engine` picks the engine an
 :class:`~ctrl_analysis.engine.policies.Execution` asks for (``"auto"``: compiled when every block has
-a kernel, otherwise numpy, said once per loop).
+a kernel, otherwise numpy, said once per loop), or, for a batch split over processes,
+:class:`~ctrl_analysis.engine.processes.ProcessEngine`.
 """
 
 from __future__ import annotations
@@ -39,7 +40,7 @@ class Engine(Protocol):
     Attributes
     ----------
     name : str
-        ``"numpy"`` or ``"compiled"``.
+        ``"numpy"``, ``"compiled"`` or ``"processes"``.
     """
 
     name: str
@@ -274,22 +275,40 @@ class CompiledEngine:
 NUMPY = NumpyEngine()
 
 
-def select_engine(plan, batch, execution) -> Engine:
-    """The engine ``execution.engine`` asks for, for this plan and batch.
+def select_engine(plan, batch, execution, loop=None) -> Engine:
+    """The engine ``execution`` asks for, for this plan and batch.
 
-    ``"auto"`` is compiled when every block has a kernel and no input is a callable (warning once per
-    loop otherwise, :class:`~ctrl_analysis.engine.compiled.SlowPathWarning`); ``"compiled"`` raises
-    when the loop cannot compile.
+    With ``execution.jobs > 1`` (or a process-wide Dask cluster, :func:`~ctrl_analysis.runs.parallel.use_cluster`,
+    for a compiled loop), several runs and a picklable ``loop``, a
+    :class:`~ctrl_analysis.engine.processes.ProcessEngine` that splits the runs over processes. Otherwise
+    ``execution.engine``: ``"auto"`` is compiled when every block has a kernel and no input is a callable
+    (warning once per loop otherwise, :class:`~ctrl_analysis.engine.compiled.SlowPathWarning`);
+    ``"compiled"`` raises when the loop cannot compile.
 
     Parameters
     ----------
     plan : Plan
     batch : Batch
     execution : Execution
+    loop : Loop, optional
+        The loop of ``plan``: needed to run in other processes (without it, one process).
 
     Returns
     -------
     Engine
     """
+    split = loop is not None and batch.B > 1 and not batch.funcs
+    if split and execution.jobs > 1:
+        from ..parallel import picklable
+        from .processes import ProcessEngine
+
+        if picklable(loop):
+            return ProcessEngine(loop)
     runner = compiled_for(plan, execution.engine, batch.funcs, batch.variants)
+    if runner is not None and split:
+        from ..parallel import active_cluster, picklable
+        from .processes import ProcessEngine
+
+        if active_cluster() is not None and picklable(loop):
+            return ProcessEngine(loop)  # a process-wide Dask cluster's workers
     return NUMPY if runner is None else CompiledEngine(runner)

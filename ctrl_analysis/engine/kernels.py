@@ -54,22 +54,8 @@ import numpy as np
 
 from .layout import Layout, offset
 
-__all__ = ["BlockKernel", "KernelBlock", "Kernels", "Layout", "as_int", "copy_output", "gather", "jitable", "offset",
+__all__ = ["KernelBlock", "Kernels", "Layout", "as_int", "copy_output", "gather", "jitable", "offset",
            "scratch"]
-
-
-class BlockKernel(NamedTuple):
-    """A block's per-run kernel functions (plain Python, numba-compilable) and its parameters.
-
-    What the compiled engine runs (:meth:`KernelBlock.kernel`, or a block's own ``kernel()``).
-    ``params`` is the block's 1-D parameter vector; values that differ per run are given to
-    ``Loop.simulate(params=...)``, which gives the engine one row per run.
-    """
-
-    output: Callable
-    params: np.ndarray
-    rhs: Callable | None = None
-    update: Callable | None = None
 
 
 def jitable(fn=None, **options):
@@ -231,7 +217,12 @@ _compiled_scratch_gather()
 
 
 class Kernels(NamedTuple):
-    """A block's kernel functions (module-level, plain Python that numba can compile).
+    """A block's kernel functions (module-level, plain Python that numba can compile), and its parameters.
+
+    One type describes kernels everywhere: a :class:`KernelBlock` lists its functions in the class
+    attribute ``kernels = Kernels(output=..., update=...)``, and :meth:`KernelBlock.kernel` (or a
+    block's own ``kernel()``) gives the engine the same record with ``params``, the block's parameter
+    vector, filled in.
 
     Attributes
     ----------
@@ -245,12 +236,17 @@ class Kernels(NamedTuple):
         Whether the kernels can be called on the batch's columns (``x.T``, ``u.T``, ``p``): scalar
         indexing and no branch on a value (``if x[0] > 0``). Otherwise the batched methods call
         them run by run.
+    params : numpy.ndarray or None
+        The block's 1-D parameter vector (``None`` in a class's description, set by ``kernel()``);
+        values that differ per run are given to ``Loop.simulate(params=...)``, which gives the engine
+        one row per run, ``(B, n_p)``.
     """
 
     output: Callable = copy_output
     update: Callable | None = None
     rhs: Callable | None = None
     columns: bool = True
+    params: np.ndarray | None = None
 
 
 #: From this many runs on, a kernel that branches per value (``Kernels(columns=False)``) runs compiled
@@ -437,7 +433,7 @@ class KernelBlock:
 
         Returns
         -------
-        BlockKernel
+        Kernels
+            The class's :attr:`kernels` with ``params`` this block's parameter vector.
         """
-        k = self.kernels
-        return BlockKernel(output=k.output, params=self.kernel_params, rhs=k.rhs, update=k.update)
+        return self.kernels._replace(params=self.kernel_params)

@@ -294,19 +294,7 @@ class Loop:
         plan = self.plan
         batch = resolve_batch(plan, n_steps, inputs=inputs, x0=x0, params=params, runs=runs, seeds=seeds, t0=t0,
                               save=save)
-        if batch.B > 1 and not batch.funcs:
-            from ..parallel import picklable
-            from .processes import simulate_chunks
-
-            if execution.jobs > 1 and picklable(self):
-                return simulate_chunks(self, batch, save, execution)
-        engine = select_engine(plan, batch, execution)
-        if engine.name == "compiled" and batch.B > 1 and execution.jobs == 1:
-            from ..parallel import active_cluster, picklable
-            from .processes import simulate_chunks
-
-            if active_cluster() is not None and picklable(self):
-                return simulate_chunks(self, batch, save, execution)  # a process-wide Dask cluster's workers
+        engine = select_engine(plan, batch, execution, loop=self)
         return engine.run(plan, batch, save, execution)
 
     # ------------------------------------------------------------------ python-control

@@ -7,9 +7,11 @@ other value is shared by every run. :func:`resolve` rebuilds the block once per 
 :meth:`~ctrl_analysis.engine.blocks.Block.with_params`, so the block's constructor validates every value,
 and gives the engines what they run:
 
-* a kernel block: its parameter vector, or the ``(B, n_p)`` rows of per-run values (the compiled
-  engine and the derived batched methods read row ``b`` for run ``b``);
-* any other block: the rebuilt block, or groups of runs each with its own rebuilt block.
+* the rebuilt block when every run shares the values;
+* per-run values: one parameter row per run, ``(B, n_p)``, and a :class:`PerRunBlocks` that steps
+  them: a kernel block's rows are its kernel parameter vectors (the compiled engine and the derived
+  batched methods read row ``b`` for run ``b``); a block without a kernel becomes a Python row kernel
+  whose row is the index of the run's rebuilt block (the numpy engine groups runs by it).
 
 :func:`chunk_functions` gives the numpy engine the per-step functions of a chunk of runs (its rows
 of the per-run values); :func:`take` cuts the per-run values to a chunk of runs, as per-run inputs
@@ -24,7 +26,7 @@ import numpy as np
 
 from .stepcheck import unchecked
 
-__all__ = ["Variant", "chunk_functions", "resolve", "runs_of", "split", "take"]
+__all__ = ["PerRunBlocks", "Variant", "chunk_functions", "resolve", "runs_of", "split", "take"]
 
 
 @dataclass(frozen=True)
@@ -33,19 +35,92 @@ class Variant:
 
     Attributes
     ----------
-    block : Block
-        The block with the shared changes applied (the placed block itself when none).
+    block : Block or PerRunBlocks
+        The block with the shared changes applied (the placed block itself when none); with per-run
+        values, a :class:`PerRunBlocks` whose rows are ``rows``.
     rows : numpy.ndarray or None
-        Per-run values of a block with a kernel: one kernel parameter row per run, ``(B, n_p)``
-        (the compiled engine, and the batched methods of a :class:`~ctrl_analysis.engine.kernels.KernelBlock`).
-    groups : tuple of (Block, numpy.ndarray) or None
-        Per-run values: each distinct block and the runs (indices) it serves (the numpy engine, for
-        blocks that have no derived batched methods).
+        Per-run values: one parameter row per run, ``(B, n_p)``. For a block with a kernel these are its
+        kernel parameter vectors (the compiled engine and the batched methods read row ``b`` for run
+        ``b``); for a block without one, the index of the run's rebuilt block (a Python row kernel,
+        which only the numpy engine runs).
+    x0 : numpy.ndarray or None
+        With per-run values, each run's initial state ``(B, n)``: its rebuilt block's ``initial_state()``
+        (so ``params={"block": {"x0": per-run values}}`` gives each run its own).
     """
 
     block: object
     rows: np.ndarray | None = None
-    groups: tuple | None = None
+    x0: np.ndarray | None = None
+
+
+class PerRunBlocks:
+    """A block rebuilt per distinct run-time value, stepped as one block whose parameter row selects the run's.
+
+    The numpy engine calls :meth:`batched` with the chunk's rows, like a kernel block's: a kernel
+    block's own batched methods take its kernel rows directly; any other block's runs are grouped by
+    their row and each group is stepped by its rebuilt block.
+
+    Parameters
+    ----------
+    blocks : tuple of Block
+        One rebuilt block per distinct value.
+    rows : numpy.ndarray, shape (len(blocks), n_p)
+        Each block's parameter row: its kernel parameters, or its index ``[i]``.
+    kernel_rows : bool
+        Whether ``rows`` are the blocks' kernel parameter vectors (then the first block's kernel,
+        with the per-run rows, runs every run).
+    """
+
+    def __init__(self, blocks, rows, kernel_rows: bool):
+        self.blocks, self.distinct, self.kernel_rows = tuple(blocks), rows, kernel_rows
+        self._parts = (None, None)
+
+    def kernel(self):
+        """The first block's kernel when the rows are kernel rows, else ``None`` (no compiled engine).
+
+        Returns
+        -------
+        Kernels or None
+        """
+        own = getattr(self.blocks[0], "kernel", None)
+        return own() if self.kernel_rows and callable(own) else None
+
+    def batched(self, kind: str, t, x, u, P) -> np.ndarray:
+        """Method ``kind`` (output, update or rhs) of every run, each by its row's block.
+
+        Parameters
+        ----------
+        kind : {"output", "update", "rhs"}
+        t : float
+        x, u : numpy.ndarray
+            ``(B, n)`` and ``(B, m)``.
+        P : numpy.ndarray, shape (B, n_p)
+            The runs' rows (the same array at every step of a chunk: its grouping is kept).
+
+        Returns
+        -------
+        numpy.ndarray
+        """
+        first = self.blocks[0]
+        if self.kernel_rows:
+            if hasattr(first, "batched"):
+                return first.batched(kind, t, x, u, P)
+            fn = getattr(first.kernel(), kind)  # a block with its own kernel(): the kernel run by run
+            out = np.empty((x.shape[0], len(first.outputs) if kind == "output" else x.shape[1]))
+            for b in range(x.shape[0]):
+                fn(t, x[b], u[b], P[b], out[b])
+            return out
+        if self._parts[0] is not P:
+            which = P[:, 0].astype(np.intp)
+            self._parts = (P, [(unchecked(b, kind), np.flatnonzero(which == i)) for i, b in enumerate(self.blocks)
+                               if (which == i).any()])
+        out = None
+        for f, idx in self._parts[1]:
+            y = np.asarray(f(t, x[idx], u[idx], None))
+            if out is None:
+                out = np.empty((x.shape[0],) + y.shape[1:])
+            out[idx] = y
+        return out
 
 
 def split(block, values: dict, B: int, where: str) -> tuple[dict, dict]:
@@ -206,22 +281,32 @@ def resolve(loop, params, B: int) -> dict:
         _, first, inverse = np.unique(flat, axis=0, return_index=True, return_inverse=True)
         inverse = np.asarray(inverse).reshape(-1)
         blocks = [_rebuild(block, {**shared, **{k: v[b] for k, v in per_run.items()}}, where) for b in first.tolist()]
-        order = np.argsort(inverse, kind="stable")
-        cuts = np.searchsorted(inverse[order], np.arange(1, len(blocks)))
-        groups = tuple(zip(blocks, (g.astype(np.intp) for g in np.split(order, cuts)), strict=True))
-        out[name] = Variant(blocks[0], rows=_kernel_rows(blocks, inverse, per_run, where), groups=groups)
+        distinct = _kernel_rows(blocks, per_run, where)
+        kernel_rows = distinct is not None
+        if not kernel_rows:  # a Python row kernel: the row is the index of the run's rebuilt block
+            distinct = np.arange(len(blocks), dtype=float).reshape(-1, 1)
+        x0 = np.stack([_initial_state(b, where) for b in blocks])[inverse]
+        out[name] = Variant(PerRunBlocks(blocks, distinct, kernel_rows), rows=np.ascontiguousarray(distinct[inverse]),
+                            x0=x0)
     return out
 
 
-def _kernel_rows(blocks, inverse, per_run, where):
-    """One kernel parameter row per run, or ``None`` when the blocks have no kernel with a parameter vector."""
+def _initial_state(block, where):
+    v = np.asarray(block.initial_state(), dtype=float).reshape(-1)
+    if not np.isfinite(v).all():
+        raise ValueError(f"{where}: the block's initial_state() must be finite, got {v}")
+    return v
+
+
+def _kernel_rows(blocks, per_run, where):
+    """Each block's kernel parameter vector as a row, or ``None`` when the blocks have no kernel with one."""
     from .codegen import kernel_of
 
     try:
         kernels = [kernel_of(b) for b in blocks]
     except Exception:  # noqa: BLE001 - a block the compiled engine cannot take runs on numpy
         return None
-    if any(k is None or np.ndim(k.params) != 1 for k in kernels):
+    if any(k is None or k.params is None or np.ndim(k.params) != 1 for k in kernels):
         return None
     if len({(k.output, k.update, k.rhs) for k in kernels}) > 1:
         return None  # different kernel functions per value: only the numpy engine can run them side by side
@@ -230,7 +315,7 @@ def _kernel_rows(blocks, inverse, per_run, where):
         raise ValueError(f"{where}: per-run values of {sorted(per_run)} change the size of the block's "
                          f"parameter vector ({sorted(sizes)}); values that change a block's structure "
                          f"(an order, a number of states) cannot vary per run")
-    return np.ascontiguousarray(np.stack([np.asarray(k.params, dtype=float) for k in kernels])[inverse])
+    return np.stack([np.asarray(k.params, dtype=float) for k in kernels])
 
 
 def take(params, B: int, loop, lo: int, hi: int):
@@ -261,32 +346,15 @@ def take(params, B: int, loop, lo: int, hi: int):
 
 def _variant_function(variant, kind: str, lo: int, B: int):
     """The per-step function of a block under run-time parameters, for runs ``lo:lo+B`` of the call."""
-    if variant.rows is not None and hasattr(variant.block, "batched"):
-        P = variant.rows[lo:lo + B]
-        block = variant.block
+    if variant.rows is None:
+        return unchecked(variant.block, kind)
+    P = variant.rows[lo:lo + B]
+    block = variant.block
 
-        def call(t, x, u, params=None):
-            return block.batched(kind, t, x, u, P)
+    def call(t, x, u, params=None):
+        return block.batched(kind, t, x, u, P)
 
-        return call
-    if variant.groups is not None:
-        parts = []
-        for block, idx in variant.groups:
-            mine = idx[(idx >= lo) & (idx < lo + B)] - lo
-            if mine.size:
-                parts.append((unchecked(block, kind), mine))
-
-        def call(t, x, u, params=None):
-            out = None
-            for f, idx in parts:
-                y = np.asarray(f(t, x[idx], u[idx], None))
-                if out is None:
-                    out = np.empty((x.shape[0],) + y.shape[1:])
-                out[idx] = y
-            return out
-
-        return call
-    return unchecked(variant.block, kind)
+    return call
 
 
 def chunk_functions(plan, variants: dict, lo: int, B: int) -> dict:

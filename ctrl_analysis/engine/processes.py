@@ -10,7 +10,42 @@ import numpy as np
 
 from ..parallel import _CLUSTER, _cluster_workers, chunk_slices, map_chunks
 
-__all__ = ["simulate_chunks"]
+__all__ = ["ProcessEngine", "simulate_chunks"]
+
+
+class ProcessEngine:
+    """The engine of a batch split over processes or a Dask cluster's workers (:func:`simulate_chunks`).
+
+    Each chunk runs in its worker on the engine that worker selects (compiled or numpy); the chunks'
+    responses are joined into one, equal bit for bit to one process.
+
+    Parameters
+    ----------
+    loop : Loop
+        Picklable (it is sent to the workers).
+    """
+
+    name = "processes"
+
+    def __init__(self, loop):
+        self.loop = loop
+
+    def run(self, plan, batch, save, execution):
+        """Step ``batch`` through the loop in ``execution.jobs`` processes (the ``Engine`` protocol).
+
+        Parameters
+        ----------
+        plan : Plan
+            The loop's plan (``self.loop.plan``).
+        batch : Batch
+        save : Save
+        execution : Execution
+
+        Returns
+        -------
+        LoopResponse
+        """
+        return simulate_chunks(self.loop, batch, save, execution)
 
 
 def simulate_chunks(loop, batch, save, execution):

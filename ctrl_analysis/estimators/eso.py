@@ -371,7 +371,7 @@ class ExtendedStateObserver(KernelBlock, ContinuousBlock):
 
         Returns
         -------
-        BlockKernel or None
+        Kernels or None
         """
         return None if self.known is not None else KernelBlock.kernel(self)
 

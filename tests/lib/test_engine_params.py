@@ -163,3 +163,83 @@ def test_per_run_initial_states_and_substeps_equal_single_runs(engine):
     shared = loop.simulate(30, inputs={name: u}, params={"td": {"x0": [1.0, 0.0]}}, runs=3,
                            execution=Execution(engine=engine))
     assert np.all(shared.states["td"][0] == [1.0, 0.0])
+
+
+class _Leak(DiscreteBlock):
+    """A plain Python block (no kernel): x(k+1) = a x(k) + u(k), y = x, starting from x0."""
+
+    inputs, outputs, states = ("u",), ("y",), ("x",)
+
+    def __init__(self, a=0.5, x0=0.0):
+        self.a, self.x0 = float(a), float(x0)
+
+    def initial_state(self):
+        return np.array([self.x0])
+
+    def update(self, t, x, u, params=None):
+        return self.a * x + u
+
+
+def _acc_update(t, x, u, p, xn):
+    xn[0] = x[0] + p[0] * u[0]
+
+
+class _OwnKernel(DiscreteBlock):
+    """A block with its own kernel() and no batched methods (the kernel is run row by row on numpy)."""
+
+    inputs, outputs, states = ("u",), ("y",), ("s",)
+
+    def __init__(self, T=1.0, s0=0.0):
+        self.p, self.s0 = np.array([float(T)]), float(s0)
+
+    def initial_state(self):
+        return np.array([self.s0])
+
+    def update(self, t, x, u, params=None):
+        return x + self.p[0] * u
+
+    def kernel(self):
+        return Kernels(params=self.p, update=_acc_update)
+
+
+def _alone(cls, u, engine, **kw):
+    return Loop([place(cls(**kw), "b")], dt=1.0).simulate(u.size - 1, inputs={"u": u},
+                                                          execution=Execution(engine=engine))
+
+
+def test_per_run_values_of_a_block_without_kernel_equal_single_runs_on_numpy_and_are_refused_compiled():
+    """Issue 29: a block without kernel takes per-run values as a Python row kernel (its rows select the run's
+    rebuilt block; ``Variant.groups`` is gone); only the numpy engine runs it, and engine='compiled' says why."""
+    u = np.cos(0.3 * np.arange(21))
+    a, x0 = np.array([0.5, 0.9, 0.5, -0.2]), np.array([0.0, 1.0, 2.0, 1.0])
+    loop = Loop([place(_Leak(), "b")], dt=1.0)
+    res = loop.simulate(20, inputs={"u": u}, params={"b": {"a": a, "x0": x0}}, execution=Execution(engine="numpy"),
+                        save=Save(states=True))
+    for r in range(a.size):
+        one = _alone(_Leak, u, "numpy", a=a[r], x0=x0[r])
+        np.testing.assert_array_equal(res.signals["y"][:, r], one.signals["y"][:, 0])
+    with pytest.raises(ValueError, match="'b' .*per-run parameters but no kernel"):
+        loop.simulate(20, inputs={"u": u}, params={"b": {"a": a}}, execution=Execution(engine="compiled"))
+
+
+@pytest.mark.parametrize("engine", ["numpy", "compiled"])
+def test_per_run_initial_state_alone_is_kept_where_the_kernel_rows_are_equal(engine):
+    """Runs that differ only by their initial state have equal kernel rows: each still starts from its own."""
+    u = np.sin(0.2 * np.arange(16))
+    s0 = np.array([0.0, 5.0, -1.0])
+    res = Loop([place(_OwnKernel(T=0.5), "b")], dt=1.0).simulate(15, inputs={"u": u}, params={"b": {"s0": s0}},
+                                                                 execution=Execution(engine=engine))
+    for r in range(s0.size):
+        one = _alone(_OwnKernel, u, engine, T=0.5, s0=s0[r])
+        np.testing.assert_array_equal(res.signals["y"][:, r], one.signals["y"][:, 0])
+
+
+@pytest.mark.parametrize("engine", ["numpy", "compiled"])
+def test_per_run_values_of_a_block_with_its_own_kernel_and_no_batched_methods_equal_single_runs(engine):
+    u = np.sin(0.2 * np.arange(16))
+    T = np.array([0.5, 2.0, 0.5])
+    res = Loop([place(_OwnKernel(), "b")], dt=1.0).simulate(15, inputs={"u": u}, params={"b": {"T": T}},
+                                                            execution=Execution(engine=engine))
+    for r in range(T.size):
+        one = _alone(_OwnKernel, u, engine, T=T[r])
+        np.testing.assert_array_equal(res.signals["y"][:, r], one.signals["y"][:, 0])

@@ -16,6 +16,7 @@ from ctrl_analysis.engine.engines import CompiledEngine, NumpyEngine, select_eng
 from ctrl_analysis.engine.kernels import KernelBlock, Kernels, Layout
 from ctrl_analysis.engine.loop import Loop, place
 from ctrl_analysis.engine.policies import MOVED
+from ctrl_analysis.engine.processes import ProcessEngine
 
 LEAK = Layout("a")
 
@@ -128,6 +129,12 @@ def test_both_engines_follow_one_protocol_bit_for_bit():
     a = NumpyEngine().run(plan, batch, Save(), Execution())
     b = compiled.run(plan, batch, Save(), Execution())
     assert np.array_equal(a["y"], b["y"]) and np.array_equal(a.x_final, b.x_final)
+    # jobs > 1 is an engine too: the runs split over processes, given the loop to send them
+    split = select_engine(plan, batch, Execution(jobs=2), loop=loop)
+    assert isinstance(split, ProcessEngine) and split.name == "processes"
+    assert isinstance(select_engine(plan, batch, Execution(jobs=2)), CompiledEngine)  # no loop: one process
+    c = split.run(plan, batch, Save(), Execution(jobs=2))
+    assert np.array_equal(c["y"], b["y"]) and np.array_equal(c.x_final, b.x_final)
 
 
 def test_loop_response_has_no_always_none_fields():

@@ -72,6 +72,7 @@ from ctrl_analysis.engine import layout as engine_layout
 from ctrl_analysis.engine import loop as loop_mod
 from ctrl_analysis.engine import matrix as engine_matrix
 from ctrl_analysis.engine import params as engine_params
+from ctrl_analysis.engine import processes as engine_processes
 from ctrl_analysis.engine import stepcheck as _stepcheck
 from ctrl_analysis.estimators import differential as de
 from ctrl_analysis.estimators import eso, lowpass, tracking
@@ -1001,8 +1002,8 @@ NOT_FUZZED = {
     loop_mod.Placed: "record built by place(), which is fuzzed",
     engine_kernels.KernelBlock: "mixin without constructor arguments (the blocks using it are fuzzed)",
     engine_kernels.Layout: "fuzzed through _layout (its fields are variadic) and _layout_pack",
-    engine_kernels.BlockKernel: "record of a block's kernel functions and parameters, checked by check_kernel_reads",
-    engine_kernels.Kernels: "record of kernel functions, checked when the block runs (check_kernel_reads)",
+    engine_kernels.Kernels: "record of a block's kernel functions and parameters, checked when the block runs "
+                            "(check_kernel_reads)",
     engine_kernels.copy_output: "per-step kernel, unchecked by design",
     engine_jit.cache_dir: "takes no arguments (reads $CTRL_ANALYSIS_CACHE)",
     engine_jit.compiled_rows: "engine plumbing: KernelBlock.batched gives it the block's own kernel",
@@ -1013,6 +1014,7 @@ NOT_FUZZED = {
                             "are fuzzed",
     engines.NumpyEngine: "no constructor arguments; run() takes the plan, batch and policies Loop.simulate made",
     engines.CompiledEngine: "built by select_engine from a runner it found; run() as NumpyEngine's",
+    engine_processes.ProcessEngine: "built by select_engine for jobs > 1 from a picklable loop; run() as NumpyEngine's",
     engines.Engine: "a typing.Protocol (the engines' contract)",
     engines.Record: "record of result arrays built by the engines",
     engines.kept_columns: "internal half of Loop.simulate(save=Save(keep=...)), whose keep is fuzzed",
@@ -1037,6 +1039,7 @@ NOT_FUZZED = {
                                      "tests/lib/test_engine_matrix.py checks it against numpy"
        for name in engine_matrix.__all__},
     engine_params.Variant: "record built by resolve",
+    engine_params.PerRunBlocks: "built by resolve from blocks the constructor validated (resolve is fuzzed)",
     engine_params.resolve: "internal half of Loop.simulate(params=...), whose params are fuzzed",
     engine_params.split: "internal half of Loop.simulate(params=...), whose params are fuzzed",
     engine_params.runs_of: "internal half of Loop.simulate(params=...): malformed params give None, then resolve's "

@@ -263,9 +263,9 @@ class KCubicPlant(CubicPlant):
         return x_next
 
     def kernel(self):
-        from ctrl_analysis.engine.kernels import BlockKernel, copy_output
+        from ctrl_analysis.engine.kernels import Kernels, copy_output
 
-        return BlockKernel(output=copy_output, params=np.zeros(0), update=cubic_update)
+        return Kernels(output=copy_output, params=np.zeros(0), update=cubic_update)
 
 
 def test_every_mfac_block_in_one_loop_compiled_equals_numpy_engine_bit_for_bit():

@@ -8,7 +8,7 @@ from ctrl_analysis.engine import codegen as _kernels
 from ctrl_analysis.engine.blocks import ContinuousBlock, DiscreteBlock
 from ctrl_analysis.engine.codegen import kernel_of
 from ctrl_analysis.engine.compiled import compiled_for
-from ctrl_analysis.engine.kernels import BlockKernel, copy_output
+from ctrl_analysis.engine.kernels import Kernels, copy_output
 from ctrl_analysis.engine.loop import Loop, place
 from ctrl_analysis.estimators.differential import DifferentialEstimator, sigma_rhs
 from ctrl_analysis.estimators.eso import ExtendedStateObserver, eso_rhs
@@ -48,7 +48,7 @@ class KOsc(ContinuousBlock):
         return y
 
     def kernel(self):
-        return BlockKernel(output=osc_output, params=self.p, rhs=osc_rhs)
+        return Kernels(output=osc_output, params=self.p, rhs=osc_rhs)
 
 
 def acc_update(t, x, u, p, xn):
@@ -69,7 +69,7 @@ class KAcc(DiscreteBlock):
         return xn
 
     def kernel(self):
-        return BlockKernel(output=copy_output, params=self.p, update=acc_update)
+        return Kernels(output=copy_output, params=self.p, update=acc_update)
 
 
 def han_eso(h=1e-3):
@@ -197,7 +197,7 @@ class BadKernel(ContinuousBlock):
         return -x + u
 
     def kernel(self):
-        return BlockKernel(output=copy_output, params=np.zeros(1), rhs=bad_rhs)
+        return Kernels(output=copy_output, params=np.zeros(1), rhs=bad_rhs)
 
 
 def test_auto_engine_falls_back_to_numpy_with_a_warning_when_a_kernel_does_not_compile():
@@ -331,7 +331,7 @@ class CheckedKernel(ContinuousBlock):
         return -x + u
 
     def kernel(self):
-        return BlockKernel(output=copy_output, params=np.zeros(1), rhs=self._rhs)
+        return Kernels(output=copy_output, params=np.zeros(1), rhs=self._rhs)
 
 
 @pytest.mark.parametrize("rhs,message", [(sloppy_rhs, "writes into its inputs u"),
