@@ -23,7 +23,7 @@ hands it, with the loop's :attr:`Loop.plan`, to an engine (:mod:`ctrl_analysis.e
 :mod:`ctrl_analysis.engine.codegen`) runs one generated numba function with the same sample and
 stage order. What is stored is a :class:`~ctrl_analysis.engine.policies.Save`, how it runs an
 :class:`~ctrl_analysis.engine.policies.Execution`: a batch is stepped in chunks when it is large
-(results unchanged) and can be split over processes (``jobs``, :mod:`ctrl_analysis.parallel`).
+(results unchanged) and can be split over processes (``jobs``, :mod:`ctrl_analysis.runs.parallel`).
 :meth:`Loop.interconnect` builds the same arrangement as a ``control.interconnect`` (all blocks
 continuous, or all discrete with the loop's ``dt``), and :meth:`LoopResponse.to_timeresponse`
 converts one run to a ``control.TimeResponseData``.
@@ -295,14 +295,14 @@ class Loop:
         batch = resolve_batch(plan, n_steps, inputs=inputs, x0=x0, params=params, runs=runs, seeds=seeds, t0=t0,
                               save=save)
         if batch.B > 1 and not batch.funcs:
-            from ..parallel import picklable
+            from ..runs.parallel import picklable
             from .processes import simulate_chunks
 
             if execution.jobs > 1 and picklable(self):
                 return simulate_chunks(self, batch, save, execution)
         engine = select_engine(plan, batch, execution)
         if engine.name == "compiled" and batch.B > 1 and execution.jobs == 1:
-            from ..parallel import active_cluster, picklable
+            from ..runs.parallel import active_cluster, picklable
             from .processes import simulate_chunks
 
             if active_cluster() is not None and picklable(self):
