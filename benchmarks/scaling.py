@@ -5,14 +5,14 @@ Record a real run, then replay its schedule::
     python benchmarks/scaling.py record --trace /tmp/trace -- reproduce all --out /tmp/out --jobs 2
     python benchmarks/scaling.py replay /tmp/trace --workers 1 2 4 8 16 32 64
 
-``record`` runs ``ctrl-analysis`` with ``CTRL_ANALYSIS_TRACE`` set (:mod:`ctrl_analysis.taskpool`): every process
+``record`` runs ``ctrl-analysis`` with ``CTRL_ANALYSIS_TRACE`` set (:mod:`ctrl_analysis.runs.taskpool`): every process
 appends each study's start and end and each ``map_chunks`` call with its calls' start and end. It prints the
 run's wall time. ``replay`` rebuilds each study as a chain: a serial stretch of its driver (everything between
 two maps: set-up, figures, linear analysis, sweeps evaluated one after another), then a map (its calls, any
 order), then the next serial stretch, and so on. It schedules these on ``W`` workers as the command does now:
 ``min(W, studies)`` drivers side by side, longest study first, and one pool in which the drivers' serial
 stretches and every study's calls wait in one queue, first ready first served (the shared pool of
-``ctrl_analysis.taskpool``). It prints the predicted wall time and speed-up per worker count, the critical
+``ctrl_analysis.runs.taskpool``). It prints the predicted wall time and speed-up per worker count, the critical
 path (the longest study with unlimited workers: its serial stretches plus its longest call per map) and the
 serial fraction (the drivers' serial time over all the work).
 

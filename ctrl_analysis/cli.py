@@ -9,7 +9,9 @@ import sys
 import time
 from pathlib import Path
 
-from . import _threads  # noqa: F401 - before the imports that load numpy: one BLAS thread per process
+from .runs import _threads  # noqa: F401 - before the imports that load numpy: one BLAS thread per process
+
+# isort: split
 from .arena.report_section import arena_links, arena_section
 from .reporting.atomic import (
     LockedError,
@@ -96,7 +98,7 @@ def _build_parser() -> argparse.ArgumentParser:
 
 
 def _progress(study: str, verbose: bool = True):
-    from .progress import write
+    from .runs.progress import write
 
     def emit(msg: str) -> None:
         write(f"[{study}] {msg}")  # through tqdm when bars are drawn, so they stay intact
@@ -126,10 +128,10 @@ def _run_study(task) -> dict:
     and ``error`` (one line, or ``None``); never raises for a study failure, so one failing study
     does not stop the others.
     """
-    from .progress import set_context
+    from .runs.progress import set_context
 
     name, out, runs, seed, quick, jobs, scheduler, position, verbose = task
-    from .taskpool import driver
+    from .runs.taskpool import driver
 
     set_context(name, position)  # the study's own bars (long simulations) carry its name, on their own line
     try:
@@ -142,8 +144,8 @@ def _run_study(task) -> dict:
 def _run_study_here(name, out, runs, seed, quick, jobs, scheduler, verbose=True) -> dict:
     from analysis import load_study
 
-    from .parallel import ClusterError, active_cluster
-    from .taskpool import trace_event
+    from .runs.parallel import ClusterError, active_cluster
+    from .runs.taskpool import trace_event
 
     record = {"name": name, "error": None, "text": "", "staged": None, "cluster": None,
               "run": {"seed": seed, "runs": runs, "quick": bool(quick)}}
@@ -313,7 +315,7 @@ def _scheduler_timeout() -> float:
 
 def _worker_timeout() -> float:
     """Seconds a run waits while no Dask worker is connected (CTRL_ANALYSIS_WORKER_TIMEOUT, parallel.WORKER_TIMEOUT)."""
-    from .parallel import WORKER_TIMEOUT
+    from .runs.parallel import WORKER_TIMEOUT
 
     return _env_seconds("CTRL_ANALYSIS_WORKER_TIMEOUT", WORKER_TIMEOUT)
 
@@ -324,7 +326,7 @@ def _reproduce(args) -> int:
     t_start = time.perf_counter()
     todo = _resolve_names(args.studies, STUDIES)
 
-    from .parallel import check_scheduler_address, default_jobs, map_chunks, use_cluster
+    from .runs.parallel import check_scheduler_address, default_jobs, map_chunks, use_cluster
 
     if args.scheduler is not None:
         try:
@@ -358,7 +360,7 @@ def _reproduce_into(args, todo, jobs, side_by_side, t_start, STUDIES, load_study
         _check_targets(out, todo)
         cluster = contextlib.nullcontext()
         if args.scheduler is not None:
-            from .parallel import silence_dask_logs
+            from .runs.parallel import silence_dask_logs
 
             silence_dask_logs()  # for good: a lost scheduler's client may still log after the cluster's block
             cluster = use_cluster(args.scheduler, jobs, timeout=_scheduler_timeout(),
@@ -433,7 +435,7 @@ def _run_studies(args, todo, out, jobs, side_by_side, run, load_study, map_chunk
     # then ends with the longest study instead of starting it last; summaries print in the asked order
     start = sorted(todo, key=lambda name: -_previous_runtime(out / name))
     # with more cores than studies side by side, every study may use all of them: their chunks share one pool
-    # (ctrl_analysis.taskpool); with as many or fewer, each driver has its core and runs its chunks in place
+    # (ctrl_analysis.runs.taskpool); with as many or fewer, each driver has its core and runs its chunks in place
     shared = side_by_side > 1 and jobs > side_by_side
     tasks = [(name, str(out), args.runs, args.seed, args.quick, jobs if shared else max(1, jobs // side_by_side),
               args.scheduler,
@@ -443,7 +445,7 @@ def _run_studies(args, todo, out, jobs, side_by_side, run, load_study, map_chunk
         for name in todo:
             load_study(name)
     if shared:
-        from .taskpool import shared_pool
+        from .runs.taskpool import shared_pool
 
         pool = shared_pool(jobs)
 
@@ -466,7 +468,7 @@ def _run_studies(args, todo, out, jobs, side_by_side, run, load_study, map_chunk
 
 def _cluster_line() -> tuple[str, str | None]:
     """The run's line on the Dask cluster (empty without one), and why the cluster failed (None if it did not)."""
-    from .parallel import active_cluster
+    from .runs.parallel import active_cluster
 
     c = active_cluster()
     if c is None:

@@ -242,7 +242,7 @@ RULES = [
      "longer", ["check_record.names"]),
     ("a record of any length from 4 samples on: without d1 nothing else fixes its length", "shorter longer",
      ["record_estimates.y"]),
-    # the last findings of the generated fuzz (issue 28: the arena, ctrl_analysis/parallel.py)
+    # the last findings of the generated fuzz (issue 28: the arena, ctrl_analysis/runs/parallel.py)
     (SIGNAL, "negative", ["record_estimates.y"]),
     (("an estimate of f' may be any real number; NaN/inf of a diverged estimator give a NaN/inf error (documented: "
       "'a diverged estimator's error is not finite')"), "negative nan-entry inf-entry", ["adversarial_error.est_d1"]),

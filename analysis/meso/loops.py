@@ -27,7 +27,7 @@ from ctrl_analysis.engine.blocks import signal_names
 from ctrl_analysis.engine.loop import Loop, place
 from ctrl_analysis.estimators.lowpass import LowPassFilter
 from ctrl_analysis.noise import draw_noise, uniform_noise
-from ctrl_analysis.parallel import chunk_slices, map_chunks
+from ctrl_analysis.runs.parallel import chunk_slices, map_chunks
 
 from .blocks import ModelledESO, ParameterPath, Plant
 from .chunk_errors import METRIC_ORDER, _accumulator, full_solved
@@ -157,7 +157,7 @@ def simulate_situation(sit: Situation, rows, T: float, paper: Paper = PAPER, win
 
     With ``jobs > 1`` (and at least :data:`_PARALLEL_RUN_STEPS` run-steps, below which starting
     processes costs more than it saves) the rows are split into ``jobs`` consecutive parts simulated
-    in parallel processes (:func:`ctrl_analysis.parallel.map_chunks`) and joined; runs are
+    in parallel processes (:func:`ctrl_analysis.runs.parallel.map_chunks`) and joined; runs are
     independent, so the result equals ``jobs=1`` bit for bit.
 
     Parameters

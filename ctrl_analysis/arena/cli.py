@@ -150,7 +150,7 @@ def check_args(args) -> SimpleNamespace:
         arithmetic would not stay finite, or whose tuning would cost more work or memory than the limits
         (:mod:`.recordcheck`).
     """
-    from ..parallel import check_scheduler_address, default_jobs
+    from ..runs.parallel import check_scheduler_address, default_jobs
     from .recordcheck import MAX_RECORDS
 
     jobs = default_jobs() if args.jobs is None else int(args.jobs)
@@ -217,9 +217,9 @@ def main(args, checked: SimpleNamespace | None = None) -> int:
 
 
 def _user(args, checked) -> int:
-    from ..progress import write
     from ..reporting.atomic import staged_directory, write_text_atomic
     from ..reporting.report import StudyContext, write_results_json
+    from ..runs.progress import write
     from .record import report_lines, run_record
 
     t, y, d1 = checked.record
@@ -265,7 +265,7 @@ def _full(args, checked) -> int:
     out = checked.out
     t0 = time.perf_counter()
     with staged_directory(out / "arena") as staged:
-        from ..progress import write
+        from ..runs.progress import write
 
         ctx = StudyContext(out_dir=staged, seed=args.seed, quick=args.quick, jobs=checked.jobs,
                            scheduler=args.scheduler, progress=lambda m: write(f"[arena] {m}"))

@@ -16,7 +16,7 @@ for two; a degree parameter takes its values), then a pattern search from the be
 ``±step`` along each parameter, move to the best if it improves, halve the step, ``rounds`` times.
 Every configuration evaluated counts as one tuning. The configurations of all cases of a family are
 run as the runs of a few large batches (per-run parameters), split over processes with
-:func:`ctrl_analysis.parallel.map_chunks` (``jobs``, ``scheduler``).
+:func:`ctrl_analysis.runs.parallel.map_chunks` (``jobs``, ``scheduler``).
 """
 
 from __future__ import annotations
@@ -36,7 +36,7 @@ from .._validate import (
     check_str,
 )
 from ..metrics import rmse
-from ..parallel import map_chunks
+from ..runs.parallel import map_chunks
 from .interface import FAMILIES, OMEGA_DT_MAX, Family, estimate, family, scales
 from .recordcheck import MAX_ROWS
 from .signals import (
@@ -341,7 +341,7 @@ def tune_family(name: str, cases, setup: Setup, *, rounds: int = 3, engine: str 
         Pattern-search rounds after the grid (0 to :data:`MAX_ROUNDS`).
     engine : {"auto", "numpy", "compiled"}
     jobs : int
-        Processes (:func:`ctrl_analysis.parallel.map_chunks`).
+        Processes (:func:`ctrl_analysis.runs.parallel.map_chunks`).
     scheduler : optional
         A Dask scheduler address.
 

@@ -179,7 +179,7 @@ class _Progress:
         work = self.batch.B * self.batch.n_steps
         if self.progress is False or (self.progress is None and work < AUTO_BAR_WORK):
             return None
-        from ..progress import enabled, updater
+        from ..runs.progress import enabled, updater
 
         show = enabled() if self.progress is None else self.progress  # True: a bar (a no-op off a terminal)
         self.cm = updater(show, work, f"{self.batch.B} runs x {self.batch.n_steps} samples", "run-sample")

@@ -23,7 +23,7 @@ hands it, with the loop's :attr:`Loop.plan`, to an engine (:mod:`ctrl_analysis.e
 :mod:`ctrl_analysis.engine.codegen`) runs one generated numba function with the same sample and
 stage order. What is stored is a :class:`~ctrl_analysis.engine.policies.Save`, how it runs an
 :class:`~ctrl_analysis.engine.policies.Execution`: a batch is stepped in chunks when it is large
-(results unchanged) and can be split over processes (``jobs``, :mod:`ctrl_analysis.parallel`).
+(results unchanged) and can be split over processes (``jobs``, :mod:`ctrl_analysis.runs.parallel`).
 :meth:`Loop.interconnect` builds the same arrangement as a ``control.interconnect`` (all blocks
 continuous, or all discrete with the loop's ``dt``), and :meth:`LoopResponse.to_timeresponse`
 converts one run to a ``control.TimeResponseData``.

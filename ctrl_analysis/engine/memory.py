@@ -81,4 +81,4 @@ def check_result_memory(nbytes: float, limit: float, where: str) -> None:
             f"{where} would store {nbytes / 2**30:.1f} GiB of trajectories (limit {limit / 2**30:.1f} GiB, half "
             f"the physical memory): pass save=Save(states=False, keep=[...]) with fewer signals, or split the "
             f"runs with "
-            f"ctrl_analysis.parallel.map_chunks and reduce each chunk to the quantities you need")
+            f"ctrl_analysis.runs.parallel.map_chunks and reduce each chunk to the quantities you need")

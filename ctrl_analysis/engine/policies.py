@@ -103,7 +103,7 @@ class Execution:
         the loop only, never on the batch size; the two engines agree to rounding (bit for bit
         without ``pow``).
     jobs : int
-        Processes the batch is split over (:func:`ctrl_analysis.parallel.map_chunks`); the result
+        Processes the batch is split over (:func:`ctrl_analysis.runs.parallel.map_chunks`); the result
         equals ``jobs=1`` bit for bit. Needs a picklable loop and no callable input.
     chunk_runs : int, optional
         Step the batch in chunks of at most this many runs (default: chosen from ``max_bytes``).

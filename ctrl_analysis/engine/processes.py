@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..parallel import _CLUSTER, _cluster_workers, chunk_slices, map_chunks
+from ..runs.parallel import _CLUSTER, _cluster_workers, chunk_slices, map_chunks
 
 __all__ = ["ProcessEngine", "simulate_chunks"]
 

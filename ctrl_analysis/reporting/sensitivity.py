@@ -124,7 +124,7 @@ class _Runner:
     """Evaluates points in rounds (one batch over processes per round) and keeps count."""
 
     def __init__(self, evaluate, box, jobs, scheduler, batch=None):
-        from ..parallel import picklable
+        from ..runs.parallel import picklable
 
         self.evaluate, self.box, self.jobs, self.scheduler, self.batch = evaluate, box, jobs, scheduler, batch
         fn = evaluate if batch is None else batch
@@ -133,7 +133,7 @@ class _Runner:
 
     def run(self, points) -> list:
         """Outcomes at ``[(u, algorithm)]``, in order."""
-        from ..parallel import map_chunks
+        from ..runs.parallel import map_chunks
 
         if not points:
             return []
@@ -231,7 +231,7 @@ def explore(evaluate: Callable, params: dict, *, samples: int = SAMPLES, seed: i
     names : collection of str, optional
         Vary only these reconstructions.
     jobs : int
-        Processes (:func:`ctrl_analysis.parallel.map_chunks`).
+        Processes (:func:`ctrl_analysis.runs.parallel.map_chunks`).
     scheduler : str, optional
         A Dask scheduler address.
     refine : int

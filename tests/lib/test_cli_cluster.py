@@ -48,7 +48,7 @@ STUDIES = {
 import os
 import time
 from pathlib import Path
-from ctrl_analysis.parallel import map_chunks
+from ctrl_analysis.runs.parallel import map_chunks
 from ctrl_analysis.reporting.report import StudyInfo, StudyResult
 
 INFO = StudyInfo(name="hold", seed_file="s.txt", paper="P", reproduces="r")
@@ -69,7 +69,7 @@ def run(ctx, params=None):
     return result
 """,
     "big": """
-from ctrl_analysis.parallel import map_chunks, picklable
+from ctrl_analysis.runs.parallel import map_chunks, picklable
 from ctrl_analysis.reporting.report import StudyInfo, StudyResult
 
 INFO = StudyInfo(name="big", seed_file="s.txt", paper="P", reproduces="r")

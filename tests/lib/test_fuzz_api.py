@@ -30,15 +30,11 @@ import ctrl_analysis
 from ctrl_analysis import (
     _validate,
     cli,
-    cluster,
     metrics,
     noise,
-    parallel,
     plants,
     polynomials,
-    progress,
     streaming,
-    taskpool,
 )
 from ctrl_analysis import identification as ident
 from ctrl_analysis.arena import claims, signals
@@ -92,6 +88,7 @@ from ctrl_analysis.reporting import sensitivity as sensitivity_module
 from ctrl_analysis.reporting.box import Box, Dimension, first_order
 from ctrl_analysis.reporting.study import algorithm as study_algorithm
 from ctrl_analysis.reporting.verdicts import claim_verdict, printed_tolerance
+from ctrl_analysis.runs import cluster, parallel, progress, taskpool
 from ctrl_analysis.streaming import _accumulator, _sketch
 from ctrl_analysis.symbolic import differential as sym_de
 from ctrl_analysis.symbolic import eso as sym_eso

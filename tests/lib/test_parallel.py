@@ -1,11 +1,10 @@
-"""Tests of ctrl_analysis.parallel (processes, Dask), batch chunking in the engine, and progress bars."""
+"""Tests of ctrl_analysis.runs.parallel (processes, Dask), batch chunking in the engine, and progress bars."""
 
 import io
 
 import numpy as np
 import pytest
 
-from ctrl_analysis import cluster, parallel, progress
 from ctrl_analysis.engine import Execution, Save
 from ctrl_analysis.engine.blocks import ContinuousBlock
 from ctrl_analysis.engine.integrators import rk4_step
@@ -13,6 +12,7 @@ from ctrl_analysis.engine.loop import Loop, place
 from ctrl_analysis.engine.memory import check_result_memory, chunk_bounds
 from ctrl_analysis.estimators.differential import DifferentialEstimator
 from ctrl_analysis.noise import draw_noise, gaussian_noise, run_seeds, uniform_noise
+from ctrl_analysis.runs import cluster, parallel, progress
 
 N_STEPS = 200
 
@@ -184,7 +184,7 @@ def test_map_chunks_given_the_process_wide_clusters_scheduler_runs_there_not_on_
         return Client(cluster), True
 
     monkeypatch.setattr(parallel, "_client", client)
-    monkeypatch.setattr(cluster, "_client", client)  # use_cluster lives in ctrl_analysis.cluster
+    monkeypatch.setattr(cluster, "_client", client)  # use_cluster lives in ctrl_analysis.runs.cluster
     with parallel.use_cluster("local", 1):
         assert parallel.map_chunks(abs, [-1, -2, 3], scheduler="local") == [1, 2, 3]
         assert parallel.map_chunks(abs, [-4]) == [4]

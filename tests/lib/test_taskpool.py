@@ -6,7 +6,7 @@ import os
 import numpy as np
 import pytest
 
-from ctrl_analysis import parallel, taskpool
+from ctrl_analysis.runs import parallel, taskpool
 
 
 def _square(x):

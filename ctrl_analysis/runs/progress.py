@@ -10,7 +10,7 @@ from __future__ import annotations
 import os
 import sys
 
-from ._validate import check_int, check_str
+from .._validate import check_int, check_str
 
 __all__ = ["NullBar", "bar", "enabled", "set_context", "updater", "write"]
 

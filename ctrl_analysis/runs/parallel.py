@@ -21,8 +21,8 @@ is active (:func:`use_cluster`); ``False`` always on this machine; ``"local"`` s
 ``LocalCluster`` with ``jobs`` single-threaded workers; any other string is the address of a
 running Dask scheduler (``"tcp://host:8786"``); a ``distributed.Client`` is used as given.
 
-:func:`~ctrl_analysis.cluster.use_cluster` makes a Dask cluster process-wide (the command line's ``--scheduler``);
-the cluster's address check and its failures in bounded time are in :mod:`ctrl_analysis.cluster`.
+:func:`~ctrl_analysis.runs.cluster.use_cluster` makes a Dask cluster process-wide (the command line's ``--scheduler``);
+the cluster's address check and its failures in bounded time are in :mod:`ctrl_analysis.runs.cluster`.
 
 Local worker processes die with the process that started them (``prctl(PR_SET_PDEATHSIG)`` on
 Linux, a watchdog thread elsewhere) and ignore SIGINT: Ctrl-C is handled once, by the parent, which
@@ -38,7 +38,7 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from ._validate import check_int, check_seeds, check_str
+from .._validate import check_int, check_seeds, check_str
 from .cluster import (  # noqa: F401 - the cluster's public names, from here too
     _CLUSTER,
     WORKER_TIMEOUT,
@@ -127,7 +127,7 @@ def _sequence(name: str, value) -> list:
 
 
 def _in_pool_worker() -> bool:
-    """Whether this process is a worker of a run's shared pool (:mod:`ctrl_analysis.taskpool`): it maps in place."""
+    """Whether this process works in a run's shared pool (:mod:`ctrl_analysis.runs.taskpool`): it maps in place."""
     return _STATE["worker"]
 
 

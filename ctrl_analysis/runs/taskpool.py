@@ -3,7 +3,7 @@
 ``reproduce all`` runs its studies side by side, each in a driver process. Before, each driver started its
 own pool with ``jobs // studies`` processes, so a study's Monte Carlo batches could never use the cores
 another study left idle while it drew figures or ran its serial parts. Now the command starts one pool of
-``jobs`` worker processes (:func:`shared_pool`), and :func:`~ctrl_analysis.parallel.map_chunks` in a driver
+``jobs`` worker processes (:func:`shared_pool`), and :func:`~ctrl_analysis.runs.parallel.map_chunks` in a driver
 sends its calls there (:func:`map_on_pool`): the chunks of every study wait in one queue, first come first
 served, and each runs on whichever worker is free. What a chunk computes does not depend on where it runs,
 so the results are those of ``--jobs 1`` bit for bit.
@@ -186,7 +186,7 @@ def shared_pool(jobs: int):
     from concurrent.futures import ProcessPoolExecutor
     from multiprocessing.connection import Listener
 
-    from ._validate import check_int
+    from .._validate import check_int
 
     jobs = check_int("jobs", jobs, minimum=1)
     method = "fork" if "fork" in mp.get_all_start_methods() else "spawn"

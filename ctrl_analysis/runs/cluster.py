@@ -1,7 +1,7 @@
-"""Dask clusters for :mod:`ctrl_analysis.parallel`: the address checked, a process-wide cluster, bounded-time failures.
+"""Dask clusters for :mod:`ctrl_analysis.runs.parallel`: address checks, a process-wide cluster, bounded-time failures.
 
 :func:`use_cluster` connects to a cluster once and makes it process-wide: while it is active every
-:func:`~ctrl_analysis.parallel.map_chunks` call without a ``scheduler`` (or with the one the cluster was made from)
+:func:`~ctrl_analysis.runs.parallel.map_chunks` call without a ``scheduler`` (or with the one the cluster was made from)
 and every batch of :meth:`Loop.simulate <ctrl_analysis.engine.loop.Loop.simulate>` (two runs or more, no callable
 input, a picklable loop) runs its chunks there, with the same numbers as on one process. The command line's
 ``--scheduler`` does this, so every study's Monte Carlo batches and sweeps go to the cluster without the study
@@ -24,7 +24,7 @@ import os
 import re
 import threading
 
-from ._validate import check_int, check_positive, check_str
+from .._validate import check_int, check_positive, check_str
 
 __all__ = ["WORKER_TIMEOUT", "ClusterError", "active_cluster", "check_scheduler_address", "default_jobs",
            "silence_dask_logs", "use_cluster"]
