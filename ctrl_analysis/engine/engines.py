@@ -299,14 +299,14 @@ def select_engine(plan, batch, execution, loop=None) -> Engine:
     """
     split = loop is not None and batch.B > 1 and not batch.funcs
     if split and execution.jobs > 1:
-        from ..parallel import picklable
+        from ..runs.parallel import picklable
         from .processes import ProcessEngine
 
         if picklable(loop):
             return ProcessEngine(loop)
     runner = compiled_for(plan, execution.engine, batch.funcs, batch.variants)
     if runner is not None and split:
-        from ..parallel import active_cluster, picklable
+        from ..runs.parallel import active_cluster, picklable
         from .processes import ProcessEngine
 
         if active_cluster() is not None and picklable(loop):
