@@ -28,10 +28,14 @@ STUDIES = {
 #: bytes per Monte Carlo run)}``. Measured with ``OPENBLAS_NUM_THREADS=1 python benchmarks/memory_per_run.py``
 #: (2026-11-24, 2-core machine): the peak resident size (ru_maxrss) each study adds to its process, run in
 #: one process at 10 and 210 runs (--quick) and 5 and 105 runs (full); per run = difference / runs added,
-#: base = the rest. The batch's statistics are kept per run, so the footprint is linear in --runs. Check:
+#: base = the rest. A study that keeps its runs' traces grows linearly in --runs. Check:
 #: pendulum --quick --runs 1500 --jobs 1 was estimated at 1.79 GB (with the CLI's 223 MiB) and peaked at 1.82 GB.
+#: A study that reduces its runs chunk by chunk is measured past its chunk (``POINTS_FOR`` of that script):
+#: ikf-mfac (``analysis.ikf_mfac.quantities.TABLE_CHUNK`` = 2000 runs; 2026-11-28) added 270 and 296 MB at
+#: --quick 2000 and 20000 runs, 291 and 294 MB at 2000 and 8000 full runs: its base is the chunk's peak, its
+#: slope the per-run values it keeps (1.5 and 0.5 kB).
 MEMORY = {
-    "ikf-mfac": {"quick": (116759961, 1223946), "full": (145489305, 2061230)},
+    "ikf-mfac": {"quick": (280087520, 1514), "full": (304087616, 524)},
     "ckf": {"quick": (69324800, 3090432), "full": (154439680, 9568256)},
     "differential-estimator": {"quick": (87115366, 581468), "full": (382555750, 4312760)},
     "meso": {"quick": (90019840, 1596416), "full": (202696499, 4156252)},

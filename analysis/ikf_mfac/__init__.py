@@ -32,7 +32,6 @@ from .findings import (
 from .paper import EX1, EX2, FIG2, SCHEMES
 from .quantities import (
     d_mfac_rearm_variant,
-    metrics_of,
     ratio_rows,
     run_with_sweeps,
     sweep_table,
@@ -90,7 +89,7 @@ def run(ctx: StudyContext, params=None) -> StudyResult:
     sweeps = {key: sweep_table(points[key], SWEEPS[key]) for key in examples}
     per_run = {}
     for key in examples:
-        per_run[key] = {s: metrics_of(all_runs[key][s]) for s in SCHEMES}
+        per_run[key] = {s: (all_runs[key][s].rmse, all_runs[key][s].snr) for s in SCHEMES}
         where = {s: [f"run {b} at k = {k}" for b,
                      k in zip(np.flatnonzero(r.diverged), r.diverged_step[r.diverged], strict=True)]
                  for s, r in all_runs[key].items()}
@@ -157,7 +156,7 @@ def _figures(ctx, result, chosen, all_runs, per_run, sweeps, ratio, seeds, fig2_
     dpi = 70 if ctx.quick else 120
     k1 = np.arange(1, ex1.n + 1)
     runs2 = result.get("fig2.diverged_runs").runs
-    ctx.save_figure(result, F.plot_fig2(k1, all_runs["ex1"]["mfac"].y_ref, fig2_first, fig2p.R, runs2,
+    ctx.save_figure(result, F.plot_fig2(k1, all_runs["ex1"]["mfac"].first.y_ref, fig2_first, fig2p.R, runs2,
                                         result.get("fig2.diverged_runs").value, result.get("fig2.rejection").value,
                                         result.get("fig2.rise").value, ex1.Q, fig2p.rise_level, fig2p.steady),
                "fig2_ikf_q_over_r.png", dpi=dpi,
@@ -170,15 +169,15 @@ def _figures(ctx, result, chosen, all_runs, per_run, sweeps, ratio, seeds, fig2_
                        "least half the runs diverge is shaded and its count printed (claim fig2-larger-r).")
     for key, (fo, fe), kind in (("ex1", (3, 4), "constant"), ("ex2", (5, 6), "time-varying")):
         r = all_runs[key]
-        ys = {s: r[s].y[:, 0] for s in SCHEMES}
+        ys = {s: r[s].first.y[:, 0] for s in SCHEMES}
         name = f"Example {key[-1]}, {kind} reference (seed {seeds[0]})"
-        ctx.save_figure(result, F.plot_outputs(fo, f"{name}: outputs of the four schemes", r["mfac"].k,
-                                          r["mfac"].y_ref, ys), f"fig{fo}_{kind}_outputs.png", dpi=dpi,
+        ctx.save_figure(result, F.plot_outputs(fo, f"{name}: outputs of the four schemes", r["mfac"].first.k,
+                                          r["mfac"].first.y_ref, ys), f"fig{fo}_{kind}_outputs.png", dpi=dpi,
                    caption=f"Redraws the paper's Fig. {fo}: the reference y* and the true outputs of MFAC, TD-MFAC, "
                            f"D-MFAC and IKF-MFAC in Example {key[-1]} ({kind} reference), one panel per scheme on "
                            "the same axes, one run with the first seed; Table 1 averages such runs.")
-        ctx.save_figure(result, F.plot_errors(fe, f"{name}: absolute tracking error |y*(k) − y(k)|", r["mfac"].k,
-                                         r["mfac"].y_ref, ys), f"fig{fe}_{kind}_abs_error.png", dpi=dpi,
+        ctx.save_figure(result, F.plot_errors(fe, f"{name}: absolute tracking error |y*(k) − y(k)|", r["mfac"].first.k,
+                                         r["mfac"].first.y_ref, ys), f"fig{fe}_{kind}_abs_error.png", dpi=dpi,
                    caption=f"Redraws the paper's Fig. {fe}: absolute tracking error |y* − y| of the four schemes "
                            f"in Example {key[-1]} ({kind} reference), the same run as Fig. {fo}.")
     ctx.save_figure(result, F.plot_spread(per_run, len(seeds)), "table1_rmse_spread.png", dpi=dpi,

@@ -375,3 +375,28 @@ def test_the_reset_value_inconsistency_is_an_erratum_naming_what_it_drives():
     assert "φ̂(1) = 2" in f["text"] and "to 0.5" in f["text"] and "fig2-larger-r (0.33, ex1.phi_reset)" in f["text"]
     # Fig. 2 is Example 1's: an index on Example 2's reset value is the estimator's noise, not named
     assert "0.16" not in f["text"]
+
+
+@pytest.mark.parametrize("scheme", ["mfac", "ikf_mfac"])
+def test_table1_runs_reduced_chunk_by_chunk_equal_one_batch(monkeypatch, scheme):
+    """Issue 30: Table 1's runs are simulated TABLE_CHUNK at a time and reduced to per-run values (memory bounded by
+    a chunk); the values equal one batch of every run, and the sweep points beside the first chunk are unchanged."""
+    from analysis.ikf_mfac import quantities as Q
+
+    ex = dataclasses.replace(EX1, n=120)
+    seeds, sweep_seeds = run_seeds(3, 7), run_seeds(4, 2)
+    sweeps = {"noise": (0.2,), "rho": (0.4,), "lam": (2.0,), "q": (0.5,)}
+    whole, points, per_run = Q.run_with_sweeps(ex, scheme, seeds, sweep_seeds, sweeps)
+    monkeypatch.setattr(Q, "TABLE_CHUNK", 3)
+    assert [len(c) for c in Q.chunks_of(seeds)] == [3, 4]  # a lone last run joins the chunk before it
+    assert [len(c) for c in Q.chunks_of(range(8))] == [3, 3, 2]
+    chunked, points3, per_run3 = Q.run_with_sweeps(ex, scheme, seeds, sweep_seeds, sweeps)
+    alone = run_scheme(ex, scheme, noise_draws(ex, seeds))
+    e, snr = metrics_of(alone)
+    for t in (whole, chunked):
+        np.testing.assert_array_equal(t.rmse, e)
+        np.testing.assert_array_equal(t.snr, snr)
+        np.testing.assert_array_equal(t.diverged, alone.diverged)
+        np.testing.assert_array_equal(t.first.y[:, 0], alone.y[:, 0])
+    assert points3 == points and all(np.array_equal(per_run3[k], per_run[k], equal_nan=True) for k in per_run)
+    np.testing.assert_array_equal(Q.chunked_metrics(ex, scheme, seeds)[0], e)
