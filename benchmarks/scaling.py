@@ -14,7 +14,9 @@ order), then the next serial stretch, and so on. It schedules these on ``W`` wor
 stretches and every study's calls wait in one queue, first ready first served (the shared pool of
 ``ctrl_analysis.runs.taskpool``). It prints the predicted wall time and speed-up per worker count, the critical
 path (the longest study with unlimited workers: its serial stretches plus its longest call per map) and the
-serial fraction (the drivers' serial time over all the work).
+serial fraction (the drivers' serial time over all the work). A figure the driver sent to the pool to be
+rendered (``StudyContext.save_figure``) is an async phase: its call waits in the same queue, the driver goes
+on, and the study ends when its driver and its figures have.
 
 What the model leaves out: a call's duration is taken as recorded (no contention for memory bandwidth, no
 compile time that more processes would repeat or share), and the time to send a call and its result. Check it
@@ -64,8 +66,9 @@ def load(folder: str, clock: str = "cpu") -> dict:
                 c = m["cpu_returned"]
             elif m["submitted"] >= t:
                 phases.append(("serial", m["submitted"] - t))
-            phases.append(("map", calls))
-            t = max(t, m["returned"])
+            # a figure rendered in the pool: the driver goes on without waiting (StudyContext.save_figure)
+            phases.append(("async" if m.get("async") else "map", calls))
+            t = max(t, m["submitted"] if m.get("async") else m["returned"])
         if clock == "cpu" and c is not None:
             phases.append(("serial", max(0.0, cpu[name][1] - c)))
         else:
@@ -82,19 +85,32 @@ def replay(chains: dict, workers: int) -> float:
     ready: list = []  # (ready time, sequence, study, phase index, duration)
     running: list = []  # (end time, sequence, study, phase index)
     left: dict = {}  # (study, phase) -> calls of a map not yet done
+    rendering = dict.fromkeys(chains, 0)  # study -> its async calls (figures) not yet done
+    ended: set = set()  # studies whose driver has run its last phase
     seq = 0
     t = 0.0
+
+    def finish(name, at):
+        if name in ended and not rendering[name] and waiting:  # this driver takes the next study
+            ended.discard(name)
+            push(waiting.pop(0), 0, at)
 
     def push(name, k, at):
         nonlocal seq
         if k >= len(chains[name]):
-            if waiting:  # this driver takes the next study
-                push(waiting.pop(0), 0, at)
+            ended.add(name)
+            finish(name, at)  # the driver waits for its study's figures, then takes the next study
             return
         kind, what = chains[name][k]
         if kind == "serial":
             heapq.heappush(ready, (at, seq, name, k, what))
             seq += 1
+        elif kind == "async":
+            rendering[name] += len(what)
+            for d in what:
+                heapq.heappush(ready, (at, seq, name, k, d))
+                seq += 1
+            push(name, k + 1, at)
         elif not what:
             push(name, k + 1, at)
         else:
@@ -115,6 +131,9 @@ def replay(chains: dict, workers: int) -> float:
         free += 1
         if chains[name][k][0] == "serial":
             push(name, k + 1, t)
+        elif chains[name][k][0] == "async":
+            rendering[name] -= 1
+            finish(name, t)
         else:
             left[(name, k)] -= 1
             if not left[(name, k)]:
@@ -127,15 +146,27 @@ def _work(phase) -> float:
 
 
 def critical_path(chains: dict) -> float:
-    """The longest study with unlimited workers: its serial stretches and its longest call per map."""
-    return max(sum(p[1] if p[0] == "serial" else max(p[1], default=0.0) for p in ph) for ph in chains.values())
+    """The longest study with unlimited workers: its serial stretches and its longest call per map.
+
+    An async call (a figure rendered in the pool) starts where the driver sent it and may end after it.
+    """
+    def length(phases):
+        t = end = 0.0
+        for kind, what in phases:
+            if kind == "async":
+                end = max(end, t + max(what, default=0.0))
+            else:
+                t += what if kind == "serial" else max(what, default=0.0)
+        return max(t, end)
+
+    return max(length(ph) for ph in chains.values())
 
 
 def summary(chains: dict, workers: list[int], check: float | None = None) -> str:
     """The table ``replay`` prints."""
     total = sum(_work(p) for ph in chains.values() for p in ph)
     serial = sum(p[1] for ph in chains.values() for p in ph if p[0] == "serial")
-    calls = sum(len(p[1]) for ph in chains.values() for p in ph if p[0] == "map")
+    calls = sum(len(p[1]) for ph in chains.values() for p in ph if p[0] != "serial")
     times = {w: replay(chains, w) for w in workers}
     base = times[min(workers)]
     lines = [f"{len(chains)} studies, {calls} calls, work {total:.1f} s (of it the drivers' serial stretches "

@@ -154,11 +154,13 @@ def _run_study_here(name, out, runs, seed, quick, jobs, scheduler, verbose=True)
         record["error"], record["cluster"] = f"not run: the Dask cluster had failed: {cluster['failed']}", "not run"
         return record
     staged = new_staging(out / name)
+    ctx = None
     try:
         ctx = StudyContext(out_dir=staged, runs=runs, seed=seed, quick=quick, progress=_progress(name, verbose),
                            jobs=jobs, scheduler=scheduler)
         t0, started, cpu = time.perf_counter(), time.time(), time.process_time()
         result = load_study(name).run(ctx, params=None)  # the study's chosen values (analysis/__init__.py)
+        ctx.wait_figures()  # figures rendered in the run's pool (StudyContext.save_figure)
         result.runtime_s = time.perf_counter() - t0
         trace_event({"kind": "study", "study": name, "start": started, "end": time.time(), "cpu_start": cpu,
                      "cpu_end": time.process_time(), "jobs": jobs})
@@ -167,17 +169,26 @@ def _run_study_here(name, out, runs, seed, quick, jobs, scheduler, verbose=True)
         write_results_json(result, staged)
         data = result.to_dict()
     except Exception as exc:  # noqa: BLE001 - any study failure is reported in one line, never a traceback
+        _settle(ctx)
         remove_tree(staged)
         record["error"] = one_line(exc)
         if isinstance(exc, ClusterError):
             record["cluster"] = "failed"
         return record
     except BaseException:
+        _settle(ctx)
         remove_tree(staged)
         raise
     record["staged"] = str(staged)
     record["text"] = _study_lines(name, out, data, result.runtime_s, verbose)
     return record
+
+
+def _settle(ctx) -> None:
+    """Let a failed study's figures still being rendered end before its staging folder is removed."""
+    if ctx is not None:
+        with contextlib.suppress(Exception):
+            ctx.wait_figures()
 
 
 def _study_lines(name: str, out: Path, data: dict, runtime: float, verbose: bool) -> str:

@@ -11,7 +11,7 @@ from __future__ import annotations
 import json
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -95,6 +95,7 @@ class StudyContext:
     progress: Callable[[str], None] = _silent
     jobs: int = 1
     scheduler: str | None = None
+    _pending: list = field(default_factory=list, init=False, repr=False, compare=False)
 
     def __post_init__(self):
         self.out_dir = check_path("out_dir", self.out_dir)
@@ -135,6 +136,12 @@ class StudyContext:
         smoke test) the figure is rendered at no more than 50 dpi, without the tight bounding box and
         without a layout engine (constrained layout is most of the rendering cost).
 
+        In a study driver of a run with a shared pool (``reproduce all`` on more cores than studies,
+        :mod:`ctrl_analysis.runs.taskpool`) the figure is pickled and rendered by a worker of the pool
+        while the study goes on (the PNG is the same bytes: the worker runs the same matplotlib on
+        the same figure); :meth:`wait_figures` waits for them. A figure that does not pickle (one
+        holding a lambda) is rendered here.
+
         Parameters
         ----------
         result : StudyResult
@@ -166,11 +173,93 @@ class StudyContext:
             result.captions[filename] = caption
         self.out_dir.mkdir(parents=True, exist_ok=True)
         path = self.out_dir / filename
-        fig.savefig(path, dpi=dpi, bbox_inches=None if self.quick else "tight")
+        bbox = None if self.quick else "tight"
+        if not self._render_elsewhere(fig, path, dpi, bbox):
+            fig.savefig(path, dpi=dpi, bbox_inches=bbox)
         plt.close(fig)
         if filename not in result.figures:
             result.figures.append(filename)
         return path
+
+    def _render_elsewhere(self, fig, path: Path, dpi: int, bbox) -> bool:
+        """Send ``fig`` to the run's shared pool to be saved as ``path``; False when it must be saved here."""
+        import pickle
+        import threading
+
+        from ..runs.progress import _CONTEXT
+        from ..runs.taskpool import map_on_pool, pool_available, trace_event
+
+        if not pool_available():
+            return False
+        try:
+            blob = pickle.dumps(fig)
+        except Exception:  # noqa: BLE001 - e.g. a FuncFormatter holding a lambda: rendered here instead
+            return False
+        failed: list = []
+        label = _CONTEXT["label"]
+
+        def render():
+            import time
+
+            submitted, cpu = time.time(), time.process_time()
+            try:
+                value = map_on_pool(_render_figure, [(blob, str(path), dpi, bbox)], lambda i, v: None)[0]
+            except BaseException as exc:  # noqa: BLE001 - raised by wait_figures in the study's thread
+                failed.append(exc)
+                return
+            # the driver does not wait for it: its CPU clock does not advance over the render (scaling.py)
+            trace_event({"kind": "map", "async": True, "study": label, "where": "pool", "submitted": submitted,
+                         "returned": time.time(), "cpu_submitted": cpu, "cpu_returned": cpu, "calls": [value[1:]]})
+
+        thread = threading.Thread(target=render, daemon=True, name=f"ctrl-analysis-render {path.name}")
+        thread.start()
+        self._pending.append((thread, failed, path.name))
+        return True
+
+    def wait_figures(self) -> None:
+        """Wait for the figures :meth:`save_figure` sent to the run's pool.
+
+        Raises
+        ------
+        RuntimeError
+            Naming the first figure that could not be rendered (after every render has ended).
+        """
+        pending, self._pending = self._pending, []
+        for thread, _, _ in pending:
+            thread.join()
+        for _, failed, name in pending:
+            if failed:
+                raise RuntimeError(f"figure {name} could not be rendered: {type(failed[0]).__name__}: "
+                                   f"{failed[0]}") from failed[0]
+
+
+def _render_figure(task) -> str:
+    """Save a pickled matplotlib figure as a PNG (a pool worker's half of :meth:`StudyContext.save_figure`).
+
+    Parameters
+    ----------
+    task : tuple
+        ``(pickled figure, path, dpi, bbox_inches)``.
+
+    Returns
+    -------
+    str
+        The path written.
+    """
+    import pickle
+
+    import matplotlib
+
+    blob, path, dpi, bbox = task
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+
+    fig = pickle.loads(blob)
+    try:
+        fig.savefig(path, dpi=dpi, bbox_inches=bbox)
+    finally:
+        plt.close(fig)
+    return path
 
 
 def write_results_json(result: StudyResult, out_dir: Path) -> Path:

@@ -96,3 +96,56 @@ def _rng_chunk(seed):
 
 def _driver_arrays(n):
     return parallel.map_chunks(_rng_chunk, list(range(n)), jobs=2)
+
+
+def _figure_driver(folder):
+    """A study's driver saving two figures: one that pickles (rendered by the pool), one holding a lambda (here)."""
+    import matplotlib.ticker as mticker
+
+    from ctrl_analysis.reporting.report import StudyContext, StudyInfo, StudyResult, new_figure
+
+    with taskpool.driver():
+        ctx = StudyContext(out_dir=folder)
+        result = StudyResult(StudyInfo(name="toy", seed_file="toy.txt", paper="toy", reproduces="toy"))
+        for name, formatter in (("pool.png", None), ("here.png", mticker.FuncFormatter(lambda v, _: f"{v:.1f}"))):
+            fig, ax = new_figure(title=name)
+            ax.plot(np.sin(np.linspace(0.0, 6.0, 200)), label="sin")
+            ax.legend()
+            if formatter is not None:
+                ax.yaxis.set_major_formatter(formatter)
+            ctx.save_figure(result, fig, name, dpi=60)
+        sent = [name for _, _, name in ctx._pending]
+        ctx.wait_figures()
+    return sent, result.figures
+
+
+def test_figures_render_in_the_pool_with_the_same_bytes(tmp_path, monkeypatch):
+    """Issue 30: in a run's shared pool a study's figures are rendered by the pool's workers while the study goes on;
+    the PNG equals the one rendered in place, and a figure that does not pickle is rendered in place."""
+    monkeypatch.setenv("CTRL_ANALYSIS_TRACE", str(tmp_path / "trace"))
+    with taskpool.shared_pool(2):
+        out = parallel.map_chunks(_figure_driver, [tmp_path / "pool", tmp_path / "pool2"], jobs=2, scheduler=False)
+    assert all(sent == ["pool.png"] and figures == ["pool.png", "here.png"] for sent, figures in out)
+    figures = out[0][1]
+    monkeypatch.delenv("CTRL_ANALYSIS_TRACE")
+    _figure_driver(tmp_path / "here")  # no pool: both in place
+    for name in figures:
+        assert (tmp_path / "pool" / name).read_bytes() == (tmp_path / "here" / name).read_bytes()
+    events = [json.loads(line) for f in sorted((tmp_path / "trace").glob("*.jsonl")) for line in f.open()]
+    renders = [e for e in events if e.get("async")]
+    assert len(renders) == 2  # one per driver
+    assert all(e["cpu_submitted"] == e["cpu_returned"] and len(e["calls"]) == 1 for e in renders)
+
+
+def test_a_figure_the_pool_could_not_render_is_named_when_the_study_waits(tmp_path):
+    import threading
+
+    from ctrl_analysis.reporting.report import StudyContext
+
+    ctx = StudyContext(out_dir=tmp_path)
+    done = threading.Thread(target=lambda: None)
+    done.start()
+    ctx._pending.append((done, [OSError("disk full")], "a.png"))
+    with pytest.raises(RuntimeError, match="figure a.png could not be rendered: OSError: disk full"):
+        ctx.wait_figures()
+    ctx.wait_figures()  # nothing left
