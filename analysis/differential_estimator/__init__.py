@@ -17,6 +17,7 @@ from ctrl_analysis.noise import run_seeds
 from ctrl_analysis.reporting import sensitivity
 from ctrl_analysis.reporting.report import StudyContext, StudyInfo, StudyResult
 from ctrl_analysis.reporting.study import record_parameters, study_params
+from ctrl_analysis.runs import parallel
 
 from . import claims, example1, example2, figures, linear_checks
 from .paper import EX1, EX2, LINEAR, READINGS
@@ -59,8 +60,7 @@ def run(ctx: StudyContext, params=None) -> StudyResult:
     for prefix, obj in chosen.items():
         record_parameters(result, obj, prefix)
     _linear(ctx, result, lin)
-    _example1(ctx, result, p1, runs)
-    _example2(ctx, result, p2, runs)
+    _examples(ctx, result, p1, p2, runs)
     claims.judge(result, p1, p2, r)
     _sensitivity(ctx, result, chosen)
     result.missing = list(MISSING)  # the differing cells are listed by the report, from their verdicts
@@ -127,6 +127,31 @@ def _linear(ctx, result, lin):
                             "for n0 = 2 to 8; the bandwidth scales with a, and n0 sets the bandwidth ω_b/a and the "
                             "resonance peak; every n0 rolls off at the same −20 dB/decade (Φ has relative degree 1; "
                             "finding lowpass-claim).")
+
+
+def _examples(ctx, result, p1, p2, runs):
+    """Example 1 and Example 2 side by side: each records into its own result (in its own process with
+    ``--jobs`` > 1), merged here in the order they would have run one after the other, so results.json is the
+    same as from one process (:meth:`StudyResult.merge <ctrl_analysis.reporting.results.StudyResult.merge>`).
+
+    They share nothing: Example 2 reads no quantity Example 1 records. Local processes only (``scheduler=False``):
+    each writes its figures into this study's folder.
+    """
+    ctx.progress(f"Examples 1 and 2 side by side: {runs} runs each, Example 1 with the fair comparison and the n0 "
+                 "sweep, Example 2 with its linearisation and robustness grid")
+    tasks = [(key, p, runs, result.info, ctx.out_dir, ctx.seed, ctx.quick) for key, p in (("ex1", p1), ("ex2", p2))]
+    for part in parallel.map_chunks(_example_part, tasks, jobs=min(ctx.jobs, 2), scheduler=False,
+                                    desc="differential-estimator: examples"):
+        result.merge(part)
+
+
+def _example_part(task) -> StudyResult:
+    """One example recorded into a result of its own (a call of :func:`_examples`, module level: run in a worker)."""
+    key, p, runs, info, out_dir, seed, quick = task
+    part, ctx = StudyResult(info), StudyContext(out_dir=out_dir, seed=seed, quick=quick)
+    (_example1 if key == "ex1" else _example2)(ctx, part, p, runs)
+    ctx.wait_figures()
+    return part
 
 
 def _example1(ctx, result, p, runs):

@@ -15,6 +15,7 @@ from ctrl_analysis.noise import run_seeds
 from ctrl_analysis.reporting import sensitivity
 from ctrl_analysis.reporting.report import StudyContext, StudyInfo, StudyResult
 from ctrl_analysis.reporting.study import record_parameters, study_params
+from ctrl_analysis.runs import parallel
 
 from . import figures as F
 from .claims import judge_claims, record_fig2, record_noise_margin, record_table1
@@ -81,8 +82,12 @@ def run(ctx: StudyContext, params=None) -> StudyResult:
     result.settings["sweeps"] = SWEEPS
     ctx.progress(f"ikf-mfac: Table 1 ({runs} runs) and the sweeps ({len(sweep_seeds)} runs a point), side by side")
     all_runs, points, noise_runs = {}, {}, {}
-    for key, ex in examples.items():
-        done = {s: run_with_sweeps(ex, s, seeds, sweep_seeds, SWEEPS[key]) for s in SCHEMES}
+    # the eight (example, scheme) batches are independent: side by side over --jobs processes (or the cluster)
+    tasks = [(ex, s, seeds, sweep_seeds, SWEEPS[key]) for key, ex in examples.items() for s in SCHEMES]
+    outs = iter(parallel.map_chunks(_table_task, tasks, jobs=ctx.jobs, scheduler=ctx.scheduler,
+                                    desc="ikf-mfac: Table 1 and the sweeps"))
+    for key in examples:
+        done = {s: next(outs) for s in SCHEMES}
         all_runs[key] = {s: d[0] for s, d in done.items()}
         points[key] = {s: d[1] for s, d in done.items()}
         noise_runs[key] = {s: [d[2][("noise", lv)] for lv in SWEEPS[key]["noise"]] for s, d in done.items()}
@@ -125,6 +130,11 @@ def run(ctx: StudyContext, params=None) -> StudyResult:
     result.missing = missing(result)
     _figures(ctx, result, chosen, all_runs, per_run, sweeps, ratio, seeds, fig2_first, td_scan)
     return result
+
+
+def _table_task(task):
+    """One (example, scheme) batch of Table 1 and the sweeps (:func:`.quantities.run_with_sweeps`), in a worker."""
+    return run_with_sweeps(*task)
 
 
 #: Runs of one evaluation of the plausible box: Table 1's cells and every noise level; Fig. 2 per R.

@@ -266,6 +266,45 @@ class StudyResult:
             item["claim_verdict"] = check_in("claim_verdict", claim_verdict, ("holds", "fails", "mixed", "untestable"))
         self.findings.append(item)
 
+    def merge(self, part: StudyResult) -> None:
+        """Append what ``part`` recorded, as if it had been recorded here after everything already here.
+
+        A study computes independent parts side by side (each into its own result, in other processes)
+        and merges them in the order it would have run them, so results.json is the same as one process
+        recording all of them in that order.
+
+        Parameters
+        ----------
+        part : StudyResult
+            Of the same study, recorded from empty.
+
+        Raises
+        ------
+        TypeError
+            If ``part`` is not a StudyResult.
+        ValueError
+            If it is another study's, or records a quantity, claim or setting, seed or caption key
+            already recorded here.
+        """
+        if not isinstance(part, StudyResult):
+            raise TypeError(f"part must be a StudyResult, got {part!r:.80}")
+        if part.info != self.info:
+            raise ValueError(f"part must be of study {self.info.name!r}, got {part.info.name!r}")
+        for kind, mine, theirs in (("quantity", [q.id for q in self.quantities], [q.id for q in part.quantities]),
+                                   ("claim", [c.claim.id for c in self.claims], [c.claim.id for c in part.claims])):
+            clash = set(mine) & set(theirs)
+            if clash:
+                raise ValueError(f"part records {kind} ids already recorded here: {sorted(clash)}")
+        for kind in ("settings", "seeds", "captions", "sensitivity"):
+            clash = set(getattr(self, kind)) & set(getattr(part, kind))
+            if clash:
+                raise ValueError(f"part records {kind} keys already recorded here: {sorted(clash)}")
+        for kind in ("reconstructions", "quantities", "findings", "missing", "claims"):
+            getattr(self, kind).extend(getattr(part, kind))
+        self.figures.extend(f for f in part.figures if f not in self.figures)
+        for kind in ("settings", "seeds", "captions", "sensitivity"):
+            getattr(self, kind).update(getattr(part, kind))
+
     def get(self, id: str) -> Quantity:
         """The recorded quantity ``id``.
 

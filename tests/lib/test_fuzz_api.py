@@ -287,6 +287,10 @@ def _finding(id, text):
     return _new_result().finding(id, text)
 
 
+def _merge(part):
+    return _new_result().merge(part)
+
+
 def _draw_noise(seeds, n_steps):
     return noise.draw_noise(seeds, n_steps, noise.gaussian_noise(1.0))
 
@@ -637,6 +641,7 @@ def build_cases(tmp):
         ("StudyResult.reconstruction", _reconstruction, dict(name="x", why="because"),
          dict(name=STR + [""], why=STR + [""])),
         ("StudyResult.finding", _finding, dict(id="f", text="found"), dict(id=STR + [""], text=STR + [""])),
+        ("StudyResult.merge", _merge, dict(part=_new_result()), dict(part=[None, 3, "s", {}])),
         ("StudyContext", report.StudyContext, dict(out_dir=".", runs=3, seed=0, jobs=1),
          dict(runs=opt(INT) + [0], seed=INT + [-1], jobs=INT + [0])),
         ("StudyContext.runs_or", _runs_or, dict(default=100, quick_default=5),

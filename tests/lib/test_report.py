@@ -101,3 +101,37 @@ def test_table_cells_escape_pipes(tmp_path):
     row = [line for line in write_report_md([r.to_dict()], tmp_path).read_text().splitlines()
            if line.startswith("| `e`")][0]
     assert row.count("|") - row.count("\\|") == 10  # nine cells, ten unescaped separators
+
+
+def test_merging_parts_recorded_apart_equals_recording_them_in_order():
+    """Issue 30: a study records independent parts in other processes and merges them in order: the same
+    results.json as one process recording them one after the other; a part that repeats an id is refused."""
+    info = StudyInfo("s", "f", "p", "r")
+
+    def part_a(r):
+        r.quantity("a.x", "x", 1.0, paper=1.0)
+        r.reconstruction("a_h", 0.1, "not printed")
+        r.figures.append("a.png")
+        r.captions["a.png"] = "caption a"
+        r.seeds["a"] = [1, 2]
+
+    def part_b(r):
+        r.quantity("b.y", "y", 2.0)
+        r.finding("b-f", "found")
+        r.figures.append("b.png")
+        r.captions["b.png"] = "caption b"
+        r.settings["b"] = {"T": 5}
+
+    whole = StudyResult(info)
+    part_a(whole)
+    part_b(whole)
+    merged, a, b = StudyResult(info), StudyResult(info), StudyResult(info)
+    part_a(a)
+    part_b(b)
+    merged.merge(a)
+    merged.merge(b)
+    assert json.dumps(merged.to_dict(), sort_keys=False) == json.dumps(whole.to_dict(), sort_keys=False)
+    with pytest.raises(ValueError, match=r"quantity ids already recorded here: \['a.x'\]"):
+        merged.merge(a)
+    with pytest.raises(ValueError, match="of study 's'"):
+        merged.merge(StudyResult(StudyInfo("t", "f", "p", "r")))
