@@ -263,9 +263,10 @@ def _full(args, checked) -> int:
     if args.runs is not None:
         settings = replace(settings, records=args.runs)
     out = checked.out
-    t0 = time.perf_counter()
+    t0, started, cpu = time.perf_counter(), time.time(), time.process_time()
     with staged_directory(out / "arena") as staged:
-        from ..runs.progress import write
+        from ..runs.progress import _CONTEXT, write
+        from ..runs.taskpool import trace_event
 
         ctx = StudyContext(out_dir=staged, seed=args.seed, quick=args.quick, jobs=checked.jobs,
                            scheduler=args.scheduler, progress=lambda m: write(f"[arena] {m}"))
@@ -274,6 +275,9 @@ def _full(args, checked) -> int:
                                                               "runs": args.runs}})
         result.runtime_s = time.perf_counter() - t0
         write_results_json(result, staged)
+        # the whole command as one traced study (benchmarks/scaling.py): its maps carry this process's bar label
+        trace_event({"kind": "study", "study": _CONTEXT["label"], "start": started, "end": time.time(),
+                     "cpu_start": cpu, "cpu_end": time.process_time(), "jobs": checked.jobs})
     print(f"arena: {out / 'arena' / 'results.json'} ({raw['tunings']} tunings, {result.runtime_s:.1f} s)")
     for f in result.findings:
         print("- " + f["text"])

@@ -106,14 +106,15 @@ def save_all(ctx, result, s, cases, table, tuned) -> None:
     tuned : dict
         :func:`~ctrl_analysis.arena.tuning.tune_family` output per family.
     """
-    ctx.save_figure(result, _pareto(s, cases, tuned), "arena_pareto.png",
-                    caption="Per signal class, each family's Pareto front over every configuration evaluated: lag "
-                            "(worst derivative error on the noise-free records) against noise-induced RMS error.")
-    ctx.save_figure(result, _heat(cases, table), "arena_ratio_heatmap.png",
-                    caption="Each family's worst-case-tuned derivative error divided by the bound 2√(εL), per case "
-                            "(signal/noise/ε), on the random records (top) and on the bound's adversarial pair "
-                            "(bottom: at least 1 for any causal estimator, so a check of the construction and of "
-                            "causality, not a ranking).")
-    ctx.save_figure(result, _sample(s, cases, table), "arena_best_on_one_signal.png",
-                    caption="The three best-ranked families (worst-case tuning) on one record, over the scored window "
-                            "(after the transient): the derivative estimates and their errors.")
+    ctx.save_figures(result, [
+        (_pareto(s, cases, tuned), "arena_pareto.png",
+         "Per signal class, each family's Pareto front over every configuration evaluated: lag (worst derivative "
+         "error on the noise-free records) against noise-induced RMS error."),
+        (_heat(cases, table), "arena_ratio_heatmap.png",
+         "Each family's worst-case-tuned derivative error divided by the bound 2√(εL), per case (signal/noise/ε), on "
+         "the random records (top) and on the bound's adversarial pair (bottom: at least 1 for any causal estimator, "
+         "so a check of the construction and of causality, not a ranking)."),
+        (_sample(s, cases, table), "arena_best_on_one_signal.png",
+         "The three best-ranked families (worst-case tuning) on one record, over the scored window (after the "
+         "transient): the derivative estimates and their errors."),
+    ])

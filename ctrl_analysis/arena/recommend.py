@@ -18,6 +18,7 @@ from .._validate import check_in, check_int, check_positive
 from ..noise import run_seeds
 from ..reporting.report import StudyContext
 from ..reporting.results import StudyInfo, StudyResult
+from ..runs.parallel import map_chunks
 from .bound import adversarial_error, adversarial_pair, lower_bound
 from .claims import VERDICT_TEXT, judge_claims
 from .interface import FAMILIES, estimate, family
@@ -29,7 +30,7 @@ from .signals import (
     registered_signal_classes,
     signal_classes,
 )
-from .tuning import MAX_ROUNDS, Case, Setup, case_records, tune_family
+from .tuning import MAX_ROUNDS, Case, Setup, case_records, tune_families, tune_family
 
 __all__ = [
     "DEFAULT",
@@ -116,6 +117,11 @@ def _cases(s: ArenaSettings, seed: int) -> list:
     return [Case(sig, noi, e, s.L, seeds) for sig in s.signals for noi in s.noises for e in s.eps]
 
 
+def _adversarial_task(task):
+    """:func:`_adversarial` of one family (a call of a map: module level, run in a worker)."""
+    return _adversarial(*task)
+
+
 def _adversarial(name, cases, rows, setup):
     """Adversarial worst-case error of each tuned configuration (one per case)."""
     k_star = setup.k_from + (setup.n - setup.k_from) // 3
@@ -163,12 +169,15 @@ def run_arena(ctx: StudyContext, settings: ArenaSettings | None = None) -> tuple
                                      "over the case's noisy records"})
     result.seeds["records"] = list(cases[0].seeds)
     table, tuned, tunings = {}, {}, 0
-    for name in s.families:
-        ctx.progress(f"tuning {name} on {len(cases)} cases")
-        r = tune_family(name, cases, s.setup, rounds=s.rounds, jobs=ctx.jobs, scheduler=ctx.scheduler)
+    ctx.progress(f"tuning {len(s.families)} families on {len(cases)} cases, their rounds side by side")
+    done = tune_families(s.families, cases, s.setup, rounds=s.rounds, jobs=ctx.jobs, scheduler=ctx.scheduler)
+    advs = map_chunks(_adversarial_task, [(name, cases, [b["worst"][0] for b in done[name]["best"]], s.setup)
+                                          for name in s.families], jobs=ctx.jobs, scheduler=ctx.scheduler,
+                      desc="adversarial pairs", unit="family")
+    for name, adv in zip(s.families, advs, strict=True):
+        r = done[name]
         tunings += r["tunings"]
         tuned[name] = r
-        adv = _adversarial(name, cases, [b["worst"][0] for b in r["best"]], s.setup)
         table[name] = {}
         for c, b, a in zip(cases, r["best"], adv, strict=True):
             bound = lower_bound(c.eps, c.L)

@@ -46,7 +46,8 @@ from .signals import (
     registered_signal_classes,
 )
 
-__all__ = ["MAX_ROUNDS", "Case", "Setup", "case_records", "evaluate", "param_values", "pareto_front", "tune_family"]
+__all__ = ["MAX_ROUNDS", "Case", "Setup", "case_records", "evaluate", "param_values", "pareto_front", "tune_families",
+           "tune_family"]
 
 #: Metric columns returned by :func:`evaluate`.
 METRICS = ("worst", "rms", "lag", "noise")
@@ -313,18 +314,142 @@ def _check_task(task) -> tuple:
     return name, setup, cases, configs, engine
 
 
-def _run(name, setup, cases, configs, engine, jobs, scheduler, desc):
-    """Evaluate ``configs`` in chunks over processes; one metrics row per configuration."""
+def _tasks(name, setup, cases, configs, engine, jobs) -> list:
+    """``configs`` of family ``name`` cut into :func:`evaluate` tasks (about four per process)."""
     if not configs:
-        return np.empty((0, len(METRICS)))
+        return []
     n_chunks = max(1, min(len(configs), 4 * jobs if jobs > 1 else 1))
     bounds = np.linspace(0, len(configs), n_chunks + 1).astype(int)
     reg = registered_signal_classes()
     classes = {c.signal: reg[c.signal] for c in cases if c.signal in reg}
-    tasks = [(name, setup, tuple(cases), configs[a:b], engine, classes) for a, b in itertools.pairwise(bounds)
-             if b > a]
-    parts = map_chunks(evaluate, tasks, jobs=jobs, scheduler=scheduler, desc=desc, unit="batch")
-    return np.vstack(parts)
+    return [(name, setup, tuple(cases), configs[a:b], engine, classes) for a, b in itertools.pairwise(bounds) if b > a]
+
+
+def _tuning(name: str, cases: list, setup: Setup, rounds: int):
+    """One family's tuning as a generator: yields ``(configs, desc)``, is sent their metrics, returns the result.
+
+    The grid, then ``rounds`` pattern-search rounds per cost; :func:`tune_families` drives many side by side.
+    """
+    fam = family(name)
+    grid, steps = _grid(fam)
+    evaluated = [[] for _ in cases]
+
+    def run(zs_per_case, desc):
+        configs, owners = [], []
+        for ci, zs in enumerate(zs_per_case):
+            if len(zs):
+                vals = param_values(fam, zs, cases[ci], setup)
+                configs += [(ci, v) for v in vals]
+                owners += [(ci, z, v) for z, v in zip(zs, vals, strict=True)]
+        metrics = yield configs, desc
+        for (ci, z, v), m in zip(owners, metrics, strict=True):
+            evaluated[ci].append((z, v, m))
+
+    yield from run([grid] * len(cases), f"{name}: grid")
+    best = {}
+    for cost in range(2):
+        cur = []
+        for ci in range(len(cases)):
+            z, v, m = min(evaluated[ci], key=lambda e: e[2][cost])
+            cur.append([z, m])
+        best[cost] = cur
+    step = steps.copy()
+    free = np.flatnonzero(step > 0)
+    for r in range(rounds):
+        for cost in range(2):
+            cand = []
+            for ci in range(len(cases)):
+                z0 = best[cost][ci][0]
+                zs = []
+                for j in free:
+                    for sgn in (-1, 1):
+                        z = z0.copy()
+                        z[j] += sgn * step[j]
+                        zs.append(z)
+                cand.append(np.array(zs))
+            start = [len(e) for e in evaluated]
+            yield from run(cand, f"{name}: refine {r + 1}/{rounds} ({METRICS[cost]})")
+            for ci in range(len(cases)):
+                for z, _v, m in evaluated[ci][start[ci]:]:
+                    if m[cost] < best[cost][ci][1][cost]:
+                        best[cost][ci] = [z, m]
+        step = step / 2
+    out_best = []
+    for ci, case in enumerate(cases):
+        row = {}
+        for cost in range(2):
+            z, m = best[cost][ci]
+            row[METRICS[cost]] = (param_values(fam, z, case, setup)[0], m)
+        out_best.append(row)
+    return {"family": name, "evaluated": [[(v, m) for _, v, m in e] for e in evaluated], "best": out_best,
+            "tunings": int(sum(len(e) for e in evaluated))}
+
+
+def _check_tuning(cases, setup, rounds, engine, jobs) -> tuple:
+    rounds = check_int("rounds", rounds, minimum=0, maximum=MAX_ROUNDS)
+    if isinstance(cases, (str, bytes)) or not hasattr(cases, "__iter__"):
+        raise TypeError(f"cases must be a sequence of Case, got {cases!r:.80}")
+    cases = list(cases)
+    if not cases or not all(isinstance(c, Case) for c in cases):
+        raise TypeError(f"cases must be a non-empty sequence of Case, got {cases!r:.80}")
+    if len({len(c.seeds) for c in cases}) != 1:
+        raise ValueError("cases must all have the same number of seeds (they are run as one batch)")
+    if not isinstance(setup, Setup):
+        raise TypeError(f"setup must be a Setup, got {setup!r:.80}")
+    check_in("engine", engine, ("auto", "numpy", "compiled"))
+    check_int("jobs", jobs, minimum=1)
+    return cases, rounds
+
+
+def tune_families(names, cases, setup: Setup, *, rounds: int = 3, engine: str = "auto", jobs: int = 1,
+                  scheduler=None) -> dict:
+    """Tune several families on every case, their rounds side by side (:func:`tune_family` for each).
+
+    Round ``r`` of every family goes into one map over the processes: the families are independent, so
+    the result is each family's :func:`tune_family` exactly (the same configurations, cut into the same
+    tasks), with one wait per round instead of one per family and round.
+
+    Parameters
+    ----------
+    names : sequence of str
+        Family names.
+    cases, setup, rounds, engine, jobs, scheduler
+        As :func:`tune_family`.
+
+    Returns
+    -------
+    dict of str -> dict
+        :func:`tune_family`'s result per family, in the order of ``names``.
+    """
+    if isinstance(names, (str, bytes)) or not hasattr(names, "__iter__"):
+        raise TypeError(f"names must be a sequence of family names, got {names!r:.80}")
+    names = list(names)
+    for i, n in enumerate(names):
+        try:
+            family(n)
+        except (TypeError, ValueError) as exc:
+            raise type(exc)(f"names[{i}]: {exc}") from None
+    if not names or len(set(names)) != len(names):
+        raise ValueError(f"names must be distinct family names, at least one, got {names}")
+    cases, rounds = _check_tuning(cases, setup, rounds, engine, jobs)
+    tuners = {n: _tuning(n, cases, setup, rounds) for n in names}
+    asked = {n: next(t) for n, t in tuners.items()}
+    out = {}
+    while asked:
+        tasks = {n: _tasks(n, setup, cases, configs, engine, jobs) for n, (configs, _) in asked.items()}
+        desc = next(iter(asked.values()))[1] if len(asked) == 1 else \
+            f"{len(asked)} families: {next(iter(asked.values()))[1].split(': ', 1)[-1]}"
+        parts = iter(map_chunks(evaluate, [t for ts in tasks.values() for t in ts], jobs=jobs, scheduler=scheduler,
+                                desc=desc, unit="batch"))
+        nxt = {}
+        for n, ts in tasks.items():
+            metrics = np.vstack([next(parts) for _ in ts]) if ts else np.empty((0, len(METRICS)))
+            try:
+                nxt[n] = tuners[n].send(metrics)
+            except StopIteration as done:
+                out[n] = done.value
+        asked = nxt
+    return {n: out[n] for n in names}
 
 
 def tune_family(name: str, cases, setup: Setup, *, rounds: int = 3, engine: str = "auto", jobs: int = 1,
@@ -352,72 +477,8 @@ def tune_family(name: str, cases, setup: Setup, *, rounds: int = 3, engine: str 
         ``best``: per case and cost (``"worst"``, ``"rms"``), ``(values, metrics)``; ``tunings``:
         configurations evaluated.
     """
-    fam = family(name)
-    rounds = check_int("rounds", rounds, minimum=0, maximum=MAX_ROUNDS)
-    if isinstance(cases, (str, bytes)) or not hasattr(cases, "__iter__"):
-        raise TypeError(f"cases must be a sequence of Case, got {cases!r:.80}")
-    cases = list(cases)
-    if not cases or not all(isinstance(c, Case) for c in cases):
-        raise TypeError(f"cases must be a non-empty sequence of Case, got {cases!r:.80}")
-    if len({len(c.seeds) for c in cases}) != 1:
-        raise ValueError("cases must all have the same number of seeds (they are run as one batch)")
-    if not isinstance(setup, Setup):
-        raise TypeError(f"setup must be a Setup, got {setup!r:.80}")
-    check_in("engine", engine, ("auto", "numpy", "compiled"))
-    check_int("jobs", jobs, minimum=1)
-    grid, steps = _grid(fam)
-    evaluated = [[] for _ in cases]
-
-    def run(zs_per_case, desc):
-        configs, owners = [], []
-        for ci, zs in enumerate(zs_per_case):
-            if len(zs):
-                vals = param_values(fam, zs, cases[ci], setup)
-                configs += [(ci, v) for v in vals]
-                owners += [(ci, z, v) for z, v in zip(zs, vals, strict=True)]
-        metrics = _run(name, setup, cases, configs, engine, jobs, scheduler, desc)
-        for (ci, z, v), m in zip(owners, metrics, strict=True):
-            evaluated[ci].append((z, v, m))
-        return metrics
-
-    run([grid] * len(cases), f"{name}: grid")
-    best = {}
-    for cost in range(2):
-        cur = []
-        for ci in range(len(cases)):
-            z, v, m = min(evaluated[ci], key=lambda e: e[2][cost])
-            cur.append([z, m])
-        best[cost] = cur
-    step = steps.copy()
-    free = np.flatnonzero(step > 0)
-    for r in range(rounds):
-        for cost in range(2):
-            cand = []
-            for ci in range(len(cases)):
-                z0 = best[cost][ci][0]
-                zs = []
-                for j in free:
-                    for sgn in (-1, 1):
-                        z = z0.copy()
-                        z[j] += sgn * step[j]
-                        zs.append(z)
-                cand.append(np.array(zs))
-            start = [len(e) for e in evaluated]
-            run(cand, f"{name}: refine {r + 1}/{rounds} ({METRICS[cost]})")
-            for ci in range(len(cases)):
-                for z, _v, m in evaluated[ci][start[ci]:]:
-                    if m[cost] < best[cost][ci][1][cost]:
-                        best[cost][ci] = [z, m]
-        step = step / 2
-    out_best = []
-    for ci, case in enumerate(cases):
-        row = {}
-        for cost in range(2):
-            z, m = best[cost][ci]
-            row[METRICS[cost]] = (param_values(fam, z, case, setup)[0], m)
-        out_best.append(row)
-    return {"family": name, "evaluated": [[(v, m) for _, v, m in e] for e in evaluated], "best": out_best,
-            "tunings": int(sum(len(e) for e in evaluated))}
+    family(name)
+    return tune_families([name], cases, setup, rounds=rounds, engine=engine, jobs=jobs, scheduler=scheduler)[name]
 
 
 def pareto_front(points) -> np.ndarray:

@@ -159,6 +159,64 @@ class StudyContext:
         """
         import matplotlib.pyplot as plt
 
+        path, dpi, bbox = self._prepare(result, fig, filename, dpi, caption)
+        if not self._render_elsewhere(fig, path, dpi, bbox):
+            fig.savefig(path, dpi=dpi, bbox_inches=bbox)
+        plt.close(fig)
+        self._listed(result, filename)
+        return path
+
+    def save_figures(self, result: StudyResult, figures) -> list[Path]:
+        """Save several figures as :meth:`save_figure` does each, rendered side by side over ``jobs`` processes.
+
+        The same PNG bytes as saving them one by one (each is pickled and rendered by the same
+        matplotlib); in a run's shared pool each goes to the pool as :meth:`save_figure` sends it. A
+        figure that does not pickle is rendered here.
+
+        Parameters
+        ----------
+        result : StudyResult
+        figures : sequence of tuple
+            ``(fig, filename, caption)`` or ``(fig, filename, caption, dpi)`` (default 120).
+
+        Returns
+        -------
+        list of Path
+            The files written, in the order of ``figures``.
+        """
+        import pickle
+
+        import matplotlib.pyplot as plt
+
+        from ..runs.parallel import map_chunks
+        from ..runs.taskpool import pool_available
+
+        if isinstance(figures, (str, bytes)) or not hasattr(figures, "__iter__"):
+            raise TypeError(f"figures must be a sequence of (fig, filename, caption[, dpi]), got {figures!r:.80}")
+        figures = list(figures)
+        if not all(isinstance(f, tuple) and len(f) in (3, 4) for f in figures):
+            raise TypeError("figures must be a sequence of (fig, filename, caption[, dpi]) tuples")
+        if pool_available() or self.jobs == 1 or len(figures) < 2:
+            return [self.save_figure(result, f[0], f[1], dpi=f[3] if len(f) == 4 else 120, caption=f[2])
+                    for f in figures]
+        tasks, paths = [], []
+        for f in figures:
+            fig, filename = f[0], f[1]
+            path, dpi, bbox = self._prepare(result, fig, filename, f[3] if len(f) == 4 else 120, f[2])
+            try:
+                tasks.append((pickle.dumps(fig), str(path), dpi, bbox))
+            except Exception:  # noqa: BLE001 - a figure holding a lambda: rendered here
+                fig.savefig(path, dpi=dpi, bbox_inches=bbox)
+            plt.close(fig)
+            paths.append(path)
+        map_chunks(_render_figure, tasks, jobs=min(self.jobs, len(tasks)), scheduler=False, desc="figures",
+                   unit="figure")
+        for f in figures:
+            self._listed(result, f[1])
+        return paths
+
+    def _prepare(self, result, fig, filename, dpi, caption) -> tuple:
+        """Check a figure's arguments, record its caption and apply quick mode: ``(path, dpi, bbox_inches)``."""
         if not isinstance(result, StudyResult) or not hasattr(fig, "savefig"):
             raise TypeError(f"result must be a StudyResult and fig a matplotlib Figure, got {result!r}, {fig!r}")
         if Path(check_str("filename", filename)).name != filename or filename in (".", ".."):
@@ -172,14 +230,12 @@ class StudyContext:
                 raise ValueError(f"caption must be a non-empty string, got {caption!r}")
             result.captions[filename] = caption
         self.out_dir.mkdir(parents=True, exist_ok=True)
-        path = self.out_dir / filename
-        bbox = None if self.quick else "tight"
-        if not self._render_elsewhere(fig, path, dpi, bbox):
-            fig.savefig(path, dpi=dpi, bbox_inches=bbox)
-        plt.close(fig)
+        return self.out_dir / filename, dpi, None if self.quick else "tight"
+
+    @staticmethod
+    def _listed(result, filename) -> None:
         if filename not in result.figures:
             result.figures.append(filename)
-        return path
 
     def _render_elsewhere(self, fig, path: Path, dpi: int, bbox) -> bool:
         """Send ``fig`` to the run's shared pool to be saved as ``path``; False when it must be saved here."""

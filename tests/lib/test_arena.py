@@ -216,6 +216,24 @@ def test_tuning_finds_the_known_optimum_of_a_one_parameter_family():
     assert np.all(np.diff(lag[:5, 1]) < 0)  # more bandwidth, less lag at the slow end
 
 
+def test_families_tuned_side_by_side_equal_each_tuned_alone():
+    """Issue 30: the families' rounds go into one map per round (one wait per round, not per family and round);
+    each family's result is its own tuning's, value for value."""
+    setup = Setup(dt=DT, n=400, transient=1.0)
+    cases = [Case("sines", "uniform", 0.01, 2.0, (3,)), Case("steps", "gaussian", 0.02, 2.0, (4,))]
+    names = ["leso2", "difflp", "algebraic"]
+    together = tuning.tune_families(names, cases, setup, rounds=1, engine="numpy", jobs=2)
+    assert list(together) == names
+    for name in names:
+        alone = tune_family(name, cases, setup, rounds=1, engine="numpy")
+        assert together[name]["tunings"] == alone["tunings"]
+        for a, b in zip(together[name]["evaluated"], alone["evaluated"], strict=True):
+            assert all(np.array_equal(va, vb) and np.array_equal(ma, mb, equal_nan=True)
+                       for (va, ma), (vb, mb) in zip(a, b, strict=True))
+    with pytest.raises(ValueError, match="distinct family names"):
+        tuning.tune_families(["leso2", "leso2"], cases, setup)
+
+
 def test_pareto_front_is_non_dominated():
     rng = np.random.default_rng(1)
     p = rng.uniform(size=(200, 2))
@@ -229,7 +247,7 @@ def test_sizes_of_the_tuning_have_a_maximum_and_are_checked_before_any_work(monk
     def no_work(*args, **kwargs):
         raise AssertionError("the tuning started")
 
-    monkeypatch.setattr(tuning, "_run", no_work)
+    monkeypatch.setattr(tuning, "map_chunks", no_work)
     setup = Setup(dt=DT, n=600, transient=2.0)
     case = Case("sines", "uniform", 0.01, 2.0, (3,))
     with pytest.raises(ValueError, match=f"rounds must be <= {MAX_ROUNDS}, got 1000000000000"):

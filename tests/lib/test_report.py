@@ -135,3 +135,33 @@ def test_merging_parts_recorded_apart_equals_recording_them_in_order():
         merged.merge(a)
     with pytest.raises(ValueError, match="of study 's'"):
         merged.merge(StudyResult(StudyInfo("t", "f", "p", "r")))
+
+
+def test_figures_saved_side_by_side_are_the_bytes_saved_one_by_one(tmp_path):
+    """Issue 30: StudyContext.save_figures renders several figures over its processes: the same PNGs, captions and
+    figure list as save_figure one by one; a figure holding a lambda is rendered in place."""
+    import matplotlib.ticker as mticker
+
+    from ctrl_analysis.reporting.report import new_figure
+
+    def figs():
+        out = []
+        for i in range(3):
+            fig, ax = new_figure(title=f"figure {i}")
+            ax.plot(np.cos(np.linspace(0.0, 3.0 + i, 50)), label="cos")
+            ax.legend()
+            if i == 1:
+                ax.yaxis.set_major_formatter(mticker.FuncFormatter(lambda v, _: f"{v:.2f}"))
+            out.append((fig, f"f{i}.png", f"caption {i}", 60))
+        return out
+
+    one, many = StudyResult(INFO), StudyResult(INFO)
+    for fig, name, caption, dpi in figs():
+        StudyContext(out_dir=tmp_path / "one").save_figure(one, fig, name, dpi=dpi, caption=caption)
+    paths = StudyContext(out_dir=tmp_path / "many", jobs=2).save_figures(many, figs())
+    assert [p.name for p in paths] == many.figures == one.figures == ["f0.png", "f1.png", "f2.png"]
+    assert many.captions == one.captions
+    for name in one.figures:
+        assert (tmp_path / "many" / name).read_bytes() == (tmp_path / "one" / name).read_bytes()
+    with pytest.raises(TypeError, match="figures must be a sequence"):
+        StudyContext(out_dir=tmp_path).save_figures(many, [("not", "a tuple of 3 or 4", 1, 2, 3)])
