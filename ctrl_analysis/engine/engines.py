@@ -275,11 +275,17 @@ class CompiledEngine:
 NUMPY = NumpyEngine()
 
 
+def _in_chunk() -> bool:
+    from .processes import in_chunk
+
+    return in_chunk()
+
+
 def select_engine(plan, batch, execution, loop=None) -> Engine:
     """The engine ``execution`` asks for, for this plan and batch.
 
-    With ``execution.jobs > 1`` (or a process-wide Dask cluster, :func:`~ctrl_analysis.runs.parallel.use_cluster`,
-    for a compiled loop), several runs and a picklable ``loop``, a
+    With ``execution.jobs > 1`` (or a process-wide Dask cluster, :func:`~ctrl_analysis.runs.parallel.use_cluster`),
+    several runs and a picklable ``loop``, a
     :class:`~ctrl_analysis.engine.processes.ProcessEngine` that splits the runs over processes. Otherwise
     ``execution.engine``: ``"auto"`` is compiled when every block has a kernel and no input is a callable
     (warning once per loop otherwise, :class:`~ctrl_analysis.engine.compiled.SlowPathWarning`);
@@ -297,7 +303,7 @@ def select_engine(plan, batch, execution, loop=None) -> Engine:
     -------
     Engine
     """
-    split = loop is not None and batch.B > 1 and not batch.funcs
+    split = loop is not None and batch.B > 1 and not batch.funcs and not _in_chunk()
     if split and execution.jobs > 1:
         from ..runs.parallel import picklable
         from .processes import ProcessEngine
@@ -305,7 +311,7 @@ def select_engine(plan, batch, execution, loop=None) -> Engine:
         if picklable(loop):
             return ProcessEngine(loop)
     runner = compiled_for(plan, execution.engine, batch.funcs, batch.variants)
-    if runner is not None and split:
+    if split and execution.jobs == 1:  # a numpy loop too: its blocks travel by cloudpickle, its rows cut by chunk
         from ..runs.parallel import active_cluster, picklable
         from .processes import ProcessEngine
 

@@ -6,11 +6,13 @@ independent); per-run inputs, initial states and run-time parameters are cut wit
 
 from __future__ import annotations
 
+import threading
+
 import numpy as np
 
 from ..runs.parallel import _CLUSTER, _cluster_workers, chunk_slices, map_chunks
 
-__all__ = ["ProcessEngine", "simulate_chunks"]
+__all__ = ["ProcessEngine", "in_chunk", "simulate_chunks"]
 
 
 class ProcessEngine:
@@ -90,7 +92,27 @@ def simulate_chunks(loop, batch, save, execution):
                         external=plan.external, outlist=plan.outlist, state_names=first.state_names, x_final=x_final)
 
 
+#: Set while this thread runs one chunk: the chunk is not split again (a Dask worker thread in the client's own
+#: process, ``LocalCluster(processes=False)``, sees the process-wide cluster too).
+_IN_CHUNK = threading.local()
+
+
+def in_chunk() -> bool:
+    """Whether this thread is running one chunk of a split batch (which then runs in place).
+
+    Returns
+    -------
+    bool
+    """
+    return getattr(_IN_CHUNK, "active", False)
+
+
 def _simulate_task(task):
     """One chunk of :meth:`Loop.simulate` with ``jobs > 1`` (module level: run in a worker process)."""
     loop, n_steps, kw = task
-    return loop.simulate(n_steps, **kw)
+    outer = in_chunk()
+    _IN_CHUNK.active = True
+    try:
+        return loop.simulate(n_steps, **kw)
+    finally:
+        _IN_CHUNK.active = outer

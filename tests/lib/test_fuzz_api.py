@@ -1022,6 +1022,7 @@ NOT_FUZZED = {
     engines.NumpyEngine: "no constructor arguments; run() takes the plan, batch and policies Loop.simulate made",
     engines.CompiledEngine: "built by select_engine from a runner it found; run() as NumpyEngine's",
     engine_processes.ProcessEngine: "built by select_engine for jobs > 1 from a picklable loop; run() as NumpyEngine's",
+    engine_processes.in_chunk: "takes no arguments",
     engines.Engine: "a typing.Protocol (the engines' contract)",
     engines.Record: "record of result arrays built by the engines",
     engines.kept_columns: "internal half of Loop.simulate(save=Save(keep=...)), whose keep is fuzzed",

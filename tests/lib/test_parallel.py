@@ -358,3 +358,24 @@ def test_loop_simulate_with_jobs_equals_one_process_bit_for_bit():
     for s in one.signals:
         assert np.array_equal(one[s], two[s])
     assert np.array_equal(one.to_timeresponse(4).outputs, two.to_timeresponse(4).outputs)
+
+
+def test_a_numpy_loops_batch_goes_to_the_process_wide_cluster_with_the_same_numbers():
+    """Issue 30: inside use_cluster, a loop with a plain Python block (numpy engine) stayed in the command's process
+    without a word; its batch is now split over the cluster's workers like a compiled loop's."""
+    import warnings
+
+    from distributed import Client, LocalCluster
+
+    loop = Loop([place(Damped(), "plant"), place(DifferentialEstimator(3, 4.0), "sigma")], dt=0.01)
+    noise = draw_noise(run_seeds(3, 4), 20, gaussian_noise([0.3, 0.01]))
+    inputs = {"w": noise[:, :, 0], "v": noise[:, :, 1]}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the numpy path is said once per loop: not the point here
+        here = loop.simulate(20, inputs=inputs, params={"sigma": {"a": [3.0, 4.0, 5.0, 6.0]}})
+        with LocalCluster(n_workers=2, threads_per_worker=1, processes=False, dashboard_address=None) as cluster, \
+                Client(cluster) as client, parallel.use_cluster(client):
+            there = loop.simulate(20, inputs=inputs, params={"sigma": {"a": [3.0, 4.0, 5.0, 6.0]}})
+            chunks = parallel.active_cluster()["chunks"]
+    assert chunks >= 2  # it ran on the cluster's workers
+    np.testing.assert_array_equal(there.x, here.x)
