@@ -264,6 +264,9 @@ RULES = [
      "list longer shorter", ["Quantiles.quantile.q", "Quantiles.percentile.p"]),
     ("the bound on a sketch's bytes for n runs is an integer formula, exact for any n (Python integers): "
      "nothing is allocated by it", "giant huge", ["Quantiles.bytes_bound.n", "Quantiles.error_bound.n"]),
+    ("a trailing shape given as one integer is a one-axis shape, numpy's convention (documented); an empty "
+     "accumulator's answers are NaN (no runs yet)", "int",
+     ["Moments.shape", "Quantiles.shape", "Histogram.shape", "Counts.shape", "Keep.shape"]),
 ]
 
 
