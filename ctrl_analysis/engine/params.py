@@ -63,16 +63,14 @@ class PerRunBlocks:
     Parameters
     ----------
     blocks : tuple of Block
-        One rebuilt block per distinct value.
-    rows : numpy.ndarray, shape (len(blocks), n_p)
-        Each block's parameter row: its kernel parameters, or its index ``[i]``.
+        One rebuilt block per distinct value; a run's row is its block's kernel parameters, or its index ``[i]``.
     kernel_rows : bool
         Whether ``rows`` are the blocks' kernel parameter vectors (then the first block's kernel,
         with the per-run rows, runs every run).
     """
 
-    def __init__(self, blocks, rows, kernel_rows: bool):
-        self.blocks, self.distinct, self.kernel_rows = tuple(blocks), rows, kernel_rows
+    def __init__(self, blocks, kernel_rows: bool):
+        self.blocks, self.kernel_rows = tuple(blocks), kernel_rows
         self._parts = (None, None)
 
     def kernel(self):
@@ -286,7 +284,7 @@ def resolve(loop, params, B: int) -> dict:
         if not kernel_rows:  # a Python row kernel: the row is the index of the run's rebuilt block
             distinct = np.arange(len(blocks), dtype=float).reshape(-1, 1)
         x0 = np.stack([_initial_state(b, where) for b in blocks])[inverse]
-        out[name] = Variant(PerRunBlocks(blocks, distinct, kernel_rows), rows=np.ascontiguousarray(distinct[inverse]),
+        out[name] = Variant(PerRunBlocks(blocks, kernel_rows), rows=np.ascontiguousarray(distinct[inverse]),
                             x0=x0)
     return out
 
