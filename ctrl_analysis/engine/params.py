@@ -65,7 +65,7 @@ class PerRunBlocks:
     blocks : tuple of Block
         One rebuilt block per distinct value; a run's row is its block's kernel parameters, or its index ``[i]``.
     kernel_rows : bool
-        Whether ``rows`` are the blocks' kernel parameter vectors (then the first block's kernel,
+        Whether the runs' rows are the blocks' kernel parameter vectors (then the first block's kernel,
         with the per-run rows, runs every run).
     """
 
@@ -283,7 +283,9 @@ def resolve(loop, params, B: int) -> dict:
         kernel_rows = distinct is not None
         if not kernel_rows:  # a Python row kernel: the row is the index of the run's rebuilt block
             distinct = np.arange(len(blocks), dtype=float).reshape(-1, 1)
-        x0 = np.stack([_initial_state(b, where) for b in blocks])[inverse]
+        # a static block under the StaticBlock protocol has no initial_state (and no state to start)
+        x0 = np.stack([_initial_state(b, where) for b in blocks])[inverse] \
+            if hasattr(block, "initial_state") else None
         out[name] = Variant(PerRunBlocks(blocks, kernel_rows), rows=np.ascontiguousarray(distinct[inverse]),
                             x0=x0)
     return out

@@ -184,8 +184,6 @@ class StudyContext:
         list of Path
             The files written, in the order of ``figures``.
         """
-        import pickle
-
         import matplotlib.pyplot as plt
 
         from ..runs.parallel import map_chunks
@@ -203,13 +201,14 @@ class StudyContext:
         for f in figures:
             fig, filename = f[0], f[1]
             path, dpi, bbox = self._prepare(result, fig, filename, f[3] if len(f) == 4 else 120, f[2])
-            try:
-                tasks.append((pickle.dumps(fig), str(path), dpi, bbox))
-            except Exception:  # noqa: BLE001 - a figure holding a lambda: rendered here
+            blob = _pickled(fig)
+            if blob is None:  # a figure holding a lambda: rendered here
                 fig.savefig(path, dpi=dpi, bbox_inches=bbox)
+            else:
+                tasks.append((blob, str(path), dpi, bbox))
             plt.close(fig)
             paths.append(path)
-        map_chunks(_render_figure, tasks, jobs=min(self.jobs, len(tasks)), scheduler=False, desc="figures",
+        map_chunks(_render_figure, tasks, jobs=max(1, min(self.jobs, len(tasks))), scheduler=False, desc="figures",
                    unit="figure")
         for f in figures:
             self._listed(result, f[1])
@@ -239,7 +238,6 @@ class StudyContext:
 
     def _render_elsewhere(self, fig, path: Path, dpi: int, bbox) -> bool:
         """Send ``fig`` to the run's shared pool to be saved as ``path``; False when it must be saved here."""
-        import pickle
         import threading
 
         from ..runs.progress import _CONTEXT
@@ -247,9 +245,8 @@ class StudyContext:
 
         if not pool_available():
             return False
-        try:
-            blob = pickle.dumps(fig)
-        except Exception:  # noqa: BLE001 - e.g. a FuncFormatter holding a lambda: rendered here instead
+        blob = _pickled(fig)
+        if blob is None:  # e.g. a FuncFormatter holding a lambda: rendered here instead
             return False
         failed: list = []
         label = _CONTEXT["label"]
@@ -287,6 +284,16 @@ class StudyContext:
             if failed:
                 raise RuntimeError(f"figure {name} could not be rendered: {type(failed[0]).__name__}: "
                                    f"{failed[0]}") from failed[0]
+
+
+def _pickled(fig) -> bytes | None:
+    """``fig`` pickled (to be rendered in another process), or ``None`` when it does not pickle."""
+    import pickle
+
+    try:
+        return pickle.dumps(fig)
+    except Exception:  # noqa: BLE001 - any figure that does not pickle is rendered where it was drawn
+        return None
 
 
 def _render_figure(task) -> str:
