@@ -16,7 +16,10 @@ stretches and every study's calls wait in one queue, first ready first served (t
 path (the longest study with unlimited workers: its serial stretches plus its longest call per map) and the
 serial fraction (the drivers' serial time over all the work). A figure the driver sent to the pool to be
 rendered (``StudyContext.save_figure``) is an async phase: its call waits in the same queue, the driver goes
-on, and the study ends when its driver and its figures have.
+on, and the study ends when its driver and its figures have. Chains a driver advances side by side
+(``ctrl_analysis.runs.chains.drive``, e.g. the arena's families) are a fan: each lane's maps and its own
+serial stretches (its thread's CPU) follow one another, the lanes independently, and the driver goes on when
+every lane has ended; a lane's calls wait with its priority (lower first, as the pool serves them).
 
 What the model leaves out: a call's duration is taken as recorded (no contention for memory bandwidth, no
 compile time that more processes would repeat or share), and the time to send a call and its result. Check it
@@ -35,9 +38,32 @@ import time
 from pathlib import Path
 
 
-def load(folder: str, clock: str = "cpu") -> dict:
-    """The trace's studies: name -> list of phases, ``("serial", seconds)`` or ``("map", [seconds, ...])``.
+class Lane(list):
+    """One chain of a fan: its phases, and its calls' priority in the pool (lower first)."""
 
+    priority = 0
+
+
+def _lane(maps: list, lane: dict, clock: str) -> list:
+    """One chain of a fan (``drive``'s thread): its own serial stretches (its thread's CPU) and its maps."""
+    phases = Lane()
+    phases.priority = lane.get("priority", 0)
+    c = lane["tcpu_start"] if clock == "cpu" else lane["start"]
+    for m in sorted(maps, key=lambda e: e["submitted"]):
+        phases.append(("serial", max(0.0, (m["tcpu_submitted"] if clock == "cpu" else m["submitted"]) - c)))
+        phases.append(("async" if m.get("async") else "map", [(x[2] if clock == "cpu" else x[1] - x[0])
+                                                              for x in m["calls"]]))
+        c = m["tcpu_returned"] if clock == "cpu" else (m["submitted"] if m.get("async") else m["returned"])
+    phases.append(("serial", max(0.0, (lane["tcpu_end"] if clock == "cpu" else lane["end"]) - c)))
+    return phases
+
+
+def load(folder: str, clock: str = "cpu") -> dict:
+    """The trace's studies: name -> list of phases.
+
+    A phase is ``("serial", seconds)``, ``("map", [seconds, ...])``, ``("async", [seconds, ...])`` (calls the
+    driver does not wait for) or ``("fan", [phases, ...])`` (chains advanced side by side by
+    ``ctrl_analysis.runs.chains.drive``, each a list of phases; the driver goes on when all have ended).
     ``clock="cpu"`` takes each piece's CPU seconds (a trace recorded with more processes than cores),
     ``"wall"`` its wall-clock seconds.
     """
@@ -45,29 +71,38 @@ def load(folder: str, clock: str = "cpu") -> dict:
     for f in sorted(Path(folder).glob("*.jsonl")):
         events += [json.loads(line) for line in f.open(encoding="utf-8") if line.strip()]
     studies = {e["study"]: (e["start"], e["end"]) for e in events if e["kind"] == "study"}
-    maps: dict = {}
+    fans: dict = {}  # fan id -> {lane: (lane event, [maps])}
     for e in events:
-        if e["kind"] == "map" and e["study"] in studies:
-            maps.setdefault(e["study"], []).append(e)
-    if not studies:  # a run without studies (the arena): its maps, from the first to the last
-        ms = [e for e in events if e["kind"] == "map"]
+        if e["kind"] == "lane":
+            fans.setdefault(e["fan"], {}).setdefault(e["lane"], [None, []])[0] = e
+    for e in events:
+        if e["kind"] == "map" and "fan" in e:
+            fans.setdefault(e["fan"], {}).setdefault(e["lane"], [None, []])[1].append(e)
+    items: dict = {}  # study -> its maps and fans, in the order the driver sent them
+    for e in events:
+        if (e["kind"] == "map" and "fan" not in e) or e["kind"] == "fan":
+            items.setdefault(e["study"], []).append(e)
+    if not studies:  # a run without studies: its maps, from the first to the last
+        ms = [e for st in items.values() for e in st]
         if not ms:
             raise SystemExit(f"no study and no map in the trace {folder}")
         studies = {"run": (min(e["submitted"] for e in ms), max(e["returned"] for e in ms))}
-        maps = {"run": ms}
+        items = {"run": ms}
     cpu = {e["study"]: (e["cpu_start"], e["cpu_end"]) for e in events if e["kind"] == "study" and "cpu_start" in e}
     chains = {}
     for name, (start, end) in studies.items():
         phases, t, c = [], start, cpu.get(name, (None,))[0]
-        for m in sorted(maps.get(name, []), key=lambda e: e["submitted"]):
-            calls = [(x[2] if clock == "cpu" else x[1] - x[0]) for x in m["calls"]]
+        for m in sorted(items.get(name, []), key=lambda e: e["submitted"]):
             if clock == "cpu" and c is not None:
                 phases.append(("serial", max(0.0, m["cpu_submitted"] - c)))
                 c = m["cpu_returned"]
             elif m["submitted"] >= t:
                 phases.append(("serial", m["submitted"] - t))
-            # a figure rendered in the pool: the driver goes on without waiting (StudyContext.save_figure)
-            phases.append(("async" if m.get("async") else "map", calls))
+            if m["kind"] == "fan":
+                phases.append(("fan", [_lane(maps, lane, clock) for lane, maps in fans[m["fan"]].values()]))
+            else:  # a figure rendered in the pool is async: the driver goes on (StudyContext.save_figure)
+                phases.append(("async" if m.get("async") else "map",
+                               [(x[2] if clock == "cpu" else x[1] - x[0]) for x in m["calls"]]))
             t = max(t, m["submitted"] if m.get("async") else m["returned"])
         if clock == "cpu" and c is not None:
             phases.append(("serial", max(0.0, cpu[name][1] - c)))
@@ -77,14 +112,22 @@ def load(folder: str, clock: str = "cpu") -> dict:
     return chains
 
 
+def _phases(chains: dict, name: str, path: tuple) -> list:
+    """The list of phases that ``path`` (its last index dropped) points into: a study's, or a fan's lane's."""
+    phases = chains[name]
+    for k, i in zip(path[:-1:2], path[1:-1:2], strict=True):
+        phases = phases[k][1][i]
+    return phases
+
+
 def replay(chains: dict, workers: int) -> float:
     """Predicted wall time of the chains on ``workers`` workers (see the module docstring)."""
     order = sorted(chains, key=lambda n: -sum(_work(p) for p in chains[n]))
     waiting = list(order)
     drivers = min(workers, len(order))
-    ready: list = []  # (ready time, sequence, study, phase index, duration)
-    running: list = []  # (end time, sequence, study, phase index)
-    left: dict = {}  # (study, phase) -> calls of a map not yet done
+    ready: list = []  # (priority, ready time, sequence, study, path, duration): all ready now, lowest first
+    running: list = []  # (end time, sequence, study, path)
+    left: dict = {}  # (study, path) -> calls of a map, or lanes of a fan, not yet done
     rendering = dict.fromkeys(chains, 0)  # study -> its async calls (figures) not yet done
     ended: set = set()  # studies whose driver has run its last phase
     seq = 0
@@ -93,68 +136,89 @@ def replay(chains: dict, workers: int) -> float:
     def finish(name, at):
         if name in ended and not rendering[name] and waiting:  # this driver takes the next study
             ended.discard(name)
-            push(waiting.pop(0), 0, at)
+            push(waiting.pop(0), (0,), at)
 
-    def push(name, k, at):
+    def after(name, path, at):
+        push(name, path[:-1] + (path[-1] + 1,), at)
+
+    def push(name, path, at):
         nonlocal seq
-        if k >= len(chains[name]):
-            ended.add(name)
-            finish(name, at)  # the driver waits for its study's figures, then takes the next study
+        phases = _phases(chains, name, path)
+        if path[-1] >= len(phases):
+            if len(path) == 1:
+                ended.add(name)
+                finish(name, at)  # the driver waits for its study's figures, then takes the next study
+                return
+            fan = path[:-2]  # a lane has ended: its fan goes on when all its lanes have
+            left[(name, fan)] -= 1
+            if not left[(name, fan)]:
+                after(name, fan, at)
             return
-        kind, what = chains[name][k]
+        kind, what = phases[path[-1]]
+        prio = getattr(phases, "priority", 0)
         if kind == "serial":
-            heapq.heappush(ready, (at, seq, name, k, what))
+            heapq.heappush(ready, (prio, at, seq, name, path, what))
             seq += 1
         elif kind == "async":
             rendering[name] += len(what)
             for d in what:
-                heapq.heappush(ready, (at, seq, name, k, d))
+                heapq.heappush(ready, (prio, at, seq, name, path, d))
                 seq += 1
-            push(name, k + 1, at)
+            after(name, path, at)
         elif not what:
-            push(name, k + 1, at)
+            after(name, path, at)
+        elif kind == "fan":
+            left[(name, path)] = len(what)
+            for i in range(len(what)):
+                push(name, path + (i, 0), at)
         else:
-            left[(name, k)] = len(what)
+            left[(name, path)] = len(what)
             for d in what:
-                heapq.heappush(ready, (at, seq, name, k, d))
+                heapq.heappush(ready, (prio, at, seq, name, path, d))
                 seq += 1
 
     for _ in range(drivers):
-        push(waiting.pop(0), 0, 0.0)
+        push(waiting.pop(0), (0,), 0.0)
     free = workers
     while ready or running:
         while free and ready:
-            _, s, name, k, d = heapq.heappop(ready)
-            heapq.heappush(running, (t + d, s, name, k))
+            _, _, s, name, path, d = heapq.heappop(ready)
+            heapq.heappush(running, (t + d, s, name, path))
             free -= 1
-        t, _, name, k = heapq.heappop(running)
+        t, _, name, path = heapq.heappop(running)
         free += 1
-        if chains[name][k][0] == "serial":
-            push(name, k + 1, t)
-        elif chains[name][k][0] == "async":
+        kind = _phases(chains, name, path)[path[-1]][0]
+        if kind == "serial":
+            after(name, path, t)
+        elif kind == "async":
             rendering[name] -= 1
             finish(name, t)
         else:
-            left[(name, k)] -= 1
-            if not left[(name, k)]:
-                push(name, k + 1, t)
+            left[(name, path)] -= 1
+            if not left[(name, path)]:
+                after(name, path, t)
     return t
 
 
 def _work(phase) -> float:
+    if phase[0] == "fan":
+        return sum(_work(p) for lane in phase[1] for p in lane)
     return phase[1] if phase[0] == "serial" else sum(phase[1])
 
 
 def critical_path(chains: dict) -> float:
     """The longest study with unlimited workers: its serial stretches and its longest call per map.
 
-    An async call (a figure rendered in the pool) starts where the driver sent it and may end after it.
+    An async call (a figure rendered in the pool) starts where the driver sent it and may end after it; a
+    fan lasts as long as its longest lane.
     """
     def length(phases):
         t = end = 0.0
         for kind, what in phases:
             if kind == "async":
                 end = max(end, t + max(what, default=0.0))
+            elif kind == "fan":
+                t += max((length(lane) for lane in what), default=0.0)
             else:
                 t += what if kind == "serial" else max(what, default=0.0)
         return max(t, end)
@@ -162,11 +226,17 @@ def critical_path(chains: dict) -> float:
     return max(length(ph) for ph in chains.values())
 
 
+def _leaves(phases: list) -> list:
+    """Every serial, map and async phase, a fan's lanes opened."""
+    return [q for p in phases for q in (_leaves([r for lane in p[1] for r in lane]) if p[0] == "fan" else [p])]
+
+
 def summary(chains: dict, workers: list[int], check: float | None = None) -> str:
     """The table ``replay`` prints."""
-    total = sum(_work(p) for ph in chains.values() for p in ph)
-    serial = sum(p[1] for ph in chains.values() for p in ph if p[0] == "serial")
-    calls = sum(len(p[1]) for ph in chains.values() for p in ph if p[0] != "serial")
+    leaves = [p for ph in chains.values() for p in _leaves(ph)]
+    total = sum(_work(p) for p in leaves)
+    serial = sum(p[1] for p in leaves if p[0] == "serial")
+    calls = sum(len(p[1]) for p in leaves if p[0] != "serial")
     times = {w: replay(chains, w) for w in workers}
     base = times[min(workers)]
     lines = [f"{len(chains)} studies, {calls} calls, work {total:.1f} s (of it the drivers' serial stretches "

@@ -65,7 +65,7 @@ RULES = [
                           "continuous_nlsys.inputs", "bar.total", "updater.total", "digits_tolerance.decimals",
                           "explore.refine", "explore.cell_steps", "explore.search_rounds", "set_context.position",
                           "LoopResponse.to_timeresponse.run", "adversarial_error.k_from", "tune_family.rounds",
-                          "ArenaSettings.rounds"]),
+                          "ArenaSettings.rounds", "family_chain.rounds"]),
     # blocks and loops
     ("a static block without inputs is a source; its names are free, and fn's widths are checked when it runs",
      "empty unknown longer", ["FunctionBlock.inputs", "FunctionBlock.outputs"]),
@@ -84,7 +84,7 @@ RULES = [
                              "printed.where", "reconstructed.why", "record_parameters.prefix", "ClaimResult.note",
                              "ClaimResult.evidence", "caption.detail", "glossary_lines.text", "write.message",
                              "bar.desc", "bar.unit", "updater.desc", "updater.unit", "map_chunks.desc",
-                             "map_chunks.unit",
+                             "map_chunks.unit", "drive.desc", "drive.unit",
                              "set_context.label", "write_text_atomic.text", "Case.signal", "Case.noise",
                              "register_signal_class.description", "register_signal_class.bound_how",
                              "register_signal_class.name", "ClaimCheck.statement", "ClaimCheck.how"]),
@@ -132,6 +132,7 @@ RULES = [
                                       "chunk_slices.chunks", "chunk_slices.chunk_size", "map_chunks.jobs",
                                       "monte_carlo.jobs", "monte_carlo.chunk_size", "sweep.jobs", "sweep.chunk_size",
                                       "StudyContext.jobs", "explore.jobs", "tune_family.jobs", "plot_sensitivity.top",
+                                      "drive.jobs", "family_chain.jobs", "simulate_registered.jobs",
                                       "bar.total", "updater.total", "set_context.position"]),
     ("a count of runs, stored and used lazily (chunk_slices only computes slice bounds)", "giant",
      ["chunk_slices(large n).n", "chunk_slices.n", "Quantity.runs", "StudyResult.quantity.runs"]),
@@ -250,10 +251,16 @@ RULES = [
      ["monte_carlo.seeds", "sweep.seeds"]),
     ("a grid's parameter names are free (fn reads the names the grid gives); a single number is one value",
      "unknown", ["sweep.grid"]),
+    ("what to simulate ahead: no class or no seed is nothing to do, a seed given twice is simulated once, and "
+     "a record of any length from 2 samples is valid", "empty longer",
+     ["simulate_registered.kinds", "simulate_registered.seeds"]),
+    ("a record of any length from 2 samples is valid", "shorter", ["simulate_registered.t"]),
     # streaming accumulators
     ("a chunk of any number of runs (runs on axis 0): fewer runs than the starting chunk is a smaller chunk",
      "shorter longer", ["Moments.add.values", "Quantiles.add.values", "Histogram.add.values",
                         "Keep.add.values"]),
+    (SIGNAL + ": a run's value or trace (an error, a state) of either sign", "negative",
+     ["Moments.add.values", "Quantiles.add.values", "Histogram.add.values", "Keep.add.values"]),
     ("Keep keeps the chosen runs' traces as they are, NaN and inf included (documented): a figure draws "
      "a diverged run too", "inf-entry nan-entry", ["Keep.add.values"]),
     ("documented: the bound for 0 runs is 0 (an empty accumulator)", "zero", ["Quantiles.error_bound.n",

@@ -25,7 +25,8 @@ import numpy as np
 from .._validate import check_finite, check_in, check_str
 from .interface import FAMILIES, family
 
-__all__ = ["VERDICT_TEXT", "ClaimCheck", "judge_claims", "register_claim_check", "registered_claim_checks"]
+__all__ = ["VERDICT_TEXT", "ClaimCheck", "fixed_configurations", "judge_claims", "register_claim_check",
+           "registered_claim_checks"]
 
 #: How each verdict reads in a report.
 VERDICT_TEXT = {"holds": "holds at best tuning", "fails": "does not hold at best tuning",
@@ -116,16 +117,43 @@ def registered_claim_checks() -> list:
     return list(_CHECKS.values())
 
 
-def _loser_errors(lo, cases, table, setup) -> tuple:
-    """``(label, RMS error per case)`` of a loser: a tuned family's best, or a fixed configuration evaluated here."""
+def fixed_configurations(checks=None) -> list:
+    """The fixed configurations the claim checks compare with: ``(family, parameter tuple)``, each once.
+
+    Evaluate them beforehand (:func:`~ctrl_analysis.arena.tuning.evaluate`, e.g. beside the tuning) and
+    hand :func:`judge_claims` their errors as ``fixed``; otherwise it evaluates them itself.
+
+    Parameters
+    ----------
+    checks : list of ClaimCheck, optional
+        Default: the registered ones.
+
+    Returns
+    -------
+    list of (str, tuple of float)
+    """
+    if checks is not None and (not isinstance(checks, (list, tuple)) or
+                               not all(isinstance(c, ClaimCheck) for c in checks)):
+        raise TypeError(f"checks must be a list of ClaimCheck or None, got {checks!r:.80}")
+    return list(dict.fromkeys((lo[0], tuple(float(v) for v in lo[1]))
+                              for chk in (registered_claim_checks() if checks is None else checks)
+                              for lo in chk.losers if not isinstance(lo, str)))
+
+
+def _loser_errors(lo, cases, table, setup, fixed) -> tuple:
+    """``(label, RMS error per case)`` of a loser: a tuned family's best, or a fixed configuration (from
+    ``fixed`` where it has every case, else evaluated here)."""
     if isinstance(lo, str):
         return lo, np.array([table[lo][c.key]["rms"] for c in cases])
     from .tuning import evaluate
 
     name, params = lo[0], np.asarray(lo[1], dtype=float)
-    m = evaluate((name, setup, tuple(cases), [(i, params) for i in range(len(cases))], "auto"))
     label = f"{name} fixed at " + ", ".join(f"{p.name} = {v:g}" for p,
                                             v in zip(family(name).params, params, strict=True))
+    known = fixed.get((name, tuple(float(v) for v in params)), {})
+    if all(c.key in known for c in cases):
+        return label, np.array([known[c.key] for c in cases], dtype=float)
+    m = evaluate((name, setup, tuple(cases), [(i, params) for i in range(len(cases))], "auto"))
     return label, m[:, 1]
 
 
@@ -133,7 +161,7 @@ def _verdict(wins: np.ndarray) -> str:
     return "holds" if wins.all() else "fails" if not wins.any() else "mixed"
 
 
-def judge_claims(result, cases, table, setup, checks=None) -> list:
+def judge_claims(result, cases, table, setup, checks=None, fixed=None) -> list:
     """Record one finding per claim check (``claim`` and ``claim_verdict`` set) and return the verdicts.
 
     Parameters
@@ -146,6 +174,9 @@ def judge_claims(result, cases, table, setup, checks=None) -> list:
     setup : Setup
     checks : list of ClaimCheck, optional
         Default: the registered ones.
+    fixed : dict, optional
+        RMS errors of the fixed configurations (:func:`fixed_configurations`) evaluated beforehand:
+        ``{(family, parameter tuple): {case key: RMS error of f̂'}}``; the others are evaluated here.
 
     Returns
     -------
@@ -166,6 +197,9 @@ def judge_claims(result, cases, table, setup, checks=None) -> list:
     if checks is not None and (not isinstance(checks, (list, tuple)) or
                                not all(isinstance(c, ClaimCheck) for c in checks)):
         raise TypeError(f"checks must be a list of ClaimCheck or None, got {checks!r:.80}")
+    if fixed is not None and (not isinstance(fixed, dict) or not all(isinstance(v, dict) for v in fixed.values())):
+        raise TypeError(f"fixed must be a dict {{(family, params): {{case key: error}}}} or None, got {fixed!r:.80}")
+    fixed = fixed or {}
     out = []
     for chk in registered_claim_checks() if checks is None else checks:
         run = [c for c in cases if not chk.signals or c.signal in chk.signals]
@@ -182,7 +216,7 @@ def judge_claims(result, cases, table, setup, checks=None) -> list:
             for w in chk.winners:
                 ew = np.array([table[w][c.key]["rms"] for c in run])
                 for lo in chk.losers:
-                    label, el = _loser_errors(lo, run, table, setup)
+                    label, el = _loser_errors(lo, run, table, setup, fixed)
                     ratio = el / ew
                     wins_all.append(ratio > 1.0)
                     evidence[f"{label} / {w}"] = {c.key: float(r) for c, r in zip(run, ratio, strict=True)}

@@ -8,7 +8,7 @@ from ..reporting.report import new_figure
 from .interface import estimate, family
 from .tuning import case_records, pareto_front
 
-__all__ = ["save_all"]
+__all__ = ["PARETO_CAPTION", "save_all", "save_pareto"]
 
 
 #: f̂' in matplotlib's mathtext (a combining circumflex does not render in the figures' font)
@@ -93,8 +93,27 @@ def _sample(s, cases, table):
     return fig
 
 
-def save_all(ctx, result, s, cases, table, tuned) -> None:
-    """Draw and save the three arena figures with captions.
+def save_pareto(ctx, result, s, cases, tuned) -> None:
+    """Draw and save the Pareto figure (sent first: it takes the longest to render).
+
+    Parameters
+    ----------
+    ctx : StudyContext
+    result : StudyResult
+    s : ArenaSettings
+    cases : list of Case
+    tuned : dict
+        :func:`~ctrl_analysis.arena.tuning.tune_family` output per family.
+    """
+    ctx.save_figure(result, _pareto(s, cases, tuned), "arena_pareto.png", dpi=120, caption=PARETO_CAPTION)
+
+
+PARETO_CAPTION = ("Per signal class, each family's Pareto front over every configuration evaluated: lag (worst "
+                  "derivative error on the noise-free records) against noise-induced RMS error.")
+
+
+def save_all(ctx, result, s, cases, table) -> None:
+    """Draw and save the other two arena figures with captions (after :func:`save_pareto`).
 
     Parameters
     ----------
@@ -103,18 +122,12 @@ def save_all(ctx, result, s, cases, table, tuned) -> None:
     s : ArenaSettings
     cases : list of Case
     table : dict
-    tuned : dict
-        :func:`~ctrl_analysis.arena.tuning.tune_family` output per family.
     """
-    ctx.save_figures(result, [
-        (_pareto(s, cases, tuned), "arena_pareto.png",
-         "Per signal class, each family's Pareto front over every configuration evaluated: lag (worst derivative "
-         "error on the noise-free records) against noise-induced RMS error."),
-        (_heat(cases, table), "arena_ratio_heatmap.png",
-         "Each family's worst-case-tuned derivative error divided by the bound 2√(εL), per case (signal/noise/ε), on "
-         "the random records (top) and on the bound's adversarial pair (bottom: at least 1 for any causal estimator, "
-         "so a check of the construction and of causality, not a ranking)."),
-        (_sample(s, cases, table), "arena_best_on_one_signal.png",
-         "The three best-ranked families (worst-case tuning) on one record, over the scored window (after the "
-         "transient): the derivative estimates and their errors."),
-    ])
+    # one after another: in a pool the heat map renders while the sample figure is drawn
+    ctx.save_figure(result, _heat(cases, table), "arena_ratio_heatmap.png", caption=(
+        "Each family's worst-case-tuned derivative error divided by the bound 2√(εL), per case (signal/noise/ε), on "
+        "the random records (top) and on the bound's adversarial pair (bottom: at least 1 for any causal estimator, "
+        "so a check of the construction and of causality, not a ranking)."))
+    ctx.save_figure(result, _sample(s, cases, table), "arena_best_on_one_signal.png", caption=(
+        "The three best-ranked families (worst-case tuning) on one record, over the scored window (after the "
+        "transient): the derivative estimates and their errors."))

@@ -18,9 +18,9 @@ from .._validate import check_in, check_int, check_positive
 from ..noise import run_seeds
 from ..reporting.report import StudyContext
 from ..reporting.results import StudyInfo, StudyResult
-from ..runs.parallel import map_chunks
+from ..runs.chains import drive, lockstep, pool_here
 from .bound import adversarial_error, adversarial_pair, lower_bound
-from .claims import VERDICT_TEXT, judge_claims
+from .claims import VERDICT_TEXT, fixed_configurations, judge_claims
 from .interface import FAMILIES, estimate, family
 from .recordcheck import MAX_RECORDS
 from .signals import (
@@ -29,8 +29,9 @@ from .signals import (
     native_bound,
     registered_signal_classes,
     signal_classes,
+    simulate_registered,
 )
-from .tuning import MAX_ROUNDS, Case, Setup, case_records, tune_families, tune_family
+from .tuning import MAX_ROUNDS, Case, Setup, case_records, evaluate, family_chain, tune_family
 
 __all__ = [
     "DEFAULT",
@@ -147,8 +148,6 @@ def run_arena(ctx: StudyContext, settings: ArenaSettings | None = None) -> tuple
     (StudyResult, dict)
         The record for results.json and the raw tables (``table[family][case key]``).
     """
-    from . import figures
-
     if not isinstance(ctx, StudyContext):
         raise TypeError(f"ctx must be a StudyContext, got {ctx!r:.80}")
     if settings is not None and not isinstance(settings, ArenaSettings):
@@ -157,8 +156,10 @@ def run_arena(ctx: StudyContext, settings: ArenaSettings | None = None) -> tuple
     t0 = time.perf_counter()
     cases = _cases(s, ctx.seed)
     plants = [c for c in cases if c.signal in registered_signal_classes()]
-    if plants:  # simulated once here; forked workers inherit the cached records
+    if plants:  # simulated once, side by side; this process and the workers forked below keep the records
         ctx.progress(f"simulating the plant signals ({', '.join(sorted({c.signal for c in plants}))})")
+        simulate_registered([c.signal for c in plants], cases[0].seeds, s.setup.dt * np.arange(s.setup.n),
+                            jobs=ctx.jobs)
     for c in cases:
         case_records(c, s.setup)
     result = StudyResult(INFO)
@@ -168,16 +169,108 @@ def run_arena(ctx: StudyContext, settings: ArenaSettings | None = None) -> tuple
                             "costs": "worst = max |f̂' - f'|, rms = RMS of f̂' - f', after the transient, "
                                      "over the case's noisy records"})
     result.seeds["records"] = list(cases[0].seeds)
-    table, tuned, tunings = {}, {}, 0
     ctx.progress(f"tuning {len(s.families)} families on {len(cases)} cases, their rounds side by side")
-    done = tune_families(s.families, cases, s.setup, rounds=s.rounds, jobs=ctx.jobs, scheduler=ctx.scheduler)
-    advs = map_chunks(_adversarial_task, [(name, cases, [b["worst"][0] for b in done[name]["best"]], s.setup)
-                                          for name in s.families], jobs=ctx.jobs, scheduler=ctx.scheduler,
-                      desc="adversarial pairs", unit="family")
+    # one pool for every map below, opened after the records are cached (its forked workers inherit them)
+    with pool_here(ctx.jobs, ctx.scheduler):
+        out = _tune_and_draw(ctx, result, s, cases, t0)
+        ctx.wait_figures()
+    return out
+
+
+def _apply(call):
+    """``fn(arg)`` of ``call = (fn, arg)``: the tuning's and the adversarial check's calls in one chain."""
+    fn, arg = call
+    return fn(arg)
+
+
+def _as_calls(fn, chain):
+    """A chain of ``fn``'s arguments as a chain of ``(fn, arg)`` calls (:func:`_apply`); returns its result."""
+    try:
+        args = next(chain)
+        while True:
+            args = chain.send((yield [(fn, a) for a in args]))
+    except StopIteration as done:
+        return done.value
+
+
+def _adversarial_calls(names, cases, tuned, setup) -> list:
+    return [(_adversarial_task, (n, cases, [b["worst"][0] for b in tuned[n]["best"]], setup)) for n in names]
+
+
+def _family_chain(name, cases, s, jobs):
+    """One family tuned on ``cases``, then its adversarial check there: one chain of :func:`drive`."""
+    tuned = yield from _as_calls(evaluate, family_chain(name, cases, s.setup, rounds=s.rounds, jobs=jobs))
+    adv = yield _adversarial_calls([name], cases, {name: tuned}, s.setup)
+    return tuned, adv[0]
+
+
+def _pareto_chain(ctx, result, s, cases, jobs):
+    """Every family tuned on the Pareto figure's cases (one per signal class), that figure sent to the pool,
+    then the families' adversarial checks there.
+
+    One chain of :func:`drive` (the families in lockstep: a ninth of the work), so the figure, the slowest to
+    render, is drawn while the other cases are still being tuned.
+    """
+    from . import figures
+
+    tuned = yield from _as_calls(evaluate, lockstep({n: family_chain(n, cases, s.setup, rounds=s.rounds, jobs=jobs)
+                                                    for n in s.families}))
+    figures.save_pareto(ctx, result, s, cases, tuned)
+    advs = yield _adversarial_calls(s.families, cases, tuned, s.setup)
+    return {n: (tuned[n], a) for n, a in zip(s.families, advs, strict=True)}
+
+
+def _fixed_chain(cases, setup):
+    """The claim checks' fixed configurations evaluated on every case (a chain of :func:`drive`, beside the
+    tuning): ``{(family, params): {case key: RMS error}}`` for :func:`judge_claims`."""
+    confs = fixed_configurations()
+    size = max(1, -(-len(cases) // 4))
+    calls = [(conf, list(range(lo, min(lo + size, len(cases))))) for conf in confs
+             for lo in range(0, len(cases), size)]
+    parts = yield [(evaluate, (name, setup, tuple(cases), [(i, np.array(params)) for i in idx], "auto"))
+                   for (name, params), idx in calls]
+    out = {conf: {} for conf in confs}
+    for (conf, idx), m in zip(calls, parts, strict=True):
+        out[conf].update({cases[i].key: float(m[j, 1]) for j, i in enumerate(idx)})
+    return out
+
+
+def _merged(parts: list, n_cases: int) -> tuple:
+    """One family's tuning and adversarial errors on all cases from parts: ``[(case indices, (result, adv))]``."""
+    evaluated, best, adv = [None] * n_cases, [None] * n_cases, np.empty(n_cases)
+    for idx, (r, a) in parts:
+        for j, i in enumerate(idx):
+            evaluated[i], best[i], adv[i] = r["evaluated"][j], r["best"][j], a[j]
+    return {"family": parts[0][1][0]["family"], "evaluated": evaluated, "best": best,
+            "tunings": sum(r["tunings"] for _, (r, _a) in parts)}, adv
+
+
+def _tune_and_draw(ctx, result, s, cases, t0) -> tuple:
+    """run_arena's tuning, adversarial check, records and figures (inside its pool).
+
+    The cases of the Pareto figure are tuned in a chain of their own, so that figure renders while the
+    other cases are tuned; every case's tuning (and adversarial check) is independent of the others', so
+    the result is the same.
+    """
+    from . import figures
+
+    table, tunings = {}, 0
+    mid = s.eps[len(s.eps) // 2]
+    front = [i for i, c in enumerate(cases) if c.noise == s.noises[0] and c.eps == mid]
+    rest = [i for i in range(len(cases)) if i not in front]
+    chains = {n: _family_chain(n, [cases[i] for i in rest], s, ctx.jobs) for n in s.families} if rest else {}
+    chains = {"pareto figure": _pareto_chain(ctx, result, s, [cases[i] for i in front], max(1, ctx.jobs // 4)),
+              **chains, "fixed configurations": _fixed_chain(cases, s.setup)}
+    # the Pareto chain first in the pool: its figure then renders while the other cases are tuned
+    parts = drive(_apply, chains, jobs=ctx.jobs, scheduler=ctx.scheduler, desc="tuning", unit="batch",
+                  priority={"pareto figure": -1})
+    done = {n: _merged([(front, parts["pareto figure"][n])] + ([(rest, parts[n])] if rest else []), len(cases))
+            for n in s.families}
+    advs = [done[n][1] for n in s.families]
+    done = {n: done[n][0] for n in s.families}
     for name, adv in zip(s.families, advs, strict=True):
         r = done[name]
         tunings += r["tunings"]
-        tuned[name] = r
         table[name] = {}
         for c, b, a in zip(cases, r["best"], adv, strict=True):
             bound = lower_bound(c.eps, c.L)
@@ -187,8 +280,8 @@ def run_arena(ctx: StudyContext, settings: ArenaSettings | None = None) -> tuple
                                   "bound": bound}
     elapsed = time.perf_counter() - t0
     _record(result, s, cases, table, tunings)
-    judge_claims(result, cases, table, s.setup)
-    figures.save_all(ctx, result, s, cases, table, tuned)
+    judge_claims(result, cases, table, s.setup, fixed=parts["fixed configurations"])
+    figures.save_all(ctx, result, s, cases, table)
     return result, {"table": table, "tunings": tunings, "seconds": elapsed}
 
 

@@ -36,6 +36,7 @@ from .._validate import (
 from ..noise import gaussian_noise, uniform_noise
 
 __all__ = ["NOISE_CLASSES", "SIGNAL_CLASSES", "SignalClass", "add_noise", "make_signal", "native_bound",
+           "simulate_registered",
            "register_signal_class", "registered_signal_classes", "signal_classes"]
 
 #: Signal classes: name -> what it is.
@@ -115,6 +116,7 @@ def register_signal_class(name: str, description: str, generate: Callable, bound
     cls = SignalClass(name, description, generate, bound_how)
     _REGISTERED[name] = cls
     _native.cache_clear()
+    _SIMULATED.clear()
     return cls
 
 
@@ -138,9 +140,54 @@ def signal_classes() -> dict:
     return {**SIGNAL_CLASSES, **{k: c.description for k, c in _REGISTERED.items()}}
 
 
+#: (kind, seed, dt, n) -> _native's value, simulated in other processes by simulate_registered
+_SIMULATED: dict = {}
+
+
+def simulate_registered(kinds, seeds, t, *, jobs: int = 1) -> None:
+    """Simulate every registered class's record for ``seeds`` on ``t`` once, side by side over ``jobs`` processes.
+
+    A registered class is usually a plant simulated in closed loop; :func:`make_signal` of one of its
+    records then reads what this computed (the same values: the same generator in another process)
+    instead of simulating it in this process, and processes forked afterwards inherit it.
+
+    Parameters
+    ----------
+    kinds : iterable of str
+        Signal classes; built-in ones are skipped (they cost nothing to draw).
+    seeds : iterable of int
+    t : array_like, shape (N,)
+        Uniform samples ``k dt`` from 0.
+    jobs : int
+        Local processes (:func:`ctrl_analysis.runs.parallel.map_chunks`, never a cluster).
+    """
+    from ..runs.parallel import map_chunks
+
+    for arg, value in (("kinds", kinds), ("seeds", seeds)):
+        if isinstance(value, (str, bytes)) or not hasattr(value, "__iter__"):
+            raise TypeError(f"{arg} must be a sequence, got {value!r:.80}")
+    kinds = [check_in("kinds", k, tuple(SIGNAL_CLASSES) + tuple(_REGISTERED)) for k in kinds]
+    seeds = [check_int("seeds", s, minimum=0) for s in seeds]
+    t = _samples("t", t)
+    dt, n = _uniform_grid(t), t.size
+    todo = [(k, s, dt, n) for k in dict.fromkeys(kinds) if k in _REGISTERED for s in dict.fromkeys(seeds)
+            if (k, s, dt, n) not in _SIMULATED]
+    for key, value in zip(todo, map_chunks(_native_task, todo, jobs=jobs, scheduler=False), strict=True):
+        for a in value[:3]:
+            a.setflags(write=False)
+        _SIMULATED[key] = value
+
+
+def _native_task(key: tuple) -> tuple:
+    """:func:`_native` of ``(kind, seed, dt, n)`` (a call of simulate_registered's map)."""
+    return _native(*key)
+
+
 @functools.lru_cache(maxsize=256)
 def _native(kind: str, seed: int, dt: float, n: int) -> tuple:
     """A registered class's ``(f, f', f'', L)`` at its own scale, checked, cached (a plant is simulated once)."""
+    if (kind, seed, dt, n) in _SIMULATED:
+        return _SIMULATED[(kind, seed, dt, n)]
     cls = _REGISTERED[kind]
     out = tuple(cls.generate(seed, dt, n))
     arrays = tuple(np.asarray(a, dtype=float) for a in out[:3])

@@ -36,7 +36,7 @@ from .._validate import (
     check_str,
 )
 from ..metrics import rmse
-from ..runs.parallel import map_chunks
+from ..runs.chains import drive
 from .interface import FAMILIES, OMEGA_DT_MAX, Family, estimate, family, scales
 from .recordcheck import MAX_ROWS
 from .signals import (
@@ -46,7 +46,8 @@ from .signals import (
     registered_signal_classes,
 )
 
-__all__ = ["MAX_ROUNDS", "Case", "Setup", "case_records", "evaluate", "param_values", "pareto_front", "tune_families",
+__all__ = ["MAX_ROUNDS", "Case", "Setup", "case_records", "evaluate", "family_chain", "param_values", "pareto_front",
+           "tune_families",
            "tune_family"]
 
 #: Metric columns returned by :func:`evaluate`.
@@ -405,9 +406,10 @@ def tune_families(names, cases, setup: Setup, *, rounds: int = 3, engine: str = 
                   scheduler=None) -> dict:
     """Tune several families on every case, their rounds side by side (:func:`tune_family` for each).
 
-    Round ``r`` of every family goes into one map over the processes: the families are independent, so
-    the result is each family's :func:`tune_family` exactly (the same configurations, cut into the same
-    tasks), with one wait per round instead of one per family and round.
+    Each family's rounds are one chain of :func:`ctrl_analysis.runs.chains.drive`: in a pool each
+    family starts its next round as soon as its own round is back (no family waits for a slower one);
+    elsewhere round ``r`` of every family goes into one map. The families are independent, so the result
+    is each family's :func:`tune_family` exactly (the same configurations, cut into the same tasks).
 
     Parameters
     ----------
@@ -432,24 +434,44 @@ def tune_families(names, cases, setup: Setup, *, rounds: int = 3, engine: str = 
     if not names or len(set(names)) != len(names):
         raise ValueError(f"names must be distinct family names, at least one, got {names}")
     cases, rounds = _check_tuning(cases, setup, rounds, engine, jobs)
-    tuners = {n: _tuning(n, cases, setup, rounds) for n in names}
-    asked = {n: next(t) for n, t in tuners.items()}
-    out = {}
-    while asked:
-        tasks = {n: _tasks(n, setup, cases, configs, engine, jobs) for n, (configs, _) in asked.items()}
-        desc = next(iter(asked.values()))[1] if len(asked) == 1 else \
-            f"{len(asked)} families: {next(iter(asked.values()))[1].split(': ', 1)[-1]}"
-        parts = iter(map_chunks(evaluate, [t for ts in tasks.values() for t in ts], jobs=jobs, scheduler=scheduler,
-                                desc=desc, unit="batch"))
-        nxt = {}
-        for n, ts in tasks.items():
-            metrics = np.vstack([next(parts) for _ in ts]) if ts else np.empty((0, len(METRICS)))
-            try:
-                nxt[n] = tuners[n].send(metrics)
-            except StopIteration as done:
-                out[n] = done.value
-        asked = nxt
-    return {n: out[n] for n in names}
+    return drive(evaluate, {n: _chain(n, cases, setup, rounds, engine, jobs) for n in names}, jobs=jobs,
+                 scheduler=scheduler, desc="tuning" if len(names) > 1 else names[0], unit="batch")
+
+
+def family_chain(name: str, cases, setup: Setup, *, rounds: int = 3, engine: str = "auto", jobs: int = 1):
+    """One family's tuning as a chain of :func:`ctrl_analysis.runs.chains.drive` (``fn`` = :func:`evaluate`).
+
+    The generator yields lists of :func:`evaluate` tasks, is sent their results, and returns what
+    :func:`tune_family` returns; a caller can follow it with work of its own in the same chain.
+
+    Parameters
+    ----------
+    name : str
+        Family name.
+    cases, setup, rounds, engine
+        As :func:`tune_family`.
+    jobs : int
+        Processes the tasks are cut for (about four tasks per process).
+
+    Returns
+    -------
+    generator
+    """
+    family(name)
+    cases, rounds = _check_tuning(cases, setup, rounds, engine, jobs)
+    return _chain(name, cases, setup, rounds, engine, jobs)
+
+
+def _chain(name, cases, setup, rounds, engine, jobs):
+    tuner = _tuning(name, cases, setup, rounds)
+    configs, _ = next(tuner)
+    while True:
+        tasks = _tasks(name, setup, cases, configs, engine, jobs)
+        parts = yield tasks
+        try:
+            configs, _ = tuner.send(np.vstack(parts) if tasks else np.empty((0, len(METRICS))))
+        except StopIteration as done:
+            return done.value
 
 
 def tune_family(name: str, cases, setup: Setup, *, rounds: int = 3, engine: str = "auto", jobs: int = 1,

@@ -241,7 +241,7 @@ class StudyContext:
         import threading
 
         from ..runs.progress import _CONTEXT
-        from ..runs.taskpool import map_on_pool, pool_available, trace_event
+        from ..runs.taskpool import lane_fields, map_on_pool, pool_available, trace_event
 
         if not pool_available():
             return False
@@ -249,20 +249,22 @@ class StudyContext:
         if blob is None:  # e.g. a FuncFormatter holding a lambda: rendered here instead
             return False
         failed: list = []
-        label = _CONTEXT["label"]
+        label, lane = _CONTEXT["label"], lane_fields()  # sent from a chain of drive(): the trace says which
 
         def render():
             import time
 
             submitted, cpu = time.time(), time.process_time()
             try:
-                value = map_on_pool(_render_figure, [(blob, str(path), dpi, bbox)], lambda i, v: None)[0]
+                value = map_on_pool(_render_figure, [(blob, str(path), dpi, bbox)], lambda i, v: None,
+                                    priority=lane.get("priority", 0))[0]
             except BaseException as exc:  # noqa: BLE001 - raised by wait_figures in the study's thread
                 failed.append(exc)
                 return
             # the driver does not wait for it: its CPU clock does not advance over the render (scaling.py)
             trace_event({"kind": "map", "async": True, "study": label, "where": "pool", "submitted": submitted,
-                         "returned": time.time(), "cpu_submitted": cpu, "cpu_returned": cpu, "calls": [value[1:]]})
+                         "returned": time.time(), "cpu_submitted": cpu, "cpu_returned": cpu, "calls": [value[1:]],
+                         **lane})
 
         thread = threading.Thread(target=render, daemon=True, name=f"ctrl-analysis-render {path.name}")
         thread.start()

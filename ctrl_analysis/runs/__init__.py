@@ -4,7 +4,9 @@
 in local processes or on Dask (``map_chunks``, ``monte_carlo``, ``sweep``), with the results of one process
 bit for bit; :mod:`~ctrl_analysis.runs.cluster` connects to a Dask cluster, makes it process-wide and fails
 in bounded time, in one line; :mod:`~ctrl_analysis.runs.taskpool` is the one pool of worker processes a whole
-run of the command shares between its studies' drivers, and its trace; :mod:`~ctrl_analysis.runs.progress`
+run of the command shares between its studies' drivers, and its trace; :mod:`~ctrl_analysis.runs.chains`
+advances chains of maps side by side (a slow one holds no other back) and opens a command's own pool;
+:mod:`~ctrl_analysis.runs.progress`
 draws progress bars on stderr, only on a terminal; ``_threads`` sets one BLAS thread per process for the
 command line, before numpy loads. This ``__init__`` imports none of them (nor numpy, Dask or numba):
 import the module you use, e.g. ``from ctrl_analysis.runs.parallel import map_chunks``.

@@ -57,6 +57,7 @@ from .cluster import (  # noqa: F401 - the cluster's public names, from here too
 )
 from .progress import _CONTEXT, bar
 from .taskpool import (
+    _LANE,
     _STATE,
     _by_value,
     _stop_workers,
@@ -71,6 +72,7 @@ from .taskpool import _die_with_parent as _worker_init
 __all__ = ["MAX_CHUNKS", "WORKER_TIMEOUT", "active_cluster", "check_scheduler_address",
            "chunk_slices", "default_jobs", "gather", "grid_points", "map_chunks", "monte_carlo", "picklable",
            "sweep", "use_cluster"]
+
 
 
 
@@ -194,7 +196,7 @@ def map_chunks(fn: Callable, args: Sequence, *, jobs: int = 1, scheduler=None, d
                     if own:
                         _close(client)
             return out
-        submitted, cpu, times = time.time(), time.process_time(), [None] * len(args)
+        submitted, cpu, tcpu, times = time.time(), time.process_time(), time.thread_time(), [None] * len(args)
 
         def one(i, timed_value):
             out[i], times[i] = timed_value[0], timed_value[1:]
@@ -202,7 +204,8 @@ def map_chunks(fn: Callable, args: Sequence, *, jobs: int = 1, scheduler=None, d
             pb.update(1)
 
         where = "here"
-        if jobs > 1 and len(args) > 1 and pool_available():  # a study's driver: the run's one pool
+        lane = getattr(_LANE, "key", None) is not None  # a chain of drive(): even one call goes to the pool
+        if jobs > 1 and (len(args) > 1 or lane) and pool_available():  # a study's driver: the run's one pool
             where = "pool"
             map_on_pool(fn, args, one)
         elif jobs == 1 or len(args) <= 1 or _in_pool_worker():
@@ -211,9 +214,12 @@ def map_chunks(fn: Callable, args: Sequence, *, jobs: int = 1, scheduler=None, d
         else:
             where = "processes"
             _map_on_processes(fn, args, jobs, one)
-        trace_event({"kind": "map", "study": _CONTEXT["label"], "where": where, "submitted": submitted,
-                     "returned": time.time(), "cpu_submitted": cpu, "cpu_returned": time.process_time(),
-                     "calls": times})
+        event = {"kind": "map", "study": _CONTEXT["label"], "where": where, "submitted": submitted,
+                 "returned": time.time(), "cpu_submitted": cpu, "cpu_returned": time.process_time(), "calls": times}
+        if getattr(_LANE, "key", None) is not None:  # one chain of drive(): its own thread's CPU clock
+            event.update(fan=_LANE.fan, lane=_LANE.key, priority=_LANE.priority, tcpu_submitted=tcpu,
+                         tcpu_returned=time.thread_time())
+        trace_event(event)
     return out
 
 

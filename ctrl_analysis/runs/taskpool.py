@@ -31,10 +31,12 @@ import signal
 import threading
 import time
 
-__all__ = ["driver", "map_on_pool", "pool_available", "shared_pool", "trace_event"]
+__all__ = ["driver", "lane_fields", "map_on_pool", "pool_available", "shared_pool", "trace_event"]
 
 _ENV = "CTRL_ANALYSIS_POOL"
-_STATE: dict = {"owner": None, "worker": False, "in_call": False}  # owner: the pid of the process that opened the pool
+_STATE: dict = {"owner": None, "worker": False}  # owner: the pid of the process that opened the pool
+_CALL = threading.local()  # .inside: this thread runs a call of a map (its own maps are part of it, untraced)
+_LANE = threading.local()  # .fan, .key, .priority: in a thread of chains.drive, the chain this thread advances
 
 
 def pool_available() -> bool:
@@ -125,13 +127,13 @@ def _timed(fn, arg):
     tuple
         The value, ``time.time()`` before and after, and the CPU seconds of this process meanwhile.
     """
-    outer = _STATE["in_call"]
-    _STATE["in_call"] = True
+    outer = getattr(_CALL, "inside", False)
+    _CALL.inside = True
     start, cpu = time.time(), time.process_time()
     try:
         return fn(arg), start, time.time(), time.process_time() - cpu
     finally:
-        _STATE["in_call"] = outer
+        _CALL.inside = outer
 
 
 @contextlib.contextmanager
@@ -142,12 +144,12 @@ def driver():
     ------
     None
     """
-    outer = _STATE["in_call"]
-    _STATE["in_call"] = False
+    outer = getattr(_CALL, "inside", False)
+    _CALL.inside = False
     try:
         yield
     finally:
-        _STATE["in_call"] = outer
+        _CALL.inside = outer
 
 
 def trace_event(event: dict) -> None:
@@ -161,21 +163,95 @@ def trace_event(event: dict) -> None:
         JSON-serialisable, with a ``"kind"`` (``"study"`` or ``"map"``).
     """
     folder = os.environ.get("CTRL_ANALYSIS_TRACE")
-    if not folder or _STATE["in_call"]:
+    if not folder or getattr(_CALL, "inside", False):
         return
     os.makedirs(folder, exist_ok=True)
     with open(os.path.join(folder, f"{os.getpid()}.jsonl"), "a", encoding="utf-8") as fh:
         fh.write(json.dumps(event) + "\n")
 
 
+class _Feed:
+    """Calls waiting for a worker of the pool: lowest priority first, then first come; at most ``depth`` handed
+    to the executor at once, so a call sent later with a lower priority (a chain on the critical path, a
+    figure it sent) overtakes the calls still waiting."""
+
+    def __init__(self, ex, depth: int):
+        import heapq
+
+        self._heapq, self._ex, self._depth = heapq, ex, depth
+        self._waiting: list = []
+        self._seq = self._busy = 0
+        self._closed = False
+        self._cv = threading.Condition()
+        threading.Thread(target=self._run, daemon=True, name="ctrl-analysis-pool-feed").start()
+
+    def submit(self, priority, blob: bytes, done, dropped) -> None:
+        """Queue ``blob``; ``done(future)`` when it has run (skipped once ``dropped`` is set)."""
+        with self._cv:
+            self._heapq.heappush(self._waiting, (priority, self._seq, blob, done, dropped))
+            self._seq += 1
+            self._cv.notify()
+
+    def close(self) -> None:
+        with self._cv:
+            self._closed = True
+            self._cv.notify_all()
+
+    def _run(self) -> None:
+        from concurrent.futures import Future
+
+        while True:
+            with self._cv:
+                while not self._closed and (not self._waiting or self._busy >= self._depth):
+                    self._cv.wait()
+                if self._closed:
+                    return
+                _, _, blob, done, dropped = self._heapq.heappop(self._waiting)
+                if dropped.is_set():
+                    continue
+                self._busy += 1
+            try:
+                fut = self._ex.submit(_timed_call, blob)
+            except BaseException as exc:  # noqa: BLE001 - the pool is shutting down: the call fails
+                fut = Future()
+                fut.set_exception(exc)
+            fut.add_done_callback(lambda f, done=done: self._finished(f, done))
+
+    def _finished(self, fut, done) -> None:
+        with self._cv:
+            self._busy -= 1
+            self._cv.notify()
+        done(fut)
+
+
+def lane_fields() -> dict:
+    """What a traced event sent from a chain of ``chains.drive`` says of it (``{}`` elsewhere).
+
+    Returns
+    -------
+    dict
+        ``fan``, ``lane``, its ``priority`` in the pool and this thread's CPU clock (``tcpu_submitted`` =
+        ``tcpu_returned``): an async call (a figure) sent from the chain, which the chain does not wait for.
+    """
+    if getattr(_LANE, "key", None) is None:
+        return {}
+    now = time.thread_time()
+    return {"fan": _LANE.fan, "lane": _LANE.key, "priority": _LANE.priority, "tcpu_submitted": now,
+            "tcpu_returned": now}
+
+
 @contextlib.contextmanager
-def shared_pool(jobs: int):
+def shared_pool(jobs: int, *, here: bool = False):
     """Open one pool of ``jobs`` worker processes for every driver process started inside the block.
 
     Parameters
     ----------
     jobs : int
         Worker processes (>= 1).
+    here : bool
+        Whether this process is a driver too: its own ``map_chunks`` calls go to the pool (one command
+        that maps many times, ``ctrl-analysis arena``), rather than only the processes it starts
+        (``reproduce all``'s study drivers; its own maps start them).
 
     Yields
     ------
@@ -198,16 +274,23 @@ def shared_pool(jobs: int):
     listener = Listener(family="AF_UNIX" if hasattr(os, "fork") else "AF_INET", authkey=key)
     stop = threading.Event()
 
+    feed = _Feed(ex, jobs + 1)
+
     def serve(conn):
+        import queue
+
         with conn:
             try:
-                blobs = conn.recv()
+                msg = conn.recv()
             except (EOFError, OSError):
                 return
-            futures = {ex.submit(_timed_call, b): i for i, b in enumerate(blobs)}
+            priority, blobs = msg if isinstance(msg, tuple) else (0, msg)
+            finished, dropped = queue.SimpleQueue(), threading.Event()
+            for i, b in enumerate(blobs):
+                feed.submit(priority, b, lambda fut, i=i: finished.put((i, fut)), dropped)
             try:
-                for fut in _completed(futures):
-                    i = futures[fut]
+                for _ in range(len(blobs)):
+                    i, fut = finished.get()
                     try:
                         value = fut.result()
                     except BaseException as exc:  # noqa: BLE001 - the driver raises it, as map_chunks does
@@ -215,8 +298,7 @@ def shared_pool(jobs: int):
                         raise
                     conn.send(("ok", i, value))
             except BaseException:  # noqa: BLE001 - a failed call or a driver gone: its other calls are dropped
-                for fut in futures:
-                    fut.cancel()
+                dropped.set()
 
     def accept():
         while not stop.is_set():
@@ -232,7 +314,8 @@ def shared_pool(jobs: int):
     acceptor.start()
     before = os.environ.get(_ENV)
     os.environ[_ENV] = json.dumps({"address": listener.address, "key": key.hex()})
-    _STATE["owner"] = os.getpid()  # a forked driver inherits this dict, not the pid
+    # a forked driver inherits this dict, not the pid; "here": this process sends its calls to the pool too
+    _STATE["owner"] = None if here else os.getpid()
     try:
         yield
     finally:
@@ -242,6 +325,7 @@ def shared_pool(jobs: int):
         else:
             os.environ[_ENV] = before
         stop.set()
+        feed.close()
         listener.close()
         _stop_workers(ex)
 
@@ -263,7 +347,7 @@ def _sendable(exc: BaseException) -> BaseException:
     return exc
 
 
-def map_on_pool(fn, args: list, done_one) -> list:
+def map_on_pool(fn, args: list, done_one, priority: int | None = None) -> list:
     """``[fn(a) for a in args]`` on the run's shared pool, from a driver; results in order.
 
     Parameters
@@ -274,6 +358,9 @@ def map_on_pool(fn, args: list, done_one) -> list:
         One argument per call.
     done_one : callable
         ``done_one(i, (value, start, end, cpu))``, called here as each call finishes.
+    priority : int, optional
+        Lower goes first among the calls waiting for a worker (default: the chain's of
+        ``chains.drive`` this thread advances, else 0).
 
     Returns
     -------
@@ -291,7 +378,7 @@ def map_on_pool(fn, args: list, done_one) -> list:
     address = where["address"]
     out = [None] * len(args)
     with Client(tuple(address) if isinstance(address, list) else address, authkey=bytes.fromhex(where["key"])) as c:
-        c.send([_by_value(fn, a) for a in args])
+        c.send((getattr(_LANE, "priority", 0) if priority is None else priority, [_by_value(fn, a) for a in args]))
         for _ in range(len(args)):
             try:
                 kind, i, value = c.recv()

@@ -247,7 +247,7 @@ def test_sizes_of_the_tuning_have_a_maximum_and_are_checked_before_any_work(monk
     def no_work(*args, **kwargs):
         raise AssertionError("the tuning started")
 
-    monkeypatch.setattr(tuning, "map_chunks", no_work)
+    monkeypatch.setattr(tuning, "drive", no_work)
     setup = Setup(dt=DT, n=600, transient=2.0)
     case = Case("sines", "uniform", 0.01, 2.0, (3,))
     with pytest.raises(ValueError, match=f"rounds must be <= {MAX_ROUNDS}, got 1000000000000"):

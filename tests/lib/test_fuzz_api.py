@@ -88,7 +88,7 @@ from ctrl_analysis.reporting import sensitivity as sensitivity_module
 from ctrl_analysis.reporting.box import Box, Dimension, first_order
 from ctrl_analysis.reporting.study import algorithm as study_algorithm
 from ctrl_analysis.reporting.verdicts import claim_verdict, printed_tolerance
-from ctrl_analysis.runs import cluster, parallel, progress, taskpool
+from ctrl_analysis.runs import chains, cluster, parallel, progress, taskpool
 from ctrl_analysis.streaming import _accumulator, _sketch
 from ctrl_analysis.symbolic import differential as sym_de
 from ctrl_analysis.symbolic import eso as sym_eso
@@ -604,6 +604,11 @@ def build_cases(tmp):
                                                  unit="chunk"),
          dict(fn=CALLABLE, args=[None, 3], jobs=INT + [0], scheduler=[3, "nonsense"], desc=[None, 3],
               unit=[None, 3, ""])),
+        ("drive", chains.drive, dict(fn=_pair, chains={}, jobs=1, scheduler=None, desc="", unit="chunk",
+                                       priority=None),
+         dict(fn=CALLABLE, chains=[None, 3, {"a": 3}], jobs=INT + [0], scheduler=[3, "nonsense"], desc=[None, 3],
+              unit=[None, 3, ""], priority=[3, {"zz": 1}])),
+        ("lockstep", chains.lockstep, dict(chains={}), dict(chains=[None, 3, {"a": 3}])),
         ("monte_carlo", parallel.monte_carlo, dict(fn=_seed_rows, seeds=[1, 2, 3], jobs=1, chunk_size=None),
          dict(fn=CALLABLE, seeds=[None, 3, []], jobs=INT + [0], chunk_size=opt(INT) + [0])),
         ("sweep", parallel.sweep, dict(fn=_sweep_fn, grid={"a": [1.0, 2.0]}, seeds=[1, 2], jobs=1, chunk_size=None),
@@ -869,6 +874,10 @@ def _arena_cases(tmp):
          dict(name="algebraic", cases=[case], setup=setup, rounds=0, engine="numpy", jobs=1, scheduler=None),
          dict(name=CHOICE + [None], cases=[None, 3, "sines", [], [3]], setup=[None, 3], rounds=INT + [-1],
               engine=CHOICE, jobs=INT + [0], scheduler=[3, "nonsense"])),
+        ("family_chain", tuning.family_chain,
+         dict(name="algebraic", cases=[case], setup=setup, rounds=0, engine="numpy", jobs=1),
+         dict(name=CHOICE + [None], cases=[None, 3, "sines", [], [3]], setup=[None, 3], rounds=INT + [-1],
+              engine=CHOICE, jobs=INT + [0])),
         ("tune_families", tuning.tune_families,
          dict(names=["algebraic"], cases=[case], setup=setup, rounds=0, engine="numpy", jobs=1, scheduler=None),
          dict(names=[None, 3, "algebraic", [], ["nonsense"], ["algebraic", "algebraic"], [None]],
@@ -924,6 +933,10 @@ def _arena_registry_cases(case, setup):
         ("register_signal_class", signals.register_signal_class,
          dict(name="fuzz-parabola", description="3t²", generate=_fuzz_parabola, bound_how="f'' = 6"),
          dict(name=STR + ["", "sines"], description=STR + [""], generate=CALLABLE, bound_how=STR + [""])),
+        ("simulate_registered", signals.simulate_registered,
+         dict(kinds=["fuzz-parabola", "sines"], seeds=[1], t=np.arange(20) * 0.1, jobs=1),
+         dict(kinds=[None, 3, "sines", ["nonsense"]], seeds=[None, 3, [-1], [1.5]],
+              t=ARR + [[], [0.0, NAN], [0.0, 0.1, 0.3]], jobs=INT + [0])),
         ("native_bound", signals.native_bound, dict(kind="fuzz-parabola", seed=1, t=np.arange(20) * 0.1),
          dict(kind=CHOICE + [None, "sines"], seed=INT + [-1],
               t=ARR + [[], np.ones((2, 3)), [0.0, NAN], [0.0, 0.1, 0.3], [1.0, 1.1, 1.2]])),
@@ -935,8 +948,10 @@ def _arena_registry_cases(case, setup):
          dict(check=[None, 3, check])),
         ("judge_claims", claims.judge_claims,
          dict(result=report.StudyResult(arena_recommend.INFO), cases=[case], table=table, setup=setup,
-              checks=[claims.ClaimCheck(**check)]),
-         dict(result=[None, 3], cases=[None, 3, [3]], table=[None, 3], setup=[None, 3], checks=[3, [3], "x"])),
+              checks=[claims.ClaimCheck(**check)], fixed=None),
+         dict(result=[None, 3], cases=[None, 3, [3]], table=[None, 3], setup=[None, 3], checks=[3, [3], "x"],
+              fixed=[3, {"a": 3}])),
+        ("fixed_configurations", claims.fixed_configurations, dict(checks=None), dict(checks=[3, [3], "x"])),
         ("arena_claim_links", arena_recommend.arena_claim_links, dict(results={"findings": []}),
          dict(results=[None, 3, "x"])),
     ]
@@ -1102,6 +1117,10 @@ NOT_FUZZED = {
                                "settings); its settings are validated by ArenaSettings (fuzzed), its ctx and "
                                "settings types on entry; run end to end in test_arena_cli.py",
     arena_figures.save_all: "figure writer fed the tables run_arena built; run by test_arena_cli.py",
+    arena_figures.save_pareto: "figure writer fed the tunings run_arena built; run by test_arena_cli.py",
+    chains.pool_here: "a context manager (checks on entering): its jobs and scheduler are map_chunks' checks "
+                        "(tests/lib/test_drive.py)",
+    taskpool.lane_fields: "no arguments",
     arena_cli.add_parser: "registers the arena subcommand on the CLI's parser (test_arena_cli.py)",
     arena_recommend.default_settings: "no arguments",
     signals.registered_signal_classes: "no arguments",
