@@ -22,11 +22,19 @@ from .compiled import compiled_for, run_compiled
 from .memory import CHUNK_BYTES, chunk_bounds
 from .response import LoopResponse
 
-__all__ = ["AUTO_BAR_WORK", "CompiledEngine", "Engine", "NumpyEngine", "Record", "kept_columns", "select_engine"]
+__all__ = ["AUTO_BAR_WORK", "CLUSTER_MIN_WORK", "CompiledEngine", "Engine", "NumpyEngine", "Record", "kept_columns",
+           "select_engine"]
 
 #: Run-samples (runs x samples) from which a simulation shows a progress bar of its own (when stderr
 #: is a terminal): about a second of work on the numpy engine.
 AUTO_BAR_WORK = 2_000_000
+
+#: Run-samples from which a compiled simulation goes to a process-wide Dask cluster by itself (``jobs=1``;
+#: a numpy-engine one from a hundredth of it, being 30-100x slower a run-sample): below, shipping it (a
+#: round trip, and every worker loading the loop's runner the first time) costs more than it saves; on
+#: two workers ckf's 1-3·10^6 run-sample batches took 2.4 s longer shipped. ``Execution(jobs > 1)``
+#: splits any batch as asked.
+CLUSTER_MIN_WORK = 10_000_000
 
 
 class Engine(Protocol):
@@ -284,8 +292,8 @@ def _in_chunk() -> bool:
 def select_engine(plan, batch, execution, loop=None) -> Engine:
     """The engine ``execution`` asks for, for this plan and batch.
 
-    With ``execution.jobs > 1`` (or a process-wide Dask cluster, :func:`~ctrl_analysis.runs.parallel.use_cluster`),
-    several runs and a picklable ``loop``, a
+    With ``execution.jobs > 1`` (or a process-wide Dask cluster, :func:`~ctrl_analysis.runs.parallel.use_cluster`,
+    and enough run-samples, :data:`CLUSTER_MIN_WORK`), several runs and a picklable ``loop``, a
     :class:`~ctrl_analysis.engine.processes.ProcessEngine` that splits the runs over processes. Otherwise
     ``execution.engine``: ``"auto"`` is compiled when every block has a kernel and no input is a callable
     (warning once per loop otherwise, :class:`~ctrl_analysis.engine.compiled.SlowPathWarning`);
@@ -315,6 +323,7 @@ def select_engine(plan, batch, execution, loop=None) -> Engine:
         from ..runs.parallel import active_cluster, picklable
         from .processes import ProcessEngine
 
-        if active_cluster() is not None and picklable(loop):
+        work = batch.B * batch.n_steps * (1 if runner is not None else 100)
+        if active_cluster() is not None and work >= CLUSTER_MIN_WORK and picklable(loop):
             return ProcessEngine(loop)  # a process-wide Dask cluster's workers
     return NUMPY if runner is None else CompiledEngine(runner)

@@ -56,7 +56,7 @@ _POLL_S = 1.0
 #: The process-wide cluster of :func:`use_cluster`: its client, the ``scheduler`` it was given, its
 #: address, the chunks it ran, its worker time-out, and why it failed (``None`` while it works).
 _CLUSTER: dict = {"client": None, "scheduler": None, "address": None, "chunks": 0, "worker_timeout": WORKER_TIMEOUT,
-                  "failed": None}
+                  "failed": None, "starting": 0}
 
 
 class ClusterError(RuntimeError):
@@ -161,11 +161,11 @@ def use_cluster(scheduler, jobs: int | None = None, timeout: float = 10.0, worke
     with _quiet_dask():
         client, own = _client(scheduler, jobs, timeout)
         _CLUSTER.update(client=client, scheduler=scheduler, address=_address(client, scheduler), chunks=0,
-                        worker_timeout=worker_timeout, failed=None)
+                        worker_timeout=worker_timeout, failed=None, starting=jobs if scheduler == "local" else 0)
         try:
             yield client
         finally:
-            _CLUSTER.update(client=None, scheduler=None, worker_timeout=WORKER_TIMEOUT, failed=None)
+            _CLUSTER.update(client=None, scheduler=None, worker_timeout=WORKER_TIMEOUT, failed=None, starting=0)
             if own:
                 _close(client)
 
@@ -191,9 +191,10 @@ def _cluster_workers() -> int:
     if _CLUSTER["failed"] is not None:
         return 1
     try:
-        return max(1, sum(_CLUSTER["client"].nthreads(callback_timeout=5).values()))
+        started = sum(_CLUSTER["client"].nthreads(callback_timeout=5).values())
     except Exception:  # noqa: BLE001 - a cluster that cannot say still takes one chunk
-        return 1
+        started = 1
+    return max(1, started, _CLUSTER["starting"])  # a local cluster's workers still starting count
 
 
 def _connected_workers(client) -> int | None:
@@ -276,9 +277,12 @@ def _client(scheduler, jobs, timeout: float = 30.0):
     if scheduler == "local":
         # no dashboard; the scheduler's HTTP routes still start, on a port the system picks (their default,
         # 8787, warns "Port 8787 is already in use" whenever another cluster runs on the machine)
-        cluster = LocalCluster(n_workers=jobs, threads_per_worker=1, processes=True, dashboard_address=None,
+        # the scheduler now, its workers in the background (each importing the library as it starts,
+        # ctrl_analysis.runs._warm): the driver goes on meanwhile, and the first chunks wait for them
+        cluster = LocalCluster(n_workers=0, threads_per_worker=1, processes=True, dashboard_address=None,
                                worker_dashboard_address=None, silence_logs=logging.CRITICAL,
-                               scheduler_kwargs={"dashboard_address": ":0"})
+                               scheduler_kwargs={"dashboard_address": ":0"}, preload=["ctrl_analysis.runs._warm"])
+        cluster.scale(jobs)
         return Client(cluster), True
     if not isinstance(scheduler, str) or not scheduler:
         raise ValueError(f"scheduler must be None, 'local', a scheduler address or a distributed.Client, "

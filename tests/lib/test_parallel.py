@@ -360,10 +360,13 @@ def test_loop_simulate_with_jobs_equals_one_process_bit_for_bit():
     assert np.array_equal(one.to_timeresponse(4).outputs, two.to_timeresponse(4).outputs)
 
 
-def test_a_numpy_loops_batch_goes_to_the_process_wide_cluster_with_the_same_numbers():
+def test_a_numpy_loops_batch_goes_to_the_process_wide_cluster_with_the_same_numbers(monkeypatch):
     """Issue 30: inside use_cluster, a loop with a plain Python block (numpy engine) stayed in the command's process
-    without a word; its batch is now split over the cluster's workers like a compiled loop's."""
+    without a word; its batch is now split over the cluster's workers like a compiled loop's, from
+    CLUSTER_MIN_WORK / 100 run-samples (4 runs x 20 samples here: the threshold set to just that, then one above)."""
     import warnings
+
+    from ctrl_analysis.engine import engines
 
     from distributed import Client, LocalCluster
 
@@ -375,7 +378,12 @@ def test_a_numpy_loops_batch_goes_to_the_process_wide_cluster_with_the_same_numb
         here = loop.simulate(20, inputs=inputs, params={"sigma": {"a": [3.0, 4.0, 5.0, 6.0]}})
         with LocalCluster(n_workers=2, threads_per_worker=1, processes=False, dashboard_address=None) as cluster, \
                 Client(cluster) as client, parallel.use_cluster(client):
+            monkeypatch.setattr(engines, "CLUSTER_MIN_WORK", 4 * 20 * 100)
             there = loop.simulate(20, inputs=inputs, params={"sigma": {"a": [3.0, 4.0, 5.0, 6.0]}})
             chunks = parallel.active_cluster()["chunks"]
+            monkeypatch.setattr(engines, "CLUSTER_MIN_WORK", 4 * 20 * 100 + 1)
+            small = loop.simulate(20, inputs=inputs, params={"sigma": {"a": [3.0, 4.0, 5.0, 6.0]}})
+            assert parallel.active_cluster()["chunks"] == chunks  # too little work to ship: it ran here
     assert chunks >= 2  # it ran on the cluster's workers
     np.testing.assert_array_equal(there.x, here.x)
+    np.testing.assert_array_equal(small.x, here.x)
