@@ -31,7 +31,7 @@ from .signals import (
     signal_classes,
     simulate_registered,
 )
-from .tuning import MAX_ROUNDS, Case, Setup, case_records, evaluate, family_chain, tune_family
+from .tuning import MAX_ROUNDS, Case, Setup, case_records, evaluate, family_chain, tune_families
 
 __all__ = [
     "DEFAULT",
@@ -500,9 +500,11 @@ def recommend_for_record(t, y, d1, eps: float, L: float, *, rounds: int = 2, job
     tuning._USER_RECORDS[case] = rec
     try:
         out = []
+        # every family side by side in one pool, opened after the record is set (its workers inherit it)
+        with pool_here(jobs):
+            done = tune_families([fam.name for fam in FAMILIES], [case], setup, rounds=rounds, jobs=jobs)
         for fam in FAMILIES:
-            r = tune_family(fam.name, [case], setup, rounds=rounds, jobs=jobs)
-            v, m = r["best"][0]["worst"]
+            v, m = done[fam.name]["best"][0]["worst"]
             if not np.isfinite(m[0]):
                 raise ValueError(f"every tuning of the {fam.name} family gave a non-finite derivative error on this "
                                  f"record (ε = {eps:.3g}, L = {L:.3g}, dt = {setup.dt:.3g} s); the arena cannot "

@@ -283,12 +283,13 @@ def test_the_library_entry_checks_the_record_and_refuses_non_finite_errors(monke
     with pytest.raises(ValueError, match="^eps must be"):
         recommend.recommend_for_record(t, y, None, -0.01, 1.0)
 
-    def diverged(name, cases, setup, **kwargs):
-        return {"best": [{"worst": (np.array([1.0] * len(family(name).params)), np.array([np.inf] * 4))}]}
+    def diverged(names, cases, setup, **kwargs):
+        return {name: {"best": [{"worst": (np.array([1.0] * len(family(name).params)), np.array([np.inf] * 4))}]}
+                for name in names}
 
     from ctrl_analysis.arena.interface import family
 
-    monkeypatch.setattr(recommend, "tune_family", diverged)
+    monkeypatch.setattr(recommend, "tune_families", diverged)
     with pytest.raises(ValueError, match="every tuning of the sigma family gave a non-finite derivative error"):
         recommend.recommend_for_record(t, y, None, 0.01, 1.0)
 
