@@ -366,9 +366,9 @@ def test_a_numpy_loops_batch_goes_to_the_process_wide_cluster_with_the_same_numb
     CLUSTER_MIN_WORK / 100 run-samples (4 runs x 20 samples here: the threshold set to just that, then one above)."""
     import warnings
 
-    from ctrl_analysis.engine import engines
-
     from distributed import Client, LocalCluster
+
+    from ctrl_analysis.engine import engines
 
     loop = Loop([place(Damped(), "plant"), place(DifferentialEstimator(3, 4.0), "sigma")], dt=0.01)
     noise = draw_noise(run_seeds(3, 4), 20, gaussian_noise([0.3, 0.01]))
