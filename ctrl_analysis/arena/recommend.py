@@ -19,6 +19,7 @@ from ..noise import run_seeds
 from ..reporting.report import StudyContext
 from ..reporting.results import StudyInfo, StudyResult
 from ..runs.chains import drive, lockstep, pool_here
+from ..runs.parallel import chunk_slices
 from .bound import adversarial_error, adversarial_pair, lower_bound
 from .claims import VERDICT_TEXT, fixed_configurations, judge_claims
 from .interface import FAMILIES, estimate, family
@@ -224,9 +225,7 @@ def _fixed_chain(cases, setup):
     """The claim checks' fixed configurations evaluated on every case (a chain of :func:`drive`, beside the
     tuning): ``{(family, params): {case key: RMS error}}`` for :func:`judge_claims`."""
     confs = fixed_configurations()
-    size = max(1, -(-len(cases) // 4))
-    calls = [(conf, list(range(lo, min(lo + size, len(cases))))) for conf in confs
-             for lo in range(0, len(cases), size)]
+    calls = [(conf, list(range(len(cases)))[sl]) for conf in confs for sl in chunk_slices(len(cases), chunks=4)]
     parts = yield [(evaluate, (name, setup, tuple(cases), [(i, np.array(params)) for i in idx], "auto"))
                    for (name, params), idx in calls]
     out = {conf: {} for conf in confs}
@@ -264,10 +263,9 @@ def _tune_and_draw(ctx, result, s, cases, t0) -> tuple:
     # the Pareto chain first in the pool: its figure then renders while the other cases are tuned
     parts = drive(_apply, chains, jobs=ctx.jobs, scheduler=ctx.scheduler, desc="tuning", unit="batch",
                   priority={"pareto figure": -1})
-    done = {n: _merged([(front, parts["pareto figure"][n])] + ([(rest, parts[n])] if rest else []), len(cases))
-            for n in s.families}
-    advs = [done[n][1] for n in s.families]
-    done = {n: done[n][0] for n in s.families}
+    merged = {n: _merged([(front, parts["pareto figure"][n])] + ([(rest, parts[n])] if rest else []), len(cases))
+              for n in s.families}
+    done, advs = {n: merged[n][0] for n in s.families}, [merged[n][1] for n in s.families]
     for name, adv in zip(s.families, advs, strict=True):
         r = done[name]
         tunings += r["tunings"]

@@ -29,10 +29,14 @@ from .taskpool import _LANE, pool_available, trace_event
 __all__ = ["drive", "lockstep", "pool_here"]
 
 
+def _on_cluster(scheduler) -> bool:
+    """Whether ``map_chunks(..., scheduler=scheduler)`` goes to a Dask cluster (given, or process-wide)."""
+    return scheduler not in (None, False) or (scheduler is None and _CLUSTER["client"] is not None)
+
+
 def _to_pool(jobs: int, scheduler) -> bool:
     """Whether ``map_chunks(..., jobs, scheduler)`` here would go to a run's shared pool."""
-    on_cluster = scheduler not in (None, False) or (scheduler is None and _CLUSTER["client"] is not None)
-    return jobs > 1 and not on_cluster and pool_available()
+    return jobs > 1 and not _on_cluster(scheduler) and pool_available()
 
 
 @contextlib.contextmanager
@@ -61,8 +65,7 @@ def pool_here(jobs: int, scheduler=None):
 
     jobs = check_int("jobs", jobs, minimum=1)
     scheduler = _check_scheduler(scheduler)
-    on_cluster = scheduler not in (None, False) or (scheduler is None and _CLUSTER["client"] is not None)
-    if jobs == 1 or on_cluster or pool_available() or _in_pool_worker():
+    if jobs == 1 or _on_cluster(scheduler) or pool_available() or _in_pool_worker():
         yield False
         return
     with shared_pool(jobs, here=True):

@@ -75,8 +75,6 @@ __all__ = ["MAX_CHUNKS", "WORKER_TIMEOUT", "active_cluster", "check_scheduler_ad
 
 
 
-
-
 def chunk_slices(n: int, *, chunks: int | None = None, chunk_size: int | None = None) -> list[slice]:
     """Consecutive slices splitting ``range(n)`` into ``chunks`` near-equal pieces or pieces of ``chunk_size``.
 
@@ -216,7 +214,7 @@ def map_chunks(fn: Callable, args: Sequence, *, jobs: int = 1, scheduler=None, d
             _map_on_processes(fn, args, jobs, one)
         event = {"kind": "map", "study": _CONTEXT["label"], "where": where, "submitted": submitted,
                  "returned": time.time(), "cpu_submitted": cpu, "cpu_returned": time.process_time(), "calls": times}
-        if getattr(_LANE, "key", None) is not None:  # one chain of drive(): its own thread's CPU clock
+        if lane:  # one chain of drive(): its own thread's CPU clock
             event.update(fan=_LANE.fan, lane=_LANE.key, priority=_LANE.priority, tcpu_submitted=tcpu,
                          tcpu_returned=time.thread_time())
         trace_event(event)

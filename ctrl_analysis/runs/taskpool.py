@@ -25,6 +25,7 @@ piece of work costs. This is what
 from __future__ import annotations
 
 import contextlib
+import heapq
 import json
 import os
 import signal
@@ -176,9 +177,7 @@ class _Feed:
     figure it sent) overtakes the calls still waiting."""
 
     def __init__(self, ex, depth: int):
-        import heapq
-
-        self._heapq, self._ex, self._depth = heapq, ex, depth
+        self._ex, self._depth = ex, depth
         self._waiting: list = []
         self._seq = self._busy = 0
         self._closed = False
@@ -188,7 +187,7 @@ class _Feed:
     def submit(self, priority, blob: bytes, done, dropped) -> None:
         """Queue ``blob``; ``done(future)`` when it has run (skipped once ``dropped`` is set)."""
         with self._cv:
-            self._heapq.heappush(self._waiting, (priority, self._seq, blob, done, dropped))
+            heapq.heappush(self._waiting, (priority, self._seq, blob, done, dropped))
             self._seq += 1
             self._cv.notify()
 
@@ -206,7 +205,7 @@ class _Feed:
                     self._cv.wait()
                 if self._closed:
                     return
-                _, _, blob, done, dropped = self._heapq.heappop(self._waiting)
+                _, _, blob, done, dropped = heapq.heappop(self._waiting)
                 if dropped.is_set():
                     continue
                 self._busy += 1
@@ -284,7 +283,7 @@ def shared_pool(jobs: int, *, here: bool = False):
                 msg = conn.recv()
             except (EOFError, OSError):
                 return
-            priority, blobs = msg if isinstance(msg, tuple) else (0, msg)
+            priority, blobs = msg  # map_on_pool sends (priority, calls)
             finished, dropped = queue.SimpleQueue(), threading.Event()
             for i, b in enumerate(blobs):
                 feed.submit(priority, b, lambda fut, i=i: finished.put((i, fut)), dropped)
@@ -328,12 +327,6 @@ def shared_pool(jobs: int, *, here: bool = False):
         feed.close()
         listener.close()
         _stop_workers(ex)
-
-
-def _completed(futures):
-    from concurrent.futures import as_completed
-
-    return as_completed(futures)
 
 
 def _sendable(exc: BaseException) -> BaseException:
