@@ -36,11 +36,12 @@ reported by :func:`compile_seconds`.
 
 from __future__ import annotations
 
+import contextlib
 import inspect
 import time
 from typing import NamedTuple
 
-from .jit import _JIT, _jit, _runner_module, cacheable
+from .jit import _JIT, _jit, _runner_module, cacheable, compile_lock
 from .kernels import Kernels
 
 __all__ = ["available", "compile_seconds", "compiled_runner", "kernel_of"]
@@ -413,7 +414,10 @@ def compiled_runner(plan, kernels: dict):
                          numba.intp[::1], i64, f64[:, :, :], f64[:, :, :], f64, numba.boolean[:], i64[:], i64[:],
                          numba.intp[::1],
                          *[f64[:, ::1] for b in blocks])
-        run = _compile(module.run, sig, cache=cacheable(fn for k, fn in fns.items() if k.startswith("K")))
+        cache = cacheable(fn for k, fn in fns.items() if k.startswith("K"))
+        # one process compiles a structure, the others load it from numba's cache once it is saved
+        with compile_lock(module.__file__ + ".lock") if cache else contextlib.nullcontext():
+            run = _compile(module.run, sig, cache=cache)
         _RUNNERS[key] = (run, time.perf_counter() - t0)
         _COMPILE["seconds"] += _RUNNERS[key][1]
     return _RUNNERS[key][0]

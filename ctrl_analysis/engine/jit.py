@@ -13,11 +13,13 @@ Nothing here knows a block, a loop or a kernel's meaning; numba is imported only
 
 from __future__ import annotations
 
+import contextlib
 import os
 import sys
+import time
 from pathlib import Path
 
-__all__ = ["cache_dir", "compiled_rows", "source_key"]
+__all__ = ["cache_dir", "compile_lock", "compiled_rows", "source_key"]
 
 _JIT: dict = {}
 
@@ -145,6 +147,62 @@ def cache_dir() -> Path:
     return Path(base) / "kernels"
 
 
+#: Longest wait, in seconds, for another process compiling the same generated code (:func:`compile_lock`);
+#: past it this process compiles the code itself.
+COMPILE_WAIT = 900.0
+
+
+@contextlib.contextmanager
+def compile_lock(path):
+    """Hold the lock file ``path`` while the block compiles: one process compiles, the others wait and load it.
+
+    Without it, a cold run on many cores compiles each loop structure once in every worker process
+    that receives one of its chunks at the same time (221 compilations of 10 structures in a cold
+    ``reproduce all --jobs 16``): each worker compiles the same code and writes the same cache.
+    With it the first process compiles and saves to numba's disk cache, and the others, once the
+    lock is free, load from it (their ``numba.njit(sig, cache=True)`` finds it). ``flock`` on a file
+    beside the generated source: the kernel releases it when its holder exits, even by ``kill -9``.
+    The lock is polled (no thread or process waits on it uninterruptibly) and given up after
+    :data:`COMPILE_WAIT` seconds; where ``flock`` or the file is not available the block runs
+    unlocked (compiling twice is wasteful, never wrong: numba's cache writes are atomic).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The lock file (created if needed, never removed).
+
+    Yields
+    ------
+    bool
+        Whether the lock is held.
+    """
+    try:
+        import fcntl
+    except ImportError:  # pragma: no cover - not POSIX
+        yield False
+        return
+    try:
+        fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+    except OSError:
+        yield False
+        return
+    try:
+        deadline, delay, held = time.monotonic() + COMPILE_WAIT, 0.005, False
+        while True:
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                held = True
+                break
+            except BlockingIOError:
+                if time.monotonic() > deadline:
+                    break
+                time.sleep(delay)
+                delay = min(2 * delay, 0.1)
+        yield held
+    finally:
+        os.close(fd)  # releases the lock
+
+
 def _runner_module(src: str, fns: dict, prefix: str = "loop", extra: str = ""):
     """Import generated source from a file named by its hash, so numba can cache what it compiles from it.
 
@@ -215,5 +273,19 @@ def compiled_rows(fn):
         module = _runner_module(_ROWS_SOURCE, {"FN": fn}, prefix="rows")
         module.FN = _jit(fn)
         rows = numba.njit(cache=cacheable([fn]), error_model="numpy")(module.rows)
-        _JIT[key] = rows
+        _JIT[key] = _LockedFirstCall(rows, module.__file__ + ".lock") if cacheable([fn]) else rows
     return _JIT[key]
+
+
+class _LockedFirstCall:
+    """A lazily compiled dispatcher whose compiling calls hold :func:`compile_lock` (one process compiles, the
+    others load from numba's cache); once this process has a compiled version, calls go straight to it."""
+
+    def __init__(self, dispatcher, lock):
+        self.dispatcher, self.lock = dispatcher, lock
+
+    def __call__(self, *args):
+        if not self.dispatcher.signatures:
+            with compile_lock(self.lock):
+                return self.dispatcher(*args)
+        return self.dispatcher(*args)

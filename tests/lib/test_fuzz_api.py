@@ -1030,6 +1030,8 @@ NOT_FUZZED = {
     engine_jit.cache_dir: "takes no arguments (reads $CTRL_ANALYSIS_CACHE)",
     engine_jit.compiled_rows: "engine plumbing: KernelBlock.batched gives it the block's own kernel",
     engine_jit.source_key: "engine plumbing: the runner cache gives it the loop's kernels",
+    engine_jit.compile_lock: "engine plumbing: the runner cache gives it the lock file beside a generated runner; "
+                             "an unusable path runs unlocked (tests/lib/test_compile_lock.py)",
     pid.pid_output: "per-step kernel, unchecked by design",
     integrators.is_bad: "per-step divergence test, unchecked by design",
     numpy_engine.run_numpy: "internal half of Loop.simulate(execution=Execution(engine='numpy')), whose arguments "
