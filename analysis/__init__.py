@@ -33,12 +33,14 @@ STUDIES = {
 #: A study that reduces its runs chunk by chunk is measured past its chunk (``POINTS_FOR`` of that script):
 #: ikf-mfac (``analysis.ikf_mfac.quantities.TABLE_CHUNK`` = 2000 runs; 2026-11-28) added 270 and 296 MB at
 #: --quick 2000 and 20000 runs, 291 and 294 MB at 2000 and 8000 full runs: its base is the chunk's peak, its
-#: slope the per-run values it keeps (1.5 and 0.5 kB).
+#: slope the per-run values it keeps (1.5 and 0.5 kB). meso (``analysis.meso.loops.ROWS_PER_PART`` = 64 rows, 3 a
+#: run; 2026-11-28) measured at 100 and 1000 --quick runs, 30 and 300 full runs: 11 and 95 kB a run (was 1.6 and
+#: 4.2 MB, its noise and signals held for every row at once).
 MEMORY = {
     "ikf-mfac": {"quick": (280087520, 1514), "full": (304087616, 524)},
     "ckf": {"quick": (69324800, 3090432), "full": (154439680, 9568256)},
     "differential-estimator": {"quick": (87115366, 581468), "full": (382555750, 4312760)},
-    "meso": {"quick": (90019840, 1596416), "full": (202696499, 4156252)},
+    "meso": {"quick": (97652280, 11104), "full": (242845468, 95239)},
     "pendulum": {"quick": (111208243, 965652), "full": (182757990, 2386616)},
 }
 

@@ -149,6 +149,11 @@ _KEPT = ("x[0]", "x[1]", "xhat[0]", "xhat[1]", "xhat[2]", "u", "theta[0]", "thet
 _PARALLEL_RUN_STEPS = 1e6
 #: the signals the chunk post-processing reads (errors, x3, kept runs, exact identifiability)
 _STORED = _KEPT + ("level",)
+#: Most rows simulated together in one process. A part holds its rows' noise over the whole horizon and a
+#: batch of their signals (about 2.6 MB a row in situation 2); what it returns is the per-row reductions and
+#: batch-end records (about 2 kB a row), so memory is bounded by the part, not by ``--runs``. Rows are
+#: independent runs: any split gives the same numbers bit for bit (``tests/studies/test_meso.py``).
+ROWS_PER_PART = 64
 
 
 def simulate_situation(sit: Situation, rows, T: float, paper: Paper = PAPER, window=(5.0, 10.0),
@@ -194,7 +199,22 @@ def simulate_situation(sit: Situation, rows, T: float, paper: Paper = PAPER, win
         if progress is not None:
             progress(f"{sit.key}: t = {T:.0f} / {T:.0f} s")
         return _join(outs, parts, rows)
-    return _simulate_rows(sit, rows, T, paper, window, keep, exact, bound, progress)
+    return _simulate_bounded(sit, rows, T, paper, window, keep, exact, bound, progress)
+
+
+def _simulate_bounded(sit, rows, T, paper, window, keep, exact, bound, progress) -> SituationRun:
+    """:func:`_simulate_rows` over consecutive parts of at most :data:`ROWS_PER_PART` rows, joined."""
+    if len(rows) <= ROWS_PER_PART:
+        return _simulate_rows(sit, rows, T, paper, window, keep, exact, bound, progress)
+    parts = chunk_slices(len(rows), chunk_size=ROWS_PER_PART)
+    outs = []
+    for i, sl in enumerate(parts):
+        said = None if progress is None else (
+            lambda msg, i=i: progress(f"{msg} (rows part {i + 1} of {len(parts)})"))
+        outs.append(_simulate_rows(sit, rows[sl], T, paper, window,
+                                   [b - sl.start for b in keep if sl.start <= b < sl.stop],
+                                   [b - sl.start for b in exact if sl.start <= b < sl.stop], bound, said))
+    return _join(outs, parts, rows)
 
 
 def _simulate_rows(sit, rows, T, paper, window, keep, exact, bound, progress) -> SituationRun:
@@ -318,7 +338,7 @@ def _end_batch(out, states, ident, configs, chunk_diverged, k: int, bound: float
 
 def _simulate_part(task) -> SituationRun:
     """:func:`simulate_situation` of one part of the rows (a worker's task)."""
-    return _simulate_rows(*task, None)
+    return _simulate_bounded(*task, None)
 
 
 def _join(outs, parts, rows) -> SituationRun:

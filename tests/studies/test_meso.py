@@ -491,3 +491,28 @@ def test_rows_split_over_processes_join_bit_for_bit(monkeypatch):
         assert np.array_equal(getattr(a, f), getattr(b, f), equal_nan=True), f
     assert all(np.array_equal(a.keep[k]["xhat[2]"], b.keep[k]["xhat[2]"]) for k in a.keep)
     assert all(np.array_equal(a.exact_cond[k], b.exact_cond[k], equal_nan=True) for k in a.exact_cond)
+
+
+@pytest.mark.parametrize("jobs", [1, 2])
+def test_rows_in_parts_of_bounded_size_join_bit_for_bit(monkeypatch, jobs):
+    """Rows simulated in parts of ROWS_PER_PART (memory bounded by the part, not --runs) equal one batch bit for bit,
+    their kept trajectories and exact records renumbered, in one process and split over processes too."""
+    from analysis.meso import loops
+
+    monkeypatch.setattr(loops, "_PARALLEL_RUN_STEPS", 0)
+    rows = [Row("meso", "wellposed", None), Row("eso", "none", 5), Row("meso", "literal", None),
+            Row("meso", "wellposed", 5, epsilon=0.1), Row("meso", "no_const", None)]
+    kw = dict(keep=[0, 3], exact=[0, 2, 4])
+    a = simulate_situation(SITUATIONS["s1"], rows, 6.0, **kw)
+    monkeypatch.setattr(loops, "ROWS_PER_PART", 2)
+    seen = []
+    b = simulate_situation(SITUATIONS["s1"], rows, 6.0, jobs=jobs, progress=seen.append, **kw)
+    assert b.rows == rows and sorted(b.keep) == [0, 3] and sorted(b.exact_cond) == [0, 2, 4]
+    if jobs == 1:
+        assert any("rows part 3 of 3" in s for s in seen), seen
+    for m in a.sums:
+        assert np.array_equal(a.sums[m], b.sums[m]) and np.array_equal(a.window_sums[m], b.window_sums[m])
+    for f in ("theta_batch", "log10_cond", "rank", "sup_dx3", "diverged", "t_batch", "full_solved"):
+        assert np.array_equal(getattr(a, f), getattr(b, f), equal_nan=True), f
+    assert all(np.array_equal(a.keep[k][s], b.keep[k][s], equal_nan=True) for k in a.keep for s in a.keep[k])
+    assert all(np.array_equal(a.exact_cond[k], b.exact_cond[k], equal_nan=True) for k in a.exact_cond)
