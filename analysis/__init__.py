@@ -29,19 +29,23 @@ STUDIES = {
 #: (2026-11-24, 2-core machine): the peak resident size (ru_maxrss) each study adds to its process, run in
 #: one process at 10 and 210 runs (--quick) and 5 and 105 runs (full); per run = difference / runs added,
 #: base = the rest. A study that keeps its runs' traces grows linearly in --runs. Check:
-#: pendulum --quick --runs 1500 --jobs 1 was estimated at 1.79 GB (with the CLI's 223 MiB) and peaked at 1.82 GB.
+#: pendulum --quick --runs 1500 --jobs 1 was estimated at 1.79 GB (with the CLI's 223 MiB) and peaked at 1.82 GB
+#: before it reduced its runs part by part; now it is estimated at 617 MB and peaks at 395 MB (20 000 runs: 402 MB).
 #: A study that reduces its runs chunk by chunk is measured past its chunk (``POINTS_FOR`` of that script):
 #: ikf-mfac (``analysis.ikf_mfac.quantities.TABLE_CHUNK`` = 2000 runs; 2026-11-28) added 270 and 296 MB at
 #: --quick 2000 and 20000 runs, 291 and 294 MB at 2000 and 8000 full runs: its base is the chunk's peak, its
 #: slope the per-run values it keeps (1.5 and 0.5 kB). meso (``analysis.meso.loops.ROWS_PER_PART`` = 64 rows, 3 a
 #: run; 2026-11-28) measured at 100 and 1000 --quick runs, 30 and 300 full runs: 11 and 95 kB a run (was 1.6 and
-#: 4.2 MB, its noise and signals held for every row at once).
+#: 4.2 MB, its noise and signals held for every row at once). pendulum keeps every run's traces up to
+#: ``analysis.pendulum.loops.RUNS_PER_PART`` = 256 runs and reduces parts of at most that many above: its base is the
+#: peak at 256 runs (360 MB --quick, 699 MB full), its slope what it keeps per run past the part (15 and 0.7 kB,
+#: measured at 300 and 3000 --quick runs, 300 and 900 full; was 0.97 and 2.4 MB a run at every run count).
 MEMORY = {
     "ikf-mfac": {"quick": (280087520, 1514), "full": (304087616, 524)},
     "ckf": {"quick": (69324800, 3090432), "full": (154439680, 9568256)},
     "differential-estimator": {"quick": (87115366, 581468), "full": (382555750, 4312760)},
     "meso": {"quick": (97652280, 11104), "full": (242845468, 95239)},
-    "pendulum": {"quick": (111208243, 965652), "full": (182757990, 2386616)},
+    "pendulum": {"quick": (359657472, 15067), "full": (698535936, 703)},
 }
 
 

@@ -20,11 +20,13 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 POINTS = {"quick": (10, 210), "full": (5, 105)}
 #: A study that reduces its runs chunk by chunk is measured past its chunk (ikf-mfac's TABLE_CHUNK, 2000 runs;
-#: meso's ROWS_PER_PART), where only what it keeps per run still grows; below the chunk its peak is at most the
-#: first point's.
+#: meso's ROWS_PER_PART, pendulum's RUNS_PER_PART), where only what it keeps per run still grows; below the chunk
+#: its peak is at most the first point's.
 POINTS_FOR = {"ikf-mfac": {"quick": (2000, 20000), "full": (2000, 8000)},
               # meso simulates at most analysis.meso.loops.ROWS_PER_PART rows (3 per run) at a time
-              "meso": {"quick": (100, 1000), "full": (30, 300)}}
+              "meso": {"quick": (100, 1000), "full": (30, 300)},
+              # pendulum reduces a case's runs analysis.pendulum.loops.RUNS_PER_PART at a time above that many
+              "pendulum": {"quick": (256, 3000), "full": (256, 900)}}
 
 CHILD = """
 import json, resource, sys, tempfile, warnings

@@ -6,6 +6,8 @@ import numpy as np
 
 from ctrl_analysis.reporting.report import new_figure
 
+from .regimes import phi_band
+
 __all__ = [
     "plot_beyond",
     "plot_control_surface",
@@ -223,14 +225,13 @@ def plot_fig4_output(regimes: dict, step: float, run: int = 0):
         dev = 0.0
         for c, (title, cr) in enumerate(cases.items()):
             r = cr.noisy
-            ok = ~r.diverged
-            mean, std = np.mean(r.phi[:, ok], axis=1), np.std(r.phi[:, ok], axis=1)
+            mean, std, n_ok = phi_band(r)
             late = r.t >= 0.5
             dev = max(dev, float(np.max(np.abs(r.phi[late, run] - step))))
             for ax in axes[2 * i:2 * i + 2, c]:
                 ax.fill_between(r.t, mean - std, mean + std, color="C0", alpha=0.25, label="± 1 std over runs")
                 ax.plot(r.t, r.phi[:, run], color="C1", lw=0.6, label=f"run {run}")
-                ax.plot(r.t, mean, color="C0", lw=1.6, label=f"mean over {int(ok.sum())} runs")
+                ax.plot(r.t, mean, color="C0", lw=1.6, label=f"mean over {n_ok} runs")
                 ax.plot(cr.quiet.t, cr.quiet.phi[:, 0], color="k", lw=1.0, ls="--", label="noise-free")
                 ax.axhline(step, color="0.3", ls=":", lw=0.8, label="reference r = 0.1 rad")
             if i == 0:

@@ -45,6 +45,8 @@ __all__ = [
     "LITERAL_CASES",
     "CaseRuns",
     "ClosedLoopRun",
+    "RUNS_PER_PART",
+    "StreamedRuns",
     "build_filter",
     "build_loop",
     "compute_regime",
@@ -249,19 +251,75 @@ def case_kind(name: str, p):
     return (filter_kind(p) if kind == "alpha-beta" else kind), nonlinear
 
 
+#: Most Monte Carlo runs of one case simulated together. Up to this many, a case keeps every run's traces (the
+#: default 100 runs do); above it the runs are simulated in consecutive parts and each part is reduced to its
+#: runs' metrics and a running mean and variance of φ (:class:`StreamedRuns`), so memory is bounded by the part
+#: (about 0.25 MB a run a case), not by ``--runs``.
+RUNS_PER_PART = 256
+
+
+@dataclass
+class StreamedRuns(ClosedLoopRun):
+    """A case's Monte Carlo runs reduced part by part (:func:`compute_regime` above :data:`RUNS_PER_PART` runs).
+
+    ``diverged`` and ``diverged_step`` cover every run; the trace fields hold run 0 only (what the figures
+    draw), so code that reads every run's trace fails on the shape instead of reading part of the runs.
+    ``per_run`` holds :func:`~.regimes.case_metrics`' per-run metrics of every run; ``phi_moments`` the mean and
+    variance of φ per sample over the runs that did not diverge (:class:`ctrl_analysis.streaming.Moments`).
+    """
+
+    per_run: dict | None = None
+    phi_moments: object = None
+
+
 def compute_regime(p, a21: float, seeds, cases=tuple(CASES)) -> dict:
     """``{case: CaseRuns}``: each case over ``seeds`` (same noise in every case) and noise-free.
 
     The noise-free run rides in the same batch as one more run with zero noise (runs are independent and
-    bit-identical to single runs, so this is the separate noise-free simulation at half the calls).
+    bit-identical to single runs, so this is the separate noise-free simulation at half the calls). Above
+    :data:`RUNS_PER_PART` runs a case's runs are simulated part by part and kept as :class:`StreamedRuns`.
     """
     out = {}
+    seeds = list(seeds)
     for name in cases:
         kind, nonlinear = case_kind(name, p)
+        if len(seeds) > RUNS_PER_PART:
+            out[name] = _streamed_case(p, a21, seeds, kind, nonlinear)
+            continue
         both = simulate_case(p, a21, seeds, filter_kind=kind, nonlinear=nonlinear, noise_free_extra=True)
         B = len(seeds)
         out[name] = CaseRuns(_take(both, slice(0, B)), _take(both, slice(B, B + 1)))
     return out
+
+
+def _streamed_case(p, a21, seeds, kind, nonlinear) -> CaseRuns:
+    """One case's runs in consecutive parts of at most :data:`RUNS_PER_PART`, each reduced as it ends."""
+    from ctrl_analysis.runs.parallel import chunk_slices
+    from ctrl_analysis.streaming import Moments
+
+    from .regimes import PER_RUN, case_metrics
+
+    per_run, moments, div, step, first, quiet = {}, Moments(), [], [], None, None
+    for i, sl in enumerate(chunk_slices(len(seeds), chunks=-(-len(seeds) // RUNS_PER_PART))):
+        B = sl.stop - sl.start
+        run = simulate_case(p, a21, seeds[sl], filter_kind=kind, nonlinear=nonlinear, noise_free_extra=i == 0)
+        if i == 0:  # copies: a view would keep the whole part's traces alive
+            quiet = _copy(_take(run, slice(B, B + 1)))
+            run = _take(run, slice(0, B))
+            first = _copy(_take(run, slice(0, 1)))
+        for k, v in case_metrics(CaseRuns(run, quiet), p, PER_RUN).items():
+            per_run.setdefault(k, []).append(v)
+        moments.add(run.phi.T, exclude=run.diverged)
+        div.append(run.diverged)
+        step.append(run.diverged_step)
+    noisy = StreamedRuns(**{**first.__dict__, "diverged": np.concatenate(div), "diverged_step": np.concatenate(step)},
+                         per_run={k: np.concatenate(v) for k, v in per_run.items()}, phi_moments=moments)
+    return CaseRuns(noisy, quiet)
+
+
+def _copy(run: ClosedLoopRun) -> ClosedLoopRun:
+    """``run`` with its own copy of every array (not views of a larger batch)."""
+    return ClosedLoopRun(**{f: (None if v is None else np.array(v)) for f, v in run.__dict__.items()})
 
 
 def _take(run: ClosedLoopRun, idx) -> ClosedLoopRun:

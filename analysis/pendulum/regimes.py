@@ -16,8 +16,9 @@ import numpy as np
 from ctrl_analysis import metrics
 from ctrl_analysis.reporting.report import StudyResult
 
-__all__ = ["METRICS", "PAIRED", "PAIRED_LITERAL", "SINGLE", "Paired", "case_label", "case_metrics", "case_stats", "cid",
-           "paired_changes", "qid", "record_comparisons", "record_regime", "regime_label"]
+__all__ = ["METRICS", "PAIRED", "PAIRED_LITERAL", "PER_RUN", "SINGLE", "Paired", "case_label", "case_metrics",
+           "case_stats", "cid", "paired_changes", "phi_band", "qid", "record_comparisons", "record_regime",
+           "regime_label"]
 
 
 #: quantity -> (label, unit); per-run metrics are mean ± std over the healthy runs, the others single values
@@ -124,6 +125,31 @@ def _peak_over_final(phi, final) -> np.ndarray:
         return np.maximum(np.max(phi, axis=0) / final - 1.0, 0.0) * 100.0
 
 
+def phi_band(run):
+    """Mean and standard deviation of φ per sample over the runs that did not diverge, and their number.
+
+    Parameters
+    ----------
+    run : loops.ClosedLoopRun or loops.StreamedRuns
+        A case's runs; for runs reduced part by part, from their running moments.
+
+    Returns
+    -------
+    mean, std : numpy.ndarray
+    n : int
+    """
+    m = getattr(run, "phi_moments", None)
+    if m is not None:
+        return m.mean, m.std(), int(m.count)
+    ok = ~run.diverged
+    return np.mean(run.phi[:, ok], axis=1), np.std(run.phi[:, ok], axis=1), int(ok.sum())
+
+
+#: The metrics of :func:`case_metrics` that are one value per run (the others are one value per case).
+PER_RUN = ("overshoot", "overshoot_noise_only", "settling_time", "angle_rms", "accel_rms", "chatter", "sat_e", "sat_ec",
+           "angle_input_error", "rate_input_error", "steady_offset")
+
+
 def case_metrics(c, p, keys=None) -> dict:
     """Metrics of one case (:class:`~.loops.CaseRuns`): per-run arrays (NaN where a run diverged) and single values.
 
@@ -151,16 +177,20 @@ def case_metrics(c, p, keys=None) -> dict:
         "steady_offset": lambda: final_run - p.step,
     }
     m = {}
+    streamed = getattr(run, "per_run", None)  # runs reduced part by part (loops.StreamedRuns): metrics kept
     with np.errstate(all="ignore"):
-        final_run = np.mean(run.phi[ss], axis=0)  # each run's own final value (the loop has a steady offset)
+        final_run = None if streamed is not None else np.mean(run.phi[ss], axis=0)  # each run's own final value
         for k, f in per_run.items():
             if k in keys or (k == "settling_time" and "settled_share" in keys):
-                m[k] = np.where(ok, f(), np.nan)
+                m[k] = streamed[k] if streamed is not None else np.where(ok, f(), np.nan)
         quiet_ok = not quiet.diverged[0]
         if "settled_share" in keys:
             m["settled_share"] = float(np.mean(np.isfinite(m["settling_time"][ok]))) if ok.any() else None
         if keys & {"overshoot_mean_response", "overshoot_mean_response_floor", "settling_time_mean"}:
-            mean_phi = np.mean(run.phi[:, ok], axis=1) if ok.any() else np.full(run.t.size, np.nan)
+            if streamed is not None:
+                mean_phi = run.phi_moments.mean if ok.any() else np.full(run.t.size, np.nan)
+            else:
+                mean_phi = np.mean(run.phi[:, ok], axis=1) if ok.any() else np.full(run.t.size, np.nan)
             final = float(np.mean(mean_phi[ss]))  # the mean response's own final value
             m["overshoot_mean_response"] = (float(metrics.overshoot(run.t[tr], mean_phi[tr], final))
                                             if ok.any() else None)

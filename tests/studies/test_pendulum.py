@@ -368,3 +368,34 @@ def test_kf_initial_covariance_does_not_reach_the_steady_window():
         ss = r.t >= p.t_ss
         rms.append(np.sqrt(np.mean((r.phi[ss] - p.step) ** 2, axis=0)))
     np.testing.assert_allclose(rms[0], rms[1], rtol=1e-8)
+
+
+def test_runs_reduced_part_by_part_equal_the_whole_batch(monkeypatch):
+    """Above RUNS_PER_PART a case's runs are reduced part by part (memory bounded by the part): every per-run metric
+    and divergence equals the whole batch's bit for bit, the mean-response metrics and the φ band to rounding."""
+    p = dataclasses.replace(L, t_end=2.0, t_ss=1.5)  # the paper's continuous filter diverges in 9 of the 10 runs
+    seeds = list(range(1, 11))
+    whole = loops.compute_regime(p, V.a21, seeds, ("nofilter", "paper_continuous"))
+    monkeypatch.setattr(loops, "RUNS_PER_PART", 4)
+    parts = loops.compute_regime(p, V.a21, seeds, ("nofilter", "paper_continuous"))
+    for name in whole:
+        a, b = whole[name], parts[name]
+        assert isinstance(b.noisy, loops.StreamedRuns) and b.noisy.phi.shape[1] == 1
+        np.testing.assert_array_equal(a.noisy.diverged, b.noisy.diverged)
+        np.testing.assert_array_equal(a.noisy.diverged_step, b.noisy.diverged_step)
+        np.testing.assert_array_equal(a.noisy.phi[:, 0], b.noisy.phi[:, 0])  # run 0, what the figures draw
+        np.testing.assert_array_equal(a.quiet.phi, b.quiet.phi)
+        ma, mb = regimes.case_metrics(a, p), regimes.case_metrics(b, p)
+        assert ma.keys() == mb.keys()
+        for k in ma:
+            if k in regimes.PER_RUN:
+                np.testing.assert_array_equal(ma[k], mb[k], err_msg=f"{name} {k}")
+            elif ma[k] is None:
+                assert mb[k] is None, (name, k)
+            else:
+                assert mb[k] == pytest.approx(ma[k], rel=1e-12, nan_ok=True), (name, k)
+        (m1, s1, n1), (m2, s2, n2) = regimes.phi_band(a.noisy), regimes.phi_band(b.noisy)
+        assert n1 == n2 == int((~a.noisy.diverged).sum())
+        np.testing.assert_allclose(m2, m1, rtol=1e-12, atol=1e-15)
+        np.testing.assert_allclose(s2, s1, rtol=1e-9, atol=1e-15)
+    assert parts["paper_continuous"].noisy.diverged.any()  # the part-wise path saw diverged runs too
