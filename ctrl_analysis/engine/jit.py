@@ -166,6 +166,11 @@ def compile_lock(path):
     :data:`COMPILE_WAIT` seconds; where ``flock`` or the file is not available the block runs
     unlocked (compiling twice is wasteful, never wrong: numba's cache writes are atomic).
 
+    Loading a cached runner takes about 0.2 s, so warm workers must not queue on the lock: once a
+    block ends without error while holding it, a marker file is written beside it (:func:`_marker`:
+    named by numba's cache folder, version and this CPU, what numba's cache is specific to), and a
+    later block with the marker present runs at once, unlocked, and loads.
+
     Parameters
     ----------
     path : str or os.PathLike
@@ -174,11 +179,15 @@ def compile_lock(path):
     Yields
     ------
     bool
-        Whether the lock is held.
+        Whether the lock is held (``False`` too when the marker says the code is compiled already).
     """
     try:
         import fcntl
     except ImportError:  # pragma: no cover - not POSIX
+        yield False
+        return
+    marker = _marker(path)
+    if os.path.exists(marker):
         yield False
         return
     try:
@@ -199,8 +208,25 @@ def compile_lock(path):
                 time.sleep(delay)
                 delay = min(2 * delay, 0.1)
         yield held
+        if held:  # the block compiled (or loaded) it without error: later blocks need not wait
+            with contextlib.suppress(OSError):
+                open(marker, "a").close()
     finally:
         os.close(fd)  # releases the lock
+
+
+def _marker(path) -> str:
+    """The file saying that the code locked by ``path`` is in numba's disk cache for this machine's CPU."""
+    import hashlib
+
+    import llvmlite.binding as llvm
+    import numba
+    from numba.core import config
+
+    if "HOST" not in _JIT:
+        _JIT["HOST"] = hashlib.sha1(f"{config.CACHE_DIR}|{numba.__version__}|{llvm.get_host_cpu_name()}|"
+                                    f"{llvm.get_host_cpu_features().flatten()}".encode()).hexdigest()[:12]
+    return f"{path}.{_JIT['HOST']}.done"
 
 
 def _runner_module(src: str, fns: dict, prefix: str = "loop", extra: str = ""):

@@ -11,6 +11,7 @@ import sys
 import threading
 import time
 
+import pytest
 from hang import limit
 
 from ctrl_analysis.engine import jit
@@ -49,6 +50,36 @@ def test_a_wait_longer_than_compile_wait_gives_up_and_runs_unlocked(tmp_path, mo
         t.start()
         t.join(limit(10))
         assert out == {"held": False}
+
+
+def test_once_compiled_a_block_runs_at_once_without_waiting_for_the_lock(tmp_path):
+    """A block that ended without error leaves a marker; later blocks (warm workers loading from the cache) do not
+    queue on the lock, even while another process holds it. A block that failed leaves none."""
+    path = str(tmp_path / "x.lock")
+    with pytest.raises(RuntimeError), jit.compile_lock(path) as held:
+        assert held
+        raise RuntimeError("numba could not compile it")
+    assert not os.path.exists(jit._marker(path))
+    with jit.compile_lock(path) as held:
+        assert held
+    assert os.path.exists(jit._marker(path))
+    got = {}
+
+    def later():
+        with jit.compile_lock(path) as held:
+            got["held"] = held
+
+    import fcntl
+
+    fd = os.open(path, os.O_RDWR)
+    fcntl.flock(fd, fcntl.LOCK_EX)  # as if another process held it now
+    try:
+        t = threading.Thread(target=later)
+        t.start()
+        t.join(limit(10))
+        assert got == {"held": False}  # ran at once, unlocked: it loads what is cached
+    finally:
+        os.close(fd)
 
 
 def test_an_unwritable_lock_file_runs_the_block_unlocked(tmp_path):
