@@ -165,15 +165,15 @@ def _example1(ctx, result, p, runs):
     trade = example1.fair_comparison(result, p, d)
     example1.n0_sweep(result, p, d)
     example1.eso_divergence(result, p, seeds)
-    b = int(np.flatnonzero(d["ok"])[0]) if d["ok"].any() else 0
-    t, s = p.h * np.arange(d["sig"]["x[0]"].shape[0]), d["sig"]
-    ctx.save_figure(result, figures.plot_x2(t, s["x[1]"][:, b], s["sig[1]"][:, b], f"Fig. 3 — Example 1: x2 and Σ's "
+    b, s = example1.shown_run(d)
+    t = p.h * np.arange(s["x[1]"].shape[0])
+    ctx.save_figure(result, figures.plot_x2(t, s["x[1]"], s["sig[1]"], f"Fig. 3 — Example 1: x2 and Σ's "
                     f"estimate z2 (n0 = {p.n0}, a = {p.a:g}; seed {seeds[b]})", r"$\hat x_2 = z_2$ (Σ)"),
                     "fig3_sigma_x2.png",
                     caption="Redraws the paper's Fig. 3 (Example 1): the true x2 and Σ's estimate z2 (state reading) "
                             "in one run, the error, and a 0.5 s zoom; its mean error over the runs is the §4 Example "
                             "1 Σ |ε̄2| cell.")
-    ctx.save_figure(result, figures.plot_x2(t, s["x[1]"][:, b], s["eso[0][1]"][:, b], f"Fig. 4 — Example 1: x2 and "
+    ctx.save_figure(result, figures.plot_x2(t, s["x[1]"], s["eso[0][1]"], f"Fig. 4 — Example 1: x2 and "
                     f"Han's nonlinear ESO estimate (textbook gains; seed {seeds[b]})", r"$\hat x_2$ (ESO)"),
                     "fig4_eso_x2.png",
                     caption="Redraws the paper's Fig. 4 (Example 1): the true x2 and the estimate of Han's nonlinear "

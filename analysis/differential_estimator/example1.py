@@ -20,12 +20,13 @@ from ctrl_analysis.estimators.eso import ExtendedStateObserver
 from ctrl_analysis.metrics import mean_abs_error, mean_std
 from ctrl_analysis.noise import draw_noise, uniform_noise
 from ctrl_analysis.reporting.report import StudyResult
+from ctrl_analysis.runs.parallel import chunk_slices
 
 from . import loops
 from .paper import Example1
 
-__all__ = ["draw", "ex1_cell", "sigma_bandwidth", "quantity_ms", "linearised_eso", "eso_bandwidth",
-           "equal_bandwidth_tuning", "simulate",
+__all__ = ["RUNS_PER_PART", "draw", "ex1_cell", "sigma_bandwidth", "quantity_ms", "linearised_eso", "eso_bandwidth",
+           "equal_bandwidth_tuning", "simulate", "shown_run",
            "main_quantities", "sensitivities", "fair_comparison", "n0_sweep", "eso_divergence"]
 
 
@@ -107,8 +108,32 @@ def sigma_bandwidth(n0: int, a: float) -> float:
     return float(ct.bandwidth(DifferentialEstimator(n0, a).tf))
 
 
+#: Most Monte Carlo runs simulated together. Up to this many (the default 100) :func:`simulate` keeps every run's
+#: traces; above it the runs are simulated in parts of at most this many, each reduced as it ends to what the
+#: quantities read per run (:func:`_reduced`), so memory is bounded by the part, not by ``--runs``.
+RUNS_PER_PART = 128
+#: The signals of the run Fig. 3-4 draw (:func:`shown_run`).
+SHOWN = ("x[1]", "sig[1]", "eso[0][1]")
+
+
 def simulate(p: Example1, seeds) -> dict:
-    """Plant + Σ + Han's ESO (textbook) + Han's ESO at Σ's bandwidth, one batch; errors per run."""
+    """Plant + Σ + Han's ESO (textbook) + Han's ESO at Σ's bandwidth; errors per run.
+
+    Up to :data:`RUNS_PER_PART` runs, one batch whose traces are kept (``sig``, ``noise``). Above it, parts
+    of at most that many runs, each reduced to its runs' errors, the Euler and half-step re-simulations'
+    errors and the linear path's errors of every swept estimator, and joined (``per_run``; the traces of
+    one run for the figures, :func:`shown_run`): every quantity reads the same per-run values either way.
+    """
+    seeds = list(seeds)
+    if len(seeds) <= RUNS_PER_PART:
+        return _simulate_batch(p, seeds)
+    parts = [(sl, _reduced(p, _simulate_batch(p, seeds[sl])))
+             for sl in chunk_slices(len(seeds), chunk_size=RUNS_PER_PART)]
+    return _joined(parts, seeds)
+
+
+def _simulate_batch(p: Example1, seeds) -> dict:
+    """:func:`simulate` of one batch, every run's traces kept."""
     est = DifferentialEstimator(p.n0, p.a)
     bw = sigma_bandwidth(p.n0, p.a)
     tune = equal_bandwidth_tuning(p, bw)
@@ -129,6 +154,55 @@ def simulate(p: Example1, seeds) -> dict:
               for j, k in enumerate(("eso", "eso_fal_eq"))}}
     return {"sig": sig, "noise": noise, "ok": ~div, "diverged": div, "step": step, "err": err, "bw_sigma": bw,
             "tune": tune, "seeds": list(seeds)}
+
+
+#: The linear-path evaluations a reduced part keeps (every one the study records).
+_LINEAR_KEYS = (("fair", True), "tradeoff", ("n0", "fixed_a", (2, 3, 4, 5, 6, 7, 8)),
+                ("n0", "equal_bw", (2, 3, 4, 5, 6, 7, 8)))
+
+
+def _reduced(p: Example1, d: dict) -> dict:
+    """One part of the runs reduced to what the quantities read per run, and the traces of its first healthy run."""
+    ok = np.flatnonzero(d["ok"])
+    b = int(ok[0]) if ok.size else 0
+    return {"ok": d["ok"], "diverged": d["diverged"], "step": d["step"], "err": d["err"], "bw_sigma": d["bw_sigma"],
+            "tune": d["tune"], "euler": _euler_errors(p, d), "half": _half_step_errors(p, d),
+            "linear": {key: _linear_errors(p, d, key) for key in _LINEAR_KEYS},
+            "shown": (b, bool(ok.size), {s: d["sig"][s][:, b].copy() for s in SHOWN})}
+
+
+def _joined(parts, seeds) -> dict:
+    """The reduced parts ``[(slice, part), ...]`` as one run set, in the order of ``seeds``."""
+    first = parts[0][1]
+
+    def cat(get):
+        return np.concatenate([get(r) for _, r in parts])
+
+    shown = next(((sl.start + r["shown"][0], r["shown"][2]) for sl, r in parts if r["shown"][1]),
+                 (0, first["shown"][2]))
+    per_run = {"euler": {k: cat(lambda r, k=k: r["euler"][k]) for k in first["euler"]},
+               "half": {k: cat(lambda r, k=k: r["half"][k]) for k in first["half"]},
+               "linear": {key: [cat(lambda r, key=key, j=j: r["linear"][key][j]) for j in range(len(errs))]
+                          for key, errs in first["linear"].items()},
+               "shown": shown}
+    return {"ok": cat(lambda r: r["ok"]), "diverged": cat(lambda r: r["diverged"]), "step": cat(lambda r: r["step"]),
+            "err": {k: cat(lambda r, k=k: r["err"][k]) for k in first["err"]}, "bw_sigma": first["bw_sigma"],
+            "tune": first["tune"], "seeds": list(seeds), "per_run": per_run}
+
+
+def shown_run(d: dict) -> tuple:
+    """The run Fig. 3-4 draw (the first that did not diverge, else run 0) and its traces of :data:`SHOWN`.
+
+    Returns
+    -------
+    b : int
+    traces : dict of str -> numpy.ndarray
+        ``(N + 1,)`` each.
+    """
+    if "per_run" in d:
+        return d["per_run"]["shown"]
+    b = int(np.flatnonzero(d["ok"])[0]) if d["ok"].any() else 0
+    return b, {s: d["sig"][s][:, b] for s in SHOWN}
 
 
 def main_quantities(result: StudyResult, p: Example1, d: dict) -> None:
@@ -191,12 +265,9 @@ def main_quantities(result: StudyResult, p: Example1, d: dict) -> None:
 
 def sensitivities(result: StudyResult, p: Example1, d: dict) -> None:
     """Euler instead of RK4 (same noise), and a halved step over the first ``p.t_sens`` s; finding ``ex1-step-size``."""
-    seeds, noise, err, ok = d["seeds"], d["noise"], d["err"], d["ok"]
-    sig, div_e, _ = loops.simulate_example1(p, seeds, noise, method="euler")
-    x = np.stack([sig["x[0]"][:-1], sig["x[1]"][:-1]], axis=2)
-    err_e = {"sigma": mean_abs_error(x, np.stack([sig["sig[0]"][:-1], sig["sig[1]"][:-1]], axis=2)),
-             "eso": mean_abs_error(x, np.stack([sig["eso[0][0]"][:-1], sig["eso[0][1]"][:-1]], axis=2))}
-    ok_e = ~div_e
+    err, ok = d["err"], d["ok"]
+    err_e = _euler_errors(p, d)
+    ok_e = err_e["ok"]
     for who in ("sigma", "eso"):
         for i in (0, 1):
             quantity_ms(result, f"ex1.euler.{who}.mean_abs_err_x{i + 1}", f"Example 1, forward Euler h = 1 ms, "
@@ -232,11 +303,26 @@ def sensitivities(result: StudyResult, p: Example1, d: dict) -> None:
         f"{100 * (m_eso_e[0] / m_eso[0] - 1):+.0f} % (x1) and {100 * (m_eso_e[1] / m_eso[1] - 1):+.0f} % (x2).")
 
 
-def _half_step(result: StudyResult, p: Example1, d: dict) -> dict:
-    """Σ alone at h/2 over the first ``t_sens`` s: the held 1 ms noise (paired) and noise redrawn every h/2."""
-    seeds, noise, sig, ok = d["seeds"], d["noise"], d["sig"], d["ok"]
-    t_sens = min(p.T / 2, p.t_sens)
-    ph = replace(p, h=p.h / 2, T=t_sens)
+def _euler_errors(p: Example1, d: dict) -> dict:
+    """Per run, Σ's and the textbook ESO's mean errors with forward Euler on the same noise, and which runs stayed
+    finite (``ok``); read from ``d`` where :func:`simulate` reduced its runs part by part."""
+    if "per_run" in d:
+        return d["per_run"]["euler"]
+    sig, div_e, _ = loops.simulate_example1(p, d["seeds"], d["noise"], method="euler")
+    x = np.stack([sig["x[0]"][:-1], sig["x[1]"][:-1]], axis=2)
+    return {"sigma": mean_abs_error(x, np.stack([sig["sig[0]"][:-1], sig["sig[1]"][:-1]], axis=2)),
+            "eso": mean_abs_error(x, np.stack([sig["eso[0][0]"][:-1], sig["eso[0][1]"][:-1]], axis=2)),
+            "ok": ~div_e}
+
+
+def _half_step_errors(p: Example1, d: dict) -> dict:
+    """Per run, Σ alone at h/2 over the first ``t_sens`` s: its errors with the held 1 ms noise (``same_noise``) and
+    with noise redrawn every h/2 (``noise_0.5ms``), whether each diverged, and the h = 1 ms run's errors over the
+    same window (``h1``)."""
+    if "per_run" in d:
+        return d["per_run"]["half"]
+    seeds, noise, sig = d["seeds"], d["noise"], d["sig"]
+    ph = replace(p, h=p.h / 2, T=min(p.T / 2, p.t_sens))
     n_half = int(round(ph.T / ph.h))
     n_win = n_half // 2
     noise_h = np.concatenate([np.repeat(noise[:n_win], 2, axis=0), draw(p, seeds, n_half)], axis=1)
@@ -247,18 +333,27 @@ def _half_step(result: StudyResult, p: Example1, d: dict) -> dict:
         return np.stack([s["x[0]"][:k], s["x[1]"][:k]], 2) - np.stack([s["sig[0]"][:k], s["sig[1]"][:k]], 2)
 
     err_h = np.mean(np.abs(e(out, n_half)[::2]), axis=0)  # the 1 ms instants of the window
-    err_m = np.mean(np.abs(e(sig, n_win)), axis=0)
+    return {"same_noise": err_h[:runs], "noise_0.5ms": err_h[runs:], "div.same_noise": div_h[:runs],
+            "div.noise_0.5ms": div_h[runs:], "h1": np.mean(np.abs(e(sig, n_win)), axis=0)}
+
+
+def _half_step(result: StudyResult, p: Example1, d: dict) -> dict:
+    """Σ alone at h/2 over the first ``t_sens`` s: the held 1 ms noise (paired) and noise redrawn every h/2."""
+    ok = d["ok"]
+    t_sens = min(p.T / 2, p.t_sens)
+    half = _half_step_errors(p, d)
+    err_m = half["h1"]
     ratios = {}
-    for tag, sl, what in (("same_noise", slice(0, runs), "paired: the RK4 runs' noise, held over two 0.5 ms "
-                                                         "sub-steps"),
-                          ("noise_0.5ms", slice(runs, 2 * runs), "noise redrawn every 0.5 ms (twice the bandwidth, "
-                                                                 "half the power spectral density); same seeds")):
-        ok_r = ~div_h[sl] & ok
-        ratios[tag] = np.mean(err_h[sl][ok_r], axis=0) / np.mean(err_m[ok_r], axis=0)
+    for tag, what in (("same_noise", "paired: the RK4 runs' noise, held over two 0.5 ms sub-steps"),
+                      ("noise_0.5ms", "noise redrawn every 0.5 ms (twice the bandwidth, half the power spectral "
+                                      "density); same seeds")):
+        err_h = half[tag]
+        ok_r = ~half[f"div.{tag}"] & ok
+        ratios[tag] = np.mean(err_h[ok_r], axis=0) / np.mean(err_m[ok_r], axis=0)
         for i in (0, 1):
             quantity_ms(result, f"ex1.h0.5ms_{tag}.sigma.err_ratio_x{i + 1}", f"Example 1, Σ, mean |x{i + 1} - "
                         f"x̂{i + 1}| with RK4 h = 0.5 ms ÷ with h = 1 ms, first {t_sens:g} s ({tag.replace('_', ' ')})",
-                        err_h[sl, i] / err_m[:, i], ok_r, unit="", note=what)
+                        err_h[:, i] / err_m[:, i], ok_r, unit="", note=what)
     return ratios
 
 
@@ -274,17 +369,11 @@ def fair_comparison(result: StudyResult, p: Example1, d: dict, tradeoff: bool = 
 
     ``check`` records the linear path's check against the engine (Σ both ways); the box evaluations skip it.
     """
-    sig, eta, ok = d["sig"], d["noise"][:, :, 1], d["ok"]
-    x = np.stack([sig["x[0]"][:-1], sig["x[1]"][:-1]], axis=2)
-    x1 = np.where(ok, x[:, :, 0], 0.0)
-    est = DifferentialEstimator(p.n0, p.a)
+    ok = d["ok"]
     bw_s, tune = d["bw_sigma"], d["tune"]
-    textbook = linearised_eso(loops.han_eso(p))
-    bw_e = eso_bandwidth(textbook)
-    path = loops.LinearPath(x1, eta, p.h)
-    leso = ExtendedStateObserver.from_bandwidth(2, tune["omega_o"])
-    z = list(path.estimates_many([leso.ss, est.ss] if check else [leso.ss]))
-    err_l = _errors(x, z[0])
+    bw_e = _textbook_bandwidth(p)
+    errs = _linear_errors(p, d, ("fair", check))
+    err_l = errs[0]
     result.quantity("ex1.fair.sigma_bandwidth", "Example 1: −3 dB bandwidth of Σ (n0 = 5, a = 7), y → z1", bw_s,
                     unit="rad/s", note="control.bandwidth")
     result.quantity("ex1.fair.textbook_eso_bandwidth", "Example 1: −3 dB bandwidth of Han's textbook ESO linearised "
@@ -299,21 +388,57 @@ def fair_comparison(result: StudyResult, p: Example1, d: dict, tradeoff: bool = 
                     f"mean |x{i + 1} - x̂{i + 1}|", d["err"]["eso_fal_eq"][:, i], ok, unit=unit,
                     note="simulated with plant and Σ in one loop")
     if check:
-        ratio = _errors(x, z[1]) / d["err"]["sigma_state"]
+        ratio = errs[1] / d["err"]["sigma_state"]
         quantity_ms(result, "ex1.fair.linear_path_check_x1", "Example 1: Σ's mean |x1 - x̂1| from the linear path "
                     "(loops.LinearPath) ÷ from the engine", ratio[:, 0], ok, unit="",
                     note="validates the linear path used for the sweeps (1 = identical)")
-    d["path"] = path
-    return _tradeoff(result, p, d, x, bw_s, bw_e, tune, err_l) if tradeoff else None
+    return _tradeoff(result, p, d, bw_s, bw_e, tune, err_l) if tradeoff else None
 
 
-def _tradeoff(result, p, d, x, bw_s, bw_e, tune, err_l) -> dict:
+def _textbook_bandwidth(p: Example1) -> float:
+    """−3 dB bandwidth of Han's textbook ESO linearised inside |e| < δ."""
+    return eso_bandwidth(linearised_eso(loops.han_eso(p)))
+
+
+def _tradeoff_bandwidths(p: Example1, d: dict) -> np.ndarray:
+    """The trade-off's −3 dB bandwidth grid, from a quarter of Σ's to 1.5 times the textbook ESO's."""
+    return np.geomspace(d["bw_sigma"] / 4, 1.5 * _textbook_bandwidth(p), 10)
+
+
+def _linear_systems(p: Example1, d: dict, key) -> list:
+    """The estimators one linear-path evaluation runs together (``key``: ``("fair", check)``, ``"tradeoff"`` or
+    ``("n0", mode, n0_values)``); the path discretises each list as one stacked system."""
+    bw_s, tune = d["bw_sigma"], d["tune"]
+    if key == "tradeoff":
+        return [sys for bw in _tradeoff_bandwidths(p, d)
+                for sys in (DifferentialEstimator(p.n0, p.a * bw / bw_s).ss,
+                            ExtendedStateObserver.from_bandwidth(2, tune["omega_o"] * bw / bw_s).ss)]
+    if key[0] == "fair":
+        leso = ExtendedStateObserver.from_bandwidth(2, tune["omega_o"])
+        return [leso.ss, DifferentialEstimator(p.n0, p.a).ss] if key[1] else [leso.ss]
+    _, mode, n0_values = key
+    a = [p.a if mode == "fixed_a" else p.a * bw_s / sigma_bandwidth(n0, p.a) for n0 in n0_values]
+    return [DifferentialEstimator(n0, a_n).ss for n0, a_n in zip(n0_values, a, strict=True)]
+
+
+def _linear_errors(p: Example1, d: dict, key) -> list:
+    """Per-run mean errors ``(B, 2)`` of each estimator of :func:`_linear_systems` ``key``, driven through
+    :class:`.loops.LinearPath` by each run's simulated y (read from ``d`` where :func:`simulate` reduced its runs
+    part by part)."""
+    if "per_run" in d:
+        return d["per_run"]["linear"][key]
+    sig, ok = d["sig"], d["ok"]
+    x = np.stack([sig["x[0]"][:-1], sig["x[1]"][:-1]], axis=2)
+    if d.get("path") is None:
+        d["path"] = loops.LinearPath(np.where(ok, x[:, :, 0], 0.0), d["noise"][:, :, 1], p.h)
+    return [_errors(x, z) for z in d["path"].estimates_many(_linear_systems(p, d, key))]
+
+
+def _tradeoff(result, p, d, bw_s, bw_e, tune, err_l) -> dict:
     """Sweep Σ's ``a`` and the linear ESO's ω_o over one bandwidth grid; finding ``ex1-tradeoff``."""
     ok = d["ok"]
-    bws = np.geomspace(bw_s / 4, 1.5 * bw_e, 10)
-    systems = [sys for bw in bws for sys in (DifferentialEstimator(p.n0, p.a * bw / bw_s).ss,
-                                             ExtendedStateObserver.from_bandwidth(2, tune["omega_o"] * bw / bw_s).ss)]
-    errs = [np.mean(_errors(x, z)[ok], axis=0) for z in d["path"].estimates_many(systems)]
+    bws = _tradeoff_bandwidths(p, d)
+    errs = [np.mean(e[ok], axis=0) for e in _linear_errors(p, d, "tradeoff")]
     curves = {"sigma": np.array(errs[0::2]), "leso": np.array(errs[1::2])}
     fal = {"textbook": np.mean(d["err"]["eso"][ok], axis=0), "equal_bw": np.mean(d["err"]["eso_fal_eq"][ok], axis=0)}
     result.quantity("ex1.tradeoff.bandwidths", "Example 1 trade-off: −3 dB bandwidths swept (Σ's a and the linear "
@@ -372,14 +497,11 @@ def n0_sweep(result: StudyResult, p: Example1, d: dict, n0_values=(2, 3, 4, 5, 6
 
     The finding ``ex1-n0`` is recorded when both modes are computed.
     """
-    sig, ok = d["sig"], d["ok"]
-    x = np.stack([sig["x[0]"][:-1], sig["x[1]"][:-1]], axis=2)
-    path = d.get("path") or loops.LinearPath(np.where(ok, x[:, :, 0], 0.0), d["noise"][:, :, 1], p.h)
+    ok = d["ok"]
     out = {}
     for mode in modes:
-        a = [p.a if mode == "fixed_a" else p.a * d["bw_sigma"] / sigma_bandwidth(n0, p.a) for n0 in n0_values]
-        zs = path.estimates_many([DifferentialEstimator(n0, a_n).ss for n0, a_n in zip(n0_values, a, strict=True)])
-        out[mode] = np.array([np.mean(_errors(x, z)[ok], axis=0) for z in zs])
+        out[mode] = np.array([np.mean(e[ok], axis=0)
+                              for e in _linear_errors(p, d, ("n0", mode, tuple(n0_values)))])
         for i in (0, 1):
             result.quantity(f"ex1.n0_sweep.{mode}.err_x{i + 1}", f"Example 1, Σ with n0 = {n0_values[0]}.."
                             f"{n0_values[-1]} ({'a = 7' if mode == 'fixed_a' else 'a scaled to Σ(5, 7)’s bandwidth'}): "
