@@ -40,10 +40,13 @@ STUDIES = {
 #: ``analysis.pendulum.loops.RUNS_PER_PART`` = 256 runs and reduces parts of at most that many above: its base is the
 #: peak at 256 runs (360 MB --quick, 699 MB full), its slope what it keeps per run past the part (15 and 0.7 kB,
 #: measured at 300 and 3000 --quick runs, 300 and 900 full; was 0.97 and 2.4 MB a run at every run count).
+#: differential-estimator, likewise above 128 runs (``example1/example2.RUNS_PER_PART``): base the 128-run peak (166 MB
+#: --quick, 1.29 GB full), slope 23 kB a run (300 and 3000 --quick runs; the full runs' slope, 200 and 500, was below
+#: the noise and the values kept per run do not depend on the horizon), was 0.58 and 4.3 MB.
 MEMORY = {
     "ikf-mfac": {"quick": (280087520, 1514), "full": (304087616, 524)},
     "ckf": {"quick": (69324800, 3090432), "full": (154439680, 9568256)},
-    "differential-estimator": {"quick": (87115366, 581468), "full": (382555750, 4312760)},
+    "differential-estimator": {"quick": (165793792, 23339), "full": (1291825152, 23339)},
     "meso": {"quick": (97652280, 11104), "full": (242845468, 95239)},
     "pendulum": {"quick": (359657472, 15067), "full": (698535936, 703)},
 }

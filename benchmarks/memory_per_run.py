@@ -26,7 +26,9 @@ POINTS_FOR = {"ikf-mfac": {"quick": (2000, 20000), "full": (2000, 8000)},
               # meso simulates at most analysis.meso.loops.ROWS_PER_PART rows (3 per run) at a time
               "meso": {"quick": (100, 1000), "full": (30, 300)},
               # pendulum reduces a case's runs analysis.pendulum.loops.RUNS_PER_PART at a time above that many
-              "pendulum": {"quick": (256, 3000), "full": (256, 900)}}
+              "pendulum": {"quick": (256, 3000), "full": (256, 900)},
+              # differential-estimator reduces parts of example1/example2.RUNS_PER_PART runs above that many
+              "differential-estimator": {"quick": (300, 3000), "full": (200, 500)}}
 
 CHILD = """
 import json, resource, sys, tempfile, warnings

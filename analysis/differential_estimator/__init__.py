@@ -202,7 +202,7 @@ def _example2(ctx, result, p, runs):
     ctx.progress(f"Example 2: presets a = {p.a:g} and a = {lin['a_new']:g}, {runs} runs + {n_grid} grid points each")
     d = example2.simulate(p, seeds, lin["a_new"], runs)
     q = example2.quantities(result, p, d, lin)
-    s, t, per = d["sig"], d["t"], d["per"]
+    t, per = d["t"], d["per"]
     pick, tr = d["pick"], d["traces"]
     traces = [(f"{name} (Σ n0 = {p.n0}, a = {d['a'][j]:g}; seed {d['seeds'][pick[j] - j * per]})",
                {"x[0]": tr["x[0]"][:-1, j], "xhat[0]": tr["xhat[0]"][:-1, j], "x[1]": tr["x[1]"][:-1, j],
@@ -221,7 +221,7 @@ def _example2(ctx, result, p, runs):
     b = pick[0]
     pair = lin["pair"]
     ctx.save_figure(result, figures.plot_literal(
-        t[:-1], d["theta"][:, 0], s["x[0]"][:-1, b], s["u"][:-1, b], zoom,
+        t[:-1], d["theta"][:, 0], tr["x[0]"][:-1, 0], tr["u"][:-1, 0], zoom,  # the traces' column 0 is run pick[0]
         f"Example 2 as printed (Σ a = {p.a:g}, K = [2184, 506, 39]): output and control (seed {d['seeds'][b]})",
         f"last 2 s: amplitude {q['amp'][b]:.3g}, {q['freq'][b]:.2f} Hz (linearised pair {pair.real:+.1f} ± "
         f"{abs(pair.imag):.1f}j rad/s)"), "fig_ex2_literal.png",

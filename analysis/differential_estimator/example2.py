@@ -16,13 +16,14 @@ from ctrl_analysis.estimators.differential import DifferentialEstimator
 from ctrl_analysis.metrics import mean_abs_error, rmse
 from ctrl_analysis.noise import draw_noise, uniform_noise
 from ctrl_analysis.reporting.report import StudyResult
+from ctrl_analysis.runs.parallel import chunk_slices
 
 from . import loops
 from .example1 import quantity_ms
 from .paper import Example2, setpoint
 
-__all__ = ["PRESETS", "softened_square_wave", "stable_estimator_a", "controller_scale_threshold",
-           "literal_eigenvalues", "linear_analysis", "simulate", "quantities",
+__all__ = ["PRESETS", "RUNS_PER_PART", "softened_square_wave", "tracking", "stable_estimator_a",
+           "controller_scale_threshold", "literal_eigenvalues", "linear_analysis", "simulate", "quantities",
            "nonminimum_phase", "oscillation"]
 
 
@@ -160,13 +161,32 @@ def oscillation(e: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray]:
 PRESETS = ("literal", "fast_estimator")
 
 
+#: Most Monte Carlo runs simulated in one batch: up to this many (the default 100) the batch keeps ``x1`` and
+#: ``u`` of every run; above it each preset's rows are simulated in parts of at most this many and reduced to
+#: their per-run values as each part ends (:func:`tracking`), so memory is bounded by the part, not ``--runs``.
+RUNS_PER_PART = 128
+
+
+def tracking(p: Example2, x1, u, v) -> dict:
+    """Per run: mean |v − x1|, the half peak-to-peak amplitude and frequency of x1 − v over the last quarter, its
+    mean there (the offset) and the RMS of u; ``x1``, ``u`` of shape ``(N + 1, B)``, ``v`` ``(N,)``."""
+    n = x1.shape[0] - 1
+    e = x1[:-1] - v[:, None]
+    tail = slice(n - n // 4, n)
+    amp, freq = oscillation(e[tail], p.h)
+    return {"err": mean_abs_error(x1[:-1], v[:, None]), "amp": amp, "freq": freq,
+            "offset": np.mean(e[tail], axis=0), "rms_u": rmse(u[:-1], 0.0)}
+
+
 def simulate(p: Example2, seeds, a_new: float, runs: int, *, traces: bool = True, presets=PRESETS) -> dict:
     """The presets (Σ a = p.a and a_new), ``runs`` Monte Carlo rows + the (b1, b2, b3) grid each, one batch.
 
-    The batch keeps ``x1`` and ``u`` of every run; with ``traces`` the states and estimates drawn in
-    Fig. 5 are kept for one run per preset (the first Monte Carlo run that did not diverge), re-run
-    alone (a run does not depend on its batch, so it is the same run). The box evaluations skip the
-    traces and the stable preset (``presets=("literal",)``): no claim reads them, only notes.
+    The batch keeps ``x1`` and ``u`` of every run and :func:`tracking` reduces them (``per_run``); above
+    :data:`RUNS_PER_PART` runs each preset's rows are simulated in parts, each reduced as it ends, and the
+    signals are not kept (``sig`` None). With ``traces`` the states, estimates and control drawn in Fig. 5 are
+    kept for one run per preset (the first Monte Carlo run that did not diverge), re-run alone (a run does
+    not depend on its batch, so it is the same run). The box evaluations skip the traces and the stable
+    preset (``presets=("literal",)``): no claim reads them, only notes.
     """
     presets = tuple(presets)
     if not presets or set(presets) - set(PRESETS):
@@ -179,36 +199,47 @@ def simulate(p: Example2, seeds, a_new: float, runs: int, *, traces: bool = True
     n = int(round(p.T / p.h))
     r = setpoint(p, n)
     theta = softened_square_wave(p.omega, r, p.h)
-    noise = draw_noise(seeds, n, uniform_noise([-p.xi_bound, -p.eta_bound], [p.xi_bound, p.eta_bound]))
-    noise = np.tile(noise.transpose(2, 0, 1), m)  # [ξ, η] as (2, N, m per): the presets share each row's noise
+    sampler = uniform_noise([-p.xi_bound, -p.eta_bound], [p.xi_bound, p.eta_bound])
+    whole = runs <= RUNS_PER_PART
+    # [ξ, η] as (2, N, m per): the presets share each row's noise (row r: seed r % per)
+    noise = np.tile(draw_noise(seeds, n, sampler).transpose(2, 0, 1), m) if whole else None
     thetas = {f"theta[{i}]": theta[:, i] for i in range(3)}
+    a_rows = np.repeat([a_of[x] for x in presets], per)
 
-    def batch(rows, keep):  # rows: a slice or index array of the batch, an equal share per preset
+    def batch(rows, keep):  # rows: a slice or index array of the batch
         k = len(range(m * per)[rows]) if isinstance(rows, slice) else len(rows)
-        params = loops.example2_params(p, np.repeat([a_of[x] for x in presets], k // m), tuple(v[rows] for v in b))
-        inputs = thetas | {"xi": noise[0][:, rows], "eta": noise[1][:, rows]}
+        params = loops.example2_params(p, a_rows[rows], tuple(v[rows] for v in b))
+        nz = noise[:, :, rows] if noise is not None else draw_noise(
+            [seeds[i % per] for i in np.asarray(rows)], n, sampler).transpose(2, 0, 1)
+        inputs = thetas | {"xi": nz[0], "eta": nz[1]}
         return loops.simulate_signals(loops.example2_loop(p), n, keep, inputs=inputs, runs=k, bound=p.bound,
                                       params=params)
 
-    sig, div, step = batch(slice(None), ["x[0]", "u"])
+    if whole:
+        sig, div, step = batch(slice(None), ["x[0]", "u"])
+        per_run = tracking(p, sig["x[0]"], sig["u"], theta[:, 0])
+    else:
+        sig, parts = None, []
+        for j in range(m):
+            for sl in chunk_slices(per, chunk_size=RUNS_PER_PART):
+                part, div_p, step_p = batch(np.arange(j * per + sl.start, j * per + sl.stop), ["x[0]", "u"])
+                parts.append((tracking(p, part["x[0]"], part["u"], theta[:, 0]), div_p, step_p))
+        per_run = {k: np.concatenate([t[k] for t, _, _ in parts]) for k in parts[0][0]}
+        div, step = (np.concatenate([x[i] for x in parts]) for i in (1, 2))
     ok = ~div
     pick = [int(np.flatnonzero(ok[j * per:j * per + runs])[0]) + j * per if ok[j * per:j * per + runs].any()
             else j * per for j in range(m)]
-    traces = batch(np.array(pick), ["x[0]", "x[1]", "xhat[0]", "xhat[1]"])[0] if traces else None
-    return {"sig": sig, "ok": ok, "diverged": div, "step": step, "r": r, "theta": theta, "per": per,
+    traces = batch(np.array(pick), ["x[0]", "x[1]", "xhat[0]", "xhat[1]", "u"])[0] if traces else None
+    return {"sig": sig, "per_run": per_run, "ok": ok, "diverged": div, "step": step, "r": r, "theta": theta,
+            "per": per,
             "runs": runs, "grid": G, "t": p.h * np.arange(n + 1), "a": tuple(a_of[x] for x in presets),
             "presets": presets, "seeds": list(seeds), "pick": pick, "traces": traces}
 
 
 def quantities(result: StudyResult, p: Example2, d: dict, lin: dict | None) -> dict:
     """Quantities ``ex2.<preset>.*``, ``ex2.sweep.*`` (findings unless ``lin`` is None); returns the stability maps."""
-    sig, ok, per, runs = d["sig"], d["ok"], d["per"], d["runs"]
-    n = sig["x[0]"].shape[0] - 1
-    v = d["theta"][:, 0]
-    e = sig["x[0]"][:-1] - v[:, None]
-    tail = slice(n - n // 4, n)
-    err = mean_abs_error(sig["x[0]"][:-1], v[:, None])
-    amp, freq = oscillation(e[tail], p.h)
+    ok, per, runs, pr = d["ok"], d["per"], d["runs"], d["per_run"]
+    err, amp, freq = pr["err"], pr["amp"], pr["freq"]
     stable = ok & (amp < p.ripple_tol)
     # outcome per run: 0 settles, 1 oscillates (bounded, ripple above the tolerance), 2 diverges
     outcome = np.where(~ok, 2, np.where(stable, 0, 1))
@@ -224,8 +255,7 @@ def quantities(result: StudyResult, p: Example2, d: dict, lin: dict | None) -> d
                         f"of x1 - v over the last {p.T / 4:g} s is below {p.ripple_tol:g} (diverged runs count as not "
                         "settled)", float(np.mean(stable[mc])), runs=runs, unit="",
                         note="the paper shows one run (Fig. 5): the claim is judged run by run")
-        quantity_ms(result, f"ex2.{name}.rms_control", f"Example 2, {label}, RMS of u", rmse(sig["u"][:-1, mc], 0.0),
-                    ok[mc])
+        quantity_ms(result, f"ex2.{name}.rms_control", f"Example 2, {label}, RMS of u", pr["rms_u"][mc], ok[mc])
         result.quantity(f"ex2.{name}.diverged_fraction", f"Example 2, {label}: fraction of runs flagged as diverged "
                         f"(|state| > {p.bound:g})", float(np.mean(d["diverged"][mc])), runs=runs, unit="")
         sid = "ex2.sweep.fraction_stable" if name == "fast_estimator" else f"ex2.sweep.{name}.fraction_stable"
@@ -244,7 +274,7 @@ def quantities(result: StudyResult, p: Example2, d: dict, lin: dict | None) -> d
              for b1 in p.sweep_b1])
         maps[name] = {"stable": stable[grid].reshape(d["grid"][0].shape), "lin": lin_map,
                       "outcome": outcome[grid].reshape(d["grid"][0].shape),
-                      "amp": amp[grid].reshape(d["grid"][0].shape), "offset": np.mean(e[tail], axis=0)[grid]}
+                      "amp": amp[grid].reshape(d["grid"][0].shape), "offset": pr["offset"][grid]}
     for k in ("diverged", "step"):
         result.settings[f"ex2.sim.{k}"] = d[k]
     if lin is not None and set(maps) == set(PRESETS):
@@ -253,7 +283,7 @@ def quantities(result: StudyResult, p: Example2, d: dict, lin: dict | None) -> d
 
 
 def _findings(result, p, d, lin, maps, err, amp, freq) -> None:
-    ok, runs, per, sig = d["ok"], d["runs"], d["per"], d["sig"]
+    ok, runs, per = d["ok"], d["runs"], d["per"]
     ok_l = ok[:runs]
     pair = lin["pair"]
     amp_lit = maps["literal"]["amp"]
@@ -265,7 +295,7 @@ def _findings(result, p, d, lin, maps, err, amp, freq) -> None:
         "by the nonlinear damping -b3 x3|x3| and x1 settles into a limit cycle around v with half peak-to-peak "
         f"amplitude {np.mean(amp[:runs][ok_l]):.3g} at {np.mean(freq[:runs][ok_l]):.2f} Hz (the linearised unstable "
         f"pair {pair.real:+.1f} ± {abs(pair.imag):.1f}j rad/s, i.e. {abs(pair.imag) / (2 * np.pi):.2f} Hz), mean |v - "
-        f"x1| = {np.mean(err[:runs][ok_l]):.3g} and RMS u = {np.mean(rmse(sig['u'][:-1, :runs][:, ok_l], 0.0)):.3g}. "
+        f"x1| = {np.mean(err[:runs][ok_l]):.3g} and RMS u = {np.mean(d['per_run']['rms_u'][:runs][ok_l]):.3g}. "
         "Over the grid the limit-cycle amplitude is set by the damping b3: "
         "" + ", ".join(f"{amp_lit[:, :, k].min():.3g}-{amp_lit[:, :, k].max():.3g} at b3 = {b3:g}"
                                          for k, b3 in enumerate(p.sweep_b3))

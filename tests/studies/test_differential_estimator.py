@@ -482,3 +482,33 @@ def test_example1_runs_reduced_part_by_part_record_the_same_quantities(monkeypat
         np.testing.assert_allclose(numbers(fb.get("evidence")), numbers(fa.get("evidence")), rtol=1e-12)
     (bw, tw), (bp, tp) = example1.shown_run(whole), example1.shown_run(parts)
     assert bw == bp and all(np.array_equal(tw[k], tp[k]) for k in example1.SHOWN)
+
+
+def test_example2_runs_reduced_part_by_part_record_the_same_quantities(monkeypatch):
+    """Above RUNS_PER_PART, each preset's rows (Monte Carlo runs and grid points) are simulated in parts reduced to
+    their per-run values as they end: the same quantities to rounding, the same findings, the same Fig. 5 runs."""
+    p = replace(EX2, T=1.2)
+    runs = 7
+    seeds = run_seeds(5, runs + len(p.sweep_b1) * len(p.sweep_b2) * len(p.sweep_b3))
+    lin = example2.linear_analysis(StudyResult(INFO), p)
+
+    def record(d):
+        res = StudyResult(INFO)
+        example2.quantities(res, p, d, lin)
+        return res.to_dict()
+
+    whole = example2.simulate(p, seeds, lin["a_new"], runs)
+    monkeypatch.setattr(example2, "RUNS_PER_PART", 3)
+    parts = example2.simulate(p, seeds, lin["a_new"], runs)
+    assert whole["sig"] is not None and parts["sig"] is None
+    for k in ("ok", "diverged", "step"):
+        np.testing.assert_array_equal(whole[k], parts[k])
+    assert whole["pick"] == parts["pick"]
+    assert all(np.array_equal(whole["traces"][s], parts["traces"][s]) for s in whole["traces"])
+    a, b = record(whole), record(parts)
+    qa, qb = ({q["id"]: q for q in r["quantities"]} for r in (a, b))
+    assert qa.keys() == qb.keys() and len(qa) >= 10
+    for k, q in qa.items():
+        if q.get("value") is not None:
+            np.testing.assert_allclose(qb[k]["value"], q["value"], rtol=1e-12, err_msg=k)
+    assert [f["id"] for f in a["findings"]] == [f["id"] for f in b["findings"]] and a["findings"]
