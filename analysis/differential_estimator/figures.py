@@ -121,8 +121,11 @@ def plot_x2(t, x2, x2_hat, title: str, label: str, zoom=(10.0, 10.5)):
     """True x2 and an estimate (top), the error (middle), both over a short window ``zoom`` (bottom, s).
 
     The zoom shows the estimate's waveform where, over the whole run, high-frequency noise
-    fills the trace into a solid band.
+    fills the trace into a solid band. A run that ends before ``zoom`` (``--quick``) is zoomed over its
+    last stretch of the same length instead.
     """
+    if zoom[1] > t[-1]:
+        zoom = (max(t[0], t[-1] - (zoom[1] - zoom[0])), t[-1])
     fig, (ax, ax_e, ax_z) = new_figure(3, 1, title=title, size=(8.0, 7.0),
                                        gridspec_kw={"height_ratios": [2, 1, 1.3]})
     ax.plot(t, x2_hat, color="tab:red", lw=0.6, alpha=0.85, label=label)

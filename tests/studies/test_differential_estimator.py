@@ -512,3 +512,14 @@ def test_example2_runs_reduced_part_by_part_record_the_same_quantities(monkeypat
         if q.get("value") is not None:
             np.testing.assert_allclose(qb[k]["value"], q["value"], rtol=1e-12, err_msg=k)
     assert [f["id"] for f in a["findings"]] == [f["id"] for f in b["findings"]] and a["findings"]
+
+
+def test_fig3_zoom_falls_inside_a_short_run():
+    """--quick runs 2 s: the 10-10.5 s zoom of Fig. 3-4 would be an empty panel; it moves to the run's last 0.5 s."""
+    t = np.linspace(0.0, 2.0, 2001)
+    fig = figures.plot_x2(t, np.sin(t), np.sin(t) + 0.01, "short run", "estimate")
+    zoom_ax = fig.axes[2]
+    assert zoom_ax.get_xlim() == pytest.approx((1.5, 2.0))
+    assert len(zoom_ax.lines[0].get_xdata()) == 501  # the estimate is drawn there
+    fig = figures.plot_x2(np.linspace(0.0, 20.0, 20001), np.zeros(20001), np.zeros(20001), "full run", "estimate")
+    assert fig.axes[2].get_xlim() == pytest.approx((10.0, 10.5))  # a full run keeps the paper-length zoom
