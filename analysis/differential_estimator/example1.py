@@ -156,19 +156,19 @@ def _simulate_batch(p: Example1, seeds) -> dict:
             "tune": tune, "seeds": list(seeds)}
 
 
+#: Σ's orders swept by :func:`n0_sweep` (remark (2)).
+N0_VALUES = (2, 3, 4, 5, 6, 7, 8)
 #: The linear-path evaluations a reduced part keeps (every one the study records).
-_LINEAR_KEYS = (("fair", True), "tradeoff", ("n0", "fixed_a", (2, 3, 4, 5, 6, 7, 8)),
-                ("n0", "equal_bw", (2, 3, 4, 5, 6, 7, 8)))
+_LINEAR_KEYS = (("fair", True), "tradeoff", ("n0", "fixed_a", N0_VALUES), ("n0", "equal_bw", N0_VALUES))
 
 
 def _reduced(p: Example1, d: dict) -> dict:
     """One part of the runs reduced to what the quantities read per run, and the traces of its first healthy run."""
-    ok = np.flatnonzero(d["ok"])
-    b = int(ok[0]) if ok.size else 0
+    b, traces = shown_run(d)
     return {"ok": d["ok"], "diverged": d["diverged"], "step": d["step"], "err": d["err"], "bw_sigma": d["bw_sigma"],
             "tune": d["tune"], "euler": _euler_errors(p, d), "half": _half_step_errors(p, d),
             "linear": {key: _linear_errors(p, d, key) for key in _LINEAR_KEYS},
-            "shown": (b, bool(ok.size), {s: d["sig"][s][:, b].copy() for s in SHOWN})}
+            "shown": (b, bool(d["ok"].any()), {k: v.copy() for k, v in traces.items()})}
 
 
 def _joined(parts, seeds) -> dict:
@@ -491,7 +491,7 @@ def _tradeoff(result, p, d, bw_s, bw_e, tune, err_l) -> dict:
     return {"bws": bws, "curves": curves, "fal": fal, "fal_bw": {"textbook": bw_e, "equal_bw": d["bw_sigma"]}}
 
 
-def n0_sweep(result: StudyResult, p: Example1, d: dict, n0_values=(2, 3, 4, 5, 6, 7, 8),
+def n0_sweep(result: StudyResult, p: Example1, d: dict, n0_values=N0_VALUES,
              modes=("fixed_a", "equal_bw")) -> dict:
     """"Larger n0 is more accurate" (remark (2)): Σ errors, n0 = 2..8, at a = 7 and (``modes``) at Σ(5, 7)'s bandwidth.
 

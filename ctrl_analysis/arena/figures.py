@@ -93,6 +93,11 @@ def _sample(s, cases, table):
     return fig
 
 
+#: The Pareto figure's caption.
+PARETO_CAPTION = ("Per signal class, each family's Pareto front over every configuration evaluated: lag (worst "
+                  "derivative error on the noise-free records) against noise-induced RMS error.")
+
+
 def save_pareto(ctx, result, s, cases, tuned) -> None:
     """Draw and save the Pareto figure (sent first: it takes the longest to render).
 
@@ -106,10 +111,6 @@ def save_pareto(ctx, result, s, cases, tuned) -> None:
         :func:`~ctrl_analysis.arena.tuning.tune_family` output per family.
     """
     ctx.save_figure(result, _pareto(s, cases, tuned), "arena_pareto.png", dpi=120, caption=PARETO_CAPTION)
-
-
-PARETO_CAPTION = ("Per signal class, each family's Pareto front over every configuration evaluated: lag (worst "
-                  "derivative error on the noise-free records) against noise-induced RMS error.")
 
 
 def save_all(ctx, result, s, cases, table) -> None:

@@ -75,6 +75,11 @@ def pool_here(jobs: int, scheduler=None):
 _FANS = iter(range(1, 1 << 62))
 
 
+def _check_chains(chains) -> None:
+    if not isinstance(chains, dict) or not all(hasattr(g, "send") and hasattr(g, "throw") for g in chains.values()):
+        raise TypeError(f"chains must be a dict of generators, got {chains!r:.80}")
+
+
 def lockstep(chains: dict):
     """Several chains of :func:`drive` as one: each round yields their lists joined, in the order of ``chains``.
 
@@ -88,8 +93,7 @@ def lockstep(chains: dict):
     generator
         A chain whose result is ``{key: that chain's result}``, in the order of ``chains``.
     """
-    if not isinstance(chains, dict) or not all(hasattr(g, "send") and hasattr(g, "throw") for g in chains.values()):
-        raise TypeError(f"chains must be a dict of generators, got {chains!r:.80}")
+    _check_chains(chains)
     return _lockstep(chains)
 
 
@@ -149,8 +153,7 @@ def drive(fn: Callable, chains: dict, *, jobs: int = 1, scheduler=None, desc: st
     jobs = check_int("jobs", jobs, minimum=1)
     if not callable(fn):
         raise TypeError(f"fn must be callable, got {type(fn).__name__}")
-    if not isinstance(chains, dict) or not all(hasattr(g, "send") and hasattr(g, "throw") for g in chains.values()):
-        raise TypeError(f"chains must be a dict of generators, got {chains!r:.80}")
+    _check_chains(chains)
     scheduler = _check_scheduler(scheduler)
     check_str("desc", desc, empty=True)
     check_str("unit", unit)
