@@ -306,19 +306,20 @@ def _q_sweep(result, p, data, m):
 
 def _second_plant(ctx, result, p):
     """The three loops on the second plant, its claims and why its output settles below the reference."""
-    from . import simulate_study
+    from . import simulate_main
 
     ctx.progress("ckf: second plant")
     p2 = dataclasses.replace(p, plant=p.plant2)
     tag = _plant2_tag(p)
-    data2 = simulate_study(p2, ctx.runs_or(p.runs, 4), ctx.seed + 20_000)[p.id_signal]
-    m2 = qty.metrics(data2, p2)
+    seed = ctx.seed + 20_000
+    data2, m2 = simulate_main(p2, ctx.runs_or(p.runs, 4), seed)
     qty.record_metrics(result, m2, p2, prefix="plant2.", tag=tag)
     terms = {c: qty.offset_terms(data2[c], p2) for c in data2}
-    home = qty.offset_terms(simulate_study(p, ctx.runs_or(20, 3), ctx.seed + 20_000)[p.id_signal]["ckf"], p)
+    # the offset terms read traces: above RUNS_PER_PART runs, those of the first part (simulate_main)
+    home = qty.offset_terms(simulate_main(p, ctx.runs_or(20, 3), seed)[0]["ckf"], p)
     leak = dataclasses.replace(p2, c2=1.0)
-    no_leak = qty.offset_terms(simulate_study(leak, ctx.runs_or(20, 3), ctx.seed + 20_000)[p.id_signal]["ckf"], leak)
-    fro = qty.offset_terms(simulate_study(frozen(p2), ctx.runs_or(20, 3), ctx.seed + 20_000)[p.id_signal]["ckf"], p2)
+    no_leak = qty.offset_terms(simulate_main(leak, ctx.runs_or(20, 3), seed)[0]["ckf"], leak)
+    fro = qty.offset_terms(simulate_main(frozen(p2), ctx.runs_or(20, 3), seed)[0]["ckf"], p2)
     t = terms["ckf"]
     eff = p.k_I / (t["c2_share"] * (1 - p.c2))
     result.finding(

@@ -189,18 +189,21 @@ def plot_q_sweep(qs, sweep, lpf_rmse):
     return fig
 
 
-def plot_second_plant(data, name, reference, t_steady, run=0, t_filter=None):
+def plot_second_plant(data, name, reference, t_steady, run=0, t_filter=None, of=None):
     """Fig. 12: the second plant ``name`` (a formula): true output (whole run; steady stage zoomed with the steady
-    means over all runs) and the filter errors."""
+    means over all runs) and the filter errors. ``of``: the run count when ``data`` holds the first runs only
+    (:func:`analysis.ckf.simulate_main`), said in the means' labels."""
     fig, (ax, ax_s, ax_e) = new_figure(3, 1, size=(10.0, 8.0), sharex=True,
                                        title=f"Fig. 12 (beyond the paper): second plant {name} (run {run})")
     for case, d in data.items():
         ax.plot(d["t"], d["y"][:, run], color=COLORS[case], lw=0.7, label=NAMES[case])
         m = d["t"] >= t_steady
         mean = float(d["y"][m][:, d["ok"]].mean())
+        n = d["y"].shape[1]
+        over = "all runs" if of is None or of <= n else f"first {n} of {of} runs"
         ax_s.plot(d["t"][m], d["y"][m, run], color=COLORS[case], lw=0.6, alpha=0.8, label=f"{NAMES[case]} (run {run})")
         ax_s.hlines(mean, t_steady, d["t"][-1], color=COLORS[case], ls="--", lw=1.5,
-                    label=f"{NAMES[case]}: steady mean {mean:.2f} (all runs)")
+                    label=f"{NAMES[case]}: steady mean {mean:.2f} ({over})")
     for a in (ax, ax_s):
         a.axhline(reference, color="k", ls=":", lw=1.0, label=f"reference {reference:g}")
     _plot_errors(ax_e, data, run, t_filter)
@@ -221,6 +224,10 @@ def save_all(ctx, result, p, data, data_f, extra, ident):
     from .quantities import TABLE1_ROWS, noise_free_fit
 
     bounds, _ = ident
+    runs, traced = result.seeds["runs"], data["ckf"]["y"].shape[1]
+    # above RUNS_PER_PART runs only the first part's traces are kept (simulate_main)
+    subset = (f" Bands, means and shares over the first {traced} of the {runs} runs, whose traces are kept (finding "
+              "traced-runs)." if runs > traced else "")
     id_note = {"lpf": "the characteristic model identified online from the LPF output",
                "raw": "the characteristic model identified online from the measurement"}
     for no, case in ((2, "nofilter"), (3, "lpf"), (4, "ckf")):
@@ -251,7 +258,7 @@ def save_all(ctx, result, p, data, data_f, extra, ident):
                             f"the CKF is not fed back; its model then is θ0 with a falling ĝ0: f̂1 and f̂2 stay within "
                             f"{moved:.3g} of θ0, while ĝ0 drops from {p.theta0[2]:g} onto its lower bound "
                             f"{p.lower[2]:g} in {hit:.0%} of the runs (median first time "
-                            f"{g0['first'] if g0['first'] is not None else float('nan'):.2f} s; Fig. 10).")
+                            f"{g0['first'] if g0['first'] is not None else float('nan'):.2f} s; Fig. 10)." + subset)
     ctx.save_figure(result, plot_steady_compare(data, p.t_steady), "fig8_steady_lpf_vs_ckf.png",
                     caption="Redraws the paper's Fig. 8: steady-stage true output (top, both filters) and control with "
                             "the LPF (middle) and with the CKF (bottom), the two control panels on one scale; the "
@@ -276,18 +283,19 @@ def save_all(ctx, result, p, data, data_f, extra, ident):
                             f"(median first time {g0['first'] if g0['first'] is not None else float('nan'):.2f} s) and "
                             f"stays near it (steady-stage mean {bounds['g0_steady']:.2g}), "
                             f"{bounds['g0_fit'] / bounds['g0_steady']:.0f}x below the plant's fit (finding "
-                            "identification-live).")
+                            "identification-live)." + subset)
     ctx.save_figure(result, plot_q_sweep(Q_SWEEP, extra["sweep"], extra["lpf"]), "fig11_q_sweep.png",
                     caption="Beyond the paper: the CKF's transient and steady RMS error against its process-noise "
                             "level Q = q I (the CKF run alone on the LPF case's records), with the LPF's errors as "
                             "reference lines (finding q-sweep).")
     name = PLANT2_FORMULA.get(p.plant2, p.plant2)
-    ctx.save_figure(result, plot_second_plant(extra["data2"], name, p.reference, p.t_steady, t_filter=p.t_filter),
+    ctx.save_figure(result, plot_second_plant(extra["data2"], name, p.reference, p.t_steady, t_filter=p.t_filter,
+                                                      of=runs),
                     "fig12_second_plant.png",
                     caption=f"Beyond the paper: the three loops on a second plant, {name} (lightly damped, ζ = 0.15, "
                             "with a 0.1 s delay as a 2nd-order Padé; unit DC gain): true outputs over the whole run "
                             "(top), the steady stage zoomed with the steady means over all runs (middle) and filter "
                             "errors on a symmetric-log axis (bottom). The outputs stay below the reference 10 over the "
                             "steady stage, the CKF loop lowest and still rising at 100 s: finding plant2-offset "
-                            "computes why.")
+                            "computes why." + subset)
 

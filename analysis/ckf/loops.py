@@ -399,7 +399,7 @@ def _point_params(ps, runs):
 
 
 def simulate_specs(specs, runs: int, seed: int, *, keep=SIGNALS, plant=None, noise_std=None, engine="auto",
-                   max_runs: int = 640) -> list:
+                   max_runs: int = 640, seeds=None) -> list:
     """Run loops ``(p, case, option)`` over ``runs`` Monte Carlo runs each, many on the batch axis of one simulation.
 
     Specs whose studies share a structure (:func:`structure_key`) run side by side, their differences as
@@ -422,13 +422,20 @@ def simulate_specs(specs, runs: int, seed: int, *, keep=SIGNALS, plant=None, noi
     engine : {"auto", "compiled", "numpy"}
     max_runs : int
         Largest batch of one simulation (memory: ``8 (N + 1) len(keep)`` bytes per run).
+    seeds : sequence of int, optional
+        The runs' seeds, ``runs`` of them (default ``run_seeds(seed, runs)``): a part of a larger set of runs,
+        simulated bit for bit as in the whole set.
 
     Returns
     -------
     list of dict
         Per spec ``{"t", "ok", "diverged_step", signal: (N + 1, runs)}``.
     """
-    seeds = run_seeds(seed, runs)
+    if seeds is None:
+        seeds = run_seeds(seed, runs)
+    elif len(seeds) != runs:
+        raise ValueError(f"seeds must hold one seed per run ({runs}), got {len(seeds)}")
+    seeds = [int(s) for s in seeds]
     groups: dict = {}
     for i, (p, case, opt) in enumerate(specs):
         if case not in CASES or opt not in ID_OPTIONS:
@@ -465,7 +472,7 @@ def simulate_specs(specs, runs: int, seed: int, *, keep=SIGNALS, plant=None, noi
 
 
 def simulate_cases(p, runs: int, seed: int, *, options=None, plant=None, noise_std=None, engine="auto",
-                   keep=SIGNALS) -> dict:
+                   keep=SIGNALS, seeds=None) -> dict:
     """Run the three cases of ``p`` over ``runs`` Monte Carlo runs, side by side (:func:`simulate_specs`).
 
     Parameters
@@ -486,6 +493,8 @@ def simulate_cases(p, runs: int, seed: int, *, options=None, plant=None, noise_s
         Passed to :meth:`Loop.simulate`.
     keep : sequence of str
         Signals kept.
+    seeds : sequence of int, optional
+        The runs' seeds (default ``run_seeds(seed, runs)``; :func:`simulate_specs`).
 
     Returns
     -------
@@ -497,5 +506,5 @@ def simulate_cases(p, runs: int, seed: int, *, options=None, plant=None, noise_s
     else:
         keys = [((o, c), (p, c, o)) for o in options for c in CASES]
     data = simulate_specs([s for _, s in keys], runs, seed, keep=keep, plant=plant, noise_std=noise_std,
-                          engine=engine)
+                          engine=engine, seeds=seeds)
     return {k: d for (k, _), d in zip(keys, data, strict=True)}

@@ -273,3 +273,24 @@ def test_compiled_engine_equals_numpy_engine_and_switches_at_t_filter():
         assert np.array_equal(d["y_fb"][before], d["y_m"][before])  # raw before t_filter
         assert np.array_equal(d["y_fb"][~before], d[fed][~before])  # then the case's signal
         assert not np.array_equal(d["y_fb"], d[fed]) or case == "nofilter"
+
+
+def test_runs_in_parts_give_every_runs_numbers_and_the_first_parts_traces():
+    """Above its part, simulate_main simulates the runs a part at a time (memory bounded by the part): every run's
+    per-run numbers equal one simulation's bit for bit, the traces are those of the first part's runs."""
+    p = dataclasses.replace(PAPER, t_end=6.0, t_steady=3.0)
+    whole, m_whole = ckf.simulate_main(p, 5, 4)
+    data, m = ckf.simulate_main(p, 5, 4, part=2)
+    assert set(m) == set(m_whole) == set(CASES)
+    for case in CASES:
+        assert set(m[case]) == set(m_whole[case])
+        for k, v in m_whole[case].items():
+            assert v.shape == (5,)
+            np.testing.assert_array_equal(m[case][k], v, err_msg=f"{case} {k}")
+        for s in SIGNALS:
+            assert data[case][s].shape[1] == 2
+            np.testing.assert_array_equal(data[case][s], whole[case][s][:, :2], err_msg=f"{case} {s}")
+    with pytest.raises(ValueError, match="part must be at least 1"):
+        ckf.simulate_main(p, 5, 4, part=0)
+    with pytest.raises(ValueError, match="seeds must hold one seed per run"):
+        simulate_cases(p, 2, 4, seeds=[1])
