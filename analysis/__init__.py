@@ -42,10 +42,13 @@ STUDIES = {
 #: measured at 300 and 3000 --quick runs, 300 and 900 full; was 0.97 and 2.4 MB a run at every run count).
 #: differential-estimator, likewise above 128 runs (``example1/example2.RUNS_PER_PART``): base the 128-run peak (166 MB
 #: --quick, 1.29 GB full), slope 23 kB a run (300 and 3000 --quick runs; the full runs' slope, 200 and 500, was below
-#: the noise and the values kept per run do not depend on the horizon), was 0.58 and 4.3 MB.
+#: the noise and the values kept per run do not depend on the horizon), was 0.58 and 4.3 MB. ckf keeps the traces of
+#: ``analysis.ckf.RUNS_PER_PART`` = 128 runs and simulates the rest that many at a time keeping their window sums: base
+#: the 128-run peak (458 MB --quick, 1.40 GB full), slope 1.1 and 0.8 kB a run (2000 --quick runs, 600 full), was 3.1
+#: and 9.6 MB.
 MEMORY = {
     "ikf-mfac": {"quick": (280087520, 1514), "full": (304087616, 524)},
-    "ckf": {"quick": (69324800, 3090432), "full": (154439680, 9568256)},
+    "ckf": {"quick": (457876191, 1050), "full": (1398118434, 815)},
     "differential-estimator": {"quick": (165793792, 23339), "full": (1291825152, 23339)},
     "meso": {"quick": (97652280, 11104), "full": (242845468, 95239)},
     "pendulum": {"quick": (359657472, 15067), "full": (698535936, 703)},

@@ -20,7 +20,8 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 POINTS = {"quick": (10, 210), "full": (5, 105)}
 #: A study that reduces its runs chunk by chunk is measured past its chunk (ikf-mfac's TABLE_CHUNK, 2000 runs;
-#: meso's ROWS_PER_PART, pendulum's RUNS_PER_PART), where only what it keeps per run still grows; below the chunk
+#: meso's ROWS_PER_PART, pendulum's, differential-estimator's and ckf's
+#: RUNS_PER_PART), where only what it keeps per run still grows; below the chunk
 #: its peak is at most the first point's.
 POINTS_FOR = {"ikf-mfac": {"quick": (2000, 20000), "full": (2000, 8000)},
               # meso simulates at most analysis.meso.loops.ROWS_PER_PART rows (3 per run) at a time
@@ -28,7 +29,9 @@ POINTS_FOR = {"ikf-mfac": {"quick": (2000, 20000), "full": (2000, 8000)},
               # pendulum reduces a case's runs analysis.pendulum.loops.RUNS_PER_PART at a time above that many
               "pendulum": {"quick": (256, 3000), "full": (256, 900)},
               # differential-estimator reduces parts of example1/example2.RUNS_PER_PART runs above that many
-              "differential-estimator": {"quick": (300, 3000), "full": (200, 500)}}
+              "differential-estimator": {"quick": (300, 3000), "full": (200, 500)},
+              # ckf keeps the traces of analysis.ckf.RUNS_PER_PART runs and simulates the rest that many at a time
+              "ckf": {"quick": (128, 2000), "full": (128, 600)}}
 
 CHILD = """
 import json, resource, sys, tempfile, warnings
