@@ -217,6 +217,14 @@ def plot_second_plant(data, name, reference, t_steady, run=0, t_filter=None, of=
 PLANT2_FORMULA = {"resonant-delay": "9 / ((s² + 0.9 s + 9)(s + 1)) · e^(−0.1 s)"}
 
 
+def _traced_note(runs, traced) -> str:
+    """A caption's note when the figures draw the first ``traced`` of ``runs`` runs: above
+    :data:`analysis.ckf.RUNS_PER_PART` runs only the first part's traces are kept
+    (:func:`analysis.ckf.simulate_main`)."""
+    return (f" Bands, means and shares over the first {traced} of the {runs} runs, whose traces are kept (finding "
+            "traced-runs)." if runs > traced else "")
+
+
 def save_all(ctx, result, p, data, data_f, extra, ident):
     """Draw and save Fig. 2-12 with their captions (``ident``: :func:`.beyond.ablation`'s bounds and progress)."""
     from .beyond import Q_SWEEP
@@ -224,10 +232,8 @@ def save_all(ctx, result, p, data, data_f, extra, ident):
     from .quantities import TABLE1_ROWS, noise_free_fit
 
     bounds, _ = ident
-    runs, traced = result.seeds["runs"], data["ckf"]["y"].shape[1]
-    # above RUNS_PER_PART runs only the first part's traces are kept (simulate_main)
-    subset = (f" Bands, means and shares over the first {traced} of the {runs} runs, whose traces are kept (finding "
-              "traced-runs)." if runs > traced else "")
+    runs = result.seeds["runs"]
+    subset = _traced_note(runs, data["ckf"]["y"].shape[1])
     id_note = {"lpf": "the characteristic model identified online from the LPF output",
                "raw": "the characteristic model identified online from the measurement"}
     for no, case in ((2, "nofilter"), (3, "lpf"), (4, "ckf")):
