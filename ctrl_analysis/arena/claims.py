@@ -12,8 +12,9 @@ after the transient, each family tuned for it (the papers compare mean errors); 
 *holds* when it is more accurate than every claimed loser in every case (signal class × noise
 class × noise bound) of the claim's classes, *fails* when it is less accurate in every case,
 *mixed* otherwise, and *untestable* when the claim cannot be put to the arena's estimators (the
-check says why) or its classes were not run. A loser may be a fixed configuration
-``(family, parameters)`` rather than a tuned family (e.g. the raw backward difference).
+check says why) or its classes were not run. A winner or a loser may be a fixed configuration
+``(family, parameters)`` rather than a tuned family: the raw backward difference, or a paper's
+printed gains (an estimator run at given parameters only, :data:`~.interface.GIVEN`).
 """
 
 from __future__ import annotations
@@ -23,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._validate import check_finite, check_in, check_str
-from .interface import FAMILIES, family
+from .interface import FAMILIES, GIVEN, family
 
 __all__ = ["VERDICT_TEXT", "ClaimCheck", "fixed_configurations", "judge_claims", "register_claim_check",
            "registered_claim_checks"]
@@ -42,8 +43,9 @@ class ClaimCheck:
     claim : str
         ``"<study>/<claim id>"`` of the study's judged claim.
     winners, losers : tuple
-        Family names claimed better / worse; a loser may also be ``(family, parameters)``, a fixed
-        configuration. Both empty: the claim cannot be put to the arena (``how`` says why).
+        Family names claimed better / worse; either may also be ``(family, parameters)``, a fixed
+        configuration (of a tuned family or of :data:`~.interface.GIVEN`). Both empty: the claim cannot
+        be put to the arena (``how`` says why).
     signals : tuple of str
         Signal classes it is judged on (empty: every class of the run).
     statement : str
@@ -70,17 +72,20 @@ class ClaimCheck:
             raise ValueError(f"winners and losers must both be given or both be empty, got {self.winners!r} and "
                              f"{self.losers!r}")
         names = [f.name for f in FAMILIES]
-        for w in self.winners:
-            check_in("winners", w, names)
-        for lo in self.losers:
-            if not isinstance(lo, str) and not (isinstance(lo, tuple) and len(lo) == 2 and isinstance(lo[1], tuple)):
-                raise TypeError(f"losers must hold family names or (family, parameter tuple) pairs, got {lo!r:.80}")
-            fam = family(check_in("losers", lo if isinstance(lo, str) else lo[0], names))
-            if not isinstance(lo, str):
-                row = np.asarray(check_finite("losers parameters", lo[1]), dtype=float)
+        given = names + [f.name for f in GIVEN]
+        for side in ("winners", "losers"):
+            for x in getattr(self, side):
+                if isinstance(x, str):  # a tuned family
+                    check_in(side, x, names)
+                    continue
+                if not (isinstance(x, tuple) and len(x) == 2 and isinstance(x[1], tuple)):
+                    raise TypeError(f"{side} must hold family names or (family, parameter tuple) pairs, got "
+                                    f"{x!r:.80}")
+                fam = family(check_in(side, x[0], given), given=True)
+                row = np.asarray(check_finite(f"{side} parameters", x[1]), dtype=float)
                 if row.shape != (len(fam.params),):
-                    raise ValueError(f"losers parameters of {fam.name} must have {len(fam.params)} entries, got "
-                                     f"{lo[1]!r}")
+                    raise ValueError(f"{side} parameters of {fam.name} must have {len(fam.params)} entries, got "
+                                     f"{x[1]!r}")
         for sig in self.signals:
             check_str("signals", sig)
         check_str("statement", self.statement)
@@ -135,13 +140,13 @@ def fixed_configurations(checks=None) -> list:
     if checks is not None and (not isinstance(checks, (list, tuple)) or
                                not all(isinstance(c, ClaimCheck) for c in checks)):
         raise TypeError(f"checks must be a list of ClaimCheck or None, got {checks!r:.80}")
-    return list(dict.fromkeys((lo[0], tuple(float(v) for v in lo[1]))
+    return list(dict.fromkeys((x[0], tuple(float(v) for v in x[1]))
                               for chk in (registered_claim_checks() if checks is None else checks)
-                              for lo in chk.losers if not isinstance(lo, str)))
+                              for x in chk.winners + chk.losers if not isinstance(x, str)))
 
 
-def _loser_errors(lo, cases, table, setup, fixed) -> tuple:
-    """``(label, RMS error per case)`` of a loser: a tuned family's best, or a fixed configuration (from
+def _side_errors(lo, cases, table, setup, fixed) -> tuple:
+    """``(label, RMS error per case)`` of a winner or loser: a tuned family's best, or a fixed configuration (from
     ``fixed`` where it has every case, else evaluated here)."""
     if isinstance(lo, str):
         return lo, np.array([table[lo][c.key]["rms"] for c in cases])
@@ -149,7 +154,7 @@ def _loser_errors(lo, cases, table, setup, fixed) -> tuple:
 
     name, params = lo[0], np.asarray(lo[1], dtype=float)
     label = f"{name} fixed at " + ", ".join(f"{p.name} = {v:g}" for p,
-                                            v in zip(family(name).params, params, strict=True))
+                                            v in zip(family(name, given=True).params, params, strict=True))
     known = fixed.get((name, tuple(float(v) for v in params)), {})
     if all(c.key in known for c in cases):
         return label, np.array([known[c.key] for c in cases], dtype=float)
@@ -205,7 +210,7 @@ def judge_claims(result, cases, table, setup, checks=None, fixed=None) -> list:
         run = [c for c in cases if not chk.signals or c.signal in chk.signals]
         study, cid = chk.claim.split("/")
         fid = f"claim-{study}-{cid}"
-        missing = [f for f in chk.winners + tuple(x for x in chk.losers if isinstance(x, str)) if f not in table]
+        missing = [f for f in chk.winners + chk.losers if isinstance(f, str) and f not in table]
         if not chk.winners or not run or missing:
             why = (chk.how if not chk.winners else f"its signal classes ({', '.join(chk.signals)}) were not run"
                    if not run else f"the families {', '.join(missing)} were not run")
@@ -213,10 +218,10 @@ def judge_claims(result, cases, table, setup, checks=None, fixed=None) -> list:
             text = f"{study} claim '{cid}' — {chk.statement}: {VERDICT_TEXT[verdict]}: {why}."
         else:
             parts, evidence, wins_all = [], {}, []
-            for w in chk.winners:
-                ew = np.array([table[w][c.key]["rms"] for c in run])
+            for win in chk.winners:
+                w, ew = _side_errors(win, run, table, setup, fixed)
                 for lo in chk.losers:
-                    label, el = _loser_errors(lo, run, table, setup, fixed)
+                    label, el = _side_errors(lo, run, table, setup, fixed)
                     ratio = el / ew
                     wins_all.append(ratio > 1.0)
                     evidence[f"{label} / {w}"] = {c.key: float(r) for c, r in zip(run, ratio, strict=True)}
@@ -225,9 +230,14 @@ def judge_claims(result, cases, table, setup, checks=None, fixed=None) -> list:
                                  f"{len(run)})")
             verdict = _verdict(np.concatenate(wins_all))
             signals = ", ".join(sorted({c.signal for c in run}))
-            text = (f"{study} claim '{cid}' — {chk.statement}: {VERDICT_TEXT[verdict]}. Each family tuned to its "
-                    f"best RMS error on {len(run)} case{'s' if len(run) != 1 else ''} ({signals}): "
-                    + "; ".join(parts) + f". Reading: {chk.how}.")
+            said, tuned = VERDICT_TEXT[verdict], "Each family tuned to its best RMS error"
+            if any(not isinstance(x, str) for x in chk.winners + chk.losers):
+                # a fixed configuration is run as given: the verdict is not "at best tuning" for it
+                said = said.replace(" at best tuning", " (tuned families at their best, fixed configurations as "
+                                                       "given)")
+                tuned = "Each tuned family at its best RMS error, each fixed configuration as given,"
+            text = (f"{study} claim '{cid}' — {chk.statement}: {said}. {tuned} on {len(run)} "
+                    f"case{'s' if len(run) != 1 else ''} ({signals}): " + "; ".join(parts) + f". Reading: {chk.how}.")
         result.finding(fid, text, evidence, claim=chk.claim, claim_verdict=verdict)
         out.append((chk.claim, verdict))
     return out

@@ -44,7 +44,7 @@ from ..estimators.tracking import TrackingDifferentiator
 from ..polynomials import repeated_pole_coefficients
 from .algebraic import MAX_WINDOW, algebraic_derivative
 
-__all__ = ["FAMILIES", "Family", "Param", "estimate", "family", "scales"]
+__all__ = ["FAMILIES", "GIVEN", "SIGMA_ORDER", "Family", "Param", "estimate", "family", "scales"]
 
 #: Integration substeps (RK4) per sample for the continuous families; every grid keeps ``ω dt <= 1``.
 SUBSTEPS = 2
@@ -63,9 +63,11 @@ class Param:
         Which scale sets the reference: ``"omega"`` (``√(L/ε)``, rad/s), ``"tau"`` (``1/√(L/ε)``, s),
         ``"eps"``, ``"L"``, ``"lambda"`` (Kalata's α-β index at ``ω = √(L/ε)``: ``(ω dt)²``),
         ``"lambda3"`` (the α-β-γ index at that ``ω``: ``(ω dt)³``, for small ``Λ`` the third gain is
-        ``γ/(2T²) ≈ ω³ T``) or ``"window"`` (samples spanning ``2/ω``).
+        ``γ/(2T²) ≈ ω³ T``), ``"window"`` (samples spanning ``2/ω``) or ``"given"`` (no reference: a value
+        of an estimator run at given parameters only, :data:`GIVEN`).
     lo, hi : float
-        Search range as multiples of the reference (log scale).
+        Search range as multiples of the reference (log scale); for ``"given"``, the values allowed,
+        ``(lo, hi]``.
     integer : bool
         Rounded to an integer (and to ``>= 2`` for a window).
     """
@@ -102,12 +104,18 @@ class Family:
     fixed: dict = field(default_factory=dict)
 
 
+#: Σ's order ``n0`` per family; its fastest closed-loop pole is the breakaway double pole ``-n0 a``.
+SIGMA_ORDER = {"sigma": 3, "sigma5": 5}
 #: Han's fal exponents of the 3-state NESO (Han 2009; the textbook choice 1, 1/2, 1/4).
 NESO_ALPHA = (1.0, 0.5, 0.25)
 
 FAMILIES = (
     Family("sigma", "Σ, n0 = 3 (breakaway gain)", (Param("a", "omega", 0.1 / 3, 10.0 / 3),), True,
            "estimators.differential.DifferentialEstimator + _kernels.sigma_rhs"),
+    # the differential-estimator paper's own order: its double pole at the breakaway point -5a is the fastest
+    Family("sigma5", "Σ, n0 = 5 (breakaway gain; the differential-estimator paper's order)",
+           (Param("a", "omega", 0.1 / 5, 10.0 / 5),), True,
+           "estimators.differential.DifferentialEstimator(5) + _kernels.sigma_rhs"),
     Family("leso2", "linear ESO, 2 states (ω_o)", (Param("omega_o", "omega", 0.1, 10.0),), False,
            "estimators.eso.ExtendedStateObserver.from_bandwidth(1, ω_o) + _kernels.eso_rhs"),
     Family("leso3", "linear ESO, 3 states (ω_o)", (Param("omega_o", "omega", 0.1, 10.0),), True,
@@ -131,14 +139,25 @@ FAMILIES = (
            True, "arena.algebraic.algebraic_derivative (FIR, vectorised numpy)"),
 )
 
+#: Estimators run at given parameters only, never tuned: a paper's printed gains, as a fixed configuration
+#: ``(name, parameters)`` of a claim check (:mod:`.claims`) or :func:`estimate`. A ``"given"`` parameter is used as
+#: given, within ``(lo, hi]``.
+GIVEN = (
+    Family("ab", "α-β filter at given gains (α, β), e.g. a paper's printed ones",
+           (Param("alpha", "given", 0.0, 2.0), Param("beta", "given", 0.0, 4.0)), False,
+           "estimators.kalman.AlphaBetaFilter(α, β, dt)"),
+)
 
-def family(name: str) -> Family:
+
+def family(name: str, *, given: bool = False) -> Family:
     """The family called ``name``.
 
     Parameters
     ----------
     name : str
-        One of the names in :data:`FAMILIES`.
+        One of the names in :data:`FAMILIES` (or :data:`GIVEN` with ``given=True``).
+    given : bool
+        Accept the estimators run at given parameters only (:data:`GIVEN`), which are not tuned.
 
     Returns
     -------
@@ -149,9 +168,10 @@ def family(name: str) -> Family:
     ValueError
         For an unknown name (the message lists the names).
     """
-    names = [f.name for f in FAMILIES]
+    known = FAMILIES + GIVEN if given else FAMILIES
+    names = [f.name for f in known]
     check_in("family name", name, names)
-    return FAMILIES[names.index(name)]
+    return known[names.index(name)]
 
 
 def scales(eps: float, L: float, dt: float) -> dict:
@@ -244,9 +264,10 @@ def _build(fam: Family, P: np.ndarray, dt: float):
     The block is built with the first run's values; the per-run values (``Loop.simulate(params=...)``)
     rebuild it per distinct value, one kernel parameter row per run.
     """
-    if fam.name == "sigma":
+    if fam.name in SIGMA_ORDER:
         a = P[:, 0]
-        return DifferentialEstimator(3, a[0]), ("y",), ("xhat[0]", "xhat[1]", "xhat[2]"), {"a": a}
+        n0 = SIGMA_ORDER[fam.name]  # f, f', f'' are its first three estimates
+        return DifferentialEstimator(n0, a[0]), ("y",), signal_names("xhat", n0), {"a": a}
     if fam.name in ("leso2", "leso3", "neso"):
         m = 2 if fam.name == "leso2" else 3
         gains = np.array([repeated_pole_coefficients(m, w)[1:] for w in P[:, 0]])
@@ -265,6 +286,9 @@ def _build(fam: Family, P: np.ndarray, dt: float):
     if fam.name == "kalman":
         alpha, beta = kalata_gains(P[:, 0])
         return AlphaBetaFilter(alpha[0], beta[0], dt), ("y",), ("xhat[0]", "xhat[1]"), {"alpha": alpha, "beta": beta}
+    if fam.name == "ab":
+        return (AlphaBetaFilter(P[0, 0], P[0, 1], dt), ("y",), ("xhat[0]", "xhat[1]"),
+                {"alpha": P[:, 0], "beta": P[:, 1]})
     if fam.name == "abg":
         alpha, beta, gamma = _abg_gains(P[:, 0])
         block = _AlphaBetaGamma(alpha[0], beta[0], gamma[0], dt)
@@ -285,6 +309,9 @@ def _check_params(fam: Family, P: np.ndarray) -> None:
             raise ValueError(f"P column {j} ({fam.name} parameter {p.name}) must be integers, got {col.tolist()!r:.80}")
         if p.ref == "one" and np.any((col < p.lo) | (col > p.hi)):
             raise ValueError(f"P column {j} ({fam.name} parameter {p.name}) must be in [{p.lo:g}, {p.hi:g}], "
+                             f"got {col.tolist()!r:.80}")
+        if p.ref == "given" and np.any(col > p.hi):
+            raise ValueError(f"P column {j} ({fam.name} parameter {p.name}) must be in ({p.lo:g}, {p.hi:g}], "
                              f"got {col.tolist()!r:.80}")
         if p.ref == "window" and np.any(col > MAX_WINDOW):
             raise ValueError(f"P column {j} ({fam.name} parameter {p.name}) must be <= MAX_WINDOW = {MAX_WINDOW} "
@@ -330,7 +357,7 @@ def estimate(fam, P, y, dt: float, *, engine: str = "auto") -> np.ndarray:
     1.99
     """
     if isinstance(fam, str):
-        fam = family(check_in("fam (family name)", fam, [f.name for f in FAMILIES]))
+        fam = family(check_in("fam (family name)", fam, [f.name for f in FAMILIES + GIVEN]), given=True)
     elif not isinstance(fam, Family):
         raise TypeError(f"fam must be a Family or a family name, got {fam!r:.80}")
     dt = float(check_positive("dt", dt, scalar=True))
@@ -350,7 +377,7 @@ def estimate(fam, P, y, dt: float, *, engine: str = "auto") -> np.ndarray:
     except ValueError as exc:  # a block's own check (gains overflowing, an unstable filter): the values come from P
         raise ValueError(f"P ({fam.name} parameters {', '.join(p.name for p in fam.params)}) gives no valid "
                          f"estimator: {exc}") from None
-    continuous = fam.name in ("sigma", "leso2", "leso3", "neso")
+    continuous = fam.name in ("sigma", "sigma5", "leso2", "leso3", "neso")
     loop = Loop([place(block, "est", inputs=[f"_{s}" for s in block.inputs], outputs=list(outs))], dt,
                 substeps=SUBSTEPS if continuous else 1)
     inputs = {f"_{ins[0]}": y}

@@ -37,7 +37,7 @@ from .._validate import (
 )
 from ..metrics import rmse
 from ..runs.chains import drive
-from .interface import FAMILIES, OMEGA_DT_MAX, Family, estimate, family, scales
+from .interface import FAMILIES, GIVEN, OMEGA_DT_MAX, SIGMA_ORDER, Family, estimate, family, scales
 from .recordcheck import MAX_ROWS
 from .signals import (
     add_noise,
@@ -206,8 +206,8 @@ def param_values(fam: Family, z, case: Case, setup: Setup) -> np.ndarray:
             continue
         with np.errstate(over="ignore", under="ignore"):  # a z beyond exp's range: refused below
             v = sc[p.ref] * np.exp(z[:, j])
-        if p.ref == "omega":  # fastest pole ω (Σ: 3a) at most OMEGA_DT_MAX / dt
-            pole = 3.0 if fam.name == "sigma" else 1.0
+        if p.ref == "omega":  # fastest pole ω (Σ: n0 a) at most OMEGA_DT_MAX / dt
+            pole = float(SIGMA_ORDER.get(fam.name, 1))
             v = np.minimum(v, OMEGA_DT_MAX / (pole * setup.dt))
         if p.ref == "tau":
             v = np.maximum(v, setup.dt)
@@ -261,7 +261,7 @@ def evaluate(task) -> np.ndarray:
     for cls in (task[5] if len(task) == 6 else {}).values():
         if cls.name not in known:
             register_signal_class(cls.name, cls.description, cls.generate, cls.bound_how)
-    fam = family(name)
+    fam = family(name, given=True)  # a fixed configuration may be a given-gains estimator
     records = {}
     out = np.empty((len(configs), len(METRICS)))
     per = 2 * len(cases[0].seeds)
@@ -295,7 +295,7 @@ def _check_task(task) -> tuple:
     name, setup, cases, configs, engine = task[:5]
     if len(task) == 6 and not isinstance(task[5], dict):
         raise TypeError(f"task classes must be a dict of registered signal classes, got {task[5]!r:.80}")
-    fam = family(check_in("task family", name, [f.name for f in FAMILIES]))
+    fam = family(check_in("task family", name, [f.name for f in FAMILIES + GIVEN]), given=True)
     if not isinstance(setup, Setup):
         raise TypeError(f"task setup must be a Setup, got {setup!r:.80}")
     if not isinstance(cases, (tuple, list)) or not cases or not all(isinstance(c, Case) for c in cases):

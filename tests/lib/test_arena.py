@@ -9,7 +9,7 @@ from ctrl_analysis.arena.algebraic import (
     algebraic_derivative,
     algebraic_weights,
 )
-from ctrl_analysis.arena.interface import FAMILIES, estimate, family, scales
+from ctrl_analysis.arena.interface import FAMILIES, SIGMA_ORDER, estimate, family, scales
 from ctrl_analysis.arena.recommend import ArenaSettings
 from ctrl_analysis.arena.recordcheck import MAX_RECORDS, MAX_ROWS
 from ctrl_analysis.arena.signals import (
@@ -263,3 +263,30 @@ def test_sizes_of_the_tuning_have_a_maximum_and_are_checked_before_any_work(monk
     with pytest.raises(ValueError, match="z must give td parameter values"):
         param_values(family("td"), [[-1e300, 0.5]], case, setup)
     assert np.all(param_values(family("td"), [[0.0, 0.5]], case, setup) > 0)
+
+
+@pytest.mark.parametrize("name", sorted(SIGMA_ORDER))
+def test_sigma_families_fastest_pole_is_n0_a_and_is_capped_by_the_sample_period(name):
+    from ctrl_analysis.arena.tuning import Case, Setup, param_values
+    from ctrl_analysis.estimators.differential import DifferentialEstimator
+
+    n0, a = SIGMA_ORDER[name], 2.0
+    poles = np.roots(np.r_[1.0, DifferentialEstimator(n0, a).a_coeffs])
+    assert np.max(np.abs(poles)) == pytest.approx(n0 * a, rel=1e-6)  # the breakaway double pole -n0 a
+    setup = Setup(dt=0.01, n=300, transient=1.0)
+    v = param_values(family(name), [[50.0]], Case("sines", "uniform", 1e-6, 1e6, (1,)), setup)
+    assert v[0, 0] * n0 * setup.dt == pytest.approx(1.0)  # OMEGA_DT_MAX = 1
+
+
+def test_the_given_gains_filter_runs_as_given_and_is_never_tuned():
+    from ctrl_analysis.arena.tuning import Case, Setup, tune_family
+    from ctrl_analysis.estimators.kalman import AlphaBetaFilter
+
+    y = _record(n=120)
+    est = estimate("ab", [[0.95, 0.863]] * y.shape[1], y, DT, engine="numpy")
+    ref, _ = AlphaBetaFilter(0.95, 0.863, DT).run(y[:, :, None])  # (N, B, [x̂, v̂])
+    np.testing.assert_allclose(est[:, :, :2], ref, rtol=1e-12, atol=1e-12)
+    with pytest.raises(ValueError, match=r"alpha\) must be in \(0, 2\]"):
+        estimate("ab", [[2.5, 0.5]], y[:, :1], DT)
+    with pytest.raises(ValueError, match="family name"):
+        tune_family("ab", [Case("sines", "uniform", 0.01, 2.0, (1,))], Setup(dt=DT, n=120, transient=0.1))

@@ -107,3 +107,18 @@ def test_cli_reads_the_arena_links_for_the_report(tmp_path):
     (tmp_path / "arena").mkdir()
     (tmp_path / "arena" / "results.json").write_text(json.dumps(arena.to_dict(), default=str))
     assert _arena_links(tmp_path) == {"demo/a-beats-b": "[arena: does not hold at best tuning](#estimator-arena)"}
+
+
+def test_a_fixed_winner_at_given_gains_is_run_as_given_and_the_verdict_says_so():
+    # the α-β filter at α = β = 1 is the backward difference: x̂_k = y_k and v̂_k = (y_k - y_(k-1)) / T
+    # (the prediction y_(k-1) + T v̂_(k-1) is corrected by β/T times its error), so against the raw backward
+    # difference (algebraic, window 2, degree 1) every ratio is 1
+    chk = _check(winners=(("ab", (1.0, 1.0)),), losers=(("algebraic", (2.0, 1.0)),))
+    r = StudyResult(INFO)
+    judge_claims(r, CASES, {}, SETUP, checks=[chk])
+    f = r.findings[0]
+    ratios = list(f["evidence"]["algebraic fixed at window = 2, degree = 1 / ab fixed at alpha = 1, beta = 1"].values())
+    assert ratios == pytest.approx([1.0] * 3, rel=1e-9)
+    assert "fixed configurations as given" in f["text"] and "at best tuning" not in f["text"]
+    with pytest.raises(ValueError, match="winners"):
+        _check(winners=("ab",))  # a given-gains estimator is not tuned: only as a fixed configuration
