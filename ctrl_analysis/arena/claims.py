@@ -26,9 +26,14 @@ import numpy as np
 from .._validate import check_finite, check_in, check_str
 from .interface import FAMILIES, GIVEN, family
 
-__all__ = ["VERDICT_TEXT", "ClaimCheck", "fixed_configurations", "judge_claims", "register_claim_check",
-           "registered_claim_checks"]
+__all__ = ["MEASURES", "VERDICT_TEXT", "ClaimCheck", "fixed_configurations", "judge_claims", "register_claim_check",
+           "registered_claim_checks", "tuned_for_signal"]
 
+#: What a claim may be judged on: the RMS error of the derivative estimate f̂' (x2) and of the signal estimate f̂
+#: (x1), each family tuned for that measure (:data:`~.tuning.COSTS`).
+MEASURES = {"rms": "RMS error of f̂'", "rms_f": "RMS error of f̂"}
+#: A ratio within this of 1 is counted as a near tie in a verdict's text (the verdict itself is strict).
+TIE = 0.01
 #: How each verdict reads in a report.
 VERDICT_TEXT = {"holds": "holds at best tuning", "fails": "does not hold at best tuning",
                 "mixed": "holds in some cases only, at best tuning", "untestable": "not testable in the arena"}
@@ -52,6 +57,9 @@ class ClaimCheck:
         The claim, in the arena's words.
     how : str
         How the arena reads it, or why it cannot.
+    measures : tuple of str
+        What it is judged on, keys of :data:`MEASURES` (default the derivative's RMS error; a paper that claims
+        the signal and its derivative: ``("rms_f", "rms")``). It holds only where it holds on each.
     """
 
     claim: str
@@ -60,6 +68,7 @@ class ClaimCheck:
     signals: tuple
     statement: str
     how: str
+    measures: tuple = ("rms",)
 
     def __post_init__(self):
         check_str("claim", self.claim)
@@ -88,6 +97,11 @@ class ClaimCheck:
                                      f"{x[1]!r}")
         for sig in self.signals:
             check_str("signals", sig)
+        if not isinstance(self.measures, tuple) or not self.measures:
+            raise TypeError(f"measures must be a non-empty tuple of names from {list(MEASURES)}, got "
+                            f"{self.measures!r:.80}")
+        for m in self.measures:
+            check_in("measures", m, list(MEASURES))
         check_str("statement", self.statement)
         check_str("how", self.how)
 
@@ -145,21 +159,43 @@ def fixed_configurations(checks=None) -> list:
                               for x in chk.winners + chk.losers if not isinstance(x, str)))
 
 
-def _side_errors(lo, cases, table, setup, fixed) -> tuple:
-    """``(label, RMS error per case)`` of a winner or loser: a tuned family's best, or a fixed configuration (from
-    ``fixed`` where it has every case, else evaluated here)."""
+def _side_errors(lo, cases, table, setup, fixed, measure="rms") -> tuple:
+    """``(label, error per case)`` of a winner or loser on ``measure`` (:data:`MEASURES`): a tuned family's best for
+    it, or a fixed configuration (from ``fixed`` where it has every case, else evaluated here)."""
     if isinstance(lo, str):
-        return lo, np.array([table[lo][c.key]["rms"] for c in cases])
-    from .tuning import evaluate
+        return lo, np.array([table[lo][c.key][measure] for c in cases])
+    from .tuning import METRICS, evaluate
 
     name, params = lo[0], np.asarray(lo[1], dtype=float)
     label = f"{name} fixed at " + ", ".join(f"{p.name} = {v:g}" for p,
                                             v in zip(family(name, given=True).params, params, strict=True))
     known = fixed.get((name, tuple(float(v) for v in params)), {})
-    if all(c.key in known for c in cases):
+    # a value is the derivative's RMS error, or a dict by measure
+    known = {k: (v.get(measure) if isinstance(v, dict) else v if measure == "rms" else None) for k, v in known.items()}
+    if all(known.get(c.key) is not None for c in cases):
         return label, np.array([known[c.key] for c in cases], dtype=float)
     m = evaluate((name, setup, tuple(cases), [(i, params) for i in range(len(cases))], "auto"))
-    return label, m[:, 1]
+    return label, m[:, METRICS.index(measure)]
+
+
+def tuned_for_signal(checks=None) -> set:
+    """The tuned families a claim check judges on the signal estimate f̂ (measure ``"rms_f"``): the arena tunes
+    them for it too.
+
+    Parameters
+    ----------
+    checks : list of ClaimCheck, optional
+        Default: the registered ones.
+
+    Returns
+    -------
+    set of str
+    """
+    if checks is not None and (not isinstance(checks, (list, tuple)) or
+                               not all(isinstance(c, ClaimCheck) for c in checks)):
+        raise TypeError(f"checks must be a list of ClaimCheck or None, got {checks!r:.80}")
+    return {x for chk in (registered_claim_checks() if checks is None else checks) if "rms_f" in chk.measures
+            for x in chk.winners + chk.losers if isinstance(x, str)}
 
 
 def _verdict(wins: np.ndarray) -> str:
@@ -175,13 +211,15 @@ def judge_claims(result, cases, table, setup, checks=None, fixed=None) -> list:
         The arena's record.
     cases : list of Case
     table : dict
-        ``table[family][case key]`` with ``"rms"`` (the RMS-tuned error), from the arena's run.
+        ``table[family][case key]`` with ``"rms"`` (the RMS-tuned error of f̂') and, for a check judged on it,
+        ``"rms_f"`` (of f̂, tuned for it), from the arena's run.
     setup : Setup
     checks : list of ClaimCheck, optional
         Default: the registered ones.
     fixed : dict, optional
-        RMS errors of the fixed configurations (:func:`fixed_configurations`) evaluated beforehand:
-        ``{(family, parameter tuple): {case key: RMS error of f̂'}}``; the others are evaluated here.
+        Errors of the fixed configurations (:func:`fixed_configurations`) evaluated beforehand:
+        ``{(family, parameter tuple): {case key: RMS error of f̂', or {measure: error}}}``; the others are
+        evaluated here.
 
     Returns
     -------
@@ -218,24 +256,27 @@ def judge_claims(result, cases, table, setup, checks=None, fixed=None) -> list:
             text = f"{study} claim '{cid}' — {chk.statement}: {VERDICT_TEXT[verdict]}: {why}."
         else:
             parts, evidence, wins_all = [], {}, []
-            for win in chk.winners:
-                w, ew = _side_errors(win, run, table, setup, fixed)
-                for lo in chk.losers:
-                    label, el = _side_errors(lo, run, table, setup, fixed)
-                    ratio = el / ew
-                    wins_all.append(ratio > 1.0)
-                    evidence[f"{label} / {w}"] = {c.key: float(r) for c, r in zip(run, ratio, strict=True)}
-                    parts.append(f"RMS error of f̂', {label} / {w}: {np.min(ratio):.2f}..{np.max(ratio):.2f} "
-                                 f"(median {np.median(ratio):.2f}; {w} better in {int(np.sum(ratio > 1))} of "
-                                 f"{len(run)})")
+            for measure in chk.measures:
+                for win in chk.winners:
+                    w, ew = _side_errors(win, run, table, setup, fixed, measure)
+                    for lo in chk.losers:
+                        label, el = _side_errors(lo, run, table, setup, fixed, measure)
+                        ratio = el / ew
+                        wins_all.append(ratio > 1.0)
+                        key = f"{label} / {w}" if measure == "rms" else f"{measure}: {label} / {w}"
+                        evidence[key] = {c.key: float(r) for c, r in zip(run, ratio, strict=True)}
+                        ties = int(np.sum(np.abs(ratio - 1.0) < TIE))
+                        parts.append(f"{MEASURES[measure]}, {label} / {w}: {np.min(ratio):.2f}..{np.max(ratio):.2f} "
+                                     f"(median {np.median(ratio):.2f}; {w} better in {int(np.sum(ratio > 1))} of "
+                                     f"{len(run)}" + (f", {ties} within {TIE:.0%} of a tie" if ties else "") + ")")
             verdict = _verdict(np.concatenate(wins_all))
             signals = ", ".join(sorted({c.signal for c in run}))
-            said, tuned = VERDICT_TEXT[verdict], "Each family tuned to its best RMS error"
+            said, tuned = VERDICT_TEXT[verdict], "Each family tuned to its best on each measure"
             if any(not isinstance(x, str) for x in chk.winners + chk.losers):
                 # a fixed configuration is run as given: the verdict is not "at best tuning" for it
-                said = said.replace(" at best tuning", " (tuned families at their best, fixed configurations as "
-                                                       "given)")
-                tuned = "Each tuned family at its best RMS error, each fixed configuration as given,"
+                said = (said.replace(", at best tuning", "").replace(" at best tuning", "")
+                        + " (tuned families at their best, fixed configurations as given)")
+                tuned = "Each tuned family at its best on each measure, each fixed configuration as given,"
             text = (f"{study} claim '{cid}' — {chk.statement}: {said}. {tuned} on {len(run)} "
                     f"case{'s' if len(run) != 1 else ''} ({signals}): " + "; ".join(parts) + f". Reading: {chk.how}.")
         result.finding(fid, text, evidence, claim=chk.claim, claim_verdict=verdict)

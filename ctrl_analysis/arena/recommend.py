@@ -21,7 +21,7 @@ from ..reporting.results import StudyInfo, StudyResult
 from ..runs.chains import drive, lockstep, pool_here
 from ..runs.parallel import chunk_slices
 from .bound import adversarial_error, adversarial_pair, lower_bound
-from .claims import VERDICT_TEXT, fixed_configurations, judge_claims
+from .claims import MEASURES, VERDICT_TEXT, fixed_configurations, judge_claims, tuned_for_signal
 from .interface import FAMILIES, estimate, family
 from .recordcheck import MAX_RECORDS
 from .signals import (
@@ -32,7 +32,7 @@ from .signals import (
     signal_classes,
     simulate_registered,
 )
-from .tuning import MAX_ROUNDS, Case, Setup, case_records, evaluate, family_chain, tune_families
+from .tuning import COSTS, MAX_ROUNDS, METRICS, Case, Setup, case_records, evaluate, family_chain, tune_families
 
 __all__ = [
     "DEFAULT",
@@ -198,9 +198,15 @@ def _adversarial_calls(names, cases, tuned, setup) -> list:
     return [(_adversarial_task, (n, cases, [b["worst"][0] for b in tuned[n]["best"]], setup)) for n in names]
 
 
+def _costs(name) -> tuple:
+    """What family ``name`` is tuned for: f̂''s worst and RMS error, and f̂'s RMS error where a claim is judged on it."""
+    return COSTS if name in tuned_for_signal() else COSTS[:2]
+
+
 def _family_chain(name, cases, s, jobs):
     """One family tuned on ``cases``, then its adversarial check there: one chain of :func:`drive`."""
-    tuned = yield from _as_calls(evaluate, family_chain(name, cases, s.setup, rounds=s.rounds, jobs=jobs))
+    tuned = yield from _as_calls(evaluate, family_chain(name, cases, s.setup, rounds=s.rounds, jobs=jobs,
+                                                        costs=_costs(name)))
     adv = yield _adversarial_calls([name], cases, {name: tuned}, s.setup)
     return tuned, adv[0]
 
@@ -214,8 +220,8 @@ def _pareto_chain(ctx, result, s, cases, jobs):
     """
     from . import figures
 
-    tuned = yield from _as_calls(evaluate, lockstep({n: family_chain(n, cases, s.setup, rounds=s.rounds, jobs=jobs)
-                                                    for n in s.families}))
+    tuned = yield from _as_calls(evaluate, lockstep({n: family_chain(n, cases, s.setup, rounds=s.rounds, jobs=jobs,
+                                                                     costs=_costs(n)) for n in s.families}))
     figures.save_pareto(ctx, result, s, cases, tuned)
     advs = yield _adversarial_calls(s.families, cases, tuned, s.setup)
     return {n: (tuned[n], a) for n, a in zip(s.families, advs, strict=True)}
@@ -223,14 +229,15 @@ def _pareto_chain(ctx, result, s, cases, jobs):
 
 def _fixed_chain(cases, setup):
     """The claim checks' fixed configurations evaluated on every case (a chain of :func:`drive`, beside the
-    tuning): ``{(family, params): {case key: RMS error}}`` for :func:`judge_claims`."""
+    tuning): ``{(family, params): {case key: {"rms": RMS error of f̂', "rms_f": of f̂}}}`` for :func:`judge_claims`."""
     confs = fixed_configurations()
     calls = [(conf, list(range(len(cases)))[sl]) for conf in confs for sl in chunk_slices(len(cases), chunks=4)]
     parts = yield [(evaluate, (name, setup, tuple(cases), [(i, np.array(params)) for i in idx], "auto"))
                    for (name, params), idx in calls]
     out = {conf: {} for conf in confs}
     for (conf, idx), m in zip(calls, parts, strict=True):
-        out[conf].update({cases[i].key: float(m[j, 1]) for j, i in enumerate(idx)})
+        out[conf].update({cases[i].key: {k: float(m[j, METRICS.index(k)]) for k in MEASURES}
+                          for j, i in enumerate(idx)})
     return out
 
 
@@ -276,6 +283,9 @@ def _tune_and_draw(ctx, result, s, cases, t0) -> tuple:
                                   "rms_params": b["rms"][0].tolist(), "rms": b["rms"][1][1],
                                   "ratio": b["worst"][1][0] / bound, "adv": a, "adv_ratio": a / bound,
                                   "bound": bound}
+            if "rms_f" in b:  # tuned for the signal estimate too (tuned_for_signal)
+                table[name][c.key].update({"rms_f_params": b["rms_f"][0].tolist(),
+                                           "rms_f": b["rms_f"][1][METRICS.index("rms_f")]})
     elapsed = time.perf_counter() - t0
     _record(result, s, cases, table, tunings)
     judge_claims(result, cases, table, s.setup, fixed=parts["fixed configurations"])

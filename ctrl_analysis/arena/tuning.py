@@ -46,12 +46,14 @@ from .signals import (
     registered_signal_classes,
 )
 
-__all__ = ["MAX_ROUNDS", "Case", "Setup", "case_records", "evaluate", "family_chain", "param_values", "pareto_front",
-           "tune_families",
-           "tune_family"]
+__all__ = ["COSTS", "MAX_ROUNDS", "METRICS", "Case", "Setup", "case_records", "evaluate", "family_chain",
+           "param_values", "pareto_front", "tune_families", "tune_family"]
 
-#: Metric columns returned by :func:`evaluate`.
-METRICS = ("worst", "rms", "lag", "noise")
+#: Metric columns returned by :func:`evaluate`: the worst and RMS error of f̂' on the noisy records, its worst error
+#: on the noise-free ones (lag), the RMS difference between the two (noise), and the RMS error of f̂ itself.
+METRICS = ("worst", "rms", "lag", "noise", "rms_f")
+#: The costs a family may be tuned for (:func:`tune_families`' ``costs``): f̂''s worst and RMS error, f̂'s RMS error.
+COSTS = ("worst", "rms", "rms_f")
 #: Runs per engine call (memory: N x runs x outputs doubles).
 RUNS_PER_CALL = 480
 #: The largest Kalata index Λ tuned (α-β and α-β-γ): beyond about 10^5 the gains round to α = 1, β = 2 (γ = 4),
@@ -254,7 +256,7 @@ def evaluate(task) -> np.ndarray:
     Returns
     -------
     numpy.ndarray, shape (len(configs), 4)
-        Columns :data:`METRICS`: worst, rms, lag, noise.
+        Columns :data:`METRICS`: worst, rms, lag, noise, rms_f.
     """
     name, setup, cases, configs, engine = _check_task(task)
     known = registered_signal_classes()
@@ -269,22 +271,26 @@ def evaluate(task) -> np.ndarray:
     k0 = setup.k_from
     for lo in range(0, len(configs), step):
         part = configs[lo:lo + step]
-        ys, truths, P = [], [], []
+        ys, truths, signals, P = [], [], [], []
         for ci, row in part:
             if ci not in records:
                 records[ci] = case_records(cases[ci], setup)
             d1, y, f = records[ci]
             ys += [y, f]
             truths.append(d1)
+            signals.append(f)
             P.append(np.tile(row, (per, 1)))
-        est = estimate(fam, np.vstack(P), np.hstack(ys), setup.dt, engine=engine)[:, :, 1]
+        both = estimate(fam, np.vstack(P), np.hstack(ys), setup.dt, engine=engine)
+        est = both[:, :, 1]
         S = per // 2
         for i in range(len(part)):
             noisy = est[k0:, i * per:i * per + S]
             clean = est[k0:, i * per + S:(i + 1) * per]
             truth = truths[i][k0:]
+            f_hat = both[k0:, i * per:i * per + S, 0]
             out[lo + i] = (np.max(np.abs(noisy - truth)), rmse(truth, noisy, axis=None),
-                           np.max(np.abs(clean - truth)), rmse(clean, noisy, axis=None))
+                           np.max(np.abs(clean - truth)), rmse(clean, noisy, axis=None),
+                           rmse(signals[i][k0:], f_hat, axis=None))
     return np.where(np.isfinite(out), out, np.inf)
 
 
@@ -326,11 +332,14 @@ def _tasks(name, setup, cases, configs, engine, jobs) -> list:
     return [(name, setup, tuple(cases), configs[a:b], engine, classes) for a, b in itertools.pairwise(bounds) if b > a]
 
 
-def _tuning(name: str, cases: list, setup: Setup, rounds: int):
+def _tuning(name: str, cases: list, setup: Setup, rounds: int, costs=COSTS[:2]):
     """One family's tuning as a generator: yields ``(configs, desc)``, is sent their metrics, returns the result.
 
-    The grid, then ``rounds`` pattern-search rounds per cost; :func:`tune_families` drives many side by side.
+    The grid, then ``rounds`` pattern-search rounds per cost (names in :data:`COSTS`); :func:`tune_families`
+    drives many side by side. Each cost's search reads only its own candidates after the grid, so adding a cost
+    leaves the others' results unchanged.
     """
+    costs = [METRICS.index(c) for c in costs]
     fam = family(name)
     grid, steps = _grid(fam)
     evaluated = [[] for _ in cases]
@@ -348,7 +357,7 @@ def _tuning(name: str, cases: list, setup: Setup, rounds: int):
 
     yield from run([grid] * len(cases), f"{name}: grid")
     best = {}
-    for cost in range(2):
+    for cost in costs:
         cur = []
         for ci in range(len(cases)):
             z, v, m = min(evaluated[ci], key=lambda e: e[2][cost])
@@ -357,7 +366,7 @@ def _tuning(name: str, cases: list, setup: Setup, rounds: int):
     step = steps.copy()
     free = np.flatnonzero(step > 0)
     for r in range(rounds):
-        for cost in range(2):
+        for cost in costs:
             cand = []
             for ci in range(len(cases)):
                 z0 = best[cost][ci][0]
@@ -378,7 +387,7 @@ def _tuning(name: str, cases: list, setup: Setup, rounds: int):
     out_best = []
     for ci, case in enumerate(cases):
         row = {}
-        for cost in range(2):
+        for cost in costs:
             z, m = best[cost][ci]
             row[METRICS[cost]] = (param_values(fam, z, case, setup)[0], m)
         out_best.append(row)
@@ -403,7 +412,7 @@ def _check_tuning(cases, setup, rounds, engine, jobs) -> tuple:
 
 
 def tune_families(names, cases, setup: Setup, *, rounds: int = 3, engine: str = "auto", jobs: int = 1,
-                  scheduler=None) -> dict:
+                  scheduler=None, costs=COSTS[:2]) -> dict:
     """Tune several families on every case, their rounds side by side (:func:`tune_family` for each).
 
     Each family's rounds are one chain of :func:`ctrl_analysis.runs.chains.drive`: in a pool each
@@ -417,6 +426,8 @@ def tune_families(names, cases, setup: Setup, *, rounds: int = 3, engine: str = 
         Family names.
     cases, setup, rounds, engine, jobs, scheduler
         As :func:`tune_family`.
+    costs : tuple of str
+        What each family is tuned for, names in :data:`COSTS` (default f̂''s worst and RMS error).
 
     Returns
     -------
@@ -434,11 +445,21 @@ def tune_families(names, cases, setup: Setup, *, rounds: int = 3, engine: str = 
     if not names or len(set(names)) != len(names):
         raise ValueError(f"names must be distinct family names, at least one, got {names}")
     cases, rounds = _check_tuning(cases, setup, rounds, engine, jobs)
-    return drive(evaluate, {n: _chain(n, cases, setup, rounds, engine, jobs) for n in names}, jobs=jobs,
+    costs = _check_costs(costs)
+    return drive(evaluate, {n: _chain(n, cases, setup, rounds, engine, jobs, costs) for n in names}, jobs=jobs,
                  scheduler=scheduler, desc="tuning" if len(names) > 1 else names[0], unit="batch")
 
 
-def family_chain(name: str, cases, setup: Setup, *, rounds: int = 3, engine: str = "auto", jobs: int = 1):
+def _check_costs(costs) -> tuple:
+    if not isinstance(costs, tuple) or not costs or len(set(costs)) != len(costs):
+        raise TypeError(f"costs must be a non-empty tuple of distinct names from {COSTS}, got {costs!r:.80}")
+    for c in costs:
+        check_in("costs", c, COSTS)
+    return costs
+
+
+def family_chain(name: str, cases, setup: Setup, *, rounds: int = 3, engine: str = "auto", jobs: int = 1,
+                 costs=COSTS[:2]):
     """One family's tuning as a chain of :func:`ctrl_analysis.runs.chains.drive` (``fn`` = :func:`evaluate`).
 
     The generator yields lists of :func:`evaluate` tasks, is sent their results, and returns what
@@ -452,6 +473,8 @@ def family_chain(name: str, cases, setup: Setup, *, rounds: int = 3, engine: str
         As :func:`tune_family`.
     jobs : int
         Processes the tasks are cut for (about four tasks per process).
+    costs : tuple of str
+        As :func:`tune_families`.
 
     Returns
     -------
@@ -459,11 +482,11 @@ def family_chain(name: str, cases, setup: Setup, *, rounds: int = 3, engine: str
     """
     family(name)
     cases, rounds = _check_tuning(cases, setup, rounds, engine, jobs)
-    return _chain(name, cases, setup, rounds, engine, jobs)
+    return _chain(name, cases, setup, rounds, engine, jobs, _check_costs(costs))
 
 
-def _chain(name, cases, setup, rounds, engine, jobs):
-    tuner = _tuning(name, cases, setup, rounds)
+def _chain(name, cases, setup, rounds, engine, jobs, costs=COSTS[:2]):
+    tuner = _tuning(name, cases, setup, rounds, costs)
     configs, _ = next(tuner)
     while True:
         tasks = _tasks(name, setup, cases, configs, engine, jobs)
@@ -496,8 +519,8 @@ def tune_family(name: str, cases, setup: Setup, *, rounds: int = 3, engine: str 
     -------
     dict
         ``evaluated``: per case, the list of ``(values, metrics)`` of every configuration;
-        ``best``: per case and cost (``"worst"``, ``"rms"``), ``(values, metrics)``; ``tunings``:
-        configurations evaluated.
+        ``best``: per case and cost (``"worst"``, ``"rms"``; :func:`tune_families` may add ``"rms_f"``),
+        ``(values, metrics)``; ``tunings``: configurations evaluated.
     """
     family(name)
     return tune_families([name], cases, setup, rounds=rounds, engine=engine, jobs=jobs, scheduler=scheduler)[name]

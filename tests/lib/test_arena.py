@@ -290,3 +290,23 @@ def test_the_given_gains_filter_runs_as_given_and_is_never_tuned():
         estimate("ab", [[2.5, 0.5]], y[:, :1], DT)
     with pytest.raises(ValueError, match="family name"):
         tune_family("ab", [Case("sines", "uniform", 0.01, 2.0, (1,))], Setup(dt=DT, n=120, transient=0.1))
+
+
+def test_the_signal_error_column_and_a_third_cost_leave_the_derivatives_tuning_unchanged():
+    from ctrl_analysis.arena.tuning import METRICS, Case, Setup, case_records, evaluate, tune_families
+
+    setup = Setup(dt=DT, n=300, transient=0.5)
+    case = Case("sines", "uniform", 0.01, 2.0, (3, 4))
+    # the raw backward difference's f̂ is the measurement: its error is the noise itself
+    m = evaluate(("algebraic", setup, (case,), [(0, np.array([2.0, 1.0]))], "numpy"))
+    _, y, f = case_records(case, setup)
+    k = setup.k_from
+    assert m[0, METRICS.index("rms_f")] == pytest.approx(np.sqrt(np.mean((y[k:] - f[k:]) ** 2)), rel=1e-9)
+    two = tune_families(["leso3"], [case], setup, rounds=1, engine="numpy")["leso3"]
+    three = tune_families(["leso3"], [case], setup, rounds=1, engine="numpy", costs=("worst", "rms", "rms_f"))["leso3"]
+    for cost in ("worst", "rms"):
+        np.testing.assert_array_equal(two["best"][0][cost][1], three["best"][0][cost][1])
+    grid = [mm for _, mm in three["evaluated"][0][:9]]  # leso3's grid: 9 bandwidths
+    assert three["best"][0]["rms_f"][1][4] <= min(g[4] for g in grid)
+    with pytest.raises(ValueError, match="costs"):
+        tune_families(["leso3"], [case], setup, costs=("lag",))

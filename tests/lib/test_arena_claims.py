@@ -122,3 +122,18 @@ def test_a_fixed_winner_at_given_gains_is_run_as_given_and_the_verdict_says_so()
     assert "fixed configurations as given" in f["text"] and "at best tuning" not in f["text"]
     with pytest.raises(ValueError, match="winners"):
         _check(winners=("ab",))  # a given-gains estimator is not tuned: only as a fixed configuration
+
+
+def test_a_claim_on_both_states_holds_only_where_it_holds_on_each():
+    table = _table([1.0] * 3, [2.0] * 3)  # the derivative: sigma better everywhere
+    for c, v in zip(CASES, (0.5, 0.5, 0.5), strict=True):  # the signal: sigma worse everywhere
+        table["sigma"][c.key]["rms_f"], table["neso"][c.key]["rms_f"] = 1.0, v
+    r = StudyResult(INFO)
+    assert judge_claims(r, CASES, table, SETUP, checks=[_check(measures=("rms_f", "rms"))])[0][1] == "mixed"
+    ev = r.findings[0]["evidence"]
+    assert list(ev["rms_f: neso / sigma"].values()) == [0.5] * 3 and list(ev["neso / sigma"].values()) == [2.0] * 3
+    assert "RMS error of f̂, neso / sigma" in r.findings[0]["text"]
+    r = StudyResult(INFO)
+    assert judge_claims(r, CASES, table, SETUP, checks=[_check()])[0][1] == "holds"  # the derivative alone
+    with pytest.raises(ValueError, match="measures"):
+        _check(measures=("rms_g",))

@@ -952,6 +952,7 @@ def _arena_registry_cases(case, setup):
          dict(result=[None, 3], cases=[None, 3, [3]], table=[None, 3], setup=[None, 3], checks=[3, [3], "x"],
               fixed=[3, {"a": 3}])),
         ("fixed_configurations", claims.fixed_configurations, dict(checks=None), dict(checks=[3, [3], "x"])),
+        ("tuned_for_signal", claims.tuned_for_signal, dict(checks=None), dict(checks=[3, [3], "x"])),
         ("arena_claim_links", arena_recommend.arena_claim_links, dict(results={"findings": []}),
          dict(results=[None, 3, "x"])),
     ]
