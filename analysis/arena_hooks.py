@@ -21,6 +21,7 @@ largest magnitude; within a step only the state moves, by O(h).
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import replace
 
@@ -31,7 +32,8 @@ from ctrl_analysis.engine import Execution
 
 from .pendulum.paper import VERIFY
 
-__all__ = ["CLAIM_CHECKS", "PENDULUM_GAINS", "de_example1", "meso_situation1", "register"]
+__all__ = ["CLAIM_CHECKS", "MESO_GRID", "PENDULUM_GAINS", "de_example1", "meso_observer_errors", "meso_situation1",
+           "register"]
 
 #: Start of the meso record: after the loop's start-up (the observer and the first LSM batch).
 MESO_START = 5.0
@@ -93,6 +95,13 @@ def meso_situation1(seed: int, dt: float, n: int) -> tuple:
     tuple
         ``x1, x2, x2'`` (arrays, shape (n,)) and ``L = max |x2'|`` over every step of the record.
     """
+    return _meso_record(seed, dt, n)[:4]
+
+
+@functools.lru_cache(maxsize=32)
+def _meso_record(seed: int, dt: float, n: int) -> tuple:
+    """:func:`meso_situation1`'s record and the loop's inputs to its observer at the samples: ``x1, x2, x2', L``,
+    the control ``u`` (n,) and the identified, smoothed ``Θ`` (n, 4) the MESO reads (cached: one loop simulation)."""
     from .meso.blocks import Plant
     from .meso.loops import Row, simulate_situation
     from .meso.paper import PAPER, SITUATIONS
@@ -112,7 +121,74 @@ def meso_situation1(seed: int, dt: float, n: int) -> tuple:
     x = np.column_stack([kept["x[0]"][steps], kept["x[1]"][steps]])
     u = np.column_stack([kept["u"][steps], level, 0 * t])
     x2dot = Plant(paper, paper.b).rhs(0.0, x, u)[:, 1]
-    return x[::sub, 0], x[::sub, 1], x2dot[::sub], float(np.max(np.abs(x2dot)))
+    theta = np.column_stack([kept[f"theta[{i}]"][steps] for i in range(4)])
+    return (x[::sub, 0], x[::sub, 1], x2dot[::sub], float(np.max(np.abs(x2dot))), kept["u"][steps][::sub],
+            theta[::sub])
+
+
+#: The observers' bandwidths ω_o = 1/ε searched by :func:`meso_observer_errors`, as multiples of the arena's
+#: reference ``√(L/ε)``: one 25-point log grid (ratio 1.21) for the MESO and the ESO alike, capped at ω_o dt <= 1.
+MESO_GRID = tuple(float(v) for v in np.exp(np.linspace(np.log(0.1), np.log(10.0), 25)))
+
+
+def meso_observer_errors(cases, setup) -> dict:
+    """The meso paper's MESO (29) and conventional ESO (6), each given the loop's control ``u``, on the arena's records.
+
+    On each case's records (the arena's meso-situation1 signal and noise, scaled to its ``L``; the loop's ``u`` and
+    the MESO's identified ``Θ`` scaled alike: ``u`` and ``θ4`` by the same factor as the signal), the observer of the
+    study (:class:`analysis.meso.blocks.ModelledESO`, ``b0 = b``, β = (3, 3, 1), poles at ``-1/ε``) runs with ``Θ``
+    (the MESO) and with ``Θ = 0`` (the ESO), over :data:`MESO_GRID`; each keeps its best bandwidth for each
+    measure. Errors are scored as the arena scores its families (after the transient, RMS over the records).
+
+    Parameters
+    ----------
+    cases : sequence of Case
+        meso-situation1 cases.
+    setup : Setup
+
+    Returns
+    -------
+    dict
+        ``{"MESO": {"rms_f": errors, "rms": errors}, "ESO": {...}}``, one error per case.
+    """
+    from ctrl_analysis.arena.interface import OMEGA_DT_MAX, SUBSTEPS, scales
+    from ctrl_analysis.arena.tuning import case_records
+    from ctrl_analysis.engine import Save
+    from ctrl_analysis.engine.blocks import signal_names
+    from ctrl_analysis.engine.loop import Loop, place
+    from ctrl_analysis.metrics import rmse
+
+    from .meso.blocks import ModelledESO
+    from .meso.paper import PAPER, SITUATIONS
+
+    out = {k: {"rms_f": [], "rms": []} for k in ("MESO", "ESO")}
+    k0, N = setup.k_from, setup.n
+    ins = ["_y", "_u"] + [f"_theta[{i}]" for i in range(4)]
+    for case in cases:
+        d1, y, f = case_records(case, setup)
+        u, theta = [], []
+        for s in case.seeds:
+            rec = _meso_record(int(s), setup.dt, N)
+            scale = case.L / rec[3]  # the arena's change of units (make_signal)
+            u.append(rec[4] * scale)
+            theta.append(rec[5] * np.array([1.0, 1.0, 1.0, scale]))
+        w = np.minimum(scales(case.eps, case.L, setup.dt)["omega"] * np.array(MESO_GRID), OMEGA_DT_MAX / setup.dt)
+        G, S = w.size, len(case.seeds)
+        th = np.array(theta)  # (S, N, 4)
+        for label, model in (("MESO", 1.0), ("ESO", 0.0)):
+            inputs = {"_y": np.tile(y, (1, G)), "_u": np.tile(np.array(u).T, (1, G))}
+            inputs.update({f"_theta[{i}]": np.tile(model * th[:, :, i].T, (1, G)) for i in range(4)})
+            block = ModelledESO(PAPER, SITUATIONS["s1"].b0, 1.0 / w[0])
+            loop = Loop([place(block, "obs", inputs=ins, outputs=signal_names("xhat", 3))], setup.dt,
+                        substeps=SUBSTEPS)
+            res = loop.simulate(N, inputs=inputs, params={"obs": {"epsilon": np.repeat(1.0 / w, S)}},
+                                save=Save(states=False, keep=["xhat[0]", "xhat[1]"]),
+                                execution=Execution(bound=np.inf, progress=False))
+            fh, dh = res.signals["xhat[0]"][k0:N], res.signals["xhat[1]"][k0:N]
+            cols = [slice(g * S, (g + 1) * S) for g in range(G)]
+            out[label]["rms_f"].append(min(rmse(f[k0:], fh[:, c], axis=None) for c in cols))
+            out[label]["rms"].append(min(rmse(d1[k0:], dh[:, c], axis=None) for c in cols))
+    return {k: {m: np.array(v) for m, v in d.items()} for k, d in out.items()}
 
 
 def register() -> None:
@@ -146,14 +222,17 @@ CLAIM_CHECKS = (
                "Σ estimates x1 = f and x2 = f' more accurately than an ESO (linear and fal) tuned as fairly",
                "the paper's Σ, n0 = 5 (family sigma5), on both states; the study equalises the -3 dB bandwidth, the "
                "arena tunes each family to its own best for each state", ("rms_f", "rms")),
-    ClaimCheck("meso/s1-meso-better", (), (), ("meso-situation1",),
-               "the modified ESO (MESO) estimates more accurately than the ESO (situation 1, Table 2)",
-               "the MESO's advantage is the known model part XᵀΘ (the plant's input u and the identified "
-               "parameters) fed into the observer; a signal-only estimator has no u, and without it the MESO is "
-               "the linear ESO (leso3), so the arena cannot judge the claim"),
+    ClaimCheck("meso/s1-meso-better", ("MESO",), ("ESO",), ("meso-situation1",),
+               "the modified ESO (MESO) estimates x1 and x2 more accurately than the ESO (situation 1, Table 2)",
+               "the study's observer (29) with the loop's control u and its identified, smoothed Θ (the MESO) and "
+               "with Θ = 0 (the conventional ESO (6), b0 u only), both fed the arena's noisy record of the same loop, "
+               "each at its best bandwidth 1/ε on one 25-point grid per measure (meso_observer_errors); x1 and x2 "
+               "only (the paper's Table 2 also compares x3, the total disturbance, which the arena does not score)",
+               ("rms_f", "rms"), meso_observer_errors),
     ClaimCheck("meso/s2-meso-better", (), (), ("meso-situation1",),
                "the modified ESO estimates more accurately than the ESO (situation 2, Table 3)",
-               "as in situation 1 the difference is the model input, which the arena's estimators do not get"),
+               "situation 2's loop (b0 = 3 against b = 3.95, the 0.95 u term) is not an arena signal class; "
+               "situation 1's verdict is claim s1-meso-better"),
     ClaimCheck("pendulum/true-state", (("ab", PENDULUM_GAINS), "kalman"), (("algebraic", (2.0, 1.0)),), (),
                "the α-β filter gives a state closer to the true one than the noisy measurement (Fig. 3)",
                f"the paper's filter, its printed gains α, β = {PENDULUM_GAINS} as given (per sample, on each record's "

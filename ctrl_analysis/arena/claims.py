@@ -60,6 +60,11 @@ class ClaimCheck:
     measures : tuple of str
         What it is judged on, keys of :data:`MEASURES` (default the derivative's RMS error; a paper that claims
         the signal and its derivative: ``("rms_f", "rms")``). It holds only where it holds on each.
+    errors : callable, optional
+        For estimators that need more than the record (a plant's input, a model): ``errors(cases, setup)``
+        returns ``{label: {measure: error per case}}`` on the arena's cases (the same records, noise and
+        scoring window), each estimator at its own best for each measure; ``winners`` and ``losers`` are then
+        its labels, not family names.
     """
 
     claim: str
@@ -69,6 +74,7 @@ class ClaimCheck:
     statement: str
     how: str
     measures: tuple = ("rms",)
+    errors: object = None
 
     def __post_init__(self):
         check_str("claim", self.claim)
@@ -82,7 +88,13 @@ class ClaimCheck:
                              f"{self.losers!r}")
         names = [f.name for f in FAMILIES]
         given = names + [f.name for f in GIVEN]
-        for side in ("winners", "losers"):
+        if self.errors is not None:
+            if not callable(self.errors):
+                raise TypeError(f"errors must be a callable errors(cases, setup) or None, got {self.errors!r:.80}")
+            if not self.winners or not all(isinstance(x, str) and x for x in self.winners + self.losers):
+                raise TypeError("with errors, winners and losers must be non-empty tuples of the labels it returns, "
+                                f"got {self.winners!r:.60} and {self.losers!r:.60}")
+        for side in (() if self.errors is not None else ("winners", "losers")):
             for x in getattr(self, side):
                 if isinstance(x, str):  # a tuned family
                     check_in(side, x, names)
@@ -198,6 +210,25 @@ def tuned_for_signal(checks=None) -> set:
             for x in chk.winners + chk.losers if isinstance(x, str)}
 
 
+def _side(x, measure, own, cases, table, setup, fixed) -> tuple:
+    """``(label, error per case)`` from a check's own errors where it has them, else :func:`_side_errors`."""
+    return (x, own[x][measure]) if own is not None else _side_errors(x, cases, table, setup, fixed, measure)
+
+
+def _own_errors(chk, cases, setup) -> dict:
+    """A check's own ``errors(cases, setup)``, checked: every label of its sides, every measure, one finite error
+    > 0 per case."""
+    out = chk.errors(tuple(cases), setup)
+    for x in chk.winners + chk.losers:
+        for m in chk.measures:
+            v = np.asarray(out.get(x, {}).get(m, ()), dtype=float) if isinstance(out, dict) else None
+            if v is None or v.shape != (len(cases),) or not np.all(np.isfinite(v) & (v > 0)):
+                raise ValueError(f"claim check {chk.claim}: errors must return {{label: {{measure: one finite error "
+                                 f"> 0 per case}}}}; {x!r}, {m!r} is {v!r:.80}")
+            out[x][m] = v
+    return out
+
+
 def _verdict(wins: np.ndarray) -> str:
     return "holds" if wins.all() else "fails" if not wins.any() else "mixed"
 
@@ -248,7 +279,8 @@ def judge_claims(result, cases, table, setup, checks=None, fixed=None) -> list:
         run = [c for c in cases if not chk.signals or c.signal in chk.signals]
         study, cid = chk.claim.split("/")
         fid = f"claim-{study}-{cid}"
-        missing = [f for f in chk.winners + chk.losers if isinstance(f, str) and f not in table]
+        missing = ([] if chk.errors is not None else
+                   [f for f in chk.winners + chk.losers if isinstance(f, str) and f not in table])
         if not chk.winners or not run or missing:
             why = (chk.how if not chk.winners else f"its signal classes ({', '.join(chk.signals)}) were not run"
                    if not run else f"the families {', '.join(missing)} were not run")
@@ -256,11 +288,12 @@ def judge_claims(result, cases, table, setup, checks=None, fixed=None) -> list:
             text = f"{study} claim '{cid}' — {chk.statement}: {VERDICT_TEXT[verdict]}: {why}."
         else:
             parts, evidence, wins_all = [], {}, []
+            own = _own_errors(chk, run, setup) if chk.errors is not None else None
             for measure in chk.measures:
                 for win in chk.winners:
-                    w, ew = _side_errors(win, run, table, setup, fixed, measure)
+                    w, ew = _side(win, measure, own, run, table, setup, fixed)
                     for lo in chk.losers:
-                        label, el = _side_errors(lo, run, table, setup, fixed, measure)
+                        label, el = _side(lo, measure, own, run, table, setup, fixed)
                         ratio = el / ew
                         wins_all.append(ratio > 1.0)
                         key = f"{label} / {w}" if measure == "rms" else f"{measure}: {label} / {w}"
@@ -272,6 +305,8 @@ def judge_claims(result, cases, table, setup, checks=None, fixed=None) -> list:
             verdict = _verdict(np.concatenate(wins_all))
             signals = ", ".join(sorted({c.signal for c in run}))
             said, tuned = VERDICT_TEXT[verdict], "Each family tuned to its best on each measure"
+            if chk.errors is not None:
+                tuned = "Each estimator at its own best on each measure (the check's own evaluation)"
             if any(not isinstance(x, str) for x in chk.winners + chk.losers):
                 # a fixed configuration is run as given: the verdict is not "at best tuning" for it
                 said = (said.replace(", at best tuning", "").replace(" at best tuning", "")

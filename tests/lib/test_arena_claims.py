@@ -137,3 +137,18 @@ def test_a_claim_on_both_states_holds_only_where_it_holds_on_each():
     assert judge_claims(r, CASES, table, SETUP, checks=[_check()])[0][1] == "holds"  # the derivative alone
     with pytest.raises(ValueError, match="measures"):
         _check(measures=("rms_g",))
+
+
+def test_a_check_with_its_own_errors_is_judged_on_them_and_they_are_checked():
+    def errors(cases, setup):
+        return {"A": {"rms": np.ones(len(cases))}, "B": {"rms": np.full(len(cases), 2.0)}}
+
+    r = StudyResult(INFO)
+    chk = _check(winners=("A",), losers=("B",), errors=errors)
+    assert judge_claims(r, CASES, {}, SETUP, checks=[chk])[0][1] == "holds"
+    assert list(r.findings[0]["evidence"]["B / A"].values()) == [2.0] * 3
+    bad = _check(winners=("A",), losers=("C",), errors=errors)
+    with pytest.raises(ValueError, match="'C', 'rms'"):
+        judge_claims(StudyResult(INFO), CASES, {}, SETUP, checks=[bad])
+    with pytest.raises(TypeError, match="errors must be a callable"):
+        _check(errors=3)

@@ -91,3 +91,19 @@ def test_registered_classes_and_claims():
         ids = {x.id for x in getattr(paper, "CLAIMS", ())} | {getattr(paper, n).id for n in dir(paper)
                                                             if n.startswith("C_")}
         assert cid in ids, c
+
+
+def test_the_meso_observers_get_the_loops_input_in_the_records_units():
+    """The MESO and the ESO are linear in the record, the loop's u and θ4: with L and ε both doubled the arena's record
+    doubles (a change of units), and so must every error, which holds only if u and θ4 are scaled with the signal."""
+    from ctrl_analysis.arena.tuning import Case, Setup
+
+    setup = Setup(dt=0.002, n=1000, transient=0.5)
+    one = [Case("meso-situation1", "uniform", 0.01, 4.0, (1, 2))]
+    two = [Case("meso-situation1", "uniform", 0.02, 8.0, (1, 2))]
+    a, b = arena_hooks.meso_observer_errors(one, setup), arena_hooks.meso_observer_errors(two, setup)
+    for who in ("MESO", "ESO"):
+        for m in ("rms_f", "rms"):
+            assert b[who][m] == pytest.approx(2.0 * a[who][m], rel=1e-9), (who, m)
+    # the identified model is what tells them apart
+    assert a["MESO"]["rms"][0] != pytest.approx(a["ESO"]["rms"][0], rel=1e-3)
