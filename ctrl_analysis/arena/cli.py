@@ -37,9 +37,11 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p.add_argument("--signal", default=None, metavar="F.csv",
                    help="tune on a recorded signal: CSV columns time, measurement[, true derivative]")
     p.add_argument("--noise-bound", type=float, default=None, metavar="E",
-                   help="bound ε on |noise| of the record (with --signal)")
+                   help="bound ε on |noise| of the record (with --signal; default: estimated from the record, "
+                        "√3 times the spread of its third differences)")
     p.add_argument("--accel-bound", type=float, default=None, metavar="L",
-                   help="bound L on |f''| of the record (with --signal)")
+                   help="bound L on |f''| of the record (with --signal; default: estimated from the record, the "
+                        "curvature its smoothed second differences show beyond its noise)")
     p.add_argument("--out", default=None,
                    help="output directory; the results go to OUT/arena (default: figures, or arena-out with --signal, "
                         "so a record run never replaces the committed benchmark)")
@@ -141,7 +143,9 @@ def check_args(args) -> SimpleNamespace:
     -------
     types.SimpleNamespace
         ``jobs``, ``out`` (created, writable), ``record`` (``(t, y, d1)`` of ``--signal`` or None),
-        ``record_check`` (:func:`~.recordcheck.check_record`'s result, or None).
+        ``record_check`` (:func:`~.recordcheck.check_record`'s result, or None), ``eps`` and ``L`` (the bounds:
+        stated, or estimated from the record where not given, :func:`~.recordcheck.estimated_bounds`) and
+        ``bounds_source`` (``{"noise_bound": "stated" | "estimated from the record", "accel_bound": ...}``).
 
     Raises
     ------
@@ -170,18 +174,27 @@ def check_args(args) -> SimpleNamespace:
                                                          "describes a record: give it") + " with --signal F.csv")
     else:
         for name, v in bounds:
-            if v is None or not math.isfinite(v) or v <= 0:
-                raise ValueError(f"{name} must be given, finite and > 0 with --signal, got {v}")
+            if v is not None and (not math.isfinite(v) or v <= 0):
+                raise ValueError(f"{name} must be finite and > 0, got {v}")
     record = read_record(args.signal) if args.signal is not None else None
-    record_check = None
+    record_check, eps, L, source = None, args.noise_bound, args.accel_bound, {}
     if record is not None:
-        from .recordcheck import check_record
+        from .recordcheck import check_record, estimated_bounds
 
-        record_check = check_record(*record, args.noise_bound, args.accel_bound,
-                                    where=f"--signal path {str(args.signal)!r}",
-                                    names=("--noise-bound", "--accel-bound"))
+        where = f"--signal path {str(args.signal)!r}"
+        if eps is None or L is None:
+            try:
+                est = estimated_bounds(*record)
+            except ValueError as exc:
+                raise ValueError(f"{where}: {exc} (--noise-bound / --accel-bound)") from None
+            eps = est["noise_bound"] if eps is None else eps
+            L = est["accel_bound"] if L is None else L
+        source = {"noise_bound": "stated" if args.noise_bound is not None else "estimated from the record",
+                  "accel_bound": "stated" if args.accel_bound is not None else "estimated from the record"}
+        record_check = check_record(*record, eps, L, where=where, names=("--noise-bound", "--accel-bound"))
     out = _check_out(args.out if args.out is not None else ("figures" if args.signal is None else "arena-out"))
-    return SimpleNamespace(jobs=jobs, out=out, record=record, record_check=record_check)
+    return SimpleNamespace(jobs=jobs, out=out, record=record, record_check=record_check, eps=eps, L=L,
+                           bounds_source=source)
 
 
 def _check_out(text: str) -> Path:
@@ -230,8 +243,8 @@ def _user(args, checked) -> int:
     t0 = time.perf_counter()
     with staged_directory(out / "arena") as staged:
         ctx = StudyContext(out_dir=staged, jobs=checked.jobs, progress=lambda m: write(f"[arena] {m}"))
-        result, ranking = run_record(ctx, t, y, d1, args.noise_bound, args.accel_bound, source=str(args.signal),
-                                     check=check)
+        result, ranking = run_record(ctx, t, y, d1, checked.eps, checked.L, source=str(args.signal),
+                                     check=check, bounds_source=checked.bounds_source)
         result.runtime_s = time.perf_counter() - t0
         write_results_json(result, staged)
         write_text_atomic(staged / "REPORT.md", "\n".join(report_lines(result.to_dict())) + "\n")
@@ -239,9 +252,16 @@ def _user(args, checked) -> int:
     print(f"bound 2√(εL) = {result.get('bound').value:.4g}; errors after a start-up window of "
           f"{s['startup_window_s']:.4g} s, scored on {s['scored_on']}")
     e = s["record_check"]["estimates"]
-    print(f"stated ε = {args.noise_bound:.4g}, L = {args.accel_bound:.4g}; the record's own estimates: ε ≈ "
-          f"{e['noise_bound']:.4g}, |f''| ≈ {e['accel']:.4g}"
-          + ("" if e["accel"] > 0 else " (none beyond its noise)"))
+    src = checked.bounds_source
+    if "estimated" in src["noise_bound"] or "estimated" in src["accel_bound"]:
+        print(f"ε = {checked.eps:.4g} ({src['noise_bound']}: √3 × the spread of its third differences; for "
+              f"Gaussian noise that is √3 σ, not a bound), L = {checked.L:.4g} ({src['accel_bound']}: a lower "
+              "estimate of max |f''|); --noise-bound / --accel-bound override them. The bound 2√(εL) and the ratios "
+              "to it rest on these estimates.")
+    else:
+        print(f"stated ε = {checked.eps:.4g}, L = {checked.L:.4g}; the record's own estimates: ε ≈ "
+              f"{e['noise_bound']:.4g}, |f''| ≈ {e['accel']:.4g}"
+              + ("" if e["accel"] > 0 else " (none beyond its noise)"))
     for i, r in enumerate(ranking, 1):
         params = ", ".join(f"{k} = {v:.4g}" for k, v in r["params"].items())
         print(f"{i}. {r['family']:10s} worst |f̂' - f'| = {r['worst']:.4g} ({r['ratio']:.2f}× bound)  {params}")

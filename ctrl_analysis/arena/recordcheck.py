@@ -64,7 +64,7 @@ import numpy as np
 from .._validate import check_bool, check_finite, check_int, check_positive
 
 __all__ = ["FACTOR", "MAX_FILE_BYTES", "MAX_MEMORY_BYTES", "MAX_RECORDS", "MAX_ROWS", "MAX_WORK_S", "SCALE_RANGE",
-           "check_record", "record_estimates", "work_estimate"]
+           "check_record", "estimated_bounds", "record_estimates", "work_estimate"]
 
 #: The largest ``--signal`` file read (bytes).
 MAX_FILE_BYTES = 128 * 2**20
@@ -312,6 +312,50 @@ def record_estimates(y, dt: float, *, d1=None, eps: float | None = None) -> dict
             best, at, scale = float(dd[k]), float((k + 0.5) * dt), dt
     return {"noise_sigma": sigma, "noise_bound": math.sqrt(3.0) * sigma, "accel": best, "accel_time": at,
             "accel_scale_s": scale, "quantum": q}
+
+
+def estimated_bounds(t, y, d1=None) -> dict:
+    """Noise bound ε and bound L on |f''| from the record alone (:func:`record_estimates`), for a run without them.
+
+    ``ε̂ = √3 σ̂`` (uniform noise of the spread the record's third differences show: for Gaussian noise of standard
+    deviation σ it is √3 σ, not a bound, since Gaussian noise has none); ``L̂`` the curvature the record shows beyond
+    its noise, a lower estimate of ``max |f''|`` (smoothed second differences, or the true derivative's differences
+    where the record has it). The tuning's reference bandwidth ``√(L/ε)`` and the surrogate it is scored on come
+    from them; the bound ``2√(εL)`` computed from them is an estimate too.
+
+    Parameters
+    ----------
+    t, y : array_like, shape (N,)
+        Uniformly sampled time and measurement.
+    d1 : array_like, shape (N,), optional
+        The true derivative, when the record has it.
+
+    Returns
+    -------
+    dict
+        ``noise_bound``, ``accel_bound`` and :func:`record_estimates`' values (``estimates``).
+
+    Raises
+    ------
+    ValueError
+        A record with no resolvable noise (ε̂ = 0: give the noise bound) or no curvature beyond its noise (L̂ = 0: give
+        the bound on |f''|), naming what to give.
+    """
+    t = np.asarray(check_finite("t", t), dtype=float)
+    if t.ndim != 1 or t.size < 4:
+        raise ValueError(f"t must be a 1-D array of at least 4 samples, got shape {t.shape}")
+    if np.shape(y) != t.shape:
+        raise ValueError(f"y must have the shape of t {t.shape}, got {np.shape(y)}")
+    dt = float(check_positive("t's median step", float(np.median(np.diff(t))), scalar=True))
+    est = record_estimates(y, dt, d1=d1)
+    # a smooth signal's own third differences reach 2 L dt²: a spread below that is not resolved noise
+    if not est["noise_bound"] > 2.0 * est["accel"] * dt * dt:
+        raise ValueError(f"the record shows no noise beyond its signal's own third differences (ε̂ = "
+                         f"{est['noise_bound']:.3g}), so the noise bound cannot be estimated from it: give it")
+    if not est["accel"] > 0:
+        raise ValueError(f"the record shows no curvature beyond its noise (ε̂ = {est['noise_bound']:.3g}), so the "
+                         "bound on |f''| cannot be estimated from it: give it")
+    return {"noise_bound": float(est["noise_bound"]), "accel_bound": float(est["accel"]), "estimates": est}
 
 
 def _quantum(y: np.ndarray) -> float:

@@ -35,10 +35,26 @@ def test_malformed_csv_is_one_line_and_exit_2(tmp_path, capsys, rows, header, me
     assert err.count("\n") == 1 and message in err and "--signal" in err
 
 
-def test_missing_bounds_are_a_usage_error(tmp_path, capsys):
+def test_bounds_a_noise_free_record_cannot_show_are_asked_for(tmp_path, capsys):
     f = _csv(tmp_path / "ok.csv", [[0.01 * k, np.sin(0.01 * k)] for k in range(100)])
     assert main(["arena", "--signal", str(f)]) == 2
-    assert "--noise-bound" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "no noise beyond its signal's own third differences" in err and "--noise-bound" in err
+
+
+def test_without_bounds_they_are_estimated_from_the_record_and_said_so(tmp_path, capsys):
+    t = 0.01 * np.arange(1500)
+    y = np.sin(t) + 0.01 * np.random.default_rng(3).uniform(-1, 1, t.size)
+    f = _csv(tmp_path / "noisy.csv", np.column_stack([t, y]))
+    assert main(["arena", "--signal", str(f), "--out", str(tmp_path / "o"), "--jobs", "1"]) == 0
+    out = capsys.readouterr().out
+    assert "estimated from the record" in out and "override them" in out
+    r = json.loads((tmp_path / "o" / "arena" / "results.json").read_text())
+    assert r["settings"]["bounds_source"] == {"noise_bound": "estimated from the record",
+                                              "accel_bound": "estimated from the record"}
+    # ε̂ from the third differences of uniform noise of bound 0.01; L̂ a lower estimate of max |sin''| = 1
+    assert 0.5 < r["settings"]["noise_bound"] / 0.01 < 2 and 0.2 < r["settings"]["accel_bound"] <= 1.0
+    assert "estimated from the record" in next(x["text"] for x in r["findings"] if x["id"] == "recommendation")
 
 
 def test_read_record_with_derivative(tmp_path):
