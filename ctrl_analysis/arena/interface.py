@@ -39,6 +39,7 @@ from ..estimators.kalman.alpha_beta import (
     alpha_beta_gamma_update,
     kalata_gains,
 )
+from ..estimators.levant import LevantDifferentiator
 from ..estimators.lowpass import DiscreteLowPass, LowPassFilter
 from ..estimators.tracking import TrackingDifferentiator
 from ..polynomials import repeated_pole_coefficients
@@ -127,6 +128,8 @@ FAMILIES = (
     Family("td", "Han's tracking differentiator (r, h0)", (Param("r", "L", 0.5, 50.0),
                                                            Param("h0", "tau", 0.1, 10.0)), False,
            "estimators.tracking.TrackingDifferentiator (td_output, td_update)"),
+    Family("levant", "Levant's robust exact differentiator, order 1 (L)", (Param("L", "L", 0.5, 50.0),), False,
+           "estimators.levant.LevantDifferentiator(1, L, dt) (explicit Euler, one step per sample)"),
     Family("kalman", "steady-state Kalman α-β (Kalata's Λ)", (Param("Lambda", "lambda", 0.001, 1000.0),), False,
            "estimators.kalman.AlphaBetaFilter with kalata_gains(Λ)"),
     Family("abg", "steady-state Kalman α-β-γ (Kalata's Λ, constant acceleration)",
@@ -286,6 +289,8 @@ def _build(fam: Family, P: np.ndarray, dt: float):
     if fam.name == "kalman":
         alpha, beta = kalata_gains(P[:, 0])
         return AlphaBetaFilter(alpha[0], beta[0], dt), ("y",), ("xhat[0]", "xhat[1]"), {"alpha": alpha, "beta": beta}
+    if fam.name == "levant":
+        return LevantDifferentiator(1, P[0, 0], dt), ("f",), ("z[0]", "z[1]"), {"L": P[:, 0]}
     if fam.name == "ab":
         return (AlphaBetaFilter(P[0, 0], P[0, 1], dt), ("y",), ("xhat[0]", "xhat[1]"),
                 {"alpha": P[:, 0], "beta": P[:, 1]})

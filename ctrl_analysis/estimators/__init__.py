@@ -1,4 +1,5 @@
-"""Estimators as blocks: the differential estimator Σ, the ESO family, the tracking differentiator, low-pass filters.
+"""Estimators as blocks: the differential estimator Σ, the ESO family, the tracking differentiator, Levant's
+differentiator, low-pass filters.
 
 The Kalman-type filters are in :mod:`ctrl_analysis.estimators.kalman`.
 """
@@ -6,6 +7,7 @@ The Kalman-type filters are in :mod:`ctrl_analysis.estimators.kalman`.
 from . import kalman
 from .differential import READINGS, DifferentialEstimator
 from .eso import ExtendedStateObserver, fal
+from .levant import LevantDifferentiator
 from .lowpass import DiscreteLowPass, LowPassFilter
 from .tracking import TrackingDifferentiator, fhan, softened_setpoint
 
@@ -14,6 +16,7 @@ __all__ = [
     "DifferentialEstimator",
     "DiscreteLowPass",
     "ExtendedStateObserver",
+    "LevantDifferentiator",
     "LowPassFilter",
     "TrackingDifferentiator",
     "fal",

@@ -71,7 +71,7 @@ from ctrl_analysis.engine import params as engine_params
 from ctrl_analysis.engine import processes as engine_processes
 from ctrl_analysis.engine import stepcheck as _stepcheck
 from ctrl_analysis.estimators import differential as de
-from ctrl_analysis.estimators import eso, lowpass, tracking
+from ctrl_analysis.estimators import eso, levant, lowpass, tracking
 from ctrl_analysis.estimators.kalman import (
     _checks,
     alpha_beta,
@@ -413,6 +413,10 @@ def build_cases(tmp):
          dict(r=10.0, h=0.01, h0=None, substeps=1, x0=None, feedthrough=False),
          dict(r=POS, h=POS, h0=opt(POS), substeps=INT + [0, HUGE], x0=opt(ARR) + [[1.0], [NAN, 0.0]],
               feedthrough=BOOL)),
+        ("LevantDifferentiator", levant.LevantDifferentiator,
+         dict(order=1, L=2.0, h=0.01, substeps=1, gains=None, x0=None),
+         dict(order=INT + [0, 9], L=POS, h=POS, substeps=INT + [0, HUGE], gains=opt(ARR) + [[1.0], [1.1, -1.5]],
+              x0=opt(ARR) + [[1.0], [NAN, 0.0]])),
         ("softened_setpoint", tracking.softened_setpoint, dict(softener=LPF, r=np.ones(20), h=0.01, method="zoh"),
          dict(softener=NOT_A_BLOCK + [PLANT], r=ARR + [np.ones((2, 2)), [], _nan_like(np.ones(20))], h=POS,
               method=CHOICE)),
@@ -1037,6 +1041,8 @@ NOT_FUZZED = {
     engine_jit.compile_lock: "engine plumbing: the runner cache gives it the lock file beside a generated runner; "
                              "an unusable path runs unlocked (tests/lib/test_compile_lock.py)",
     pid.pid_output: "per-step kernel, unchecked by design",
+    levant.levant_output: "per-step kernel, unchecked by design",
+    levant.levant_update: "per-step kernel, unchecked by design",
     integrators.is_bad: "per-step divergence test, unchecked by design",
     numpy_engine.run_numpy: "internal half of Loop.simulate(execution=Execution(engine='numpy')), whose arguments "
                             "are fuzzed",
