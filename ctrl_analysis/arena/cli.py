@@ -265,8 +265,17 @@ def _user(args, checked) -> int:
     for i, r in enumerate(ranking, 1):
         params = ", ".join(f"{k} = {v:.4g}" for k, v in r["params"].items())
         print(f"{i}. {r['family']:10s} worst |f̂' - f'| = {r['worst']:.4g} ({r['ratio']:.2f}× bound)  {params}")
+    off = result.settings.get("offline_families") or []
+    if off:
+        print("offline smoothers (the whole record, not a filter):")
+        for i, name in enumerate(sorted(off, key=lambda n: result.get(f"{n}.worst").value), 1):
+            print(f"{i}. {name:10s} worst |f̂' - f'| = {result.get(f'{name}.worst').value:.4g} "
+                  f"({result.get(f'{name}.ratio').value:.2f}× bound)  {result.get(f'{name}.worst').note}")
+        print(f"price of causality on this record: {result.get('price_of_causality.worst').value:.3g}× (worst case), "
+              f"{result.get('price_of_causality.rms').value:.3g}× (RMS)")
     w = ranking[0]
-    print(f"recommendation: {w['label']} with {w['params']}: the smallest worst-case derivative error on this record.")
+    print(f"recommendation: {w['label']} with {w['params']}: the smallest worst-case derivative error on this record "
+          "among the causal filters (for the derivative of the recorded signal itself, the offline smoothers above).")
     print(f"arena: {out / 'arena'} (results.json, REPORT.md, estimate.csv, {len(result.figures)} figures; "
           f"{result.runtime_s:.1f} s)")
     return 0

@@ -44,8 +44,9 @@ from ..estimators.lowpass import DiscreteLowPass, LowPassFilter
 from ..estimators.tracking import TrackingDifferentiator
 from ..polynomials import repeated_pole_coefficients
 from .algebraic import MAX_WINDOW, algebraic_derivative
+from .offline import rts_smoother, savgol_smoother, spline_smoother
 
-__all__ = ["FAMILIES", "GIVEN", "SIGMA_ORDER", "Family", "Param", "estimate", "family", "scales"]
+__all__ = ["FAMILIES", "GIVEN", "OFFLINE", "SIGMA_ORDER", "Family", "Param", "estimate", "family", "scales"]
 
 #: Integration substeps (RK4) per sample for the continuous families; every grid keeps ``ω dt <= 1``.
 SUBSTEPS = 2
@@ -64,7 +65,8 @@ class Param:
         Which scale sets the reference: ``"omega"`` (``√(L/ε)``, rad/s), ``"tau"`` (``1/√(L/ε)``, s),
         ``"eps"``, ``"L"``, ``"lambda"`` (Kalata's α-β index at ``ω = √(L/ε)``: ``(ω dt)²``),
         ``"lambda3"`` (the α-β-γ index at that ``ω``: ``(ω dt)³``, for small ``Λ`` the third gain is
-        ``γ/(2T²) ≈ ω³ T``), ``"window"`` (samples spanning ``2/ω``) or ``"given"`` (no reference: a value
+        ``γ/(2T²) ≈ ω³ T``), ``"window"`` (samples spanning ``2/ω``), ``"lam"`` (a smoothing spline's penalty
+        with cut-off ``ω``: ``1/(dt ω⁴)``) or ``"given"`` (no reference: a value
         of an estimator run at given parameters only, :data:`GIVEN`).
     lo, hi : float
         Search range as multiples of the reference (log scale); for ``"given"``, the values allowed,
@@ -95,6 +97,11 @@ class Family:
         Whether it also estimates ``f''``.
     source : str
         The library code it runs.
+    fixed : dict
+        Settings that are not tuned.
+    causal : bool
+        Whether its estimate at ``t`` uses the samples up to ``t`` only (:data:`FAMILIES`), or the whole record
+        (:data:`OFFLINE`).
     """
 
     name: str
@@ -103,6 +110,7 @@ class Family:
     second: bool
     source: str
     fixed: dict = field(default_factory=dict)
+    causal: bool = True
 
 
 #: Σ's order ``n0`` per family; its fastest closed-loop pole is the breakaway double pole ``-n0 a``.
@@ -142,6 +150,19 @@ FAMILIES = (
            True, "arena.algebraic.algebraic_derivative (FIR, vectorised numpy)"),
 )
 
+#: Offline smoothers of a whole record (:mod:`.offline`), tuned like the causal families and ranked apart from them:
+#: what a recorded signal's derivative is, not what an online filter can know.
+OFFLINE = (
+    Family("sg", "Savitzky–Golay, centred (window, degree)",
+           (Param("window", "window", 0.3, 30.0, integer=True), Param("degree", "one", 2.0, 4.0, integer=True)),
+           True, "scipy.signal.savgol_filter (mode='interp')", causal=False),
+    Family("spline", "smoothing spline (λ of ∫ s''²)", (Param("lam", "lam", 1e-4, 1e4),), True,
+           "scipy.interpolate.make_smoothing_spline", causal=False),
+    Family("rts", "RTS smoother, constant velocity, steady state (Kalata's Λ)",
+           (Param("Lambda", "lambda", 0.001, 1000.0),), False,
+           "arena.offline.rts_smoother: steady α-β filter forward, steady RTS gain backward", causal=False),
+)
+
 #: Estimators run at given parameters only, never tuned: a paper's printed gains, as a fixed configuration
 #: ``(name, parameters)`` of a claim check (:mod:`.claims`) or :func:`estimate`. A ``"given"`` parameter is used as
 #: given, within ``(lo, hi]``.
@@ -158,7 +179,7 @@ def family(name: str, *, given: bool = False) -> Family:
     Parameters
     ----------
     name : str
-        One of the names in :data:`FAMILIES` (or :data:`GIVEN` with ``given=True``).
+        One of the names in :data:`FAMILIES` or :data:`OFFLINE` (or :data:`GIVEN` with ``given=True``).
     given : bool
         Accept the estimators run at given parameters only (:data:`GIVEN`), which are not tuned.
 
@@ -171,7 +192,7 @@ def family(name: str, *, given: bool = False) -> Family:
     ValueError
         For an unknown name (the message lists the names).
     """
-    known = FAMILIES + GIVEN if given else FAMILIES
+    known = FAMILIES + OFFLINE + GIVEN if given else FAMILIES + OFFLINE
     names = [f.name for f in known]
     check_in("family name", name, names)
     return known[names.index(name)]
@@ -191,7 +212,9 @@ def scales(eps: float, L: float, dt: float) -> dict:
     Returns
     -------
     dict
-        ``omega, tau, eps, L, lambda, lambda3, window, one, dt``.
+        ``omega, tau, eps, L, lambda, lambda3, window, one, dt``, and ``lam`` (the smoothing spline's penalty
+        ``1/(dt ω⁴)``, whose cut-off is ``ω``; it may be 0 or infinite at extreme magnitudes, where only the
+        spline family cannot run).
 
     Raises
     ------
@@ -213,10 +236,14 @@ def scales(eps: float, L: float, dt: float) -> dict:
                "lambda3": (omega * dt) ** 3, "window": round(2.0 / omega / dt, 6), "one": 1.0, "dt": dt}
     except (OverflowError, ZeroDivisionError):
         out = {"omega": math.nan}
+    # the smoothing spline's λ (cut-off ω: λ dt ω⁴ = 1), only the spline needs it: its own check is param_values'
+    with np.errstate(over="ignore", under="ignore", divide="ignore"):
+        lam = float(1.0 / (dt * np.float64(out.get("omega", math.nan)) ** 4))
     if not all(math.isfinite(v) and (v > 0 or k == "window") for k, v in out.items()):
         raise ValueError(f"eps, L and dt (eps = {eps:.3g}, L = {L:.3g}, dt = {dt:.3g}) give reference values beyond "
                          "double precision (ω = √(L/ε), 1/ω and (ω dt)³ must be finite and > 0): express the signal "
                          "and time in other units")
+    out["lam"] = lam
     return out
 
 
@@ -362,7 +389,7 @@ def estimate(fam, P, y, dt: float, *, engine: str = "auto") -> np.ndarray:
     1.99
     """
     if isinstance(fam, str):
-        fam = family(check_in("fam (family name)", fam, [f.name for f in FAMILIES + GIVEN]), given=True)
+        fam = family(check_in("fam (family name)", fam, [f.name for f in FAMILIES + OFFLINE + GIVEN]), given=True)
     elif not isinstance(fam, Family):
         raise TypeError(f"fam must be a Family or a family name, got {fam!r:.80}")
     dt = float(check_positive("dt", dt, scalar=True))
@@ -377,6 +404,12 @@ def estimate(fam, P, y, dt: float, *, engine: str = "auto") -> np.ndarray:
     k = 3 if fam.second else 2
     if fam.name == "algebraic":
         return algebraic_derivative(y, P[:, 0].astype(int), P[:, 1].astype(int), dt)
+    if fam.name == "sg":
+        return savgol_smoother(y, P[:, 0].astype(int), P[:, 1].astype(int), dt)
+    if fam.name == "spline":
+        return spline_smoother(y, P[:, 0], dt)
+    if fam.name == "rts":
+        return rts_smoother(y, P[:, 0], dt)
     try:
         block, ins, outs, per_run = _build(fam, P, dt)
     except ValueError as exc:  # a block's own check (gains overflowing, an unstable filter): the values come from P

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .._validate import check_in, check_int, check_positive
+from .._validate import check_bool, check_in, check_int, check_positive
 from ..noise import run_seeds
 from ..reporting.report import StudyContext
 from ..reporting.results import StudyInfo, StudyResult
@@ -22,7 +22,7 @@ from ..runs.chains import drive, lockstep, pool_here
 from ..runs.parallel import chunk_slices
 from .bound import adversarial_error, adversarial_pair, lower_bound
 from .claims import MEASURES, VERDICT_TEXT, fixed_configurations, judge_claims, tuned_for_signal
-from .interface import FAMILIES, estimate, family
+from .interface import FAMILIES, OFFLINE, estimate, family
 from .recordcheck import MAX_RECORDS
 from .signals import (
     NOISE_CLASSES,
@@ -471,7 +471,8 @@ def record_case(t, y, d1, eps: float, L: float) -> tuple:
     return setup, (fd[:, None], add_noise("uniform", f, eps, 0)[:, None], f[:, None])
 
 
-def recommend_for_record(t, y, d1, eps: float, L: float, *, rounds: int = 2, jobs: int = 1) -> list:
+def recommend_for_record(t, y, d1, eps: float, L: float, *, rounds: int = 2, jobs: int = 1,
+                         offline: bool = False) -> list:
     """Tune every family on one recorded signal; the ranking by worst-case error.
 
     The record and the bounds are checked first (:func:`~ctrl_analysis.arena.recordcheck.check_record`): bounds
@@ -491,11 +492,14 @@ def recommend_for_record(t, y, d1, eps: float, L: float, *, rounds: int = 2, job
         Pattern-search rounds (0 to :data:`~ctrl_analysis.arena.tuning.MAX_ROUNDS`).
     jobs : int
         Processes.
+    offline : bool
+        Tune the offline smoothers (:data:`~ctrl_analysis.arena.interface.OFFLINE`) too.
 
     Returns
     -------
     list of dict
-        One per family, best first: ``family``, ``label``, ``params``, ``worst``, ``ratio``.
+        One per family, best first by worst-case error: ``family``, ``label``, ``params``, ``worst``, ``ratio``,
+        ``causal``, and ``rms`` / ``rms_params`` (the family tuned for its RMS error instead).
 
     Raises
     ------
@@ -512,6 +516,7 @@ def recommend_for_record(t, y, d1, eps: float, L: float, *, rounds: int = 2, job
     eps, L = float(eps), float(L)
     rounds = check_int("rounds", rounds, minimum=0, maximum=MAX_ROUNDS)
     jobs = check_int("jobs", jobs, minimum=1)
+    fams = FAMILIES + (OFFLINE if check_bool("offline", offline) else ())
     setup, rec = record_case(t, y, d1, eps, L)
     case = Case("user", "user", float(eps), float(L), (0,))
     tuning._USER_RECORDS[case] = rec
@@ -519,16 +524,19 @@ def recommend_for_record(t, y, d1, eps: float, L: float, *, rounds: int = 2, job
         out = []
         # every family side by side in one pool, opened after the record is set (its workers inherit it)
         with pool_here(jobs):
-            done = tune_families([fam.name for fam in FAMILIES], [case], setup, rounds=rounds, jobs=jobs)
-        for fam in FAMILIES:
+            done = tune_families([fam.name for fam in fams], [case], setup, rounds=rounds, jobs=jobs)
+        for fam in fams:
             v, m = done[fam.name]["best"][0]["worst"]
             if not np.isfinite(m[0]):
                 raise ValueError(f"every tuning of the {fam.name} family gave a non-finite derivative error on this "
                                  f"record (ε = {eps:.3g}, L = {L:.3g}, dt = {setup.dt:.3g} s); the arena cannot "
                                  "rank it")
+            vr, mr = done[fam.name]["best"][0]["rms"]
             out.append({"family": fam.name, "label": fam.label, "params": dict(zip([p.name for p in fam.params],
                                                                                    v.tolist(), strict=True)),
-                        "worst": float(m[0]), "ratio": float(m[0] / lower_bound(eps, L))})
+                        "worst": float(m[0]), "ratio": float(m[0] / lower_bound(eps, L)), "causal": fam.causal,
+                        "rms": float(mr[1]), "rms_params": dict(zip([p.name for p in fam.params], vr.tolist(),
+                                                                    strict=True))})
     finally:
         tuning._USER_RECORDS.pop(case, None)
     return sorted(out, key=lambda r: r["worst"])

@@ -66,13 +66,17 @@ def run_record(ctx: StudyContext, t, y, d1, eps: float, L: float, source: str = 
     t, y = np.asarray(t, dtype=float), np.asarray(y, dtype=float)
     d1 = None if d1 is None else np.asarray(d1, dtype=float)
     eps, L = float(eps), float(L)
-    ctx.progress("tuning every family on the record")
-    ranking = recommend_for_record(t, y, d1, eps, L, jobs=ctx.jobs)
+    ctx.progress("tuning every family on the record, causal filters and offline smoothers")
+    everything = recommend_for_record(t, y, d1, eps, L, jobs=ctx.jobs, offline=True)
+    ranking = [r for r in everything if r["causal"]]
+    smooth = [r for r in everything if not r["causal"]]
     setup, (ref, _, fit) = record_case(t, y, d1, eps, L)
     bound = lower_bound(eps, L)
     win = ranking[0]
     fam = family(win["family"])
     est = estimate(fam, [[win["params"][p.name] for p in fam.params]], y[:, None], setup.dt)[:, 0, 1]
+    best_off = family(smooth[0]["family"])
+    off = estimate(best_off, [[smooth[0]["params"][p.name] for p in best_off.params]], y[:, None], setup.dt)[:, 0]
     result = StudyResult(INFO)
     lo, mid, hi = SURROGATE_RATIO
     scored = ("the record's own derivative column" if d1 is not None else
@@ -81,7 +85,7 @@ def run_record(ctx: StudyContext, t, y, d1, eps: float, L: float, source: str = 
               f"error was {lo:.2f}-{hi:.2f}x the real one, median {mid:.2f})")
     bounds_source = dict(bounds_source or {"noise_bound": "stated", "accel_bound": "stated"})
     result.settings.update({"mode": "record", "signal": source, "noise_bound": float(eps), "accel_bound": float(L),
-                            "bounds_source": bounds_source,
+                            "bounds_source": bounds_source, "offline_families": [r["family"] for r in smooth],
                             "dt": setup.dt, "samples": int(y.size), "startup_window_s": setup.transient,
                             "scored_on": scored, "record_check": _check_settings(check, float(t[0]))})
     result.quantity("bound", "lower bound 2√(εL) on the worst-case error of any causal estimator", bound,
@@ -94,11 +98,16 @@ def run_record(ctx: StudyContext, t, y, d1, eps: float, L: float, source: str = 
                     "0 = none resolved)", e["accel"], unit="signal unit/s²", note=f"stated L = {L:.4g}")
     for i, w in enumerate(check["warnings"]):
         result.finding(f"bound-warning-{i + 1}", f"Warning: {w}.")
-    for r in ranking:
-        result.quantity(f"{r['family']}.worst", f"{r['label']}: tuned worst-case |f̂' - f'| after the start-up window",
-                        r["worst"], unit="signal unit/s",
+    for r in ranking + smooth:
+        kind = "" if r["causal"] else " (offline)"
+        result.quantity(f"{r['family']}.worst", f"{r['label']}{kind}: tuned worst-case |f̂' - f'| after the start-up "
+                        "window", r["worst"], unit="signal unit/s",
                         note=", ".join(f"{k} = {v:.4g}" for k, v in r["params"].items()))
-        result.quantity(f"{r['family']}.ratio", f"{r['label']}: worst-case error / 2√(εL)", r["ratio"], unit="")
+        result.quantity(f"{r['family']}.ratio", f"{r['label']}{kind}: worst-case error / 2√(εL)", r["ratio"], unit="")
+        result.quantity(f"{r['family']}.rms", f"{r['label']}{kind}: tuned RMS |f̂' - f'| after the start-up window",
+                        r["rms"], unit="signal unit/s",
+                        note=", ".join(f"{k} = {v:.4g}" for k, v in r["rms_params"].items()))
+    _price_of_causality(result, ranking, smooth, d1 is not None)
     result.finding("recommendation",
                    f"Recommended: {win['label']} ({', '.join(f'{k} = {v:.4g}' for k, v in win['params'].items())}), "
                    f"the smallest worst-case derivative error on this record: {win['worst']:.4g} signal unit/s, "
@@ -108,10 +117,33 @@ def run_record(ctx: StudyContext, t, y, d1, eps: float, L: float, source: str = 
                    + ("" if set(bounds_source.values()) == {"stated"} else
                       f" The bounds were estimated from the record (ε {bounds_source['noise_bound']}, L "
                       f"{bounds_source['accel_bound']}): the bound and the ratios to it are estimates too."))
-    np.savetxt(ctx.out_dir / "estimate.csv", np.column_stack([t, y, est]), delimiter=",", fmt="%.10g",
-               header=f"time,measurement,derivative estimate ({win['family']})", comments="")
-    _figures(ctx, result, t, y, est, ref[:, 0], fit[:, 0], setup, ranking, bound, d1 is not None)
+    cols = [t, y, est, off[:, 1]] + ([off[:, 2]] if off.shape[1] > 2 else [])
+    np.savetxt(ctx.out_dir / "estimate.csv", np.column_stack(cols), delimiter=",", fmt="%.10g",
+               header=f"time,measurement,derivative estimate (causal: {win['family']}),derivative estimate (offline: "
+                      f"{best_off.name})" + (f",second derivative estimate (offline: {best_off.name})"
+                                            if off.shape[1] > 2 else ""), comments="")
+    _figures(ctx, result, t, y, est, ref[:, 0], fit[:, 0], setup, ranking + smooth, bound, d1 is not None)
     return result, ranking
+
+
+def _price_of_causality(result, ranking, smooth, exact) -> None:
+    """The best causal filter against the best offline smoother on this record: the two questions and the ratio."""
+    c, o = ranking[0], smooth[0]
+    c_rms, o_rms = min(ranking, key=lambda r: r["rms"]), min(smooth, key=lambda r: r["rms"])
+    worst, rms = c["worst"] / o["worst"], c_rms["rms"] / o_rms["rms"]
+    result.quantity("price_of_causality.worst", "best causal worst-case error / best offline worst-case error", worst,
+                    unit="")
+    result.quantity("price_of_causality.rms", "best causal RMS error / best offline RMS error", rms, unit="")
+    result.finding(
+        "price-of-causality",
+        f"Two questions, two rankings. Online (a filter that at t knows the samples up to t): {c['label']}, worst-case "
+        f"error {c['worst']:.4g}; RMS-tuned best {c_rms['family']}, {c_rms['rms']:.4g}. After the fact (the derivative "
+        f"of this record, every sample used): {o['label']}, worst-case error {o['worst']:.4g}; RMS-tuned best "
+        f"{o_rms['family']}, {o_rms['rms']:.4g}. The price of causality on this record: {worst:.3g}× in worst-case "
+        f"error, {rms:.3g}× in RMS (the worst-case theory's price is √2 over all signals with these bounds)."
+        + ("" if exact else " Without the true derivative both are scored on the surrogate, whose signal is a "
+           "zero-phase Savitzky-Golay fit of the record: the offline ranking then favours smoothers like that fit."),
+        {"worst": worst, "rms": rms, "causal": c["family"], "offline": o["family"]})
 
 
 def _check_settings(check: dict, t0: float) -> dict:
@@ -150,10 +182,12 @@ def _figures(ctx, result, t, y, est, ref, fit, setup, ranking, bound, exact) -> 
                             "family's error.")
     fams = [r["family"] for r in ranking][::-1]
     ratios = [r["ratio"] for r in ranking][::-1]
+    offline = {r["family"] for r in ranking if not r.get("causal", True)}
     fig, ax = new_figure(size=(8.0, 0.45 * len(fams) + 2.0),
                          title="Every family tuned on the record: worst-case derivative error")
-    ax.barh(range(len(fams)), ratios, color=["tab:orange" if f == ranking[0]["family"] else "tab:blue"
-                                             for f in fams])
+    ax.barh(range(len(fams)), ratios, color=["tab:orange" if f == ranking[0]["family"] else
+                                             "tab:green" if f in offline else "tab:blue" for f in fams])
+
     ax.axvline(1.0, color="k", ls="--", lw=1,
                label="2√(εL): no causal estimator stays below it on every signal with |f''| ≤ L and noise ≤ ε\n"
                      "(one record is one such signal: an error below it proves nothing by itself)")
@@ -161,10 +195,16 @@ def _figures(ctx, result, t, y, est, ref, fit, setup, ranking, bound, exact) -> 
     ax.set_yticks(range(len(fams)), fams)
     ax.set_xscale("log")
     ax.set_xlabel(f"worst-case |f̂' - f'| / 2√(εL)   (2√(εL) = {bound:.3g} signal unit/s)")
-    ax.legend(fontsize=8, loc="lower right")
+    handles, _ = ax.get_legend_handles_labels()
+    if offline:
+        from matplotlib.patches import Patch
+
+        handles.append(Patch(color="tab:green", label="offline smoother (uses the whole record: not bound by 2√(εL))"))
+    ax.legend(handles=handles, fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.1))
     ctx.save_figure(result, fig, "ranking.png",
                     caption="Each family at its best tuning on this record: worst-case derivative error after the "
-                            "start-up window, relative to the lower bound (dashed); the recommended one in orange.")
+                            "start-up window, relative to the lower bound (dashed); the recommended causal one in "
+                            "orange, the offline smoothers in green.")
 
 
 def report_lines(results: dict, out_dir: Path | str = ".") -> list[str]:
@@ -185,7 +225,8 @@ def report_lines(results: dict, out_dir: Path | str = ".") -> list[str]:
         raise ValueError("results must be the results.json of an arena run on a record (settings.mode 'record')")
     s = results["settings"]
     q = {x["id"]: x for x in results["quantities"]}
-    fams = [x["id"][:-len(".worst")] for x in results["quantities"] if x["id"].endswith(".worst")]
+    fams = [x["id"][:-len(".worst")] for x in results["quantities"]
+            if x["id"].endswith(".worst") and not x["id"].startswith("price_of_causality")]
     lines = ["# Estimator arena on a record", "",
              f"Record `{s['signal']}`: {s['samples']} samples at dt = {s['dt']:.4g} s; noise bound ε = "
              f"{s['noise_bound']:.4g}, bound L = {s['accel_bound']:.4g} on |f''|; lower bound 2√(εL) = "
@@ -194,7 +235,9 @@ def report_lines(results: dict, out_dir: Path | str = ".") -> list[str]:
     rc = s.get("record_check")
     if rc:
         e = rc["estimates"]
-        lines += [f"Stated bounds against the record's own estimates: noise ε = {rc['stated']['noise_bound']:.4g} "
+        said = ("Stated bounds" if set((s.get("bounds_source") or {"": "stated"}).values()) == {"stated"} else
+                "Bounds (stated, or estimated from the record: settings.bounds_source)")
+        lines += [f"{said} against the record's own estimates: noise ε = {rc['stated']['noise_bound']:.4g} "
                   f"(record: ε̂ ≈ {e['noise_bound']:.4g}, from the robust spread of its third differences"
                   + (f"; quantised, step {e['quantum']:.4g}" if e["quantum"] else "") + f"), |f''| ≤ L = "
                   f"{rc['stated']['accel_bound']:.4g} (record: "
@@ -203,13 +246,23 @@ def report_lines(results: dict, out_dir: Path | str = ".") -> list[str]:
                   + f"). A bound tighter than the record by more than {rc['factor']:g}× is refused; a looser one is "
                   "a warning.", ""]
         lines += [f"**Warning:** {w}." for w in rc["warnings"]] + ([""] if rc["warnings"] else [])
-    lines += ["| rank | family | worst-case error | × bound | tuning |", "|---|---|---|---|---|"]
-    for i, f in enumerate(fams, 1):
-        lines.append(f"| {i} | {q[f + '.worst']['label'].split(':')[0]} | {q[f + '.worst']['value']:.4g} "
-                     f"| {q[f + '.ratio']['value']:.3g} | {q[f + '.worst']['note']} |")
+    off = set(s.get("offline_families") or [])
+    for title, group in (("Causal filters (online: the samples up to t)", [f for f in fams if f not in off]),
+                         ("Offline smoothers (the whole record)", [f for f in fams if f in off])):
+        if not group:
+            continue
+        lines += [f"**{title}**", "", "| rank | family | worst-case error | × bound | tuning | RMS error (RMS-tuned) |",
+                  "|---|---|---|---|---|---|"]
+        for i, f in enumerate(group, 1):
+            rms = q.get(f + ".rms")
+            lines.append(f"| {i} | {q[f + '.worst']['label'].split(':')[0]} | {q[f + '.worst']['value']:.4g} "
+                         f"| {q[f + '.ratio']['value']:.3g} | {q[f + '.worst']['note']} | "
+                         + (f"{rms['value']:.4g} ({rms['note']})" if rms else "") + " |")
+        lines.append("")
     findings = [f for f in results.get("findings") or [] if not str(f.get("id", "")).startswith("bound-warning")]
     lines += ["", *[f"- {f['text']}" for f in findings], "",
-              "The recommended estimator's f̂' at every sample: `estimate.csv` (time, measurement, estimate).", ""]
+              "The estimates at every sample: `estimate.csv` (time, measurement, the recommended causal estimator's "
+              "f̂', the best offline smoother's f̂' and, where it has one, f̂'').", ""]
     for fig in results.get("figures") or []:
         lines += [f"![{fig}]({Path(out_dir) / fig})", "", (results.get("captions") or {}).get(fig, ""), ""]
     return lines

@@ -37,7 +37,7 @@ from .._validate import (
 )
 from ..metrics import rmse
 from ..runs.chains import drive
-from .interface import FAMILIES, GIVEN, OMEGA_DT_MAX, SIGMA_ORDER, Family, estimate, family, scales
+from .interface import FAMILIES, GIVEN, OFFLINE, OMEGA_DT_MAX, SIGMA_ORDER, Family, estimate, family, scales
 from .recordcheck import MAX_ROWS
 from .signals import (
     add_noise,
@@ -301,7 +301,7 @@ def _check_task(task) -> tuple:
     name, setup, cases, configs, engine = task[:5]
     if len(task) == 6 and not isinstance(task[5], dict):
         raise TypeError(f"task classes must be a dict of registered signal classes, got {task[5]!r:.80}")
-    fam = family(check_in("task family", name, [f.name for f in FAMILIES + GIVEN]), given=True)
+    fam = family(check_in("task family", name, [f.name for f in FAMILIES + OFFLINE + GIVEN]), given=True)
     if not isinstance(setup, Setup):
         raise TypeError(f"task setup must be a Setup, got {setup!r:.80}")
     if not isinstance(cases, (tuple, list)) or not cases or not all(isinstance(c, Case) for c in cases):

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from ctrl_analysis.arena import recordcheck, tuning
-from ctrl_analysis.arena.interface import FAMILIES, family
+from ctrl_analysis.arena.interface import FAMILIES, OFFLINE, family
 from ctrl_analysis.arena.recordcheck import (
     check_record,
     record_estimates,
@@ -127,7 +127,7 @@ def test_arrays_and_bounds_are_checked_by_name():
 
 # ------------------------------------------------------------------------------------------------ the cost
 def test_the_cost_tables_agree_with_the_tuning():
-    for fam in FAMILIES:
+    for fam in FAMILIES + OFFLINE:
         grid, steps = tuning._grid(fam)
         assert recordcheck.FAMILY_GRIDS[fam.name] == (int(np.sum(steps > 0)), len(grid)), fam.name
     grid, _ = tuning._grid(family("algebraic"))

@@ -41,6 +41,7 @@ from ctrl_analysis.arena import claims, signals
 from ctrl_analysis.arena import cli as arena_cli
 from ctrl_analysis.arena import figures as arena_figures
 from ctrl_analysis.arena import interface as arena_interface
+from ctrl_analysis.arena import offline as arena_offline
 from ctrl_analysis.arena import recommend as arena_recommend
 from ctrl_analysis.arena import record as arena_record
 from ctrl_analysis.arena import report_section as arena_report_section
@@ -1042,6 +1043,9 @@ NOT_FUZZED = {
                              "an unusable path runs unlocked (tests/lib/test_compile_lock.py)",
     pid.pid_output: "per-step kernel, unchecked by design",
     levant.levant_output: "per-step kernel, unchecked by design",
+    arena_offline.savgol_smoother: "runner of arena.interface.estimate, which checks its arguments (fuzzed)",
+    arena_offline.spline_smoother: "runner of arena.interface.estimate, which checks its arguments (fuzzed)",
+    arena_offline.rts_smoother: "runner of arena.interface.estimate, which checks its arguments (fuzzed)",
     levant.levant_update: "per-step kernel, unchecked by design",
     integrators.is_bad: "per-step divergence test, unchecked by design",
     numpy_engine.run_numpy: "internal half of Loop.simulate(execution=Execution(engine='numpy')), whose arguments "
