@@ -163,12 +163,16 @@ def fixed_configurations(checks=None) -> list:
     -------
     list of (str, tuple of float)
     """
+    return list(dict.fromkeys((x[0], tuple(float(v) for v in x[1])) for chk in _checks(checks)
+                              for x in chk.winners + chk.losers if not isinstance(x, str)))
+
+
+def _checks(checks) -> list:
+    """``checks`` checked (a list of ClaimCheck), or the registered ones for None."""
     if checks is not None and (not isinstance(checks, (list, tuple)) or
                                not all(isinstance(c, ClaimCheck) for c in checks)):
         raise TypeError(f"checks must be a list of ClaimCheck or None, got {checks!r:.80}")
-    return list(dict.fromkeys((x[0], tuple(float(v) for v in x[1]))
-                              for chk in (registered_claim_checks() if checks is None else checks)
-                              for x in chk.winners + chk.losers if not isinstance(x, str)))
+    return registered_claim_checks() if checks is None else list(checks)
 
 
 def _side_errors(lo, cases, table, setup, fixed, measure="rms") -> tuple:
@@ -203,11 +207,8 @@ def tuned_for_signal(checks=None) -> set:
     -------
     set of str
     """
-    if checks is not None and (not isinstance(checks, (list, tuple)) or
-                               not all(isinstance(c, ClaimCheck) for c in checks)):
-        raise TypeError(f"checks must be a list of ClaimCheck or None, got {checks!r:.80}")
-    return {x for chk in (registered_claim_checks() if checks is None else checks) if "rms_f" in chk.measures
-            for x in chk.winners + chk.losers if isinstance(x, str)}
+    return {x for chk in _checks(checks) if "rms_f" in chk.measures for x in chk.winners + chk.losers
+            if isinstance(x, str) and chk.errors is None}
 
 
 def _side(x, measure, own, cases, table, setup, fixed) -> tuple:
@@ -268,14 +269,12 @@ def judge_claims(result, cases, table, setup, checks=None, fixed=None) -> list:
         raise TypeError(f"table must be a dict table[family][case key], got {table!r:.80}")
     if not isinstance(setup, Setup):
         raise TypeError(f"setup must be a Setup, got {setup!r:.80}")
-    if checks is not None and (not isinstance(checks, (list, tuple)) or
-                               not all(isinstance(c, ClaimCheck) for c in checks)):
-        raise TypeError(f"checks must be a list of ClaimCheck or None, got {checks!r:.80}")
+    checks = _checks(checks)
     if fixed is not None and (not isinstance(fixed, dict) or not all(isinstance(v, dict) for v in fixed.values())):
         raise TypeError(f"fixed must be a dict {{(family, params): {{case key: error}}}} or None, got {fixed!r:.80}")
     fixed = fixed or {}
     out = []
-    for chk in registered_claim_checks() if checks is None else checks:
+    for chk in checks:
         run = [c for c in cases if not chk.signals or c.signal in chk.signals]
         study, cid = chk.claim.split("/")
         fid = f"claim-{study}-{cid}"
