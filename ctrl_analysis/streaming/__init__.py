@@ -42,6 +42,13 @@ METHODS = ("inverted_cdf", "averaged_inverted_cdf", "closest_observation", "inte
 
 
 
+def _check_spread(m2) -> None:
+    """Refuse finite values whose spread overflows double precision (a sum of squared deviations beyond 1.8e308)."""
+    if not np.all(np.isfinite(m2)):
+        raise ValueError("values: their spread overflows double precision (squared deviations from the mean beyond "
+                         "1.8e308, e.g. values near 1e300 beside values near 1): scale them before adding")
+
+
 class Moments(Accumulator):
     """Count, mean, variance, min and max per trailing element, combined chunk by chunk by the pairwise update.
 
@@ -86,9 +93,12 @@ class Moments(Accumulator):
         rows = self._kept(values, exclude)
         n = rows.shape[0]
         if n:
-            d = rows - rows[0]
-            self._n, self._shift, self._rel = n, rows[0].copy(), d.mean(axis=0)
-            self._m2 = ((d - self._rel) ** 2).sum(axis=0)
+            with np.errstate(over="ignore", invalid="ignore"):
+                d = rows - rows[0]
+                rel = d.mean(axis=0)
+                m2 = ((d - rel) ** 2).sum(axis=0)
+            _check_spread(m2)
+            self._n, self._shift, self._rel, self._m2 = n, rows[0].copy(), rel, m2
             self._min, self._max = rows.min(axis=0), rows.max(axis=0)
 
     def _merge(self, other):
@@ -99,9 +109,12 @@ class Moments(Accumulator):
             self._shift, self._rel, self._m2 = other._shift.copy(), other._rel.copy(), other._m2.copy()
         else:
             n = na + nb
-            d = ((other._shift - self._shift) + other._rel) - self._rel  # small numbers: no cancellation
+            with np.errstate(over="ignore", invalid="ignore"):
+                d = ((other._shift - self._shift) + other._rel) - self._rel  # small numbers: no cancellation
+                m2 = self._m2 + other._m2 + d * d * (na * nb / n)
+            _check_spread(m2)
             self._rel = self._rel + d * (nb / n)
-            self._m2 = self._m2 + other._m2 + d * d * (na * nb / n)
+            self._m2 = m2
         self._min, self._max = np.minimum(self._min, other._min), np.maximum(self._max, other._max)
         self._n = na + nb
 

@@ -270,3 +270,14 @@ def test_empty_chunks_change_nothing():
 def test_bad_input_errors_name_the_argument(call, arg):
     with pytest.raises((TypeError, ValueError), match=rf"\b{arg}\b"):
         call()
+
+
+def test_moments_refuse_values_whose_spread_overflows_and_stay_as_they_were():
+    with pytest.raises(ValueError, match="spread overflows double precision"):
+        Moments().add(np.array([[1e300, 1.0], [1.0, 1.0]]))
+    m = Moments().add(np.array([[1e150, 1.0]]))
+    with pytest.raises(ValueError, match="spread overflows"):
+        m.add(np.array([[-1e160, 1.0]]))  # merging: d² = 1e320
+    assert m.count == 1 and m.mean.tolist() == [1e150, 1.0] and m.var().tolist() == [0.0, 0.0]
+    # large but representable spreads are kept
+    assert Moments().add(np.array([[1e150], [-1e150]])).var() == pytest.approx(1e300)
