@@ -195,8 +195,9 @@ def _side_errors(lo, cases, table, setup, fixed, measure="rms") -> tuple:
 
 
 def tuned_for_signal(checks=None) -> set:
-    """The tuned families a claim check judges on the signal estimate f̂ (measure ``"rms_f"``): the arena tunes
-    them for it too.
+    """The tuned families a claim check judges on the signal estimate f̂ (measure ``"rms_f"``).
+
+    The arena tunes them for that measure too.
 
     Parameters
     ----------

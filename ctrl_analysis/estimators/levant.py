@@ -69,8 +69,9 @@ def levant_update(t, x, u, p, x_next):
 
 @jitable
 def levant_output(t, x, u, p, y):
-    """Kernel output of :class:`LevantDifferentiator`: the state ``z_0 .. z_n`` (reached with the inputs up to the
-    previous sample).
+    """Kernel output of :class:`LevantDifferentiator`: the state ``z_0 .. z_n``.
+
+    The state was reached with the inputs up to the previous sample (no feedthrough).
 
     Parameters
     ----------
