@@ -273,6 +273,9 @@ def _user(args, checked) -> int:
                   f"({result.get(f'{name}.ratio').value:.2f}× bound)  {result.get(f'{name}.worst').note}")
         print(f"price of causality on this record: {result.get('price_of_causality.worst').value:.3g}× (worst case), "
               f"{result.get('price_of_causality.rms').value:.3g}× (RMS)")
+    if any(x.id == "reference.difference_quotient.worst" for x in result.quantities):
+        dq = result.get("reference.difference_quotient.worst")
+        print(f"reference (not tuned): {dq.label.split(': ', 1)[1]} = {dq.value:.4g} ({dq.note})")
     w = ranking[0]
     print(f"recommendation: {w['label']} with {w['params']}: the smallest worst-case derivative error on this record "
           "among the causal filters (for the derivative of the recorded signal itself, the offline smoothers above).")

@@ -108,6 +108,7 @@ def run_record(ctx: StudyContext, t, y, d1, eps: float, L: float, source: str = 
                         r["rms"], unit="signal unit/s",
                         note=", ".join(f"{k} = {v:.4g}" for k, v in r["rms_params"].items()))
     _price_of_causality(result, ranking, smooth, d1 is not None)
+    _reference(result, y, ref[:, 0], setup, eps, L)
     result.finding("recommendation",
                    f"Recommended: {win['label']} ({', '.join(f'{k} = {v:.4g}' for k, v in win['params'].items())}), "
                    f"the smallest worst-case derivative error on this record: {win['worst']:.4g} signal unit/s, "
@@ -124,6 +125,25 @@ def run_record(ctx: StudyContext, t, y, d1, eps: float, L: float, source: str = 
                                             if off.shape[1] > 2 else ""), comments="")
     _figures(ctx, result, t, y, est, ref[:, 0], fit[:, 0], setup, ranking + smooth, bound, d1 is not None)
     return result, ranking
+
+
+def _reference(result, y, ref, setup, eps, L) -> None:
+    """The bound-attaining difference quotient (:func:`~.bound.difference_quotient`): no tuning, a guarantee."""
+    from .bound import difference_quotient
+
+    try:
+        d, m, guarantee = difference_quotient(y, setup.dt, eps, L)
+    except ValueError:  # a window longer than the record: no reference
+        return
+    k = max(m, int(round(setup.transient / setup.dt)))
+    worst = float(np.max(np.abs(d[k:] - ref[k:]))) if k < y.size else float("nan")
+    result.quantity("reference.difference_quotient.worst", f"reference, not tuned: the difference quotient over "
+                    f"{m} samples (2√(ε/L) rounded up): worst-case |f̂' - f'| after the start-up window", worst,
+                    unit="signal unit/s",
+                    note=f"guaranteed at most {guarantee:.4g} = 2ε/(m dt) + L m dt/2 on every record within ε and L")
+    result.quantity("reference.difference_quotient.guarantee", "the difference quotient's worst-case error on any "
+                    "record with noise <= ε and |f''| <= L: the lower bound 2√(εL) attained (plus at most L dt/2)",
+                    guarantee, unit="signal unit/s")
 
 
 def _price_of_causality(result, ranking, smooth, exact) -> None:
@@ -225,8 +245,9 @@ def report_lines(results: dict, out_dir: Path | str = ".") -> list[str]:
         raise ValueError("results must be the results.json of an arena run on a record (settings.mode 'record')")
     s = results["settings"]
     q = {x["id"]: x for x in results["quantities"]}
+    # a family has its worst-case error and its ratio to the bound (the references and the price have no ratio)
     fams = [x["id"][:-len(".worst")] for x in results["quantities"]
-            if x["id"].endswith(".worst") and not x["id"].startswith("price_of_causality")]
+            if x["id"].endswith(".worst") and x["id"][:-len(".worst")] + ".ratio" in q]
     lines = ["# Estimator arena on a record", "",
              f"Record `{s['signal']}`: {s['samples']} samples at dt = {s['dt']:.4g} s; noise bound ε = "
              f"{s['noise_bound']:.4g}, bound L = {s['accel_bound']:.4g} on |f''|; lower bound 2√(εL) = "
@@ -259,6 +280,9 @@ def report_lines(results: dict, out_dir: Path | str = ".") -> list[str]:
                          f"| {q[f + '.ratio']['value']:.3g} | {q[f + '.worst']['note']} | "
                          + (f"{rms['value']:.4g} ({rms['note']})" if rms else "") + " |")
         lines.append("")
+    dq = q.get("reference.difference_quotient.worst")
+    if dq:
+        lines += [f"Reference, not tuned: {dq['label'].split(': ', 1)[1]}: {dq['value']:.4g} ({dq['note']}).", ""]
     findings = [f for f in results.get("findings") or [] if not str(f.get("id", "")).startswith("bound-warning")]
     lines += ["", *[f"- {f['text']}" for f in findings], "",
               "The estimates at every sample: `estimate.csv` (time, measurement, the recommended causal estimator's "

@@ -89,3 +89,22 @@ def test_bound_constant_against_the_papers_example():
     est = (pair["y"][:, l:] - pair["y"][:, :-l]) / (l * D)
     err_pair = np.max(np.abs(est - pair["f1"][:, l:]))
     assert lo * (1 - 1e-9) <= err_pair <= hi
+
+
+def test_the_difference_quotient_keeps_its_guarantee_on_every_admissible_record():
+    """Its worst-case error is at most 2ε/(m dt) + L m dt/2 <= 2√(εL) + L dt/2 on any signal with |f''| <= L and noise
+    |η| <= ε: checked on sines with |f''| = L exactly and the most adverse bounded noise of a seeded draw."""
+    from ctrl_analysis.arena.bound import difference_quotient
+
+    rng = np.random.default_rng(7)
+    dt, n = 0.001, 3000
+    t = dt * np.arange(n)
+    for _ in range(20):
+        eps, L, w = 10 ** rng.uniform(-3, -1), 10 ** rng.uniform(-1, 1), rng.uniform(0.5, 5.0)
+        f, d1 = (L / w**2) * np.sin(w * t + 1.0), (L / w) * np.cos(w * t + 1.0)
+        noise = eps * np.sign(rng.uniform(-1, 1, n))  # ±ε: the largest noise allowed
+        d, m, g = difference_quotient(f + noise, dt, eps, L)
+        assert np.nanmax(np.abs(d - d1)) <= g * (1 + 1e-9)
+        assert g <= lower_bound(eps, L) + L * dt / 2 + 1e-12 and np.all(np.isnan(d[:m]))
+    with pytest.raises(ValueError, match="shorter than y"):
+        difference_quotient(np.zeros(10), 0.01, 1.0, 1e-6)

@@ -834,6 +834,9 @@ def _arena_cases(tmp):
                "findings": [{"text": "a finding"}], "figures": ["a.png"], "captions": {"a.png": "c"}}
     return [
         ("lower_bound", bound.lower_bound, dict(eps=0.01, L=1.0), dict(eps=VPOS, L=VPOS)),
+        ("difference_quotient", bound.difference_quotient, dict(y=np.sin(0.01 * np.arange(100)), dt=0.01, eps=0.01,
+                                                                L=1.0),
+         dict(y=ARR + [np.zeros((2, 2, 2)), [1.0], _nan_like(np.ones(100))], dt=POS, eps=POS, L=POS)),
         ("adversarial_pair", bound.adversarial_pair,
          dict(eps=0.01, L=1.0, dt=0.01, n_samples=100, k_star=50, slope=1.0),
          dict(eps=POS, L=POS, dt=POS, n_samples=ints + [0, -1], k_star=ints + [-1, 100, 5], slope=REAL)),
