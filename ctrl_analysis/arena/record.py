@@ -1,8 +1,10 @@
 """The arena on a user's record (``ctrl-analysis arena --signal F.csv``): the ranking, written where it can be kept.
 
-:func:`run_record` tunes every estimator family on the record (:func:`.recommend.recommend_for_record`), and
-writes into its output folder ``results.json`` (the ranking as quantities, the settings, the recommendation),
-``estimate.csv`` (the recommended estimator's f̂' at every sample), two figures and a short ``REPORT.md``.
+:func:`run_record` tunes every causal estimator family and every offline smoother on the record
+(:func:`.recommend.recommend_for_record`), and writes into its output folder ``results.json`` (both rankings as
+quantities, the price of causality, the untuned difference-quotient reference, the settings, the recommendation),
+``estimate.csv`` (the recommended causal estimator's f̂' and the best smoother's f̂' and f̂'' at every sample), two
+figures and a short ``REPORT.md``.
 """
 
 from __future__ import annotations
@@ -53,7 +55,7 @@ def run_record(ctx: StudyContext, t, y, d1, eps: float, L: float, source: str = 
     Returns
     -------
     (StudyResult, list)
-        The record for results.json and the ranking (best first).
+        The record for results.json and the causal ranking (best first; the offline smoothers' is in the record).
     """
     from .interface import estimate, family
     from .recommend import recommend_for_record, record_case
