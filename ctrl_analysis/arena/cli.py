@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import io
 import math
+import re
 import sys
 import time
 from pathlib import Path
@@ -42,6 +43,9 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p.add_argument("--accel-bound", type=float, default=None, metavar="L",
                    help="bound L on |f''| of the record (with --signal; default: estimated from the record, the "
                         "curvature its smoothed second differences show beyond its noise)")
+    p.add_argument("--channels", action="store_true",
+                   help="with --signal: every column after time is a measurement channel (no derivative column), "
+                        "each ranked on its own into OUT/arena/<column name>")
     p.add_argument("--out", default=None,
                    help="output directory; the results go to OUT/arena (default: figures, or arena-out with --signal, "
                         "so a record run never replaces the committed benchmark)")
@@ -81,6 +85,45 @@ def read_record(path) -> tuple:
     A UTF-8 byte-order mark at the start of the file is skipped (it would otherwise make the first row look
     like a header and drop it).
     """
+    header, a, where = _read_table(path)
+    if a.shape[1] > 3:
+        raise ValueError(f"{where} has {a.shape[1]} columns: a record is time, measurement[, derivative]; for several "
+                         "measurement channels, each ranked on its own, add --channels")
+    return a[:, 0], a[:, 1], (a[:, 2] if a.shape[1] > 2 else None)
+
+
+def read_channels(path) -> tuple:
+    """Read a CSV of several measurement channels: ``(t, names, Y)``, every column after time a channel.
+
+    Parameters
+    ----------
+    path : str or Path
+        CSV with a header row (the channels' names) or none (``channel1``, ``channel2``, ...).
+
+    Returns
+    -------
+    tuple
+        ``t`` (N,), ``names`` (list of str, usable as folder names, distinct), ``Y`` (N, C).
+
+    Raises
+    ------
+    TypeError, ValueError
+        As :func:`read_record`.
+    """
+    header, a, where = _read_table(path)
+    names = []
+    for i in range(1, a.shape[1]):
+        raw = header[i].strip() if header is not None and i < len(header) else ""
+        name = re.sub(r"[^A-Za-z0-9_.-]+", "_", raw).strip("._") or f"channel{i}"
+        while name in names:
+            name += f"_{i}"
+        names.append(name)
+    return a[:, 0], names, a[:, 1:]
+
+
+def _read_table(path) -> tuple:
+    """``(header fields or None, rows (N, columns), where)`` of a record CSV, every check of :func:`read_record` but
+    the number of columns (at least two)."""
     from .recordcheck import MAX_ROWS, check_file
 
     path = check_path("--signal path", path)
@@ -99,8 +142,9 @@ def read_record(path) -> tuple:
             raise ValueError(f"{where} has {n} rows, over the limit of {MAX_ROWS}: decimate the record (keep every "
                              "k-th row) or cut it")
     rows = [r for r in (line.strip() for line in text.splitlines()) if r]
+    header = None
     if rows and not _numeric(rows[0].split(",")[0]):
-        rows = rows[1:]  # header
+        header, rows = rows[0].split(","), rows[1:]
     try:
         data = [[float(v) for v in r.split(",")] for r in rows]
     except ValueError:
@@ -121,7 +165,7 @@ def read_record(path) -> tuple:
         raise ValueError(f"{where}: time must be strictly increasing (row {int(np.argmax(dt <= 0)) + 2})")
     if np.max(np.abs(dt - np.median(dt))) > 0.01 * np.median(dt):
         raise ValueError(f"{where}: time must be uniformly sampled (steps within 1 %)")
-    return a[:, 0], a[:, 1], (a[:, 2] if a.shape[1] > 2 else None)
+    return header, a, where
 
 
 def _numeric(s: str) -> bool:
@@ -145,7 +189,9 @@ def check_args(args) -> SimpleNamespace:
         ``jobs``, ``out`` (created, writable), ``record`` (``(t, y, d1)`` of ``--signal`` or None),
         ``record_check`` (:func:`~.recordcheck.check_record`'s result, or None), ``eps`` and ``L`` (the bounds:
         stated, or estimated from the record where not given, :func:`~.recordcheck.estimated_bounds`) and
-        ``bounds_source`` (``{"noise_bound": "stated" | "estimated from the record", "accel_bound": ...}``).
+        ``bounds_source`` (``{"noise_bound": "stated" | "estimated from the record", "accel_bound": ...}``);
+        with ``--channels``, ``channels``: one namespace per channel (``name``, ``record``, ``record_check``, ``eps``,
+        ``L``, ``bounds_source``), each checked on its own, and ``record`` None.
 
     Raises
     ------
@@ -176,25 +222,42 @@ def check_args(args) -> SimpleNamespace:
         for name, v in bounds:
             if v is not None and (not math.isfinite(v) or v <= 0):
                 raise ValueError(f"{name} must be finite and > 0, got {v}")
-    record = read_record(args.signal) if args.signal is not None else None
-    record_check, eps, L, source = None, args.noise_bound, args.accel_bound, {}
-    if record is not None:
-        from .recordcheck import check_record, estimated_bounds
+    channels = bool(getattr(args, "channels", False))
+    if channels and args.signal is None:
+        raise ValueError("--channels describes a record's columns: give it with --signal F.csv")
+    none = {"record": None, "record_check": None, "eps": None, "L": None, "bounds_source": {}}
+    where = f"--signal path {str(args.signal)!r}"
+    if args.signal is None:
+        found = SimpleNamespace(channels=[], **none)
+    elif not channels:
+        found = SimpleNamespace(channels=[], **vars(_checked_record(read_record(args.signal), args, where)))
+    else:
+        t, names, Y = read_channels(args.signal)
+        found = SimpleNamespace(channels=[SimpleNamespace(name=n, **vars(_checked_record((t, Y[:, i], None), args,
+                                                                                          f"{where}, channel {n!r}")))
+                                          for i, n in enumerate(names)], **none)
+    # the output folder is made only once everything else is accepted
+    found.out = _check_out(args.out if args.out is not None else ("figures" if args.signal is None else "arena-out"))
+    found.jobs = jobs
+    return found
 
-        where = f"--signal path {str(args.signal)!r}"
-        if eps is None or L is None:
-            try:
-                est = estimated_bounds(*record)
-            except ValueError as exc:
-                raise ValueError(f"{where}: {exc} (--noise-bound / --accel-bound)") from None
-            eps = est["noise_bound"] if eps is None else eps
-            L = est["accel_bound"] if L is None else L
-        source = {"noise_bound": "stated" if args.noise_bound is not None else "estimated from the record",
-                  "accel_bound": "stated" if args.accel_bound is not None else "estimated from the record"}
-        record_check = check_record(*record, eps, L, where=where, names=("--noise-bound", "--accel-bound"))
-    out = _check_out(args.out if args.out is not None else ("figures" if args.signal is None else "arena-out"))
-    return SimpleNamespace(jobs=jobs, out=out, record=record, record_check=record_check, eps=eps, L=L,
-                           bounds_source=source)
+
+def _checked_record(record, args, where) -> SimpleNamespace:
+    """One record's bounds (stated, or estimated where not given) and its :func:`~.recordcheck.check_record`."""
+    from .recordcheck import check_record, estimated_bounds
+
+    eps, L = args.noise_bound, args.accel_bound
+    if eps is None or L is None:
+        try:
+            est = estimated_bounds(*record)
+        except ValueError as exc:
+            raise ValueError(f"{where}: {exc} (--noise-bound / --accel-bound)") from None
+        eps = est["noise_bound"] if eps is None else eps
+        L = est["accel_bound"] if L is None else L
+    source = {"noise_bound": "stated" if args.noise_bound is not None else "estimated from the record",
+              "accel_bound": "stated" if args.accel_bound is not None else "estimated from the record"}
+    check = check_record(*record, eps, L, where=where, names=("--noise-bound", "--accel-bound"))
+    return SimpleNamespace(record=record, record_check=check, eps=eps, L=L, bounds_source=source)
 
 
 def _check_out(text: str) -> Path:
@@ -221,6 +284,11 @@ def main(args, checked: SimpleNamespace | None = None) -> int:
     """
     try:
         checked = check_args(args) if checked is None else checked
+        if getattr(checked, "channels", None):
+            for ch in checked.channels:  # each channel ranked on its own, in its own folder
+                print(f"== channel {ch.name}")
+                _user(args, SimpleNamespace(jobs=checked.jobs, out=checked.out, **vars(ch)), f"arena/{ch.name}")
+            return 0
         if checked.record is not None:
             return _user(args, checked)
         return _full(args, checked)
@@ -229,7 +297,7 @@ def main(args, checked: SimpleNamespace | None = None) -> int:
         return 2
 
 
-def _user(args, checked) -> int:
+def _user(args, checked, folder: str = "arena") -> int:
     from ..reporting.atomic import staged_directory, write_text_atomic
     from ..reporting.report import StudyContext, write_results_json
     from ..runs.progress import write
@@ -241,7 +309,7 @@ def _user(args, checked) -> int:
     for w in (check or {}).get("warnings", []):
         sys.stderr.write(f"ctrl-analysis: warning: {w}\n")
     t0 = time.perf_counter()
-    with staged_directory(out / "arena") as staged:
+    with staged_directory(out / folder) as staged:
         ctx = StudyContext(out_dir=staged, jobs=checked.jobs, progress=lambda m: write(f"[arena] {m}"))
         result, ranking = run_record(ctx, t, y, d1, checked.eps, checked.L, source=str(args.signal),
                                      check=check, bounds_source=checked.bounds_source)
@@ -279,7 +347,7 @@ def _user(args, checked) -> int:
     w = ranking[0]
     print(f"recommendation: {w['label']} with {w['params']}: the smallest worst-case derivative error on this record "
           "among the causal filters (for the derivative of the recorded signal itself, the offline smoothers above).")
-    print(f"arena: {out / 'arena'} (results.json, REPORT.md, estimate.csv, {len(result.figures)} figures; "
+    print(f"arena: {out / folder} (results.json, REPORT.md, estimate.csv, {len(result.figures)} figures; "
           f"{result.runtime_s:.1f} s)")
     return 0
 

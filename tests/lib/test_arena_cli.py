@@ -326,3 +326,27 @@ def test_a_record_at_the_edge_of_the_scale_ranks_as_the_original_without_overflo
         b = recommend_for_record(t, 2.0**150 * y, None, 2.0**150 * 0.01, 2.0**150, rounds=0)  # ~1.4e45
     assert [r["family"] for r in a] == [r["family"] for r in b]
     assert [r["ratio"] for r in a] == pytest.approx([r["ratio"] for r in b], rel=1e-9)
+
+
+def test_several_channels_each_ranked_in_their_own_folder(tmp_path, capsys):
+    from ctrl_analysis.arena.cli import read_channels
+
+    t = 0.002 * np.arange(1500)
+    rng = np.random.default_rng(4)
+    cols = [t, np.sin(2 * t) + 0.01 * rng.uniform(-1, 1, t.size), 3 * np.cos(t) + 0.02 * rng.uniform(-1, 1, t.size)]
+    f = _csv(tmp_path / "ch.csv", np.column_stack(cols), "time,left arm,left arm")
+    assert read_channels(f)[1] == ["left_arm", "left_arm_2"]
+    # without --channels a third column is the derivative, a fourth is refused naming the option
+    g = _csv(tmp_path / "four.csv", np.column_stack(cols + [t]), "t,a,b,c")
+    assert main(["arena", "--signal", str(g)]) == 2
+    assert "4 columns" in capsys.readouterr().err
+    assert main(["arena", "--channels"]) == 2
+    assert "--channels describes a record's columns" in capsys.readouterr().err
+    assert main(["arena", "--signal", str(f), "--channels", "--out", str(tmp_path / "o"), "--jobs", "1"]) == 0
+    out = capsys.readouterr().out
+    assert "== channel left_arm" in out and "== channel left_arm_2" in out
+    noise = {}
+    for name in ("left_arm", "left_arm_2"):
+        r = json.loads((tmp_path / "o" / "arena" / name / "results.json").read_text())
+        noise[name] = r["settings"]["noise_bound"]  # each channel's bounds estimated from its own samples
+    assert 0.5 < noise["left_arm"] / 0.01 < 2 and 0.5 < noise["left_arm_2"] / 0.02 < 2

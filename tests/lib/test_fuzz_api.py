@@ -901,6 +901,7 @@ def _arena_cases(tmp):
          dict(results=[None, 3, "x", [], {"quantities": 3}, {"findings": [3]}, {"figures": [None]},
                        {"quantities": [{"id": "q"}]}])),
         ("read_record", arena_cli.read_record, dict(path=ok), dict(path=[None, 3, ""] + bad_csv)),
+        ("read_channels", arena_cli.read_channels, dict(path=ok), dict(path=[None, 3, ""] + bad_csv)),
         *_arena_registry_cases(case, setup),
         *_arena_record_check_cases(),
     ]
