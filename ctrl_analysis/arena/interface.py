@@ -415,7 +415,7 @@ def estimate(fam, P, y, dt: float, *, engine: str = "auto") -> np.ndarray:
     except ValueError as exc:  # a block's own check (gains overflowing, an unstable filter): the values come from P
         raise ValueError(f"P ({fam.name} parameters {', '.join(p.name for p in fam.params)}) gives no valid "
                          f"estimator: {exc}") from None
-    continuous = fam.name in ("sigma", "sigma5", "leso2", "leso3", "neso")
+    continuous = fam.name in SIGMA_ORDER or fam.name in ("leso2", "leso3", "neso")
     loop = Loop([place(block, "est", inputs=[f"_{s}" for s in block.inputs], outputs=list(outs))], dt,
                 substeps=SUBSTEPS if continuous else 1)
     inputs = {f"_{ins[0]}": y}

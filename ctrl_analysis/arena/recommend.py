@@ -284,8 +284,7 @@ def _tune_and_draw(ctx, result, s, cases, t0) -> tuple:
                                   "ratio": b["worst"][1][0] / bound, "adv": a, "adv_ratio": a / bound,
                                   "bound": bound}
             if "rms_f" in b:  # tuned for the signal estimate too (tuned_for_signal)
-                table[name][c.key].update({"rms_f_params": b["rms_f"][0].tolist(),
-                                           "rms_f": b["rms_f"][1][METRICS.index("rms_f")]})
+                table[name][c.key]["rms_f"] = b["rms_f"][1][METRICS.index("rms_f")]
     elapsed = time.perf_counter() - t0
     _record(result, s, cases, table, tunings)
     judge_claims(result, cases, table, s.setup, fixed=parts["fixed configurations"])

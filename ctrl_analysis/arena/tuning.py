@@ -255,7 +255,7 @@ def evaluate(task) -> np.ndarray:
 
     Returns
     -------
-    numpy.ndarray, shape (len(configs), 4)
+    numpy.ndarray, shape (len(configs), len(METRICS))
         Columns :data:`METRICS`: worst, rms, lag, noise, rms_f.
     """
     name, setup, cases, configs, engine = _check_task(task)
