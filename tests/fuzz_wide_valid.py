@@ -245,6 +245,7 @@ RULES = [
      ["record_estimates.y"]),
     # the last findings of the generated fuzz (issue 28: the arena, ctrl_analysis/runs/parallel.py)
     (SIGNAL, "negative", ["record_estimates.y"]),
+    (SIGNAL + " (a measurement and its derivative)", "negative", ["estimated_bounds.y", "estimated_bounds.d1"]),
     (("an estimate of f' may be any real number; NaN/inf of a diverged estimator give a NaN/inf error (documented: "
       "'a diverged estimator's error is not finite')"), "negative nan-entry inf-entry", ["adversarial_error.est_d1"]),
     ("a batch of any number of seeds (at least one): one run per seed", "longer shorter",

@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 
-from .._validate import check_finite, check_int, check_positive
+from .._validate import check_finite, check_in, check_int, check_positive
 from .recordcheck import MAX_ROWS
 
 __all__ = ["MAX_WINDOW", "algebraic_derivative", "algebraic_weights"]
@@ -86,10 +86,10 @@ def _square(dt: float) -> float:
         return math.inf
 
 
-def algebraic_derivative(y, windows, degrees, dt: float) -> np.ndarray:
+def algebraic_derivative(y, windows, degrees, dt: float, *, before: str = "first") -> np.ndarray:
     """Run the causal algebraic differentiator over records ``y``, one window and degree per run.
 
-    Before the first sample the record is taken as constant (``y_(-j) = y_0``).
+    Before the first sample the record is taken as constant (``y_(-j) = y_0``), or as zero.
 
     Parameters
     ----------
@@ -100,6 +100,9 @@ def algebraic_derivative(y, windows, degrees, dt: float) -> np.ndarray:
         smaller).
     dt : float
         Sample period (> 0).
+    before : {"first", "zero"}
+        What the window sees before the first sample: ``y_0`` (default, the filter at rest on the first sample)
+        or 0.
 
     Returns
     -------
@@ -111,7 +114,8 @@ def algebraic_derivative(y, windows, degrees, dt: float) -> np.ndarray:
     TypeError, ValueError
         If ``y`` is not a finite (N, B) array, ``windows``/``degrees`` are not integers (windows 1 to
         :data:`MAX_WINDOW`, degrees 1 or 2) of one value or ``B`` values, ``dt`` is not as
-        :func:`algebraic_weights` needs it, or the magnitudes of ``y`` and ``dt`` make an estimate overflow.
+        :func:`algebraic_weights` needs it, ``before`` is unknown, or the magnitudes of ``y`` and ``dt`` make an
+        estimate overflow.
 
     Examples
     --------
@@ -127,12 +131,14 @@ def algebraic_derivative(y, windows, degrees, dt: float) -> np.ndarray:
     dt = float(check_positive("dt", dt, scalar=True))
     windows = _integers("windows", windows, B, minimum=1, maximum=MAX_WINDOW)
     degrees = _integers("degrees", degrees, B, minimum=1, maximum=2)
+    check_in("before", before, ("first", "zero"))
     windows = np.maximum(windows, degrees + 1)
     out = np.empty((N, B, 3))
     for W, d in {(int(a), int(b)) for a, b in zip(windows, degrees, strict=True)}:
         cols = np.flatnonzero((windows == W) & (degrees == d))
         w = algebraic_weights(W, d, dt)
-        padded = np.concatenate([np.repeat(y[:1, cols], W - 1, axis=0), y[:, cols]])
+        head = y[:1, cols] if before == "first" else np.zeros((1, cols.size))
+        padded = np.concatenate([np.repeat(head, W - 1, axis=0), y[:, cols]])
         # sliding windows: view[k, b, j] = padded[k + j, b]; newest sample last, so reverse the weights
         view = np.lib.stride_tricks.sliding_window_view(padded, W, axis=0)
         out[:, cols, :] = np.einsum("kbj,rj->kbr", view, w[:, ::-1])

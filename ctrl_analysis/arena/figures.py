@@ -1,4 +1,5 @@
-"""Figures of the arena: Pareto fronts per signal class, ratio-to-bound heat map, best estimators on one signal."""
+"""Figures of the arena: Pareto fronts per signal class, ratio-to-bound heat map, best estimators on one signal, and
+the start-up window."""
 
 from __future__ import annotations
 
@@ -81,7 +82,8 @@ def _sample(s, cases, table):
     axes = np.array(axes).reshape(2, 1)
     axes[0, 0].plot(t, d1[:, 0], "k", lw=2, label="true f'")
     for name in fams:
-        est = estimate(family(name), np.array([table[name][case.key]["params"]]), y[:, :1], setup.dt)[k:, 0, 1]
+        est = estimate(family(name), np.array([table[name][case.key]["params"]]), y[:, :1], setup.dt,
+                       init=setup.init)[k:, 0, 1]
         axes[0, 0].plot(t, est, lw=1, label=name)
         axes[1, 0].plot(t, est - d1[:, 0], lw=1, label=name)
     for ax in axes[:, 0]:
@@ -90,6 +92,48 @@ def _sample(s, cases, table):
     axes[0, 0].set_ylabel("f' (1/s)")
     axes[1, 0].set_ylabel(f"{FHAT} - f' (1/s)")
     axes[1, 0].set_xlabel("time (s)")
+    return fig
+
+
+def _startup(s, cases, table):
+    """One record's start-up (the best 3 families, at rest on the first sample and from zero), and every family's
+    start-up error over all cases."""
+    from dataclasses import replace
+
+    case = cases[len(s.eps) // 2]
+    setup = replace(s.setup, n=min(s.setup.n, s.setup.k_from + max(1, s.setup.k_from // 4)))
+    d1, y, _ = case_records(case, s.setup)
+    peak = float(np.max(np.abs(d1)))
+    fams = sorted(table, key=lambda n: table[n][case.key]["worst"])[:3]
+    t = setup.dt * np.arange(setup.n)
+    fig, (ax, bx) = new_figure(2, 1, title=f"The start-up window (first {setup.transient:g} s), scored apart",
+                               size=(9, 8))
+    for i, name in enumerate(fams):
+        P = np.array([table[name][case.key]["params"]])
+        for init, ls in (("first", "-"), ("zero", ":")):
+            est = estimate(family(name), P, y[:setup.n, :1], setup.dt, init=init)[:, 0, 1]
+            ax.plot(t, (est - d1[:setup.n, 0]) / peak, ls, color=f"C{i}", lw=1.2 if ls == "-" else 1.0,
+                    label=f"{name}, " + ("at rest on y0" if init == "first" else "from the zero state"))
+    ax.axvline(setup.transient, color="k", lw=0.8)
+    ax.set_yscale("symlog", linthresh=1.0)
+    ax.set_xlabel("time (s)")
+    ax.set_ylabel(f"({FHAT} - f') / max|f'|")
+    ax.set_title(f"best 3 on one {case.signal} record ({case.noise}, ε = {case.eps:g}); scoring starts at the line",
+                 fontsize=9)
+    ax.legend(fontsize=7, ncol=2, loc="lower right")
+    names = list(table)
+    first = [max(table[n][c.key]["startup"] for c in cases) for n in names]
+    zero = [max(table[n][c.key]["startup_zero"] for c in cases) for n in names]
+    pos = np.arange(len(names))
+    bx.barh(pos + 0.2, first, height=0.4, color="tab:blue", label="started at rest on the first sample")
+    bx.barh(pos - 0.2, zero, height=0.4, color="tab:gray", label="started from the zero state")
+    bx.set_yticks(pos, names)
+    bx.set_xscale("log")
+    bx.axvline(1.0, color="k", ls="--", lw=0.8)
+    bx.set_xlabel(f"worst |{FHAT} - f'| in the start-up window / max|f'|, worst over {len(cases)} cases")
+    bx.legend(fontsize=8)
+    for a in (ax, bx):
+        a.grid(True, which="both", alpha=0.3)
     return fig
 
 
@@ -114,7 +158,7 @@ def save_pareto(ctx, result, s, cases, tuned) -> None:
 
 
 def save_all(ctx, result, s, cases, table) -> None:
-    """Draw and save the other two arena figures with captions (after :func:`save_pareto`).
+    """Draw and save the other three arena figures with captions (after :func:`save_pareto`).
 
     Parameters
     ----------
@@ -132,3 +176,8 @@ def save_all(ctx, result, s, cases, table) -> None:
     ctx.save_figure(result, _sample(s, cases, table), "arena_best_on_one_signal.png", caption=(
         "The three best-ranked families (worst-case tuning) on one record, over the scored window (after the "
         "transient): the derivative estimates and their errors."))
+    ctx.save_figure(result, _startup(s, cases, table), "arena_startup.png", caption=(
+        "The start-up window, which no tuning cost counts. Top: the derivative error of the three best-ranked "
+        "families on one record, started at rest on the first sample (solid, the arena's start) and from the zero "
+        "state (dotted), relative to max|f'| (log scale beyond ±1). Bottom: every family's worst start-up error over "
+        "all cases, at its worst-case tuning, both ways (dashed: max|f'|)."))

@@ -46,12 +46,16 @@ from ..polynomials import repeated_pole_coefficients
 from .algebraic import MAX_WINDOW, algebraic_derivative
 from .offline import rts_smoother, savgol_smoother, spline_smoother
 
-__all__ = ["FAMILIES", "GIVEN", "OFFLINE", "SIGMA_ORDER", "Family", "Param", "estimate", "family", "scales"]
+__all__ = ["FAMILIES", "GIVEN", "INITS", "OFFLINE", "SIGMA_ORDER", "Family", "Param", "estimate", "family", "scales"]
 
 #: Integration substeps (RK4) per sample for the continuous families; every grid keeps ``ω dt <= 1``.
 SUBSTEPS = 2
 #: The fastest pole any family is tuned to, ``OMEGA_DT_MAX / dt``: RK4 with 2 substeps is accurate there.
 OMEGA_DT_MAX = 1.0
+#: How a causal family starts (:func:`estimate`'s ``init``): ``"first"``, at rest on the first sample (the state a
+#: constant record ``y_0`` holds: ``f̂ = y_0``, every derivative 0; the FIR window sees ``y_0`` before the record);
+#: ``"zero"``, from the zero state (the FIR window sees zeros before the record), as the papers' estimators start.
+INITS = ("first", "zero")
 
 
 @dataclass(frozen=True)
@@ -350,7 +354,7 @@ def _check_params(fam: Family, P: np.ndarray) -> None:
                              f"samples, got {col.tolist()!r:.80}")
 
 
-def estimate(fam, P, y, dt: float, *, engine: str = "auto") -> np.ndarray:
+def estimate(fam, P, y, dt: float, *, engine: str = "auto", init: str = "first") -> np.ndarray:
     """Estimates of ``f``, ``f'`` (and ``f''`` where the family gives it) from the records ``y``, one run per column.
 
     Parameters
@@ -365,6 +369,12 @@ def estimate(fam, P, y, dt: float, *, engine: str = "auto") -> np.ndarray:
         Sample period (> 0).
     engine : {"auto", "numpy", "compiled"}
         The engine of :meth:`Loop.simulate` (the algebraic family always runs vectorised numpy).
+    init : {"first", "zero"}
+        How a causal family starts (:data:`INITS`): at rest on each record's first sample (default: ``f̂ = y_0``
+        and every derivative estimate 0, so the start-up error of ``f̂'`` begins at ``|f'(0)|``), or from the zero
+        state (``f̂ = 0``: a start-up peak that grows with ``|y_0|``). The derivative is not started from a
+        difference of the first samples: with noise bound ``ε`` that difference errs by up to ``2ε/dt``. The
+        offline families (:data:`OFFLINE`) read the whole record and ignore it.
 
     Returns
     -------
@@ -378,7 +388,7 @@ def estimate(fam, P, y, dt: float, *, engine: str = "auto") -> np.ndarray:
         If ``fam`` is not a family, the shapes of ``P`` and ``y`` disagree, a value is not finite, a
         parameter is not > 0 (an integer parameter not an integer, a degree not 1 or 2, a window over
         :data:`~ctrl_analysis.arena.algebraic.MAX_WINDOW`) or builds no valid estimator (gains that overflow),
-        ``dt <= 0`` or ``engine`` is unknown.
+        ``dt <= 0``, ``engine`` or ``init`` is unknown.
 
     Examples
     --------
@@ -394,6 +404,7 @@ def estimate(fam, P, y, dt: float, *, engine: str = "auto") -> np.ndarray:
         raise TypeError(f"fam must be a Family or a family name, got {fam!r:.80}")
     dt = float(check_positive("dt", dt, scalar=True))
     check_in("engine", engine, ("auto", "numpy", "compiled"))
+    check_in("init", init, INITS)
     P = np.atleast_2d(check_finite("P", P))
     y = np.asarray(check_finite("y", y))
     if y.ndim != 2 or P.ndim != 2 or P.shape != (y.shape[1], len(fam.params)):
@@ -403,7 +414,7 @@ def estimate(fam, P, y, dt: float, *, engine: str = "auto") -> np.ndarray:
     N, B = y.shape
     k = 3 if fam.second else 2
     if fam.name == "algebraic":
-        return algebraic_derivative(y, P[:, 0].astype(int), P[:, 1].astype(int), dt)
+        return algebraic_derivative(y, P[:, 0].astype(int), P[:, 1].astype(int), dt, before=init)
     if fam.name == "sg":
         return savgol_smoother(y, P[:, 0].astype(int), P[:, 1].astype(int), dt)
     if fam.name == "spline":
@@ -425,7 +436,12 @@ def estimate(fam, P, y, dt: float, *, engine: str = "auto") -> np.ndarray:
         dy = np.zeros_like(y)
         dy[1:] = np.diff(y, axis=0) / dt  # backward difference (y_k - y_(k-1)) / dt
         inputs = {"_u[0]": y, "_u[1]": dy}
-    res = loop.simulate(N, inputs=inputs, save=Save(states=False, keep=list(outs[:k])),
+    x0 = None
+    if init == "first":  # at rest on y_0: every block's state 0 is its estimate of f, the others its derivatives
+        x0 = np.zeros((B, len(block.states)))
+        x0[:, 0] = y[0]
+        x0 = {"est": x0}
+    res = loop.simulate(N, inputs=inputs, x0=x0, save=Save(states=False, keep=list(outs[:k])),
                         execution=Execution(chunk_runs=B, engine=engine, progress=False, bound=np.inf),
                         params={"est": per_run})
     out = np.empty((N, B, k))

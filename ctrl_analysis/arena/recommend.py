@@ -32,6 +32,7 @@ from .signals import (
     signal_classes,
     simulate_registered,
 )
+from .startup import derivative_peak, record_startup, startup_calls
 from .tuning import COSTS, MAX_ROUNDS, METRICS, Case, Setup, case_records, evaluate, family_chain, tune_families
 
 __all__ = [
@@ -130,7 +131,7 @@ def _adversarial(name, cases, rows, setup):
     pairs = [adversarial_pair(c.eps, c.L, setup.dt, setup.n, k_star) for c in cases]
     y = np.hstack([p["y"].T for p in pairs])
     P = np.repeat(np.array(rows), 2, axis=0)
-    est = estimate(family(name), P, y, setup.dt)[:, :, 1]
+    est = estimate(family(name), P, y, setup.dt, init=setup.init)[:, :, 1]
     return np.array([adversarial_error(est[:, 2 * i:2 * i + 2], p, setup.k_from) for i, p in enumerate(pairs)])
 
 
@@ -207,8 +208,9 @@ def _family_chain(name, cases, s, jobs):
     """One family tuned on ``cases``, then its adversarial check there: one chain of :func:`drive`."""
     tuned = yield from _as_calls(evaluate, family_chain(name, cases, s.setup, rounds=s.rounds, jobs=jobs,
                                                         costs=_costs(name)))
-    adv = yield _adversarial_calls([name], cases, {name: tuned}, s.setup)
-    return tuned, adv[0]
+    adv, *zero = yield (_adversarial_calls([name], cases, {name: tuned}, s.setup)
+                        + startup_calls([name], cases, {name: tuned}, s.setup))
+    return tuned, (adv, np.vstack(zero))
 
 
 def _pareto_chain(ctx, result, s, cases, jobs):
@@ -223,8 +225,14 @@ def _pareto_chain(ctx, result, s, cases, jobs):
     tuned = yield from _as_calls(evaluate, lockstep({n: family_chain(n, cases, s.setup, rounds=s.rounds, jobs=jobs,
                                                                      costs=_costs(n)) for n in s.families}))
     figures.save_pareto(ctx, result, s, cases, tuned)
-    advs = yield _adversarial_calls(s.families, cases, tuned, s.setup)
-    return {n: (tuned[n], a) for n, a in zip(s.families, advs, strict=True)}
+    calls = [_adversarial_calls([n], cases, tuned, s.setup) + startup_calls([n], cases, tuned, s.setup)
+             for n in s.families]
+    got = iter((yield [c for group in calls for c in group]))
+    out = {}
+    for n, group in zip(s.families, calls, strict=True):
+        adv, *zero = [next(got) for _ in group]
+        out[n] = (tuned[n], (adv, np.vstack(zero)))
+    return out
 
 
 def _fixed_chain(cases, setup):
@@ -242,13 +250,14 @@ def _fixed_chain(cases, setup):
 
 
 def _merged(parts: list, n_cases: int) -> tuple:
-    """One family's tuning and adversarial errors on all cases from parts: ``[(case indices, (result, adv))]``."""
-    evaluated, best, adv = [None] * n_cases, [None] * n_cases, np.empty(n_cases)
-    for idx, (r, a) in parts:
+    """One family's tuning, adversarial errors and zero-state metrics on all cases from parts:
+    ``[(case indices, (result, (adv, zero-state metrics)))]``."""
+    evaluated, best, adv, zero = [None] * n_cases, [None] * n_cases, np.empty(n_cases), [None] * n_cases
+    for idx, (r, (a, z)) in parts:
         for j, i in enumerate(idx):
-            evaluated[i], best[i], adv[i] = r["evaluated"][j], r["best"][j], a[j]
+            evaluated[i], best[i], adv[i], zero[i] = r["evaluated"][j], r["best"][j], a[j], z[j]
     return {"family": parts[0][1][0]["family"], "evaluated": evaluated, "best": best,
-            "tunings": sum(r["tunings"] for _, (r, _a) in parts)}, adv
+            "tunings": sum(r["tunings"] for _, (r, _a) in parts)}, adv, np.array(zero)
 
 
 def _tune_and_draw(ctx, result, s, cases, t0) -> tuple:
@@ -272,21 +281,24 @@ def _tune_and_draw(ctx, result, s, cases, t0) -> tuple:
                   priority={"pareto figure": -1})
     merged = {n: _merged([(front, parts["pareto figure"][n])] + ([(rest, parts[n])] if rest else []), len(cases))
               for n in s.families}
-    done, advs = {n: merged[n][0] for n in s.families}, [merged[n][1] for n in s.families]
-    for name, adv in zip(s.families, advs, strict=True):
-        r = done[name]
+    peaks = [derivative_peak(c, s.setup) for c in cases]
+    start = METRICS.index("startup")
+    for name in s.families:
+        r, adv, zero = merged[name]
         tunings += r["tunings"]
         table[name] = {}
-        for c, b, a in zip(cases, r["best"], adv, strict=True):
+        for c, b, a, z, peak in zip(cases, r["best"], adv, zero, peaks, strict=True):
             bound = lower_bound(c.eps, c.L)
             table[name][c.key] = {"params": b["worst"][0].tolist(), "worst": b["worst"][1][0],
                                   "rms_params": b["rms"][0].tolist(), "rms": b["rms"][1][1],
                                   "ratio": b["worst"][1][0] / bound, "adv": a, "adv_ratio": a / bound,
-                                  "bound": bound}
+                                  "bound": bound, "startup": b["worst"][1][start] / peak,
+                                  "startup_zero": z[start] / peak}
             if "rms_f" in b:  # tuned for the signal estimate too (tuned_for_signal)
                 table[name][c.key]["rms_f"] = b["rms_f"][1][METRICS.index("rms_f")]
     elapsed = time.perf_counter() - t0
     _record(result, s, cases, table, tunings)
+    record_startup(result, s.setup, cases, table)
     judge_claims(result, cases, table, s.setup, fixed=parts["fixed configurations"])
     figures.save_all(ctx, result, s, cases, table)
     return result, {"table": table, "tunings": tunings, "seconds": elapsed}
@@ -498,7 +510,8 @@ def recommend_for_record(t, y, d1, eps: float, L: float, *, rounds: int = 2, job
     -------
     list of dict
         One per family, best first by worst-case error: ``family``, ``label``, ``params``, ``worst``, ``ratio``,
-        ``causal``, and ``rms`` / ``rms_params`` (the family tuned for its RMS error instead).
+        ``causal``, ``startup`` (its worst error in the start-up window / ``max |f'|``, for the offline smoothers too),
+        and ``rms`` / ``rms_params`` (the family tuned for its RMS error instead).
 
     Raises
     ------
@@ -519,6 +532,7 @@ def recommend_for_record(t, y, d1, eps: float, L: float, *, rounds: int = 2, job
     setup, rec = record_case(t, y, d1, eps, L)
     case = Case("user", "user", float(eps), float(L), (0,))
     tuning._USER_RECORDS[case] = rec
+    peak = max(float(np.max(np.abs(rec[0]))), np.finfo(float).tiny)  # max |f'|: a start-up error's scale
     try:
         out = []
         # every family side by side in one pool, opened after the record is set (its workers inherit it)
@@ -534,6 +548,7 @@ def recommend_for_record(t, y, d1, eps: float, L: float, *, rounds: int = 2, job
             out.append({"family": fam.name, "label": fam.label, "params": dict(zip([p.name for p in fam.params],
                                                                                    v.tolist(), strict=True)),
                         "worst": float(m[0]), "ratio": float(m[0] / lower_bound(eps, L)), "causal": fam.causal,
+                        "startup": float(m[METRICS.index("startup")] / peak),
                         "rms": float(mr[1]), "rms_params": dict(zip([p.name for p in fam.params], vr.tolist(),
                                                                     strict=True))})
     finally:

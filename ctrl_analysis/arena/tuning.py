@@ -37,7 +37,7 @@ from .._validate import (
 )
 from ..metrics import rmse
 from ..runs.chains import drive
-from .interface import FAMILIES, GIVEN, OFFLINE, OMEGA_DT_MAX, SIGMA_ORDER, Family, estimate, family, scales
+from .interface import FAMILIES, GIVEN, INITS, OFFLINE, OMEGA_DT_MAX, SIGMA_ORDER, Family, estimate, family, scales
 from .recordcheck import MAX_ROWS
 from .signals import (
     add_noise,
@@ -50,8 +50,9 @@ __all__ = ["COSTS", "MAX_ROUNDS", "METRICS", "Case", "Setup", "case_records", "e
            "param_values", "pareto_front", "tune_families", "tune_family"]
 
 #: Metric columns returned by :func:`evaluate`: the worst and RMS error of f̂' on the noisy records, its worst error
-#: on the noise-free ones (lag), the RMS difference between the two (noise), and the RMS error of f̂ itself.
-METRICS = ("worst", "rms", "lag", "noise", "rms_f")
+#: on the noise-free ones (lag), the RMS difference between the two (noise), and the RMS error of f̂ itself, all
+#: after the start-up window; then f̂''s worst error on the noisy records *in* the start-up window (0 without one).
+METRICS = ("worst", "rms", "lag", "noise", "rms_f", "startup")
 #: The costs a family may be tuned for (:func:`tune_families`' ``costs``): f̂''s worst and RMS error, f̂'s RMS error.
 COSTS = ("worst", "rms", "rms_f")
 #: Runs per engine call (memory: N x runs x outputs doubles).
@@ -77,17 +78,23 @@ class Setup:
     n : int
         Samples per record (2 to :data:`~ctrl_analysis.arena.recordcheck.MAX_ROWS`).
     transient : float
-        Errors before this time are not counted (s).
+        The start-up window (s): errors before this time are not counted in the costs, and are scored apart
+        (:data:`METRICS`' ``"startup"``).
+    init : {"first", "zero"}
+        How the causal families start (:data:`~ctrl_analysis.arena.interface.INITS`): at rest on each record's
+        first sample (default), or from the zero state.
     """
 
     dt: float = 0.002
     n: int = 4000
     transient: float = 2.0
+    init: str = "first"
 
     def __post_init__(self):
         check_positive("dt", self.dt, scalar=True)
         check_int("n", self.n, minimum=2, maximum=MAX_ROWS)
         check_nonnegative("transient", self.transient, scalar=True)
+        check_in("init", self.init, INITS)
         if self.k_from >= self.n:
             raise ValueError(f"transient must end before the record does (n dt = {self.n * self.dt:g} s), "
                              f"got transient = {self.transient!r}")
@@ -256,7 +263,7 @@ def evaluate(task) -> np.ndarray:
     Returns
     -------
     numpy.ndarray, shape (len(configs), len(METRICS))
-        Columns :data:`METRICS`: worst, rms, lag, noise, rms_f.
+        Columns :data:`METRICS`: worst, rms, lag, noise, rms_f, startup.
     """
     name, setup, cases, configs, engine = _check_task(task)
     known = registered_signal_classes()
@@ -280,7 +287,7 @@ def evaluate(task) -> np.ndarray:
             truths.append(d1)
             signals.append(f)
             P.append(np.tile(row, (per, 1)))
-        both = estimate(fam, np.vstack(P), np.hstack(ys), setup.dt, engine=engine)
+        both = estimate(fam, np.vstack(P), np.hstack(ys), setup.dt, engine=engine, init=setup.init)
         est = both[:, :, 1]
         S = per // 2
         for i in range(len(part)):
@@ -288,9 +295,10 @@ def evaluate(task) -> np.ndarray:
             clean = est[k0:, i * per + S:(i + 1) * per]
             truth = truths[i][k0:]
             f_hat = both[k0:, i * per:i * per + S, 0]
+            startup = np.max(np.abs(est[:k0, i * per:i * per + S] - truths[i][:k0]), initial=0.0)
             out[lo + i] = (np.max(np.abs(noisy - truth)), rmse(truth, noisy, axis=None),
                            np.max(np.abs(clean - truth)), rmse(clean, noisy, axis=None),
-                           rmse(signals[i][k0:], f_hat, axis=None))
+                           rmse(signals[i][k0:], f_hat, axis=None), startup)
     return np.where(np.isfinite(out), out, np.inf)
 
 

@@ -113,14 +113,19 @@ def _library_block(name, row):
     return DiscreteLowPass(LowPassFilter(row[0], 2), DT, channels=2), ("u[0]", "u[1]"), ("w[0]", "w[1]")
 
 
+@pytest.mark.parametrize("init", ["first", "zero"])
 @pytest.mark.parametrize("name", ["sigma", "leso2", "leso3", "neso", "td", "kalman", "difflp"])
-def test_interface_equals_the_library_block_run_alone(name):
+def test_interface_equals_the_library_block_run_alone(name, init):
+    # started at rest on the first sample: the library block with its first state y_0, the others 0
     fam = family(name)
     y = _record()
     P = _params(fam)
-    est = estimate(fam, P, y, DT, engine="numpy")
+    est = estimate(fam, P, y, DT, engine="numpy", init=init)
     b = 2
     block, ins, outs = _library_block(name, P[b])
+    x0 = np.zeros(len(block.states))
+    if init == "first":
+        x0[0] = y[0, b]
     continuous = name in ("sigma", "leso2", "leso3", "neso")
     loop = Loop([place(block, "x", outputs=list(block.outputs))], DT, substeps=2 if continuous else 1)
     inputs = {ins[0]: y[:, b]}
@@ -128,7 +133,7 @@ def test_interface_equals_the_library_block_run_alone(name):
         inputs["u"] = 0.0
     if name == "difflp":
         inputs["u[1]"] = np.concatenate([[0.0], np.diff(y[:, b]) / DT])
-    res = loop.simulate(y.shape[0], inputs=inputs, execution=Execution(engine="numpy", progress=False))
+    res = loop.simulate(y.shape[0], inputs=inputs, x0={"x": x0}, execution=Execution(engine="numpy", progress=False))
     for j, s in enumerate(outs):
         assert np.allclose(est[:, b, j], res.signals[s][:-1, 0], rtol=1e-12, atol=1e-12), s
 
@@ -283,8 +288,8 @@ def test_the_given_gains_filter_runs_as_given_and_is_never_tuned():
     from ctrl_analysis.estimators.kalman import AlphaBetaFilter
 
     y = _record(n=120)
-    est = estimate("ab", [[0.95, 0.863]] * y.shape[1], y, DT, engine="numpy")
-    ref, _ = AlphaBetaFilter(0.95, 0.863, DT).run(y[:, :, None])  # (N, B, [x̂, v̂])
+    est = estimate("ab", [[0.95, 0.863]] * y.shape[1], y, DT, engine="numpy", init="zero")
+    ref, _ = AlphaBetaFilter(0.95, 0.863, DT).run(y[:, :, None])  # (N, B, [x̂, v̂]), from the zero state
     np.testing.assert_allclose(est[:, :, :2], ref, rtol=1e-12, atol=1e-12)
     with pytest.raises(ValueError, match=r"alpha\) must be in \(0, 2\]"):
         estimate("ab", [[2.5, 0.5]], y[:, :1], DT)

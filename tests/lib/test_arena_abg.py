@@ -47,7 +47,7 @@ def test_runner_is_the_steady_state_kalman_filter(engine):
     a, b, g = alpha_beta_gamma_gains(lam)
     K = np.array([a, b / dt, g / (2 * dt * dt)])
     F = np.array([[1, dt, dt * dt / 2], [0, 1, dt], [0, 0, 1]])
-    xp, ref = np.zeros(3), []
+    xp, ref = np.array([y[0, 0], 0.0, 0.0]), []  # at rest on the first sample (the arena's start)
     for v in y[:, 0]:
         xf = xp + K * (v - xp[0])
         ref.append(xf)

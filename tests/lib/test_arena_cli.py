@@ -78,9 +78,14 @@ def test_tiny_arena_writes_valid_results(tmp_path):
     assert all(q["unit"] is not None for q in data["quantities"])
     adv = [q["value"] for q in data["quantities"] if q["id"].endswith("adv_ratio")]
     assert min(adv) >= 1 - 1e-9
-    assert sorted(data["figures"]) == ["arena_best_on_one_signal.png", "arena_pareto.png", "arena_ratio_heatmap.png"]
+    assert sorted(data["figures"]) == ["arena_best_on_one_signal.png", "arena_pareto.png", "arena_ratio_heatmap.png",
+                                       "arena_startup.png"]
     assert any(f["id"] == "recommend-sines-uniform" for f in data["findings"])
     assert arena_report_lines(data)[0] == "## Estimator arena"
+    # the start-up window scored apart, beside the same tunings started from the zero state (sines: y0 far from 0)
+    start = next(f for f in data["findings"] if f["id"] == "start-up")
+    assert "sines.uniform.0.01.leso2.startup" in ids
+    assert start["evidence"]["first_max"] < start["evidence"]["zero_max"]
 
 
 def _sine_csv(path, derivative=True, n=600):
@@ -117,6 +122,12 @@ def test_a_record_run_writes_its_folder(tmp_path, capsys, derivative):
         t0 = s["startup_window_s"]
         after = est[:, 0] >= t0 + 1e-9
         assert np.max(np.abs(est[after, 2] - np.cos(est[after, 0]))) <= min(worst.values()) * 1.05
+        # the start-up window scored apart: the winner's start-up error / max |f'| (= 1 here), as the CSV shows it
+        win = min(worst, key=worst.get)[:-6]
+        start = next(q["value"] for q in data["quantities"] if q["id"] == win + ".startup")
+        before = ~after
+        assert start == pytest.approx(np.max(np.abs(est[before, 2] - np.cos(est[before, 0]))), rel=1e-6)
+        assert est[0, 2] == pytest.approx(0.0, abs=1e-9)  # started at rest on the first sample: f̂'(0) = 0
     assert sorted(data["figures"]) == ["ranking.png", "record_estimate.png"]
     assert all((folder / fig).stat().st_size > 5_000 for fig in data["figures"])
     report = (folder / "REPORT.md").read_text()

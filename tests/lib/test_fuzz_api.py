@@ -45,6 +45,7 @@ from ctrl_analysis.arena import offline as arena_offline
 from ctrl_analysis.arena import recommend as arena_recommend
 from ctrl_analysis.arena import record as arena_record
 from ctrl_analysis.arena import report_section as arena_report_section
+from ctrl_analysis.arena import startup as arena_startup
 from ctrl_analysis.controllers import differential_feedback as hodf
 from ctrl_analysis.controllers import fuzzy, golden_section, mfac, pd, pid
 from ctrl_analysis.engine import (
@@ -849,7 +850,7 @@ def _arena_cases(tmp):
          dict(y=np.zeros((20, 2)), windows=[4, 5], degrees=2, dt=0.1),
          dict(y=ARR + [np.zeros(20), np.zeros((20, 2, 1)), _nan_like(np.zeros((20, 2)))],
               windows=["3", None, [4.5, 5], [NAN, 5], [4, 5, 6], [[4, 5]], [0, 5]],
-              degrees=["3", None, 1.5, NAN, [1, 2, 2], 0, 3], dt=POS)),
+              degrees=["3", None, 1.5, NAN, [1, 2, 2], 0, 3], dt=POS, before=CHOICE + [None, 0])),
         ("make_signal", signals.make_signal, dict(kind="chirp", seed=1, t=np.linspace(0.0, 1.0, 20), L=2.0),
          dict(kind=CHOICE + [None, ["chirp"]], seed=ints + [-1], t=ARR + [[], np.ones((2, 3)), [0.0, NAN]], L=POS)),
         ("add_noise", signals.add_noise, dict(kind="uniform", f=np.zeros(20), eps=0.1, seed=3),
@@ -858,11 +859,12 @@ def _arena_cases(tmp):
         ("scales", interface.scales, dict(eps=0.01, L=4.0, dt=0.002), dict(eps=POS, L=POS, dt=POS)),
         ("estimate", interface.estimate, dict(fam="leso2", P=[[20.0]], y=y, dt=0.01, engine="numpy"),
          dict(fam=CHOICE + [None], P=ARR + [[[20.0, 1.0]], [[NAN]], [[0.0]], [[-20.0]]],
-              y=ARR + [np.zeros(50), np.zeros((50, 2)), _nan_like(y)], dt=POS, engine=CHOICE + [None])),
+              y=ARR + [np.zeros(50), np.zeros((50, 2)), _nan_like(y)], dt=POS, engine=CHOICE + [None],
+              init=CHOICE + [None, 0])),
         ("estimate(algebraic)", interface.estimate, dict(fam="algebraic", P=[[4.0, 2.0]], y=y, dt=0.01),
          dict(P=[[[4.5, 2.0]], [[4.0, 3.0]], [[4.0, 1.5]], [[4.0, 0.0]]])),
         ("Setup", tuning.Setup, dict(dt=0.01, n=100, transient=0.2),
-         dict(dt=POS, n=INT + [1, 0], transient=NONNEG + [1.0, 5.0])),
+         dict(dt=POS, n=INT + [1, 0], transient=NONNEG + [1.0, 5.0], init=CHOICE + [None, 0])),
         ("Case", tuning.Case, dict(signal="sines", noise="uniform", eps=0.01, L=2.0, seeds=(1, 2)),
          dict(signal=STR + [""], noise=STR + [""], eps=POS, L=POS, seeds=[None, 3, (), [1, 2], (1.5,), (-1,), ("a",)])),
         ("case_records", tuning.case_records, dict(case=case, setup=setup),
@@ -1050,6 +1052,9 @@ NOT_FUZZED = {
     arena_offline.savgol_smoother: "runner of arena.interface.estimate, which checks its arguments (fuzzed)",
     arena_offline.spline_smoother: "runner of arena.interface.estimate, which checks its arguments (fuzzed)",
     arena_offline.rts_smoother: "runner of arena.interface.estimate, which checks its arguments (fuzzed)",
+    arena_startup.startup_calls: "run_arena's plumbing: the calls of its tuned families (test_arena_cli's tiny arena)",
+    arena_startup.derivative_peak: "run_arena's plumbing on its own cases (test_arena_cli's tiny arena)",
+    arena_startup.record_startup: "records run_arena's table in its result (test_arena_cli's tiny arena)",
     levant.levant_update: "per-step kernel, unchecked by design",
     integrators.is_bad: "per-step divergence test, unchecked by design",
     numpy_engine.run_numpy: "internal half of Loop.simulate(execution=Execution(engine='numpy')), whose arguments "
