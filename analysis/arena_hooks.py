@@ -151,7 +151,7 @@ def meso_observer_errors(cases, setup) -> dict:
     dict
         ``{"MESO": {"rms_f": errors, "rms": errors}, "ESO": {...}}``, one error per case.
     """
-    from ctrl_analysis.arena.interface import OMEGA_DT_MAX, SUBSTEPS, scales
+    from ctrl_analysis.arena.interface import OMEGA_DT_RK4, SUBSTEPS, scales
     from ctrl_analysis.arena.tuning import case_records
     from ctrl_analysis.engine import Save
     from ctrl_analysis.engine.blocks import signal_names
@@ -172,7 +172,7 @@ def meso_observer_errors(cases, setup) -> dict:
             scale = case.L / rec[3]  # the arena's change of units (make_signal)
             u.append(rec[4] * scale)
             theta.append(rec[5] * np.array([1.0, 1.0, 1.0, scale]))
-        w = np.minimum(scales(case.eps, case.L, setup.dt)["omega"] * np.array(MESO_GRID), OMEGA_DT_MAX / setup.dt)
+        w = np.minimum(scales(case.eps, case.L, setup.dt)["omega"] * np.array(MESO_GRID), OMEGA_DT_RK4 / setup.dt)
         G, S = w.size, len(case.seeds)
         th = np.array(theta)  # (S, N, 4)
         for label, model in (("MESO", 1.0), ("ESO", 0.0)):

@@ -131,7 +131,8 @@ RULES = [
                                       "discrete_steady_state_batch.max_iter", "chunk_slices(large n).chunk_size",
                                       "chunk_slices.chunks", "chunk_slices.chunk_size", "map_chunks.jobs",
                                       "monte_carlo.jobs", "monte_carlo.chunk_size", "sweep.jobs", "sweep.chunk_size",
-                                      "StudyContext.jobs", "explore.jobs", "tune_family.jobs", "plot_sensitivity.top",
+                                      "StudyContext.jobs", "explore.jobs", "tune_family.jobs", "tune_families.jobs",
+                                      "plot_sensitivity.top",
                                       "drive.jobs", "family_chain.jobs", "simulate_registered.jobs",
                                       "bar.total", "updater.total", "set_context.position"]),
     ("a count of runs, stored and used lazily (chunk_slices only computes slice bounds)", "giant",
@@ -246,6 +247,7 @@ RULES = [
     # the last findings of the generated fuzz (issue 28: the arena, ctrl_analysis/runs/parallel.py)
     (SIGNAL, "negative", ["record_estimates.y"]),
     (SIGNAL + " (a measurement and its derivative)", "negative", ["estimated_bounds.y", "estimated_bounds.d1"]),
+    ("a quantile level in [0, 1] (documented): 0 is the smallest value seen", "zero", ["Quantiles.quantile.q"]),
     (("an estimate of f' may be any real number; NaN/inf of a diverged estimator give a NaN/inf error (documented: "
       "'a diverged estimator's error is not finite')"), "negative nan-entry inf-entry", ["adversarial_error.est_d1"]),
     ("a batch of any number of seeds (at least one): one run per seed", "longer shorter",

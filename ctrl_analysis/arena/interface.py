@@ -36,9 +36,9 @@ from ..estimators.kalman.alpha_beta import (
     AlphaBetaFilter,
     alpha_beta_gamma_gains,
     alpha_beta_gamma_output,
-    alpha_beta_gamma_update,
     kalata_gains,
 )
+from ..estimators.kalman.singer import singer_gains, singer_transition, singer_update
 from ..estimators.levant import LevantDifferentiator
 from ..estimators.lowpass import DiscreteLowPass, LowPassFilter
 from ..estimators.tracking import TrackingDifferentiator
@@ -46,12 +46,17 @@ from ..polynomials import repeated_pole_coefficients
 from .algebraic import MAX_WINDOW, algebraic_derivative
 from .offline import rts_smoother, savgol_smoother, spline_smoother
 
-__all__ = ["FAMILIES", "GIVEN", "INITS", "OFFLINE", "SIGMA_ORDER", "Family", "Param", "estimate", "family", "scales"]
+__all__ = ["FAMILIES", "GIVEN", "INITS", "OFFLINE", "SIGMA_ORDER", "Family", "Param", "estimate", "family", "scales",
+           "substeps_for"]
 
-#: Integration substeps (RK4) per sample for the continuous families; every grid keeps ``ω dt <= 1``.
+#: Integration substeps (RK4) per sample for the continuous families whose fastest pole has ``ω dt <= OMEGA_DT_RK4``;
+#: a faster run takes ``SUBSTEPS`` more per ``OMEGA_DT_RK4`` (:func:`substeps_for`).
 SUBSTEPS = 2
-#: The fastest pole any family is tuned to, ``OMEGA_DT_MAX / dt``: RK4 with 2 substeps is accurate there.
-OMEGA_DT_MAX = 1.0
+#: The fastest pole that RK4 with :data:`SUBSTEPS` substeps per sample integrates accurately: ``ω h <= 0.5`` per step.
+OMEGA_DT_RK4 = 1.0
+#: The fastest pole any family is tuned to, ``OMEGA_DT_MAX / dt``: far beyond the Nyquist rate ``π/dt`` a faster
+#: estimator only follows the held samples more closely, with the error of a one-sample difference.
+OMEGA_DT_MAX = 8.0
 #: How a causal family starts (:func:`estimate`'s ``init``): ``"first"``, at rest on the first sample (the state a
 #: constant record ``y_0`` holds: ``f̂ = y_0``, every derivative 0; the FIR window sees ``y_0`` before the record);
 #: ``"zero"``, from the zero state (the FIR window sees zeros before the record), as the papers' estimators start.
@@ -77,6 +82,9 @@ class Param:
         ``(lo, hi]``.
     integer : bool
         Rounded to an integer (and to ``>= 2`` for a window).
+    points : int, optional
+        Grid points over the range (:func:`~ctrl_analysis.arena.tuning.param_values`' search); default 9 for a
+        family's only parameter, 5 for each of two.
     """
 
     name: str
@@ -84,6 +92,7 @@ class Param:
     lo: float
     hi: float
     integer: bool = False
+    points: int | None = None
 
 
 @dataclass(frozen=True)
@@ -146,7 +155,13 @@ FAMILIES = (
            "estimators.kalman.AlphaBetaFilter with kalata_gains(Λ)"),
     Family("abg", "steady-state Kalman α-β-γ (Kalata's Λ, constant acceleration)",
            (Param("Lambda", "lambda3", 0.001, 1000.0),), True,
-           "estimators.kalman.alpha_beta: alpha_beta_gamma_gains(Λ) + alpha_beta_gamma_output/_update"),
+           "estimators.kalman: alpha_beta_gamma_gains(Λ) + alpha_beta_gamma_output, singer_update (τ_m = ∞)"),
+    # beyond constant acceleration: Singer's manoeuvre model, from near-white acceleration (τ_m ~ dt, an α-β-like
+    # filter) to constant acceleration (τ_m >> the record, the abg family)
+    Family("singer", "steady-state Kalman α-β-γ, Singer manoeuvre model (Kalata's Λ, time constant τ_m)",
+           # Λ on abg's 9-point grid: the constant-acceleration filter (τ_m large) is then among the grid's points
+           (Param("Lambda", "lambda3", 0.001, 1000.0, points=9), Param("tau_m", "tau", 0.1, 1000.0)), True,
+           "estimators.kalman.singer: singer_gains(Λ, dt/τ_m) + alpha_beta_gamma_output, singer_update"),
     Family("difflp", "backward difference + low-pass, order 2 (ω)", (Param("omega", "omega", 0.1, 10.0),), False,
            "estimators.lowpass.DiscreteLowPass on [y, Δy/dt]"),
     Family("algebraic", "causal Savitzky–Golay / algebraic (window, degree)",
@@ -206,7 +221,7 @@ def scales(eps: float, L: float, dt: float) -> dict:
     """Reference values of the tuning parameters for noise bound ``eps`` and acceleration bound ``L``.
 
     ``ω = √(L/ε)`` balances a linear differentiator's lag error (``∝ L/ω``) against its noise error
-    (``∝ ε ω``); every family's search range is set around it (and capped at ``ω dt <= 1``).
+    (``∝ ε ω``); every family's search range is set around it (and capped at ``ω dt <=`` :data:`OMEGA_DT_MAX`).
 
     Parameters
     ----------
@@ -251,20 +266,54 @@ def scales(eps: float, L: float, dt: float) -> dict:
     return out
 
 
+def substeps_for(omega_dt) -> np.ndarray:
+    """RK4 substeps per sample for a continuous family whose fastest pole is ``omega_dt / dt``.
+
+    :data:`SUBSTEPS` for every :data:`OMEGA_DT_RK4` of ``ω dt`` begun (``ω h <= 0.5`` per substep), at least
+    :data:`SUBSTEPS`: a run's integration accuracy does not depend on the other runs of its batch.
+
+    Parameters
+    ----------
+    omega_dt : array_like
+        ``ω dt`` per run (finite, > 0, at most :data:`OMEGA_DT_MAX`).
+
+    Returns
+    -------
+    numpy.ndarray of int
+
+    Raises
+    ------
+    TypeError, ValueError
+        If ``omega_dt`` is not numbers > 0 and at most :data:`OMEGA_DT_MAX`.
+
+    Examples
+    --------
+    >>> substeps_for([0.3, 1.0, 1.5, 8.0]).tolist()
+    [2, 2, 4, 16]
+    """
+    w = np.asarray(check_positive("omega_dt", omega_dt), dtype=float)
+    if np.any(w > OMEGA_DT_MAX):
+        raise ValueError(f"omega_dt must be <= OMEGA_DT_MAX = {OMEGA_DT_MAX:g}, got up to {np.max(w):.4g}")
+    return SUBSTEPS * np.maximum(1, np.ceil(w / OMEGA_DT_RK4 - 1e-12)).astype(int)
+
+
 # ---------------------------------------------------------------------------------------- blocks
 class _AlphaBetaGamma(KernelBlock, DiscreteBlock):
-    """Constant-gain α-β-γ filter: the library's kernels ``alpha_beta_gamma_output``/``_update`` with gains ``α, β, γ``.
+    """Constant-gain α-β-γ filter: the library's kernels ``alpha_beta_gamma_output`` and ``singer_update`` with gains
+    ``α, β, γ`` and Singer's decay ``s = T/τ_m`` (0, the default: constant acceleration, ``alpha_beta_gamma_update``'s
+    prediction to the last bit).
 
     Block signals: input ``y``; states ``xpred[0..2]``; outputs ``xhat[0..2]``.
     """
 
     inputs, states, outputs = ("y",), ("xpred[0]", "xpred[1]", "xpred[2]"), ("xhat[0]", "xhat[1]", "xhat[2]")
     feedthrough = True
-    kernels = Kernels(output=alpha_beta_gamma_output, update=alpha_beta_gamma_update)
+    kernels = Kernels(output=alpha_beta_gamma_output, update=singer_update)
 
-    def __init__(self, alpha: float, beta: float, gamma: float, T: float):
+    def __init__(self, alpha: float, beta: float, gamma: float, T: float, decay: float = 0.0):
         T = float(check_positive("T", T, scalar=True))
-        self.kernel_params = np.array([alpha, beta / T, gamma / (2.0 * T * T), T], dtype=float)
+        a, b, rho = singer_transition(decay)
+        self.kernel_params = np.array([alpha, beta / T, gamma / (2.0 * T * T), T, a * T * T, b * T, rho], dtype=float)
 
     def initial_state(self):
         return np.zeros(3)
@@ -289,6 +338,21 @@ def _abg_gains(lam: np.ndarray) -> tuple:
 
 #: Λ -> (α, β, γ), filled by :func:`_abg_gains`
 _ABG_CACHE: dict = {}
+
+
+def _singer_gains(lam: np.ndarray, decay: np.ndarray) -> tuple:
+    """α, β, γ per run from :func:`~ctrl_analysis.estimators.kalman.singer.singer_gains` (cached per ``(Λ, s)``)."""
+    keys = list(zip(lam.tolist(), decay.tolist(), strict=True))
+    new = sorted(set(keys) - _SINGER_CACHE.keys())
+    if new:
+        got = singer_gains(np.array([k[0] for k in new]), np.array([k[1] for k in new]))
+        for k, *g in zip(new, *got, strict=True):
+            _SINGER_CACHE[k] = tuple(float(v) for v in g)
+    return tuple(np.array(v) for v in zip(*(_SINGER_CACHE[k] for k in keys), strict=True))
+
+
+#: (Λ, s) -> (α, β, γ), filled by :func:`_singer_gains`
+_SINGER_CACHE: dict = {}
 
 
 # ---------------------------------------------------------------------------------------- running
@@ -329,6 +393,12 @@ def _build(fam: Family, P: np.ndarray, dt: float):
         alpha, beta, gamma = _abg_gains(P[:, 0])
         block = _AlphaBetaGamma(alpha[0], beta[0], gamma[0], dt)
         return block, ("y",), ("xhat[0]", "xhat[1]", "xhat[2]"), {"alpha": alpha, "beta": beta, "gamma": gamma}
+    if fam.name == "singer":
+        decay = dt / P[:, 1]
+        alpha, beta, gamma = _singer_gains(P[:, 0], decay)
+        block = _AlphaBetaGamma(alpha[0], beta[0], gamma[0], dt, decay[0])
+        return block, ("y",), ("xhat[0]", "xhat[1]", "xhat[2]"), {"alpha": alpha, "beta": beta, "gamma": gamma,
+                                                                   "decay": decay}
     if fam.name == "difflp":
         return _LowPass(P[0, 0], dt), ("u[0]", "u[1]"), ("w[0]", "w[1]"), {"omega": P[:, 0]}
     raise ValueError(f"family {fam.name!r} has no loop")  # pragma: no cover
@@ -388,7 +458,8 @@ def estimate(fam, P, y, dt: float, *, engine: str = "auto", init: str = "first")
         If ``fam`` is not a family, the shapes of ``P`` and ``y`` disagree, a value is not finite, a
         parameter is not > 0 (an integer parameter not an integer, a degree not 1 or 2, a window over
         :data:`~ctrl_analysis.arena.algebraic.MAX_WINDOW`) or builds no valid estimator (gains that overflow),
-        ``dt <= 0``, ``engine`` or ``init`` is unknown.
+        ``dt <= 0``, ``engine`` or ``init`` is unknown, or a continuous family's fastest pole is beyond
+        :data:`OMEGA_DT_MAX` ``/ dt`` (it is integrated with :func:`substeps_for` RK4 steps per sample).
 
     Examples
     --------
@@ -421,14 +492,35 @@ def estimate(fam, P, y, dt: float, *, engine: str = "auto", init: str = "first")
         return spline_smoother(y, P[:, 0], dt)
     if fam.name == "rts":
         return rts_smoother(y, P[:, 0], dt)
+    if fam.name not in SIGMA_ORDER and fam.name not in ("leso2", "leso3", "neso"):
+        return _run(fam, P, y, dt, engine, init, 1)
+    # continuous: RK4 substeps per run from its fastest pole (Σ: the double pole -n0 a; the ESOs: -ω_o)
+    fastest = P[:, 0] * SIGMA_ORDER.get(fam.name, 1) * dt
+    if np.any(fastest > OMEGA_DT_MAX):
+        raise ValueError(f"P column 0 ({fam.name} parameter {fam.params[0].name}) must put the fastest pole within "
+                         f"OMEGA_DT_MAX / dt (ω dt <= {OMEGA_DT_MAX:g}: beyond the sample rate a faster estimator "
+                         f"only follows the held samples), got ω dt up to {np.max(fastest):.4g}")
+    steps = substeps_for(fastest)
+    if np.all(steps == steps[0]):
+        return _run(fam, P, y, dt, engine, init, int(steps[0]))
+    out = np.empty((N, B, k))
+    for n_sub in np.unique(steps):
+        cols = np.flatnonzero(steps == n_sub)
+        out[:, cols] = _run(fam, P[cols], y[:, cols], dt, engine, init, int(n_sub))
+    return out
+
+
+def _run(fam, P, y, dt, engine, init, substeps) -> np.ndarray:
+    """:func:`estimate` of a loop family (checked arguments), every run with ``substeps`` per sample."""
+    N, B = y.shape
+    k = 3 if fam.second else 2
     try:
         block, ins, outs, per_run = _build(fam, P, dt)
     except ValueError as exc:  # a block's own check (gains overflowing, an unstable filter): the values come from P
         raise ValueError(f"P ({fam.name} parameters {', '.join(p.name for p in fam.params)}) gives no valid "
                          f"estimator: {exc}") from None
-    continuous = fam.name in SIGMA_ORDER or fam.name in ("leso2", "leso3", "neso")
     loop = Loop([place(block, "est", inputs=[f"_{s}" for s in block.inputs], outputs=list(outs))], dt,
-                substeps=SUBSTEPS if continuous else 1)
+                substeps=substeps)
     inputs = {f"_{ins[0]}": y}
     if fam.name in ("leso2", "leso3", "neso"):
         inputs["_u"] = 0.0

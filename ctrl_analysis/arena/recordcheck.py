@@ -96,7 +96,8 @@ ROUNDS = 2
 #: Per family: parameters with a pattern-search step and the grid's size (:func:`.tuning._grid`); the test
 #: suite checks this table against the families.
 FAMILY_GRIDS = {"sigma": (1, 9), "sigma5": (1, 9), "leso2": (1, 9), "leso3": (1, 9), "neso": (2, 25), "td": (2, 25),
-                "levant": (1, 9), "kalman": (1, 9), "abg": (1, 9), "difflp": (1, 9), "algebraic": (1, 10),
+                "levant": (1, 9), "kalman": (1, 9), "abg": (1, 9), "singer": (2, 45), "difflp": (1, 9),
+                "algebraic": (1, 10),
                 # the offline smoothers a --signal run tunes too (costed like an engine family: same order per row)
                 "sg": (1, 15), "spline": (1, 9), "rts": (1, 9)}
 #: The algebraic family's window grid, as multiples of its reference ``2 √(ε/L) / dt`` samples (x 2 degrees).

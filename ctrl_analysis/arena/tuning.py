@@ -242,7 +242,7 @@ def _grid(fam: Family) -> tuple:
             axes.append(np.arange(p.lo, p.hi + 1))
             steps.append(0.0)
         else:
-            ax = np.linspace(np.log(p.lo), np.log(p.hi), n)
+            ax = np.linspace(np.log(p.lo), np.log(p.hi), p.points or n)
             axes.append(ax)
             steps.append(0.5 * (ax[1] - ax[0]))
     mesh = np.meshgrid(*axes, indexing="ij")

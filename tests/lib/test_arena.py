@@ -9,7 +9,15 @@ from ctrl_analysis.arena.algebraic import (
     algebraic_derivative,
     algebraic_weights,
 )
-from ctrl_analysis.arena.interface import FAMILIES, SIGMA_ORDER, estimate, family, scales
+from ctrl_analysis.arena.interface import (
+    FAMILIES,
+    OMEGA_DT_MAX,
+    SIGMA_ORDER,
+    estimate,
+    family,
+    scales,
+    substeps_for,
+)
 from ctrl_analysis.arena.recommend import ArenaSettings
 from ctrl_analysis.arena.recordcheck import MAX_RECORDS, MAX_ROWS
 from ctrl_analysis.arena.signals import (
@@ -169,6 +177,9 @@ def test_references_and_parameters_beyond_double_precision_are_refused_naming_th
             scales(eps, L, dt)
     assert scales(1e-12, 1e4, 0.1)["window"] == 0.0  # a window under a sample is capped at 2 later, not refused
     with pytest.raises(ValueError, match=r"P \(leso2 parameters omega_o\) gives no valid estimator: m and omega"):
+        estimate("leso2", [[1e299]], np.zeros((50, 1)), 1e-299)  # ω dt = 1, but ω² overflows
+    with pytest.raises(ValueError, match=r"P column 0 \(leso2 parameter omega_o\) must put the fastest pole within "
+                                         r"OMEGA_DT_MAX / dt \(ω dt <= 8"):
         estimate("leso2", [[1e300]], np.zeros((50, 1)), DT)
     with pytest.raises(ValueError, match=r"P column 0 \(algebraic parameter window\) must be <= MAX_WINDOW"):
         estimate("algebraic", [[1e300, 2.0]], np.zeros((50, 1)), DT)
@@ -280,7 +291,32 @@ def test_sigma_families_fastest_pole_is_n0_a_and_is_capped_by_the_sample_period(
     assert np.max(np.abs(poles)) == pytest.approx(n0 * a, rel=1e-6)  # the breakaway double pole -n0 a
     setup = Setup(dt=0.01, n=300, transient=1.0)
     v = param_values(family(name), [[50.0]], Case("sines", "uniform", 1e-6, 1e6, (1,)), setup)
-    assert v[0, 0] * n0 * setup.dt == pytest.approx(1.0)  # OMEGA_DT_MAX = 1
+    assert v[0, 0] * n0 * setup.dt == pytest.approx(OMEGA_DT_MAX)
+
+
+@pytest.mark.parametrize("name", ["leso2", "sigma"])
+def test_a_pole_beyond_the_sample_rate_is_integrated_with_more_substeps_whatever_its_batch(name):
+    # ω dt = 4: 8 RK4 substeps (ω h = 0.5), against the same observer integrated with 64; alone and beside a slow run
+    y = _record(n=200, runs=2)
+    P = np.array([[4.0 / DT / SIGMA_ORDER.get(name, 1)], [0.3 / DT / SIGMA_ORDER.get(name, 1)]])
+    both = estimate(name, P, y, DT, engine="numpy")
+    alone = estimate(name, P[:1], y[:, :1], DT, engine="numpy")
+    assert np.array_equal(both[:, :1], alone)
+    block, ins, outs = _library_block(name, P[0])
+    x0 = np.zeros(len(block.states))
+    x0[0] = y[0, 0]
+    inputs = {ins[0]: y[:, 0]} | ({"u": 0.0} if ins[-1] == "u" else {})
+    run = {}
+    for n_sub in (64, 2):
+        loop = Loop([place(block, "x", outputs=list(block.outputs))], DT, substeps=n_sub)
+        res = loop.simulate(200, inputs=inputs, x0={"x": x0}, execution=Execution(engine="numpy", progress=False))
+        run[n_sub] = res.signals[outs[1]][:-1, 0]
+    err = np.max(np.abs(alone[:, 0, 1] - run[64]))
+    assert err < 5e-3 * np.max(np.abs(run[64]))  # RK4 at ω h = 0.5, the accuracy of ω dt = 1 with 2 substeps
+    assert np.max(np.abs(run[2] - run[64])) > 10 * err  # two substeps at ω dt = 4 (ω h = 2) would not be
+    assert substeps_for([4.0, 0.3]).tolist() == [8, 2]
+    with pytest.raises(ValueError, match="omega_dt must be <= OMEGA_DT_MAX"):
+        substeps_for(9.0)
 
 
 def test_the_given_gains_filter_runs_as_given_and_is_never_tuned():

@@ -82,6 +82,7 @@ from ctrl_analysis.estimators.kalman import (
     discrete,
     ikf,
     scalar,
+    singer,
 )
 from ctrl_analysis.estimators.kalman import filter as kfilter
 from ctrl_analysis.reporting import box_cells, report, run_folder, study
@@ -463,6 +464,9 @@ def build_cases(tmp):
         ("kalata_gains", alpha_beta.kalata_gains, dict(Lambda=0.5), dict(Lambda=VNONNEG)),
         ("alpha_beta_gamma_gains", alpha_beta.alpha_beta_gamma_gains, dict(Lambda=0.5),
          dict(Lambda=VPOS + [[1.0, -2.0]])),
+        ("singer_transition", singer.singer_transition, dict(decay=0.1), dict(decay=VNONNEG + [[0.1, -2.0]])),
+        ("singer_gains", singer.singer_gains, dict(Lambda=0.5, decay=0.1),
+         dict(Lambda=VPOS + [[1.0, -2.0]], decay=VNONNEG + [[0.1, -0.2]])),
         ("alpha_beta_stable", alpha_beta.alpha_beta_stable, dict(alpha=0.5, beta=0.2), dict(alpha=REAL, beta=REAL)),
         ("AlphaBetaFilter", alpha_beta.AlphaBetaFilter,
          dict(alpha=0.5, beta=0.2, T=0.1, F=None, b=None, x0=None, require_stable=True),
@@ -857,6 +861,8 @@ def _arena_cases(tmp):
          dict(kind=CHOICE + [None], f=ARR + [[], np.ones((2, 3)), [0.0, INF]], eps=POS, seed=ints + [-1])),
         ("family", interface.family, dict(name="leso2"), dict(name=CHOICE + [None, ["leso2"]])),
         ("scales", interface.scales, dict(eps=0.01, L=4.0, dt=0.002), dict(eps=POS, L=POS, dt=POS)),
+        ("substeps_for", interface.substeps_for, dict(omega_dt=[0.5, 2.0]),
+         dict(omega_dt=ARR + [[0.0], [-1.0], [9.0], "abc", None])),
         ("estimate", interface.estimate, dict(fam="leso2", P=[[20.0]], y=y, dt=0.01, engine="numpy"),
          dict(fam=CHOICE + [None], P=ARR + [[[20.0, 1.0]], [[NAN]], [[0.0]], [[-20.0]]],
               y=ARR + [np.zeros(50), np.zeros((50, 2)), _nan_like(y)], dt=POS, engine=CHOICE + [None],
@@ -1154,6 +1160,7 @@ NOT_FUZZED = {
     claims.registered_claim_checks: "no arguments",
     alpha_beta.alpha_beta_gamma_output: "compiled per-step kernel (test_arena_abg.py: against the matrix-form filter)",
     alpha_beta.alpha_beta_gamma_update: "compiled per-step kernel (test_arena_abg.py: against the matrix-form filter)",
+    singer.singer_update: "compiled per-step kernel (test_singer.py: against the matrix-form filter)",
     arena_cli.main: "command line, fuzzed in test_arena_cli.py (malformed CSV, missing bounds: one line, exit 2); "
                     "its CSV reader read_record is fuzzed here",
     **{getattr(_validate, name): "the shared validators themselves (test_validate.py)" for name in _validate.__all__},

@@ -12,6 +12,8 @@ Building blocks, independent of any paper, one topic per module:
   sampled-data noise discretisation (Van Loan);
 * :mod:`.alpha_beta` — α-β gains from a 2-state filter gain, Kalata's tracking index and closed
   forms, and the constant-gain α-β filter as a discrete block;
+* :mod:`.singer` — the α-β-γ filter of Singer's manoeuvre (first-order Markov acceleration) model: its exact
+  transition, steady-state gains and prediction kernel;
 * :mod:`.filter` — the time-varying discrete Kalman filter as a discrete block;
 * :mod:`.scalar` — the scalar random-walk steady-state gain ``K∞(Q/R)``.
 
