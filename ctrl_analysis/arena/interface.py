@@ -180,6 +180,10 @@ OFFLINE = (
     Family("rts", "RTS smoother, constant velocity, steady state (Kalata's Λ)",
            (Param("Lambda", "lambda", 0.001, 1000.0),), False,
            "arena.offline.rts_smoother: steady α-β filter forward, steady RTS gain backward", causal=False),
+    Family("rts3", "RTS smoother, constant acceleration, steady state (Kalata's Λ)",
+           (Param("Lambda", "lambda3", 0.001, 1000.0),), True,
+           "arena.offline.rts_smoother(order=3): steady α-β-γ filter forward, steady RTS gain backward",
+           causal=False),
 )
 
 #: Estimators run at given parameters only, never tuned: a paper's printed gains, as a fixed configuration
@@ -490,8 +494,8 @@ def estimate(fam, P, y, dt: float, *, engine: str = "auto", init: str = "first")
         return savgol_smoother(y, P[:, 0].astype(int), P[:, 1].astype(int), dt)
     if fam.name == "spline":
         return spline_smoother(y, P[:, 0], dt)
-    if fam.name == "rts":
-        return rts_smoother(y, P[:, 0], dt)
+    if fam.name in ("rts", "rts3"):
+        return rts_smoother(y, P[:, 0], dt, order=2 if fam.name == "rts" else 3)
     if fam.name not in SIGMA_ORDER and fam.name not in ("leso2", "leso3", "neso"):
         return _run(fam, P, y, dt, engine, init, 1)
     # continuous: RK4 substeps per run from its fastest pole (Σ: the double pole -n0 a; the ESOs: -ω_o)

@@ -1,7 +1,7 @@
 """Offline (non-causal) smoothers of a whole record: the arena's answer to "what is the derivative of my record".
 
 A causal estimator's error at ``t`` can only use the samples up to ``t``; a smoother of a recorded signal uses
-every sample, before and after. On a record the price of causality is the ratio of the two best errors. Three
+every sample, before and after. On a record the price of causality is the ratio of the two best errors. Four
 families from well-kept code, each tuned like the causal ones (:mod:`.tuning`):
 
 * ``sg`` — the centred Savitzky–Golay fit (:func:`scipy.signal.savgol_filter`, ``mode="interp"``: the first and
@@ -10,7 +10,9 @@ families from well-kept code, each tuned like the causal ones (:mod:`.tuning`):
   ``Σ (y_k - s(t_k))² + λ ∫ s''(t)² dt``), ``λ`` tuned; its derivatives are the spline's;
 * ``rts`` — the Rauch–Tung–Striebel smoother of the constant-velocity Kalman filter (white acceleration), in
   steady state: the forward filter is the α-β filter of Kalata's index ``Λ`` (the arena's ``kalman`` family), the
-  backward pass its steady RTS gain; ``Λ`` tuned.
+  backward pass its steady RTS gain; ``Λ`` tuned;
+* ``rts3`` — the same of the constant-acceleration model (the arena's ``abg`` family forward), which also
+  estimates ``f''``.
 
 Each returns the estimates of ``f``, ``f'`` (and ``f''`` where it has one) at every sample, one record per column.
 """
@@ -81,28 +83,28 @@ def spline_smoother(y: np.ndarray, lam: np.ndarray, dt: float) -> np.ndarray:
     return out
 
 
-def _rts_gains(lam: float, dt: float) -> tuple:
-    """Steady-state Kalman gain ``K``, predicted covariance and RTS gain of the constant-velocity model whose
-    tracking index is ``Λ = σ_w dt² / σ_v`` (unit measurement noise)."""
-    import scipy.linalg
+def _rts_gains(lam: float, order: int) -> tuple:
+    """Transition ``F``, steady-state filter gain ``K`` and RTS gain ``C = P(k|k) Fᵀ P(k+1|k)⁻¹`` of the order-2
+    (constant-velocity) or order-3 (constant-acceleration) model of tracking index ``Λ``, in the scaled states
+    ``[x, T ẋ, T² ẍ]`` (``T = 1``: the model depends on ``Λ`` alone), by the library's steady-state DARE."""
+    from ..estimators.kalman.discrete import discrete_steady_state_batch
 
-    F = np.array([[1.0, dt], [0.0, 1.0]])
-    H = np.array([[1.0, 0.0]])
-    g = np.array([[dt * dt / 2.0], [dt]])
-    q = (lam / (dt * dt)) ** 2  # σ_w² with σ_v = 1
-    Q = q * (g @ g.T)
-    P = scipy.linalg.solve_discrete_are(F.T, H.T, Q, np.eye(1))  # predicted covariance
-    K = P @ H.T / (H @ P @ H.T + 1.0)
-    Pf = (np.eye(2) - K @ H) @ P
-    C = Pf @ F.T @ np.linalg.inv(P)
-    return F, K[:, 0], C
+    if order == 2:
+        F, g = np.array([[1.0, 1.0], [0.0, 1.0]]), np.array([0.5, 1.0])
+    else:
+        F, g = np.array([[1.0, 1.0, 0.5], [0.0, 1.0, 1.0], [0.0, 0.0, 1.0]]), np.array([0.5, 1.0, 1.0])
+    ss = discrete_steady_state_batch(F[None], np.eye(1, order), (lam**2 * np.outer(g, g))[None], 1.0)
+    C = ss.P_post[0] @ F.T @ np.linalg.inv(ss.P_prior[0])
+    return F, ss.K_filter[0, :, 0], C
 
 
-def rts_smoother(y: np.ndarray, lam: np.ndarray, dt: float) -> np.ndarray:
-    """Steady-state RTS estimates of ``f, f'`` of every record (column) of ``y`` (constant-velocity model).
+def rts_smoother(y: np.ndarray, lam: np.ndarray, dt: float, order: int = 2) -> np.ndarray:
+    """Steady-state RTS estimates of ``f, f'`` (and ``f''`` at order 3) of every record (column) of ``y``.
 
-    The forward pass is the steady α-β filter of index ``Λ``, started from a line fitted to the first ``2/√Λ``
-    samples; the backward pass ``x_s(k) = x_f(k) + C (x_s(k+1) - F x_f(k))``.
+    The forward pass is the steady α-β (order 2, constant velocity: the arena's ``kalman`` family) or α-β-γ filter
+    (order 3, constant acceleration: its ``abg`` family) of index ``Λ``, started from a polynomial of degree
+    ``order - 1`` fitted to the first ``2/Λ^(1/order)`` samples (about the filter's memory); the backward pass
+    ``x_s(k) = x_f(k) + C (x_s(k+1) - F x_f(k))``.
 
     Parameters
     ----------
@@ -110,30 +112,35 @@ def rts_smoother(y: np.ndarray, lam: np.ndarray, dt: float) -> np.ndarray:
     lam : numpy.ndarray, shape (B,)
         Kalata's tracking index ``Λ`` per record (> 0).
     dt : float
+    order : {2, 3}
+        States of the model.
 
     Returns
     -------
-    numpy.ndarray, shape (N, B, 2)
+    numpy.ndarray, shape (N, B, order)
     """
     N, B = y.shape
-    out = np.empty((N, B, 2))
+    out = np.empty((N, B, order))
+    scale = dt ** -np.arange(order)  # scaled state [x, T ẋ, T² ẍ] -> [x, ẋ, ẍ]
     for value in np.unique(lam):
         cols = np.flatnonzero(lam == value)
-        F, K, C = _rts_gains(float(value), dt)
+        F, K, C = _rts_gains(float(value), order)
         yy = y[:, cols]
-        xf = np.empty((N, 2, cols.size))
-        # started from a line fitted to the first samples (about the filter's memory, 2/√Λ): a steady-state filter
-        # has no diffuse prior, and a zero slope would bias the start of the smoothed record
-        w = int(min(N, max(2, round(2.0 / np.sqrt(float(value))))))
-        slope, icpt = np.polyfit(dt * np.arange(w), yy[:w], 1) if N > 1 else (np.zeros(cols.size), yy[0])
-        xp = np.array([icpt, slope])
+        xf = np.empty((N, order, cols.size))
+        # started from a fit to the first samples: a steady-state filter has no diffuse prior, and a zero slope
+        # would bias the start of the smoothed record
+        w = int(min(N, max(order, round(2.0 / float(value) ** (1.0 / order)))))
+        deg = min(order - 1, w - 1)
+        c = np.polyfit(np.arange(w, dtype=float), yy[:w], deg)[::-1] if N > 1 else yy[:1]  # c0 + c1 k + c2 k²
+        xp = np.zeros((order, cols.size))
+        xp[:deg + 1] = c * np.array([1.0, 1.0, 2.0])[:deg + 1, None]  # [x, T ẋ, T² ẍ] at k = 0
         for k in range(N):
             x = xp + K[:, None] * (yy[k] - xp[0])
             xf[k] = x
             xp = F @ x
         xs = xf[-1]
-        out[-1, cols, :] = xs.T
+        out[-1, cols, :] = xs.T * scale
         for k in range(N - 2, -1, -1):
             xs = xf[k] + C @ (xs - F @ xf[k])
-            out[k, cols, :] = xs.T
+            out[k, cols, :] = xs.T * scale
     return out

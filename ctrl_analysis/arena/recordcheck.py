@@ -99,7 +99,8 @@ FAMILY_GRIDS = {"sigma": (1, 9), "sigma5": (1, 9), "leso2": (1, 9), "leso3": (1,
                 "levant": (1, 9), "kalman": (1, 9), "abg": (1, 9), "singer": (2, 45), "difflp": (1, 9),
                 "algebraic": (1, 10),
                 # the offline smoothers a --signal run tunes too (costed like an engine family: same order per row)
-                "sg": (1, 15), "spline": (1, 9), "rts": (1, 9)}
+                "sg": (1, 15), "spline": (1, 9), "rts": (1, 9),
+                "rts3": (1, 9)}
 #: The algebraic family's window grid, as multiples of its reference ``2 √(ε/L) / dt`` samples (x 2 degrees).
 WINDOW_MULTIPLES = tuple(float(v) for v in np.exp(np.linspace(np.log(0.1), np.log(10.0), 5)))
 

@@ -33,6 +33,18 @@ def test_rts_is_exact_on_the_constant_velocity_model_it_assumes():
         np.testing.assert_allclose(e[:, :, 1], [[2.0, -3.0]] * T.size, atol=1e-9)
 
 
+def test_rts3_is_exact_on_the_constant_acceleration_model_it_assumes():
+    y = (1.5 * T**2 + 2 * T + 1)[:, None]
+    for lam in (1e-6, 0.01, 1.0):
+        e = rts_smoother(y, np.array([lam]), DT, order=3)
+        assert e.shape == (T.size, 1, 3)
+        np.testing.assert_allclose(e[:, 0, 1], 3 * T + 2, atol=1e-9)
+        np.testing.assert_allclose(e[:, 0, 2], 3.0, atol=1e-7)
+    # the constant-velocity smoother is not (a parabola is outside its model): the test can fail
+    assert np.max(np.abs(rts_smoother(y, np.array([1e-6]), DT)[:, 0, 1] - (3 * T + 2))) > 0.1
+    assert estimate("rts3", [[0.01]], y, DT).shape == (T.size, 1, 3)
+
+
 def test_offline_families_use_the_future_and_beat_the_causal_best_on_a_noisy_record():
     rng = np.random.default_rng(5)
     t = 0.002 * np.arange(3000)
