@@ -32,7 +32,7 @@ from .signals import (
     signal_classes,
     simulate_registered,
 )
-from .startup import derivative_peak, record_startup, startup_calls
+from .startup import record_startup, startup_calls
 from .tuning import COSTS, MAX_ROUNDS, METRICS, Case, Setup, case_records, evaluate, family_chain, tune_families
 
 __all__ = [
@@ -281,7 +281,7 @@ def _tune_and_draw(ctx, result, s, cases, t0) -> tuple:
                   priority={"pareto figure": -1})
     merged = {n: _merged([(front, parts["pareto figure"][n])] + ([(rest, parts[n])] if rest else []), len(cases))
               for n in s.families}
-    peaks = [derivative_peak(c, s.setup) for c in cases]
+    peaks = [float(np.max(np.abs(case_records(c, s.setup)[0]))) for c in cases]  # max |f'|: a start-up error's scale
     start = METRICS.index("startup")
     for name in s.families:
         r, adv, zero = merged[name]

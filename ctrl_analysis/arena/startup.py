@@ -13,9 +13,9 @@ from dataclasses import replace
 
 import numpy as np
 
-from .tuning import _tasks, case_records, evaluate
+from .tuning import _tasks, evaluate
 
-__all__ = ["derivative_peak", "record_startup", "startup_calls"]
+__all__ = ["record_startup", "startup_calls"]
 
 
 def startup_calls(names, cases, tuned, setup) -> list:
@@ -41,21 +41,6 @@ def startup_calls(names, cases, tuned, setup) -> list:
         configs = [(i, b["worst"][0]) for i, b in enumerate(tuned[n]["best"])]
         out += [(evaluate, task) for task in _tasks(n, zero, list(cases), configs, "auto", 1)]
     return out
-
-
-def derivative_peak(case, setup) -> float:
-    """``max |f'|`` over the case's records (all samples): the scale of a start-up error.
-
-    Parameters
-    ----------
-    case : Case
-    setup : Setup
-
-    Returns
-    -------
-    float
-    """
-    return float(np.max(np.abs(case_records(case, setup)[0])))
 
 
 def record_startup(result, setup, cases, table) -> None:

@@ -1059,7 +1059,6 @@ NOT_FUZZED = {
     arena_offline.spline_smoother: "runner of arena.interface.estimate, which checks its arguments (fuzzed)",
     arena_offline.rts_smoother: "runner of arena.interface.estimate, which checks its arguments (fuzzed)",
     arena_startup.startup_calls: "run_arena's plumbing: the calls of its tuned families (test_arena_cli's tiny arena)",
-    arena_startup.derivative_peak: "run_arena's plumbing on its own cases (test_arena_cli's tiny arena)",
     arena_startup.record_startup: "records run_arena's table in its result (test_arena_cli's tiny arena)",
     levant.levant_update: "per-step kernel, unchecked by design",
     integrators.is_bad: "per-step divergence test, unchecked by design",
