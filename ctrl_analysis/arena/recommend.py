@@ -511,7 +511,9 @@ def recommend_for_record(t, y, d1, eps: float, L: float, *, rounds: int = 2, job
     list of dict
         One per family, best first by worst-case error: ``family``, ``label``, ``params``, ``worst``, ``ratio``,
         ``causal``, ``startup`` (its worst error in the start-up window / ``max |f'|``, for the offline smoothers too),
-        and ``rms`` / ``rms_params`` (the family tuned for its RMS error instead).
+        ``rms`` / ``rms_params`` (the family tuned for its RMS error instead) and ``pareto`` (the Pareto front of every
+        configuration it evaluated: ``[lag, noise-induced error]`` pairs on the surrogate, as in the benchmark's Pareto
+        figure; empty with ``d1``, where no noise-free signal separates the lag from the noise).
 
     Raises
     ------
@@ -545,12 +547,15 @@ def recommend_for_record(t, y, d1, eps: float, L: float, *, rounds: int = 2, job
                                  f"record (ε = {eps:.3g}, L = {L:.3g}, dt = {setup.dt:.3g} s); the arena cannot "
                                  "rank it")
             vr, mr = done[fam.name]["best"][0]["rms"]
+            pts = np.array([[m_[2], m_[3]] for _, m_ in done[fam.name]["evaluated"][0]])  # lag, noise-induced
+            pts = pts[np.all(np.isfinite(pts), axis=1)]
             out.append({"family": fam.name, "label": fam.label, "params": dict(zip([p.name for p in fam.params],
                                                                                    v.tolist(), strict=True)),
                         "worst": float(m[0]), "ratio": float(m[0] / lower_bound(eps, L)), "causal": fam.causal,
                         "startup": float(m[METRICS.index("startup")] / peak),
                         "rms": float(mr[1]), "rms_params": dict(zip([p.name for p in fam.params], vr.tolist(),
-                                                                    strict=True))})
+                                                                    strict=True)),
+                        "pareto": pts[tuning.pareto_front(pts)].tolist() if pts.size and d1 is None else []})
     finally:
         tuning._USER_RECORDS.pop(case, None)
     return sorted(out, key=lambda r: r["worst"])

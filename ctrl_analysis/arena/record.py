@@ -127,7 +127,10 @@ def run_record(ctx: StudyContext, t, y, d1, eps: float, L: float, source: str = 
                header=f"time,measurement,derivative estimate (causal: {win['family']}),derivative estimate (offline: "
                       f"{best_off.name})" + (f",second derivative estimate (offline: {best_off.name})"
                                             if off.shape[1] > 2 else ""), comments="")
-    _figures(ctx, result, t, y, est, ref[:, 0], fit[:, 0], setup, ranking + smooth, bound, d1 is not None)
+    _figures(ctx, result, t, y, (est, off[:, 1], best_off.name), ref[:, 0], fit[:, 0], setup, ranking + smooth, bound,
+             d1 is not None)
+    if d1 is None:  # the surrogate's noise-free signal separates lag from noise; a record with d1 has none
+        _pareto(ctx, result, ranking + smooth)
     return result, ranking
 
 
@@ -181,11 +184,12 @@ def _check_settings(check: dict, t0: float) -> dict:
             "cost": {k: float(v) for k, v in (check.get("cost") or {}).items()}}
 
 
-def _figures(ctx, result, t, y, est, ref, fit, setup, ranking, bound, exact) -> None:
+def _figures(ctx, result, t, y, ests, ref, fit, setup, ranking, bound, exact) -> None:
     from ..reporting.report import new_figure
 
-    fig, (ax, bx) = new_figure(2, 1, size=(9.0, 6.5), sharex=True,
-                               title=f"Record and the recommended estimator ({ranking[0]['label']})")
+    est, off, off_name = ests
+    fig, (ax, bx, cx) = new_figure(3, 1, size=(9.0, 8.5), sharex=True,
+                                   title=f"Record and the recommended estimator ({ranking[0]['label']})")
     ax.plot(t, y, lw=0.8, color="0.5", label="measurement")
     if not exact:
         ax.plot(t, fit, lw=1.2, color="tab:blue", label="zero-phase fit (the surrogate's signal)")
@@ -197,14 +201,27 @@ def _figures(ctx, result, t, y, est, ref, fit, setup, ranking, bound, exact) -> 
     bx.axvspan(t[0], t[0] + setup.transient, color="0.85", label="start-up window (scored apart)")
     span = np.ptp(ref) if np.ptp(ref) > 0 else 1.0
     bx.set_ylim(ref.min() - 0.5 * span, ref.max() + 0.5 * span)
-    bx.set_xlabel("time (s)")
     bx.set_ylabel("derivative (signal unit/s)")
     bx.legend(fontsize=8)
+    cx.plot(t, est - ref, lw=0.8, color="tab:orange", label=f"{ranking[0]['family']} (causal)")
+    cx.plot(t, off - ref, lw=0.8, color="tab:green", label=f"{off_name} (offline)")
+    cx.axvspan(t[0], t[0] + setup.transient, color="0.85")
+    for sign in (-1, 1):
+        cx.axhline(sign * bound, color="k", ls="--", lw=0.8, label="±2√(εL)" if sign > 0 else None)
+    k = int(round(setup.transient / setup.dt))
+    scored = np.abs(np.concatenate([est[k:] - ref[k:], off[k:] - ref[k:]]))
+    top = max(float(np.max(scored)) if scored.size else 0.0, bound)
+    cx.set_ylim(-1.5 * top, 1.5 * top)
+    cx.set_xlabel("time (s)")
+    cx.set_ylabel("f̂' - f' (signal unit/s)")
+    cx.legend(fontsize=8, ncol=3)
     ctx.save_figure(result, fig, "record_estimate.png",
-                    caption=f"Top: the record. Bottom: the recommended estimator's causal derivative estimate against "
-                            f"the {what}; the grey start-up window ({setup.transient:.3g} s) is left out of every "
+                    caption=f"Top: the record. Middle: the recommended estimator's causal derivative estimate against "
+                            f"the {what}. Bottom: the error over time of the recommended causal estimator and of the "
+                            f"best offline smoother, against the lower bound ±2√(εL) of any causal estimator's "
+                            f"worst case. The grey start-up window ({setup.transient:.3g} s) is left out of every "
                             "family's ranking error and scored apart (the estimator starts at rest on the first "
-                            "sample: f̂ = y0, f̂' = 0).")
+                            "sample: f̂ = y0, f̂' = 0); the error axis is scaled to the scored window.")
     fams = [r["family"] for r in ranking][::-1]
     ratios = [r["ratio"] for r in ranking][::-1]
     offline = {r["family"] for r in ranking if not r.get("causal", True)}
@@ -230,6 +247,30 @@ def _figures(ctx, result, t, y, est, ref, fit, setup, ranking, bound, exact) -> 
                     caption="Each family at its best tuning on this record: worst-case derivative error after the "
                             "start-up window, relative to the lower bound (dashed); the recommended causal one in "
                             "orange, the offline smoothers in green.")
+
+
+def _pareto(ctx, result, rows) -> None:
+    """Each family's Pareto front on the record: lag (noise-free worst error) against noise-induced RMS error."""
+    from ..reporting.report import new_figure
+
+    import matplotlib
+
+    colours = matplotlib.colormaps["tab20"]
+    fig, ax = new_figure(size=(8.5, 6.0), title="Every family on the record: lag against noise-induced error of f̂'")
+    for i, r in enumerate(rows):
+        pts = np.array(r.get("pareto") or [])
+        if pts.size:
+            ax.loglog(pts[:, 0], pts[:, 1], ".-" if r["causal"] else "s--", ms=4, color=colours(i % 20),
+                      label=r["family"] + ("" if r["causal"] else " (offline)"))
+    ax.set_xlabel("lag: worst |f̂' - f'| without noise (signal unit/s)")
+    ax.set_ylabel("noise-induced RMS error of f̂' (signal unit/s)")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize=8)
+    ctx.save_figure(result, fig, "record_pareto.png",
+                    caption="Per family, the Pareto front of every configuration evaluated while tuning on the "
+                            "record's surrogate: its lag (the worst derivative error on the surrogate's noise-free "
+                            "signal, the zero-phase fit) against the RMS of what the noise adds. Lower left is "
+                            "better; a front's corner is the family's best trade-off.")
 
 
 def report_lines(results: dict, out_dir: Path | str = ".") -> list[str]:

@@ -45,6 +45,21 @@ def test_rts3_is_exact_on_the_constant_acceleration_model_it_assumes():
     assert estimate("rts3", [[0.01]], y, DT).shape == (T.size, 1, 3)
 
 
+def test_a_record_without_its_derivative_gets_each_familys_pareto_front():
+    from ctrl_analysis.arena.recommend import recommend_for_record
+
+    t = 0.01 * np.arange(600)
+    y = np.sin(t) + 0.01 * np.random.default_rng(3).uniform(-1, 1, t.size)
+    rows = recommend_for_record(t, y, None, 0.01, 1.0, rounds=1)
+    for r in rows:
+        p = np.array(r["pareto"])
+        assert p.ndim == 2 and p.shape[1] == 2 and len(p) >= 1
+        # non-dominated: the lag grows and the noise-induced error falls along the front
+        assert np.all(np.diff(p[:, 0]) >= 0) and np.all(np.diff(p[:, 1]) < 0)
+    with_d1 = recommend_for_record(t, y, np.cos(t), 0.01, 1.0, rounds=0)
+    assert all(r["pareto"] == [] for r in with_d1)
+
+
 def test_offline_families_use_the_future_and_beat_the_causal_best_on_a_noisy_record():
     rng = np.random.default_rng(5)
     t = 0.002 * np.arange(3000)
