@@ -46,8 +46,8 @@ from ..polynomials import repeated_pole_coefficients
 from .algebraic import MAX_WINDOW, algebraic_derivative
 from .offline import rts_smoother, savgol_smoother, spline_smoother
 
-__all__ = ["FAMILIES", "GIVEN", "INITS", "OFFLINE", "SIGMA_ORDER", "Family", "Param", "estimate", "family", "scales",
-           "substeps_for"]
+__all__ = ["FAMILIES", "GIVEN", "INITS", "OFFLINE", "SIGMA_ORDER", "SIGMA_ORDERS_TUNED", "Family", "Param", "estimate",
+           "family", "scales", "substeps_for"]
 
 #: Integration substeps (RK4) per sample for the continuous families whose fastest pole has ``ω dt <= OMEGA_DT_RK4``;
 #: a faster run takes ``SUBSTEPS`` more per ``OMEGA_DT_RK4`` (:func:`substeps_for`).
@@ -128,6 +128,8 @@ class Family:
 
 #: Σ's order ``n0`` per family; its fastest closed-loop pole is the breakaway double pole ``-n0 a``.
 SIGMA_ORDER = {"sigma": 3, "sigma5": 5}
+#: The orders the family ``sigman`` chooses from (tuned; parameterised by its fastest pole ``n0 a``).
+SIGMA_ORDERS_TUNED = (3, 6)
 #: Han's fal exponents of the 3-state NESO (Han 2009; the textbook choice 1, 1/2, 1/4).
 NESO_ALPHA = (1.0, 0.5, 0.25)
 
@@ -138,6 +140,10 @@ FAMILIES = (
     Family("sigma5", "Σ, n0 = 5 (breakaway gain; the differential-estimator paper's order)",
            (Param("a", "omega", 0.1 / 5, 10.0 / 5),), True,
            "estimators.differential.DifferentialEstimator(5) + _kernels.sigma_rhs"),
+    # n0 as a tuned choice: the fastest pole p = n0 a and n0 itself (a = p / n0), every order on the same pole grid
+    Family("sigman", f"Σ, n0 tuned ({SIGMA_ORDERS_TUNED[0]} to {SIGMA_ORDERS_TUNED[1]}; breakaway gain, pole n0 a)",
+           (Param("pole", "omega", 0.1, 10.0, points=9), Param("n0", "one", *SIGMA_ORDERS_TUNED, integer=True)),
+           True, "estimators.differential.DifferentialEstimator(n0, pole / n0) + _kernels.sigma_rhs"),
     Family("leso2", "linear ESO, 2 states (ω_o)", (Param("omega_o", "omega", 0.1, 10.0),), False,
            "estimators.eso.ExtendedStateObserver.from_bandwidth(1, ω_o) + _kernels.eso_rhs"),
     Family("leso3", "linear ESO, 3 states (ω_o)", (Param("omega_o", "omega", 0.1, 10.0),), True,
@@ -366,9 +372,10 @@ def _build(fam: Family, P: np.ndarray, dt: float):
     The block is built with the first run's values; the per-run values (``Loop.simulate(params=...)``)
     rebuild it per distinct value, one kernel parameter row per run.
     """
-    if fam.name in SIGMA_ORDER:
-        a = P[:, 0]
-        n0 = SIGMA_ORDER[fam.name]  # f, f', f'' are its first three estimates
+    if fam.name in SIGMA_ORDER or fam.name == "sigman":
+        # f, f', f'' are its first three estimates; sigman's runs share one n0 here (estimate groups them)
+        n0 = SIGMA_ORDER[fam.name] if fam.name in SIGMA_ORDER else int(P[0, 1])
+        a = P[:, 0] / (1 if fam.name in SIGMA_ORDER else n0)
         return DifferentialEstimator(n0, a[0]), ("y",), signal_names("xhat", n0), {"a": a}
     if fam.name in ("leso2", "leso3", "neso"):
         m = 2 if fam.name == "leso2" else 3
@@ -496,21 +503,23 @@ def estimate(fam, P, y, dt: float, *, engine: str = "auto", init: str = "first")
         return spline_smoother(y, P[:, 0], dt)
     if fam.name in ("rts", "rts3"):
         return rts_smoother(y, P[:, 0], dt, order=2 if fam.name == "rts" else 3)
-    if fam.name not in SIGMA_ORDER and fam.name not in ("leso2", "leso3", "neso"):
+    if fam.name not in SIGMA_ORDER and fam.name not in ("sigman", "leso2", "leso3", "neso"):
         return _run(fam, P, y, dt, engine, init, 1)
-    # continuous: RK4 substeps per run from its fastest pole (Σ: the double pole -n0 a; the ESOs: -ω_o)
+    # continuous: RK4 substeps per run from its fastest pole (Σ: the double pole -n0 a, sigman's first parameter;
+    # the ESOs: -ω_o); runs grouped by their substeps (and sigman's by n0: one block order per loop)
     fastest = P[:, 0] * SIGMA_ORDER.get(fam.name, 1) * dt
     if np.any(fastest > OMEGA_DT_MAX):
         raise ValueError(f"P column 0 ({fam.name} parameter {fam.params[0].name}) must put the fastest pole within "
                          f"OMEGA_DT_MAX / dt (ω dt <= {OMEGA_DT_MAX:g}: beyond the sample rate a faster estimator "
                          f"only follows the held samples), got ω dt up to {np.max(fastest):.4g}")
     steps = substeps_for(fastest)
-    if np.all(steps == steps[0]):
+    group = steps * 100 + (P[:, 1].astype(int) if fam.name == "sigman" else 0)
+    if np.all(group == group[0]):
         return _run(fam, P, y, dt, engine, init, int(steps[0]))
     out = np.empty((N, B, k))
-    for n_sub in np.unique(steps):
-        cols = np.flatnonzero(steps == n_sub)
-        out[:, cols] = _run(fam, P[cols], y[:, cols], dt, engine, init, int(n_sub))
+    for g in np.unique(group):
+        cols = np.flatnonzero(group == g)
+        out[:, cols] = _run(fam, P[cols], y[:, cols], dt, engine, init, int(steps[cols[0]]))
     return out
 
 

@@ -251,9 +251,9 @@ def _figures(ctx, result, t, y, ests, ref, fit, setup, ranking, bound, exact) ->
 
 def _pareto(ctx, result, rows) -> None:
     """Each family's Pareto front on the record: lag (noise-free worst error) against noise-induced RMS error."""
-    from ..reporting.report import new_figure
-
     import matplotlib
+
+    from ..reporting.report import new_figure
 
     colours = matplotlib.colormaps["tab20"]
     fig, ax = new_figure(size=(8.5, 6.0), title="Every family on the record: lag against noise-induced error of f̂'")

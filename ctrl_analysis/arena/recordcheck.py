@@ -93,14 +93,14 @@ S_PER_ROW_RUN_TAP = 10e-9
 S_PER_ROW_FIT_TAP = 1e-9
 #: Tuning rounds of :func:`.recommend.recommend_for_record`.
 ROUNDS = 2
-#: Per family: parameters with a pattern-search step and the grid's size (:func:`.tuning._grid`); the test
-#: suite checks this table against the families.
-FAMILY_GRIDS = {"sigma": (1, 9), "sigma5": (1, 9), "leso2": (1, 9), "leso3": (1, 9), "neso": (2, 25), "td": (2, 25),
-                "levant": (1, 9), "kalman": (1, 9), "abg": (1, 9), "singer": (2, 45), "difflp": (1, 9),
-                "algebraic": (1, 10),
+#: Per family: parameters with a pattern-search step, the grid's size (:func:`.tuning._grid`) and the pattern searches
+#: per cost (one per value of its parameters without a step: a degree, Σ's order); the test suite checks this table
+#: against the families.
+FAMILY_GRIDS = {"sigma": (1, 9, 1), "sigma5": (1, 9, 1), "sigman": (1, 36, 4), "leso2": (1, 9, 1),
+                "leso3": (1, 9, 1), "neso": (2, 25, 1), "td": (2, 25, 1), "levant": (1, 9, 1), "kalman": (1, 9, 1),
+                "abg": (1, 9, 1), "singer": (2, 45, 1), "difflp": (1, 9, 1), "algebraic": (1, 10, 2),
                 # the offline smoothers a --signal run tunes too (costed like an engine family: same order per row)
-                "sg": (1, 15), "spline": (1, 9), "rts": (1, 9),
-                "rts3": (1, 9)}
+                "sg": (1, 15, 3), "spline": (1, 9, 1), "rts": (1, 9, 1), "rts3": (1, 9, 1)}
 #: The algebraic family's window grid, as multiples of its reference ``2 √(ε/L) / dt`` samples (x 2 degrees).
 WINDOW_MULTIPLES = tuple(float(v) for v in np.exp(np.linspace(np.log(0.1), np.log(10.0), 5)))
 
@@ -174,11 +174,11 @@ def work_estimate(n: int, dt: float, eps: float, L: float, *, derivative: bool =
     eps = float(check_positive("eps", eps, scalar=True))
     L = float(check_positive("L", L, scalar=True))
     derivative = check_bool("derivative", derivative)
-    per_family = {name: grid + ROUNDS * 2 * 2 * free for name, (free, grid) in FAMILY_GRIDS.items()}
+    per_family = {name: grid + ROUNDS * 2 * 2 * free * starts for name, (free, grid, starts) in FAMILY_GRIDS.items()}
     engine = sum(c for name, c in per_family.items() if name != "algebraic")
     w = _windows(n, dt, eps, L)
-    free = FAMILY_GRIDS["algebraic"][0]
-    taps = 2.0 * float(np.sum(w)) + ROUNDS * 2 * 2 * free * float(w[-1])  # grid: 5 windows x 2 degrees
+    free, _, starts = FAMILY_GRIDS["algebraic"]
+    taps = 2.0 * float(np.sum(w)) + ROUNDS * 2 * 2 * free * starts * float(w[-1])  # grid: 5 windows x 2 degrees
     fit = 0 if derivative else int(min(max(5.0, 2 * math.floor(min(_ref(dt, eps, L), n) + 0.5) + 1), n))
     core_s = BASE_S + 2 * n * (engine * S_PER_ROW_RUN + taps * S_PER_ROW_RUN_TAP) + 2 * n * fit * S_PER_ROW_FIT_TAP
     memory = BASE_BYTES + n * BYTES_PER_ROW + 8.0 * 2 * (n + float(w[-1])) * 2

@@ -12,8 +12,9 @@ the difference of the noisy and the noise-free estimate): the axes of the Pareto
 
 **Search** (per family, case and cost), in the log of each parameter relative to its reference
 (:func:`ctrl_analysis.arena.interface.scales`): a grid (9 points for one parameter, 5 per parameter
-for two; a degree parameter takes its values), then a pattern search from the best grid point:
-``±step`` along each parameter, move to the best if it improves, halve the step, ``rounds`` times.
+for two, unless a parameter says otherwise; a degree or order parameter takes its values), then a pattern search
+from the best grid point of each value of a degree or order parameter (one search otherwise): ``±step`` along
+each other parameter, move to the best if it improves, halve the step, ``rounds`` times; the best of the searches.
 Every configuration evaluated counts as one tuning. The configurations of all cases of a family are
 run as the runs of a few large batches (per-run parameters), split over processes with
 :func:`ctrl_analysis.runs.parallel.map_chunks` (``jobs``, ``scheduler``).
@@ -364,43 +365,51 @@ def _tuning(name: str, cases: list, setup: Setup, rounds: int, costs=COSTS[:2]):
             evaluated[ci].append((z, v, m))
 
     yield from run([grid] * len(cases), f"{name}: grid")
-    best = {}
-    for cost in costs:
-        cur = []
-        for ci in range(len(cases)):
-            z, v, m = min(evaluated[ci], key=lambda e: e[2][cost])
-            cur.append([z, m])
-        best[cost] = cur
     step = steps.copy()
-    free = np.flatnonzero(step > 0)
+    free, fixed = np.flatnonzero(step > 0), np.flatnonzero(step == 0)
+    # one search per value of the parameters that are not stepped (a degree, Σ's order): from each value's best
+    # grid point, so a categorical choice is searched exhaustively, not only the grid-best value's neighbourhood
+    best = {cost: [_starts(evaluated[ci], fixed, cost) for ci in range(len(cases))] for cost in costs}
     for r in range(rounds):
         for cost in costs:
-            cand = []
+            cand, owner = [], []
             for ci in range(len(cases)):
-                z0 = best[cost][ci][0]
-                zs = []
-                for j in free:
-                    for sgn in (-1, 1):
-                        z = z0.copy()
-                        z[j] += sgn * step[j]
-                        zs.append(z)
+                zs, who = [], []
+                for si, (z0, _m) in enumerate(best[cost][ci]):
+                    for j in free:
+                        for sgn in (-1, 1):
+                            z = z0.copy()
+                            z[j] += sgn * step[j]
+                            zs.append(z)
+                            who.append(si)
                 cand.append(np.array(zs))
+                owner.append(who)
             start = [len(e) for e in evaluated]
             yield from run(cand, f"{name}: refine {r + 1}/{rounds} ({METRICS[cost]})")
             for ci in range(len(cases)):
-                for z, _v, m in evaluated[ci][start[ci]:]:
-                    if m[cost] < best[cost][ci][1][cost]:
-                        best[cost][ci] = [z, m]
+                for si, (z, _v, m) in zip(owner[ci], evaluated[ci][start[ci]:], strict=True):
+                    if m[cost] < best[cost][ci][si][1][cost]:
+                        best[cost][ci][si] = [z, m]
         step = step / 2
     out_best = []
     for ci, case in enumerate(cases):
         row = {}
         for cost in costs:
-            z, m = best[cost][ci]
+            z, m = min(best[cost][ci], key=lambda e: e[1][cost])  # the first on a tie: the grid's order
             row[METRICS[cost]] = (param_values(fam, z, case, setup)[0], m)
         out_best.append(row)
     return {"family": name, "evaluated": [[(v, m) for _, v, m in e] for e in evaluated], "best": out_best,
             "tunings": int(sum(len(e) for e in evaluated))}
+
+
+def _starts(evaluated: list, fixed: np.ndarray, cost: int) -> list:
+    """``[z, metrics]`` of the best grid point per value of the ``fixed`` (not stepped) parameters, best first."""
+    best = {}
+    for z, _v, m in evaluated:
+        key = tuple(z[fixed])
+        if key not in best or m[cost] < best[key][1][cost]:
+            best[key] = [z, m]
+    return sorted(best.values(), key=lambda e: e[1][cost])
 
 
 def _check_tuning(cases, setup, rounds, engine, jobs) -> tuple:

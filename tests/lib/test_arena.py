@@ -53,7 +53,7 @@ def _record(n=300, seed=0, runs=3):
 
 def _params(fam, runs=3):
     s = scales(0.01, 2.0, DT)
-    row = [2.0 if p.ref == "one" else round(s[p.ref]) if p.integer else s[p.ref] for p in fam.params]
+    row = [max(p.lo, 2.0) if p.ref == "one" else round(s[p.ref]) if p.integer else s[p.ref] for p in fam.params]
     return np.array(row) * np.linspace(1.0, 1.4, runs)[:, None] ** np.array([0 if p.integer else 1 for p in fam.params])
 
 
@@ -292,6 +292,34 @@ def test_sigma_families_fastest_pole_is_n0_a_and_is_capped_by_the_sample_period(
     setup = Setup(dt=0.01, n=300, transient=1.0)
     v = param_values(family(name), [[50.0]], Case("sines", "uniform", 1e-6, 1e6, (1,)), setup)
     assert v[0, 0] * n0 * setup.dt == pytest.approx(OMEGA_DT_MAX)
+
+
+def test_every_value_of_a_degree_or_order_gets_its_own_pattern_search():
+    # algebraic: 5 windows x 2 degrees on the grid, then per cost and round ±1 window step from each degree's best
+    case, setup = Case("sines", "uniform", 0.01, 2.0, (1,)), Setup(dt=DT, n=300, transient=1.0)
+    r = tune_family("algebraic", [case], setup, rounds=1, engine="numpy")
+    assert r["tunings"] == 10 + 2 * 2 * 2
+    refined = r["evaluated"][0][10:]
+    assert {int(v[1]) for v, _ in refined} == {1, 2}
+    for cost, j in (("worst", 0), ("rms", 1)):  # no worse than either degree's best grid point
+        for d in (1, 2):
+            assert r["best"][0][cost][1][j] <= min(m[j] for v, m in r["evaluated"][0][:10] if v[1] == d)
+
+
+def test_sigma_with_n0_tuned_is_sigma_of_that_order_at_the_same_fastest_pole():
+    # one batch holding several orders and substep counts: each run is the fixed-order family's, bit for bit
+    y = _record(n=200, runs=4)
+    P = np.array([[30.0, 3], [30.0, 5], [30.0, 4], [600.0, 3]])
+    est = estimate("sigman", P, y, DT, engine="numpy")
+    assert np.array_equal(est[:, :1], estimate("sigma", [[10.0]], y[:, :1], DT, engine="numpy"))
+    assert np.array_equal(est[:, 1:2], estimate("sigma5", [[6.0]], y[:, 1:2], DT, engine="numpy"))
+    assert np.array_equal(est[:, 3:], estimate("sigma", [[200.0]], y[:, 3:], DT, engine="numpy"))
+    assert not np.array_equal(est[:, 2], est[:, 0])  # n0 = 4 is another estimator
+    with pytest.raises(ValueError, match=r"P column 1 \(sigman parameter n0\) must be in \[3, 6\]"):
+        estimate("sigman", [[30.0, 2]], y[:, :1], DT)
+    case, setup = Case("sines", "uniform", 1e-6, 1e6, (1,)), Setup(dt=DT, n=300, transient=1.0)
+    v = param_values(family("sigman"), [[50.0, 4]], case, setup)
+    assert v[0, 0] * DT == pytest.approx(OMEGA_DT_MAX) and v[0, 1] == 4  # the pole itself is capped
 
 
 @pytest.mark.parametrize("name", ["leso2", "sigma"])
