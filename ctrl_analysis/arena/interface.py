@@ -61,6 +61,8 @@ OMEGA_DT_MAX = 8.0
 #: constant record ``y_0`` holds: ``f̂ = y_0``, every derivative 0; the FIR window sees ``y_0`` before the record);
 #: ``"zero"``, from the zero state (the FIR window sees zeros before the record), as the papers' estimators start.
 INITS = ("first", "zero")
+#: A pole capped at ``OMEGA_DT_MAX / (n0 dt)`` gives back ``n0 a dt`` a few ulps above the cap: accepted.
+_CAP_ROUNDING = 1.0 + 1e-12
 
 
 @dataclass(frozen=True)
@@ -302,7 +304,7 @@ def substeps_for(omega_dt) -> np.ndarray:
     [2, 2, 4, 16]
     """
     w = np.asarray(check_positive("omega_dt", omega_dt), dtype=float)
-    if np.any(w > OMEGA_DT_MAX):
+    if np.any(w > OMEGA_DT_MAX * _CAP_ROUNDING):
         raise ValueError(f"omega_dt must be <= OMEGA_DT_MAX = {OMEGA_DT_MAX:g}, got up to {np.max(w):.4g}")
     return SUBSTEPS * np.maximum(1, np.ceil(w / OMEGA_DT_RK4 - 1e-12)).astype(int)
 
@@ -508,7 +510,7 @@ def estimate(fam, P, y, dt: float, *, engine: str = "auto", init: str = "first")
     # continuous: RK4 substeps per run from its fastest pole (Σ: the double pole -n0 a, sigman's first parameter;
     # the ESOs: -ω_o); runs grouped by their substeps (and sigman's by n0: one block order per loop)
     fastest = P[:, 0] * SIGMA_ORDER.get(fam.name, 1) * dt
-    if np.any(fastest > OMEGA_DT_MAX):
+    if np.any(fastest > OMEGA_DT_MAX * _CAP_ROUNDING):
         raise ValueError(f"P column 0 ({fam.name} parameter {fam.params[0].name}) must put the fastest pole within "
                          f"OMEGA_DT_MAX / dt (ω dt <= {OMEGA_DT_MAX:g}: beyond the sample rate a faster estimator "
                          f"only follows the held samples), got ω dt up to {np.max(fastest):.4g}")

@@ -292,6 +292,11 @@ def test_sigma_families_fastest_pole_is_n0_a_and_is_capped_by_the_sample_period(
     setup = Setup(dt=0.01, n=300, transient=1.0)
     v = param_values(family(name), [[50.0]], Case("sines", "uniform", 1e-6, 1e6, (1,)), setup)
     assert v[0, 0] * n0 * setup.dt == pytest.approx(OMEGA_DT_MAX)
+    # a capped value runs, though n0 a dt may come back a few ulps above the cap (8.000000000000002 at dt = 3 ms)
+    for dt in (0.003, 0.0123, 0.01):
+        s = Setup(dt=dt, n=300, transient=0.1)
+        v = param_values(family(name), [[50.0]], Case("sines", "uniform", 1e-6, 1e6, (1,)), s)
+        assert np.all(np.isfinite(estimate(name, v, np.zeros((20, 1)), dt)))
 
 
 def test_every_value_of_a_degree_or_order_gets_its_own_pattern_search():
