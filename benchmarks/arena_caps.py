@@ -31,7 +31,7 @@ SIGNALS = ("sines", "steps", "ramps", "chirp", "mixed")
 NOISES = ("uniform", "gaussian")
 LEVELS = (0.0005, 0.002, 0.01)
 L_TRUE, DT, N, SEEDS = 4.0, 0.01, 2000, (101, 102, 103)
-CAPPED = ("sigma", "sigma5", "leso2", "leso3", "neso", "difflp")
+CAPPED = ("sigma", "sigma5", "sigman", "leso2", "leso3", "neso", "difflp")
 COSTS = ("worst", "rms")
 
 
