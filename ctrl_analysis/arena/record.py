@@ -3,8 +3,9 @@
 :func:`run_record` tunes every causal estimator family and every offline smoother on the record
 (:func:`.recommend.recommend_for_record`), and writes into its output folder ``results.json`` (both rankings as
 quantities, the price of causality, the untuned difference-quotient reference, the settings, the recommendation),
-``estimate.csv`` (the recommended causal estimator's f̂' and the best smoother's f̂' and f̂'' at every sample), two
-figures and a short ``REPORT.md``.
+``estimate.csv`` (at every sample the recommended causal estimator's f̂' and the best smoother's f̂', then each
+one's f̂'' where it estimates one; the header names every column), figures (the record with the estimate and its
+error over time, the ranking, and without a derivative column the Pareto fronts) and a short ``REPORT.md``.
 """
 
 from __future__ import annotations
@@ -76,7 +77,8 @@ def run_record(ctx: StudyContext, t, y, d1, eps: float, L: float, source: str = 
     bound = lower_bound(eps, L)
     win = ranking[0]
     fam = family(win["family"])
-    est = estimate(fam, [[win["params"][p.name] for p in fam.params]], y[:, None], setup.dt, init=setup.init)[:, 0, 1]
+    causal = estimate(fam, [[win["params"][p.name] for p in fam.params]], y[:, None], setup.dt, init=setup.init)[:, 0]
+    est = causal[:, 1]
     best_off = family(smooth[0]["family"])
     off = estimate(best_off, [[smooth[0]["params"][p.name] for p in best_off.params]], y[:, None], setup.dt)[:, 0]
     result = StudyResult(INFO)
@@ -122,11 +124,15 @@ def run_record(ctx: StudyContext, t, y, d1, eps: float, L: float, source: str = 
                    + ("" if set(bounds_source.values()) == {"stated"} else
                       f" The bounds were estimated from the record (ε {bounds_source['noise_bound']}, L "
                       f"{bounds_source['accel_bound']}): the bound and the ratios to it are estimates too."))
-    cols = [t, y, est, off[:, 1]] + ([off[:, 2]] if off.shape[1] > 2 else [])
-    np.savetxt(ctx.out_dir / "estimate.csv", np.column_stack(cols), delimiter=",", fmt="%.10g",
-               header=f"time,measurement,derivative estimate (causal: {win['family']}),derivative estimate (offline: "
-                      f"{best_off.name})" + (f",second derivative estimate (offline: {best_off.name})"
-                                            if off.shape[1] > 2 else ""), comments="")
+    # time, measurement, the causal winner's f̂', the best smoother's f̂', then each one's f̂'' where it estimates one
+    cols = [t, y, est, off[:, 1]] + ([off[:, 2]] if off.shape[1] > 2 else []) + ([causal[:, 2]]
+                                                                                if causal.shape[1] > 2 else [])
+    names = ["time", "measurement", f"derivative estimate (causal: {win['family']})",
+             f"derivative estimate (offline: {best_off.name})"]
+    names += [f"second derivative estimate (offline: {best_off.name})"] if off.shape[1] > 2 else []
+    names += [f"second derivative estimate (causal: {win['family']})"] if causal.shape[1] > 2 else []
+    np.savetxt(ctx.out_dir / "estimate.csv", np.column_stack(cols), delimiter=",", fmt="%.10g", header=",".join(names),
+               comments="")
     _figures(ctx, result, t, y, (est, off[:, 1], best_off.name), ref[:, 0], fit[:, 0], setup, ranking + smooth, bound,
              d1 is not None)
     if d1 is None:  # the surrogate's noise-free signal separates lag from noise; a record with d1 has none
@@ -333,7 +339,8 @@ def report_lines(results: dict, out_dir: Path | str = ".") -> list[str]:
     findings = [f for f in results.get("findings") or [] if not str(f.get("id", "")).startswith("bound-warning")]
     lines += ["", *[f"- {f['text']}" for f in findings], "",
               "The estimates at every sample: `estimate.csv` (time, measurement, the recommended causal estimator's "
-              "f̂', the best offline smoother's f̂' and, where it has one, f̂'').", ""]
+              "f̂', the best offline smoother's f̂', then each one's f̂'' where it estimates one; the header names "
+              "every column).", ""]
     for fig in results.get("figures") or []:
         lines += [f"![{fig}]({Path(out_dir) / fig})", "", (results.get("captions") or {}).get(fig, ""), ""]
     return lines

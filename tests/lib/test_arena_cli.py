@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from ctrl_analysis.arena.cli import read_record
-from ctrl_analysis.arena.interface import FAMILIES
+from ctrl_analysis.arena.interface import FAMILIES, family
 from ctrl_analysis.arena.recommend import ArenaSettings, arena_report_lines, run_arena
 from ctrl_analysis.arena.tuning import Setup
 from ctrl_analysis.cli import main
@@ -117,7 +117,12 @@ def test_a_record_run_writes_its_folder(tmp_path, capsys, derivative):
     assert list(worst.values()) == sorted(worst.values())
     assert all(ratios[k[:-6] + ".ratio"] == pytest.approx(v / bound) for k, v in worst.items())
     est = np.loadtxt(folder / "estimate.csv", delimiter=",", skiprows=1)
-    assert est.shape[0] == 600 and est.shape[1] in (4, 5)  # + the best offline smoother's f̂' (and f̂'')
+    assert est.shape[0] == 600 and est.shape[1] in (4, 5, 6)  # + the best offline smoother's f̂' (and f̂'')
+    header = (folder / "estimate.csv").read_text().splitlines()[0].split(",")
+    win = min(worst, key=worst.get)[:-6]
+    # the causal winner's f̂'' is the last column exactly when its family estimates f''
+    assert (header[-1] == f"second derivative estimate (causal: {win})") == family(win).second
+    assert len(header) == est.shape[1]
     if derivative:  # after the start-up window the recommended estimate is within its own scored worst case
         t0 = s["startup_window_s"]
         after = est[:, 0] >= t0 + 1e-9
