@@ -12,10 +12,13 @@ each family is a library block (:class:`~ctrl_analysis.estimators.differential.D
 :class:`~ctrl_analysis.estimators.eso.ExtendedStateObserver`,
 :class:`~ctrl_analysis.estimators.tracking.TrackingDifferentiator`,
 :class:`~ctrl_analysis.estimators.kalman.alpha_beta.AlphaBetaFilter`,
-:class:`~ctrl_analysis.estimators.lowpass.DiscreteLowPass`, and the α-β-γ kernels
-``alpha_beta_gamma_output``/``_update`` in a small block here) whose per-run values go through
-``Loop.simulate(params={"est": {...}})``. The algebraic differentiator (:mod:`.algebraic`) is an FIR
-filter run with vectorised numpy.
+:class:`~ctrl_analysis.estimators.lowpass.DiscreteLowPass`,
+:class:`~ctrl_analysis.estimators.levant.LevantDifferentiator`, and the α-β-γ kernels ``alpha_beta_gamma_output``
+and ``singer_update`` (constant acceleration at ``τ_m = ∞``, Singer's model otherwise) in a small block here) whose
+per-run values go through ``Loop.simulate(params={"est": {...}})``. The continuous families' runs are grouped by
+their RK4 substeps (:func:`substeps_for`) and ``sigman``'s by Σ's order, one loop per group. The algebraic
+differentiator (:mod:`.algebraic`) is an FIR filter run with vectorised numpy; the offline smoothers
+(:data:`OFFLINE`, :mod:`.offline`) read the whole record.
 """
 
 from __future__ import annotations
